@@ -1,0 +1,59 @@
+# Project-wide options as INTERFACE targets: nothing here touches global flags.
+option(INSDIAG_BUILD_TESTS "Build the test suite" ON)
+option(INSDIAG_BUILD_BENCHMARKS "Build the Google Benchmark programs" ON)
+option(INSDIAG_BUILD_SERVICES "Build proto, kb, server and the server verbs of the CLI" ON)
+option(INSDIAG_WARNINGS_AS_ERRORS "Treat compiler warnings as errors (on in CI)" OFF)
+option(INSDIAG_SANITIZE "Build with AddressSanitizer and UndefinedBehaviorSanitizer" OFF)
+
+find_program(INSDIAG_CCACHE ccache)
+if(INSDIAG_CCACHE)
+  set(CMAKE_CXX_COMPILER_LAUNCHER ${INSDIAG_CCACHE})
+endif()
+
+# insdiag::warnings — the warning set every first-party target builds with.
+add_library(insdiag_warnings INTERFACE)
+add_library(insdiag::warnings ALIAS insdiag_warnings)
+target_compile_options(insdiag_warnings INTERFACE
+  -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor -Wcast-align
+  -Woverloaded-virtual -Wnull-dereference -Wimplicit-fallthrough
+  $<$<BOOL:${INSDIAG_WARNINGS_AS_ERRORS}>:-Werror>)
+
+# insdiag::sanitizers — opt-in ASan/UBSan for debugging runs.
+add_library(insdiag_sanitizers INTERFACE)
+add_library(insdiag::sanitizers ALIAS insdiag_sanitizers)
+if(INSDIAG_SANITIZE)
+  target_compile_options(insdiag_sanitizers INTERFACE -fsanitize=address,undefined -fno-omit-frame-pointer)
+  target_link_options(insdiag_sanitizers INTERFACE -fsanitize=address,undefined)
+endif()
+
+# Fails the configure step when `target` links (directly or transitively through
+# first-party targets) any of `forbidden`: the engine must stay a pure library.
+function(insdiag_forbid_links target)
+  set(pending ${target})
+  set(seen "")
+  while(pending)
+    list(POP_FRONT pending current)
+    if(current IN_LIST seen)
+      continue()
+    endif()
+    list(APPEND seen ${current})
+    foreach(forbidden IN LISTS ARGN)
+      if(current MATCHES "${forbidden}")
+        message(FATAL_ERROR "${target} must not link ${current} (layering rule: engine links no libpq, gRPC or protobuf)")
+      endif()
+    endforeach()
+    if(TARGET ${current})
+      get_target_property(aliased ${current} ALIASED_TARGET)
+      if(aliased)
+        list(APPEND pending ${aliased})
+      endif()
+      get_target_property(links ${current} LINK_LIBRARIES)
+      get_target_property(ilinks ${current} INTERFACE_LINK_LIBRARIES)
+      foreach(l IN LISTS links ilinks)
+        if(l AND NOT l MATCHES "NOTFOUND$" AND NOT l MATCHES "^\\$<")
+          list(APPEND pending ${l})
+        endif()
+      endforeach()
+    endif()
+  endwhile()
+endfunction()

@@ -1,0 +1,74 @@
+// A bench run: what one INS unit produced during one test on a rotary table.
+//
+// Raw inertial samples plus the table's reference attitude at a fixed,
+// surveyed site (spec: shared/spec/bench-run-format.md, version 1). All
+// quantities are SI: s, rad/s, m/s², rad, °C.
+//
+//   gyro_rad_s : body angular rate w.r.t. inertial space, mean over (t[k-1], t[k]]
+//   acc_mps2   : specific force in body axes, mean over (t[k-1], t[k]]
+//   ref_rpy_rad: attitude of the body w.r.t. local North-East-Down at t[k],
+//                C_b^n = Rz(yaw)·Ry(pitch)·Rx(roll)
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace insdiag::engine {
+
+// Geodetic WGS-84 position of the table centre.
+struct Site {
+  double latitude_rad = 0.0;
+  double longitude_rad = 0.0;
+  double height_m = 0.0;  // ellipsoidal
+};
+
+// Datasheet values of the unit, where the run carries them. They form the
+// a-priori error model; absent values fall back to the knowledge base or to
+// identification from the data.
+struct Datasheet {
+  std::optional<double> gyro_arw_rad_rts;       // angle random walk [rad/√s]
+  std::optional<double> gyro_bias_sigma_rad_s;  // Gauss–Markov drift σ [rad/s]
+  std::optional<double> gyro_bias_tau_s;        // Gauss–Markov correlation time [s]
+  std::optional<double> acc_vrw_mps_rts;        // velocity random walk [m/s/√s]
+  std::optional<double> acc_bias_sigma_mps2;    // Gauss–Markov bias σ [m/s²]
+  std::optional<double> acc_bias_tau_s;         // Gauss–Markov correlation time [s]
+
+  bool operator==(const Datasheet&) const = default;
+};
+
+struct BenchRunMetadata {
+  std::string format;       // "insdiag-bench-run/1"
+  std::string unit_serial;  // required
+  std::string unit_type;    // optional, e.g. "INS-2000"
+  Site site;
+  Datasheet datasheet;
+  // Every other `# key: value` line in file order (bench, operator,
+  // started_at, notes and unknown keys), kept as free metadata.
+  std::vector<std::pair<std::string, std::string>> extra;
+
+  // Value of a free metadata key, or nullopt.
+  std::optional<std::string> Extra(const std::string& key) const;
+};
+
+struct ImuSample {
+  double t_s = 0.0;
+  Eigen::Vector3d gyro_rad_s = Eigen::Vector3d::Zero();
+  Eigen::Vector3d acc_mps2 = Eigen::Vector3d::Zero();
+  Eigen::Vector3d ref_rpy_rad = Eigen::Vector3d::Zero();  // roll, pitch, yaw
+  double temp_degc = 0.0;  // meaningful only when the run has temperature
+};
+
+struct BenchRun {
+  BenchRunMetadata metadata;
+  bool has_temperature = false;
+  std::vector<ImuSample> samples;
+
+  // Nominal sample interval: the median of t[k] − t[k−1]; 0 for < 2 samples.
+  double NominalIntervalS() const;
+  double DurationS() const;
+};
+
+}  // namespace insdiag::engine

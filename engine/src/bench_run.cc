@@ -1,0 +1,31 @@
+#include "insdiag/engine/bench_run.h"
+
+#include <algorithm>
+
+namespace insdiag::engine {
+
+std::optional<std::string> BenchRunMetadata::Extra(const std::string& key) const {
+  for (const auto& [k, v] : extra) {
+    if (k == key) return v;
+  }
+  return std::nullopt;
+}
+
+double BenchRun::NominalIntervalS() const {
+  if (samples.size() < 2) return 0.0;
+  // The median is robust to the occasional late sample a logger produces.
+  std::vector<double> dt;
+  dt.reserve(samples.size() - 1);
+  for (size_t k = 1; k < samples.size(); ++k) dt.push_back(samples[k].t_s - samples[k - 1].t_s);
+  auto mid = dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2);
+  std::nth_element(dt.begin(), mid, dt.end());
+  return *mid;
+}
+
+double BenchRun::DurationS() const {
+  if (samples.empty()) return 0.0;
+  // The first sample covers (t0 − Δt, t0]: a run of N samples lasts N·Δt.
+  return samples.back().t_s - samples.front().t_s + NominalIntervalS();
+}
+
+}  // namespace insdiag::engine
