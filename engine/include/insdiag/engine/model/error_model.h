@@ -1,0 +1,77 @@
+// The unit's error model as data: the base model of seed eq. 3–6 plus any set
+// of catalogue effects. The filter's state layout (state_layout.h) is derived
+// from it; nothing indexes a state by a literal.
+//
+// Base model, per sensor axis i (seed eq. 5–6):
+//   ḃ_i = −b_i/τ + σ·√(2/τ)·ξ,       R(t) = σ² e^{−|t|/τ}          Gauss–Markov drift
+//   n_i white with density N (ARW [rad/√s] or VRW [m/s/√s])          (IEEE Std 952, Annex C)
+//   quantisation Q (angle [rad] or velocity [m/s]), σ²_Allan = 3Q²/τ²  (IEEE Std 952, Annex C)
+// Random effects (shared/spec/effects.md):
+//   bias_rw            ḃ = w,  E[w²] = K² (rate random walk density K [unit/√s])
+//   bias_second_order  ẋ = (−α I + β J) x + w, E[w wᵀ] = 2ασ² I,  J = [0 −1; 1 0];
+//                      the output x₁ has R(t) = σ² e^{−α|t|} cos(βt)
+//                      (Gelb, Applied Optimal Estimation, 1974, Table 3.8-1: damped
+//                      oscillatory process, here built from a rotating pair of states)
+// Constant effects: parameters with a Gaussian prior N(0, σ_prior²) and no process noise.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "insdiag/engine/model/effect_catalogue.h"
+
+namespace insdiag::engine {
+
+struct GaussMarkov {
+  double sigma = 0.0;  // steady-state σ in the sensor's unit (rad/s or m/s²)
+  double tau_s = 0.0;  // correlation time
+};
+
+// The base model of one sensor triad (gyros or accelerometers).
+struct SensorTriadModel {
+  std::array<GaussMarkov, 3> bias;                                // per axis
+  Eigen::Vector3d white_noise_density = Eigen::Vector3d::Zero();  // ARW [rad/√s] | VRW [m/s/√s]
+  Eigen::Vector3d quantization = Eigen::Vector3d::Zero();         // Q [rad] | [m/s]; 0 = none
+};
+
+// One catalogue term in the model with its prior / process parameters.
+struct ModelEffect {
+  EffectTerm term;
+  // kConstant families: prior σ of each parameter (index 1 used by yaw harmonics).
+  std::array<double, 2> prior_sigma = {0.0, 0.0};
+  // bias_rw: rate random walk density K [unit/√s].
+  double random_walk_density = 0.0;
+  // bias_second_order: σ [unit], α [1/s], β [rad/s].
+  double second_order_sigma = 0.0;
+  double second_order_alpha_per_s = 0.0;
+  double second_order_beta_rad_s = 0.0;
+};
+
+// Accuracy of the bench's reference: the table's attitude (initial attitude),
+// the site's position and the zero velocity of the body at the table centre.
+// They set the initial attitude uncertainty and the observation noise.
+struct ReferenceAccuracy {
+  double attitude_sigma_rad = 0.0;
+  double position_sigma_m = 0.0;
+  double velocity_sigma_mps = 0.0;
+};
+
+struct ErrorModel {
+  SensorTriadModel gyro;  // rad/s
+  SensorTriadModel acc;   // m/s²
+  std::vector<ModelEffect> effects;
+  ReferenceAccuracy reference;
+
+  // Index of the effect with this term in `effects`, or −1.
+  int FindEffect(const EffectTerm& term) const;
+  // Names of the effects in the model, in model order ("gyro_scale_factor.z", …).
+  std::vector<std::string> EffectNames() const;
+  // Number of free parameters of the model counted by AIC/BIC: the base
+  // model's noise parameters plus each effect's parameters.
+  int ParameterCount() const;
+};
+
+}  // namespace insdiag::engine

@@ -1,0 +1,183 @@
+#include "insdiag/engine/model/effect_catalogue.h"
+
+#include <cmath>
+#include <string>
+
+namespace insdiag::engine {
+namespace {
+
+constexpr std::array<EffectFamily, 14> kCatalogue = {{
+    {"gyro_turn_on_bias", Sensor::kGyro, EffectKind::kConstant, AxisSet::kSingle, Regressor::kOne,
+     RandomProcess::kNone, 1, Excitation::kAlways, "rad/s", "run-to-run constant gyro bias c_i"},
+    {"gyro_scale_factor", Sensor::kGyro, EffectKind::kConstant, AxisSet::kSingle, Regressor::kOwnInput,
+     RandomProcess::kNone, 1, Excitation::kRotation, "", "gyro scale-factor error s_i·ω_i"},
+    {"gyro_misalignment", Sensor::kGyro, EffectKind::kConstant, AxisSet::kCrossPairs,
+     Regressor::kCrossInput, RandomProcess::kNone, 1, Excitation::kRotation, "rad",
+     "gyro axis misalignment m_ij·ω_j"},
+    {"gyro_g_sensitivity", Sensor::kGyro, EffectKind::kConstant, AxisSet::kAllPairs,
+     Regressor::kSpecificForce, RandomProcess::kNone, 1, Excitation::kTilt, "rad/s per m/s^2",
+     "gyro drift proportional to specific force d_ij·f_j"},
+    {"gyro_temp_coeff", Sensor::kGyro, EffectKind::kConstant, AxisSet::kSingle, Regressor::kTemperature,
+     RandomProcess::kNone, 1, Excitation::kTemperature, "rad/s/degC", "gyro bias temperature coefficient k_i·(T−T0)"},
+    {"gyro_yaw_harmonic", Sensor::kGyro, EffectKind::kConstant, AxisSet::kSingle, Regressor::kYawSinCos,
+     RandomProcess::kNone, 2, Excitation::kRotation, "rad/s", "gyro drift harmonic in table yaw a_i·sinψ + b_i·cosψ"},
+    {"gyro_bias_rw", Sensor::kGyro, EffectKind::kRandom, AxisSet::kSingle, Regressor::kNone,
+     RandomProcess::kRandomWalk, 1, Excitation::kAlways, "rad/s/sqrt(s)", "gyro rate random walk"},
+    {"gyro_bias_second_order", Sensor::kGyro, EffectKind::kRandom, AxisSet::kSingle, Regressor::kNone,
+     RandomProcess::kSecondOrderMarkov, 1, Excitation::kAlways, "rad/s",
+     "gyro drift with correlation σ²·e^(−α|τ|)·cos(βτ)"},
+    {"acc_turn_on_bias", Sensor::kAccelerometer, EffectKind::kConstant, AxisSet::kSingle, Regressor::kOne,
+     RandomProcess::kNone, 1, Excitation::kAlways, "m/s^2", "run-to-run constant accelerometer bias c_i"},
+    {"acc_scale_factor", Sensor::kAccelerometer, EffectKind::kConstant, AxisSet::kSingle,
+     Regressor::kOwnInput, RandomProcess::kNone, 1, Excitation::kTilt, "", "accelerometer scale-factor error s_i·f_i"},
+    {"acc_misalignment", Sensor::kAccelerometer, EffectKind::kConstant, AxisSet::kCrossPairs,
+     Regressor::kCrossInput, RandomProcess::kNone, 1, Excitation::kTilt, "rad",
+     "accelerometer axis misalignment m_ij·f_j"},
+    {"acc_temp_coeff", Sensor::kAccelerometer, EffectKind::kConstant, AxisSet::kSingle,
+     Regressor::kTemperature, RandomProcess::kNone, 1, Excitation::kTemperature, "m/s^2/degC",
+     "accelerometer bias temperature coefficient k_i·(T−T0)"},
+    {"acc_bias_rw", Sensor::kAccelerometer, EffectKind::kRandom, AxisSet::kSingle, Regressor::kNone,
+     RandomProcess::kRandomWalk, 1, Excitation::kAlways, "m/s^2/sqrt(s)", "accelerometer bias random walk"},
+    {"acc_bias_second_order", Sensor::kAccelerometer, EffectKind::kRandom, AxisSet::kSingle,
+     Regressor::kNone, RandomProcess::kSecondOrderMarkov, 1, Excitation::kAlways, "m/s^2",
+     "accelerometer bias with correlation σ²·e^(−α|τ|)·cos(βτ)"},
+}};
+
+constexpr std::array<char, 3> kAxisNames = {'x', 'y', 'z'};
+
+}  // namespace
+
+std::span<const EffectFamily> EffectCatalogue() { return kCatalogue; }
+
+const EffectFamily* FindEffectFamily(std::string_view name) {
+  for (const auto& f : kCatalogue) {
+    if (f.name == name) return &f;
+  }
+  return nullptr;
+}
+
+std::string AxisLabel(AxisSet axes, int axis, int source_axis) {
+  std::string label(1, kAxisNames[axis]);
+  if (axes != AxisSet::kSingle) label += kAxisNames[source_axis];
+  return label;
+}
+
+std::string EffectTerm::Name() const {
+  return std::string(family->name) + "." + AxisLabel(family->axes, axis, source_axis);
+}
+
+std::string EffectTerm::ParameterName(int k) const {
+  if (family->regressor == Regressor::kYawSinCos) return Name() + (k == 0 ? ".sin" : ".cos");
+  return Name();
+}
+
+std::vector<EffectTerm> TermsOf(const EffectFamily& family) {
+  std::vector<EffectTerm> terms;
+  for (int i = 0; i < 3; ++i) {
+    if (family.axes == AxisSet::kSingle) {
+      terms.push_back({&family, i, i});
+      continue;
+    }
+    for (int j = 0; j < 3; ++j) {
+      if (family.axes == AxisSet::kCrossPairs && i == j) continue;
+      terms.push_back({&family, i, j});
+    }
+  }
+  return terms;
+}
+
+std::vector<EffectTerm> AllCatalogueTerms() {
+  std::vector<EffectTerm> all;
+  for (const auto& f : kCatalogue) {
+    auto t = TermsOf(f);
+    all.insert(all.end(), t.begin(), t.end());
+  }
+  return all;
+}
+
+absl::StatusOr<std::vector<EffectTerm>> ParseEffectSelector(std::string_view selector) {
+  const size_t dot = selector.find('.');
+  const std::string_view family_name = selector.substr(0, dot);
+  const EffectFamily* family = FindEffectFamily(family_name);
+  if (family == nullptr) {
+    std::string names;
+    for (const auto& f : kCatalogue) names += (names.empty() ? "" : ", ") + std::string(f.name);
+    return absl::InvalidArgumentError("unknown effect '" + std::string(selector) +
+                                      "'; the catalogue has: " + names);
+  }
+  std::vector<EffectTerm> terms = TermsOf(*family);
+  if (dot == std::string_view::npos) return terms;
+  const std::string_view axis = selector.substr(dot + 1);
+  std::string labels;
+  for (const auto& t : terms) {
+    const std::string label = AxisLabel(family->axes, t.axis, t.source_axis);
+    if (label == axis) return std::vector<EffectTerm>{t};
+    labels += (labels.empty() ? "" : ", ") + label;
+  }
+  return absl::InvalidArgumentError("effect family '" + std::string(family_name) + "' has no axis '" +
+                                    std::string(axis) + "'; its axes are: " + labels);
+}
+
+void EvaluateRegressor(const EffectTerm& term, const RegressorInputs& in, double* out) {
+  const Eigen::Vector3d& own = term.family->sensor == Sensor::kGyro ? in.gyro_rad_s : in.acc_mps2;
+  switch (term.family->regressor) {
+    case Regressor::kOne:
+      out[0] = 1.0;
+      return;
+    case Regressor::kOwnInput:
+      out[0] = own[term.axis];
+      return;
+    case Regressor::kCrossInput:
+      out[0] = own[term.source_axis];
+      return;
+    case Regressor::kSpecificForce:
+      out[0] = in.acc_mps2[term.source_axis];
+      return;
+    case Regressor::kTemperature:
+      out[0] = in.temperature_delta_degc;
+      return;
+    case Regressor::kYawSinCos:
+      out[0] = std::sin(in.yaw_rad);
+      out[1] = std::cos(in.yaw_rad);
+      return;
+    case Regressor::kNone:
+      return;
+  }
+}
+
+Eigen::Vector3d ConstantEffectError(const EffectTerm& term, const RegressorInputs& in,
+                                    std::span<const double> p) {
+  // Written from the physical definitions, independently of EvaluateRegressor,
+  // so that the numeric-differentiation test compares two derivations.
+  const Eigen::Vector3d& own = term.family->sensor == Sensor::kGyro ? in.gyro_rad_s : in.acc_mps2;
+  Eigen::Vector3d error = Eigen::Vector3d::Zero();
+  double& e = error[term.axis];
+  switch (term.family->regressor) {
+    case Regressor::kOne:
+      e = p[0];
+      break;
+    case Regressor::kOwnInput:  // a scale-factor error scales the true input
+      e = (1.0 + p[0]) * own[term.axis] - own[term.axis];
+      break;
+    case Regressor::kCrossInput:  // a small rotation of the sensing axis towards axis j
+      e = std::sin(p[0]) * own[term.source_axis];
+      break;
+    case Regressor::kSpecificForce:
+      e = p[0] * in.acc_mps2[term.source_axis];
+      break;
+    case Regressor::kTemperature:
+      e = p[0] * in.temperature_delta_degc;
+      break;
+    case Regressor::kYawSinCos: {
+      const double amplitude = std::hypot(p[0], p[1]);
+      const double phase = std::atan2(p[1], p[0]);
+      e = amplitude * std::sin(in.yaw_rad + phase);
+      break;
+    }
+    case Regressor::kNone:
+      break;
+  }
+  return error;
+}
+
+}  // namespace insdiag::engine
