@@ -87,6 +87,35 @@ class Quantizer {
   Eigen::Vector3d remainder_ = Eigen::Vector3d::Zero();
 };
 
+// Advances the base drifts (seed eq. 5, exact discretisation) and the random
+// effects' processes over one sample interval.
+void AdvanceDrifts(const SimulatedUnit& unit, double dt, Eigen::Vector3d& gyro_gm, Eigen::Vector3d& acc_gm,
+                   std::vector<RandomEffectState>& random_states, std::mt19937_64& rng,
+                   std::normal_distribution<double>& normal) {
+  for (int i = 0; i < 3; ++i) {
+    for (auto [triad, drift] : {std::pair{&unit.gyro, &gyro_gm}, std::pair{&unit.acc, &acc_gm}}) {
+      const GaussMarkov& gm = triad->bias[i];
+      if (gm.sigma <= 0.0) continue;
+      const double phi = std::exp(-dt / gm.tau_s);
+      (*drift)[i] = phi * (*drift)[i] + gm.sigma * std::sqrt(1.0 - phi * phi) * normal(rng);
+    }
+  }
+  for (RandomEffectState& s : random_states) {
+    const TrueEffect& e = *s.effect;
+    if (e.term.family->process == RandomProcess::kRandomWalk) {
+      s.x[0] += e.random_walk_density * std::sqrt(dt) * normal(rng);
+      continue;
+    }
+    // Rotating damped pair: x ← e^{−αΔt} R(βΔt) x + w, E[wwᵀ] = σ²(1 − e^{−2αΔt}) I.
+    const double decay = std::exp(-e.second_order_alpha_per_s * dt);
+    const double c = std::cos(e.second_order_beta_rad_s * dt);
+    const double sn = std::sin(e.second_order_beta_rad_s * dt);
+    const Eigen::Vector2d rotated(c * s.x[0] - sn * s.x[1], sn * s.x[0] + c * s.x[1]);
+    const double q = e.second_order_sigma * std::sqrt(1.0 - decay * decay);
+    s.x = decay * rotated + q * Eigen::Vector2d(normal(rng), normal(rng));
+  }
+}
+
 double AxisMean(const Eigen::Vector3d& v) { return v.mean(); }
 double AxisRms(const std::array<GaussMarkov, 3>& b, double GaussMarkov::*field) {
   double s = 0.0;
@@ -237,15 +266,8 @@ absl::StatusOr<SimulatedRun> Simulate(const SimulatedUnit& unit, const TableProf
       continue;
     }
 
-    // Base drifts, exact discretisation over this interval.
-    for (int i = 0; i < 3; ++i) {
-      for (auto [triad, drift] : {std::pair{&unit.gyro, &gyro_gm}, std::pair{&unit.acc, &acc_gm}}) {
-        const GaussMarkov& gm = triad->bias[i];
-        if (gm.sigma <= 0.0) continue;
-        const double phi = std::exp(-dt / gm.tau_s);
-        (*drift)[i] = phi * (*drift)[i] + gm.sigma * std::sqrt(1.0 - phi * phi) * normal(rng);
-      }
-    }
+    // A sample sees every drift as it stands at the start of its interval; the
+    // drifts then advance over the interval (the error model's convention).
     Eigen::Vector3d gyro_error = gyro_gm;
     Eigen::Vector3d acc_error = acc_gm;
 
@@ -260,20 +282,10 @@ absl::StatusOr<SimulatedRun> Simulate(const SimulatedUnit& unit, const TableProf
       (e.term.family->sensor == Sensor::kGyro ? gyro_error : acc_error) += err;
     }
     int column = 0;
-    for (RandomEffectState& s : random_states) {
+    for (const RandomEffectState& s : random_states) {
       const TrueEffect& e = *s.effect;
-      if (e.term.family->process == RandomProcess::kRandomWalk) {
-        s.x[0] += e.random_walk_density * std::sqrt(dt) * normal(rng);
-        out.random_effect_states(static_cast<Eigen::Index>(k), column++) = s.x[0];
-      } else {
-        // Rotating damped pair: x ← e^{−αΔt} R(βΔt) x + w, E[wwᵀ] = σ²(1 − e^{−2αΔt}) I.
-        const double decay = std::exp(-e.second_order_alpha_per_s * dt);
-        const double c = std::cos(e.second_order_beta_rad_s * dt);
-        const double sn = std::sin(e.second_order_beta_rad_s * dt);
-        const Eigen::Vector2d rotated(c * s.x[0] - sn * s.x[1], sn * s.x[0] + c * s.x[1]);
-        const double q = e.second_order_sigma * std::sqrt(1.0 - decay * decay);
-        s.x = decay * rotated + q * Eigen::Vector2d(normal(rng), normal(rng));
-        out.random_effect_states(static_cast<Eigen::Index>(k), column++) = s.x[0];
+      out.random_effect_states(static_cast<Eigen::Index>(k), column++) = s.x[0];
+      if (e.term.family->process == RandomProcess::kSecondOrderMarkov) {
         out.random_effect_states(static_cast<Eigen::Index>(k), column++) = s.x[1];
       }
       (e.term.family->sensor == Sensor::kGyro ? gyro_error : acc_error)[e.term.axis] += s.x[0];
@@ -292,6 +304,7 @@ absl::StatusOr<SimulatedRun> Simulate(const SimulatedUnit& unit, const TableProf
     truth.acc_gm = acc_gm;
     truth.gyro_error = gyro_error;
     truth.acc_error = acc_error;
+    AdvanceDrifts(unit, dt, gyro_gm, acc_gm, random_states, rng, normal);
 
     Eigen::Vector3d gyro_noise, acc_noise;
     for (int i = 0; i < 3; ++i) {

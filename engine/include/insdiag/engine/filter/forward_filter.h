@@ -1,0 +1,105 @@
+// Forward error-state Kalman filter over a bench run.
+//
+// The mechanisation (nav/strapdown.h) runs at the sample rate; the filter
+// propagates the error state over each update interval with the exact
+// interval transition Φ and noise Q (model/error_dynamics.h) and then
+// processes the six observation channels one by one as scalar updates
+// (seed: channel-wise processing), each in Joseph form:
+//
+//   S = h P hᵀ + r,  ν = z − h x,  K = P hᵀ / S
+//   x ← x + K ν
+//   P ← (I − K h) P (I − K h)ᵀ + K r Kᵀ  =  P − K (Phᵀ)ᵀ − (Phᵀ) Kᵀ + S K Kᵀ
+// (the expanded form keeps Joseph's first-order insensitivity to errors in K
+// and is symmetric by construction). Per channel and epoch it keeps ν,
+// α² = S and β² = ν²/α² (seed, monitoring section) and the innovations'
+// log-likelihood −½ Σ (ln 2πS + ν²/S).
+//
+// After the updates the navigation part of the estimate is fed back into the
+// mechanisation (closed loop: attitude, velocity, position reset, their error
+// mean returns to zero) so that the linearisation stays exact over hours; the
+// sensor states keep their estimates.
+#pragma once
+
+#include <absl/status/statusor.h>
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "insdiag/engine/bench_run.h"
+#include "insdiag/engine/filter/observation.h"
+#include "insdiag/engine/model/error_dynamics.h"
+#include "insdiag/engine/model/error_model.h"
+#include "insdiag/engine/model/state_layout.h"
+
+namespace insdiag::engine {
+
+struct FilterOptions {
+  // Interval between observation updates; the run's samples are grouped into
+  // intervals of round(update_interval_s / Δt) samples.
+  double update_interval_s = 1.0;
+
+  absl::Status Validate() const;
+};
+
+// The per-sample and per-update hooks of the forward pass, for computations
+// that must ride along the same pass (the missing-effect score test).
+class FilterObserver {
+ public:
+  virtual ~FilterObserver() = default;
+  virtual void OnSample(const NavigationDiscretisation& nav, const SampleCoupling& coupling) = 0;
+  // After the prior of an epoch is formed with `transition`.
+  virtual void OnPrediction(const IntervalTransition& transition) = 0;
+  // After a scalar update of `channel`: row h, gain K, innovation ν, its variance S.
+  virtual void OnScalarUpdate(int channel, const ObservationRow& h, const Eigen::VectorXd& gain,
+                              double innovation, double innovation_variance) = 0;
+};
+
+// Upper triangle of a symmetric n×n matrix, row by row.
+int PackedSize(int n);
+void PackSymmetric(const Eigen::MatrixXd& P, double* out);
+void UnpackSymmetric(const double* in, int n, Eigen::MatrixXd& P);
+
+// One packed covariance per row (row-major so that a row is contiguous).
+using PackedCovariances = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+// The Φ of one interval, kept for the smoother.
+struct StoredTransition {
+  Matrix9d A;
+  Eigen::MatrixXd B;
+  SensorBlocks D;
+};
+
+struct ForwardPass {
+  int state_size = 0;
+  // Epoch k: the update at time epoch_time_s[k] (k = 0 … K−1).
+  std::vector<double> epoch_time_s;
+  std::vector<int> epoch_sample;  // index of the run's sample at each epoch
+  Eigen::MatrixXd z;                    // K × 6 observations
+  Eigen::MatrixXd innovation;           // K × 6 ν
+  Eigen::MatrixXd innovation_variance;  // K × 6 α²
+  Eigen::MatrixXd observation_noise;    // K × 6 r
+  Eigen::MatrixXd x_pred, x_filt;       // K × n, before and after the epoch's updates (before the reset)
+  PackedCovariances P_pred, P_filt;     // K × PackedSize(n)
+  std::vector<StoredTransition> transitions;  // transitions[k]: from epoch k−1 (or the start) to k
+  Eigen::VectorXd x0;
+  Eigen::MatrixXd P0;
+  double log_likelihood = 0.0;
+  int scalar_updates = 0;
+  double duration_s = 0.0;
+
+  int epochs() const { return static_cast<int>(epoch_time_s.size()); }
+  // Bytes held per run sample, for the memory figure in docs/PERFORMANCE.md.
+  double BytesPerSample(size_t samples) const;
+};
+
+// Runs the mechanisation and the forward filter. Needs at least two samples
+// and a model whose parameters are valid (σ ≥ 0, τ > 0 where σ > 0).
+absl::StatusOr<ForwardPass> RunForwardFilter(const BenchRun& run, const ErrorModel& model,
+                                             const FilterOptions& options, FilterObserver* observer = nullptr);
+
+// The filter's initial covariance for a model (reference accuracy for the
+// navigation errors, steady-state or prior variances for the sensor states).
+Eigen::MatrixXd InitialCovariance(const ErrorModel& model, const StateLayout& layout);
+
+}  // namespace insdiag::engine

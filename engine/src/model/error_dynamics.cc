@@ -1,0 +1,294 @@
+#include "insdiag/engine/model/error_dynamics.h"
+
+#include <cmath>
+
+#include "insdiag/engine/nav/rotation.h"
+#include "insdiag/engine/nav/strapdown.h"
+#include "insdiag/engine/nav/wgs84.h"
+#include "insdiag/engine/numerics/matrix_exponential.h"
+
+namespace insdiag::engine {
+
+Matrix9d NavigationErrorMatrix(const Site& site, const StateLayout& layout) {
+  const double lat = site.latitude_rad;
+  const double h = site.height_m;
+  const double rm = wgs84::MeridianRadiusM(lat) + h;
+  const double rn = wgs84::PrimeVerticalRadiusM(lat) + h;
+  const double omega = wgs84::kEarthRateRadS;
+  const Eigen::Vector3d w_ie = wgs84::EarthRateNed(lat);
+  const Eigen::Vector3d f_n = -nav::GravityNed(lat, h);
+  // ∂γ/∂h from the WGS-84 height expansion (wgs84.h): γ0 (−2/a (1 + f + m − 2 f sin²φ) + 6h/a²).
+  const double s2 = std::pow(std::sin(lat), 2);
+  const double a = wgs84::kSemiMajorAxisM;
+  const double gamma0 = wgs84::NormalGravityMps2(lat, 0.0);
+  const double dgamma_dh =
+      gamma0 * (-2.0 / a * (1.0 + wgs84::kFlattening + wgs84::kGravityRatioM - 2.0 * wgs84::kFlattening * s2) +
+                6.0 * h / (a * a));
+
+  const int att = layout.attitude();
+  const int vel = layout.velocity();
+  const int pos = layout.position();
+  Matrix9d F = Matrix9d::Zero();
+  // Attitude rows.
+  F.block<3, 3>(att, att) = -nav::Skew(w_ie);
+  F(att + 0, pos + 0) = -omega * std::sin(lat) / rm;
+  F(att + 2, pos + 0) = -omega * std::cos(lat) / rm;
+  F(att + 0, vel + 1) = 1.0 / rn;
+  F(att + 1, vel + 0) = -1.0 / rm;
+  F(att + 2, vel + 1) = -std::tan(lat) / rn;
+  // Velocity rows.
+  F.block<3, 3>(vel, att) = nav::Skew(f_n);
+  F.block<3, 3>(vel, vel) = -nav::Skew(2.0 * w_ie);
+  F(vel + 2, pos + 2) = -dgamma_dh;
+  // Position rows.
+  F.block<3, 3>(pos, vel) = Eigen::Matrix3d::Identity();
+  return F;
+}
+
+NavigationDiscretisation DiscretiseNavigation(const Matrix9d& F, double dt_s) {
+  const auto e = numerics::ExponentialWithIntegral(F, dt_s);
+  NavigationDiscretisation d;
+  d.A = e.exponential;
+  d.Gamma = e.integral;
+  d.dt_s = dt_s;
+  return d;
+}
+
+SampleCoupling MakeSampleCoupling(const NavigationDiscretisation& d, const StateLayout& layout,
+                                  const Eigen::Matrix3d& C_b_n_mid, const RegressorInputs& inputs) {
+  SampleCoupling c;
+  c.g_att.noalias() = -d.Gamma.middleCols<3>(layout.attitude()) * C_b_n_mid;
+  c.g_vel.noalias() = d.Gamma.middleCols<3>(layout.velocity()) * C_b_n_mid;
+  c.inputs = inputs;
+  c.dt_s = d.dt_s;
+  return c;
+}
+
+// ---- SensorBlocks -----------------------------------------------------------
+
+namespace {
+
+SensorBlocks StructureOf(const StateLayout& layout, const Eigen::Matrix2d& fill) {
+  SensorBlocks b;
+  const auto& states = layout.sensor_states();
+  for (size_t i = 0; i < states.size(); ++i) {
+    if (states[i].dynamics == StateDynamics::kSecondOrderTail) continue;
+    const int size = states[i].dynamics == StateDynamics::kSecondOrderPair ? 2 : 1;
+    b.blocks.push_back({static_cast<int>(i), size, fill});
+  }
+  return b;
+}
+
+}  // namespace
+
+SensorBlocks SensorBlocks::Identity(const StateLayout& layout) {
+  return StructureOf(layout, Eigen::Matrix2d::Identity());
+}
+
+SensorBlocks SensorBlocks::Zero(const StateLayout& layout) { return StructureOf(layout, Eigen::Matrix2d::Zero()); }
+
+void SensorBlocks::Discretise(const ErrorModel& model, const StateLayout& layout, double dt, SensorBlocks& D,
+                              SensorBlocks& Qs) {
+  D = Identity(layout);
+  Qs = Zero(layout);
+  const auto& states = layout.sensor_states();
+  for (size_t b = 0; b < D.blocks.size(); ++b) {
+    const SensorState& s = states[static_cast<size_t>(D.blocks[b].offset)];
+    Eigen::Matrix2d& phi = D.blocks[b].m;
+    Eigen::Matrix2d& q = Qs.blocks[b].m;
+    switch (s.dynamics) {
+      case StateDynamics::kGaussMarkov: {
+        // Seed eq. 5, exact: φ = e^{−Δt/τ}, q = σ²(1 − φ²).
+        const GaussMarkov& gm = (s.sensor == Sensor::kGyro ? model.gyro : model.acc).bias[s.axis];
+        const double f = gm.tau_s > 0.0 ? std::exp(-dt / gm.tau_s) : 0.0;
+        phi(0, 0) = f;
+        q(0, 0) = gm.sigma * gm.sigma * (1.0 - f * f);
+        break;
+      }
+      case StateDynamics::kConstant:
+        break;
+      case StateDynamics::kRandomWalk: {
+        const double k = model.effects[static_cast<size_t>(s.effect)].random_walk_density;
+        q(0, 0) = k * k * dt;
+        break;
+      }
+      case StateDynamics::kSecondOrderPair: {
+        const ModelEffect& e = model.effects[static_cast<size_t>(s.effect)];
+        const double decay = std::exp(-e.second_order_alpha_per_s * dt);
+        const double c = std::cos(e.second_order_beta_rad_s * dt);
+        const double sn = std::sin(e.second_order_beta_rad_s * dt);
+        phi << decay * c, -decay * sn, decay * sn, decay * c;
+        q = Eigen::Matrix2d::Identity() * e.second_order_sigma * e.second_order_sigma * (1.0 - decay * decay);
+        break;
+      }
+      case StateDynamics::kSecondOrderTail:
+        break;
+    }
+  }
+}
+
+void SensorBlocks::RightMultiplyTranspose(Eigen::Ref<Eigen::MatrixXd> M) const {
+  for (const Block& b : blocks) {
+    if (b.size == 1) {
+      M.col(b.offset) *= b.m(0, 0);
+    } else {
+      const Eigen::MatrixXd cols = M.middleCols(b.offset, 2) * b.m.transpose();
+      M.middleCols(b.offset, 2) = cols;
+    }
+  }
+}
+
+void SensorBlocks::RightMultiply(Eigen::Ref<Eigen::MatrixXd> M) const {
+  for (const Block& b : blocks) {
+    if (b.size == 1) {
+      M.col(b.offset) *= b.m(0, 0);
+    } else {
+      const Eigen::MatrixXd cols = M.middleCols(b.offset, 2) * b.m;
+      M.middleCols(b.offset, 2) = cols;
+    }
+  }
+}
+
+void SensorBlocks::PreMultiply(const SensorBlocks& later) {
+  for (size_t i = 0; i < blocks.size(); ++i) blocks[i].m = later.blocks[i].m * blocks[i].m;
+}
+
+void SensorBlocks::Propagate(const SensorBlocks& D, const SensorBlocks& Q) {
+  for (size_t i = 0; i < blocks.size(); ++i) {
+    blocks[i].m = D.blocks[i].m * blocks[i].m * D.blocks[i].m.transpose() + Q.blocks[i].m;
+  }
+}
+
+Eigen::MatrixXd SensorBlocks::Dense(int m) const {
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(m, m);
+  for (const Block& b : blocks) out.block(b.offset, b.offset, b.size, b.size) = b.m.topLeftCorner(b.size, b.size);
+  return out;
+}
+
+// ---- IntervalTransition -----------------------------------------------------
+
+void IntervalTransition::PropagateMean(Eigen::VectorXd& x) const {
+  const auto m = B.cols();
+  Eigen::Matrix<double, 9, 1> nav = A * x.head<9>() + B * x.tail(m);
+  Eigen::RowVectorXd sensors = x.tail(m).transpose();
+  D.RightMultiplyTranspose(sensors);
+  x.head<9>() = nav;
+  x.tail(m) = sensors.transpose();
+}
+
+void IntervalTransition::PropagateRows(Eigen::MatrixXd& M) const {
+  const auto m = B.cols();
+  Eigen::MatrixXd nav = A * M.topRows<9>() + B * M.bottomRows(m);
+  Eigen::MatrixXd sensorsT = M.bottomRows(m).transpose();
+  D.RightMultiplyTranspose(sensorsT);
+  M.topRows<9>() = nav;
+  M.bottomRows(m) = sensorsT.transpose();
+}
+
+void IntervalTransition::PropagateCovariance(Eigen::MatrixXd& P) const {
+  // Φ P Φᵀ in two one-sided products, then add Q.
+  PropagateRows(P);
+  Eigen::MatrixXd PT = P.transpose();
+  PropagateRows(PT);
+  P = PT.transpose();
+  const auto m = B.cols();
+  P.topLeftCorner<9, 9>() += Qnn;
+  P.topRightCorner(9, m) += Qns;
+  P.bottomLeftCorner(m, 9) += Qns.transpose();
+  for (const auto& b : Qss.blocks) {
+    P.block(9 + b.offset, 9 + b.offset, b.size, b.size) += b.m.topLeftCorner(b.size, b.size);
+  }
+  P = 0.5 * (P + P.transpose()).eval();
+}
+
+Eigen::MatrixXd IntervalTransition::DenseTransition(int n) const {
+  Eigen::MatrixXd phi = Eigen::MatrixXd::Zero(n, n);
+  const int m = n - 9;
+  phi.topLeftCorner<9, 9>() = A;
+  phi.topRightCorner(9, m) = B;
+  phi.bottomRightCorner(m, m) = D.Dense(m);
+  return phi;
+}
+
+// ---- IntervalAccumulator ----------------------------------------------------
+
+void EvaluateStateRegressors(const ErrorModel& model, const StateLayout& layout, const RegressorInputs& in,
+                             Eigen::VectorXd& r) {
+  const auto& states = layout.sensor_states();
+  double values[2];
+  for (size_t i = 0; i < states.size(); ++i) {
+    const SensorState& s = states[i];
+    if (!s.reaches_output) {
+      r[static_cast<Eigen::Index>(i)] = 0.0;
+    } else if (s.effect < 0 || s.dynamics != StateDynamics::kConstant) {
+      r[static_cast<Eigen::Index>(i)] = 1.0;  // drifts add themselves to the sensor's output
+    } else {
+      EvaluateRegressor(model.effects[static_cast<size_t>(s.effect)].term, in, values);
+      r[static_cast<Eigen::Index>(i)] = values[s.parameter];
+    }
+  }
+}
+
+IntervalAccumulator::IntervalAccumulator(const ErrorModel& model, const StateLayout& layout)
+    : model_(model), layout_(layout) {
+  const int m = layout.sensor_count();
+  t_.B.setZero(9, m);
+  t_.Qns.setZero(9, m);
+  regressors_.setZero(m);
+  Bj_.setZero(9, m);
+  U_.setZero(9, m);
+  V_.setZero(9, m);
+  white_gyro_var_ = model.gyro.white_noise_density.cwiseAbs2();
+  white_acc_var_ = model.acc.white_noise_density.cwiseAbs2();
+  Reset();
+}
+
+void IntervalAccumulator::Reset() {
+  t_.A.setIdentity();
+  t_.B.setZero();
+  t_.D = SensorBlocks::Identity(layout_);
+  t_.Qnn.setZero();
+  t_.Qns.setZero();
+  t_.Qss = SensorBlocks::Zero(layout_);
+  t_.duration_s = 0.0;
+}
+
+void IntervalAccumulator::AddSample(const NavigationDiscretisation& nav, const SensorBlocks& D,
+                                    const SensorBlocks& Qs, const SampleCoupling& c) {
+  EvaluateStateRegressors(model_, layout_, c.inputs, regressors_);
+  const auto& states = layout_.sensor_states();
+  for (size_t i = 0; i < states.size(); ++i) {
+    const auto col = static_cast<Eigen::Index>(i);
+    Bj_.col(col) = c.Column(states[i].sensor, states[i].axis) * regressors_[col];
+  }
+  const Matrix9d& A = nav.A;
+
+  // Q ← Φ_j Q Φ_jᵀ + diag(Qw, Qs) with Φ_j = [A B_j; 0 D] (see the header).
+  U_.noalias() = A * t_.Qns;
+  V_ = Bj_;
+  t_.Qss.RightMultiply(V_);  // B_j Qss (Qss symmetric)
+  Matrix9d Qnn = A * t_.Qnn * A.transpose();
+  Qnn.noalias() += U_ * Bj_.transpose();
+  Qnn.noalias() += Bj_ * U_.transpose();
+  Qnn.noalias() += V_ * Bj_.transpose();
+  // White sensor noise over the sample: interval means with variance N²/Δt.
+  const double inv_dt = 1.0 / c.dt_s;
+  Qnn.noalias() += c.g_att * (white_gyro_var_ * inv_dt).asDiagonal() * c.g_att.transpose();
+  Qnn.noalias() += c.g_vel * (white_acc_var_ * inv_dt).asDiagonal() * c.g_vel.transpose();
+  t_.Qnn = 0.5 * (Qnn + Qnn.transpose());
+  U_ += V_;
+  D.RightMultiplyTranspose(U_);
+  t_.Qns = U_;
+  t_.Qss.Propagate(D, Qs);
+
+  // Φ_acc ← Φ_j Φ_acc: the sample acts on the sensor states as they stand at its start.
+  V_ = Bj_;
+  t_.D.RightMultiply(V_);
+  U_.noalias() = A * t_.B;
+  t_.B = U_ + V_;
+  t_.A = A * t_.A;
+  t_.D.PreMultiply(D);
+  t_.duration_s += c.dt_s;
+}
+
+}  // namespace insdiag::engine
