@@ -57,8 +57,8 @@ NavigationDiscretisation DiscretiseNavigation(const Matrix9d& F, double dt_s) {
 SampleCoupling MakeSampleCoupling(const NavigationDiscretisation& d, const StateLayout& layout,
                                   const Eigen::Matrix3d& C_b_n_mid, const RegressorInputs& inputs) {
   SampleCoupling c;
-  c.g_att.noalias() = -d.Gamma.middleCols<3>(layout.attitude()) * C_b_n_mid;
-  c.g_vel.noalias() = d.Gamma.middleCols<3>(layout.velocity()) * C_b_n_mid;
+  c.g_att.noalias() = -d.Gamma.middleCols<3>(layout.attitude()).lazyProduct(C_b_n_mid);
+  c.g_vel.noalias() = d.Gamma.middleCols<3>(layout.velocity()).lazyProduct(C_b_n_mid);
   c.inputs = inputs;
   c.dt_s = d.dt_s;
   return c;
@@ -257,25 +257,41 @@ void IntervalAccumulator::AddSample(const NavigationDiscretisation& nav, const S
                                     const SensorBlocks& Qs, const SampleCoupling& c) {
   EvaluateStateRegressors(model_, layout_, c.inputs, regressors_);
   const auto& states = layout_.sensor_states();
-  for (size_t i = 0; i < states.size(); ++i) {
-    const auto col = static_cast<Eigen::Index>(i);
-    Bj_.col(col) = c.Column(states[i].sensor, states[i].axis) * regressors_[col];
+  const auto m = static_cast<Eigen::Index>(states.size());
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const SensorState& st = states[static_cast<size_t>(i)];
+    Bj_.col(i) = c.Column(st.sensor, st.axis) * regressors_[i];
   }
   const Matrix9d& A = nav.A;
 
-  // Q ← Φ_j Q Φ_jᵀ + diag(Qw, Qs) with Φ_j = [A B_j; 0 D] (see the header).
-  U_.noalias() = A * t_.Qns;
+  // Q ← Φ_j Q Φ_jᵀ + diag(Qw, Qs) with Φ_j = [A B_j; 0 D] (see the header):
+  //   Qnn ← A Qnn Aᵀ + X + Xᵀ + Qw,   X = (A Qns + ½ B_j Qss) B_jᵀ
+  //   Qns ← (A Qns + B_j Qss) Dᵀ
+  // B_j's column s is g_{sensor(s)}[:, axis(s)]·r_s, so X = Y_g g_attᵀ + Y_a g_velᵀ with
+  // Y_{g|a}[:, axis] = Σ_s (A Qns + ½ B_j Qss)[:, s]·r_s over the gyro | accelerometer states.
+  U_.noalias() = A.lazyProduct(t_.Qns);
   V_ = Bj_;
   t_.Qss.RightMultiply(V_);  // B_j Qss (Qss symmetric)
-  Matrix9d Qnn = A * t_.Qnn * A.transpose();
-  Qnn.noalias() += U_ * Bj_.transpose();
-  Qnn.noalias() += Bj_ * U_.transpose();
-  Qnn.noalias() += V_ * Bj_.transpose();
+  Matrix93d Yg = Matrix93d::Zero();
+  Matrix93d Ya = Matrix93d::Zero();
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const SensorState& st = states[static_cast<size_t>(i)];
+    (st.sensor == Sensor::kGyro ? Yg : Ya).col(st.axis) += (U_.col(i) + 0.5 * V_.col(i)) * regressors_[i];
+  }
+  // Eigen sends even fixed 9×9 products to its blocked GEMM (its coefficient-based
+  // threshold is rows + cols + depth < 20); lazyProduct keeps them inline.
+  Matrix9d X = Yg.lazyProduct(c.g_att.transpose());
+  X.noalias() += Ya.lazyProduct(c.g_vel.transpose());
+  const Matrix9d AQ = A.lazyProduct(t_.Qnn);
+  Matrix9d Qnn = AQ.lazyProduct(A.transpose());
+  Qnn += X + X.transpose();
   // White sensor noise over the sample: interval means with variance N²/Δt.
   const double inv_dt = 1.0 / c.dt_s;
-  Qnn.noalias() += c.g_att * (white_gyro_var_ * inv_dt).asDiagonal() * c.g_att.transpose();
-  Qnn.noalias() += c.g_vel * (white_acc_var_ * inv_dt).asDiagonal() * c.g_vel.transpose();
-  t_.Qnn = 0.5 * (Qnn + Qnn.transpose());
+  const Matrix93d g_att_w = c.g_att * (white_gyro_var_ * inv_dt).asDiagonal();
+  const Matrix93d g_vel_w = c.g_vel * (white_acc_var_ * inv_dt).asDiagonal();
+  Qnn.noalias() += g_att_w.lazyProduct(c.g_att.transpose());
+  Qnn.noalias() += g_vel_w.lazyProduct(c.g_vel.transpose());
+  t_.Qnn = Qnn;
   U_ += V_;
   D.RightMultiplyTranspose(U_);
   t_.Qns = U_;
@@ -284,9 +300,9 @@ void IntervalAccumulator::AddSample(const NavigationDiscretisation& nav, const S
   // Φ_acc ← Φ_j Φ_acc: the sample acts on the sensor states as they stand at its start.
   V_ = Bj_;
   t_.D.RightMultiply(V_);
-  U_.noalias() = A * t_.B;
+  U_.noalias() = A.lazyProduct(t_.B);
   t_.B = U_ + V_;
-  t_.A = A * t_.A;
+  t_.A = A.lazyProduct(t_.A);
   t_.D.PreMultiply(D);
   t_.duration_s += c.dt_s;
 }
