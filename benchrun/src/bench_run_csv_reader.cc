@@ -25,13 +25,20 @@ constexpr std::array kRequiredKeys = {MetadataField::kFormat, MetadataField::kUn
                                       MetadataField::kSiteLatitude, MetadataField::kSiteLongitude,
                                       MetadataField::kSiteHeight};
 
+bool IsSpaceOrTab(char c) { return c == ' ' || c == '\t'; }
+
+// Plain loops: find_first_not_of calls memchr per character, which showed up
+// as a tenth of the parse time.
 std::string_view Trim(std::string_view text) {
-  const std::size_t begin = text.find_first_not_of(kBlank);
-  if (begin == std::string_view::npos) return text.substr(text.size());
-  return text.substr(begin, text.find_last_not_of(kBlank) - begin + 1);
+  while (!text.empty() && IsSpaceOrTab(text.front())) text.remove_prefix(1);
+  while (!text.empty() && IsSpaceOrTab(text.back())) text.remove_suffix(1);
+  return text;
 }
 
-bool IsBlank(std::string_view text) { return text.find_first_not_of(" \t\r\n") == text.npos; }
+bool IsBlank(std::string_view text) {
+  return std::all_of(text.begin(), text.end(),
+                     [](char c) { return IsSpaceOrTab(c) || c == '\r' || c == '\n'; });
+}
 
 // 1-based character column of `at` in `line`: UTF-8 continuation bytes do not
 // start a character.
