@@ -43,10 +43,17 @@ NumberParse ParseDegreesAsRadians(std::string_view text, double& radians) {
 std::string DescribeNumberParse(NumberParse outcome, std::string_view text) {
   std::string_view what = "is out of the range of a double";
   switch (outcome) {
-    case NumberParse::kOk: what = "is a number"; break;
-    case NumberParse::kNotANumber: what = "is not a number"; break;
-    case NumberParse::kNotFinite: what = "is not a finite number"; break;
-    case NumberParse::kOutOfRange: break;
+    case NumberParse::kOk:
+      what = "is a number";
+      break;
+    case NumberParse::kNotANumber:
+      what = "is not a number";
+      break;
+    case NumberParse::kNotFinite:
+      what = "is not a finite number";
+      break;
+    case NumberParse::kOutOfRange:
+      break;
   }
   return absl::StrFormat("'%s' %s", text, what);
 }

@@ -1,5 +1,6 @@
 #include "insdiag/benchrun/bench_run_csv.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -16,7 +17,9 @@ namespace insdiag::benchrun {
 namespace {
 
 using testing::CsvText;
+using ::testing::HasSubstr;
 using testing::IsRefusalAt;
+using ::testing::Not;
 
 constexpr double kRadiansPerDegree = std::numbers::pi / 180.0;
 constexpr char kSource[] = "run.csv";
@@ -96,9 +99,10 @@ TEST(ParseBenchRun, DatasheetKeysFillTheDatasheet) {
 
 TEST(ParseBenchRun, KeepsUnknownAndFreeMetadataInFileOrder) {
   CsvText csv;
-  csv.metadata.insert(csv.metadata.begin() + 2,
-                      {"# operator: kim", "# table_firmware: 4.2.1", "# started_at: 2024-03-01T09:15:00Z"});
-  csv.metadata.insert(csv.metadata.end(), {"# bench:  table 3  ", "# notes: warm-up: 20 min, door closed"});
+  csv.metadata.insert(csv.metadata.begin() + 2, {"# operator: kim", "# table_firmware: 4.2.1",
+                                                 "# started_at: 2024-03-01T09:15:00Z"});
+  csv.metadata.insert(csv.metadata.end(),
+                      {"# bench:  table 3  ", "# notes: warm-up: 20 min, door closed"});
   const absl::StatusOr<engine::BenchRun> run = ParseBenchRun(csv.Text(), kSource);
   ASSERT_TRUE(run.ok()) << run.status();
   const std::vector<std::pair<std::string, std::string>> expected = {
@@ -237,7 +241,7 @@ TEST(ParseBenchRunRefuses, NanOrInfinityInARow) {
     csv.SetField(30, kFieldAccY, value);
     const absl::Status status = ParseStatus(csv.Text());
     EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(30), kColumnAccY, "acc_y"))) << value;
-    EXPECT_NE(MessageOf(status).find("is not a finite number"), std::string::npos) << status;
+    EXPECT_THAT(MessageOf(status), HasSubstr("is not a finite number"));
   }
 }
 
@@ -278,7 +282,7 @@ TEST(ParseBenchRunRefuses, MissingRequiredKey) {
     csv.metadata.erase(csv.metadata.begin() + static_cast<std::ptrdiff_t>(dropped));
     const absl::Status status = ParseStatus(csv.Text());
     EXPECT_TRUE(IsRefusalAt(status, At(csv.HeaderLine(), 0, key))) << key;
-    EXPECT_NE(MessageOf(status).find("missing required metadata key"), std::string::npos);
+    EXPECT_THAT(MessageOf(status), HasSubstr("missing required metadata key"));
   }
 }
 
@@ -301,16 +305,17 @@ TEST(ParseBenchRunRefuses, DuplicateColumn) {
   csv.header = "t,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,ref_roll,ref_pitch,ref_yaw,gyro_x";
   const absl::Status status = ParseStatus(csv.Text());
   EXPECT_TRUE(IsRefusalAt(status, At(7, 69, "gyro_x")));
-  EXPECT_NE(MessageOf(status).find("duplicate column"), std::string::npos);
+  EXPECT_THAT(MessageOf(status), HasSubstr("duplicate column"));
 }
 
 TEST(ParseBenchRunRefuses, UnknownFormat) {
-  for (const char* format : {"insdiag-bench-run/2", "insdiag-bench-run/1.0", "INSDIAG-BENCH-RUN/1"}) {
+  for (const char* format :
+       {"insdiag-bench-run/2", "insdiag-bench-run/1.0", "INSDIAG-BENCH-RUN/1"}) {
     CsvText csv;
     csv.metadata[0] = std::string("# format: ") + format;
     const absl::Status status = ParseStatus(csv.Text());
     EXPECT_TRUE(IsRefusalAt(status, At(1, 11, "format"))) << format;
-    EXPECT_NE(MessageOf(status).find("unknown format"), std::string::npos) << status;
+    EXPECT_THAT(MessageOf(status), HasSubstr("unknown format"));
   }
 }
 
@@ -327,7 +332,7 @@ TEST(ParseBenchRunRefuses, DuplicateMetadataKey) {
   csv.metadata.push_back("#  bench: table 4");
   const absl::Status status = ParseStatus(csv.Text());
   EXPECT_TRUE(IsRefusalAt(status, At(8, 4, "bench")));
-  EXPECT_NE(MessageOf(status).find("first at line 3"), std::string::npos) << status;
+  EXPECT_THAT(MessageOf(status), HasSubstr("first at line 3"));
 }
 
 TEST(ParseBenchRunRefuses, DuplicateSpecMetadataKey) {
@@ -338,12 +343,12 @@ TEST(ParseBenchRunRefuses, DuplicateSpecMetadataKey) {
 
 TEST(ParseBenchRunRefuses, MetadataLineThatIsNotKeyColonValue) {
   const std::vector<std::pair<std::string, int>> cases = {
-      {"# just a comment", 3},        // no colon
-      {"#", 2},                       // nothing at all
-      {"# Unit Serial: 42", 3},       // not a lower-case key
-      {"# site-height: 3", 3},        // '-' in key
-      {"# : value", 3},               // empty key
-      {"#\t2nd_key: value", 3},       // key starting with a digit
+      {"# just a comment", 3},   // no colon
+      {"#", 2},                  // nothing at all
+      {"# Unit Serial: 42", 3},  // not a lower-case key
+      {"# site-height: 3", 3},   // '-' in key
+      {"# : value", 3},          // empty key
+      {"#\t2nd_key: value", 3},  // key starting with a digit
   };
   for (const auto& [line, column] : cases) {
     CsvText csv;
@@ -358,7 +363,7 @@ TEST(ParseBenchRunRefuses, NonIncreasingTime) {
     csv.SetField(50, 0, t);
     const absl::Status status = ParseStatus(csv.Text());
     EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(50), kColumnT, "t"))) << t;
-    EXPECT_NE(MessageOf(status).find("does not increase"), std::string::npos) << status;
+    EXPECT_THAT(MessageOf(status), HasSubstr("does not increase"));
   }
 }
 
@@ -368,7 +373,7 @@ TEST(ParseBenchRunRefuses, GapLongerThanFiveNominalIntervals) {
   csv.rows.erase(csv.rows.begin() + 120, csv.rows.begin() + 125);
   const absl::Status status = ParseStatus(csv.Text());
   EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(120), kColumnT, "t")));
-  EXPECT_NE(MessageOf(status).find("nominal intervals"), std::string::npos) << status;
+  EXPECT_THAT(MessageOf(status), HasSubstr("nominal intervals"));
 }
 
 TEST(ParseBenchRunRefuses, OnlyTheFirstGapIsReported) {
@@ -390,7 +395,7 @@ TEST(ParseBenchRunRefuses, RowWithTooFewFields) {
   const absl::Status status = ParseStatus(csv.Text());
   const int end_column = static_cast<int>(csv.rows[9].size()) + 1;
   EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(9), end_column, "temp")));
-  EXPECT_NE(MessageOf(status).find("row has 10 fields, expected 11"), std::string::npos) << status;
+  EXPECT_THAT(MessageOf(status), HasSubstr("row has 10 fields, expected 11"));
 }
 
 TEST(ParseBenchRunRefuses, RowWithTooManyFields) {
@@ -399,7 +404,7 @@ TEST(ParseBenchRunRefuses, RowWithTooManyFields) {
   csv.rows[9] += ",1,2";
   const absl::Status status = ParseStatus(csv.Text());
   EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(9), extra_column, "row")));
-  EXPECT_NE(MessageOf(status).find("row has 13 fields, expected 11"), std::string::npos) << status;
+  EXPECT_THAT(MessageOf(status), HasSubstr("row has 13 fields, expected 11"));
 }
 
 TEST(ParseBenchRunRefuses, EmptyRowBetweenRows) {
@@ -413,8 +418,7 @@ TEST(ParseBenchRunRefuses, GyroRateInDegreesPerSecond) {
   csv.SetField(20, 1, "-57.3");
   const absl::Status status = ParseStatus(csv.Text());
   EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(20), kColumnGyroX, "gyro_x")));
-  EXPECT_NE(MessageOf(status).find("beyond ±35 rad/s: looks like deg/s"), std::string::npos)
-      << status;
+  EXPECT_THAT(MessageOf(status), HasSubstr("beyond ±35 rad/s: looks like deg/s"));
 }
 
 TEST(ParseBenchRunRefuses, GyroRateBeyondEvenDegreesPerSecond) {
@@ -422,7 +426,7 @@ TEST(ParseBenchRunRefuses, GyroRateBeyondEvenDegreesPerSecond) {
   csv.SetField(20, 3, "4000");
   const absl::Status status = ParseStatus(csv.Text());
   EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(20), kColumnGyroZ, "gyro_z")));
-  EXPECT_EQ(MessageOf(status).find("deg/s"), std::string::npos) << status;
+  EXPECT_THAT(MessageOf(status), Not(HasSubstr("deg/s")));
 }
 
 TEST(ParseBenchRunRefuses, SpecificForceBeyondLimit) {
@@ -430,7 +434,7 @@ TEST(ParseBenchRunRefuses, SpecificForceBeyondLimit) {
   csv.SetField(150, kFieldAccY, "500.5");
   const absl::Status status = ParseStatus(csv.Text());
   EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(150), kColumnAccY, "acc_y")));
-  EXPECT_NE(MessageOf(status).find("beyond ±500 m/s²"), std::string::npos) << status;
+  EXPECT_THAT(MessageOf(status), HasSubstr("beyond ±500 m/s²"));
 }
 
 TEST(ParseBenchRunRefuses, LatitudeOutsideNinetyDegrees) {
@@ -438,7 +442,7 @@ TEST(ParseBenchRunRefuses, LatitudeOutsideNinetyDegrees) {
   csv.metadata[3] = "# site_latitude_deg: 95.5";
   const absl::Status status = ParseStatus(csv.Text());
   EXPECT_TRUE(IsRefusalAt(status, At(4, 22, "site_latitude_deg")));
-  EXPECT_NE(MessageOf(status).find("outside ±90°"), std::string::npos) << status;
+  EXPECT_THAT(MessageOf(status), HasSubstr("outside ±90°"));
 }
 
 TEST(ParseBenchRunRefuses, SpecificForceInUnitsOfG) {
@@ -446,8 +450,7 @@ TEST(ParseBenchRunRefuses, SpecificForceInUnitsOfG) {
   for (std::size_t i = 0; i < csv.rows.size(); ++i) csv.SetField(i, kFieldAccZ, "-1.0009");
   const absl::Status status = ParseStatus(csv.Text());
   EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(0), kColumnAccX, "acc_x")));
-  EXPECT_NE(MessageOf(status).find("looks like units of g, expected m/s²"), std::string::npos)
-      << status;
+  EXPECT_THAT(MessageOf(status), HasSubstr("looks like units of g, expected m/s²"));
 }
 
 TEST(ParseBenchRunRefuses, SpecificForceFarFromGravity) {
@@ -456,8 +459,8 @@ TEST(ParseBenchRunRefuses, SpecificForceFarFromGravity) {
   for (std::size_t i = 0; i < 100; ++i) csv.SetField(i, kFieldAccZ, "-8.7");
   const absl::Status status = ParseStatus(csv.Text());
   EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(0), kColumnAccX, "acc_x")));
-  EXPECT_NE(MessageOf(status).find("local normal gravity is 9.81"), std::string::npos) << status;
-  EXPECT_EQ(MessageOf(status).find("units of g"), std::string::npos) << status;
+  EXPECT_THAT(MessageOf(status), HasSubstr("local normal gravity is 9.81"));
+  EXPECT_THAT(MessageOf(status), Not(HasSubstr("units of g")));
 }
 
 TEST(ParseBenchRunAccepts, SpecificForceWithinTenPercentOfGravity) {
@@ -471,14 +474,14 @@ TEST(ParseBenchRunRefuses, RunShorterThanASecondFarFromGravity) {
   for (std::size_t i = 0; i < csv.rows.size(); ++i) csv.SetField(i, kFieldAccZ, "-0.98");
   const absl::Status status = ParseStatus(csv.Text());
   EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(0), kColumnAccX, "acc_x")));
-  EXPECT_NE(MessageOf(status).find("(20 samples)"), std::string::npos) << status;
+  EXPECT_THAT(MessageOf(status), HasSubstr("(20 samples)"));
 }
 
 TEST(ParseBenchRunRefuses, RunWithNoSamples) {
   CsvText csv(0);
   const absl::Status status = ParseStatus(csv.Text() + "\n\n");
   EXPECT_TRUE(IsRefusalAt(status, At(8, 0, "samples")));
-  EXPECT_NE(MessageOf(status).find("no samples"), std::string::npos) << status;
+  EXPECT_THAT(MessageOf(status), HasSubstr("no samples"));
 }
 
 TEST(ParseBenchRunRefuses, TextWithoutHeader) {
@@ -499,7 +502,8 @@ TEST(ParseBenchRunRefuses, TheFirstErrorInLineOrder) {
 
 TEST(ParseBenchRunRefuses, ColumnsCountCharactersNotBytes) {
   CsvText csv;
-  csv.header = "t,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,ref_roll,ref_pitch,ref_yaw,température,temp";
+  csv.header =
+      "t,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,ref_roll,ref_pitch,ref_yaw,température,temp";
   for (std::size_t i = 0; i < csv.rows.size(); ++i) {
     csv.rows[i].insert(csv.rows[i].rfind(',') + 1, "°C,");
   }
@@ -511,7 +515,7 @@ TEST(ParseBenchRunRefuses, ColumnsCountCharactersNotBytes) {
 TEST(ReadBenchRunFile, NamesTheMissingFile) {
   const absl::StatusOr<engine::BenchRun> run = ReadBenchRunFile("/nonexistent/run.csv");
   EXPECT_EQ(run.status().code(), absl::StatusCode::kNotFound);
-  EXPECT_NE(MessageOf(run.status()).find("/nonexistent/run.csv"), std::string::npos);
+  EXPECT_THAT(MessageOf(run.status()), HasSubstr("/nonexistent/run.csv"));
 }
 
 TEST(ReadBenchRunFile, ErrorsNameThePath) {
@@ -539,11 +543,13 @@ engine::BenchRun RandomRun(std::mt19937_64& rng, bool has_temperature) {
   engine::BenchRun run;
   run.metadata.format = std::string(kFormatV1);
   run.metadata.unit_serial = "INS-2000-" + std::to_string(rng() % 10000);
-  run.metadata.site = {.latitude_rad = latitude(rng), .longitude_rad = angle(rng),
+  run.metadata.site = {.latitude_rad = latitude(rng),
+                       .longitude_rad = angle(rng),
                        .height_m = 100.0 + 50.0 * noise(rng)};
   run.metadata.datasheet.gyro_arw_rad_rts = 1e-6 * std::abs(noise(rng));
   run.metadata.datasheet.acc_bias_tau_s = 3600.0 / 7.0;
-  run.metadata.extra = {{"operator", "Kim Jae-won"}, {"notes", "ключ: значение, 25 °C"}, {"x1", ""}};
+  run.metadata.extra = {
+      {"operator", "Kim Jae-won"}, {"notes", "ключ: значение, 25 °C"}, {"x1", ""}};
   run.has_temperature = has_temperature;
   const double gravity = 9.8;
   for (int k = 0; k < 300; ++k) {
@@ -568,8 +574,9 @@ TEST(FormatBenchRun, RoundTripIsExactWithTemperature) {
   const engine::BenchRun run = RandomRun(rng, /*has_temperature=*/true);
   ASSERT_TRUE(ValidateBenchRun(run, "random").ok()) << ValidateBenchRun(run, "random");
   const std::string text = FormatBenchRun(run);
-  EXPECT_NE(text.find("\nt,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,ref_roll,ref_pitch,ref_yaw,temp\n"),
-            std::string::npos);
+  EXPECT_THAT(
+      text,
+      HasSubstr("\nt,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,ref_roll,ref_pitch,ref_yaw,temp\n"));
   const absl::StatusOr<engine::BenchRun> parsed = ParseBenchRun(text, "written");
   ASSERT_TRUE(parsed.ok()) << parsed.status();
   ExpectSameRun(*parsed, run);
@@ -579,9 +586,9 @@ TEST(FormatBenchRun, RoundTripIsExactWithoutTemperature) {
   std::mt19937_64 rng(8);
   const engine::BenchRun run = RandomRun(rng, /*has_temperature=*/false);
   const std::string text = FormatBenchRun(run);
-  EXPECT_NE(text.find("\nt,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,ref_roll,ref_pitch,ref_yaw\n"),
-            std::string::npos);
-  EXPECT_EQ(text.find("temp"), std::string::npos);
+  EXPECT_THAT(text,
+              HasSubstr("\nt,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,ref_roll,ref_pitch,ref_yaw\n"));
+  EXPECT_THAT(text, Not(HasSubstr("temp")));
   const absl::StatusOr<engine::BenchRun> parsed = ParseBenchRun(text, "written");
   ASSERT_TRUE(parsed.ok()) << parsed.status();
   ExpectSameRun(*parsed, run);
@@ -652,9 +659,7 @@ TEST(FormatBenchRun, SiteAnglesKeepTheirShortDecimalText) {
   const absl::StatusOr<engine::BenchRun> run = ParseBenchRun(csv.Text(), kSource);
   ASSERT_TRUE(run.ok()) << run.status();
   const std::string text = FormatBenchRun(*run);
-  EXPECT_NE(text.find("# site_latitude_deg: -33.8688\n# site_longitude_deg: 151.2093\n"),
-            std::string::npos)
-      << text.substr(0, 200);
+  EXPECT_THAT(text, HasSubstr("# site_latitude_deg: -33.8688\n# site_longitude_deg: 151.2093\n"));
 }
 
 TEST(WriteBenchRunFile, WritesAFileTheReaderReadsBack) {

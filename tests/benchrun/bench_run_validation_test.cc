@@ -1,5 +1,6 @@
 #include "insdiag/benchrun/bench_run_validation.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -16,7 +17,9 @@ namespace insdiag::benchrun {
 namespace {
 
 using testing::CsvText;
+using ::testing::HasSubstr;
 using testing::IsRefusalAt;
+using ::testing::Not;
 using testing::StaticRun;
 
 constexpr char kSource[] = "upload";
@@ -98,7 +101,7 @@ TEST(ValidateBenchRun, RefusesSpecificForceInUnitsOfG) {
   for (engine::ImuSample& sample : run.samples) sample.acc_mps2 /= 9.80665;
   const absl::Status status = Validate(run);
   EXPECT_TRUE(IsRefusalAt(status, Field("samples[0].acc_x")));
-  EXPECT_NE(MessageOf(status).find("looks like units of g, expected m/s²"), std::string::npos);
+  EXPECT_THAT(MessageOf(status), HasSubstr("looks like units of g, expected m/s²"));
 }
 
 TEST(ValidateBenchRun, GravityUsesTheSiteLatitudeAndHeight) {
@@ -118,7 +121,7 @@ TEST(ValidateBenchRun, RefusesLatitudeOutsideNinetyDegrees) {
   run.metadata.site.latitude_rad = -1.6;
   const absl::Status status = Validate(run);
   EXPECT_TRUE(IsRefusalAt(status, Field("metadata.site.latitude_rad")));
-  EXPECT_NE(MessageOf(status).find("latitude -91.67324722"), std::string::npos) << status;
+  EXPECT_THAT(MessageOf(status), HasSubstr("latitude -91.67324722"));
 }
 
 TEST(ValidateBenchRun, RefusesMissingOrUnknownFormat) {
@@ -237,7 +240,8 @@ TEST(BenchRunValidator, CsvAndTypedPathsRefuseAlike) {
     const std::optional<InputLocation> where = LocationOf(parsed);
     ASSERT_TRUE(where.has_value()) << parsed;
     EXPECT_EQ(where->line, csv.RowLine(c.path == "samples[0].acc_x" ? 0 : c.row)) << c.path;
-    EXPECT_EQ("samples[" + std::to_string(where->line - csv.RowLine(0)) + "]." + where->field, c.path);
+    EXPECT_EQ("samples[" + std::to_string(where->line - csv.RowLine(0)) + "]." + where->field,
+              c.path);
     EXPECT_EQ(DetailOf(parsed), DetailOf(typed));
   }
 }
@@ -246,8 +250,8 @@ TEST(BenchRunValidator, CsvAndTypedPathsRefuseAlike) {
 // Locations
 
 TEST(Refusal, CarriesItsLocationAsPayload) {
-  const InputLocation where{.source = "C:\\runs\\odd\tname: 3.csv", .line = 4, .column = 17,
-                            .field = "acc_z"};
+  const InputLocation where{
+      .source = "C:\\runs\\odd\tname: 3.csv", .line = 4, .column = 17, .field = "acc_z"};
   const absl::Status status = Refusal(where, "detail");
   EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
   EXPECT_EQ(MessageOf(status), "C:\\runs\\odd\tname: 3.csv:4:17: acc_z: detail");

@@ -129,8 +129,8 @@ inline ::testing::AssertionResult IsRefusalAt(const absl::Status& status,
   prefix += ": " + expected.field + ": ";
   const std::string message(status.message());
   if (message.rfind(prefix, 0) != 0) {
-    return ::testing::AssertionFailure() << "message '" << message << "' does not start with '"
-                                         << prefix << "'";
+    return ::testing::AssertionFailure()
+           << "message '" << message << "' does not start with '" << prefix << "'";
   }
   return ::testing::AssertionSuccess();
 }
