@@ -19,6 +19,7 @@ namespace {
 using testing::CsvText;
 using ::testing::HasSubstr;
 using testing::IsRefusalAt;
+using testing::MessageOf;
 using ::testing::Not;
 
 constexpr double kRadiansPerDegree = std::numbers::pi / 180.0;
@@ -41,8 +42,6 @@ absl::Status ParseStatus(const std::string& text) { return ParseBenchRun(text, k
 InputLocation At(int line, int column, std::string field) {
   return {.source = kSource, .line = line, .column = column, .field = std::move(field)};
 }
-
-std::string MessageOf(const absl::Status& status) { return std::string(status.message()); }
 
 void ExpectSameRun(const engine::BenchRun& actual, const engine::BenchRun& expected) {
   EXPECT_EQ(actual.metadata.format, expected.metadata.format);

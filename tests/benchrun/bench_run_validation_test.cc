@@ -19,7 +19,7 @@ namespace {
 using testing::CsvText;
 using ::testing::HasSubstr;
 using testing::IsRefusalAt;
-using ::testing::Not;
+using testing::MessageOf;
 using testing::StaticRun;
 
 constexpr char kSource[] = "upload";
@@ -28,8 +28,6 @@ constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
 InputLocation Field(std::string path) { return {.source = kSource, .field = std::move(path)}; }
 
 absl::Status Validate(const engine::BenchRun& run) { return ValidateBenchRun(run, kSource); }
-
-std::string MessageOf(const absl::Status& status) { return std::string(status.message()); }
 
 // The part of a refusal's message after "location: field: ".
 std::string DetailOf(const absl::Status& status) {

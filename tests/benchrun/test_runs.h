@@ -108,6 +108,9 @@ inline engine::BenchRun StaticRun(std::size_t sample_count = 200) {
   return run;
 }
 
+// The message as a std::string (Debian's abseil has its own string_view).
+inline std::string MessageOf(const absl::Status& status) { return std::string(status.message()); }
+
 // Checks that `status` is a refusal at `expected` whose message starts with
 // "source:line:column: field: " (line and column left out when 0).
 inline ::testing::AssertionResult IsRefusalAt(const absl::Status& status,
@@ -127,7 +130,7 @@ inline ::testing::AssertionResult IsRefusalAt(const absl::Status& status,
   if (expected.line > 0) prefix += ":" + std::to_string(expected.line);
   if (expected.line > 0 && expected.column > 0) prefix += ":" + std::to_string(expected.column);
   prefix += ": " + expected.field + ": ";
-  const std::string message(status.message());
+  const std::string message = MessageOf(status);
   if (message.rfind(prefix, 0) != 0) {
     return ::testing::AssertionFailure()
            << "message '" << message << "' does not start with '" << prefix << "'";
