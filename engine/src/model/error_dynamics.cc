@@ -302,7 +302,8 @@ void IntervalAccumulator::AddSample(const NavigationDiscretisation& nav, const S
   t_.D.RightMultiply(V_);
   U_.noalias() = A.lazyProduct(t_.B);
   t_.B = U_ + V_;
-  t_.A = A.lazyProduct(t_.A);
+  const Matrix9d A_acc = A.lazyProduct(t_.A);  // lazy products must not alias their operands
+  t_.A = A_acc;
   t_.D.PreMultiply(D);
   t_.duration_s += c.dt_s;
 }

@@ -1,0 +1,42 @@
+// Screening of the raw samples for spikes: isolated samples that depart from
+// their neighbours far beyond the sensor's noise (a transmission error, a
+// momentary electronic fault). A spike integrates into a step of attitude or
+// velocity that no sensor model explains, so it is flagged as an outlier and
+// replaced before the mechanisation, and the estimates after it stay clean.
+//
+// A sample x_k is a spike when |x_k − med_k| > threshold · σ, where med_k is
+// the median of the 2w+1 samples around k and σ = 1.4826 · median |x − med|
+// over the channel (a robust standard deviation; Hampel, J. Amer. Stat.
+// Assoc. 69, 1974 — the "Hampel identifier"). Medians follow table ramps and
+// stops, so motion is never taken for a spike.
+#pragma once
+
+#include <string_view>
+#include <vector>
+
+#include "insdiag/engine/bench_run.h"
+
+namespace insdiag::engine {
+
+// Raw sensor channels in sample order: gyro x, y, z, then accelerometer x, y, z.
+inline constexpr std::string_view kSensorChannelNames[6] = {"gyro_x", "gyro_y", "gyro_z",
+                                                            "acc_x",  "acc_y",  "acc_z"};
+
+struct ScreeningOptions {
+  int half_window = 5;      // w
+  double threshold = 12.0;  // in robust standard deviations
+};
+
+struct SampleOutlier {
+  size_t sample = 0;
+  int sensor_channel = 0;  // index into kSensorChannelNames
+  double time_s = 0.0;
+  double robust_z = 0.0;
+  double value = 0.0;        // as recorded
+  double replacement = 0.0;  // the neighbours' median used instead
+};
+
+// Finds spikes and replaces them in `run` (in place).
+std::vector<SampleOutlier> ScreenAndRepairSpikes(BenchRun& run, const ScreeningOptions& options);
+
+}  // namespace insdiag::engine

@@ -1,0 +1,93 @@
+// The analysis report: what the engine says about one bench run under one
+// error model. A plain value; the server and the CLI map it onto the
+// insdiag.v1.AnalysisReport message (shared/spec/cli-and-report.md).
+#pragma once
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "insdiag/engine/monitor/monitoring.h"
+
+namespace insdiag::engine {
+
+// An identified parameter of the error model.
+struct ParameterEstimate {
+  std::string name;  // "gyro_bias_gm.x.sigma", "gyro_arw.x", "gyro_scale_factor.z", …
+  double value = 0.0;
+  double std_error = std::numeric_limits<double>::quiet_NaN();
+  std::string method;  // "ACF", "ALLAN" or "FILTER"
+  std::string unit;
+  double a_priori = std::numeric_limits<double>::quiet_NaN();  // the model's value before identification
+};
+
+// Where in the run a candidate effect shows: its share of the score statistic
+// per channel and time segment.
+struct SegmentContribution {
+  std::string channel;
+  double start_s = 0.0;
+  double end_s = 0.0;
+  std::string motion;  // what the table did: "still", "turning", "tilting"
+  double share = 0.0;  // fraction of the candidate's statistic
+};
+
+// A catalogue effect absent from the model, tested from the same pass.
+struct EffectCandidate {
+  std::string name;  // "gyro_scale_factor.z" (or a family name in family_candidates)
+  std::string family;
+  std::string source;  // "SCORE" (Lagrange-multiplier test) or "STRUCTURE" (correlation-function family)
+  double statistic = 0.0;
+  int dof = 0;
+  double p_value = 1.0;
+  double p_value_holm = 1.0;
+  double estimate = 0.0;  // in the family's unit (shared/spec/effects.md)
+  double std_error = std::numeric_limits<double>::quiet_NaN();
+  std::string unit;
+  bool identifiable = true;  // false: the run's motion or temperature cannot excite it
+  double predicted_delta_aic = 0.0;
+  double predicted_delta_bic = 0.0;
+  std::vector<std::string> correlated_with;  // candidates it cannot be told apart from in this run
+  std::vector<SegmentContribution> where;
+};
+
+struct AnalysisReport {
+  Verdict verdict = Verdict::kGood;
+  std::vector<std::string> model_effects;
+  int parameter_count = 0;
+  std::vector<ChannelFit> channels;
+  double nis_mean = 0.0;
+  double nis_band_low = 0.0;
+  double nis_band_high = 0.0;
+  double log_likelihood = 0.0;
+  double aic = 0.0;
+  double bic = 0.0;
+  int scalar_updates = 0;
+  double gamma2 = 0.0;
+  double eta2 = 0.0;
+  std::vector<FaultInterval> faults;
+  std::vector<Localisation> localisation;
+  std::vector<EffectCandidate> effect_candidates;  // per term, most significant first
+  std::vector<EffectCandidate> family_candidates;  // per family
+  std::vector<ParameterEstimate> identified;
+  std::vector<std::string> notes;  // what the engine wants the user to know (e.g. a fallback it took)
+  double duration_s = 0.0;
+  size_t samples = 0;
+  double sample_rate_hz = 0.0;
+  double update_interval_s = 0.0;
+};
+
+// Per-epoch series for plotting (`insdiag analyze --series`).
+struct AnalysisSeries {
+  std::vector<double> time_s;
+  Eigen::MatrixXd measured;   // K × 6: z
+  Eigen::MatrixXd predicted;  // K × 6: h x⁻
+  Eigen::MatrixXd residual;   // K × 6: ν
+  Eigen::MatrixXd sigma;      // K × 6: α = √(h P hᵀ + r)
+  Eigen::MatrixXd window_ratio;  // K × 6: moving F
+  std::vector<std::string> state_names;  // sensor states
+  Eigen::MatrixXd forward, smoothed, smoothed_sigma, backward, discrepancy;  // K × m
+};
+
+}  // namespace insdiag::engine

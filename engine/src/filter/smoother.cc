@@ -1,0 +1,109 @@
+#include "insdiag/engine/filter/smoother.h"
+
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Cholesky>
+
+namespace insdiag::engine {
+namespace {
+
+// Relative size below which P_f − P_s counts as "the future adds nothing".
+constexpr double kNoInformationRatio = 1e-9;
+
+// M ← Φ M for the stored transition.
+void ApplyTransition(const StoredTransition& t, Eigen::MatrixXd& M) {
+  const auto m = t.B.cols();
+  Eigen::MatrixXd nav = t.A * M.topRows<9>() + t.B * M.bottomRows(m);
+  Eigen::MatrixXd sensorsT = M.bottomRows(m).transpose();
+  t.D.RightMultiplyTranspose(sensorsT);
+  M.topRows<9>() = nav;
+  M.bottomRows(m) = sensorsT.transpose();
+}
+
+}  // namespace
+
+absl::StatusOr<SmoothedPass> RunSmoother(const ForwardPass& fw, const SmootherOptions& options) {
+  const int n = fw.state_size;
+  const int K = fw.epochs();
+  if (K == 0) return absl::InvalidArgumentError("smoother: the forward pass has no epochs");
+  if (options.block_begin < 0 || options.block_size < 0 || options.block_begin + options.block_size > n) {
+    return absl::InvalidArgumentError("smoother: the covariance block is outside the state");
+  }
+  SmoothedPass out;
+  out.x.resize(K, n);
+  out.variance.resize(K, n);
+  out.lag_one_covariance = Eigen::MatrixXd::Zero(K, n);
+  out.backward_x.resize(K, n);
+  out.backward_variance.resize(K, n);
+  out.discrepancy.resize(K, n);
+  if (options.block_size > 0) out.block_covariance.resize(K, PackedSize(options.block_size));
+
+  Eigen::MatrixXd P_s, P_f, P_p, gain_T, diff;
+  Eigen::VectorXd x_s = fw.x_filt.row(K - 1).transpose();
+  UnpackSymmetric(fw.P_filt.row(K - 1).data(), n, P_s);
+  Eigen::VectorXd scale(n), inv_scale(n);
+
+  auto record = [&](int k, const Eigen::VectorXd& xs, const Eigen::MatrixXd& Ps, const Eigen::MatrixXd& Pf) {
+    out.x.row(k) = xs.transpose();
+    out.variance.row(k) = Ps.diagonal().transpose();
+    if (options.block_size > 0) {
+      const Eigen::MatrixXd block =
+          Ps.block(options.block_begin, options.block_begin, options.block_size, options.block_size);
+      PackSymmetric(block, out.block_covariance.row(k).data());
+    }
+    for (int i = 0; i < n; ++i) {
+      const double pf = Pf(i, i);
+      const double ps = Ps(i, i);
+      const double gain = pf - ps;
+      const double xf = fw.x_filt(k, i);
+      if (gain > kNoInformationRatio * pf && gain > 0.0) {
+        const double dx = xs[i] - xf;
+        out.discrepancy(k, i) = dx * dx / gain;
+        out.backward_x(k, i) = xf + dx * pf / gain;
+        out.backward_variance(k, i) = pf * ps / gain;
+      } else {
+        out.discrepancy(k, i) = 0.0;
+        out.backward_x(k, i) = std::numeric_limits<double>::quiet_NaN();
+        out.backward_variance(k, i) = std::numeric_limits<double>::infinity();
+      }
+    }
+  };
+  UnpackSymmetric(fw.P_filt.row(K - 1).data(), n, P_f);
+  record(K - 1, x_s, P_s, P_f);
+
+  for (int k = K - 2; k >= 0; --k) {
+    UnpackSymmetric(fw.P_filt.row(k).data(), n, P_f);
+    UnpackSymmetric(fw.P_pred.row(k + 1).data(), n, P_p);
+    // C_kᵀ = P_{k+1|k}⁻¹ Φ P_{k|k}. The states span many orders of magnitude
+    // (metres, rad, rad/s): solve in Jacobi-scaled form so the Cholesky factor
+    // sees correlations, not units.
+    gain_T = P_f;
+    ApplyTransition(fw.transitions[static_cast<size_t>(k + 1)], gain_T);
+    for (int i = 0; i < n; ++i) {
+      scale[i] = std::sqrt(std::max(P_p(i, i), std::numeric_limits<double>::min()));
+      inv_scale[i] = 1.0 / scale[i];
+    }
+    const Eigen::MatrixXd P_scaled = inv_scale.asDiagonal() * P_p * inv_scale.asDiagonal();
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(P_scaled);
+    if (ldlt.info() != Eigen::Success) {
+      return absl::InternalError("smoother: predicted covariance is not positive definite at epoch " +
+                                 std::to_string(k + 1));
+    }
+    gain_T = inv_scale.asDiagonal() * ldlt.solve(inv_scale.asDiagonal() * gain_T);
+
+    const Eigen::VectorXd x_f = fw.x_filt.row(k).transpose();
+    const Eigen::VectorXd x_p = fw.x_pred.row(k + 1).transpose();
+    const Eigen::VectorXd x_next = x_s;
+    x_s = x_f + gain_T.transpose() * (x_next - x_p);
+    diff = P_s - P_p;
+    const Eigen::MatrixXd lag = P_s * gain_T;  // P_{k+1,k|K} = P_{k+1|K} C_kᵀ
+    out.lag_one_covariance.row(k) = lag.diagonal().transpose();
+    P_s = P_f + gain_T.transpose() * diff * gain_T;
+    P_s = 0.5 * (P_s + P_s.transpose()).eval();
+    record(k, x_s, P_s, P_f);
+  }
+  return out;
+}
+
+}  // namespace insdiag::engine

@@ -1,0 +1,226 @@
+// The linearised model against numeric differentiation: each effect's
+// regressor against its physical error function, and the filter's interval
+// transition against finite differences of the nonlinear mechanisation.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "insdiag/engine/filter/observation.h"
+#include "insdiag/engine/model/error_dynamics.h"
+#include "insdiag/engine/nav/rotation.h"
+#include "insdiag/engine/nav/strapdown.h"
+#include "insdiag/engine/nav/wgs84.h"
+#include "scenarios.h"
+
+namespace insdiag::engine {
+namespace {
+
+using testing::kDeg;
+
+RegressorInputs SomeInputs() {
+  RegressorInputs in;
+  in.gyro_rad_s = {0.012, -0.17, 0.05};
+  in.acc_mps2 = {1.3, -2.1, -9.4};
+  in.temperature_delta_degc = 6.5;
+  in.yaw_rad = 0.7;
+  return in;
+}
+
+TEST(EffectJacobian, EveryConstantTermMatchesNumericDifferentiation) {
+  const RegressorInputs in = SomeInputs();
+  for (const EffectTerm& term : AllCatalogueTerms()) {
+    if (term.family->kind != EffectKind::kConstant) continue;
+    double analytic[2];
+    EvaluateRegressor(term, in, analytic);
+    for (int p = 0; p < term.family->parameters_per_term; ++p) {
+      // Central difference around a non-zero operating point, step small against it.
+      std::array<double, 2> base = {1e-4, -2e-4};
+      const double h = 1e-7;
+      auto plus = base, minus = base;
+      plus[static_cast<size_t>(p)] += h;
+      minus[static_cast<size_t>(p)] -= h;
+      const Eigen::Vector3d numeric =
+          (ConstantEffectError(term, in, plus) - ConstantEffectError(term, in, minus)) / (2.0 * h);
+      for (int axis = 0; axis < 3; ++axis) {
+        const double expected = axis == term.axis ? analytic[p] : 0.0;
+        EXPECT_NEAR(numeric[axis], expected, 1e-6 * std::max(1.0, std::abs(expected)))
+            << term.ParameterName(p) << " axis " << axis;
+      }
+    }
+  }
+}
+
+TEST(EffectJacobian, ParsesEveryTermNameBack) {
+  for (const EffectTerm& term : AllCatalogueTerms()) {
+    auto parsed = ParseEffectSelector(term.Name());
+    ASSERT_TRUE(parsed.ok()) << parsed.status();
+    ASSERT_EQ(parsed->size(), 1u);
+    EXPECT_EQ(parsed->front(), term);
+  }
+  EXPECT_FALSE(ParseEffectSelector("gyro_scale_factor.q").ok());
+  EXPECT_FALSE(ParseEffectSelector("gyro_misalignment.xx").ok());
+  EXPECT_EQ(ParseEffectSelector("gyro_g_sensitivity")->size(), 9u);
+}
+
+// Error-state coordinates of `perturbed` relative to `nominal` (the filter's
+// definitions: phi-angle, NED velocity, NED metres).
+Eigen::Matrix<double, 9, 1> ErrorBetween(const nav::NavState& perturbed, const nav::NavState& nominal,
+                                         const Site& site) {
+  Eigen::Matrix<double, 9, 1> e;
+  // C̃ = (I − [ψ×]) C  ⇒  [ψ×] ≈ I − C̃ Cᵀ.
+  const Eigen::Matrix3d E = perturbed.q_b_n.toRotationMatrix() * nominal.q_b_n.toRotationMatrix().transpose();
+  e.segment<3>(0) = -0.5 * Eigen::Vector3d(E(2, 1) - E(1, 2), E(0, 2) - E(2, 0), E(1, 0) - E(0, 1));
+  e.segment<3>(3) = perturbed.v_n_mps - nominal.v_n_mps;
+  const auto zp = Observe(perturbed, site);
+  const auto zn = Observe(nominal, site);
+  e.segment<3>(6) = Eigen::Vector3d(zp[0] - zn[0], zp[1] - zn[1], -(zp[2] - zn[2]));
+  return e;
+}
+
+class TransitionJacobian : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    // One second of a turning, tilted table with perfect sensors.
+    sim::TableProfile profile;
+    profile.angular_acceleration_rad_s2 = 10.0 * kDeg;
+    profile.initial_inner_rad = 30.0 * kDeg;
+    profile.mount_rpy_rad = {0.0, 0.0, 45.0 * kDeg};
+    using K = sim::TableSegment::Kind;
+    profile.segments = {{K::kRotateOuter, 5.0, 10.0 * kDeg, 0, 0}};
+    sim::SimulationOptions o;
+    o.sample_rate_hz = 100.0;
+    o.site = testing::TestSite();
+    o.perfect_sensors = true;
+    run_ = sim::Simulate(sim::SimulatedUnit{}, profile, o)->run;
+    site_ = o.site;
+    model_.gyro.white_noise_density.setConstant(1e-6);
+    model_.acc.white_noise_density.setConstant(1e-5);
+    for (auto& b : model_.gyro.bias) b = {1e-7, 1000.0};
+    for (auto& b : model_.acc.bias) b = {1e-4, 1000.0};
+  }
+
+  nav::NavState StartState() const {
+    nav::NavState s;
+    s.q_b_n = Eigen::Quaterniond(nav::EulerToDcm(run_.samples[first_].ref_rpy_rad));
+    s.latitude_rad = site_.latitude_rad;
+    s.longitude_rad = site_.longitude_rad;
+    s.height_m = site_.height_m;
+    return s;
+  }
+
+  // Mechanises samples first_+1 … first_+count with sensor errors added by `error(k, gyro, acc)`.
+  template <typename ErrorFn>
+  nav::NavState Mechanise(nav::NavState s, int count, ErrorFn error) const {
+    const double dt = 0.01;
+    nav::ImuIncrement prev{run_.samples[first_].gyro_rad_s * dt, run_.samples[first_].acc_mps2 * dt};
+    for (int j = 1; j <= count; ++j) {
+      const ImuSample& smp = run_.samples[first_ + static_cast<size_t>(j)];
+      Eigen::Vector3d g = smp.gyro_rad_s, a = smp.acc_mps2;
+      error(smp, g, a);
+      const nav::ImuIncrement cur{g * dt, a * dt};
+      s = nav::PropagateStrapdown(s, cur, prev, dt);
+      prev = cur;
+    }
+    return s;
+  }
+
+  // The filter's interval transition over the same samples (as RunForwardFilter builds it).
+  IntervalTransition Transition(const ErrorModel& model, int count) const {
+    const StateLayout layout(model);
+    const auto disc = DiscretiseNavigation(NavigationErrorMatrix(site_, layout), 0.01);
+    SensorBlocks D, Qs;
+    SensorBlocks::Discretise(model, layout, 0.01, D, Qs);
+    IntervalAccumulator acc(model, layout);
+    nav::NavState s = StartState();
+    const double dt = 0.01;
+    nav::ImuIncrement prev{run_.samples[first_].gyro_rad_s * dt, run_.samples[first_].acc_mps2 * dt};
+    for (int j = 1; j <= count; ++j) {
+      const ImuSample& smp = run_.samples[first_ + static_cast<size_t>(j)];
+      const nav::ImuIncrement cur{smp.gyro_rad_s * dt, smp.acc_mps2 * dt};
+      const Eigen::Quaterniond q0 = s.q_b_n;
+      s = nav::PropagateStrapdown(s, cur, prev, dt);
+      prev = cur;
+      RegressorInputs in;
+      in.gyro_rad_s = smp.gyro_rad_s;
+      in.acc_mps2 = smp.acc_mps2;
+      in.temperature_delta_degc = smp.temp_degc - run_.samples[0].temp_degc;
+      in.yaw_rad = smp.ref_rpy_rad.z();
+      acc.AddSample(disc, D, Qs, MakeSampleCoupling(disc, layout, q0.slerp(0.5, s.q_b_n).toRotationMatrix(), in));
+    }
+    return acc.transition();
+  }
+
+  BenchRun run_;
+  Site site_;
+  ErrorModel model_;
+  size_t first_ = 100;
+};
+
+TEST_F(TransitionJacobian, NavigationBlockMatchesTheMechanisation) {
+  const int count = 100;  // one second
+  const IntervalTransition t = Transition(model_, count);
+  const nav::NavState nominal = Mechanise(StartState(), count, [](const ImuSample&, auto&, auto&) {});
+  // Perturb each navigation error coordinate and compare the propagated difference.
+  const double steps[9] = {1e-5, 1e-5, 1e-5, 1e-3, 1e-3, 1e-3, 1.0, 1.0, 1.0};
+  for (int i = 0; i < 9; ++i) {
+    nav::NavState start = StartState();
+    Eigen::Matrix<double, 9, 1> dx = Eigen::Matrix<double, 9, 1>::Zero();
+    dx[i] = steps[i];
+    start.q_b_n = (nav::RotationVectorToQuaternion(-dx.segment<3>(0)) * start.q_b_n).normalized();
+    start.v_n_mps += dx.segment<3>(3);
+    const double rm = wgs84::MeridianRadiusM(site_.latitude_rad) + site_.height_m;
+    const double rn = wgs84::PrimeVerticalRadiusM(site_.latitude_rad) + site_.height_m;
+    start.latitude_rad += dx[6] / rm;
+    start.longitude_rad += dx[7] / (rn * std::cos(site_.latitude_rad));
+    start.height_m -= dx[8];
+    const nav::NavState end = Mechanise(start, count, [](const ImuSample&, auto&, auto&) {});
+    const Eigen::Matrix<double, 9, 1> numeric = ErrorBetween(end, nominal, site_);
+    const Eigen::Matrix<double, 9, 1> linear = t.A * dx;
+    for (int r = 0; r < 9; ++r) {
+      EXPECT_NEAR(numeric[r], linear[r], 2e-3 * linear.cwiseAbs().maxCoeff() + 1e-12)
+          << "perturbed " << i << ", row " << r;
+    }
+  }
+}
+
+TEST_F(TransitionJacobian, EveryEffectColumnMatchesTheMechanisation) {
+  const int count = 100;
+  const nav::NavState nominal = Mechanise(StartState(), count, [](const ImuSample&, auto&, auto&) {});
+  const double temp0 = run_.samples[0].temp_degc;
+  for (const EffectTerm& term : AllCatalogueTerms()) {
+    if (term.family->kind != EffectKind::kConstant) continue;
+    ErrorModel model = model_;
+    ModelEffect effect;
+    effect.term = term;
+    effect.prior_sigma = {1.0, 1.0};
+    model.effects.push_back(effect);
+    const IntervalTransition t = Transition(model, count);
+    const StateLayout layout(model);
+    for (int p = 0; p < term.family->parameters_per_term; ++p) {
+      // Large enough that the position difference stands far above the ~1e-9 m
+      // resolution of latitude differences in double precision, small enough
+      // to stay linear (attitude errors below 1e-4 rad).
+      std::array<double, 2> value = {0.0, 0.0};
+      value[static_cast<size_t>(p)] = term.family->regressor == Regressor::kTemperature ? 1e-5 : 1e-4;
+      const nav::NavState end = Mechanise(StartState(), count, [&](const ImuSample& smp, auto& g, auto& a) {
+        RegressorInputs in;
+        in.gyro_rad_s = smp.gyro_rad_s;
+        in.acc_mps2 = smp.acc_mps2;
+        in.temperature_delta_degc = smp.temp_degc - temp0;
+        in.yaw_rad = smp.ref_rpy_rad.z();
+        const Eigen::Vector3d err = ConstantEffectError(term, in, value);
+        (term.family->sensor == Sensor::kGyro ? g : a) += err;
+      });
+      const Eigen::Matrix<double, 9, 1> numeric = ErrorBetween(end, nominal, site_);
+      const int column = layout.EffectOffset(0) + p - layout.sensor_begin();
+      const Eigen::Matrix<double, 9, 1> linear = t.B.col(column) * value[static_cast<size_t>(p)];
+      const double scale = linear.cwiseAbs().maxCoeff();
+      for (int r = 0; r < 9; ++r) {
+        EXPECT_NEAR(numeric[r], linear[r], 5e-3 * scale + 1e-14) << term.ParameterName(p) << " row " << r;
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace insdiag::engine
