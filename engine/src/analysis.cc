@@ -183,6 +183,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   r.eta2 = monitor.eta2;
   r.faults = monitor.faults;
   r.localisation = monitor.localisation;
+  r.discrepancies = monitor.discrepancies;
   r.duration_s = run.DurationS();
   r.samples = run.samples.size();
   r.sample_rate_hz = 1.0 / run.NominalIntervalS();

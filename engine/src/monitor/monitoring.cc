@@ -46,7 +46,10 @@ MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const State
                       const std::vector<SampleOutlier>& spikes, const MonitorOptions& options) {
   MonitorResult out;
   const int K = fw.epochs();
-  const double alpha = options.family_wise_alpha;
+  // The verdict rests on three families of tests (outliers, gradual failures,
+  // the mean NIS); Bonferroni's split keeps a healthy unit GOOD with
+  // probability ≥ 1 − family_wise_alpha.
+  const double alpha = options.family_wise_alpha / 3.0;
   out.gamma2 = 1.0 + 3.0 * std::numbers::sqrt2;
   const double epoch_interval = K > 1 ? (fw.epoch_time_s.back() - fw.epoch_time_s.front()) / (K - 1) : 1.0;
   const int W = std::clamp(static_cast<int>(std::lround(options.window_s / epoch_interval)), 2, std::max(2, K));
@@ -124,8 +127,9 @@ MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const State
   out.nis_band_low = updates > 0 ? stats::ChiSquareQuantile(alpha / 2.0, updates) / updates : 0.0;
   out.nis_band_high = updates > 0 ? stats::ChiSquareQuantile(1.0 - alpha / 2.0, updates) / updates : 0.0;
 
-  // Localisation: the sensor states whose forward/backward discrepancy peaks beyond chance.
-  const double per_test_alpha = alpha / std::max(1, K * layout.sensor_count());
+  // The seed's forward/backward discrepancy: sensor states whose estimates from
+  // past and future data disagree beyond chance.
+  const double per_test_alpha = options.family_wise_alpha / std::max(1, K * layout.sensor_count());
   for (const SensorState& s : layout.sensor_states()) {
     double peak = 0.0;
     int at = 0;
@@ -137,12 +141,26 @@ MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const State
     }
     const double p_single = stats::ChiSquareSurvival(peak, 1.0);
     if (p_single < per_test_alpha) {
-      out.localisation.push_back({s.name, fw.epoch_time_s[static_cast<size_t>(at)], peak,
-                                  std::min(1.0, p_single * K * layout.sensor_count())});
+      out.discrepancies.push_back({s.name, fw.epoch_time_s[static_cast<size_t>(at)], peak,
+                                   std::min(1.0, p_single * K * layout.sensor_count()), "FORWARD_BACKWARD", 0.0,
+                                   0.0});
     }
   }
-  std::sort(out.localisation.begin(), out.localisation.end(),
+  std::sort(out.discrepancies.begin(), out.discrepancies.end(),
             [](const Localisation& a, const Localisation& b) { return a.statistic > b.statistic; });
+
+  // Each gradual failure: which sensor state jumped at its onset.
+  double localised_until = -std::numeric_limits<double>::infinity();
+  for (const FaultInterval& f : out.faults) {
+    if (f.kind != FaultKind::kGradual || f.start_s <= localised_until) continue;
+    if (static_cast<int>(out.localisation.size()) >= options.max_localised_failures) break;
+    const auto hypotheses = LocaliseJump(fw, layout, f.start_s, options.localisation);
+    if (!hypotheses.empty() && hypotheses.front().p_value < options.family_wise_alpha) {
+      const JumpHypothesis& h = hypotheses.front();
+      out.localisation.push_back({h.state, h.onset_s, h.statistic, h.p_value, "JUMP", h.jump, h.jump_std_error});
+    }
+    localised_until = f.end_s;
+  }
 
   const bool gradual = std::any_of(out.faults.begin(), out.faults.end(),
                                    [](const FaultInterval& f) { return f.kind == FaultKind::kGradual; });

@@ -67,7 +67,8 @@ struct AnalysisReport {
   double gamma2 = 0.0;
   double eta2 = 0.0;
   std::vector<FaultInterval> faults;
-  std::vector<Localisation> localisation;
+  std::vector<Localisation> localisation;   // the sensor behind each gradual failure
+  std::vector<Localisation> discrepancies;  // forward/backward disagreements per sensor state
   std::vector<EffectCandidate> effect_candidates;  // per term, most significant first
   std::vector<EffectCandidate> family_candidates;  // per family
   std::vector<ParameterEstimate> identified;

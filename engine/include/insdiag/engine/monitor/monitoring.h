@@ -14,10 +14,14 @@
 // the seed's own tolerances are reported per channel beside them.
 //
 // Verdict: FAULTY when a gradual failure is found; OPERABLE when only outliers
-// are found or the mean NIS leaves its χ² band; GOOD otherwise.
+// are found or the mean NIS leaves its χ² band; GOOD otherwise. The three
+// families of tests share the family-wise α equally (Bonferroni), so a unit
+// whose model holds is judged GOOD with probability ≥ 1 − α.
 //
-// Localisation: the forward/backward discrepancy d_i (filter/smoother.h) of
-// each sensor state, against its family-wise χ²(1) quantile over the epochs.
+// Localisation: for each gradual failure, the sensor state whose jump best
+// explains the innovations after its onset (monitor/fault_localisation.h);
+// beside it, the seed's forward/backward discrepancy d_i (filter/smoother.h)
+// of each sensor state against its family-wise χ²(1) quantile over the epochs.
 #pragma once
 
 #include <string>
@@ -28,6 +32,7 @@
 #include "insdiag/engine/filter/forward_filter.h"
 #include "insdiag/engine/filter/smoother.h"
 #include "insdiag/engine/model/state_layout.h"
+#include "insdiag/engine/monitor/fault_localisation.h"
 #include "insdiag/engine/monitor/sample_screening.h"
 
 namespace insdiag::engine {
@@ -55,18 +60,23 @@ struct ChannelFit {
   double fraction_over_eta2 = 0.0;    // share of windows with F > η²
 };
 
-// A sensor state whose forward and backward estimates disagree beyond chance.
+// A sensor state named as the seat of a failure.
 struct Localisation {
   std::string state;  // e.g. "gyro_bias_gm.x"
-  double time_s = 0.0;
-  double statistic = 0.0;  // d_i at its peak
-  double p_value = 0.0;    // family-wise over the epochs
+  double time_s = 0.0;     // the jump's onset, or the discrepancy's peak
+  double statistic = 0.0;  // ℓ of the jump, or d_i at its peak
+  double p_value = 0.0;    // family-wise
+  std::string method;      // "JUMP" (likelihood ratio) or "FORWARD_BACKWARD" (discrepancy)
+  double jump = 0.0;       // the jump's estimate in the state's unit (JUMP only)
+  double jump_std_error = 0.0;
 };
 
 struct MonitorOptions {
   double window_s = 60.0;
   double family_wise_alpha = 0.01;
   int whiteness_lags = 20;
+  LocalisationOptions localisation;
+  int max_localised_failures = 5;
 };
 
 struct MonitorResult {
@@ -76,9 +86,10 @@ struct MonitorResult {
   int window_updates = 0;
   std::vector<ChannelFit> channels;
   std::vector<FaultInterval> faults;
-  std::vector<Localisation> localisation;  // most significant first
+  std::vector<Localisation> localisation;   // one per localised gradual failure, in time order
+  std::vector<Localisation> discrepancies;  // forward/backward, most significant first
   double nis_mean = 0.0;
-  double nis_band_low = 0.0;   // 1 − α two-sided χ² band of the mean NIS
+  double nis_band_low = 0.0;   // 1 − α/3 two-sided χ² band of the mean NIS
   double nis_band_high = 0.0;
   Eigen::MatrixXd window_ratio;  // K × 6 moving F (NaN until the first full window)
 };
