@@ -130,7 +130,7 @@ class TransitionJacobian : public ::testing::Test {
     const auto disc = DiscretiseNavigation(NavigationErrorMatrix(site_, layout), 0.01);
     SensorBlocks D, Qs;
     SensorBlocks::Discretise(model, layout, 0.01, D, Qs);
-    IntervalAccumulator acc(model, layout);
+    IntervalAccumulator acc(model, layout, disc, count);
     nav::NavState s = StartState();
     const double dt = 0.01;
     nav::ImuIncrement prev{run_.samples[first_].gyro_rad_s * dt, run_.samples[first_].acc_mps2 * dt};
@@ -145,9 +145,9 @@ class TransitionJacobian : public ::testing::Test {
       in.acc_mps2 = smp.acc_mps2;
       in.temperature_delta_degc = smp.temp_degc - run_.samples[0].temp_degc;
       in.yaw_rad = smp.ref_rpy_rad.z();
-      acc.AddSample(disc, D, Qs, MakeSampleCoupling(disc, layout, q0.slerp(0.5, s.q_b_n).toRotationMatrix(), in));
+      acc.AddSample(disc, D, Qs, q0.slerp(0.5, s.q_b_n).toRotationMatrix(), in);
     }
-    return acc.transition();
+    return acc.Finish();
   }
 
   BenchRun run_;

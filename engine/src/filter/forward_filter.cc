@@ -162,7 +162,7 @@ absl::StatusOr<ForwardPass> RunForwardFilter(const BenchRun& run, const ErrorMod
   out.P0 = P;
   Eigen::VectorXd PH(n), gain(n);
 
-  IntervalAccumulator accumulator(model, layout);
+  IntervalAccumulator accumulator(model, layout, nominal, samples_per_epoch);
   const double temperature0 = run.samples[0].temp_degc;
   nav::ImuIncrement previous{run.samples[0].gyro_rad_s * dt_nominal, run.samples[0].acc_mps2 * dt_nominal};
   int in_interval = 0;
@@ -194,15 +194,14 @@ absl::StatusOr<ForwardPass> RunForwardFilter(const BenchRun& run, const ErrorMod
     inputs.temperature_delta_degc = run.has_temperature ? s.temp_degc - temperature0 : 0.0;
     inputs.yaw_rad = MidAngle(run.samples[k - 1].ref_rpy_rad.z(), s.ref_rpy_rad.z());
     const Eigen::Matrix3d C_mid = q_start.slerp(0.5, ins.q_b_n).toRotationMatrix();
-    const SampleCoupling coupling = MakeSampleCoupling(*disc, layout, C_mid, inputs);
-    accumulator.AddSample(*disc, *D, *Qs, coupling);
+    const SampleCoupling& coupling = accumulator.AddSample(*disc, *D, *Qs, C_mid, inputs);
     if (observer != nullptr) observer->OnSample(*disc, coupling);
     ++in_interval;
     if (in_interval < samples_per_epoch && k + 1 < samples) continue;
 
     // ---- epoch: predict over the interval, then the channel-wise updates ----
     in_interval = 0;
-    const IntervalTransition& tr = accumulator.transition();
+    const IntervalTransition& tr = accumulator.Finish();
     tr.PropagateMean(x);
     tr.PropagateCovariance(P);
     if (observer != nullptr) observer->OnPrediction(tr);

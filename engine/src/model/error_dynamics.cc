@@ -49,19 +49,10 @@ NavigationDiscretisation DiscretiseNavigation(const Matrix9d& F, double dt_s) {
   const auto e = numerics::ExponentialWithIntegral(F, dt_s);
   NavigationDiscretisation d;
   d.A = e.exponential;
+  d.A_inverse = numerics::MatrixExponential(-Eigen::MatrixXd(F) * dt_s);
   d.Gamma = e.integral;
   d.dt_s = dt_s;
   return d;
-}
-
-SampleCoupling MakeSampleCoupling(const NavigationDiscretisation& d, const StateLayout& layout,
-                                  const Eigen::Matrix3d& C_b_n_mid, const RegressorInputs& inputs) {
-  SampleCoupling c;
-  c.g_att.noalias() = -d.Gamma.middleCols<3>(layout.attitude()).lazyProduct(C_b_n_mid);
-  c.g_vel.noalias() = d.Gamma.middleCols<3>(layout.velocity()).lazyProduct(C_b_n_mid);
-  c.inputs = inputs;
-  c.dt_s = d.dt_s;
-  return c;
 }
 
 // ---- SensorBlocks -----------------------------------------------------------
@@ -229,83 +220,140 @@ void EvaluateStateRegressors(const ErrorModel& model, const StateLayout& layout,
   }
 }
 
-IntervalAccumulator::IntervalAccumulator(const ErrorModel& model, const StateLayout& layout)
-    : model_(model), layout_(layout) {
+IntervalAccumulator::IntervalAccumulator(const ErrorModel& model, const StateLayout& layout,
+                                         const NavigationDiscretisation& nominal, int samples_per_interval)
+    : model_(model), layout_(layout), nominal_dt_(nominal.dt_s) {
   const int m = layout.sensor_count();
+  const auto capacity = static_cast<size_t>(std::max(1, samples_per_interval) + 2);
+  power_.resize(capacity + 1);
+  inverse_power_.resize(capacity + 1);
+  att_input_.resize(capacity + 1);
+  vel_input_.resize(capacity + 1);
+  power_[0].setIdentity();
+  inverse_power_[0].setIdentity();
+  for (size_t j = 1; j <= capacity; ++j) {
+    power_[j] = nominal.A * power_[j - 1];
+    inverse_power_[j] = inverse_power_[j - 1] * nominal.A_inverse;
+    att_input_[j] = -inverse_power_[j] * nominal.Gamma.middleCols<3>(layout.attitude());
+    vel_input_[j] = inverse_power_[j] * nominal.Gamma.middleCols<3>(layout.velocity());
+  }
   t_.B.setZero(9, m);
   t_.Qns.setZero(9, m);
+  B_y_.setZero(9, m);
+  Qns_y_.setZero(9, m);
   regressors_.setZero(m);
   Bj_.setZero(9, m);
-  U_.setZero(9, m);
   V_.setZero(9, m);
   white_gyro_var_ = model.gyro.white_noise_density.cwiseAbs2();
   white_acc_var_ = model.acc.white_noise_density.cwiseAbs2();
+  acc_quantization_var_ = model.acc.quantization.cwiseAbs2();
   Reset();
 }
 
 void IntervalAccumulator::Reset() {
-  t_.A.setIdentity();
-  t_.B.setZero();
+  samples_ = 0;
+  regular_ = true;
+  T_.setIdentity();
+  T_inverse_.setIdentity();
+  Qnn_y_.setZero();
+  B_y_.setZero();
+  Qns_y_.setZero();
   t_.D = SensorBlocks::Identity(layout_);
-  t_.Qnn.setZero();
-  t_.Qns.setZero();
   t_.Qss = SensorBlocks::Zero(layout_);
   t_.duration_s = 0.0;
 }
 
-void IntervalAccumulator::AddSample(const NavigationDiscretisation& nav, const SensorBlocks& D,
-                                    const SensorBlocks& Qs, const SampleCoupling& c) {
-  EvaluateStateRegressors(model_, layout_, c.inputs, regressors_);
+const SampleCoupling& IntervalAccumulator::AddSample(const NavigationDiscretisation& nav, const SensorBlocks& D,
+                                                     const SensorBlocks& Qs, const Eigen::Matrix3d& C_mid,
+                                                     const RegressorInputs& inputs) {
+  ++samples_;
+  const auto j = static_cast<size_t>(samples_);
+  const bool nominal_step = std::abs(nav.dt_s - nominal_dt_) <= 1e-9 * nominal_dt_;
+  if (regular_ && (!nominal_step || j >= power_.size())) {
+    // Leave the tables: carry T_{j−1} and its inverse explicitly from here on.
+    T_ = power_[j - 1];
+    T_inverse_ = inverse_power_[j - 1];
+    regular_ = false;
+  }
+  SampleCoupling& c = coupling_;
+  if (regular_) {
+    c.g_att.noalias() = att_input_[j].lazyProduct(C_mid);
+    c.g_vel.noalias() = vel_input_[j].lazyProduct(C_mid);
+  } else {
+    const Matrix9d T = nav.A.lazyProduct(T_);  // lazy products must not alias their operands
+    const Matrix9d T_inverse = T_inverse_.lazyProduct(nav.A_inverse);
+    T_ = T;
+    T_inverse_ = T_inverse;
+    const Matrix93d att = -T_inverse_.lazyProduct(nav.Gamma.middleCols<3>(layout_.attitude()));
+    const Matrix93d vel = T_inverse_.lazyProduct(nav.Gamma.middleCols<3>(layout_.velocity()));
+    c.g_att.noalias() = att.lazyProduct(C_mid);
+    c.g_vel.noalias() = vel.lazyProduct(C_mid);
+  }
+  c.inputs = inputs;
+  c.dt_s = nav.dt_s;
+
+  EvaluateStateRegressors(model_, layout_, inputs, regressors_);
   const auto& states = layout_.sensor_states();
   const auto m = static_cast<Eigen::Index>(states.size());
   for (Eigen::Index i = 0; i < m; ++i) {
     const SensorState& st = states[static_cast<size_t>(i)];
     Bj_.col(i) = c.Column(st.sensor, st.axis) * regressors_[i];
   }
-  const Matrix9d& A = nav.A;
 
-  // Q ← Φ_j Q Φ_jᵀ + diag(Qw, Qs) with Φ_j = [A B_j; 0 D] (see the header):
-  //   Qnn ← A Qnn Aᵀ + X + Xᵀ + Qw,   X = (A Qns + ½ B_j Qss) B_jᵀ
-  //   Qns ← (A Qns + B_j Qss) Dᵀ
+  // In interval-start coordinates the navigation transition is the identity:
+  //   Qnn ← Qnn + X + Xᵀ + Qw,   X = (Qns + ½ B_j Qss) B_jᵀ
+  //   Qns ← (Qns + B_j Qss) Dᵀ
   // B_j's column s is g_{sensor(s)}[:, axis(s)]·r_s, so X = Y_g g_attᵀ + Y_a g_velᵀ with
-  // Y_{g|a}[:, axis] = Σ_s (A Qns + ½ B_j Qss)[:, s]·r_s over the gyro | accelerometer states.
-  U_.noalias() = A.lazyProduct(t_.Qns);
+  // Y_{g|a}[:, axis] = Σ_s (Qns + ½ B_j Qss)[:, s]·r_s over the gyro | accelerometer states.
   V_ = Bj_;
   t_.Qss.RightMultiply(V_);  // B_j Qss (Qss symmetric)
   Matrix93d Yg = Matrix93d::Zero();
   Matrix93d Ya = Matrix93d::Zero();
   for (Eigen::Index i = 0; i < m; ++i) {
     const SensorState& st = states[static_cast<size_t>(i)];
-    (st.sensor == Sensor::kGyro ? Yg : Ya).col(st.axis) += (U_.col(i) + 0.5 * V_.col(i)) * regressors_[i];
+    (st.sensor == Sensor::kGyro ? Yg : Ya).col(st.axis) += (Qns_y_.col(i) + 0.5 * V_.col(i)) * regressors_[i];
   }
   // Eigen sends even fixed 9×9 products to its blocked GEMM (its coefficient-based
   // threshold is rows + cols + depth < 20); lazyProduct keeps them inline.
   Matrix9d X = Yg.lazyProduct(c.g_att.transpose());
   X.noalias() += Ya.lazyProduct(c.g_vel.transpose());
-  const Matrix9d AQ = A.lazyProduct(t_.Qnn);
-  Matrix9d Qnn = AQ.lazyProduct(A.transpose());
-  Qnn += X + X.transpose();
+  Qnn_y_ += X + X.transpose();
   // White sensor noise over the sample: interval means with variance N²/Δt.
   const double inv_dt = 1.0 / c.dt_s;
   const Matrix93d g_att_w = c.g_att * (white_gyro_var_ * inv_dt).asDiagonal();
   const Matrix93d g_vel_w = c.g_vel * (white_acc_var_ * inv_dt).asDiagonal();
-  Qnn.noalias() += g_att_w.lazyProduct(c.g_att.transpose());
-  Qnn.noalias() += g_vel_w.lazyProduct(c.g_vel.transpose());
-  t_.Qnn = Qnn;
-  U_ += V_;
-  D.RightMultiplyTranspose(U_);
-  t_.Qns = U_;
+  Qnn_y_.noalias() += g_att_w.lazyProduct(c.g_att.transpose());
+  Qnn_y_.noalias() += g_vel_w.lazyProduct(c.g_vel.transpose());
+  if (acc_quantization_var_.maxCoeff() > 0.0) {
+    // Velocity quantisation: the position integrates each sample's carried
+    // remainder, white with variance Q² per axis (IEEE Std 952, Annex C).
+    const Matrix93d to_position =
+        (regular_ ? inverse_power_[j] : T_inverse_).middleCols<3>(layout_.position()) * C_mid;
+    Qnn_y_.noalias() += (to_position * (acc_quantization_var_ * c.dt_s * c.dt_s).asDiagonal())
+                            .lazyProduct(to_position.transpose());
+  }
+  Qns_y_ += V_;
+  D.RightMultiplyTranspose(Qns_y_);
   t_.Qss.Propagate(D, Qs);
 
-  // Φ_acc ← Φ_j Φ_acc: the sample acts on the sensor states as they stand at its start.
+  // Φ: the sample acts on the sensor states as they stand at its start.
   V_ = Bj_;
   t_.D.RightMultiply(V_);
-  U_.noalias() = A.lazyProduct(t_.B);
-  t_.B = U_ + V_;
-  const Matrix9d A_acc = A.lazyProduct(t_.A);  // lazy products must not alias their operands
-  t_.A = A_acc;
+  B_y_ += V_;
   t_.D.PreMultiply(D);
   t_.duration_s += c.dt_s;
+  return c;
+}
+
+const IntervalTransition& IntervalAccumulator::Finish() {
+  const Matrix9d& T = regular_ ? power_[static_cast<size_t>(samples_)] : T_;
+  t_.A = T;
+  t_.B.noalias() = T.lazyProduct(B_y_);
+  t_.Qns.noalias() = T.lazyProduct(Qns_y_);
+  const Matrix9d TQ = T.lazyProduct(Qnn_y_);
+  Matrix9d Qnn = TQ.lazyProduct(T.transpose());
+  t_.Qnn = 0.5 * (Qnn + Qnn.transpose());
+  return t_;
 }
 
 }  // namespace insdiag::engine

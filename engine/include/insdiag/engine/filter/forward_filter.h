@@ -47,8 +47,10 @@ struct FilterOptions {
 class FilterObserver {
  public:
   virtual ~FilterObserver() = default;
+  // Each sample's coupling, in the interval-start coordinates of the accumulator.
   virtual void OnSample(const NavigationDiscretisation& nav, const SampleCoupling& coupling) = 0;
-  // After the prior of an epoch is formed with `transition`.
+  // After the prior of an epoch is formed with `transition` (whose A also maps
+  // interval-start coordinates to the epoch).
   virtual void OnPrediction(const IntervalTransition& transition) = 0;
   // After a scalar update of `channel`: row h, gain K, innovation ν, its variance S.
   virtual void OnScalarUpdate(int channel, const ObservationRow& h, const Eigen::VectorXd& gain,
