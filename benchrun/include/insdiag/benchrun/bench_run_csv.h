@@ -6,34 +6,31 @@
 // key): "run.csv:12:23: gyro_z: 'abc' is not a number". The same location is
 // attached to the Status as a structured payload (see InputLocation) so that
 // the server can turn it into a google.rpc.BadRequest field violation.
+//
+// The reader refuses, besides the value rules of bench_run_validation.h (which
+// it applies through the same BenchRunValidator, mapping sample indices back
+// to lines and columns): a metadata line that is not `# key: value`, a key that
+// is not lower-case ASCII, a duplicate key, a missing required key or column, a
+// duplicate column, a number that does not parse or is NaN/infinite, a row with
+// the wrong number of fields. It tolerates a UTF-8 byte-order mark, CRLF line
+// ends, blank lines before the header and at the end, spaces around fields and
+// values, and columns the spec does not name (ignored). The first refusal wins:
+// refusals of the text come in line order; of the value rules, the gap rule
+// and the gravity of a run shorter than 1 s come after all rows are read.
+// Site angles are degrees in the text and radians in the value.
 #pragma once
 
 #include <absl/status/status.h>
 #include <absl/status/statusor.h>
 
 #include <filesystem>
-#include <optional>
 #include <string>
 #include <string_view>
 
+#include "insdiag/benchrun/bench_run_validation.h"  // InputLocation, LocationOf, ValidateBenchRun
 #include "insdiag/engine/bench_run.h"
 
 namespace insdiag::benchrun {
-
-inline constexpr std::string_view kFormatV1 = "insdiag-bench-run/1";
-
-// Where a refused input is wrong. line/column are 0 when not applicable
-// (e.g. a missing column names the header line and column 0; a gRPC upload
-// names `field` as "samples[1234].gyro_x" and leaves line/column 0).
-struct InputLocation {
-  std::string source;
-  int line = 0;
-  int column = 0;
-  std::string field;
-};
-
-// The location a refusal carries, if the Status came from this library.
-std::optional<InputLocation> LocationOf(const absl::Status& status);
 
 // Parses a whole bench-run CSV text. `source_name` names the input in errors.
 absl::StatusOr<engine::BenchRun> ParseBenchRun(std::string_view text, std::string_view source_name);
@@ -41,9 +38,17 @@ absl::StatusOr<engine::BenchRun> ParseBenchRun(std::string_view text, std::strin
 // Reads and parses a file; errors name the file's path.
 absl::StatusOr<engine::BenchRun> ReadBenchRunFile(const std::filesystem::path& path);
 
-// Writes the run in the CSV format, doubles in shortest round-trip form so
-// that ParseBenchRun(FormatBenchRun(run)) == run.
+// Writes the run in the CSV format: metadata (format, unit_serial, unit_type,
+// site, datasheet, then extra in order), the header, one row per sample;
+// `temp` only when the run has temperature. Doubles are in shortest round-trip
+// form, site angles in the shortest degrees text that reads back to the same
+// radians, so that ParseBenchRun(FormatBenchRun(run)) == run exactly for every
+// run ValidateBenchRun accepts whose metadata values have no surrounding
+// spaces (the reader trims them). No check is made here.
 std::string FormatBenchRun(const engine::BenchRun& run);
+
+// Validates the run (ValidateBenchRun, naming `path`) and writes it through a
+// temporary file beside it; on any error `path` is left as it was.
 absl::Status WriteBenchRunFile(const engine::BenchRun& run, const std::filesystem::path& path);
 
 }  // namespace insdiag::benchrun

@@ -1,0 +1,392 @@
+#include <absl/strings/str_format.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "insdiag/benchrun/bench_run_csv.h"
+#include "metadata_rules.h"
+#include "number_text.h"
+#include "sample_fields.h"
+
+namespace insdiag::benchrun {
+namespace {
+
+using internal::NumberParse;
+
+constexpr std::string_view kBlank = " \t";
+constexpr std::string_view kUtf8ByteOrderMark = "\xEF\xBB\xBF";
+constexpr std::array kRequiredKeys = {MetadataField::kFormat, MetadataField::kUnitSerial,
+                                      MetadataField::kSiteLatitude, MetadataField::kSiteLongitude,
+                                      MetadataField::kSiteHeight};
+
+std::string_view Trim(std::string_view text) {
+  const std::size_t begin = text.find_first_not_of(kBlank);
+  if (begin == std::string_view::npos) return text.substr(text.size());
+  return text.substr(begin, text.find_last_not_of(kBlank) - begin + 1);
+}
+
+bool IsBlank(std::string_view text) { return text.find_first_not_of(" \t\r\n") == text.npos; }
+
+// 1-based character column of `at` in `line`: UTF-8 continuation bytes do not
+// start a character.
+int CharacterColumn(std::string_view line, const char* at) {
+  int column = 1;
+  for (const char* p = line.data(); p < at; ++p) {
+    if ((static_cast<unsigned char>(*p) & 0xC0) != 0x80) ++column;
+  }
+  return column;
+}
+
+// Splits the text into lines without their break ("\n" or "\r\n").
+class LineReader {
+ public:
+  LineReader(std::string_view text, int first_line_number)
+      : rest_(text), number_(first_line_number - 1) {}
+
+  bool Next(std::string_view& line) {
+    if (rest_.empty()) return false;
+    const std::size_t end = rest_.find('\n');
+    line = rest_.substr(0, end);
+    rest_.remove_prefix(end == rest_.npos ? rest_.size() : end + 1);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    ++number_;
+    return true;
+  }
+
+  int number() const { return number_; }  // of the line Next returned last
+  std::string_view rest() const { return rest_; }
+
+ private:
+  std::string_view rest_;
+  int number_;
+};
+
+// Where a rule's subject stands in the text. Metadata places are recorded as
+// the lines are read; a sample's place is found again from its index only when
+// a rule refuses it, so the fast path keeps no per-row positions: rows are
+// consecutive lines, so sample i is line first_data_line + i.
+class CsvLocator final : public InputLocator {
+ public:
+  struct Place {
+    int line = 0;
+    int column = 0;
+  };
+
+  explicit CsvLocator(std::string_view source) : source_(source) { header_column_of_.fill(-1); }
+
+  InputLocation OfSample(std::size_t sample_index, SampleField field) const override {
+    const int line_number = first_data_line_ + static_cast<int>(sample_index);
+    InputLocation location{.source = source_, .line = line_number, .field = std::string(ColumnName(field))};
+    LineReader lines(data_, first_data_line_);
+    std::string_view line;
+    while (lines.Next(line) && lines.number() < line_number) {
+    }
+    const int header_column = header_column_of_[static_cast<std::size_t>(field)];
+    if (lines.number() != line_number || header_column < 0) return location;
+    std::size_t begin = 0;
+    for (int k = 0; k < header_column && begin != line.npos; ++k) {
+      begin = line.find(',', begin);
+      if (begin != line.npos) ++begin;
+    }
+    if (begin == line.npos) return location;
+    begin = std::min(line.find_first_not_of(kBlank, begin), line.size());
+    location.column = CharacterColumn(line, line.data() + begin);
+    return location;
+  }
+
+  InputLocation OfMetadata(MetadataField field, std::size_t extra_index) const override {
+    if (field == MetadataField::kExtra) {
+      const auto& [key, place] = extra_places_.at(extra_index);
+      return {.source = source_, .line = place.line, .column = place.column, .field = std::string(key)};
+    }
+    const Place& place = metadata_places_[static_cast<std::size_t>(field)];
+    return {.source = source_,
+            .line = place.line,
+            .column = place.column,
+            .field = std::string(MetadataKey(field))};
+  }
+
+  InputLocation OfSampleList() const override {
+    return {.source = source_, .line = first_data_line_, .field = "samples"};
+  }
+
+  InputLocation At(int line, int column, std::string_view field) const {
+    return {.source = source_, .line = line, .column = column, .field = std::string(field)};
+  }
+
+  void SetMetadataPlace(MetadataField field, Place place) {
+    metadata_places_[static_cast<std::size_t>(field)] = place;
+  }
+  bool HasMetadata(MetadataField field) const {
+    return metadata_places_[static_cast<std::size_t>(field)].line > 0;
+  }
+  void AddExtraPlace(std::string_view key, Place place) { extra_places_.emplace_back(key, place); }
+  void SetHeaderColumn(SampleField field, int header_column) {
+    header_column_of_[static_cast<std::size_t>(field)] = header_column;
+  }
+  bool HasColumn(SampleField field) const {
+    return header_column_of_[static_cast<std::size_t>(field)] >= 0;
+  }
+  void SetData(std::string_view data, int first_data_line) {
+    data_ = data;
+    first_data_line_ = first_data_line;
+  }
+
+ private:
+  std::string source_;
+  std::array<Place, kSpecMetadataFieldCount> metadata_places_{};
+  std::vector<std::pair<std::string_view, Place>> extra_places_;
+  std::array<int, kSampleFieldCount> header_column_of_{};
+  std::string_view data_;
+  int first_data_line_ = 0;
+};
+
+class Parser {
+ public:
+  Parser(std::string_view text, std::string_view source_name)
+      : lines_(text.substr(text.starts_with(kUtf8ByteOrderMark) ? kUtf8ByteOrderMark.size() : 0), 1),
+        locator_(source_name) {}
+
+  absl::StatusOr<engine::BenchRun> Parse() {
+    std::optional<std::string_view> header;
+    if (absl::Status status = ReadMetadata(header); !status.ok()) return status;
+    if (absl::Status status = CheckRequiredKeys(header.has_value()); !status.ok()) return status;
+    if (!header.has_value()) {
+      return Refusal(locator_.At(lines_.number() + 1, 0, "header"), "missing header row");
+    }
+    if (absl::Status status = ReadHeader(*header); !status.ok()) return status;
+    absl::StatusOr<BenchRunValidator> validator =
+        BenchRunValidator::Create(run_.metadata, run_.has_temperature, locator_);
+    if (!validator.ok()) return validator.status();
+    if (absl::Status status = ReadRows(*validator); !status.ok()) return status;
+    if (absl::Status status = validator->Finish(); !status.ok()) return status;
+    return std::move(run_);
+  }
+
+ private:
+  absl::Status Refuse(std::string_view line, const char* at, std::string_view field,
+                      std::string_view detail) const {
+    return Refusal(locator_.At(lines_.number(), CharacterColumn(line, at), field), detail);
+  }
+
+  // Reads `# key: value` lines up to the first other non-blank line, the header.
+  absl::Status ReadMetadata(std::optional<std::string_view>& header) {
+    std::string_view line;
+    while (lines_.Next(line)) {
+      if (IsBlank(line)) continue;
+      if (!line.starts_with('#')) {
+        header = line;
+        return absl::OkStatus();
+      }
+      if (absl::Status status = ReadMetadataLine(line); !status.ok()) return status;
+    }
+    return absl::OkStatus();
+  }
+
+  absl::Status ReadMetadataLine(std::string_view line) {
+    const std::size_t key_begin = std::min(line.find_first_not_of(kBlank, 1), line.size());
+    const char* const key_at = line.data() + key_begin;
+    const std::size_t colon = line.find(':', key_begin);
+    if (colon == line.npos) return Refuse(line, key_at, "metadata", "expected '# key: value'");
+    const std::string_view key = Trim(line.substr(key_begin, colon - key_begin));
+    if (!internal::IsMetadataKey(key)) {
+      return Refuse(line, key_at, "metadata",
+                    absl::StrFormat("expected '# key: value' with a lower-case ASCII key "
+                                    "(a-z, 0-9, _), got '%s'",
+                                    key));
+    }
+    for (const auto& [seen_key, seen_line] : seen_keys_) {
+      if (seen_key == key) {
+        return Refuse(line, key_at, key,
+                      absl::StrFormat("duplicate metadata key (first at line %d)", seen_line));
+      }
+    }
+    seen_keys_.emplace_back(key, lines_.number());
+
+    const std::string_view raw_value = line.substr(colon + 1);
+    const std::string_view value = Trim(raw_value);
+    const char* const value_at = value.empty() ? raw_value.data() : value.data();
+    const CsvLocator::Place value_place{lines_.number(), CharacterColumn(line, value_at)};
+
+    const std::optional<MetadataField> field = SpecField(key);
+    if (!field.has_value()) {
+      run_.metadata.extra.emplace_back(key, value);
+      locator_.AddExtraPlace(key, {lines_.number(), CharacterColumn(line, key_at)});
+      return absl::OkStatus();
+    }
+    locator_.SetMetadataPlace(*field, value_place);
+    const NumberParse outcome = StoreMetadata(*field, value);
+    if (outcome != NumberParse::kOk) {
+      return Refuse(line, value_at, key, internal::DescribeNumberParse(outcome, value));
+    }
+    // A file of another format may follow another grammar: say so before
+    // reading further rather than report its lines as errors of this one.
+    if (*field == MetadataField::kFormat) {
+      if (std::string detail = internal::CheckFormat(value); !detail.empty()) {
+        return Refuse(line, value_at, key, detail);
+      }
+    }
+    return absl::OkStatus();
+  }
+
+  static std::optional<MetadataField> SpecField(std::string_view key) {
+    for (std::size_t i = 0; i < kSpecMetadataFieldCount; ++i) {
+      const auto field = static_cast<MetadataField>(i);
+      if (MetadataKey(field) == key) return field;
+    }
+    return std::nullopt;
+  }
+
+  NumberParse StoreMetadata(MetadataField field, std::string_view value) {
+    engine::BenchRunMetadata& metadata = run_.metadata;
+    engine::Datasheet& sheet = metadata.datasheet;
+    const auto store_optional = [value](std::optional<double>& target) {
+      double number = 0.0;
+      const NumberParse outcome = internal::ParseDouble(value, number);
+      if (outcome == NumberParse::kOk) target = number;
+      return outcome;
+    };
+    switch (field) {
+      case MetadataField::kFormat: metadata.format = value; break;
+      case MetadataField::kUnitSerial: metadata.unit_serial = value; break;
+      case MetadataField::kUnitType: metadata.unit_type = value; break;
+      case MetadataField::kSiteLatitude:
+        return internal::ParseDegreesAsRadians(value, metadata.site.latitude_rad);
+      case MetadataField::kSiteLongitude:
+        return internal::ParseDegreesAsRadians(value, metadata.site.longitude_rad);
+      case MetadataField::kSiteHeight: return internal::ParseDouble(value, metadata.site.height_m);
+      case MetadataField::kGyroArw: return store_optional(sheet.gyro_arw_rad_rts);
+      case MetadataField::kGyroBiasSigma: return store_optional(sheet.gyro_bias_sigma_rad_s);
+      case MetadataField::kGyroBiasTau: return store_optional(sheet.gyro_bias_tau_s);
+      case MetadataField::kAccVrw: return store_optional(sheet.acc_vrw_mps_rts);
+      case MetadataField::kAccBiasSigma: return store_optional(sheet.acc_bias_sigma_mps2);
+      case MetadataField::kAccBiasTau: return store_optional(sheet.acc_bias_tau_s);
+      case MetadataField::kExtra: break;
+    }
+    return NumberParse::kOk;
+  }
+
+  // Missing keys are reported at the header line (where the metadata ends) or,
+  // without a header, at the line after the last.
+  absl::Status CheckRequiredKeys(bool header_found) const {
+    const int line = header_found ? lines_.number() : lines_.number() + 1;
+    for (const MetadataField field : kRequiredKeys) {
+      if (!locator_.HasMetadata(field)) {
+        return Refusal(locator_.At(line, 0, MetadataKey(field)), "missing required metadata key");
+      }
+    }
+    return absl::OkStatus();
+  }
+
+  absl::Status ReadHeader(std::string_view line) {
+    std::size_t begin = 0;
+    while (true) {
+      const std::size_t comma = line.find(',', begin);
+      const std::string_view name = Trim(line.substr(begin, comma - begin));
+      const char* const name_at = name.empty() ? line.data() + begin : name.data();
+      if (std::find(column_names_.begin(), column_names_.end(), name) != column_names_.end()) {
+        return Refuse(line, name_at, name, "duplicate column");
+      }
+      std::optional<SampleField> field;
+      for (const SampleField candidate : internal::kAllSampleFields) {
+        if (ColumnName(candidate) == name) field = candidate;
+      }
+      if (field.has_value()) locator_.SetHeaderColumn(*field, static_cast<int>(column_names_.size()));
+      column_names_.push_back(name);
+      column_fields_.push_back(field);
+      if (comma == line.npos) break;
+      begin = comma + 1;
+    }
+    for (const SampleField field : internal::FieldsOf(/*has_temperature=*/false)) {
+      if (!locator_.HasColumn(field)) {
+        return Refusal(locator_.At(lines_.number(), 0, ColumnName(field)), "missing required column");
+      }
+    }
+    run_.has_temperature = locator_.HasColumn(SampleField::kTemp);
+    return absl::OkStatus();
+  }
+
+  absl::Status ReadRows(BenchRunValidator& validator) {
+    locator_.SetData(lines_.rest(), lines_.number() + 1);
+    // Rows are lines: reserving by the line count leaves the vectors one
+    // allocation each for the whole run.
+    const auto row_bound = static_cast<std::size_t>(std::count(lines_.rest().begin(), lines_.rest().end(), '\n')) + 1;
+    run_.samples.reserve(row_bound);
+    validator.Reserve(row_bound);
+
+    std::string_view line;
+    while (lines_.Next(line)) {
+      if (IsBlank(line)) {
+        if (IsBlank(lines_.rest())) break;  // blank lines at the end
+        return Refuse(line, line.data(), "row",
+                      absl::StrFormat("empty row, expected %d fields", column_fields_.size()));
+      }
+      engine::ImuSample& sample = run_.samples.emplace_back();
+      if (absl::Status status = ReadRow(line, sample); !status.ok()) return status;
+      if (absl::Status status = validator.Add(sample); !status.ok()) return status;
+    }
+    return absl::OkStatus();
+  }
+
+  absl::Status ReadRow(std::string_view line, engine::ImuSample& sample) const {
+    const std::size_t column_count = column_fields_.size();
+    std::size_t begin = 0;
+    for (std::size_t k = 0; k < column_count; ++k) {
+      const std::size_t comma = line.find(',', begin);
+      if (const std::optional<SampleField> field = column_fields_[k]; field.has_value()) {
+        const std::string_view text = Trim(line.substr(begin, comma - begin));
+        const NumberParse outcome = internal::ParseDouble(text, internal::ValueOf(sample, *field));
+        if (outcome != NumberParse::kOk) {
+          const char* const text_at = text.empty() ? line.data() + begin : text.data();
+          return Refuse(line, text_at, ColumnName(*field),
+                        internal::DescribeNumberParse(outcome, text));
+        }
+      }
+      if (comma == line.npos) {
+        if (k + 1 == column_count) return absl::OkStatus();
+        return Refuse(line, line.data() + line.size(), column_names_[k + 1],
+                      absl::StrFormat("row has %d fields, expected %d", k + 1, column_count));
+      }
+      begin = comma + 1;
+    }
+    const auto extra_commas = std::count(line.begin() + static_cast<std::ptrdiff_t>(begin), line.end(), ',');
+    return Refuse(line, line.data() + begin, "row",
+                  absl::StrFormat("row has %d fields, expected %d",
+                                  column_count + 1 + static_cast<std::size_t>(extra_commas),
+                                  column_count));
+  }
+
+  LineReader lines_;
+  CsvLocator locator_;
+  engine::BenchRun run_;
+  std::vector<std::pair<std::string_view, int>> seen_keys_;  // metadata key, line
+  std::vector<std::string_view> column_names_;               // header, in order
+  std::vector<std::optional<SampleField>> column_fields_;    // nullopt: a column the spec does not name
+};
+
+}  // namespace
+
+absl::StatusOr<engine::BenchRun> ParseBenchRun(std::string_view text, std::string_view source_name) {
+  return Parser(text, source_name).Parse();
+}
+
+absl::StatusOr<engine::BenchRun> ReadBenchRunFile(const std::filesystem::path& path) {
+  const std::string name = path.string();
+  const std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(name.c_str(), "rb"),
+                                                             &std::fclose);
+  if (file == nullptr) return absl::ErrnoToStatus(errno, name + ": cannot open");
+  std::string text;
+  char buffer[1 << 16];
+  std::size_t read = 0;
+  while ((read = std::fread(buffer, 1, sizeof buffer, file.get())) > 0) text.append(buffer, read);
+  if (std::ferror(file.get())) return absl::ErrnoToStatus(errno, name + ": cannot read");
+  return ParseBenchRun(text, name);
+}
+
+}  // namespace insdiag::benchrun

@@ -1,0 +1,80 @@
+#include "number_text.h"
+
+#include <absl/strings/str_format.h>
+
+#include <charconv>
+#include <cmath>
+#include <numbers>
+#include <system_error>
+
+namespace insdiag::benchrun::internal {
+namespace {
+
+constexpr long double kRadiansPerDegree = std::numbers::pi_v<long double> / 180.0L;
+
+template <typename Real>
+NumberParse ParseWhole(std::string_view text, Real& value) {
+  // from_chars refuses a leading '+', which spreadsheet exports sometimes write.
+  if (text.size() > 1 && text.front() == '+' && text[1] != '-' && text[1] != '+') {
+    text.remove_prefix(1);
+  }
+  const char* const end = text.data() + text.size();
+  const auto [ptr, ec] = std::from_chars(text.data(), end, value);
+  if (ptr != end || ec == std::errc::invalid_argument) return NumberParse::kNotANumber;
+  if (ec == std::errc::result_out_of_range) return NumberParse::kOutOfRange;
+  if (!std::isfinite(value)) return NumberParse::kNotFinite;
+  return NumberParse::kOk;
+}
+
+}  // namespace
+
+NumberParse ParseDouble(std::string_view text, double& value) { return ParseWhole(text, value); }
+
+NumberParse ParseDegreesAsRadians(std::string_view text, double& radians) {
+  long double degrees = 0.0L;
+  const NumberParse outcome = ParseWhole(text, degrees);
+  if (outcome != NumberParse::kOk) return outcome;
+  radians = static_cast<double>(degrees * kRadiansPerDegree);
+  if (!std::isfinite(radians)) return NumberParse::kOutOfRange;
+  return NumberParse::kOk;
+}
+
+std::string DescribeNumberParse(NumberParse outcome, std::string_view text) {
+  std::string_view what = "is out of the range of a double";
+  switch (outcome) {
+    case NumberParse::kOk: what = "is a number"; break;
+    case NumberParse::kNotANumber: what = "is not a number"; break;
+    case NumberParse::kNotFinite: what = "is not a finite number"; break;
+    case NumberParse::kOutOfRange: break;
+  }
+  return absl::StrFormat("'%s' %s", text, what);
+}
+
+std::string ShortestText(double value) {
+  char buffer[32];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return std::string(buffer, result.ptr);
+}
+
+std::string DegreesText(double radians) {
+  const long double degrees = static_cast<long double>(radians) / kRadiansPerDegree;
+  // Candidates from short to long: the shortest text of the nearest double
+  // (what a person would write, e.g. 55.5672), then the shortest text of the
+  // long double, which reads back to `degrees` exactly; degrees × π/180 then
+  // differs from `radians` by a few long-double ulps, far below half a double
+  // ulp, so it rounds back to `radians`.
+  std::string candidate = ShortestText(static_cast<double>(degrees));
+  double read_back = 0.0;
+  if (ParseDegreesAsRadians(candidate, read_back) == NumberParse::kOk && read_back == radians) {
+    return candidate;
+  }
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, degrees);
+  return std::string(buffer, result.ptr);
+}
+
+double DegreesFromRadians(double radians) {
+  return static_cast<double>(static_cast<long double>(radians) / kRadiansPerDegree);
+}
+
+}  // namespace insdiag::benchrun::internal
