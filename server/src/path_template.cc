@@ -29,34 +29,8 @@ absl::StatusOr<PathTemplate> PathTemplate::Parse(const std::string& text) {
   }
 
   std::optional<Variable> open;
-  for (absl::string_view split_piece : absl::StrSplit(body, '/')) {
-    std::string piece(split_piece);
-    if (!piece.empty() && piece.front() == '{') {
-      if (open) return Malformed(text, "nested variables");
-      piece.erase(0, 1);
-      const auto equals = piece.find('=');
-      const bool closes = !piece.empty() && piece.back() == '}';
-      if (closes) piece.pop_back();
-      open = Variable{equals == std::string::npos ? piece : piece.substr(0, equals), parsed.segments_.size(), 0};
-      piece = equals == std::string::npos ? "*" : piece.substr(equals + 1);
-      if (open->field.empty()) return Malformed(text, "a variable without a field name");
-      if (!closes && equals == std::string::npos) return Malformed(text, "unclosed variable");
-      parsed.segments_.push_back(
-          {piece == "**" ? Kind::kRest : piece == "*" ? Kind::kWildcard : Kind::kLiteral, piece});
-      if (closes) {
-        open->end = parsed.segments_.size();
-        parsed.variables_.push_back(*open);
-        open.reset();
-      }
-      continue;
-    }
-    const bool closes = !piece.empty() && piece.back() == '}';
-    if (closes) {
-      if (!open) return Malformed(text, "'}' without '{'");
-      piece.pop_back();
-    }
-    if (piece.empty()) return Malformed(text, "an empty segment");
-    if (piece.find_first_of("{}=") != std::string::npos) return Malformed(text, "stray '{', '}' or '='");
+  // Appends one segment; `closes` ends the open variable after it.
+  const auto add = [&](const std::string& piece, bool closes) {
     parsed.segments_.push_back(
         {piece == "**" ? Kind::kRest : piece == "*" ? Kind::kWildcard : Kind::kLiteral, piece});
     if (closes) {
@@ -64,6 +38,25 @@ absl::StatusOr<PathTemplate> PathTemplate::Parse(const std::string& text) {
       parsed.variables_.push_back(*open);
       open.reset();
     }
+  };
+  for (absl::string_view split_piece : absl::StrSplit(body, '/')) {
+    std::string piece(split_piece);
+    const bool closes = !piece.empty() && piece.back() == '}';
+    if (closes) piece.pop_back();
+    if (!piece.empty() && piece.front() == '{') {
+      if (open) return Malformed(text, "nested variables");
+      piece.erase(0, 1);
+      const auto equals = piece.find('=');
+      open = Variable{equals == std::string::npos ? piece : piece.substr(0, equals), parsed.segments_.size(), 0};
+      if (open->field.empty()) return Malformed(text, "a variable without a field name");
+      if (!closes && equals == std::string::npos) return Malformed(text, "unclosed variable");
+      add(equals == std::string::npos ? "*" : piece.substr(equals + 1), closes);
+      continue;
+    }
+    if (closes && !open) return Malformed(text, "'}' without '{'");
+    if (piece.empty()) return Malformed(text, "an empty segment");
+    if (piece.find_first_of("{}=") != std::string::npos) return Malformed(text, "stray '{', '}' or '='");
+    add(piece, closes);
   }
   if (open) return Malformed(text, "unclosed variable");
   for (std::size_t i = 0; i + 1 < parsed.segments_.size(); ++i) {

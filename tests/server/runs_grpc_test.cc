@@ -2,6 +2,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <functional>
+#include <optional>
 #include <thread>
 
 #include "google/rpc/error_details.pb.h"
@@ -34,6 +36,33 @@ std::vector<engine::ImuSample> ReadBack(v1::RunService::Stub& stub, const std::s
   const grpc::Status status = reader->Finish();
   EXPECT_TRUE(status.ok()) << status.error_message();
   return samples;
+}
+
+// Uploads `run` with every message passed through `edit`, which may change
+// it or drop it (nullopt); returns the server's verdict.
+grpc::Status UploadEdited(
+    v1::RunService::Stub& stub, const engine::BenchRun& run, std::size_t chunk_samples,
+    const std::function<std::optional<v1::UploadRunRequest>(const v1::UploadRunRequest&)>& edit) {
+  grpc::ClientContext context;
+  v1::Run response;
+  auto stream = stub.UploadRun(&context, &response);
+  api::ForEachUploadRequest(run, "", chunk_samples, [&](const v1::UploadRunRequest& request) {
+    const auto edited = edit(request);
+    return !edited || stream->Write(*edited);
+  });
+  stream->WritesDone();
+  return stream->Finish();
+}
+
+template <typename Detail>
+Detail DetailOf(const grpc::Status& status) {
+  google::rpc::Status details;
+  details.ParseFromString(status.error_details());
+  Detail detail;
+  for (const auto& any : details.details()) {
+    if (any.Is<Detail>()) any.UnpackTo(&detail);
+  }
+  return detail;
 }
 
 class RunsGrpcTest : public ServerTest {};
@@ -82,41 +111,24 @@ TEST_F(RunsGrpcTest, StreamCutOffHalfWayStoresNothing) {
 }
 
 TEST_F(RunsGrpcTest, StreamEndingWithoutItsDigestStoresNothing) {
-  const auto run = SyntheticStaticRun(1'000, 50.0, 1);
-  grpc::ClientContext context;
-  v1::Run response;
-  auto stream = runs().UploadRun(&context, &response);
-  api::ForEachUploadRequest(run, "", 100, [&](const v1::UploadRunRequest& request) {
-    return request.has_sha256() || stream->Write(request);  // everything but the digest
-  });
-  stream->WritesDone();
-  const grpc::Status status = stream->Finish();
+  const grpc::Status status = UploadEdited(runs(), SyntheticStaticRun(1'000, 50.0, 1), 100,
+                                           [](const v1::UploadRunRequest& request) {
+                                             return request.has_sha256() ? std::nullopt : std::optional(request);
+                                           });
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_THAT(status.error_message(), HasSubstr("without its sha256"));
   EXPECT_EQ(StoredRunCount(), 0);
 }
 
 TEST_F(RunsGrpcTest, WrongSha256IsRefusedAndStoresNothing) {
-  const auto run = SyntheticStaticRun(1'000, 50.0, 1);
-  grpc::ClientContext context;
-  v1::Run response;
-  auto stream = runs().UploadRun(&context, &response);
-  api::ForEachUploadRequest(run, "", 100, [&](const v1::UploadRunRequest& request) {
-    if (!request.has_sha256()) return stream->Write(request);
-    v1::UploadRunRequest forged;
-    forged.set_sha256(std::string(64, '0'));
-    return stream->Write(forged);
-  });
-  stream->WritesDone();
-  const grpc::Status status = stream->Finish();
+  const grpc::Status status = UploadEdited(runs(), SyntheticStaticRun(1'000, 50.0, 1), 100,
+                                           [](v1::UploadRunRequest request) {
+                                             if (request.has_sha256()) request.set_sha256(std::string(64, '0'));
+                                             return std::optional(request);
+                                           });
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_THAT(status.error_message(), HasSubstr("sha256 mismatch"));
-  google::rpc::Status details;
-  ASSERT_TRUE(details.ParseFromString(status.error_details()));
-  google::rpc::ErrorInfo info;
-  ASSERT_EQ(details.details_size(), 1);
-  ASSERT_TRUE(details.details(0).UnpackTo(&info));
-  EXPECT_EQ(info.reason(), "SHA256_MISMATCH");
+  EXPECT_EQ(DetailOf<google::rpc::ErrorInfo>(status).reason(), "SHA256_MISMATCH");
   EXPECT_EQ(StoredRunCount(), 0);
 }
 
@@ -141,19 +153,10 @@ TEST_F(RunsGrpcTest, SameRequestIdWithOtherContentIsAlreadyExists) {
 TEST_F(RunsGrpcTest, RefusedSampleIsNamedByItsFieldPath) {
   auto run = SyntheticStaticRun(2'000, 50.0, 1);
   run.samples[1234].gyro_rad_s.y() = 40.0;  // beyond ±35 rad/s
-  grpc::ClientContext context;
-  v1::Run response;
-  auto stream = runs().UploadRun(&context, &response);
-  api::ForEachUploadRequest(run, "", 500, [&](const v1::UploadRunRequest& request) { return stream->Write(request); });
-  stream->WritesDone();
-  const grpc::Status status = stream->Finish();
+  const grpc::Status status =
+      UploadEdited(runs(), run, 500, [](const v1::UploadRunRequest& request) { return std::optional(request); });
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
-  google::rpc::Status details;
-  ASSERT_TRUE(details.ParseFromString(status.error_details()));
-  google::rpc::BadRequest bad_request;
-  for (const auto& any : details.details()) {
-    if (any.Is<google::rpc::BadRequest>()) any.UnpackTo(&bad_request);
-  }
+  const auto bad_request = DetailOf<google::rpc::BadRequest>(status);
   ASSERT_EQ(bad_request.field_violations_size(), 1);
   EXPECT_EQ(bad_request.field_violations(0).field(), "samples[1234].gyro_y");
   EXPECT_EQ(StoredRunCount(), 0);
