@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -19,19 +20,25 @@ namespace {
 
 using internal::NumberParse;
 
-constexpr std::string_view kBlank = " \t";
 constexpr std::string_view kUtf8ByteOrderMark = "\xEF\xBB\xBF";
 constexpr std::array kRequiredKeys = {MetadataField::kFormat, MetadataField::kUnitSerial,
                                       MetadataField::kSiteLatitude, MetadataField::kSiteLongitude,
                                       MetadataField::kSiteHeight};
 
+bool IsSpaceOrTab(char c) { return c == ' ' || c == '\t'; }
+
+// Plain loops: find_first_not_of calls memchr per character, which showed up
+// as a tenth of the parse time.
 std::string_view Trim(std::string_view text) {
-  const std::size_t begin = text.find_first_not_of(kBlank);
-  if (begin == std::string_view::npos) return text.substr(text.size());
-  return text.substr(begin, text.find_last_not_of(kBlank) - begin + 1);
+  while (!text.empty() && IsSpaceOrTab(text.front())) text.remove_prefix(1);
+  while (!text.empty() && IsSpaceOrTab(text.back())) text.remove_suffix(1);
+  return text;
 }
 
-bool IsBlank(std::string_view text) { return text.find_first_not_of(" \t\r\n") == text.npos; }
+bool IsBlank(std::string_view text) {
+  return std::all_of(text.begin(), text.end(),
+                     [](char c) { return IsSpaceOrTab(c) || c == '\r' || c == '\n'; });
+}
 
 // 1-based character column of `at` in `line`: UTF-8 continuation bytes do not
 // start a character.
@@ -82,7 +89,8 @@ class CsvLocator final : public InputLocator {
 
   InputLocation OfSample(std::size_t sample_index, SampleField field) const override {
     const int line_number = first_data_line_ + static_cast<int>(sample_index);
-    InputLocation location{.source = source_, .line = line_number, .field = std::string(ColumnName(field))};
+    InputLocation location{
+        .source = source_, .line = line_number, .field = std::string(ColumnName(field))};
     LineReader lines(data_, first_data_line_);
     std::string_view line;
     while (lines.Next(line) && lines.number() < line_number) {
@@ -95,15 +103,16 @@ class CsvLocator final : public InputLocator {
       if (begin != line.npos) ++begin;
     }
     if (begin == line.npos) return location;
-    begin = std::min(line.find_first_not_of(kBlank, begin), line.size());
-    location.column = CharacterColumn(line, line.data() + begin);
+    const std::string_view text = Trim(line.substr(begin, line.find(',', begin) - begin));
+    location.column = CharacterColumn(line, text.data());
     return location;
   }
 
   InputLocation OfMetadata(MetadataField field, std::size_t extra_index) const override {
     if (field == MetadataField::kExtra) {
       const auto& [key, place] = extra_places_.at(extra_index);
-      return {.source = source_, .line = place.line, .column = place.column, .field = std::string(key)};
+      return {
+          .source = source_, .line = place.line, .column = place.column, .field = std::string(key)};
     }
     const Place& place = metadata_places_[static_cast<std::size_t>(field)];
     return {.source = source_,
@@ -150,7 +159,8 @@ class CsvLocator final : public InputLocator {
 class Parser {
  public:
   Parser(std::string_view text, std::string_view source_name)
-      : lines_(text.substr(text.starts_with(kUtf8ByteOrderMark) ? kUtf8ByteOrderMark.size() : 0), 1),
+      : lines_(text.substr(text.starts_with(kUtf8ByteOrderMark) ? kUtf8ByteOrderMark.size() : 0),
+               1),
         locator_(source_name) {}
 
   absl::StatusOr<engine::BenchRun> Parse() {
@@ -190,8 +200,8 @@ class Parser {
   }
 
   absl::Status ReadMetadataLine(std::string_view line) {
-    const std::size_t key_begin = std::min(line.find_first_not_of(kBlank, 1), line.size());
-    const char* const key_at = line.data() + key_begin;
+    const char* const key_at = Trim(line.substr(1)).data();
+    const auto key_begin = static_cast<std::size_t>(key_at - line.data());
     const std::size_t colon = line.find(':', key_begin);
     if (colon == line.npos) return Refuse(line, key_at, "metadata", "expected '# key: value'");
     const std::string_view key = Trim(line.substr(key_begin, colon - key_begin));
@@ -253,21 +263,35 @@ class Parser {
       return outcome;
     };
     switch (field) {
-      case MetadataField::kFormat: metadata.format = value; break;
-      case MetadataField::kUnitSerial: metadata.unit_serial = value; break;
-      case MetadataField::kUnitType: metadata.unit_type = value; break;
+      case MetadataField::kFormat:
+        metadata.format = value;
+        break;
+      case MetadataField::kUnitSerial:
+        metadata.unit_serial = value;
+        break;
+      case MetadataField::kUnitType:
+        metadata.unit_type = value;
+        break;
       case MetadataField::kSiteLatitude:
         return internal::ParseDegreesAsRadians(value, metadata.site.latitude_rad);
       case MetadataField::kSiteLongitude:
         return internal::ParseDegreesAsRadians(value, metadata.site.longitude_rad);
-      case MetadataField::kSiteHeight: return internal::ParseDouble(value, metadata.site.height_m);
-      case MetadataField::kGyroArw: return store_optional(sheet.gyro_arw_rad_rts);
-      case MetadataField::kGyroBiasSigma: return store_optional(sheet.gyro_bias_sigma_rad_s);
-      case MetadataField::kGyroBiasTau: return store_optional(sheet.gyro_bias_tau_s);
-      case MetadataField::kAccVrw: return store_optional(sheet.acc_vrw_mps_rts);
-      case MetadataField::kAccBiasSigma: return store_optional(sheet.acc_bias_sigma_mps2);
-      case MetadataField::kAccBiasTau: return store_optional(sheet.acc_bias_tau_s);
-      case MetadataField::kExtra: break;
+      case MetadataField::kSiteHeight:
+        return internal::ParseDouble(value, metadata.site.height_m);
+      case MetadataField::kGyroArw:
+        return store_optional(sheet.gyro_arw_rad_rts);
+      case MetadataField::kGyroBiasSigma:
+        return store_optional(sheet.gyro_bias_sigma_rad_s);
+      case MetadataField::kGyroBiasTau:
+        return store_optional(sheet.gyro_bias_tau_s);
+      case MetadataField::kAccVrw:
+        return store_optional(sheet.acc_vrw_mps_rts);
+      case MetadataField::kAccBiasSigma:
+        return store_optional(sheet.acc_bias_sigma_mps2);
+      case MetadataField::kAccBiasTau:
+        return store_optional(sheet.acc_bias_tau_s);
+      case MetadataField::kExtra:
+        break;
     }
     return NumberParse::kOk;
   }
@@ -297,7 +321,8 @@ class Parser {
       for (const SampleField candidate : internal::kAllSampleFields) {
         if (ColumnName(candidate) == name) field = candidate;
       }
-      if (field.has_value()) locator_.SetHeaderColumn(*field, static_cast<int>(column_names_.size()));
+      if (field.has_value())
+        locator_.SetHeaderColumn(*field, static_cast<int>(column_names_.size()));
       column_names_.push_back(name);
       column_fields_.push_back(field);
       if (comma == line.npos) break;
@@ -305,7 +330,8 @@ class Parser {
     }
     for (const SampleField field : internal::FieldsOf(/*has_temperature=*/false)) {
       if (!locator_.HasColumn(field)) {
-        return Refusal(locator_.At(lines_.number(), 0, ColumnName(field)), "missing required column");
+        return Refusal(locator_.At(lines_.number(), 0, ColumnName(field)),
+                       "missing required column");
       }
     }
     run_.has_temperature = locator_.HasColumn(SampleField::kTemp);
@@ -316,7 +342,8 @@ class Parser {
     locator_.SetData(lines_.rest(), lines_.number() + 1);
     // Rows are lines: reserving by the line count leaves the vectors one
     // allocation each for the whole run.
-    const auto row_bound = static_cast<std::size_t>(std::count(lines_.rest().begin(), lines_.rest().end(), '\n')) + 1;
+    const auto row_bound =
+        static_cast<std::size_t>(std::count(lines_.rest().begin(), lines_.rest().end(), '\n')) + 1;
     run_.samples.reserve(row_bound);
     validator.Reserve(row_bound);
 
@@ -355,11 +382,12 @@ class Parser {
       }
       begin = comma + 1;
     }
-    const auto extra_commas = std::count(line.begin() + static_cast<std::ptrdiff_t>(begin), line.end(), ',');
-    return Refuse(line, line.data() + begin, "row",
-                  absl::StrFormat("row has %d fields, expected %d",
-                                  column_count + 1 + static_cast<std::size_t>(extra_commas),
-                                  column_count));
+    const auto extra_commas =
+        std::count(line.begin() + static_cast<std::ptrdiff_t>(begin), line.end(), ',');
+    return Refuse(
+        line, line.data() + begin, "row",
+        absl::StrFormat("row has %d fields, expected %d",
+                        column_count + 1 + static_cast<std::size_t>(extra_commas), column_count));
   }
 
   LineReader lines_;
@@ -367,12 +395,14 @@ class Parser {
   engine::BenchRun run_;
   std::vector<std::pair<std::string_view, int>> seen_keys_;  // metadata key, line
   std::vector<std::string_view> column_names_;               // header, in order
-  std::vector<std::optional<SampleField>> column_fields_;    // nullopt: a column the spec does not name
+  std::vector<std::optional<SampleField>>
+      column_fields_;  // nullopt: a column the spec does not name
 };
 
 }  // namespace
 
-absl::StatusOr<engine::BenchRun> ParseBenchRun(std::string_view text, std::string_view source_name) {
+absl::StatusOr<engine::BenchRun> ParseBenchRun(std::string_view text,
+                                               std::string_view source_name) {
   return Parser(text, source_name).Parse();
 }
 
@@ -382,6 +412,9 @@ absl::StatusOr<engine::BenchRun> ReadBenchRunFile(const std::filesystem::path& p
                                                              &std::fclose);
   if (file == nullptr) return absl::ErrnoToStatus(errno, name + ": cannot open");
   std::string text;
+  std::error_code size_error;
+  const std::uintmax_t size = std::filesystem::file_size(path, size_error);
+  if (!size_error) text.reserve(size);
   char buffer[1 << 16];
   std::size_t read = 0;
   while ((read = std::fread(buffer, 1, sizeof buffer, file.get())) > 0) text.append(buffer, read);

@@ -1,5 +1,5 @@
-#include <charconv>
 #include <cerrno>
+#include <charconv>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -20,7 +20,8 @@ void AppendMetadata(std::string& out, MetadataField field, std::string_view valu
   AppendMetadataLine(out, MetadataKey(field), value);
 }
 
-void AppendOptionalNumber(std::string& out, MetadataField field, const std::optional<double>& value) {
+void AppendOptionalNumber(std::string& out, MetadataField field,
+                          const std::optional<double>& value) {
   if (value.has_value()) AppendMetadata(out, field, internal::ShortestText(*value));
 }
 
@@ -52,8 +53,10 @@ std::string FormatBenchRun(const engine::BenchRun& run) {
   // This writer writes version 1, whatever the value says.
   AppendMetadata(out, MetadataField::kFormat, kFormatV1);
   AppendMetadata(out, MetadataField::kUnitSerial, metadata.unit_serial);
-  if (!metadata.unit_type.empty()) AppendMetadata(out, MetadataField::kUnitType, metadata.unit_type);
-  AppendMetadata(out, MetadataField::kSiteLatitude, internal::DegreesText(metadata.site.latitude_rad));
+  if (!metadata.unit_type.empty())
+    AppendMetadata(out, MetadataField::kUnitType, metadata.unit_type);
+  AppendMetadata(out, MetadataField::kSiteLatitude,
+                 internal::DegreesText(metadata.site.latitude_rad));
   AppendMetadata(out, MetadataField::kSiteLongitude,
                  internal::DegreesText(metadata.site.longitude_rad));
   AppendMetadata(out, MetadataField::kSiteHeight, internal::ShortestText(metadata.site.height_m));

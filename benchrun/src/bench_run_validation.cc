@@ -21,14 +21,14 @@ using internal::IsMetadataKey;
 using internal::ShortestText;
 
 constexpr std::array<std::string_view, kSampleFieldCount> kColumnNames = {
-    "t",     "gyro_x", "gyro_y",   "gyro_z",    "acc_x",   "acc_y",
+    "t",     "gyro_x",   "gyro_y",    "gyro_z",  "acc_x", "acc_y",
     "acc_z", "ref_roll", "ref_pitch", "ref_yaw", "temp",
 };
 
 constexpr std::array<std::string_view, kSpecMetadataFieldCount> kMetadataKeys = {
-    "format",    "unit_serial",     "unit_type",     "site_latitude_deg",
-    "site_longitude_deg", "site_height_m", "gyro_arw",  "gyro_bias_sigma",
-    "gyro_bias_tau", "acc_vrw",     "acc_bias_sigma", "acc_bias_tau",
+    "format",         "unit_serial",  "unit_type",       "site_latitude_deg", "site_longitude_deg",
+    "site_height_m",  "gyro_arw",     "gyro_bias_sigma", "gyro_bias_tau",     "acc_vrw",
+    "acc_bias_sigma", "acc_bias_tau",
 };
 
 // Paths into engine::BenchRunMetadata, in MetadataField order.
@@ -92,7 +92,8 @@ std::string CheckSampleValue(SampleField field, double value) {
 }
 
 absl::Status CheckMetadata(const engine::BenchRunMetadata& metadata, const InputLocator& locator) {
-  const auto refuse = [&](MetadataField field, std::string_view detail, std::size_t extra_index = 0) {
+  const auto refuse = [&](MetadataField field, std::string_view detail,
+                          std::size_t extra_index = 0) {
     return Refusal(locator.OfMetadata(field, extra_index), detail);
   };
   if (std::string detail = internal::CheckFormat(metadata.format); !detail.empty()) {
@@ -151,7 +152,9 @@ absl::Status CheckMetadata(const engine::BenchRunMetadata& metadata, const Input
 
 }  // namespace
 
-std::string_view ColumnName(SampleField field) { return kColumnNames[static_cast<std::size_t>(field)]; }
+std::string_view ColumnName(SampleField field) {
+  return kColumnNames[static_cast<std::size_t>(field)];
+}
 
 std::string_view MetadataKey(MetadataField field) {
   const auto index = static_cast<std::size_t>(field);
@@ -228,8 +231,9 @@ InputLocation FieldPathLocator::OfSample(std::size_t sample_index, SampleField f
 InputLocation FieldPathLocator::OfMetadata(MetadataField field, std::size_t extra_index) const {
   const auto index = static_cast<std::size_t>(field);
   return {.source = source_name_,
-          .field = index < kMetadataPaths.size() ? std::string(kMetadataPaths[index])
-                                                 : absl::StrFormat("metadata.extra[%d]", extra_index)};
+          .field = index < kMetadataPaths.size()
+                       ? std::string(kMetadataPaths[index])
+                       : absl::StrFormat("metadata.extra[%d]", extra_index)};
 }
 
 InputLocation FieldPathLocator::OfSampleList() const {
@@ -239,9 +243,8 @@ InputLocation FieldPathLocator::OfSampleList() const {
 // ---------------------------------------------------------------------------
 // Validator
 
-absl::StatusOr<BenchRunValidator> BenchRunValidator::Create(const engine::BenchRunMetadata& metadata,
-                                                            bool has_temperature,
-                                                            const InputLocator& locator) {
+absl::StatusOr<BenchRunValidator> BenchRunValidator::Create(
+    const engine::BenchRunMetadata& metadata, bool has_temperature, const InputLocator& locator) {
   if (absl::Status status = CheckMetadata(metadata, locator); !status.ok()) return status;
   const double gravity =
       engine::wgs84::NormalGravityMps2(metadata.site.latitude_rad, metadata.site.height_m);

@@ -4,6 +4,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <system_error>
 
@@ -42,10 +43,17 @@ NumberParse ParseDegreesAsRadians(std::string_view text, double& radians) {
 std::string DescribeNumberParse(NumberParse outcome, std::string_view text) {
   std::string_view what = "is out of the range of a double";
   switch (outcome) {
-    case NumberParse::kOk: what = "is a number"; break;
-    case NumberParse::kNotANumber: what = "is not a number"; break;
-    case NumberParse::kNotFinite: what = "is not a finite number"; break;
-    case NumberParse::kOutOfRange: break;
+    case NumberParse::kOk:
+      what = "is a number";
+      break;
+    case NumberParse::kNotANumber:
+      what = "is not a number";
+      break;
+    case NumberParse::kNotFinite:
+      what = "is not a finite number";
+      break;
+    case NumberParse::kOutOfRange:
+      break;
   }
   return absl::StrFormat("'%s' %s", text, what);
 }
@@ -58,19 +66,23 @@ std::string ShortestText(double value) {
 
 std::string DegreesText(double radians) {
   const long double degrees = static_cast<long double>(radians) / kRadiansPerDegree;
-  // Candidates from short to long: the shortest text of the nearest double
-  // (what a person would write, e.g. 55.5672), then the shortest text of the
-  // long double, which reads back to `degrees` exactly; degrees × π/180 then
-  // differs from `radians` by a few long-double ulps, far below half a double
-  // ulp, so it rounds back to `radians`.
-  std::string candidate = ShortestText(static_cast<double>(degrees));
-  double read_back = 0.0;
-  if (ParseDegreesAsRadians(candidate, read_back) == NumberParse::kOk && read_back == radians) {
-    return candidate;
-  }
+  // `degrees` is within a few long-double ulps of the exact preimage, so its
+  // shortest text reads back to it and degrees × π/180 rounds to `radians`
+  // (the error is far below half a double ulp). Shorter texts usually do too:
+  // a site written as 55.5672 should come back as 55.5672, so try roundings to
+  // fewer significant digits first.
   char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, degrees);
-  return std::string(buffer, result.ptr);
+  for (int digits = 1; digits < std::numeric_limits<long double>::max_digits10; ++digits) {
+    const auto rounded =
+        std::to_chars(buffer, buffer + sizeof buffer, degrees, std::chars_format::general, digits);
+    const std::string_view text(buffer, static_cast<std::size_t>(rounded.ptr - buffer));
+    double read_back = 0.0;
+    if (ParseDegreesAsRadians(text, read_back) == NumberParse::kOk && read_back == radians) {
+      return std::string(text);
+    }
+  }
+  const auto shortest = std::to_chars(buffer, buffer + sizeof buffer, degrees);
+  return std::string(buffer, shortest.ptr);
 }
 
 double DegreesFromRadians(double radians) {

@@ -14,10 +14,19 @@
 // duplicate column, a number that does not parse or is NaN/infinite, a row with
 // the wrong number of fields. It tolerates a UTF-8 byte-order mark, CRLF line
 // ends, blank lines before the header and at the end, spaces around fields and
-// values, and columns the spec does not name (ignored). The first refusal wins:
-// refusals of the text come in line order; of the value rules, the gap rule
-// and the gravity of a run shorter than 1 s come after all rows are read.
-// Site angles are degrees in the text and radians in the value.
+// values, and columns the spec does not name (ignored). The first refusal wins
+// and no run is returned. Order: the text's refusals come in line order, with
+// `format` checked on its own line (another format may follow another
+// grammar); the other metadata value rules apply once the header has been
+// read; a sample's value rules apply when its row is read; the gap rule and
+// the gravity of a run shorter than 1 s after the last row.
+//
+// Locations: a value names its own line and column; a missing key or column
+// the header line, column 0 (the line after the last without a header); a
+// wrong field count the row, at the first extra field (field "row") or at the
+// end of the line (field: the first missing column); a run with no samples
+// the line after the header (field "samples"); the gravity rule the first
+// row's acc_x. Site angles are degrees in the text and radians in the value.
 #pragma once
 
 #include <absl/status/status.h>

@@ -44,7 +44,7 @@ inline constexpr std::string_view kFormatV1 = "insdiag-bench-run/1";
 inline constexpr double kMaxGyroRateRadS = 35.0;
 inline constexpr double kMaxSpecificForceMps2 = 500.0;
 inline constexpr double kMaxLatitudeDeg = 90.0;
-inline constexpr double kGravityWindowS = 1.0;            // "the first second"
+inline constexpr double kGravityWindowS = 1.0;             // "the first second"
 inline constexpr double kGravityRelativeTolerance = 0.10;  // of local normal gravity
 inline constexpr double kMaxGapNominalIntervals = 5.0;
 
@@ -141,22 +141,29 @@ class FieldPathLocator final : public InputLocator {
 
 // Checks a run incrementally, as its samples arrive (whole or in chunks):
 //
-//   ASSIGN_OR_RETURN(auto validator, BenchRunValidator::Create(metadata, has_temp, locator));
-//   for (const auto& chunk : chunks) RETURN_IF_ERROR(validator.Add(chunk));
-//   RETURN_IF_ERROR(validator.Finish());
+//   const FieldPathLocator locator("upload");
+//   absl::StatusOr<BenchRunValidator> validator =
+//       BenchRunValidator::Create(metadata, has_temperature, locator);
+//   if (!validator.ok()) return validator.status();
+//   for (each chunk) if (absl::Status s = validator->Add(chunk); !s.ok()) return s;
+//   return validator->Finish();
 //
 // Create applies the metadata rules, Add the per-sample rules (finite, t order,
 // ranges, gravity once the first second is complete), Finish the rules that
 // need the whole run (gap rule, since the nominal interval is the median of all
 // intervals; gravity of a run shorter than the window; at least one sample).
-// The first violation is returned; do not feed the validator after one.
-// Memory: 8 bytes per sample for the intervals.
+// A gap is named at the sample that ends it (field t), the gravity rule at the
+// first sample's acc_x. The first violation is returned; do not feed the
+// validator after one. Memory: 8 bytes per sample for the intervals.
 class BenchRunValidator {
  public:
   // Refuses metadata that breaks a rule. `locator` must outlive the validator.
   static absl::StatusOr<BenchRunValidator> Create(const engine::BenchRunMetadata& metadata,
                                                   bool has_temperature,
                                                   const InputLocator& locator);
+  // A temporary locator would dangle.
+  static absl::StatusOr<BenchRunValidator> Create(const engine::BenchRunMetadata&, bool,
+                                                  const InputLocator&&) = delete;
 
   // Reserves room for the intervals of `sample_count` samples.
   void Reserve(std::size_t sample_count);

@@ -1,0 +1,689 @@
+#include "insdiag/benchrun/bench_run_csv.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <random>
+#include <string>
+
+#include "test_runs.h"
+
+namespace insdiag::benchrun {
+namespace {
+
+using testing::CsvText;
+using ::testing::HasSubstr;
+using testing::IsRefusalAt;
+using testing::MessageOf;
+using ::testing::Not;
+
+constexpr double kRadiansPerDegree = std::numbers::pi / 180.0;
+constexpr char kSource[] = "run.csv";
+
+// Columns of CsvText rows (see test_runs.h).
+constexpr int kColumnT = 1;
+constexpr int kColumnGyroX = 6;
+constexpr int kColumnGyroZ = 23;
+constexpr int kColumnAccX = 32;
+constexpr int kColumnAccY = 39;
+constexpr int kColumnAccZ = 47;
+constexpr int kColumnTemp = 61;
+constexpr std::size_t kFieldAccX = 4;
+constexpr std::size_t kFieldAccY = 5;
+constexpr std::size_t kFieldAccZ = 6;
+
+absl::Status ParseStatus(const std::string& text) { return ParseBenchRun(text, kSource).status(); }
+
+InputLocation At(int line, int column, std::string field) {
+  return {.source = kSource, .line = line, .column = column, .field = std::move(field)};
+}
+
+void ExpectSameRun(const engine::BenchRun& actual, const engine::BenchRun& expected) {
+  EXPECT_EQ(actual.metadata.format, expected.metadata.format);
+  EXPECT_EQ(actual.metadata.unit_serial, expected.metadata.unit_serial);
+  EXPECT_EQ(actual.metadata.unit_type, expected.metadata.unit_type);
+  EXPECT_EQ(actual.metadata.site.latitude_rad, expected.metadata.site.latitude_rad);
+  EXPECT_EQ(actual.metadata.site.longitude_rad, expected.metadata.site.longitude_rad);
+  EXPECT_EQ(actual.metadata.site.height_m, expected.metadata.site.height_m);
+  EXPECT_EQ(actual.metadata.datasheet, expected.metadata.datasheet);
+  EXPECT_EQ(actual.metadata.extra, expected.metadata.extra);
+  EXPECT_EQ(actual.has_temperature, expected.has_temperature);
+  ASSERT_EQ(actual.samples.size(), expected.samples.size());
+  for (std::size_t i = 0; i < actual.samples.size(); ++i) {
+    const engine::ImuSample& a = actual.samples[i];
+    const engine::ImuSample& e = expected.samples[i];
+    ASSERT_EQ(a.t_s, e.t_s) << "sample " << i;
+    ASSERT_EQ(a.gyro_rad_s, e.gyro_rad_s) << "sample " << i;
+    ASSERT_EQ(a.acc_mps2, e.acc_mps2) << "sample " << i;
+    ASSERT_EQ(a.ref_rpy_rad, e.ref_rpy_rad) << "sample " << i;
+    if (expected.has_temperature) {
+      ASSERT_EQ(a.temp_degc, e.temp_degc) << "sample " << i;
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Accepted input
+
+TEST(ParseBenchRun, ReadsMetadataColumnsAndSamples) {
+  const absl::StatusOr<engine::BenchRun> run = ParseBenchRun(CsvText().Text(), kSource);
+  ASSERT_TRUE(run.ok()) << run.status();
+  ExpectSameRun(*run, testing::StaticRun());
+  EXPECT_NEAR(run->metadata.site.latitude_rad, 0.9698306, 1e-7);
+  EXPECT_EQ(run->metadata.datasheet, engine::Datasheet{});
+  EXPECT_TRUE(run->metadata.extra.empty());
+}
+
+TEST(ParseBenchRun, DatasheetKeysFillTheDatasheet) {
+  CsvText csv;
+  csv.metadata.insert(csv.metadata.end(),
+                      {"# gyro_arw: 2.9e-06", "# gyro_bias_sigma: 4.8e-08", "# gyro_bias_tau: 3600",
+                       "# acc_vrw: 1.5e-05", "# acc_bias_sigma: 0.0002", "# acc_bias_tau: 1800"});
+  const absl::StatusOr<engine::BenchRun> run = ParseBenchRun(csv.Text(), kSource);
+  ASSERT_TRUE(run.ok()) << run.status();
+  const engine::Datasheet expected{.gyro_arw_rad_rts = 2.9e-06,
+                                   .gyro_bias_sigma_rad_s = 4.8e-08,
+                                   .gyro_bias_tau_s = 3600,
+                                   .acc_vrw_mps_rts = 1.5e-05,
+                                   .acc_bias_sigma_mps2 = 0.0002,
+                                   .acc_bias_tau_s = 1800};
+  EXPECT_EQ(run->metadata.datasheet, expected);
+  EXPECT_TRUE(run->metadata.extra.empty());
+}
+
+TEST(ParseBenchRun, KeepsUnknownAndFreeMetadataInFileOrder) {
+  CsvText csv;
+  csv.metadata.insert(csv.metadata.begin() + 2, {"# operator: kim", "# table_firmware: 4.2.1",
+                                                 "# started_at: 2024-03-01T09:15:00Z"});
+  csv.metadata.insert(csv.metadata.end(),
+                      {"# bench:  table 3  ", "# notes: warm-up: 20 min, door closed"});
+  const absl::StatusOr<engine::BenchRun> run = ParseBenchRun(csv.Text(), kSource);
+  ASSERT_TRUE(run.ok()) << run.status();
+  const std::vector<std::pair<std::string, std::string>> expected = {
+      {"operator", "kim"},
+      {"table_firmware", "4.2.1"},
+      {"started_at", "2024-03-01T09:15:00Z"},
+      {"bench", "table 3"},
+      {"notes", "warm-up: 20 min, door closed"}};
+  EXPECT_EQ(run->metadata.extra, expected);
+  EXPECT_EQ(run->metadata.unit_type, "INS-2000");
+}
+
+TEST(ParseBenchRun, ToleratesCrlfLineEnds) {
+  const absl::StatusOr<engine::BenchRun> run = ParseBenchRun(CsvText().Text("\r\n"), kSource);
+  ASSERT_TRUE(run.ok()) << run.status();
+  ExpectSameRun(*run, testing::StaticRun());
+}
+
+TEST(ParseBenchRun, CrlfErrorsNameTheSameLineAndColumn) {
+  CsvText csv;
+  csv.SetField(4, 3, "abc");
+  EXPECT_TRUE(IsRefusalAt(ParseStatus(csv.Text("\r\n")), At(12, kColumnGyroZ, "gyro_z")));
+}
+
+TEST(ParseBenchRun, ToleratesByteOrderMarkBlankLinesAndSpaces) {
+  CsvText csv;
+  csv.metadata.insert(csv.metadata.begin() + 1, "");
+  csv.header = " t , gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,ref_roll,ref_pitch,ref_yaw,temp ";
+  csv.SetField(3, 1, " 1.1e-05 ");
+  csv.SetField(5, 1, "+1.1e-05");
+  const absl::StatusOr<engine::BenchRun> run =
+      ParseBenchRun("\xEF\xBB\xBF" + csv.Text() + "\n \n\r\n", kSource);
+  ASSERT_TRUE(run.ok()) << run.status();
+  ExpectSameRun(*run, testing::StaticRun());
+}
+
+TEST(ParseBenchRun, AcceptsTheLastLineWithoutLineEnd) {
+  std::string text = CsvText().Text();
+  text.pop_back();
+  const absl::StatusOr<engine::BenchRun> run = ParseBenchRun(text, kSource);
+  ASSERT_TRUE(run.ok()) << run.status();
+  EXPECT_EQ(run->samples.size(), 200u);
+}
+
+TEST(ParseBenchRun, ColumnsMayComeInAnyOrder) {
+  const CsvText canonical;
+  std::mt19937 rng(20240301);
+  for (int trial = 0; trial < 5; ++trial) {
+    std::vector<std::size_t> order(11);
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::shuffle(order.begin(), order.end(), rng);
+    const auto permute = [&order](const std::string& line) {
+      const std::vector<std::string> fields = CsvText::Split(line);
+      std::vector<std::string> permuted;
+      for (const std::size_t k : order) permuted.push_back(fields[k]);
+      return CsvText::Join(permuted);
+    };
+    CsvText shuffled = canonical;
+    shuffled.header = permute(canonical.header);
+    std::transform(canonical.rows.begin(), canonical.rows.end(), shuffled.rows.begin(), permute);
+    const absl::StatusOr<engine::BenchRun> run = ParseBenchRun(shuffled.Text(), kSource);
+    ASSERT_TRUE(run.ok()) << shuffled.header << ": " << run.status();
+    ExpectSameRun(*run, testing::StaticRun());
+  }
+}
+
+TEST(ParseBenchRun, IgnoresColumnsTheSpecDoesNotName) {
+  CsvText csv;
+  csv.header += ",encoder_ticks";
+  for (std::string& row : csv.rows) row += ",not-a-number";
+  const absl::StatusOr<engine::BenchRun> run = ParseBenchRun(csv.Text(), kSource);
+  ASSERT_TRUE(run.ok()) << run.status();
+  ExpectSameRun(*run, testing::StaticRun());
+}
+
+TEST(ParseBenchRun, TemperatureColumnIsOptional) {
+  CsvText csv;
+  csv.header.erase(csv.header.rfind(','));
+  for (std::string& row : csv.rows) row.erase(row.rfind(','));
+  const absl::StatusOr<engine::BenchRun> run = ParseBenchRun(csv.Text(), kSource);
+  ASSERT_TRUE(run.ok()) << run.status();
+  EXPECT_FALSE(run->has_temperature);
+}
+
+TEST(ParseBenchRun, LatitudeOfExactlyNinetyDegreesIsAccepted) {
+  for (const char* latitude : {"90", "-90"}) {
+    CsvText csv;
+    csv.metadata[3] = std::string("# site_latitude_deg: ") + latitude;
+    for (std::size_t i = 0; i < csv.rows.size(); ++i) csv.SetField(i, kFieldAccZ, "-9.832");
+    const absl::StatusOr<engine::BenchRun> run = ParseBenchRun(csv.Text(), kSource);
+    ASSERT_TRUE(run.ok()) << latitude << ": " << run.status();
+    EXPECT_EQ(std::abs(run->metadata.site.latitude_rad), std::numbers::pi / 2);
+  }
+}
+
+TEST(ParseBenchRun, RealRingLaserGyroRecording) {
+  const absl::StatusOr<engine::BenchRun> run =
+      ReadBenchRunFile(INSDIAG_SHARED_DIR "/data/real/rlg-static-psins.csv");
+  ASSERT_TRUE(run.ok()) << run.status();
+  EXPECT_EQ(run->samples.size(), 184718u);
+  EXPECT_EQ(run->metadata.unit_serial, "PSINS-RLG-2014");
+  EXPECT_EQ(run->metadata.unit_type, "RLG-IMU");
+  EXPECT_NEAR(run->metadata.site.latitude_rad, 34.246048 * kRadiansPerDegree, 1e-12);
+  EXPECT_NEAR(run->metadata.site.longitude_rad, 108.909664 * kRadiansPerDegree, 1e-12);
+  EXPECT_EQ(run->metadata.site.height_m, 380.0);
+  EXPECT_FALSE(run->has_temperature);
+  EXPECT_EQ(run->metadata.Extra("bench"), "static (vehicle at rest)");
+  EXPECT_EQ(run->samples.front().t_s, 0.01);
+  EXPECT_EQ(run->samples.front().gyro_rad_s.z(), -9.696273622e-05);
+  EXPECT_NEAR(run->NominalIntervalS(), 0.01, 1e-9);
+}
+
+// ---------------------------------------------------------------------------
+// Refusals: one test per rule, each naming line, column and field.
+
+TEST(ParseBenchRunRefuses, ValueThatIsNotANumber) {
+  CsvText csv;
+  csv.SetField(4, 3, "abc");
+  const absl::Status status = ParseStatus(csv.Text());
+  EXPECT_TRUE(IsRefusalAt(status, At(12, kColumnGyroZ, "gyro_z")));
+  EXPECT_EQ(MessageOf(status), "run.csv:12:23: gyro_z: 'abc' is not a number");
+}
+
+TEST(ParseBenchRunRefuses, ValueWithTrailingGarbageOrDecimalComma) {
+  for (const char* value : {"0.0012x", "0.0012 5", "", "0x1p3", "1.2.3"}) {
+    CsvText csv;
+    csv.SetField(7, kFieldAccX, value);
+    EXPECT_TRUE(IsRefusalAt(ParseStatus(csv.Text()), At(csv.RowLine(7), kColumnAccX, "acc_x")))
+        << "'" << value << "'";
+  }
+}
+
+TEST(ParseBenchRunRefuses, NanOrInfinityInARow) {
+  for (const char* value : {"nan", "NaN", "-nan", "inf", "-Infinity"}) {
+    CsvText csv;
+    csv.SetField(30, kFieldAccY, value);
+    const absl::Status status = ParseStatus(csv.Text());
+    EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(30), kColumnAccY, "acc_y"))) << value;
+    EXPECT_THAT(MessageOf(status), HasSubstr("is not a finite number"));
+  }
+}
+
+TEST(ParseBenchRunRefuses, NumberOutOfTheRangeOfADouble) {
+  CsvText csv;
+  csv.SetField(2, 10, "1e999");
+  EXPECT_TRUE(IsRefusalAt(ParseStatus(csv.Text()), At(csv.RowLine(2), kColumnTemp, "temp")));
+}
+
+TEST(ParseBenchRunRefuses, MetadataNumberThatIsNotANumber) {
+  CsvText csv;
+  csv.metadata[5] = "# site_height_m: 12O.5";
+  const absl::Status status = ParseStatus(csv.Text());
+  EXPECT_TRUE(IsRefusalAt(status, At(6, 18, "site_height_m")));
+  EXPECT_EQ(MessageOf(status), "run.csv:6:18: site_height_m: '12O.5' is not a number");
+}
+
+TEST(ParseBenchRunRefuses, MetadataNumberThatIsNanOrInfinite) {
+  CsvText csv;
+  csv.metadata.push_back("# gyro_arw: nan");
+  csv.metadata.push_back("# acc_vrw: inf");
+  EXPECT_TRUE(IsRefusalAt(ParseStatus(csv.Text()), At(7, 13, "gyro_arw")));
+  csv.metadata.erase(csv.metadata.begin() + 6);
+  EXPECT_TRUE(IsRefusalAt(ParseStatus(csv.Text()), At(7, 12, "acc_vrw")));
+}
+
+TEST(ParseBenchRunRefuses, SiteAngleThatIsNotANumber) {
+  CsvText csv;
+  csv.metadata[4] = "# site_longitude_deg: 38°09'";
+  EXPECT_TRUE(IsRefusalAt(ParseStatus(csv.Text()), At(5, 23, "site_longitude_deg")));
+}
+
+TEST(ParseBenchRunRefuses, MissingRequiredKey) {
+  for (const std::size_t dropped : {0, 1, 3, 4, 5}) {
+    CsvText csv;
+    const std::string line = csv.metadata[dropped];
+    const std::string key = line.substr(2, line.find(':') - 2);
+    csv.metadata.erase(csv.metadata.begin() + static_cast<std::ptrdiff_t>(dropped));
+    const absl::Status status = ParseStatus(csv.Text());
+    EXPECT_TRUE(IsRefusalAt(status, At(csv.HeaderLine(), 0, key))) << key;
+    EXPECT_THAT(MessageOf(status), HasSubstr("missing required metadata key"));
+  }
+}
+
+TEST(ParseBenchRunRefuses, EmptyUnitSerial) {
+  CsvText csv;
+  csv.metadata[1] = "# unit_serial:";
+  EXPECT_TRUE(IsRefusalAt(ParseStatus(csv.Text()), At(2, 15, "unit_serial")));
+}
+
+TEST(ParseBenchRunRefuses, MissingColumn) {
+  CsvText csv;
+  csv.header = "t,gyro_x,gyro_z,acc_x,acc_y,acc_z,ref_roll,ref_pitch,ref_yaw,temp";
+  const absl::Status status = ParseStatus(csv.Text());
+  EXPECT_TRUE(IsRefusalAt(status, At(7, 0, "gyro_y")));
+  EXPECT_EQ(MessageOf(status), "run.csv:7: gyro_y: missing required column");
+}
+
+TEST(ParseBenchRunRefuses, DuplicateColumn) {
+  CsvText csv;
+  csv.header = "t,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,ref_roll,ref_pitch,ref_yaw,gyro_x";
+  const absl::Status status = ParseStatus(csv.Text());
+  EXPECT_TRUE(IsRefusalAt(status, At(7, 69, "gyro_x")));
+  EXPECT_THAT(MessageOf(status), HasSubstr("duplicate column"));
+}
+
+TEST(ParseBenchRunRefuses, UnknownFormat) {
+  for (const char* format :
+       {"insdiag-bench-run/2", "insdiag-bench-run/1.0", "INSDIAG-BENCH-RUN/1"}) {
+    CsvText csv;
+    csv.metadata[0] = std::string("# format: ") + format;
+    const absl::Status status = ParseStatus(csv.Text());
+    EXPECT_TRUE(IsRefusalAt(status, At(1, 11, "format"))) << format;
+    EXPECT_THAT(MessageOf(status), HasSubstr("unknown format"));
+  }
+}
+
+TEST(ParseBenchRunRefuses, UnknownFormatBeforeLaterErrors) {
+  CsvText csv;
+  csv.metadata[0] = "# format: insdiag-bench-run/2";
+  csv.metadata.push_back("# this line is not metadata of version 1");
+  EXPECT_TRUE(IsRefusalAt(ParseStatus(csv.Text()), At(1, 11, "format")));
+}
+
+TEST(ParseBenchRunRefuses, DuplicateMetadataKey) {
+  CsvText csv;
+  csv.metadata.insert(csv.metadata.begin() + 2, "# bench: table 3");
+  csv.metadata.push_back("#  bench: table 4");
+  const absl::Status status = ParseStatus(csv.Text());
+  EXPECT_TRUE(IsRefusalAt(status, At(8, 4, "bench")));
+  EXPECT_THAT(MessageOf(status), HasSubstr("first at line 3"));
+}
+
+TEST(ParseBenchRunRefuses, DuplicateSpecMetadataKey) {
+  CsvText csv;
+  csv.metadata.push_back("# site_height_m: 126.0");
+  EXPECT_TRUE(IsRefusalAt(ParseStatus(csv.Text()), At(7, 3, "site_height_m")));
+}
+
+TEST(ParseBenchRunRefuses, MetadataLineThatIsNotKeyColonValue) {
+  const std::vector<std::pair<std::string, int>> cases = {
+      {"# just a comment", 3},   // no colon
+      {"#", 2},                  // nothing at all
+      {"# Unit Serial: 42", 3},  // not a lower-case key
+      {"# site-height: 3", 3},   // '-' in key
+      {"# : value", 3},          // empty key
+      {"#\t2nd_key: value", 3},  // key starting with a digit
+  };
+  for (const auto& [line, column] : cases) {
+    CsvText csv;
+    csv.metadata.insert(csv.metadata.begin() + 3, line);
+    EXPECT_TRUE(IsRefusalAt(ParseStatus(csv.Text()), At(4, column, "metadata"))) << line;
+  }
+}
+
+TEST(ParseBenchRunRefuses, NonIncreasingTime) {
+  for (const char* t : {"0.50", "0.49"}) {  // row 49 has t = 0.50
+    CsvText csv;
+    csv.SetField(50, 0, t);
+    const absl::Status status = ParseStatus(csv.Text());
+    EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(50), kColumnT, "t"))) << t;
+    EXPECT_THAT(MessageOf(status), HasSubstr("does not increase"));
+  }
+}
+
+TEST(ParseBenchRunRefuses, GapLongerThanFiveNominalIntervals) {
+  CsvText csv;
+  // Rows 120..124 removed: t jumps from 1.20 to 1.26, six intervals.
+  csv.rows.erase(csv.rows.begin() + 120, csv.rows.begin() + 125);
+  const absl::Status status = ParseStatus(csv.Text());
+  EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(120), kColumnT, "t")));
+  EXPECT_THAT(MessageOf(status), HasSubstr("nominal intervals"));
+}
+
+TEST(ParseBenchRunRefuses, OnlyTheFirstGapIsReported) {
+  CsvText csv;
+  csv.rows.erase(csv.rows.begin() + 150, csv.rows.begin() + 170);  // a longer gap later
+  csv.rows.erase(csv.rows.begin() + 120, csv.rows.begin() + 127);
+  EXPECT_TRUE(IsRefusalAt(ParseStatus(csv.Text()), At(csv.RowLine(120), kColumnT, "t")));
+}
+
+TEST(ParseBenchRunAccepts, GapOfFourIntervals) {
+  CsvText csv;
+  csv.rows.erase(csv.rows.begin() + 120, csv.rows.begin() + 123);
+  EXPECT_TRUE(ParseStatus(csv.Text()).ok());
+}
+
+TEST(ParseBenchRunRefuses, RowWithTooFewFields) {
+  CsvText csv;
+  csv.rows[9].erase(csv.rows[9].rfind(','));
+  const absl::Status status = ParseStatus(csv.Text());
+  const int end_column = static_cast<int>(csv.rows[9].size()) + 1;
+  EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(9), end_column, "temp")));
+  EXPECT_THAT(MessageOf(status), HasSubstr("row has 10 fields, expected 11"));
+}
+
+TEST(ParseBenchRunRefuses, RowWithTooManyFields) {
+  CsvText csv;
+  const int extra_column = static_cast<int>(csv.rows[9].size()) + 2;
+  csv.rows[9] += ",1,2";
+  const absl::Status status = ParseStatus(csv.Text());
+  EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(9), extra_column, "row")));
+  EXPECT_THAT(MessageOf(status), HasSubstr("row has 13 fields, expected 11"));
+}
+
+TEST(ParseBenchRunRefuses, EmptyRowBetweenRows) {
+  CsvText csv;
+  csv.rows.insert(csv.rows.begin() + 9, "");
+  EXPECT_TRUE(IsRefusalAt(ParseStatus(csv.Text()), At(csv.RowLine(9), 1, "row")));
+}
+
+TEST(ParseBenchRunRefuses, GyroRateInDegreesPerSecond) {
+  CsvText csv;
+  csv.SetField(20, 1, "-57.3");
+  const absl::Status status = ParseStatus(csv.Text());
+  EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(20), kColumnGyroX, "gyro_x")));
+  EXPECT_THAT(MessageOf(status), HasSubstr("beyond ±35 rad/s: looks like deg/s"));
+}
+
+TEST(ParseBenchRunRefuses, GyroRateBeyondEvenDegreesPerSecond) {
+  CsvText csv;
+  csv.SetField(20, 3, "4000");
+  const absl::Status status = ParseStatus(csv.Text());
+  EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(20), kColumnGyroZ, "gyro_z")));
+  EXPECT_THAT(MessageOf(status), Not(HasSubstr("deg/s")));
+}
+
+TEST(ParseBenchRunRefuses, SpecificForceBeyondLimit) {
+  CsvText csv;
+  csv.SetField(150, kFieldAccY, "500.5");
+  const absl::Status status = ParseStatus(csv.Text());
+  EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(150), kColumnAccY, "acc_y")));
+  EXPECT_THAT(MessageOf(status), HasSubstr("beyond ±500 m/s²"));
+}
+
+TEST(ParseBenchRunRefuses, LatitudeOutsideNinetyDegrees) {
+  CsvText csv;
+  csv.metadata[3] = "# site_latitude_deg: 95.5";
+  const absl::Status status = ParseStatus(csv.Text());
+  EXPECT_TRUE(IsRefusalAt(status, At(4, 22, "site_latitude_deg")));
+  EXPECT_THAT(MessageOf(status), HasSubstr("outside ±90°"));
+}
+
+TEST(ParseBenchRunRefuses, SpecificForceInUnitsOfG) {
+  CsvText csv;
+  for (std::size_t i = 0; i < csv.rows.size(); ++i) csv.SetField(i, kFieldAccZ, "-1.0009");
+  const absl::Status status = ParseStatus(csv.Text());
+  EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(0), kColumnAccX, "acc_x")));
+  EXPECT_THAT(MessageOf(status), HasSubstr("looks like units of g, expected m/s²"));
+}
+
+TEST(ParseBenchRunRefuses, SpecificForceFarFromGravity) {
+  CsvText csv;
+  // Only the first second counts: later rows at -9.8154 do not rescue it.
+  for (std::size_t i = 0; i < 100; ++i) csv.SetField(i, kFieldAccZ, "-8.7");
+  const absl::Status status = ParseStatus(csv.Text());
+  EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(0), kColumnAccX, "acc_x")));
+  EXPECT_THAT(MessageOf(status), HasSubstr("local normal gravity is 9.81"));
+  EXPECT_THAT(MessageOf(status), Not(HasSubstr("units of g")));
+}
+
+TEST(ParseBenchRunAccepts, SpecificForceWithinTenPercentOfGravity) {
+  CsvText csv;
+  for (std::size_t i = 0; i < 100; ++i) csv.SetField(i, kFieldAccZ, "-8.9");
+  EXPECT_TRUE(ParseStatus(csv.Text()).ok());
+}
+
+TEST(ParseBenchRunRefuses, RunShorterThanASecondFarFromGravity) {
+  CsvText csv(20);
+  for (std::size_t i = 0; i < csv.rows.size(); ++i) csv.SetField(i, kFieldAccZ, "-0.98");
+  const absl::Status status = ParseStatus(csv.Text());
+  EXPECT_TRUE(IsRefusalAt(status, At(csv.RowLine(0), kColumnAccX, "acc_x")));
+  EXPECT_THAT(MessageOf(status), HasSubstr("(20 samples)"));
+}
+
+TEST(ParseBenchRunRefuses, RunWithNoSamples) {
+  CsvText csv(0);
+  const absl::Status status = ParseStatus(csv.Text() + "\n\n");
+  EXPECT_TRUE(IsRefusalAt(status, At(8, 0, "samples")));
+  EXPECT_THAT(MessageOf(status), HasSubstr("no samples"));
+}
+
+TEST(ParseBenchRunRefuses, TextWithoutHeader) {
+  CsvText csv;
+  std::string text;
+  for (const std::string& line : csv.metadata) text += line + "\n";
+  EXPECT_TRUE(IsRefusalAt(ParseStatus(text), At(7, 0, "header")));
+  EXPECT_TRUE(IsRefusalAt(ParseStatus(""), At(1, 0, "format")));
+}
+
+TEST(ParseBenchRunRefuses, TheFirstErrorInLineOrder) {
+  CsvText csv;
+  csv.SetField(40, 2, "x");
+  csv.SetField(60, 2, "99");
+  csv.SetField(30, 3, "y");
+  EXPECT_TRUE(IsRefusalAt(ParseStatus(csv.Text()), At(csv.RowLine(30), kColumnGyroZ, "gyro_z")));
+}
+
+TEST(ParseBenchRunRefuses, ColumnsCountCharactersNotBytes) {
+  CsvText csv;
+  csv.header =
+      "t,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,ref_roll,ref_pitch,ref_yaw,température,temp";
+  for (std::size_t i = 0; i < csv.rows.size(); ++i) {
+    csv.rows[i].insert(csv.rows[i].rfind(',') + 1, "°C,");
+  }
+  csv.SetField(3, 11, "warm");
+  // "°C," is 3 characters (4 bytes) inserted before temp.
+  EXPECT_TRUE(IsRefusalAt(ParseStatus(csv.Text()), At(csv.RowLine(3), kColumnTemp + 3, "temp")));
+}
+
+TEST(ReadBenchRunFile, NamesTheMissingFile) {
+  const absl::StatusOr<engine::BenchRun> run = ReadBenchRunFile("/nonexistent/run.csv");
+  EXPECT_EQ(run.status().code(), absl::StatusCode::kNotFound);
+  EXPECT_THAT(MessageOf(run.status()), HasSubstr("/nonexistent/run.csv"));
+}
+
+TEST(ReadBenchRunFile, ErrorsNameThePath) {
+  const std::filesystem::path path =
+      std::filesystem::path(::testing::TempDir()) / "benchrun_error_names_path.csv";
+  CsvText csv;
+  csv.SetField(4, 3, "abc");
+  std::ofstream(path) << csv.Text();
+  const absl::StatusOr<engine::BenchRun> run = ReadBenchRunFile(path);
+  EXPECT_TRUE(IsRefusalAt(run.status(),
+                          {.source = path.string(), .line = 12, .column = 23, .field = "gyro_z"}));
+  std::filesystem::remove(path);
+}
+
+// ---------------------------------------------------------------------------
+// Writer
+
+// A run with every kind of value the writer must carry exactly: random values
+// of realistic size, times that are not short decimals, signed zeros, tiny and
+// subnormal numbers, values at the limits.
+engine::BenchRun RandomRun(std::mt19937_64& rng, bool has_temperature) {
+  std::normal_distribution<double> noise(0.0, 1.0);
+  std::uniform_real_distribution<double> angle(-std::numbers::pi, std::numbers::pi);
+  std::uniform_real_distribution<double> latitude(-std::numbers::pi / 2, std::numbers::pi / 2);
+  engine::BenchRun run;
+  run.metadata.format = std::string(kFormatV1);
+  run.metadata.unit_serial = "INS-2000-" + std::to_string(rng() % 10000);
+  run.metadata.site = {.latitude_rad = latitude(rng),
+                       .longitude_rad = angle(rng),
+                       .height_m = 100.0 + 50.0 * noise(rng)};
+  run.metadata.datasheet.gyro_arw_rad_rts = 1e-6 * std::abs(noise(rng));
+  run.metadata.datasheet.acc_bias_tau_s = 3600.0 / 7.0;
+  run.metadata.extra = {
+      {"operator", "Kim Jae-won"}, {"notes", "ключ: значение, 25 °C"}, {"x1", ""}};
+  run.has_temperature = has_temperature;
+  const double gravity = 9.8;
+  for (int k = 0; k < 300; ++k) {
+    engine::ImuSample sample;
+    sample.t_s = 1000.0 + (k + 1) / 100.0;
+    sample.gyro_rad_s = Eigen::Vector3d(noise(rng), noise(rng), noise(rng)) * 1e-3;
+    sample.acc_mps2 = Eigen::Vector3d(noise(rng), noise(rng), -gravity + noise(rng)) * 0.05 +
+                      Eigen::Vector3d(0.0, 0.0, -0.95 * gravity);
+    sample.ref_rpy_rad = {angle(rng), angle(rng) / 2, angle(rng)};
+    sample.temp_degc = has_temperature ? 25.0 + noise(rng) : 0.0;
+    run.samples.push_back(sample);
+  }
+  run.samples[3].gyro_rad_s = {-0.0, 4.9406564584124654e-324, 1e-300};
+  // At the limits, after the first second so that the gravity check holds.
+  run.samples[204].gyro_rad_s = {kMaxGyroRateRadS, -kMaxGyroRateRadS, std::nextafter(35.0, 0.0)};
+  run.samples[205].acc_mps2.x() = -kMaxSpecificForceMps2;
+  return run;
+}
+
+TEST(FormatBenchRun, RoundTripIsExactWithTemperature) {
+  std::mt19937_64 rng(7);
+  const engine::BenchRun run = RandomRun(rng, /*has_temperature=*/true);
+  ASSERT_TRUE(ValidateBenchRun(run, "random").ok()) << ValidateBenchRun(run, "random");
+  const std::string text = FormatBenchRun(run);
+  EXPECT_THAT(
+      text,
+      HasSubstr("\nt,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,ref_roll,ref_pitch,ref_yaw,temp\n"));
+  const absl::StatusOr<engine::BenchRun> parsed = ParseBenchRun(text, "written");
+  ASSERT_TRUE(parsed.ok()) << parsed.status();
+  ExpectSameRun(*parsed, run);
+}
+
+TEST(FormatBenchRun, RoundTripIsExactWithoutTemperature) {
+  std::mt19937_64 rng(8);
+  const engine::BenchRun run = RandomRun(rng, /*has_temperature=*/false);
+  const std::string text = FormatBenchRun(run);
+  EXPECT_THAT(text,
+              HasSubstr("\nt,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,ref_roll,ref_pitch,ref_yaw\n"));
+  EXPECT_THAT(text, Not(HasSubstr("temp")));
+  const absl::StatusOr<engine::BenchRun> parsed = ParseBenchRun(text, "written");
+  ASSERT_TRUE(parsed.ok()) << parsed.status();
+  ExpectSameRun(*parsed, run);
+}
+
+TEST(FormatBenchRun, MetadataInStableOrder) {
+  engine::BenchRun run = testing::StaticRun(2);
+  run.metadata.datasheet.acc_vrw_mps_rts = 1.5e-05;
+  run.metadata.datasheet.gyro_bias_tau_s = 3600;
+  run.metadata.extra = {{"notes", "second"}, {"bench", "first"}};
+  const std::string text = FormatBenchRun(run);
+  EXPECT_EQ(text.substr(0, text.find("\nt,")),
+            "# format: insdiag-bench-run/1\n"
+            "# unit_serial: INS-2000-0042\n"
+            "# unit_type: INS-2000\n"
+            "# site_latitude_deg: 55.5672\n"
+            "# site_longitude_deg: 38.15\n"
+            "# site_height_m: 125\n"
+            "# gyro_bias_tau: 3600\n"
+            "# acc_vrw: 1.5e-05\n"
+            "# notes: second\n"
+            "# bench: first");
+}
+
+// Significant digits of a number's text ("-0.0012345e-5" has 5).
+int SignificantDigits(std::string_view text) {
+  text = text.substr(0, text.find('e'));
+  const std::size_t first = text.find_first_of("123456789");
+  if (first == std::string_view::npos) return 0;
+  const std::size_t last = text.find_last_of("123456789");
+  const auto digits = static_cast<int>(last - first + 1);
+  const bool point_between = text.find('.', first) < last;
+  return point_between ? digits - 1 : digits;
+}
+
+TEST(FormatBenchRun, SiteAnglesRoundTripExactly) {
+  // Degrees → radians in double cannot reach every double of radians; the
+  // reader converts through long double and the writer looks for a degrees
+  // text that reads back to the same radians.
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> latitude(-std::numbers::pi / 2, std::numbers::pi / 2);
+  std::uniform_real_distribution<double> longitude(-std::numbers::pi, std::numbers::pi);
+  engine::BenchRun run = testing::StaticRun(1);
+  run.samples[0].acc_mps2 = {0.0, 0.0, -9.8};
+  int longer_than_a_double = 0;
+  constexpr int kTrials = 2000;
+  for (int trial = 0; trial < kTrials; ++trial) {
+    run.metadata.site.latitude_rad = latitude(rng);
+    run.metadata.site.longitude_rad = longitude(rng);
+    const std::string text = FormatBenchRun(run);
+    const absl::StatusOr<engine::BenchRun> parsed = ParseBenchRun(text, "written");
+    ASSERT_TRUE(parsed.ok()) << parsed.status();
+    ASSERT_EQ(parsed->metadata.site.latitude_rad, run.metadata.site.latitude_rad) << text;
+    ASSERT_EQ(parsed->metadata.site.longitude_rad, run.metadata.site.longitude_rad) << text;
+    const std::size_t begin = text.find("site_latitude_deg: ") + 19;
+    if (SignificantDigits(text.substr(begin, text.find('\n', begin) - begin)) > 17) {
+      ++longer_than_a_double;
+    }
+  }
+  // Nearly all fit in the 17 digits of a double's text.
+  EXPECT_LT(longer_than_a_double, kTrials / 100);
+}
+
+TEST(FormatBenchRun, SiteAnglesKeepTheirShortDecimalText) {
+  CsvText csv;
+  csv.metadata[3] = "# site_latitude_deg: -33.8688";
+  csv.metadata[4] = "# site_longitude_deg: 151.2093";
+  const absl::StatusOr<engine::BenchRun> run = ParseBenchRun(csv.Text(), kSource);
+  ASSERT_TRUE(run.ok()) << run.status();
+  const std::string text = FormatBenchRun(*run);
+  EXPECT_THAT(text, HasSubstr("# site_latitude_deg: -33.8688\n# site_longitude_deg: 151.2093\n"));
+}
+
+TEST(WriteBenchRunFile, WritesAFileTheReaderReadsBack) {
+  const std::filesystem::path path =
+      std::filesystem::path(::testing::TempDir()) / "benchrun_write_test.csv";
+  std::mt19937_64 rng(9);
+  const engine::BenchRun run = RandomRun(rng, true);
+  ASSERT_TRUE(WriteBenchRunFile(run, path).ok());
+  const absl::StatusOr<engine::BenchRun> read = ReadBenchRunFile(path);
+  ASSERT_TRUE(read.ok()) << read.status();
+  ExpectSameRun(*read, run);
+  EXPECT_FALSE(std::filesystem::exists(path.string() + ".partial"));
+  std::filesystem::remove(path);
+}
+
+TEST(WriteBenchRunFile, RefusesAnInvalidRunAndWritesNothing) {
+  const std::filesystem::path path =
+      std::filesystem::path(::testing::TempDir()) / "benchrun_write_refused.csv";
+  std::filesystem::remove(path);
+  engine::BenchRun run = testing::StaticRun();
+  run.samples[7].gyro_rad_s.y() = 60.0;
+  const absl::Status status = WriteBenchRunFile(run, path);
+  EXPECT_TRUE(IsRefusalAt(status, {.source = path.string(), .field = "samples[7].gyro_y"}));
+  EXPECT_FALSE(std::filesystem::exists(path));
+}
+
+}  // namespace
+}  // namespace insdiag::benchrun
