@@ -64,6 +64,48 @@ bool GrpcHealthy(int port) {
   return bytes == std::string("\x08\x01", 2);
 }
 
+// Asks grpc.reflection.v1alpha.ServerReflection to list the services and
+// returns the raw response bytes (service names appear in them verbatim).
+// The request is ServerReflectionRequest{list_services = ""}: field 7, an
+// empty string, on the wire 3a 00.
+std::string ReflectionListing(int port) {
+  class Listing final : public grpc::ClientBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer> {
+   public:
+    Listing() : request_slice_(std::string("\x3a\x00", 2)), request_(&request_slice_, 1) {}
+    void Begin(grpc::GenericStub& stub, grpc::ClientContext& context) {
+      stub.PrepareBidiStreamingCall(&context, "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo",
+                                    grpc::StubOptions(), this);
+      StartWrite(&request_);
+      StartRead(&response_);
+      StartCall();
+    }
+    void OnWriteDone(bool) override { StartWritesDone(); }
+    void OnReadDone(bool ok) override {
+      if (!ok) return;
+      std::vector<grpc::Slice> slices;
+      response_.Dump(&slices);
+      for (const auto& slice : slices) bytes_.append(reinterpret_cast<const char*>(slice.begin()), slice.size());
+      StartRead(&response_);
+    }
+    void OnDone(const grpc::Status&) override { done_.set_value(bytes_); }
+    std::future<std::string> Result() { return done_.get_future(); }
+
+   private:
+    grpc::Slice request_slice_;
+    grpc::ByteBuffer request_;
+    grpc::ByteBuffer response_;
+    std::string bytes_;
+    std::promise<std::string> done_;
+  };
+  grpc::GenericStub stub(client::Connect("127.0.0.1:" + std::to_string(port)));
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + 5s);
+  Listing listing;
+  auto result = listing.Result();
+  listing.Begin(stub, context);
+  return result.get();
+}
+
 // Running, not merely a zombie waiting for a reaper (pg_ctl leaves the
 // postmaster to whoever adopts orphans, which may be slow to reap it).
 bool ProcessAlive(pid_t pid) {
@@ -99,6 +141,7 @@ TEST_F(InsdiagdTest, ServesHealthAcceptsCliUploadAndStopsWithPostgresOnSigterm) 
   const auto ports = AwaitListening(server, 60s);
   ASSERT_TRUE(ports) << "insdiagd did not come up:\n" << server.Stderr();
   EXPECT_TRUE(GrpcHealthy(ports->grpc));
+  EXPECT_THAT(ReflectionListing(ports->grpc), HasSubstr("insdiag.v1.RunService")) << "reflection is off";
   httplib::Client http("127.0.0.1", ports->http);
   auto health = http.Get("/healthz");
   ASSERT_TRUE(health);
