@@ -1,7 +1,6 @@
 # Project-wide options as INTERFACE targets: nothing here touches global flags.
 option(INSDIAG_BUILD_TESTS "Build the test suite" ON)
 option(INSDIAG_BUILD_BENCHMARKS "Build the Google Benchmark programs" ON)
-option(INSDIAG_BUILD_SERVICES "Build proto, kb, server and the server verbs of the CLI" ON)
 option(INSDIAG_WARNINGS_AS_ERRORS "Treat compiler warnings as errors (on in CI)" OFF)
 option(INSDIAG_SANITIZE "Build with AddressSanitizer and UndefinedBehaviorSanitizer" OFF)
 

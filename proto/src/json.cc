@@ -1,0 +1,31 @@
+#include "insdiag/api/json.h"
+
+#include <google/protobuf/util/json_util.h>
+
+#include <string>
+
+namespace insdiag::api {
+
+absl::StatusOr<std::string> ToJson(const google::protobuf::Message& message, bool pretty) {
+  google::protobuf::util::JsonPrintOptions options;
+  options.always_print_primitive_fields = true;
+  options.add_whitespace = pretty;
+  std::string out;
+  const auto status = google::protobuf::util::MessageToJsonString(message, &out, options);
+  if (!status.ok()) return absl::InternalError(std::string(status.message()));
+  return out;
+}
+
+absl::Status FromJson(std::string_view json, google::protobuf::Message* message) {
+  message->Clear();
+  google::protobuf::util::JsonParseOptions options;
+  options.ignore_unknown_fields = false;
+  const auto status = google::protobuf::util::JsonStringToMessage(json, message, options);
+  if (!status.ok()) {
+    return absl::InvalidArgumentError("request body is not a valid " + message->GetTypeName() +
+                                      " in JSON: " + std::string(status.message()));
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace insdiag::api

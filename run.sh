@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Installs what is missing, builds, and starts insdiagd in the foreground on an
+# embedded PostgreSQL kept in .insdiag/ inside this checkout. Ctrl-C stops both.
+# Usage: ./run.sh [insdiagd options...]   e.g. ./run.sh --http-port 8081
+# Environment: INSDIAG_GRPC_PORT (50051), INSDIAG_HTTP_PORT (8080),
+#              INSDIAG_DATA_DIR (<checkout>/.insdiag)
+set -euo pipefail
+root=$(cd "$(dirname "$0")" && pwd)
+"$root/scripts/install-deps.sh"
+"$root/scripts/build.sh"
+build_dir=${INSDIAG_BUILD_DIR:-$root/build}
+
+data_dir=${INSDIAG_DATA_DIR:-$root/.insdiag}
+grpc_port=${INSDIAG_GRPC_PORT:-50051}
+http_port=${INSDIAG_HTTP_PORT:-8080}
+
+# As root, the embedded PostgreSQL runs as `postgres`, which must be able to
+# enter every directory above the data directory (a checkout under /root is
+# not reachable): fall back to /var/lib/insdiag then.
+if [[ $(id -u) -eq 0 && -z "${INSDIAG_DATA_DIR:-}" ]]; then
+  mkdir -p "$data_dir"
+  if ! runuser -u postgres -- test -x "$data_dir"; then
+    data_dir=/var/lib/insdiag
+    echo "run.sh: the postgres user cannot reach $root; keeping the database in $data_dir" >&2
+  fi
+fi
+
+cat <<EOM
+insdiag is starting:
+  gRPC   localhost:$grpc_port   (health checking and reflection on)
+  REST   http://localhost:$http_port/v1/runs   (health: http://localhost:$http_port/healthz)
+  data   $data_dir
+  upload $build_dir/clients/insdiag upload RUN.csv --server localhost:$grpc_port
+Stop with Ctrl-C.
+EOM
+
+# --- demo of the main job -------------------------------------------------
+# Once analyses exist (AnalysisService), this is where run.sh will upload a
+# demonstration run and have it diagnosed while the server runs.
+# ---------------------------------------------------------------------------
+
+exec "$build_dir/server/insdiagd" --data-dir "$data_dir" --grpc-port "$grpc_port" --http-port "$http_port" "$@"

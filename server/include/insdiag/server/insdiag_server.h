@@ -1,0 +1,60 @@
+// The insdiag server: the gRPC services (with health checking and
+// reflection) on one port and their REST/JSON face on another, over a
+// PostgreSQL connection pool. Start() returns once both listen.
+#pragma once
+
+#include <absl/status/statusor.h>
+
+#include <memory>
+#include <string>
+#include <thread>
+
+#include "insdiag/kb/connection_pool.h"
+
+namespace grpc {
+class Server;
+}  // namespace grpc
+namespace httplib {
+class Server;
+}  // namespace httplib
+
+namespace insdiag::server {
+
+class RestGateway;
+class RunService;
+class RunServiceGrpc;
+
+class InsdiagServer {
+ public:
+  struct Options {
+    std::string bind_address = "0.0.0.0";
+    int grpc_port = 50051;  // 0: any free port (see grpc_port())
+    int http_port = 8080;   // 0: any free port (see http_port())
+    std::size_t max_upload_samples = 20'000'000;
+  };
+
+  // `pool` must outlive the server. UNAVAILABLE when a port cannot be bound.
+  static absl::StatusOr<std::unique_ptr<InsdiagServer>> Start(kb::ConnectionPool& pool, Options options);
+  ~InsdiagServer();  // Shutdown()
+
+  int grpc_port() const { return grpc_port_; }
+  int http_port() const { return http_port_; }
+
+  // Stops accepting, lets running calls finish (at most a few seconds),
+  // then stops. Idempotent; safe from any thread.
+  void Shutdown();
+
+ private:
+  InsdiagServer();
+  struct Services;
+  std::unique_ptr<Services> services_;
+  std::unique_ptr<grpc::Server> grpc_;
+  std::unique_ptr<RestGateway> gateway_;
+  std::unique_ptr<httplib::Server> http_;
+  std::thread http_thread_;
+  int grpc_port_ = 0;
+  int http_port_ = 0;
+  std::once_flag shutdown_once_;
+};
+
+}  // namespace insdiag::server

@@ -1,0 +1,70 @@
+// The REST/JSON face: the services' methods at their google.api.http paths,
+// with protobuf's JSON mapping, built at start-up from the service
+// descriptors. A request is turned into the method's request message (path
+// variables, query parameters and the JSON body), sent through the gRPC
+// server's in-process channel, and the response printed as JSON: one
+// implementation of every method, two transports, one status mapping.
+//
+// Beyond the transcoded methods:
+//   POST /v1/runs:upload           text/csv body (a bench-run file; optional
+//                                  ?requestId=) or application/x-ndjson
+//                                  (one UploadRunRequest per line)
+//   GET  /v1/runs/{run}:download   the run as a bench-run CSV file
+//   GET  /healthz                  the gRPC health service's verdict
+// Server-streaming methods answer with newline-delimited JSON.
+#pragma once
+
+#include <absl/status/statusor.h>
+#include <grpcpp/generic/generic_stub.h>
+#include <grpcpp/grpcpp.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "insdiag/server/path_template.h"
+
+namespace google::protobuf {
+class MethodDescriptor;
+}  // namespace google::protobuf
+
+namespace httplib {
+class Server;
+struct Request;
+struct Response;
+}  // namespace httplib
+
+namespace insdiag::server {
+
+class RestGateway {
+ public:
+  // `services`: full names, e.g. "insdiag.v1.RunService". INVALID_ARGUMENT
+  // for an unknown service or a malformed http rule.
+  static absl::StatusOr<std::unique_ptr<RestGateway>> Create(std::shared_ptr<grpc::Channel> channel,
+                                                             const std::vector<std::string>& services);
+
+  // Installs the handlers; the gateway must outlive `http`'s serving.
+  void Register(httplib::Server& http);
+
+ private:
+  struct Route {
+    std::string http_method;
+    PathTemplate path;
+    std::string body;  // "", "*" or a field name
+    const google::protobuf::MethodDescriptor* method;
+    std::string grpc_path;  // "/insdiag.v1.RunService/GetRun"
+  };
+
+  explicit RestGateway(std::shared_ptr<grpc::Channel> channel) : stub_(std::move(channel)) {}
+  void Handle(const httplib::Request& request, httplib::Response& response);
+  void Dispatch(const Route& route, const std::map<std::string, std::string>& bindings,
+                const httplib::Request& request, httplib::Response& response);
+  void Upload(const Route& route, const httplib::Request& request, httplib::Response& response);
+  void Download(const std::string& run_name, httplib::Response& response);
+  void Health(httplib::Response& response);
+
+  grpc::GenericStub stub_;
+  std::vector<Route> routes_;  // custom-verb routes first
+};
+
+}  // namespace insdiag::server

@@ -1,0 +1,72 @@
+// The runs methods of insdiag.v1.RunService, once, independent of transport:
+// requests in, responses or absl::Status out. The gRPC face adapts it
+// (grpc_services.h); REST reaches it through gRPC (rest_gateway.h).
+#pragma once
+
+#include <absl/functional/function_ref.h>
+#include <absl/status/status.h>
+#include <absl/status/statusor.h>
+
+#include <cstddef>
+#include <memory>
+#include <optional>
+
+#include "insdiag/api/run_codec.h"
+#include "insdiag/benchrun/bench_run_validation.h"
+#include "insdiag/kb/run_store.h"
+#include "insdiag/v1/runs.pb.h"
+
+namespace insdiag::server {
+
+class RunService {
+ public:
+  struct Options {
+    // Larger uploads are refused with RESOURCE_EXHAUSTED (memory: ~100 bytes
+    // a sample while the upload is checked).
+    std::size_t max_upload_samples = 20'000'000;
+  };
+
+  RunService(kb::RunStore& store, Options options) : store_(store), options_(options) {}
+
+  absl::StatusOr<v1::Run> GetRun(const v1::GetRunRequest& request);
+  absl::StatusOr<v1::ListRunsResponse> ListRuns(const v1::ListRunsRequest& request);
+  absl::Status DeleteRun(const v1::DeleteRunRequest& request);
+  // Calls `send` per chunk until done or it returns false (client gone).
+  absl::Status ReadRunSamples(const v1::ReadRunSamplesRequest& request,
+                              absl::FunctionRef<bool(const v1::SampleChunk&)> send);
+
+  // One upload stream: Accept each message in order, then Finish when the
+  // stream has ended. Nothing is stored before Finish succeeds; an upload
+  // dropped before (a broken stream) stores nothing.
+  class Upload {
+   public:
+    // INVALID_ARGUMENT for a message out of order or a refused sample.
+    absl::Status Accept(const v1::UploadRunRequest& message);
+    // Checks completeness, validity and the digest, then stores the run in
+    // one transaction.
+    absl::StatusOr<v1::Run> Finish();
+
+   private:
+    friend class RunService;
+    explicit Upload(RunService& service);
+    absl::Status AcceptMetadata(const v1::RunMetadata& metadata);
+    absl::Status AcceptSamples(const v1::SampleChunk& chunk);
+    absl::Status AcceptDigest(const std::string& sha256);
+
+    RunService& service_;
+    enum class Stage { kMetadata, kSamples, kComplete } stage_ = Stage::kMetadata;
+    v1::RunMetadata metadata_;
+    engine::BenchRun run_;
+    std::unique_ptr<benchrun::FieldPathLocator> locator_;
+    std::optional<benchrun::BenchRunValidator> validator_;
+    std::optional<api::SampleDigest> digest_;
+    std::string sha256_;
+  };
+  Upload StartUpload() { return Upload(*this); }
+
+ private:
+  kb::RunStore& store_;
+  Options options_;
+};
+
+}  // namespace insdiag::server

@@ -1,0 +1,99 @@
+// insdiagd — the insdiag server. Wires the components together:
+//   embedded PostgreSQL (unless --database-url) → connection pool →
+//   migrations → gRPC + REST server → wait for SIGINT/SIGTERM → shut down.
+#include <CLI/CLI.hpp>
+#include <signal.h>
+
+#include <cstdlib>
+#include <iostream>
+#include <memory>
+#include <optional>
+
+#include "insdiag/kb/connection_pool.h"
+#include "insdiag/kb/migrations.h"
+#include "insdiag/server/insdiag_server.h"
+#include "insdiag/server/postgres_supervisor.h"
+
+namespace {
+
+int Fail(const absl::Status& status) {
+  std::cerr << "insdiagd: " << status.message() << "\n";
+  return 1;
+}
+
+std::string DefaultDataDir() {
+  const char* env = std::getenv("INSDIAG_DATA_DIR");
+  return env != nullptr && *env != '\0' ? env : ".insdiag";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"insdiagd — diagnosis server for inertial navigation systems in bench tests"};
+  std::string data_dir = DefaultDataDir();
+  std::string database_url;
+  std::string migrations_dir;
+  insdiag::server::InsdiagServer::Options options;
+  app.add_option("--data-dir", data_dir,
+                 "Directory of the embedded PostgreSQL cluster (default $INSDIAG_DATA_DIR, else ./.insdiag)");
+  app.add_option("--grpc-port", options.grpc_port, "gRPC port (0: any free port)")->capture_default_str();
+  app.add_option("--http-port", options.http_port, "REST/JSON port (0: any free port)")->capture_default_str();
+  app.add_option("--database-url", database_url,
+                 "Use this PostgreSQL (libpq URL) instead of the embedded one")->envname("INSDIAG_DATABASE_URL");
+  app.add_option("--bind", options.bind_address, "Address to listen on")->capture_default_str();
+  app.add_option("--migrations-dir", migrations_dir,
+                 "Apply migrations from this directory instead of those built in");
+  CLI11_PARSE(app, argc, argv);
+
+  // SIGINT/SIGTERM are taken synchronously by sigwait below, after start-up;
+  // blocked before any thread exists so that every thread inherits the mask.
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+
+  std::unique_ptr<insdiag::server::PostgresSupervisor> postgres;
+  if (database_url.empty()) {
+    auto started = insdiag::server::PostgresSupervisor::Start({.data_dir = data_dir, .bin_dir = {}, .database = "insdiag"});
+    if (!started.ok()) return Fail(started.status());
+    postgres = std::move(*started);
+    database_url = postgres->database_url();
+  }
+
+  auto pool = insdiag::kb::ConnectionPool::Create({.database_url = database_url, .max_connections = 16});
+  if (!pool.ok()) return Fail(pool.status());
+  {
+    std::vector<insdiag::kb::Migration> from_dir;
+    if (!migrations_dir.empty()) {
+      auto loaded = insdiag::kb::LoadMigrationsFromDirectory(migrations_dir);
+      if (!loaded.ok()) return Fail(loaded.status());
+      from_dir = std::move(*loaded);
+    }
+    auto lease = (*pool)->Acquire();
+    if (!lease.ok()) return Fail(lease.status());
+    auto applied = insdiag::kb::ApplyMigrations(
+        **lease, migrations_dir.empty() ? insdiag::kb::EmbeddedMigrations() : std::span(from_dir));
+    if (!applied.ok()) return Fail(applied.status());
+    std::cerr << "insdiagd: schema up to date (" << applied->applied << " migrations applied now, "
+              << applied->already_applied << " before)\n";
+  }
+
+  auto server = insdiag::server::InsdiagServer::Start(**pool, options);
+  if (!server.ok()) return Fail(server.status());
+  std::cout << "insdiagd: listening grpc=" << options.bind_address << ":" << (*server)->grpc_port()
+            << " http=" << options.bind_address << ":" << (*server)->http_port() << " database="
+            << (postgres ? "embedded:" + postgres->cluster_dir().string() : std::string("external"))
+            << std::endl;
+
+  int signal_number = 0;
+  sigwait(&stop_signals, &signal_number);
+  std::cerr << "insdiagd: " << (signal_number == SIGINT ? "SIGINT" : "SIGTERM") << ", shutting down\n";
+  (*server)->Shutdown();
+  server->reset();
+  pool->reset();
+  if (postgres) {
+    if (auto stopped = postgres->Stop(); !stopped.ok()) return Fail(stopped);
+  }
+  return 0;
+}

@@ -1,0 +1,199 @@
+#include "insdiag/server/postgres_supervisor.h"
+
+#include <absl/strings/str_cat.h>
+#include <absl/strings/str_join.h>
+#include <fcntl.h>
+#include <pwd.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "insdiag/kb/pg.h"
+
+extern char** environ;
+
+namespace insdiag::server {
+namespace {
+
+// The socket name is <dir>/.s.PGSQL.<port>; sun_path holds 107 bytes.
+constexpr std::size_t kMaxSocketPath = 107;
+constexpr int kSocketPort = 5432;  // only a socket name: no TCP listener
+
+std::filesystem::path FindBinDir() {
+  std::vector<std::filesystem::path> candidates;
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator("/usr/lib/postgresql", error)) {
+    if (std::filesystem::exists(entry.path() / "bin" / "pg_ctl")) candidates.push_back(entry.path() / "bin");
+  }
+  // Newest major version: compare numerically ("15" > "9.6").
+  std::sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) {
+    return std::stod(a.parent_path().filename().string()) < std::stod(b.parent_path().filename().string());
+  });
+  return candidates.empty() ? std::filesystem::path() : candidates.back();
+}
+
+std::string Tail(const std::filesystem::path& file, std::size_t max_chars) {
+  std::ifstream in(file);
+  std::ostringstream text;
+  text << in.rdbuf();
+  std::string all = text.str();
+  return all.size() > max_chars ? "…" + all.substr(all.size() - max_chars) : all;
+}
+
+}  // namespace
+
+PostgresSupervisor::PostgresSupervisor(Options options)
+    : options_(std::move(options)),
+      cluster_dir_(options_.data_dir / "pg"),
+      run_dir_(options_.data_dir / "run"),
+      as_postgres_(::geteuid() == 0) {}
+
+absl::Status PostgresSupervisor::Run(const std::string& tool, const std::vector<std::string>& args) const {
+  std::vector<std::string> argv;
+  if (as_postgres_) argv = {"/usr/sbin/runuser", "-u", "postgres", "--"};
+  argv.push_back((options_.bin_dir / tool).string());
+  argv.insert(argv.end(), args.begin(), args.end());
+  const auto output = options_.data_dir / (tool + ".out");
+
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+  // The server blocks SIGINT/SIGTERM to take them on its signal thread; the
+  // children must not inherit that, and a Ctrl-C at the terminal is for the
+  // server (which then stops PostgreSQL in order), not for them.
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  sigset_t none;
+  sigemptyset(&none);
+  posix_spawnattr_setsigmask(&attributes, &none);
+  sigset_t defaults;
+  sigemptyset(&defaults);
+  sigaddset(&defaults, SIGINT);
+  sigaddset(&defaults, SIGTERM);
+  posix_spawnattr_setsigdefault(&attributes, &defaults);
+  posix_spawnattr_setpgroup(&attributes, 0);
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETPGROUP);
+
+  std::vector<char*> raw;
+  for (auto& arg : argv) raw.push_back(arg.data());
+  raw.push_back(nullptr);
+  pid_t pid = 0;
+  const int error = posix_spawn(&pid, raw[0], &actions, &attributes, raw.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  posix_spawnattr_destroy(&attributes);
+  if (error != 0) return absl::InternalError(absl::StrCat("cannot run ", argv[0], ": ", std::strerror(error)));
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return absl::OkStatus();
+  return absl::InternalError(absl::StrCat(tool, " ", absl::StrJoin(args, " "), " failed (status ", status,
+                                          "): ", Tail(output, 600)));
+}
+
+absl::StatusOr<std::unique_ptr<PostgresSupervisor>> PostgresSupervisor::Start(Options options) {
+  if (options.bin_dir.empty()) options.bin_dir = FindBinDir();
+  if (options.bin_dir.empty() || !std::filesystem::exists(options.bin_dir / "pg_ctl")) {
+    return absl::FailedPreconditionError(
+        "no PostgreSQL server found under /usr/lib/postgresql (scripts/install-deps.sh installs it), "
+        "or give --database-url");
+  }
+  std::error_code error;
+  options.data_dir = std::filesystem::absolute(options.data_dir, error);
+  std::unique_ptr<PostgresSupervisor> supervisor(new PostgresSupervisor(std::move(options)));
+  const auto& data_dir = supervisor->options_.data_dir;
+  const auto& run_dir = supervisor->run_dir_;
+  const std::string run_text = run_dir.string();
+  if (run_text.size() + std::string_view("/.s.PGSQL.5432").size() > kMaxSocketPath) {
+    return absl::FailedPreconditionError(absl::StrCat("the data directory ", data_dir.string(),
+                                                      " is too long for a unix socket path; choose a shorter one"));
+  }
+  if (run_text.find('\'') != std::string::npos) {
+    return absl::FailedPreconditionError("the data directory's path must not contain a single quote");
+  }
+  std::filesystem::create_directories(run_dir, error);
+  if (error) return absl::FailedPreconditionError(absl::StrCat("cannot create ", run_dir.string(), ": ", error.message()));
+  ::chmod(data_dir.c_str(), 0755);
+
+  if (supervisor->as_postgres_) {
+    const passwd* postgres = ::getpwnam("postgres");
+    if (postgres == nullptr) return absl::FailedPreconditionError("running as root, but there is no postgres user");
+    for (const auto& dir : {run_dir, supervisor->cluster_dir_}) {
+      std::filesystem::create_directories(dir, error);
+      if (::chown(dir.c_str(), postgres->pw_uid, postgres->pw_gid) != 0) {
+        return absl::FailedPreconditionError(absl::StrCat("cannot hand ", dir.string(), " to the postgres user"));
+      }
+    }
+    ::chmod(supervisor->cluster_dir_.c_str(), 0700);
+    // Every directory above must be enterable by postgres (/root is not).
+    if (!supervisor->Run("pg_ctl", {"--version"}).ok() ||
+        ::access(data_dir.c_str(), X_OK) != 0) {
+      return absl::FailedPreconditionError("cannot run PostgreSQL's tools as the postgres user");
+    }
+    for (auto dir = data_dir; dir != dir.root_path(); dir = dir.parent_path()) {
+      struct stat info {};
+      if (::stat(dir.c_str(), &info) == 0 && (info.st_mode & S_IXOTH) == 0 && info.st_uid != postgres->pw_uid) {
+        return absl::FailedPreconditionError(absl::StrCat(
+            "the postgres user cannot enter ", dir.string(), ", so it cannot reach the data directory ",
+            data_dir.string(), "; choose --data-dir under a directory every user can enter (e.g. /var/lib/insdiag)"));
+      }
+    }
+  }
+
+  const std::string cluster = supervisor->cluster_dir_.string();
+  if (!std::filesystem::exists(supervisor->cluster_dir_ / "PG_VERSION")) {
+    if (auto status = supervisor->Run("initdb", {"-D", cluster, "--no-sync", "-A", "trust", "-U", "postgres",
+                                                 "-E", "UTF8", "--locale=C.UTF-8"});
+        !status.ok()) {
+      return status;
+    }
+  }
+  // A cluster still running from a crashed server is adopted.
+  if (!supervisor->Run("pg_ctl", {"status", "-D", cluster}).ok()) {
+    const std::string settings = absl::StrCat("-c listen_addresses='' -k '", run_text, "' -p ", kSocketPort);
+    if (auto status = supervisor->Run("pg_ctl", {"start", "-w", "-t", "60", "-D", cluster, "-l",
+                                                 (run_dir / "postgresql.log").string(), "-o", settings});
+        !status.ok()) {
+      return status;
+    }
+  }
+  supervisor->running_ = true;
+
+  auto admin = kb::Connection::Open(absl::StrCat("host='", run_text, "' port=", kSocketPort, " user=postgres dbname=postgres"));
+  if (!admin.ok()) return admin.status();
+  auto exists = admin->Exec("SELECT 1 FROM pg_database WHERE datname = $1", {kb::Param::Text(supervisor->options_.database)});
+  if (!exists.ok()) return exists.status();
+  if (exists->rows() == 0) {
+    // CREATE DATABASE takes no parameters: the name is quoted as an identifier.
+    std::string quoted = "\"";
+    for (const char c : supervisor->options_.database) quoted += (c == '"') ? std::string("\"\"") : std::string(1, c);
+    quoted += '"';
+    if (auto status = admin->ExecScript("CREATE DATABASE " + quoted); !status.ok()) return status;
+  }
+  return supervisor;
+}
+
+std::string PostgresSupervisor::database_url() const {
+  // Quoted values: the data directory may contain spaces (single quotes are refused).
+  return absl::StrCat("host='", run_dir_.string(), "' port=", kSocketPort, " user=postgres dbname='",
+                      options_.database, "'");
+}
+
+absl::Status PostgresSupervisor::Stop() {
+  if (!running_) return absl::OkStatus();
+  running_ = false;
+  return Run("pg_ctl", {"stop", "-w", "-t", "60", "-m", "fast", "-D", cluster_dir_.string()});
+}
+
+PostgresSupervisor::~PostgresSupervisor() { (void)Stop(); }
+
+}  // namespace insdiag::server

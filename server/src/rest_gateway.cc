@@ -1,0 +1,391 @@
+#include "insdiag/server/rest_gateway.h"
+
+#include <absl/strings/ascii.h>
+#include <absl/strings/match.h>
+#include <absl/strings/strip.h>
+#include <absl/strings/numbers.h>
+#include <absl/strings/str_cat.h>
+#include <absl/strings/str_split.h>
+#include <google/protobuf/descriptor.h>
+#include <google/protobuf/dynamic_message.h>
+
+#include <algorithm>
+
+#include "google/api/annotations.pb.h"
+#include "in_process_call.h"
+#include "insdiag/api/json.h"
+#include "insdiag/api/run_codec.h"
+#include "insdiag/benchrun/bench_run_csv.h"
+#include "insdiag/server/status_mapping.h"
+#include "insdiag/v1/runs.pb.h"
+
+// Last: httplib.h pulls in <resolv.h>, whose `_res` macro breaks Eigen's headers.
+#include <httplib.h>
+
+namespace insdiag::server {
+namespace {
+
+using google::protobuf::FieldDescriptor;
+using google::protobuf::Message;
+
+constexpr char kJson[] = "application/json";
+constexpr char kNdjson[] = "application/x-ndjson";
+constexpr char kUploadMethod[] = "insdiag.v1.RunService.UploadRun";
+
+void SendStatus(httplib::Response& response, const grpc::Status& status, const std::string& method = "") {
+  const HttpError error = ToHttpError(status, method);
+  response.status = error.http_status;
+  response.set_content(error.json_body, kJson);
+}
+
+void SendStatus(httplib::Response& response, const absl::Status& status) {
+  SendStatus(response, ToGrpcStatus(status));
+}
+
+void SendJson(httplib::Response& response, const Message& message) {
+  auto json = api::ToJson(message);
+  if (!json.ok()) return SendStatus(response, json.status());
+  response.status = 200;
+  response.set_content(*json, kJson);
+}
+
+std::unique_ptr<Message> NewMessage(const google::protobuf::Descriptor* type) {
+  return std::unique_ptr<Message>(
+      google::protobuf::MessageFactory::generated_factory()->GetPrototype(type)->New());
+}
+
+const FieldDescriptor* FindField(const google::protobuf::Descriptor* type, const std::string& name) {
+  if (const auto* field = type->FindFieldByName(name)) return field;
+  return type->FindFieldByCamelcaseName(name);  // the JSON spelling: pageSize
+}
+
+// Sets the scalar at dotted `path` (proto or JSON names) from its text, as
+// path variables and query parameters carry it; repeated fields get an
+// element added.
+absl::Status SetFieldFromText(Message& message, const std::string& path, const std::string& text) {
+  Message* target = &message;
+  const std::vector<std::string> names = absl::StrSplit(path, '.');
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    const FieldDescriptor* field = FindField(target->GetDescriptor(), names[i]);
+    if (field == nullptr) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("unknown parameter '", path, "' for ", message.GetDescriptor()->full_name()));
+    }
+    const auto* reflection = target->GetReflection();
+    if (i + 1 < names.size()) {
+      if (field->cpp_type() != FieldDescriptor::CPPTYPE_MESSAGE || field->is_repeated()) {
+        return absl::InvalidArgumentError(absl::StrCat("parameter '", path, "' does not name a field"));
+      }
+      target = reflection->MutableMessage(target, field);
+      continue;
+    }
+    const bool repeated = field->is_repeated();
+    const auto bad = [&] {
+      return absl::InvalidArgumentError(absl::StrCat("parameter '", path, "': '", text, "' is not a valid ",
+                                                     field->cpp_type_name()));
+    };
+    switch (field->cpp_type()) {
+      case FieldDescriptor::CPPTYPE_STRING:
+        repeated ? reflection->AddString(target, field, text) : reflection->SetString(target, field, text);
+        return absl::OkStatus();
+      case FieldDescriptor::CPPTYPE_INT32:
+      case FieldDescriptor::CPPTYPE_INT64: {
+        std::int64_t value = 0;
+        if (!absl::SimpleAtoi(text, &value)) return bad();
+        if (field->cpp_type() == FieldDescriptor::CPPTYPE_INT32) {
+          if (value < INT32_MIN || value > INT32_MAX) return bad();
+          const auto narrow = static_cast<std::int32_t>(value);
+          repeated ? reflection->AddInt32(target, field, narrow) : reflection->SetInt32(target, field, narrow);
+        } else {
+          repeated ? reflection->AddInt64(target, field, value) : reflection->SetInt64(target, field, value);
+        }
+        return absl::OkStatus();
+      }
+      case FieldDescriptor::CPPTYPE_UINT32:
+      case FieldDescriptor::CPPTYPE_UINT64: {
+        std::uint64_t value = 0;
+        if (!absl::SimpleAtoi(text, &value)) return bad();
+        if (field->cpp_type() == FieldDescriptor::CPPTYPE_UINT32) {
+          if (value > UINT32_MAX) return bad();
+          const auto narrow = static_cast<std::uint32_t>(value);
+          repeated ? reflection->AddUInt32(target, field, narrow) : reflection->SetUInt32(target, field, narrow);
+        } else {
+          repeated ? reflection->AddUInt64(target, field, value) : reflection->SetUInt64(target, field, value);
+        }
+        return absl::OkStatus();
+      }
+      case FieldDescriptor::CPPTYPE_DOUBLE:
+      case FieldDescriptor::CPPTYPE_FLOAT: {
+        double value = 0;
+        if (!absl::SimpleAtod(text, &value)) return bad();
+        if (field->cpp_type() == FieldDescriptor::CPPTYPE_FLOAT) {
+          const auto narrow = static_cast<float>(value);
+          repeated ? reflection->AddFloat(target, field, narrow) : reflection->SetFloat(target, field, narrow);
+        } else {
+          repeated ? reflection->AddDouble(target, field, value) : reflection->SetDouble(target, field, value);
+        }
+        return absl::OkStatus();
+      }
+      case FieldDescriptor::CPPTYPE_BOOL: {
+        if (text != "true" && text != "false") return bad();
+        repeated ? reflection->AddBool(target, field, text == "true")
+                 : reflection->SetBool(target, field, text == "true");
+        return absl::OkStatus();
+      }
+      case FieldDescriptor::CPPTYPE_ENUM: {
+        const auto* value = field->enum_type()->FindValueByName(text);
+        int number = 0;
+        if (value == nullptr && absl::SimpleAtoi(text, &number)) value = field->enum_type()->FindValueByNumber(number);
+        if (value == nullptr) return bad();
+        repeated ? reflection->AddEnum(target, field, value) : reflection->SetEnum(target, field, value);
+        return absl::OkStatus();
+      }
+      case FieldDescriptor::CPPTYPE_MESSAGE:
+        return absl::InvalidArgumentError(
+            absl::StrCat("parameter '", path, "' names a message; send it in the JSON body"));
+    }
+  }
+  return absl::InvalidArgumentError(absl::StrCat("empty parameter name"));
+}
+
+// The request message of a non-streaming-request method from the HTTP request.
+absl::Status BuildRequest(const std::string& body_rule, const std::map<std::string, std::string>& bindings,
+                          const httplib::Request& http, Message& request) {
+  if (!body_rule.empty() && !http.body.empty()) {
+    Message* body_target = &request;
+    if (body_rule != "*") {
+      const FieldDescriptor* field = request.GetDescriptor()->FindFieldByName(body_rule);
+      if (field == nullptr || field->cpp_type() != FieldDescriptor::CPPTYPE_MESSAGE) {
+        return absl::InternalError(absl::StrCat("http rule body '", body_rule, "' names no message field"));
+      }
+      body_target = request.GetReflection()->MutableMessage(&request, field);
+    }
+    if (auto status = api::FromJson(http.body, body_target); !status.ok()) return status;
+  }
+  for (const auto& [name, value] : http.params) {
+    if (auto status = SetFieldFromText(request, name, value); !status.ok()) return status;
+  }
+  // Path variables last: the URL names the resource, whatever the body says.
+  for (const auto& [path, value] : bindings) {
+    const FieldDescriptor* field = FindField(request.GetDescriptor(), path);
+    if (field != nullptr && !field->is_repeated() && field->cpp_type() == FieldDescriptor::CPPTYPE_STRING) {
+      request.GetReflection()->ClearField(&request, field);
+    }
+    if (auto status = SetFieldFromText(request, path, value); !status.ok()) return status;
+  }
+  return absl::OkStatus();
+}
+
+std::string MediaType(const httplib::Request& request) {
+  std::string type = request.get_header_value("Content-Type");
+  type = type.substr(0, type.find(';'));
+  type.erase(std::remove(type.begin(), type.end(), ' '), type.end());
+  return absl::AsciiStrToLower(type);
+}
+
+std::string Param(const httplib::Request& request, const char* json_name, const char* proto_name) {
+  if (request.has_param(json_name)) return request.get_param_value(json_name);
+  return request.get_param_value(proto_name);
+}
+
+}  // namespace
+
+absl::StatusOr<std::unique_ptr<RestGateway>> RestGateway::Create(std::shared_ptr<grpc::Channel> channel,
+                                                                 const std::vector<std::string>& services) {
+  std::unique_ptr<RestGateway> gateway(new RestGateway(std::move(channel)));
+  const auto* pool = google::protobuf::DescriptorPool::generated_pool();
+  for (const auto& service_name : services) {
+    const auto* service = pool->FindServiceByName(service_name);
+    if (service == nullptr) return absl::InvalidArgumentError(absl::StrCat("unknown service ", service_name));
+    for (int m = 0; m < service->method_count(); ++m) {
+      const auto* method = service->method(m);
+      if (!method->options().HasExtension(google::api::http)) continue;
+      const google::api::HttpRule& rule = method->options().GetExtension(google::api::http);
+      std::vector<const google::api::HttpRule*> rules = {&rule};
+      for (const auto& extra : rule.additional_bindings()) rules.push_back(&extra);
+      for (const auto* binding : rules) {
+        std::string verb;
+        std::string path;
+        switch (binding->pattern_case()) {
+          case google::api::HttpRule::kGet: verb = "GET", path = binding->get(); break;
+          case google::api::HttpRule::kPut: verb = "PUT", path = binding->put(); break;
+          case google::api::HttpRule::kPost: verb = "POST", path = binding->post(); break;
+          case google::api::HttpRule::kDelete: verb = "DELETE", path = binding->delete_(); break;
+          case google::api::HttpRule::kPatch: verb = "PATCH", path = binding->patch(); break;
+          case google::api::HttpRule::kCustom: verb = binding->custom().kind(), path = binding->custom().path(); break;
+          default: continue;
+        }
+        auto parsed = PathTemplate::Parse(path);
+        if (!parsed.ok()) return parsed.status();
+        gateway->routes_.push_back(Route{verb, std::move(*parsed), binding->body(), method,
+                                         absl::StrCat("/", service->full_name(), "/", method->name())});
+      }
+    }
+  }
+  // "runs/x:download" must reach the :download route, not GetRun.
+  std::stable_sort(gateway->routes_.begin(), gateway->routes_.end(),
+                   [](const Route& a, const Route& b) { return a.path.has_verb() && !b.path.has_verb(); });
+  return gateway;
+}
+
+void RestGateway::Register(httplib::Server& http) {
+  const auto handler = [this](const httplib::Request& request, httplib::Response& response) {
+    Handle(request, response);
+  };
+  http.Get(".*", handler);
+  http.Post(".*", handler);
+  http.Put(".*", handler);
+  http.Patch(".*", handler);
+  http.Delete(".*", handler);
+}
+
+void RestGateway::Handle(const httplib::Request& request, httplib::Response& response) {
+  if (request.method == "GET" && request.path == "/healthz") return Health(response);
+  static const auto download = *PathTemplate::Parse("/v1/{name=runs/*}:download");
+  if (request.method == "GET") {
+    if (auto bindings = download.Match(request.path)) return Download(bindings->at("name"), response);
+  }
+  for (const auto& route : routes_) {
+    if (route.http_method != request.method) continue;
+    if (auto bindings = route.path.Match(request.path)) return Dispatch(route, *bindings, request, response);
+  }
+  SendStatus(response, absl::NotFoundError(absl::StrCat("no method answers ", request.method, " ", request.path)));
+}
+
+void RestGateway::Dispatch(const Route& route, const std::map<std::string, std::string>& bindings,
+                           const httplib::Request& request, httplib::Response& response) {
+  if (route.method->full_name() == kUploadMethod) return Upload(route, request, response);
+  if (route.method->client_streaming()) {
+    return SendStatus(response, absl::UnimplementedError(absl::StrCat(
+                                    route.method->full_name(), " streams requests; it has no REST form")));
+  }
+  auto message = NewMessage(route.method->input_type());
+  if (auto status = BuildRequest(route.body, bindings, request, *message); !status.ok()) {
+    return SendStatus(response, status);
+  }
+  auto call = std::make_shared<InProcessCall>(stub_, route.grpc_path);
+  call->Write(message->SerializeAsString());
+  call->WritesDone();
+  std::string bytes;
+  if (!call->Read(&bytes)) return SendStatus(response, call->Finish(), route.method->full_name());
+  auto first = NewMessage(route.method->output_type());
+  first->ParseFromString(bytes);
+  if (!route.method->server_streaming()) {
+    const grpc::Status status = call->Finish();
+    if (!status.ok()) return SendStatus(response, status, route.method->full_name());
+    return SendJson(response, *first);
+  }
+  // Newline-delimited JSON, streamed as the responses arrive. An error after
+  // the first response can only be told in the body: a last line {"error":…}.
+  response.status = 200;
+  response.set_chunked_content_provider(
+      kNdjson, [call, first = std::shared_ptr<Message>(std::move(first)), method = route.method](
+                   std::size_t, httplib::DataSink& sink) mutable {
+        auto write = [&](const Message& chunk) {
+          auto json = api::ToJson(chunk);
+          const std::string line = (json.ok() ? *json : "{}") + "\n";
+          return sink.write(line.data(), line.size());
+        };
+        bool open = write(*first);
+        std::string next_bytes;
+        auto next = NewMessage(method->output_type());
+        while (open && call->Read(&next_bytes)) {
+          next->ParseFromString(next_bytes);
+          open = write(*next);
+        }
+        const grpc::Status status = call->Finish();
+        if (open && !status.ok()) {
+          const std::string line = ToHttpError(status, method->full_name()).json_body + "\n";
+          sink.write(line.data(), line.size());
+        }
+        sink.done();
+        return true;
+      });
+}
+
+void RestGateway::Upload(const Route& route, const httplib::Request& request, httplib::Response& response) {
+  const std::string type = MediaType(request);
+  InProcessCall call(stub_, route.grpc_path);
+  if (type == "text/csv") {
+    const std::string source = request.has_param("filename") ? request.get_param_value("filename") : "body";
+    auto run = benchrun::ParseBenchRun(request.body, source);
+    if (!run.ok()) return SendStatus(response, run.status());
+    api::ForEachUploadRequest(*run, Param(request, "requestId", "request_id"), api::kDefaultChunkSamples,
+                              [&](const v1::UploadRunRequest& message) {
+                                return call.Write(message.SerializeAsString());
+                              });
+  } else if (type == kNdjson || type == kJson) {
+    v1::UploadRunRequest message;
+    int line_number = 0;
+    for (absl::string_view line : absl::StrSplit(request.body, '\n')) {
+      ++line_number;
+      if (absl::StripAsciiWhitespace(line).empty()) continue;
+      if (auto status = api::FromJson(std::string(line), &message); !status.ok()) {
+        return SendStatus(response, absl::InvalidArgumentError(absl::StrCat("body line ", line_number, ": ",
+                                                                            status.message())));
+      }
+      if (!call.Write(message.SerializeAsString())) break;
+    }
+  } else {
+    return SendStatus(response, absl::InvalidArgumentError(absl::StrCat(
+                                    "POST /v1/runs:upload takes text/csv (a bench-run file) or ", kNdjson,
+                                    " (UploadRunRequest messages), not '", type, "'")));
+  }
+  call.WritesDone();
+  std::string bytes;
+  v1::Run run;
+  if (call.Read(&bytes)) run.ParseFromString(bytes);
+  const grpc::Status status = call.Finish();
+  if (!status.ok()) return SendStatus(response, status);
+  SendJson(response, run);
+}
+
+void RestGateway::Download(const std::string& run_name, httplib::Response& response) {
+  engine::BenchRun run;
+  {
+    v1::GetRunRequest get;
+    get.set_name(run_name);
+    InProcessCall call(stub_, "/insdiag.v1.RunService/GetRun");
+    call.Write(get.SerializeAsString());
+    call.WritesDone();
+    std::string bytes;
+    v1::Run stored;
+    if (call.Read(&bytes)) stored.ParseFromString(bytes);
+    if (const auto status = call.Finish(); !status.ok()) return SendStatus(response, status);
+    run.metadata = api::FromProto(stored.metadata());
+    run.has_temperature = stored.metadata().has_temperature();
+    run.samples.reserve(static_cast<std::size_t>(stored.sample_count()));
+  }
+  v1::ReadRunSamplesRequest read;
+  read.set_name(run_name);
+  InProcessCall call(stub_, "/insdiag.v1.RunService/ReadRunSamples");
+  call.Write(read.SerializeAsString());
+  call.WritesDone();
+  std::string bytes;
+  v1::SampleChunk chunk;
+  while (call.Read(&bytes)) {
+    chunk.ParseFromString(bytes);
+    for (const auto& sample : chunk.samples()) run.samples.push_back(api::FromProto(sample));
+  }
+  if (const auto status = call.Finish(); !status.ok()) return SendStatus(response, status);
+  response.status = 200;
+  response.set_content(benchrun::FormatBenchRun(run), "text/csv");
+}
+
+void RestGateway::Health(httplib::Response& response) {
+  // grpc.health.v1.Health/Check with an empty request (the whole server).
+  // Its response is HealthCheckResponse{status = 1 (SERVING)}, on the wire
+  // the two bytes 08 01; Debian ships no C++ code generated from health.proto.
+  InProcessCall call(stub_, "/grpc.health.v1.Health/Check");
+  call.Write("");
+  call.WritesDone();
+  std::string bytes;
+  const bool answered = call.Read(&bytes);
+  const grpc::Status status = call.Finish();
+  if (!status.ok()) return SendStatus(response, status);
+  const bool serving = answered && bytes == std::string("\x08\x01", 2);
+  response.status = serving ? 200 : 503;
+  response.set_content(serving ? R"({"status":"SERVING"})" : R"({"status":"NOT_SERVING"})", kJson);
+}
+
+}  // namespace insdiag::server

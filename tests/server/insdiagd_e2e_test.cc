@@ -1,0 +1,221 @@
+// The real programs: insdiagd with its embedded PostgreSQL in a temporary
+// data directory, and the insdiag CLI uploading to it.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <grpcpp/generic/generic_stub.h>
+#include <signal.h>
+
+#include <filesystem>
+#include <fstream>
+#include <future>
+#include <regex>
+#include <thread>
+
+#include "insdiag/benchrun/bench_run_csv.h"
+#include "insdiag/client/run_client.h"
+#include "support/subprocess.h"
+#include "support/synthetic_run.h"
+
+// Last: httplib.h pulls in <resolv.h>, whose `_res` macro breaks Eigen.
+#include <httplib.h>
+
+namespace insdiag::testing {
+namespace {
+
+using ::testing::HasSubstr;
+using namespace std::chrono_literals;
+
+struct Ports {
+  int grpc = 0;
+  int http = 0;
+};
+
+// Waits for insdiagd's "listening grpc=…:N http=…:M" line.
+std::optional<Ports> AwaitListening(Subprocess& server, std::chrono::seconds timeout) {
+  const std::regex listening(R"(listening grpc=[^ ]*:(\d+) http=[^ ]*:(\d+))");
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < deadline) {
+    std::smatch match;
+    const std::string out = server.Stdout();
+    if (std::regex_search(out, match, listening)) return Ports{std::stoi(match[1]), std::stoi(match[2])};
+    if (server.Wait(0ms)) return std::nullopt;
+    std::this_thread::sleep_for(50ms);
+  }
+  return std::nullopt;
+}
+
+// grpc.health.v1.Health/Check for the whole server; true when SERVING
+// (response bytes 08 01: no C++ code is generated from health.proto here).
+bool GrpcHealthy(int port) {
+  grpc::GenericStub stub(client::Connect("127.0.0.1:" + std::to_string(port)));
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + 5s);
+  grpc::Slice empty(std::string{});
+  const grpc::ByteBuffer request(&empty, 1);
+  grpc::ByteBuffer response;
+  std::promise<grpc::Status> done;
+  stub.UnaryCall(&context, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request, &response,
+                 [&done](grpc::Status status) { done.set_value(std::move(status)); });
+  if (!done.get_future().get().ok()) return false;
+  std::vector<grpc::Slice> slices;
+  response.Dump(&slices);
+  std::string bytes;
+  for (const auto& slice : slices) bytes.append(reinterpret_cast<const char*>(slice.begin()), slice.size());
+  return bytes == std::string("\x08\x01", 2);
+}
+
+// Asks grpc.reflection.v1alpha.ServerReflection to list the services and
+// returns the raw response bytes (service names appear in them verbatim).
+// The request is ServerReflectionRequest{list_services = ""}: field 7, an
+// empty string, on the wire 3a 00.
+std::string ReflectionListing(int port) {
+  class Listing final : public grpc::ClientBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer> {
+   public:
+    Listing() : request_slice_(std::string("\x3a\x00", 2)), request_(&request_slice_, 1) {}
+    void Begin(grpc::GenericStub& stub, grpc::ClientContext& context) {
+      stub.PrepareBidiStreamingCall(&context, "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo",
+                                    grpc::StubOptions(), this);
+      StartWrite(&request_);
+      StartRead(&response_);
+      StartCall();
+    }
+    void OnWriteDone(bool) override { StartWritesDone(); }
+    void OnReadDone(bool ok) override {
+      if (!ok) return;
+      std::vector<grpc::Slice> slices;
+      response_.Dump(&slices);
+      for (const auto& slice : slices) bytes_.append(reinterpret_cast<const char*>(slice.begin()), slice.size());
+      StartRead(&response_);
+    }
+    void OnDone(const grpc::Status&) override { done_.set_value(bytes_); }
+    std::future<std::string> Result() { return done_.get_future(); }
+
+   private:
+    grpc::Slice request_slice_;
+    grpc::ByteBuffer request_;
+    grpc::ByteBuffer response_;
+    std::string bytes_;
+    std::promise<std::string> done_;
+  };
+  grpc::GenericStub stub(client::Connect("127.0.0.1:" + std::to_string(port)));
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + 5s);
+  Listing listing;
+  auto result = listing.Result();
+  listing.Begin(stub, context);
+  return result.get();
+}
+
+// Running, not merely a zombie waiting for a reaper (pg_ctl leaves the
+// postmaster to whoever adopts orphans, which may be slow to reap it).
+bool ProcessAlive(pid_t pid) {
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string text;
+  if (!std::getline(stat, text)) return false;
+  const auto after_name = text.rfind(')');
+  return after_name != std::string::npos && after_name + 2 < text.size() && text[after_name + 2] != 'Z';
+}
+
+class InsdiagdTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = MakeTempDir("insdiagd-e2e");
+    ASSERT_FALSE(dir_.empty());
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+
+  Subprocess StartServer(const std::vector<std::string>& extra = {}) {
+    std::vector<std::string> argv = {INSDIAGD_PATH, "--data-dir", (dir_ / "data").string(), "--grpc-port", "0",
+                                     "--http-port", "0", "--bind", "127.0.0.1"};
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    auto server = Subprocess::Start(argv, dir_);
+    EXPECT_TRUE(server.ok()) << server.status();
+    return std::move(*server);
+  }
+
+  std::filesystem::path dir_;
+};
+
+TEST_F(InsdiagdTest, ServesHealthAcceptsCliUploadAndStopsWithPostgresOnSigterm) {
+  auto server = StartServer();
+  const auto ports = AwaitListening(server, 60s);
+  ASSERT_TRUE(ports) << "insdiagd did not come up:\n" << server.Stderr();
+  EXPECT_TRUE(GrpcHealthy(ports->grpc));
+  EXPECT_THAT(ReflectionListing(ports->grpc), HasSubstr("insdiag.v1.RunService")) << "reflection is off";
+  httplib::Client http("127.0.0.1", ports->http);
+  auto health = http.Get("/healthz");
+  ASSERT_TRUE(health);
+  EXPECT_EQ(health->status, 200);
+
+  const auto file = dir_ / "run.csv";
+  ASSERT_TRUE(benchrun::WriteBenchRunFile(SyntheticStaticRun(180'000, 50.0, 11), file).ok());
+  const auto started = std::chrono::steady_clock::now();
+  auto upload = RunToCompletion({INSDIAG_CLI_PATH, "upload", file.string(), "--server",
+                                 "127.0.0.1:" + std::to_string(ports->grpc)},
+                                dir_, 60s);
+  const auto took = std::chrono::steady_clock::now() - started;
+  ASSERT_TRUE(upload.ok()) << upload.status();
+  EXPECT_EQ(upload->exit_status, 0) << upload->stderr_text;
+  std::smatch name;
+  ASSERT_TRUE(std::regex_match(upload->stdout_text, name, std::regex(R"((runs/[0-9a-f-]{36})\n)")))
+      << upload->stdout_text;
+  EXPECT_LT(took, 10s) << "a 1-hour 50 Hz run must upload in under 10 s";
+  auto got = http.Get(("/v1/" + name[1].str()).c_str());
+  ASSERT_TRUE(got);
+  EXPECT_THAT(got->body, HasSubstr(R"("sampleCount":"180000")"));
+
+  // The PostgreSQL the server started, by its postmaster.pid.
+  std::ifstream pid_file(dir_ / "data" / "pg" / "postmaster.pid");
+  pid_t postmaster = 0;
+  ASSERT_TRUE(pid_file >> postmaster) << "no postmaster.pid: the embedded PostgreSQL is not running";
+  ASSERT_TRUE(ProcessAlive(postmaster));
+
+  server.Signal(SIGTERM);
+  const auto exit_status = server.Wait(60s);
+  ASSERT_TRUE(exit_status) << "insdiagd did not stop on SIGTERM";
+  EXPECT_EQ(*exit_status, 0) << server.Stderr();
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "data" / "pg" / "postmaster.pid"));
+  EXPECT_FALSE(ProcessAlive(postmaster)) << "PostgreSQL outlived the server";
+}
+
+TEST_F(InsdiagdTest, CliRefusesABadFileNamingLineAndColumnAndMisuseWithStatus2) {
+  const auto file = dir_ / "bad.csv";
+  std::string csv = benchrun::FormatBenchRun(SyntheticStaticRun(100, 50.0, 1));
+  const auto header = csv.find("\nt,");
+  const auto row = csv.find('\n', header + 1);  // end of the header line
+  csv = csv.substr(0, row + 1) + "x" + csv.substr(row + 1);  // first data row: t = "x0.02"
+  std::ofstream(file) << csv;
+  const int line = static_cast<int>(std::count(csv.begin(), csv.begin() + static_cast<std::ptrdiff_t>(row), '\n')) + 2;
+
+  // No server needed: the file is refused before anything is sent.
+  auto refused = RunToCompletion({INSDIAG_CLI_PATH, "upload", file.string(), "--server", "127.0.0.1:1"}, dir_, 30s);
+  ASSERT_TRUE(refused.ok());
+  EXPECT_EQ(refused->exit_status, 1);
+  EXPECT_THAT(refused->stderr_text, HasSubstr(file.string() + ":" + std::to_string(line) + ":1"));
+  EXPECT_TRUE(refused->stdout_text.empty());
+
+  auto misuse = RunToCompletion({INSDIAG_CLI_PATH, "upload"}, dir_, 30s);
+  ASSERT_TRUE(misuse.ok());
+  EXPECT_EQ(misuse->exit_status, 2);
+}
+
+TEST_F(InsdiagdTest, RefusesToStartWhenAnAppliedMigrationChanged) {
+  const auto migrations = dir_ / "migrations";
+  std::filesystem::copy(INSDIAG_SOURCE_DIR "/migrations", migrations);
+  {
+    auto server = StartServer({"--migrations-dir", migrations.string()});
+    ASSERT_TRUE(AwaitListening(server, 60s)) << server.Stderr();
+    server.Signal(SIGTERM);
+    ASSERT_EQ(server.Wait(60s), 0);
+  }
+  std::ofstream(migrations / "0001_runs.sql", std::ios::app) << "\n-- edited after it was applied\n";
+  auto server = StartServer({"--migrations-dir", migrations.string()});
+  const auto exit_status = server.Wait(60s);
+  ASSERT_TRUE(exit_status) << "insdiagd started on a changed migration";
+  EXPECT_EQ(*exit_status, 1);
+  EXPECT_THAT(server.Stderr(), HasSubstr("0001_runs.sql has changed"));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "data" / "pg" / "postmaster.pid")) << "PostgreSQL left running";
+}
+
+}  // namespace
+}  // namespace insdiag::testing

@@ -1,0 +1,36 @@
+// The server tests' fixture: an InsdiagServer on 127.0.0.1 with ephemeral
+// ports over a fresh migrated database, a real gRPC stub and a real HTTP
+// client.
+#pragma once
+
+#include <memory>
+
+#include "insdiag/client/run_client.h"
+#include "insdiag/v1/analyses.grpc.pb.h"
+#include "insdiag/server/insdiag_server.h"
+#include "support/database_fixture.h"
+
+// Last: httplib.h pulls in <resolv.h>, whose `_res` macro breaks Eigen.
+#include <httplib.h>
+
+namespace insdiag::testing {
+
+class ServerTest : public DatabaseTest {
+ protected:
+  void SetUp() override;
+  void TearDown() override;
+
+  v1::RunService::Stub& runs() { return *runs_; }
+  httplib::Client& http() { return *http_; }
+  std::shared_ptr<grpc::Channel> channel() { return channel_; }
+
+  // Count of stored runs, through the API.
+  int StoredRunCount();
+
+  std::unique_ptr<server::InsdiagServer> server_;
+  std::shared_ptr<grpc::Channel> channel_;
+  std::unique_ptr<v1::RunService::Stub> runs_;
+  std::unique_ptr<httplib::Client> http_;
+};
+
+}  // namespace insdiag::testing
