@@ -1,0 +1,103 @@
+// insdiag analyze RUN.csv [--add EFFECT]... [--json] [--series OUT.csv]
+// Runs the engine locally on a bench-run file, no server needed.
+#include <fstream>
+#include <ostream>
+
+#include "insdiag/api/json.h"
+#include "insdiag/api/report_codec.h"
+#include "insdiag/api/unit_types.h"
+#include "insdiag/benchrun/bench_run_csv.h"
+#include "insdiag/engine/analysis.h"
+#include "report_text.h"
+#include "verb.h"
+
+namespace insdiag::cli {
+namespace {
+
+class AnalyzeVerb final : public Verb {
+ public:
+  std::string Name() const override { return "analyze"; }
+  std::string Summary() const override {
+    return "Compare the unit's error model with a bench run: fit, where it fails, missing effects";
+  }
+
+  void DeclareOptions(OptionSink& options) override {
+    options.Positional("RUN.csv", &file_, "Bench-run file (shared/spec/bench-run-format.md)");
+    options.Repeated("--add", &add_,
+                     "Put a catalogue effect into the model: a term (gyro_scale_factor.z) or a family "
+                     "(gyro_scale_factor); repeatable");
+    options.Flag("--json", &json_, "Print the report as JSON (insdiag.v1.AnalysisReport)");
+    options.Option("--series", &series_, "Write measured, predicted, residual and ±3σ per channel and epoch to CSV");
+    options.Option("--unit-type", &unit_type_,
+                   "Unit type whose nominal model completes a datasheet the run lacks (default: the run's "
+                   "unit_type when insdiag knows it)");
+    options.Option("--update-interval", &update_interval_, "Seconds between filter updates (default 1)");
+  }
+
+  int Run(std::ostream& out, std::ostream& err) override {
+    auto run = benchrun::ReadBenchRunFile(file_);
+    if (!run.ok()) {
+      err << run.status().message() << "\n";
+      return kExitRefused;
+    }
+    engine::AnalysisRequest request;
+    request.add_effects = add_;
+    const std::string type = unit_type_.empty() ? run->metadata.unit_type : unit_type_;
+    if (!type.empty()) {
+      auto unit_type = api::BuiltinUnitType(type);
+      if (unit_type.ok()) {
+        auto nominal = api::BaseModelOf(*unit_type);
+        if (nominal.ok()) request.nominal = *nominal;
+      } else if (!unit_type_.empty()) {
+        err << "insdiag analyze: " << unit_type.status().message() << "\n";
+        return kExitUsage;
+      }
+    }
+    engine::AnalysisOptions options;
+    try {
+      options.filter.update_interval_s = std::stod(update_interval_);
+    } catch (...) {
+      err << "insdiag analyze: --update-interval: '" << update_interval_ << "' is not a number\n";
+      return kExitUsage;
+    }
+    options.keep_series = !series_.empty();
+    auto analysis = engine::Analyze(*run, request, options);
+    if (!analysis.ok()) {
+      err << "insdiag analyze: " << file_ << ": " << analysis.status().message() << "\n";
+      return analysis.status().code() == absl::StatusCode::kInvalidArgument ? kExitUsage : kExitRefused;
+    }
+    if (!series_.empty()) {
+      std::ofstream series(series_);
+      WriteSeriesCsv(analysis->series, series);
+      if (!series) {
+        err << "insdiag analyze: cannot write " << series_ << "\n";
+        return kExitRefused;
+      }
+    }
+    if (json_) {
+      auto text = api::ToJson(api::ToProto(analysis->report, analysis->model), /*pretty=*/true);
+      if (!text.ok()) {
+        err << "insdiag analyze: " << text.status().message() << "\n";
+        return kExitRefused;
+      }
+      out << *text << "\n";
+    } else {
+      PrintReport(analysis->report, out);
+    }
+    return kExitOk;
+  }
+
+ private:
+  std::string file_;
+  std::vector<std::string> add_;
+  bool json_ = false;
+  std::string series_;
+  std::string unit_type_;
+  std::string update_interval_ = "1";
+};
+
+}  // namespace
+
+std::unique_ptr<Verb> MakeVerb_analyze() { return std::make_unique<AnalyzeVerb>(); }
+
+}  // namespace insdiag::cli

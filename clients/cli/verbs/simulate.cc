@@ -1,0 +1,184 @@
+// insdiag simulate OUT.csv [--profile NAME] [--effect NAME=VALUE]... [--seed N] …
+// Writes a bench run of a simulated unit on a two-axis rotary table, with the
+// given effects (and faults) hidden in it. The unit's base model is its unit
+// type's nominal model (data/unit-types), so no sensor number lives here.
+#include <charconv>
+#include <cmath>
+#include <numbers>
+#include <ostream>
+
+#include "insdiag/api/unit_types.h"
+#include "insdiag/benchrun/bench_run_csv.h"
+#include "insdiag/engine/model/parameters.h"
+#include "insdiag/engine/sim/simulator.h"
+#include "verb.h"
+
+namespace insdiag::cli {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+absl::StatusOr<std::vector<double>> Numbers(std::string_view text, const std::string& what, size_t count) {
+  std::vector<double> out;
+  while (!text.empty()) {
+    const size_t comma = text.find(',');
+    const std::string_view item = text.substr(0, comma);
+    double v = 0.0;
+    const auto [ptr, ec] = std::from_chars(item.data(), item.data() + item.size(), v);
+    if (ec != std::errc() || ptr != item.data() + item.size() || !std::isfinite(v)) {
+      return absl::InvalidArgumentError(what + ": '" + std::string(item) + "' is not a number");
+    }
+    out.push_back(v);
+    if (comma == std::string_view::npos) break;
+    text.remove_prefix(comma + 1);
+  }
+  if (out.size() != count) {
+    return absl::InvalidArgumentError(what + ": expected " + std::to_string(count) + " comma-separated numbers");
+  }
+  return out;
+}
+
+// "gyro.x=TIME,SIZE" → sensor, axis and the two numbers.
+absl::Status ParseFault(const std::string& spec, const std::string& flag, engine::Sensor* sensor, int* axis,
+                        double* time_s, double* size) {
+  const size_t eq = spec.find('=');
+  const std::string target = spec.substr(0, eq);
+  if (eq == std::string::npos || (target.size() != 5 && target.size() != 6)) {
+    return absl::InvalidArgumentError(flag + " " + spec + ": expected gyro.x|acc.y…=TIME_S,SIZE");
+  }
+  const bool gyro = target.rfind("gyro.", 0) == 0;
+  const bool acc = target.rfind("acc.", 0) == 0;
+  const char a = target.back();
+  if (!(gyro || acc) || a < 'x' || a > 'z') {
+    return absl::InvalidArgumentError(flag + " " + spec + ": the target is gyro.x … acc.z");
+  }
+  auto v = Numbers(std::string_view(spec).substr(eq + 1), flag + " " + spec, 2);
+  if (!v.ok()) return v.status();
+  *sensor = gyro ? engine::Sensor::kGyro : engine::Sensor::kAccelerometer;
+  *axis = a - 'x';
+  *time_s = (*v)[0];
+  *size = (*v)[1];
+  return absl::OkStatus();
+}
+
+class SimulateVerb final : public Verb {
+ public:
+  std::string Name() const override { return "simulate"; }
+  std::string Summary() const override {
+    return "Write a bench run of a simulated unit on a rotary table, with effects hidden in it";
+  }
+
+  void DeclareOptions(OptionSink& options) override {
+    options.Positional("OUT.csv", &file_, "Bench-run file to write");
+    options.Option("--profile", &profile_,
+                   "Table profile: static, rotations, positions, thermal or full (default full: excites every "
+                   "effect of the catalogue)");
+    options.Repeated("--effect", &effects_,
+                     "Hidden effect NAME=VALUE, e.g. gyro_scale_factor.z=1e-4 (a family applies to every axis; "
+                     "yaw harmonics SIN[,COS]; bias_rw K; bias_second_order SIGMA,TAU_S,PERIOD_S)");
+    options.Option("--seed", &seed_, "Random seed (default 1)");
+    options.Option("--rate", &rate_, "Sample rate in Hz (default 50)");
+    options.Option("--unit-type", &unit_type_, "Unit type whose nominal model the unit has (default INS-2000)");
+    options.Repeated("--param", &params_,
+                     "Override a base-model parameter NAME=VALUE, e.g. gyro_bias_gm.x.sigma=1.5e-7 or "
+                     "acc_quantization.z=3.5e-4 (SI units)");
+    options.Repeated("--bias-step", &steps_, "Fault: drift step gyro.x|…|acc.z=TIME_S,SIZE (rad/s or m/s²)");
+    options.Repeated("--spike", &spikes_, "Fault: one-sample spike gyro.x|…|acc.z=TIME_S,SIZE");
+    options.Option("--serial", &serial_, "Unit serial written to the file (default SIM-<seed>)");
+    options.Option("--site", &site_, "Site LAT_DEG,LON_DEG,HEIGHT_M (default 55.5672,38.15,125)");
+    options.Flag("--no-datasheet", &no_datasheet_, "Leave the datasheet metadata out of the file");
+  }
+
+  int Run(std::ostream& out, std::ostream& err) override {
+    auto st = Simulate(out);
+    if (!st.ok()) {
+      err << "insdiag simulate: " << st.message() << "\n";
+      return st.code() == absl::StatusCode::kInvalidArgument ? kExitUsage : kExitRefused;
+    }
+    return kExitOk;
+  }
+
+ private:
+  absl::Status Simulate(std::ostream& out) {
+    auto profile = engine::sim::BuiltinProfile(profile_);
+    if (!profile.ok()) return profile.status();
+    auto unit_type = api::BuiltinUnitType(unit_type_);
+    if (!unit_type.ok()) return absl::InvalidArgumentError(std::string(unit_type.status().message()));
+    auto model = api::BaseModelOf(*unit_type);
+    if (!model.ok()) return model.status();
+    for (const std::string& p : params_) {
+      const size_t eq = p.find('=');
+      auto value = Numbers(eq == std::string::npos ? "" : std::string_view(p).substr(eq + 1), "--param " + p, 1);
+      if (!value.ok()) return value.status();
+      engine::ErrorModel probe;
+      if (auto s = engine::SetParameter(p.substr(0, eq), (*value)[0], probe); !s.ok()) return s;
+      if (!probe.effects.empty()) {
+        return absl::InvalidArgumentError("--param " + p + ": effects are hidden with --effect");
+      }
+      if (auto s = engine::SetParameter(p.substr(0, eq), (*value)[0], *model); !s.ok()) return s;
+    }
+    engine::sim::SimulatedUnit unit;
+    unit.type = unit_type->display_name();
+    unit.gyro = model->gyro;
+    unit.acc = model->acc;
+    for (const std::string& e : effects_) {
+      auto parsed = engine::sim::ParseTrueEffect(e);
+      if (!parsed.ok()) return parsed.status();
+      unit.effects.insert(unit.effects.end(), parsed->begin(), parsed->end());
+    }
+    for (const std::string& s : steps_) {
+      engine::sim::BiasStep step;
+      if (auto st = ParseFault(s, "--bias-step", &step.sensor, &step.axis, &step.time_s, &step.size); !st.ok()) {
+        return st;
+      }
+      unit.bias_steps.push_back(step);
+    }
+    for (const std::string& s : spikes_) {
+      engine::sim::Spike spike;
+      if (auto st = ParseFault(s, "--spike", &spike.sensor, &spike.axis, &spike.time_s, &spike.size); !st.ok()) {
+        return st;
+      }
+      unit.spikes.push_back(spike);
+    }
+    engine::sim::SimulationOptions options;
+    auto seed = Numbers(seed_, "--seed", 1);
+    auto rate = Numbers(rate_, "--rate", 1);
+    auto site = Numbers(site_, "--site", 3);
+    for (const auto* v : {&seed, &rate, &site}) {
+      if (!v->ok()) return v->status();
+    }
+    if ((*seed)[0] < 0 || (*seed)[0] != std::floor((*seed)[0])) {
+      return absl::InvalidArgumentError("--seed: a non-negative integer");
+    }
+    options.seed = static_cast<uint64_t>((*seed)[0]);
+    options.sample_rate_hz = (*rate)[0];
+    options.site = {(*site)[0] * kDeg, (*site)[1] * kDeg, (*site)[2]};
+    options.write_datasheet = !no_datasheet_;
+    unit.serial = serial_.empty() ? "SIM-" + std::to_string(options.seed) : serial_;
+    auto sim = engine::sim::Simulate(unit, *profile, options);
+    if (!sim.ok()) return sim.status();
+    if (auto st = benchrun::WriteBenchRunFile(sim->run, file_); !st.ok()) return st;
+    out << file_ << ": " << sim->run.samples.size() << " samples, " << sim->run.DurationS() << " s, profile "
+        << profile->name << ", unit " << unit.serial << " (" << unit.type << "), seed " << options.seed << "\n";
+    return absl::OkStatus();
+  }
+
+  std::string file_;
+  std::string profile_ = "full";
+  std::vector<std::string> effects_;
+  std::string seed_ = "1";
+  std::string rate_ = "50";
+  std::string unit_type_ = "INS-2000";
+  std::vector<std::string> params_;
+  std::vector<std::string> steps_;
+  std::vector<std::string> spikes_;
+  std::string serial_;
+  std::string site_ = "55.5672,38.15,125";
+  bool no_datasheet_ = false;
+};
+
+}  // namespace
+
+std::unique_ptr<Verb> MakeVerb_simulate() { return std::make_unique<SimulateVerb>(); }
+
+}  // namespace insdiag::cli
