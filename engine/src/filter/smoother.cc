@@ -72,6 +72,38 @@ absl::StatusOr<SmoothedPass> RunSmoother(const ForwardPass& fw, const SmootherOp
   UnpackSymmetric(fw.P_filt.row(K - 1).data(), n, P_f);
   record(K - 1, x_s, P_s, P_f);
 
+  // Error autocovariance: from each reference epoch l (the later time), carry
+  // w = Cov(e_k, e_l[i]) backwards with w ← C_k w while l − k ≤ max lag.
+  const int max_lag = std::min(options.error_acf_max_lag, K - 1);
+  const auto n_acf = options.error_acf_states.size();
+  out.error_autocovariance.assign(n_acf, std::vector<double>(static_cast<size_t>(std::max(max_lag, 0) + 1), 0.0));
+  std::vector<int> references;
+  if (n_acf > 0 && max_lag >= 0) {
+    const int count = std::max(1, std::min(options.error_acf_references, K - max_lag));
+    for (int r = 0; r < count; ++r) {
+      references.push_back(max_lag + static_cast<int>((static_cast<long>(K - 1 - max_lag) * r) / std::max(1, count - 1)));
+    }
+  }
+  // Active carriers: (reference epoch, state slot, vector).
+  struct Carrier {
+    int reference;
+    size_t slot;
+    Eigen::VectorXd w;
+  };
+  std::vector<Carrier> carriers;
+  const double per_reference = references.empty() ? 0.0 : 1.0 / static_cast<double>(references.size());
+  auto start_carriers = [&](int l, const Eigen::MatrixXd& Ps) {
+    for (int ref : references) {
+      if (ref != l) continue;
+      for (size_t slot = 0; slot < n_acf; ++slot) {
+        const int i = options.error_acf_states[slot];
+        carriers.push_back({l, slot, Ps.col(i)});
+        out.error_autocovariance[slot][0] += Ps(i, i) * per_reference;
+      }
+    }
+  };
+  start_carriers(K - 1, P_s);
+
   for (int k = K - 2; k >= 0; --k) {
     UnpackSymmetric(fw.P_filt.row(k).data(), n, P_f);
     UnpackSymmetric(fw.P_pred.row(k + 1).data(), n, P_p);
@@ -102,6 +134,14 @@ absl::StatusOr<SmoothedPass> RunSmoother(const ForwardPass& fw, const SmootherOp
     P_s = P_f + gain_T.transpose() * diff * gain_T;
     P_s = 0.5 * (P_s + P_s.transpose()).eval();
     record(k, x_s, P_s, P_f);
+    for (auto it = carriers.begin(); it != carriers.end();) {
+      it->w = gain_T.transpose() * it->w;  // Cov(e_k, e_l[i]) = C_k Cov(e_{k+1}, e_l[i])
+      const int epochs_apart = it->reference - k;
+      const int i = options.error_acf_states[it->slot];
+      out.error_autocovariance[it->slot][static_cast<size_t>(epochs_apart)] += it->w[i] * per_reference;
+      it = epochs_apart >= max_lag ? carriers.erase(it) : std::next(it);
+    }
+    start_carriers(k, P_s);
   }
   return out;
 }

@@ -34,6 +34,11 @@
 
 namespace insdiag::engine {
 
+// The smoother's error autocovariance of a state, for correlation processing:
+//   R_e(j) = mean over reference epochs l of Cov(e_{l−j}, e_l | all data),  e = x − x_{·|K}
+//   Cov(e_{l−j}, e_l) = C_{l−j} ⋯ C_{l−1} P_{l|K}[:, i]   (the RTS gains, taken backwards)
+// so that the autocovariance of the smoothed estimates, R_x̂ = R_x − R_e (the
+// smoothed estimate is orthogonal to its error), can be corrected to the process's.
 struct SmoothedPass {
   Eigen::MatrixXd x;         // K × n smoothed estimates x_{k|K}
   Eigen::MatrixXd variance;  // K × n diagonal of P_{k|K}
@@ -45,12 +50,19 @@ struct SmoothedPass {
   // Full smoothed covariance of the requested block of states, K rows of
   // PackedSize(block size) (empty when no block was requested).
   PackedCovariances block_covariance;
+  // R_e(j), j = 0 … max lag, per requested state (SmootherOptions::error_acf_states).
+  std::vector<std::vector<double>> error_autocovariance;
 };
 
 struct SmootherOptions {
   // States whose joint smoothed covariance to keep (e.g. the base drifts for NEES).
   int block_begin = 0;
   int block_size = 0;
+  // States whose smoother-error autocovariance to compute, up to this lag in
+  // epochs, averaged over this many reference epochs spread over the run.
+  std::vector<int> error_acf_states;
+  int error_acf_max_lag = 0;
+  int error_acf_references = 32;
 };
 
 absl::StatusOr<SmoothedPass> RunSmoother(const ForwardPass& forward, const SmootherOptions& options = {});

@@ -1,0 +1,579 @@
+#include "insdiag/engine/ident/correlation.h"
+
+#include <ceres/ceres.h>
+
+#include "insdiag/engine/stats/distributions.h"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace insdiag::engine::ident {
+namespace {
+
+// The covariance of the series under a family: a stationary part R(d) (d in
+// epochs) plus a random walk from the run's start, K(i, l) = q (min(i, l) + 1).
+struct SeriesCovariance {
+  std::vector<double> stationary;  // d = 0 … N−1
+  double walk_rate = 0.0;          // q per epoch
+};
+
+// E[R̂_j] for j in `lags` (see the header), exact for N samples.
+std::vector<double> ExpectedEstimator(const SeriesCovariance& K, int N, std::span<const int> lags) {
+  const auto n = static_cast<size_t>(N);
+  // a_i for the stationary part via prefix sums S(m) = Σ_{d ≤ m} R(d).
+  std::vector<double> S(n);
+  double run = 0.0;
+  for (size_t d = 0; d < n; ++d) {
+    run += K.stationary[d];
+    S[d] = run;
+  }
+  std::vector<double> A(n + 1, 0.0);  // A[m+1] = Σ_{i ≤ m} a_i
+  const double q = K.walk_rate;
+  for (size_t i = 0; i < n; ++i) {
+    double a = (S[i] + S[n - 1 - i] - K.stationary[0]) / N;
+    if (q != 0.0) {
+      const double ip1 = static_cast<double>(i + 1);
+      a += q / N * (ip1 * (ip1 + 1.0) / 2.0 + static_cast<double>(n - 1 - i) * ip1);
+    }
+    A[i + 1] = A[i] + a;
+  }
+  const double b = A[n] / N;
+  std::vector<double> out;
+  out.reserve(lags.size());
+  for (int j : lags) {
+    const auto J = static_cast<size_t>(j);
+    const double count = static_cast<double>(n - J);
+    double diagonal = count * K.stationary[J];
+    if (q != 0.0) diagonal += q * count * (count + 1.0) / 2.0;  // Σ_{i<N−j} q (i+1)
+    const double a_sum = A[n - J] + (A[n] - A[J]);              // Σ a_i + Σ a_{i+j}
+    out.push_back((diagonal - a_sum + count * b) / N);
+  }
+  return out;
+}
+
+// Variance of the series' mean m under K: b = (1/N²) Σ Σ K(i, l).
+double MeanVariance(const SeriesCovariance& K, int N) {
+  double sum = 0.0;
+  const auto n = static_cast<size_t>(N);
+  for (size_t d = 0; d < n; ++d) sum += (d == 0 ? 1.0 : 2.0) * static_cast<double>(n - d) * K.stationary[d];
+  if (K.walk_rate != 0.0) {
+    // Σ_i Σ_l (min(i,l)+1) = Σ_{k=1}^{N} (2(N−k)+1) k
+    double w = 0.0;
+    for (size_t k = 1; k <= n; ++k) w += (2.0 * static_cast<double>(n - k) + 1.0) * static_cast<double>(k);
+    sum += K.walk_rate * w;
+  }
+  return sum / (static_cast<double>(N) * N);
+}
+
+struct FamilySpec {
+  CorrelationFamily family;
+  std::vector<std::string> names;  // parameters, all fitted as logarithms
+};
+
+std::vector<FamilySpec> Families() {
+  return {{CorrelationFamily::kWhite, {"sigma"}},
+          {CorrelationFamily::kExponential, {"sigma", "tau_s"}},
+          {CorrelationFamily::kExponentialCosine, {"sigma", "tau_s", "sigma2", "tau2_s", "period_s"}},
+          {CorrelationFamily::kRandomWalk, {"sigma", "tau_s", "density"}},
+          {CorrelationFamily::kTwoExponentials, {"sigma", "tau_s", "sigma2", "tau2_s"}}};
+}
+
+// The series' covariance under a family with parameters θ (natural units) —
+// the drift's own covariance less the smoother's error covariance.
+SeriesCovariance CovarianceOf(CorrelationFamily f, const double* p, int N, double dt,
+                              std::span<const double> error_acf) {
+  SeriesCovariance K;
+  K.stationary.assign(static_cast<size_t>(N), 0.0);
+  // Exponentials and the cosine by recurrence over the lags (one exp per term).
+  double first = 0.0, first_step = 0.0, second = 0.0, second_step = 0.0;
+  double c = 1.0, sn = 0.0, c_step = 1.0, s_step = 0.0;
+  switch (f) {
+    case CorrelationFamily::kWhite:
+      K.stationary[0] = p[0] * p[0];
+      break;
+    case CorrelationFamily::kExponential:
+    case CorrelationFamily::kExponentialPlusConstant:
+    case CorrelationFamily::kRandomWalk:
+      first = p[0] * p[0];
+      first_step = std::exp(-dt / p[1]);
+      break;
+    case CorrelationFamily::kExponentialCosine:
+      first = p[0] * p[0];
+      first_step = std::exp(-dt / p[1]);
+      second = p[2] * p[2];
+      second_step = std::exp(-dt / p[3]);
+      c_step = std::cos(2.0 * std::numbers::pi * dt / p[4]);
+      s_step = std::sin(2.0 * std::numbers::pi * dt / p[4]);
+      break;
+    case CorrelationFamily::kTwoExponentials:
+      first = p[0] * p[0];
+      first_step = std::exp(-dt / p[1]);
+      second = p[2] * p[2];
+      second_step = std::exp(-dt / p[3]);
+      break;
+  }
+  if (f != CorrelationFamily::kWhite) {
+    for (size_t d = 0; d < K.stationary.size(); ++d) {
+      K.stationary[d] = first + second * c;
+      first *= first_step;
+      second *= second_step;
+      if (f == CorrelationFamily::kExponentialCosine) {
+        const double next_c = c * c_step - sn * s_step;
+        sn = sn * c_step + c * s_step;
+        c = next_c;
+      }
+    }
+  }
+  for (size_t d = 0; d < K.stationary.size() && d < error_acf.size(); ++d) K.stationary[d] -= error_acf[d];
+  if (f == CorrelationFamily::kRandomWalk) K.walk_rate = p[2] * p[2] * dt;
+  return K;
+}
+
+// Whitened residuals L⁻¹ (R̂ − E[R̂]) on the lag grid, plus the mean's term.
+class WhitenedAcfResidual {
+ public:
+  WhitenedAcfResidual(CorrelationFamily family, std::vector<int> lags, Eigen::VectorXd data, Eigen::MatrixXd L,
+                      int N, double dt, std::vector<double> error_acf, double mean)
+      : family_(family),
+        lags_(std::move(lags)),
+        data_(std::move(data)),
+        L_(std::move(L)),
+        N_(N),
+        dt_(dt),
+        error_acf_(std::move(error_acf)),
+        mean_(mean) {}
+
+  // residual = L⁻¹ ([R̂_grid; m] − [E[R̂_grid](θ); 0]) with C = L Lᵀ the covariance of
+  // [R̂_grid; m] under the null; the mean's variance follows the family:
+  // (m / σ_m(θ)) replaces the mean's row scale.  θ = exp(log θ).
+  bool operator()(double const* const* log_params, double* residual) const {
+    const size_t k = Families()[static_cast<size_t>(family_)].names.size();
+    std::vector<double> p(k);
+    for (size_t i = 0; i < k; ++i) p[i] = std::exp(log_params[0][i]);
+    const SeriesCovariance K = CovarianceOf(family_, p.data(), N_, dt_, error_acf_);
+    const std::vector<double> expected = ExpectedEstimator(K, N_, lags_);
+    const auto G = static_cast<Eigen::Index>(lags_.size());
+    Eigen::VectorXd r(G);
+    for (Eigen::Index i = 0; i < G; ++i) r[i] = data_[i] - expected[static_cast<size_t>(i)];
+    const Eigen::VectorXd w = L_.triangularView<Eigen::Lower>().solve(r);
+    for (Eigen::Index i = 0; i < G; ++i) residual[i] = w[i];
+    residual[G] = mean_ / std::sqrt(std::max(MeanVariance(K, N_), 1e-300));
+    // Parameters far outside the data's range overflow: tell the solver the
+    // step failed rather than hand it NaNs.
+    for (Eigen::Index i = 0; i <= G; ++i) {
+      if (!std::isfinite(residual[i])) return false;
+    }
+    return true;
+  }
+
+ private:
+  CorrelationFamily family_;
+  std::vector<int> lags_;
+  Eigen::VectorXd data_;
+  Eigen::MatrixXd L_;
+  int N_;
+  double dt_;
+  std::vector<double> error_acf_;
+  double mean_;
+};
+
+}  // namespace
+
+const char* CorrelationFamilyName(CorrelationFamily f) {
+  switch (f) {
+    case CorrelationFamily::kWhite:
+      return "white";
+    case CorrelationFamily::kExponential:
+      return "exponential";
+    case CorrelationFamily::kExponentialCosine:
+      return "exponential-cosine";
+    case CorrelationFamily::kRandomWalk:
+      return "random walk";
+    case CorrelationFamily::kTwoExponentials:
+      return "sum of two exponentials";
+    case CorrelationFamily::kExponentialPlusConstant:
+      return "exponential plus constant";
+  }
+  return "";
+}
+
+absl::Status CorrelationOptions::Validate() const {
+  if (!(max_lag_in_tau > 0.0) || !(max_lag_fraction > 0.0 && max_lag_fraction < 1.0) || grid_lags < 4) {
+    return absl::InvalidArgumentError("correlation options: lags out of range");
+  }
+  return absl::OkStatus();
+}
+
+const FittedParameter* FamilyFit::Parameter(const std::string& name) const {
+  for (const FittedParameter& p : parameters) {
+    if (p.name == name) return &p;
+  }
+  return nullptr;
+}
+
+const FamilyFit* CorrelationAnalysis::Fit(CorrelationFamily f) const {
+  for (const FamilyFit& fit : fits) {
+    if (fit.family == f) return &fit;
+  }
+  return nullptr;
+}
+
+std::vector<double> SampleAutocovariance(std::span<const double> x, int max_lag) {
+  const auto n = static_cast<int>(x.size());
+  std::vector<double> out(static_cast<size_t>(std::max(0, max_lag) + 1), 0.0);
+  if (n == 0) return out;
+  double m = 0.0;
+  for (double v : x) m += v;
+  m /= n;
+  std::vector<double> c(x.size());
+  for (size_t i = 0; i < x.size(); ++i) c[i] = x[i] - m;
+  for (int j = 0; j <= max_lag && j < n; ++j) {
+    double s = 0.0;
+    for (int i = 0; i + j < n; ++i) s += c[static_cast<size_t>(i)] * c[static_cast<size_t>(i + j)];
+    out[static_cast<size_t>(j)] = s / n;
+  }
+  return out;
+}
+
+namespace {
+
+// Bartlett's covariance of R̂_u and R̂_v for a stationary series with autocovariance R.
+double Bartlett(const std::vector<double>& R, int N, int u, int v, int M) {
+  auto at = [&](int d) { d = std::abs(d); return d < static_cast<int>(R.size()) && d < N ? R[static_cast<size_t>(d)] : 0.0; };
+  double s = 0.0;
+  for (int m = -M; m <= M; ++m) s += at(m) * at(m + v - u) + at(m + v) * at(m - u);
+  return s / N;
+}
+
+struct Problem {
+  std::vector<int> lags;
+  Eigen::VectorXd data;
+  Eigen::MatrixXd L;  // Cholesky factor of C
+  std::vector<double> error_acf;
+  int N = 0;
+  double dt = 0.0;
+  double mean = 0.0;
+  double T = 0.0;
+};
+
+// The longest decay of a second-order drift's oscillation, in periods.
+constexpr double kMaxDecayInPeriods = 2.0;
+
+// Epochs per correlation time at which the series is analysed.
+constexpr int kEpochsPerCorrelationTime = 20;
+
+// Lags 0 … max spread evenly, `count` of them (distinct).
+std::vector<int> LagGrid(int max_lag, int count) {
+  std::vector<int> g;
+  for (int i = 0; i < count; ++i) {
+    const int lag = static_cast<int>(std::lround(static_cast<double>(max_lag) * i / (count - 1)));
+    if (g.empty() || lag != g.back()) g.push_back(lag);
+  }
+  return g;
+}
+
+// C over the grid from the exponential model (σ, τ) less the smoother's error.
+Eigen::MatrixXd GridCovariance(const Problem& pb, double sigma, double tau, std::vector<double>* stationary) {
+  const double p[2] = {sigma, tau};
+  *stationary = CovarianceOf(CorrelationFamily::kExponential, p, pb.N, pb.dt, pb.error_acf).stationary;
+  const int M = std::min(pb.N - 1, pb.lags.back() + static_cast<int>(6.0 * tau / pb.dt) + 1);
+  const auto G = static_cast<Eigen::Index>(pb.lags.size());
+  Eigen::MatrixXd C(G, G);
+  for (Eigen::Index a = 0; a < G; ++a) {
+    for (Eigen::Index b = a; b < G; ++b) {
+      C(a, b) = C(b, a) = Bartlett(*stationary, pb.N, pb.lags[static_cast<size_t>(a)], pb.lags[static_cast<size_t>(b)], M);
+    }
+  }
+  // Loading the diagonal by a part in 10⁹ keeps the factorisation defined when
+  // neighbouring lags are almost perfectly correlated.
+  C.diagonal().array() += 1e-9 * C.diagonal().mean();
+  return C;
+}
+
+// Fits `family` from `start` (natural units); parameters listed in `fixed`
+// stay at their start values. Covariance of the free logarithms from the
+// whitened Jacobian, (JᵀJ)⁻¹, when it is well conditioned.
+FamilyFit FitFamily(const Problem& pb, CorrelationFamily family, std::vector<double> start,
+                    const std::vector<int>& fixed = {}) {
+  const auto spec = Families()[static_cast<size_t>(family)];
+  const int k = static_cast<int>(spec.names.size());
+  std::vector<double> theta(static_cast<size_t>(k));
+  for (int i = 0; i < k; ++i) theta[static_cast<size_t>(i)] = std::log(std::max(start[static_cast<size_t>(i)], 1e-300));
+
+  ceres::Problem problem;
+  auto* cost = new ceres::DynamicNumericDiffCostFunction<WhitenedAcfResidual, ceres::CENTRAL>(
+      new WhitenedAcfResidual(family, pb.lags, pb.data, pb.L, pb.N, pb.dt, pb.error_acf, pb.mean));
+  cost->AddParameterBlock(k);
+  cost->SetNumResiduals(static_cast<int>(pb.lags.size()) + 1);
+  problem.AddResidualBlock(cost, nullptr, theta.data());
+  if (!fixed.empty()) problem.SetManifold(theta.data(), new ceres::SubsetManifold(k, fixed));
+  // Correlation times between a tenth of an epoch and a hundred runs.
+  for (int i = 0; i < k; ++i) {
+    const std::string& name = spec.names[static_cast<size_t>(i)];
+    if (std::find(fixed.begin(), fixed.end(), i) != fixed.end()) continue;
+    if (name.find("tau") != std::string::npos || name == "period_s") {
+      problem.SetParameterLowerBound(theta.data(), i, std::log(0.1 * pb.dt));
+      problem.SetParameterUpperBound(theta.data(), i, std::log(100.0 * pb.T));
+    }
+  }
+  ceres::Solver::Options so;
+  so.max_num_iterations = 200;
+  so.function_tolerance = 1e-12;
+  so.parameter_tolerance = 1e-12;
+  so.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+
+  FamilyFit fit;
+  fit.family = family;
+  fit.parameter_count = k - static_cast<int>(fixed.size());
+  fit.converged = summary.IsSolutionUsable();
+  fit.chi2 = 2.0 * summary.final_cost;
+  // Jacobian at the solution (in the full logarithmic parameters).
+  Eigen::MatrixXd cov = Eigen::MatrixXd::Constant(k, k, std::numeric_limits<double>::quiet_NaN());
+  {
+    double cost_value = 0.0;
+    std::vector<double> residuals;
+    ceres::CRSMatrix crs;
+    ceres::Problem::EvaluateOptions eo;
+    problem.Evaluate(eo, &cost_value, &residuals, nullptr, &crs);
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, k);
+    for (int r = 0; r < crs.num_rows; ++r) {
+      for (int idx = crs.rows[static_cast<size_t>(r)]; idx < crs.rows[static_cast<size_t>(r) + 1]; ++idx) {
+        J(r, crs.cols[static_cast<size_t>(idx)]) = crs.values[static_cast<size_t>(idx)];
+      }
+    }
+    std::vector<int> free_index;
+    for (int i = 0; i < k; ++i) {
+      if (std::find(fixed.begin(), fixed.end(), i) == fixed.end()) free_index.push_back(i);
+    }
+    Eigen::MatrixXd Jf(J.rows(), static_cast<Eigen::Index>(free_index.size()));
+    for (size_t c = 0; c < free_index.size(); ++c) Jf.col(static_cast<Eigen::Index>(c)) = J.col(free_index[c]);
+    const Eigen::MatrixXd info = Jf.transpose() * Jf;
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(info);
+    const auto& sv = svd.singularValues();
+    // A direction the data do not determine leaves the standard errors unknown.
+    if (sv.size() > 0 && sv(sv.size() - 1) > 1e-12 * sv(0)) {
+      const Eigen::MatrixXd inv = info.inverse();
+      for (size_t a = 0; a < free_index.size(); ++a) {
+        for (size_t b = 0; b < free_index.size(); ++b) {
+          cov(free_index[a], free_index[b]) = inv(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b));
+        }
+      }
+    }
+  }
+  for (int i = 0; i < k; ++i) {
+    const double v = std::exp(theta[static_cast<size_t>(i)]);
+    const double se_log = std::sqrt(cov(i, i));
+    fit.parameters.push_back({spec.names[static_cast<size_t>(i)], v, v * se_log, v * std::exp(-1.96 * se_log),
+                              v * std::exp(1.96 * se_log)});
+  }
+  std::vector<double> natural(static_cast<size_t>(k));
+  for (int i = 0; i < k; ++i) natural[static_cast<size_t>(i)] = std::exp(theta[static_cast<size_t>(i)]);
+  const SeriesCovariance K = CovarianceOf(family, natural.data(), pb.N, pb.dt, pb.error_acf);
+  std::vector<int> all(static_cast<size_t>(pb.lags.back() + 1));
+  for (size_t j = 0; j < all.size(); ++j) all[j] = static_cast<int>(j);
+  fit.expected = ExpectedEstimator(K, pb.N, all);
+  return fit;
+}
+
+std::vector<double> LogSpaced(double lo, double hi, int count) {
+  std::vector<double> v;
+  if (!(hi > lo)) return {lo};
+  for (int i = 0; i < count; ++i) v.push_back(lo * std::pow(hi / lo, static_cast<double>(i) / (count - 1)));
+  return v;
+}
+
+// The profiled likelihood-ratio test of an alternative whose shape parameters
+// vanish under the exponential: each grid point fixes them and frees one
+// amplitude; the best point is then refitted with everything free for the
+// reported magnitudes.
+FamilyFit ProfiledAlternative(const Problem& pb, CorrelationFamily family, const FamilyFit& exponential,
+                              const std::vector<std::vector<double>>& grid_starts, const std::vector<int>& shape) {
+  double best_chi2 = std::numeric_limits<double>::infinity();
+  const std::vector<double>* best_start = nullptr;
+  for (const auto& start : grid_starts) {
+    const FamilyFit f = FitFamily(pb, family, start, shape);
+    if (f.converged && f.chi2 < best_chi2) {
+      best_chi2 = f.chi2;
+      best_start = &start;
+    }
+  }
+  FamilyFit out;
+  out.family = family;
+  if (best_start == nullptr) return out;
+  out = FitFamily(pb, family, *best_start);
+  const FittedParameter* decay = out.Parameter("tau2_s");
+  const FittedParameter* period = out.Parameter("period_s");
+  const bool left_family = decay != nullptr && period != nullptr && decay->value > kMaxDecayInPeriods * period->value;
+  if (!out.converged || out.chi2 > best_chi2 || left_family) {
+    // Keep the grid's point when the free fit wanders off.
+    out = FitFamily(pb, family, *best_start, shape);
+    out.parameter_count += static_cast<int>(shape.size());
+  }
+  out.lr_statistic = std::max(0.0, exponential.chi2 - best_chi2);
+  out.lr_dof = 1;
+  out.lr_p_value = std::min(
+      1.0, stats::ChiSquareSurvival(out.lr_statistic, 1.0) * static_cast<double>(grid_starts.size()));
+  return out;
+}
+
+}  // namespace
+
+absl::StatusOr<CorrelationAnalysis> AnalyseCorrelation(std::span<const double> series,
+                                                       std::span<const double> series_error_acf, double epoch_dt,
+                                                       const CorrelationOptions& options) {
+  if (auto st = options.Validate(); !st.ok()) return st;
+  if (!(epoch_dt > 0.0)) return absl::InvalidArgumentError("correlation processing: epoch interval must be positive");
+  // Work at an epoch spacing of about τ/20 (τ from where the ACF falls by e):
+  // the estimator is the same at any spacing, and lags finer than that add
+  // little about a drift but cost every evaluation of the fit.
+  int decimation = 1;
+  {
+    const auto raw = SampleAutocovariance(series, static_cast<int>(options.max_lag_fraction * static_cast<double>(series.size())));
+    const double e0 = series_error_acf.empty() ? 0.0 : series_error_acf[0];
+    for (size_t j = 1; j < raw.size(); ++j) {
+      const double ej = j < series_error_acf.size() ? series_error_acf[j] : 0.0;
+      if (raw[j] + ej <= (raw[0] + e0) / std::numbers::e) {
+        decimation = std::max(1, static_cast<int>(j) / kEpochsPerCorrelationTime);
+        break;
+      }
+    }
+    // Keep enough epochs for the lag grid (see the minimum below).
+    const int most = static_cast<int>(series.size()) / (8 * options.grid_lags);
+    decimation = std::max(1, std::min(decimation, most));
+  }
+  std::vector<double> smoothed;
+  for (size_t i = 0; i < series.size(); i += static_cast<size_t>(decimation)) smoothed.push_back(series[i]);
+  std::vector<double> error_acf;
+  for (size_t j = 0; j < series_error_acf.size(); j += static_cast<size_t>(decimation)) {
+    error_acf.push_back(series_error_acf[j]);
+  }
+  const double dt = epoch_dt * decimation;
+  const int N = static_cast<int>(smoothed.size());
+  if (N < 4 * options.grid_lags) {
+    return absl::FailedPreconditionError("correlation processing needs at least " +
+                                         std::to_string(4 * options.grid_lags) + " epochs");
+  }
+  CorrelationAnalysis out;
+  out.dt_s = dt;
+  out.n = N;
+  const int capacity = static_cast<int>(options.max_lag_fraction * N);
+  const std::vector<double> acf_full = SampleAutocovariance(smoothed, capacity);
+  for (double v : smoothed) out.mean += v / N;
+  auto error_at = [&](int j) { return j < static_cast<int>(error_acf.size()) ? error_acf[static_cast<size_t>(j)] : 0.0; };
+
+  // Start: σ² from the corrected zero lag, τ where the corrected ACF falls by e.
+  const double r0 = acf_full[0] + error_at(0);
+  if (!(r0 > 0.0)) return absl::FailedPreconditionError("correlation processing: the series has no variance");
+  int fall = capacity;
+  for (int j = 1; j <= capacity; ++j) {
+    if (acf_full[static_cast<size_t>(j)] + error_at(j) <= r0 / std::numbers::e) {
+      fall = j;
+      break;
+    }
+  }
+  double sigma = std::sqrt(r0);
+  double tau = std::max(1.0, static_cast<double>(fall)) * dt;
+
+  Problem pb;
+  pb.N = N;
+  pb.dt = dt;
+  pb.mean = out.mean;
+  pb.T = N * dt;
+  pb.error_acf.assign(error_acf.begin(), error_acf.end());
+  std::vector<double> stationary;
+  FamilyFit exponential;
+  // Iterate: the lag range and Bartlett's covariance follow the exponential fit.
+  for (int pass = 0; pass < 3; ++pass) {
+    const int max_lag = std::clamp(static_cast<int>(options.max_lag_in_tau * tau / dt), options.grid_lags, capacity);
+    pb.lags = LagGrid(max_lag, options.grid_lags);
+    pb.data.resize(static_cast<Eigen::Index>(pb.lags.size()));
+    for (size_t i = 0; i < pb.lags.size(); ++i) pb.data[static_cast<Eigen::Index>(i)] = acf_full[static_cast<size_t>(pb.lags[i])];
+    const Eigen::MatrixXd C = GridCovariance(pb, sigma, tau, &stationary);
+    const Eigen::LLT<Eigen::MatrixXd> llt(C);
+    if (llt.info() != Eigen::Success) return absl::InternalError("correlation processing: covariance not positive definite");
+    pb.L = llt.matrixL();
+    exponential = FitFamily(pb, CorrelationFamily::kExponential, {sigma, tau});
+    const double new_tau = exponential.parameters[1].value;
+    sigma = exponential.parameters[0].value;
+    const bool settled = std::abs(std::log(new_tau / tau)) < 0.05;
+    tau = new_tau;
+    if (settled && pass > 0) break;
+  }
+  out.acf.assign(acf_full.begin(), acf_full.begin() + pb.lags.back() + 1);
+  out.error_acf.resize(out.acf.size());
+  for (size_t j = 0; j < out.acf.size(); ++j) out.error_acf[j] = error_at(static_cast<int>(j));
+  {
+    const int M = std::min(N - 1, pb.lags.back() + static_cast<int>(6.0 * tau / dt) + 1);
+    out.acf_band.resize(out.acf.size());
+    for (size_t j = 0; j < out.acf.size(); ++j) {
+      out.acf_band[j] = 1.96 * std::sqrt(std::max(0.0, Bartlett(stationary, N, static_cast<int>(j), static_cast<int>(j), M)));
+    }
+  }
+
+  // Every family against the same data and covariance.
+  out.fits.push_back(FitFamily(pb, CorrelationFamily::kWhite, {std::sqrt(r0)}));
+  out.fits.push_back(exponential);
+  const double T = pb.T;
+  const double lag_span = pb.lags.back() * dt;
+  {
+    // Cosine term: a damped oscillation the lags show at least three times —
+    // periods from four grid spacings (what the grid resolves) to a third of
+    // the lag span, decays of half a period to kMaxDecayInPeriods; σ₂ free.
+    // Slower, barely damped waves are what the sample ACF of any drift shows
+    // at lags of several τ, not a second-order drift.
+    std::vector<std::vector<double>> grid;
+    const double grid_spacing = lag_span / static_cast<double>(pb.lags.size() - 1);
+    for (double period : LogSpaced(4.0 * grid_spacing, std::min(T / 4.0, lag_span / 3.0), 8)) {
+      for (double decay : {0.5, kMaxDecayInPeriods}) grid.push_back({sigma, tau, 0.5 * sigma, decay * period, period});
+    }
+    out.fits.push_back(ProfiledAlternative(pb, CorrelationFamily::kExponentialCosine, exponential, grid, {3, 4}));
+  }
+  {
+    // A second, longer correlation time from 3τ to a hundred runs; σ₂ free.
+    std::vector<std::vector<double>> grid;
+    for (double tau2 : LogSpaced(3.0 * tau, 100.0 * T, 6)) grid.push_back({sigma, tau, 0.5 * sigma, tau2});
+    out.fits.push_back(ProfiledAlternative(pb, CorrelationFamily::kTwoExponentials, exponential, grid, {3}));
+  }
+  {
+    FamilyFit walk = FitFamily(pb, CorrelationFamily::kRandomWalk, {sigma, tau, sigma / std::sqrt(2.0 * T)});
+    walk.lr_statistic = std::max(0.0, exponential.chi2 - walk.chi2);
+    walk.lr_dof = 1;
+    walk.lr_p_value = stats::ChiSquareSurvival(walk.lr_statistic, 1.0);
+    out.fits.push_back(walk);
+  }
+  {
+    // Exponential plus constant: the constant frees the mean, whose term leaves χ².
+    FamilyFit constant = exponential;
+    constant.family = CorrelationFamily::kExponentialPlusConstant;
+    const double p[2] = {exponential.parameters[0].value, exponential.parameters[1].value};
+    const double mean_sd = std::sqrt(std::max(MeanVariance(CovarianceOf(CorrelationFamily::kExponential, p, N, dt,
+                                                                        pb.error_acf), N), 0.0));
+    const double mean_term = mean_sd > 0.0 ? out.mean / mean_sd : 0.0;
+    constant.chi2 = exponential.chi2 - mean_term * mean_term;
+    constant.parameter_count = exponential.parameter_count + 1;
+    constant.parameters.push_back({"constant", out.mean, mean_sd, out.mean - 1.96 * mean_sd, out.mean + 1.96 * mean_sd});
+    constant.lr_statistic = mean_term * mean_term;
+    constant.lr_dof = 1;
+    constant.lr_p_value = stats::ChiSquareSurvival(constant.lr_statistic, 1.0);
+    out.fits.push_back(constant);
+  }
+  const double log_n = std::log(static_cast<double>(pb.lags.size() + 1));
+  double best_aic = std::numeric_limits<double>::infinity();
+  for (FamilyFit& f : out.fits) {
+    f.aic = f.chi2 + 2.0 * f.parameter_count;
+    f.bic = f.chi2 + f.parameter_count * log_n;
+    if (f.converged && f.bic < best_aic) {
+      best_aic = f.bic;
+      out.best = f.family;
+    }
+  }
+  out.unresolved_fraction = error_at(0) / (sigma * sigma);
+  out.resolved = exponential.converged && out.unresolved_fraction <= options.max_unresolved_fraction;
+  return out;
+}
+
+}  // namespace insdiag::engine::ident
