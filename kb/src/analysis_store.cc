@@ -16,12 +16,12 @@ namespace {
 using internal::Micros;
 
 constexpr char kColumns[] =
-    "a.analysis_id::text, a.run_id::text, a.state, a.request, a.progress_fraction, a.progress_stage, "
+    "a.analysis_id::text, a.run_id::text, a.state, encode(a.request, 'hex'), a.progress_fraction, a.progress_stage, "
     "coalesce(a.error_code, 0), coalesce(a.error_message, ''), a.attempts, u.serial, ";
 
 std::string SelectAnalyses(bool include_report) {
   return absl::StrCat("SELECT ", kColumns, Micros("a.create_time"), ", ", Micros("a.update_time"), ", ",
-                      include_report ? "a.report" : "NULL::bytea",
+                      include_report ? "encode(a.report, 'hex')" : "NULL::text",
                       ", a.create_time::text FROM analyses a JOIN units u ON u.unit_id = a.unit_id ");
 }
 
@@ -35,7 +35,8 @@ v1::Analysis AnalysisFromRow(const Result& rows, int row) {
   v1::Analysis a;
   a.set_name(absl::StrCat("analyses/", rows.String(row, 0)));
   a.set_run(absl::StrCat("runs/", rows.String(row, 1)));
-  a.mutable_model()->ParseFromString(std::string(rows.Get(row, 3)));
+  // bytea travels as hex text here: the rest of the row is text.
+  a.mutable_model()->ParseFromString(absl::HexStringToBytes(rows.String(row, 3)));
   a.set_state(StateOf(rows.Get(row, 2)));
   a.mutable_progress()->set_fraction(internal::DoubleOr0(rows, row, 4));
   a.mutable_progress()->set_stage(rows.String(row, 5));
@@ -47,7 +48,7 @@ v1::Analysis AnalysisFromRow(const Result& rows, int row) {
   a.set_unit(absl::StrCat("units/", rows.String(row, 9)));
   *a.mutable_create_time() = internal::TimestampOfMicros(internal::IntOr0(rows, row, 10));
   *a.mutable_update_time() = internal::TimestampOfMicros(internal::IntOr0(rows, row, 11));
-  if (!rows.IsNull(row, 12)) a.mutable_report()->ParseFromString(std::string(rows.Get(row, 12)));
+  if (!rows.IsNull(row, 12)) a.mutable_report()->ParseFromString(absl::HexStringToBytes(rows.String(row, 12)));
   return a;
 }
 
@@ -241,14 +242,14 @@ absl::StatusOr<std::optional<ClaimedJob>> AnalysisStore::Claim(const std::string
       "progress_fraction = 0, progress_stage = 'queued for the engine' "
       "WHERE analysis_id = (SELECT analysis_id FROM analyses WHERE state = 'QUEUED' ORDER BY create_time "
       "FOR UPDATE SKIP LOCKED LIMIT 1) "
-      "RETURNING analysis_id::text, run_id::text, request, attempts",
+      "RETURNING analysis_id::text, run_id::text, encode(request, 'hex'), attempts",
       {Param::Text(owner), Param::Text(Millis(lease))});
   if (!rows.ok()) return rows.status();
   if (rows->rows() == 0) return std::optional<ClaimedJob>();
   ClaimedJob job;
   job.analysis_id = rows->String(0, 0);
   job.run_id = rows->String(0, 1);
-  job.request.ParseFromString(std::string(rows->Get(0, 2)));
+  job.request.ParseFromString(absl::HexStringToBytes(rows->String(0, 2)));
   job.attempt = static_cast<int>(internal::IntOr0(*rows, 0, 3));
   return std::optional<ClaimedJob>(std::move(job));
 }
