@@ -8,6 +8,7 @@
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <thread>
 
 #include "insdiag/kb/connection_pool.h"
 #include "insdiag/kb/migrations.h"
@@ -43,7 +44,26 @@ int main(int argc, char** argv) {
   app.add_option("--bind", options.bind_address, "Address to listen on")->capture_default_str();
   app.add_option("--migrations-dir", migrations_dir,
                  "Apply migrations from this directory instead of those built in");
+  const unsigned cores = std::thread::hardware_concurrency();
+  int workers = cores > 1 ? static_cast<int>(cores) - 1 : 1;
+  double lease_s = 30.0;
+  double fleet_refresh_s = 600.0;
+  app.add_option("--workers", workers, "Analysis worker threads (0: serve the API only; default: cores - 1, at least 1)")
+      ->capture_default_str();
+  app.add_option("--lease-seconds", lease_s,
+                 "Lease of a running analysis; a job whose worker died is taken up again after it")
+      ->capture_default_str();
+  app.add_option("--fleet-refresh-seconds", fleet_refresh_s,
+                 "How often the fleet statistics' materialised views are refreshed (0: never)")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
+  if (workers < 0 || lease_s <= 0 || fleet_refresh_s < 0) {
+    std::cerr << "insdiagd: --workers, --lease-seconds and --fleet-refresh-seconds must not be negative\n";
+    return 2;
+  }
+  options.workers.workers = workers;
+  options.workers.lease = std::chrono::milliseconds(static_cast<long>(lease_s * 1000));
+  options.workers.fleet_refresh = std::chrono::milliseconds(static_cast<long>(fleet_refresh_s * 1000));
 
   // SIGINT/SIGTERM are taken synchronously by sigwait below, after start-up;
   // blocked before any thread exists so that every thread inherits the mask.
@@ -84,7 +104,7 @@ int main(int argc, char** argv) {
   std::cout << "insdiagd: listening grpc=" << options.bind_address << ":" << (*server)->grpc_port()
             << " http=" << options.bind_address << ":" << (*server)->http_port() << " database="
             << (postgres ? "embedded:" + postgres->cluster_dir().string() : std::string("external"))
-            << std::endl;
+            << " workers=" << workers << std::endl;
 
   int signal_number = 0;
   sigwait(&stop_signals, &signal_number);

@@ -118,6 +118,33 @@ absl::Status Connection::ExecScript(std::string_view sql) {
   return Check(PQexec(conn_.get(), script.c_str()), sql).status();
 }
 
+absl::StatusOr<std::int64_t> Connection::CopyIn(std::string_view copy_sql,
+                                                absl::FunctionRef<bool(std::string&)> produce) {
+  const std::string statement(copy_sql);
+  {
+    Result started(PQexec(conn_.get(), statement.c_str()));
+    if (PQresultStatus(started.result_.get()) != PGRES_COPY_IN) return Check(started.result_.release(), copy_sql).status();
+  }
+  std::string buffer;
+  bool more = true;
+  while (more) {
+    buffer.clear();
+    more = produce(buffer);
+    if (!buffer.empty() &&
+        PQputCopyData(conn_.get(), buffer.data(), static_cast<int>(buffer.size())) != 1) {
+      return absl::UnavailableError(absl::StrCat("COPY: ", FirstLine(PQerrorMessage(conn_.get()))));
+    }
+  }
+  if (PQputCopyEnd(conn_.get(), nullptr) != 1) {
+    return absl::UnavailableError(absl::StrCat("COPY: ", FirstLine(PQerrorMessage(conn_.get()))));
+  }
+  auto done = Check(PQgetResult(conn_.get()), copy_sql);
+  // Drain: libpq wants PQgetResult called until it returns null.
+  while (PGresult* extra = PQgetResult(conn_.get())) PQclear(extra);
+  if (!done.ok()) return done.status();
+  return done->AffectedRows();
+}
+
 absl::Status Connection::InTransaction(absl::FunctionRef<absl::Status()> body) {
   if (auto begun = Exec("BEGIN"); !begun.ok()) return begun.status();
   absl::Status status = body();

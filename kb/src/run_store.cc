@@ -199,6 +199,15 @@ absl::StatusOr<std::string> InsertRun(Connection& db, const engine::BenchRun& ru
       "RETURNING unit_id",
       {Param::Text(meta.unit_serial), Param::TextOrNull(meta.unit_type)});
   if (!unit.ok()) return unit.status();
+  // A unit's modules are registered with it (migrations/0002_knowledge.sql):
+  // one current part per role, its serial unknown until the knowledge base learns it.
+  auto modules = db.Exec(
+      "INSERT INTO modules (unit_id, role, installed_time) "
+      "SELECT u.unit_id, r.role, u.create_time FROM units u CROSS JOIN module_roles r "
+      "WHERE u.unit_id = $1 AND NOT EXISTS (SELECT 1 FROM modules m WHERE m.unit_id = u.unit_id "
+      "AND m.role = r.role AND m.removed_time IS NULL)",
+      {Param::Text(unit->String(0, 0))});
+  if (!modules.ok()) return modules.status();
 
   const auto& sheet = meta.datasheet;
   auto inserted = db.Exec(

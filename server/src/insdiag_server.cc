@@ -7,7 +7,10 @@
 
 #include <chrono>
 
+#include "insdiag/api/unit_types.h"
+#include "insdiag/kb/diagnosis.h"
 #include "insdiag/kb/run_store.h"
+#include "insdiag/server/analysis_workers.h"
 #include "insdiag/server/grpc_services.h"
 #include "insdiag/server/rest_gateway.h"
 #include "insdiag/server/run_service.h"
@@ -20,18 +23,25 @@
 
 namespace insdiag::server {
 
-// What the gRPC server serves. Analyses, the knowledge base and fleet
-// statistics are the generated bases for now: every method answers
-// UNIMPLEMENTED, on both faces.
+// What the gRPC server serves, and the analysis workers.
 struct InsdiagServer::Services {
   Services(kb::ConnectionPool& pool, const Options& options)
-      : store(pool), runs(store, RunService::Options{options.max_upload_samples}), runs_grpc(runs) {}
+      : store(pool), runs(store, RunService::Options{options.max_upload_samples}), runs_grpc(runs),
+        analysis_store(pool), analyses(analysis_store, AnalysisService::Options{options.watch_poll}),
+        analyses_grpc(analyses), knowledge_store(pool), knowledge(knowledge_store), knowledge_grpc(knowledge),
+        fleet_store(pool), fleet_grpc(fleet_store), workers(pool, options.workers) {}
   kb::RunStore store;
   RunService runs;
   RunServiceGrpc runs_grpc;
-  v1::AnalysisService::Service analyses;
-  v1::KnowledgeService::Service knowledge;
-  v1::FleetService::Service fleet;
+  kb::AnalysisStore analysis_store;
+  AnalysisService analyses;
+  AnalysisServiceGrpc analyses_grpc;
+  kb::KnowledgeStore knowledge_store;
+  KnowledgeService knowledge;
+  KnowledgeServiceGrpc knowledge_grpc;
+  kb::FleetStore fleet_store;
+  FleetServiceGrpc fleet_grpc;
+  AnalysisWorkers workers;
 };
 
 InsdiagServer::InsdiagServer() = default;
@@ -39,6 +49,12 @@ InsdiagServer::InsdiagServer() = default;
 absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::ConnectionPool& pool, Options options) {
   std::unique_ptr<InsdiagServer> server(new InsdiagServer());
   server->services_ = std::make_unique<Services>(pool, options);
+  if (options.seed_knowledge_base) {
+    // The built-in unit types and failure modes, upserted idempotently.
+    const auto unit_types = api::BuiltinUnitTypes();
+    const auto catalogues = kb::BuiltinFailureModeCatalogues();
+    if (auto seeded = server->services_->knowledge_store.Seed(unit_types, catalogues); !seeded.ok()) return seeded;
+  }
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
@@ -46,9 +62,9 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
   builder.AddListeningPort(absl::StrCat(options.bind_address, ":", options.grpc_port),
                            grpc::InsecureServerCredentials(), &server->grpc_port_);
   builder.RegisterService(&server->services_->runs_grpc);
-  builder.RegisterService(&server->services_->analyses);
-  builder.RegisterService(&server->services_->knowledge);
-  builder.RegisterService(&server->services_->fleet);
+  builder.RegisterService(&server->services_->analyses_grpc);
+  builder.RegisterService(&server->services_->knowledge_grpc);
+  builder.RegisterService(&server->services_->fleet_grpc);
   server->grpc_ = builder.BuildAndStart();
   if (!server->grpc_ || server->grpc_port_ == 0) {
     return absl::UnavailableError(absl::StrCat("cannot serve gRPC on ", options.bind_address, ":", options.grpc_port));
@@ -72,11 +88,14 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
     return absl::UnavailableError(absl::StrCat("cannot serve HTTP on ", options.bind_address, ":", options.http_port));
   }
   server->http_thread_ = std::thread([http = server->http_.get()] { http->listen_after_bind(); });
+  server->services_->workers.Start();
   return server;
 }
 
 void InsdiagServer::Shutdown() {
   std::call_once(shutdown_once_, [this] {
+    // Workers first: they finish the analysis they run, then stop claiming.
+    if (services_) services_->workers.Stop();
     // HTTP first: its handlers call into the gRPC server.
     if (http_) {
       // stop() only stops a server that already listens: give the listening

@@ -206,13 +206,13 @@ TEST_F(RunsGrpcTest, GetListDeleteAndNotFound) {
   EXPECT_EQ(runs().GetRun(&bad_context, get, &gone).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
 }
 
-TEST_F(RunsGrpcTest, SketchedServicesAnswerUnimplemented) {
+TEST_F(RunsGrpcTest, AnalysisServiceRefusesAMalformedName) {
   auto analyses = v1::AnalysisService::NewStub(channel());
   grpc::ClientContext context;
   v1::GetAnalysisRequest request;
   request.set_name("analyses/a");
   v1::Analysis analysis;
-  EXPECT_EQ(analyses->GetAnalysis(&context, request, &analysis).error_code(), grpc::StatusCode::UNIMPLEMENTED);
+  EXPECT_EQ(analyses->GetAnalysis(&context, request, &analysis).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
 }
 
 }  // namespace

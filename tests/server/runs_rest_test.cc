@@ -147,15 +147,16 @@ TEST_F(RunsRestTest, SamplesStreamAsNewlineDelimitedJson) {
   EXPECT_EQ(last.samples_size(), 50);
 }
 
-TEST_F(RunsRestTest, HealthAndUnimplementedMethods) {
+TEST_F(RunsRestTest, HealthAndAnalysesOverRest) {
   auto health = http().Get("/healthz");
   ASSERT_TRUE(health);
   EXPECT_EQ(health->status, 200);
   EXPECT_EQ(health->body, R"({"status":"SERVING"})");
   auto analysis = http().Post("/v1/analyses", R"({"run":"runs/x"})", "application/json");
   ASSERT_TRUE(analysis);
-  EXPECT_EQ(analysis->status, 501);
-  EXPECT_THAT(analysis->body, HasSubstr(R"("status":"UNIMPLEMENTED")"));
+  EXPECT_EQ(analysis->status, 400);
+  EXPECT_THAT(analysis->body, HasSubstr(R"("status":"INVALID_ARGUMENT")"));
+  EXPECT_THAT(analysis->body, HasSubstr("analysis.run"));
 }
 
 }  // namespace

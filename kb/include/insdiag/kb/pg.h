@@ -93,6 +93,11 @@ class Connection {
   // Runs a script of several statements without parameters (migrations).
   absl::Status ExecScript(std::string_view sql);
 
+  // COPY … FROM STDIN in text format: `produce` appends rows (tab-separated,
+  // newline-terminated) to its buffer and returns false once it has no more.
+  // Returns the number of rows COPY reports.
+  absl::StatusOr<std::int64_t> CopyIn(std::string_view copy_sql, absl::FunctionRef<bool(std::string&)> produce);
+
   // Runs `body` inside BEGIN … COMMIT; rolls back when it fails.
   absl::Status InTransaction(absl::FunctionRef<absl::Status()> body);
 

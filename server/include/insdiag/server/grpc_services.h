@@ -2,7 +2,12 @@
 // transport-free services, with every error mapped by ToGrpcStatus.
 #pragma once
 
+#include "insdiag/kb/fleet_store.h"
+#include "insdiag/server/kb_services.h"
 #include "insdiag/server/run_service.h"
+#include "insdiag/v1/analyses.grpc.pb.h"
+#include "insdiag/v1/fleet.grpc.pb.h"
+#include "insdiag/v1/knowledge.grpc.pb.h"
 #include "insdiag/v1/runs.grpc.pb.h"
 
 namespace insdiag::server {
@@ -25,5 +30,63 @@ class RunServiceGrpc final : public v1::RunService::Service {
  private:
   RunService& runs_;
 };
+
+// Declares a unary method `Name(Request) → Response` of a gRPC service base.
+#define INSDIAG_UNARY(Name, Request, Response)                                             \
+  grpc::Status Name(grpc::ServerContext* context, const v1::Request* request, v1::Response* response) override
+
+class AnalysisServiceGrpc final : public v1::AnalysisService::Service {
+ public:
+  explicit AnalysisServiceGrpc(AnalysisService& analyses) : analyses_(analyses) {}
+  INSDIAG_UNARY(CreateAnalysis, CreateAnalysisRequest, Analysis);
+  INSDIAG_UNARY(GetAnalysis, GetAnalysisRequest, Analysis);
+  INSDIAG_UNARY(ListAnalyses, ListAnalysesRequest, ListAnalysesResponse);
+  INSDIAG_UNARY(CancelAnalysis, CancelAnalysisRequest, Analysis);
+  grpc::Status WatchAnalysis(grpc::ServerContext* context, const v1::WatchAnalysisRequest* request,
+                             grpc::ServerWriter<v1::Analysis>* writer) override;
+  grpc::Status ReadResidualSeries(grpc::ServerContext* context, const v1::ReadResidualSeriesRequest* request,
+                                  grpc::ServerWriter<v1::ResidualSeriesChunk>* writer) override;
+
+ private:
+  AnalysisService& analyses_;
+};
+
+class KnowledgeServiceGrpc final : public v1::KnowledgeService::Service {
+ public:
+  explicit KnowledgeServiceGrpc(KnowledgeService& knowledge) : knowledge_(knowledge) {}
+  INSDIAG_UNARY(GetUnitType, GetUnitTypeRequest, UnitType);
+  INSDIAG_UNARY(ListUnitTypes, ListUnitTypesRequest, ListUnitTypesResponse);
+  INSDIAG_UNARY(GetUnit, GetUnitRequest, Unit);
+  INSDIAG_UNARY(ListUnits, ListUnitsRequest, ListUnitsResponse);
+  INSDIAG_UNARY(ListModules, ListModulesRequest, ListModulesResponse);
+  INSDIAG_UNARY(ListFailureModes, ListFailureModesRequest, ListFailureModesResponse);
+  INSDIAG_UNARY(GetFailureMode, GetFailureModeRequest, FailureMode);
+  INSDIAG_UNARY(CreateFailureRecord, CreateFailureRecordRequest, FailureRecord);
+  INSDIAG_UNARY(ListFailureRecords, ListFailureRecordsRequest, ListFailureRecordsResponse);
+  INSDIAG_UNARY(CreateDiagnosis, CreateDiagnosisRequest, Diagnosis);
+  INSDIAG_UNARY(GetDiagnosis, GetDiagnosisRequest, Diagnosis);
+  INSDIAG_UNARY(ListDiagnoses, ListDiagnosesRequest, ListDiagnosesResponse);
+  INSDIAG_UNARY(ResolveDiagnosis, ResolveDiagnosisRequest, Diagnosis);
+
+ private:
+  KnowledgeService& knowledge_;
+};
+
+class FleetServiceGrpc final : public v1::FleetService::Service {
+ public:
+  explicit FleetServiceGrpc(kb::FleetStore& fleet) : fleet_(fleet) {}
+  INSDIAG_UNARY(GetFleetStatistics, GetFleetStatisticsRequest, FleetStatistics);
+  INSDIAG_UNARY(ListFailureCounts, ListFailureCountsRequest, ListFailureCountsResponse);
+  INSDIAG_UNARY(GetFailurePareto, GetFailureParetoRequest, FailurePareto);
+  INSDIAG_UNARY(GetWeibullFit, GetWeibullFitRequest, WeibullFit);
+  INSDIAG_UNARY(ListParameterTrends, ListParameterTrendsRequest, ListParameterTrendsResponse);
+  INSDIAG_UNARY(GetParameterTrend, GetParameterTrendRequest, ParameterTrend);
+  INSDIAG_UNARY(RankUnits, RankUnitsRequest, RankUnitsResponse);
+
+ private:
+  kb::FleetStore& fleet_;
+};
+
+#undef INSDIAG_UNARY
 
 }  // namespace insdiag::server

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "insdiag/kb/connection_pool.h"
+#include "insdiag/server/analysis_workers.h"
 
 namespace grpc {
 class Server;
@@ -31,6 +32,11 @@ class InsdiagServer {
     int grpc_port = 50051;  // 0: any free port (see grpc_port())
     int http_port = 8080;   // 0: any free port (see http_port())
     std::size_t max_upload_samples = 20'000'000;
+    // The analysis worker pool (analysis_workers.h): workers, lease, poll, fleet-view refresh.
+    AnalysisWorkers::Options workers;
+    std::chrono::milliseconds watch_poll{250};
+    // Upsert the built-in unit types and failure modes at start.
+    bool seed_knowledge_base = true;
   };
 
   // `pool` must outlive the server. UNAVAILABLE when a port cannot be bound.

@@ -1,0 +1,121 @@
+// Diagnosis: an analysis's evidence matched against a unit type's failure
+// modes (docs/DIAGNOSIS.md). Pure functions: report, unit type, modes and
+// fleet counts in; ranked hypotheses and modules out. No database here.
+//
+// Evidence. For each identified parameter p with a nominal value v₀ and
+// tolerance T in the unit type:
+//   positive quantities (σ, τ, ARW, VRW):  x = ln(v/v₀),  s_m = se/v          ("log_ratio")
+//   the rest (effects, nominally 0):       x = (v − v₀)/T, s_m = se/T          ("tolerance")
+// For each identifiable effect candidate (absent from the model): its
+// estimate the same way when the unit type has a tolerance for it, else its
+// standard score x = estimate/se, s_m = 0 ("z"). An absent, identifiable,
+// non-significant candidate is evidence that the effect is not there: its
+// estimate near 0 with its standard error counts against modes predicting it.
+// Healthy units scatter with s_h: `healthy_tolerance_sd`, a fraction of
+// ln(1 + T/v₀) on the log scale, `healthy_z_sd` for standard scores.
+//
+// Likelihood of the evidence under a hypothesis (products over terms):
+//   healthy  every term  N(x; 0, s_h² + s_m²)
+//   unknown  every term  (1 − ε) N(x; 0, s_h² + s_m²) + ε Cauchy(x; 0, √(b² + s_m²))
+//   mode m   its signature's terms as below; every other term as under `unknown`
+// A signature term with expected change μ, spread s and direction d:
+//   single term or family of independent terms, per term j:
+//     q · avg_{sign ∈ d} N(x_j; sign·μ, s² + s_h,j² + s_m,j²) + (1 − q) N(x_j; 0, s_h,j² + s_m,j²)
+//     (q = `fraction` of the family's terms expected to move; 1 for single terms)
+//   family moving together (`common`): one shared shift,
+//     avg_{sign ∈ d} N_k(x; sign·μ·1, s² 11ᵀ + diag(s_h,j² + s_m,j²))
+//     (Sherman–Morrison for the inverse and the determinant).
+//
+// Prior (a Gamma–Poisson rate per mode, Bayesian Data Analysis 3rd ed., §2.6):
+//   λ_m = (n_m + r_m H₀)/(T_fleet + H₀)   n_m confirmed failures of m in the fleet,
+//                                         T_fleet its operating hours, r_m the expert rate,
+//                                         H₀ the expert pseudo-exposure
+//   h = max(unit's operating hours since its previous analysis, minimum exposure)
+//   P(healthy) = (1 − u) e^{−Λh},  P(m) = (1 − u)(1 − e^{−Λh}) λ_m/Λ,  P(unknown) = u,  Λ = Σλ_m
+// Posterior ∝ prior × likelihood; a module's probability is the sum over its modes.
+// A report without evidence: healthy when its verdict is GOOD, else unknown.
+//
+// Refinement of a signature term by confirmed cases (normal model with a
+// conjugate prior, Bayesian Data Analysis 3rd ed., §3.3; the expert's (μ₀, s₀)
+// weighs as κ₀ pseudo-cases): with the cases' oriented values c_1..c_n,
+//   μ = (κ₀μ₀ + n c̄)/(κ₀ + n)
+//   s² = (κ₀ s₀² + Σ(c_i − c̄)² + κ₀ n (c̄ − μ₀)²/(κ₀ + n)) / (κ₀ + n)
+#pragma once
+
+#include <absl/status/statusor.h>
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "insdiag/v1/analyses.pb.h"
+#include "insdiag/v1/knowledge.pb.h"
+
+namespace insdiag::kb {
+
+enum class Scale { kLogRatio, kTolerance, kZ };
+
+// One observed quantity of the evidence.
+struct EvidenceTerm {
+  std::string name;  // "gyro_bias_gm.x.sigma", "gyro_scale_factor.y", "acc_bias_rw.z"
+  Scale scale = Scale::kTolerance;
+  double x = 0.0;               // observed change, in scale units
+  double measurement_sd = 0.0;  // its standard error, in scale units
+  double healthy_sd = 1.0;      // the spread of healthy units, in scale units
+  bool significant = false;     // effect candidates: Holm-adjusted p below the level
+  double tolerance_units = 0.0; // (v − v₀)/T, for the lines
+  std::string line;             // human-readable
+};
+
+struct Evidence {
+  std::vector<EvidenceTerm> terms;
+  v1::AnalysisReport::Verdict verdict = v1::AnalysisReport::VERDICT_UNSPECIFIED;
+  std::vector<std::string> notes;
+};
+
+// The unit types' failure modes as data (data/failure-modes/*.json, built in).
+std::vector<v1::FailureModeCatalogue> BuiltinFailureModeCatalogues();
+// The catalogue of one unit type (display or resource name); NOT_FOUND when none.
+absl::StatusOr<v1::FailureModeCatalogue> BuiltinFailureModeCatalogue(const std::string& unit_type);
+
+// The catalogue's templates expanded per axis into failure modes
+// (failureModes/{id}), signatures at the expert's values. INVALID_ARGUMENT
+// naming the mode and field for a malformed template.
+absl::StatusOr<std::vector<v1::FailureMode>> ExpandCatalogue(const v1::FailureModeCatalogue& catalogue);
+
+// The evidence of one report against the unit type's nominal values.
+Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType& unit_type,
+                            const v1::DiagnosisSettings& settings);
+
+// What the prior needs from the fleet and the unit.
+struct PriorInputs {
+  double exposure_hours = 0.0;        // the unit's hours since its previous analysis (or all its hours)
+  double fleet_exposure_hours = 0.0;  // operating hours of the unit type's fleet
+  std::map<std::string, std::int64_t> confirmed_failures;  // by failure mode name
+};
+
+// Ranks the hypotheses and modules. `modes` are the unit type's failure
+// modes (current signatures). The result's candidates[] (modules, healthy,
+// unknown) and hypotheses[] are sorted, most probable first; name, analysis
+// and times are left for the caller.
+v1::Diagnosis Diagnose(const Evidence& evidence, std::span<const v1::FailureMode> modes,
+                       const v1::DiagnosisSettings& settings, const PriorInputs& prior);
+
+// The prior rate λ_m per hour of one mode (see above).
+double ModeRatePerHour(const v1::FailureMode& mode, std::int64_t confirmed_failures, double fleet_exposure_hours,
+                       const v1::DiagnosisSettings& settings);
+
+// The oriented value of one signature term in a confirmed case's evidence
+// (UP: x, DOWN: −x, EITHER: |x|; families: the mean over their terms), or
+// nullopt when the evidence does not measure it.
+std::optional<double> CaseValue(const v1::Signature& term, const Evidence& evidence);
+
+// The term with change and spread refined by the confirmed cases' values
+// (expert values kept in expert_change / expert_spread).
+v1::Signature RefineSignature(const v1::Signature& term, std::span<const double> case_values,
+                              const v1::DiagnosisSettings& settings);
+
+}  // namespace insdiag::kb

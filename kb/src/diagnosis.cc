@@ -1,0 +1,507 @@
+#include "insdiag/kb/diagnosis.h"
+
+#include <absl/strings/match.h>
+#include <absl/strings/str_cat.h>
+#include <absl/strings/str_format.h>
+#include <absl/strings/str_join.h>
+#include <absl/strings/str_replace.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <set>
+
+#include "failure_mode_data.h"
+#include "insdiag/api/json.h"
+
+namespace insdiag::kb {
+namespace {
+
+constexpr char kHealthy[] = "healthy";
+constexpr char kUnknown[] = "unknown";
+constexpr char kModePrefix[] = "failureModes/";
+
+double LogNormalPdf(double x, double mean, double variance) {
+  const double d = x - mean;
+  return -0.5 * (std::log(2.0 * std::numbers::pi * variance) + d * d / variance);
+}
+
+double LogCauchyPdf(double x, double scale) {
+  return -std::log(std::numbers::pi * scale * (1.0 + (x / scale) * (x / scale)));
+}
+
+// log(e^a + e^b) without overflow.
+double LogAddExp(double a, double b) {
+  if (a == -INFINITY) return b;
+  if (b == -INFINITY) return a;
+  const double m = std::max(a, b);
+  return m + std::log(std::exp(a - m) + std::exp(b - m));
+}
+
+std::string ScaleName(Scale scale) {
+  switch (scale) {
+    case Scale::kLogRatio: return "log_ratio";
+    case Scale::kTolerance: return "tolerance";
+    case Scale::kZ: return "z";
+  }
+  return "";
+}
+
+double BroadScale(Scale scale, const v1::DiagnosisSettings& s) {
+  switch (scale) {
+    case Scale::kLogRatio: return s.broad_log_ratio();
+    case Scale::kTolerance: return s.broad_tolerance();
+    case Scale::kZ: return s.broad_z();
+  }
+  return s.broad_z();
+}
+
+double HealthyLog(const EvidenceTerm& t) {
+  return LogNormalPdf(t.x, 0.0, t.healthy_sd * t.healthy_sd + t.measurement_sd * t.measurement_sd);
+}
+
+// (1 − ε) healthy + ε broad: evidence off for a reason no hypothesis names.
+double RobustLog(const EvidenceTerm& t, const v1::DiagnosisSettings& s) {
+  const double eps = s.contamination();
+  const double b = BroadScale(t.scale, s);
+  return LogAddExp(std::log1p(-eps) + HealthyLog(t),
+                   std::log(eps) + LogCauchyPdf(t.x, std::sqrt(b * b + t.measurement_sd * t.measurement_sd)));
+}
+
+std::vector<double> Signs(v1::Signature::Direction d) {
+  if (d == v1::Signature::UP) return {1.0};
+  if (d == v1::Signature::DOWN) return {-1.0};
+  return {1.0, -1.0};
+}
+
+bool IsFamily(const std::string& parameter) { return absl::EndsWith(parameter, ".*"); }
+
+// Whether evidence term `name` is covered by signature parameter `pattern`:
+// the exact term, or for "family.*" a term "family.<axis>".
+bool Covers(const std::string& pattern, const std::string& name) {
+  if (!IsFamily(pattern)) return pattern == name;
+  const std::string family = pattern.substr(0, pattern.size() - 1);  // "family."
+  return absl::StartsWith(name, family) && name.find('.', family.size()) == std::string::npos;
+}
+
+std::vector<const EvidenceTerm*> Members(const v1::Signature& term, const Evidence& evidence) {
+  std::vector<const EvidenceTerm*> out;
+  for (const auto& t : evidence.terms) {
+    if (Covers(term.parameter(), t.name) && ScaleName(t.scale) == term.scale()) out.push_back(&t);
+  }
+  return out;
+}
+
+// log N_k(x; m·1, s² 11ᵀ + D) by Sherman–Morrison (D diagonal).
+double LogCommonShift(const std::vector<const EvidenceTerm*>& members, double mean, double spread) {
+  double log_det_d = 0.0, sum_inv = 0.0, quad_d = 0.0, lin = 0.0;
+  for (const auto* t : members) {
+    const double d = t->healthy_sd * t->healthy_sd + t->measurement_sd * t->measurement_sd;
+    const double r = t->x - mean;
+    log_det_d += std::log(d);
+    sum_inv += 1.0 / d;
+    quad_d += r * r / d;
+    lin += r / d;
+  }
+  const double s2 = spread * spread;
+  const double denom = 1.0 + s2 * sum_inv;
+  const double quad = quad_d - s2 * lin * lin / denom;
+  const double k = static_cast<double>(members.size());
+  return -0.5 * (k * std::log(2.0 * std::numbers::pi) + log_det_d + std::log(denom) + quad);
+}
+
+double LogSignatureTerm(const v1::Signature& term, const std::vector<const EvidenceTerm*>& members) {
+  const auto signs = Signs(term.direction());
+  const double log_share = -std::log(static_cast<double>(signs.size()));
+  if (term.common() && members.size() > 1) {
+    double total = -INFINITY;
+    for (double sign : signs) total = LogAddExp(total, log_share + LogCommonShift(members, sign * term.change(), term.spread()));
+    return total;
+  }
+  const double q = term.fraction() > 0.0 ? std::min(term.fraction(), 1.0) : 1.0;
+  double sum = 0.0;
+  for (const auto* t : members) {
+    const double var = term.spread() * term.spread() + t->healthy_sd * t->healthy_sd +
+                       t->measurement_sd * t->measurement_sd;
+    double moved = -INFINITY;
+    for (double sign : signs) moved = LogAddExp(moved, log_share + LogNormalPdf(t->x, sign * term.change(), var));
+    sum += q < 1.0 ? LogAddExp(std::log(q) + moved, std::log1p(-q) + HealthyLog(*t)) : moved;
+  }
+  return sum;
+}
+
+std::string Format(double v) { return absl::StrFormat("%.3g", v); }
+
+std::string SignedFormat(double v) { return absl::StrFormat("%+.2g", v); }
+
+// "gyro_scale_factor.{x,y,z}: +9.6, +9.5, +9.7 tolerance units" for a family.
+std::string FamilyLine(const v1::Signature& term, const std::vector<const EvidenceTerm*>& members) {
+  std::vector<std::string> axes, values;
+  bool all_significant = true;
+  int positive = 0;
+  for (const auto* t : members) {
+    axes.push_back(t->name.substr(t->name.rfind('.') + 1));
+    values.push_back(SignedFormat(t->x));
+    all_significant = all_significant && (t->scale != Scale::kTolerance || t->significant ||
+                                          std::abs(t->x) > 3.0 * std::max(t->measurement_sd, 1e-12));
+    positive += t->x > 0 ? 1 : 0;
+  }
+  const std::string family = term.parameter().substr(0, term.parameter().size() - 2);
+  const char* unit = term.scale() == "log_ratio" ? " (log-ratio to nominal)"
+                     : term.scale() == "z"       ? " standard errors"
+                                                 : " tolerance units";
+  std::string line = absl::StrCat(family, ".{", absl::StrJoin(axes, ","), "}: ", absl::StrJoin(values, ", "), unit);
+  if (members.size() > 1 && (positive == 0 || positive == static_cast<int>(members.size()))) {
+    absl::StrAppend(&line, ", all ", positive > 0 ? "positive" : "negative");
+  }
+  if (all_significant) absl::StrAppend(&line, ", significant");
+  return line;
+}
+
+std::vector<std::string> ModeEvidenceLines(const v1::FailureMode& mode, const Evidence& evidence) {
+  std::vector<std::string> lines;
+  for (const auto& term : mode.signature()) {
+    const auto members = Members(term, evidence);
+    if (members.empty()) {
+      lines.push_back(absl::StrCat(term.parameter(), ": not measured by this analysis"));
+      continue;
+    }
+    if (IsFamily(term.parameter()) && members.size() > 1) lines.push_back(FamilyLine(term, members));
+    for (const auto* t : members) lines.push_back(t->line);
+  }
+  return lines;
+}
+
+// The terms furthest from healthy, as lines.
+std::vector<std::string> LargestDeviations(const Evidence& evidence, std::size_t count) {
+  std::vector<const EvidenceTerm*> sorted;
+  for (const auto& t : evidence.terms) sorted.push_back(&t);
+  std::sort(sorted.begin(), sorted.end(), [](const EvidenceTerm* a, const EvidenceTerm* b) {
+    const auto z = [](const EvidenceTerm* t) {
+      return std::abs(t->x) / std::hypot(t->healthy_sd, t->measurement_sd);
+    };
+    return z(a) > z(b);
+  });
+  std::vector<std::string> lines;
+  for (std::size_t i = 0; i < std::min(count, sorted.size()); ++i) lines.push_back(sorted[i]->line);
+  return lines;
+}
+
+std::string ModuleOfHypothesis(const v1::Hypothesis& h) { return h.module(); }
+
+}  // namespace
+
+std::vector<v1::FailureModeCatalogue> BuiltinFailureModeCatalogues() {
+  std::vector<v1::FailureModeCatalogue> out;
+  for (const std::string_view json : kFailureModeJson) {
+    v1::FailureModeCatalogue catalogue;
+    // The files are part of the build and parsed by a unit test.
+    if (api::FromJson(json, &catalogue).ok()) out.push_back(std::move(catalogue));
+  }
+  return out;
+}
+
+absl::StatusOr<v1::FailureModeCatalogue> BuiltinFailureModeCatalogue(const std::string& unit_type) {
+  const std::string name = absl::StartsWith(unit_type, "unitTypes/") ? unit_type.substr(10) : unit_type;
+  for (auto& catalogue : BuiltinFailureModeCatalogues()) {
+    if (catalogue.unit_type() == name) return catalogue;
+  }
+  return absl::NotFoundError(absl::StrCat("no failure modes for unit type '", unit_type, "'"));
+}
+
+absl::StatusOr<std::vector<v1::FailureMode>> ExpandCatalogue(const v1::FailureModeCatalogue& catalogue) {
+  std::vector<v1::FailureMode> out;
+  std::set<std::string> seen;
+  for (const auto& tmpl : catalogue.modes()) {
+    const auto bad = [&](const std::string& field, const std::string& why) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("failure modes of ", catalogue.unit_type(), ": mode '", tmpl.id(), "': ", field, ": ", why));
+    };
+    if (tmpl.id().empty()) return bad("id", "is empty");
+    if (tmpl.rate_per_million_hours() <= 0) return bad("ratePerMillionHours", "must be positive");
+    if (tmpl.weibull_shape() <= 0 || tmpl.weibull_scale_hours() <= 0) return bad("weibull", "must be positive");
+    if (tmpl.signature().empty()) return bad("signature", "is empty");
+    std::vector<std::string> axes(tmpl.axes().begin(), tmpl.axes().end());
+    if (axes.empty()) axes.push_back("");
+    for (const std::string& axis : axes) {
+      const auto fill = [&](const std::string& text) {
+        return axis.empty() ? text : absl::StrReplaceAll(text, {{"{i}", axis}});
+      };
+      v1::FailureMode mode;
+      mode.set_name(absl::StrCat(kModePrefix, fill(tmpl.id())));
+      if (!seen.insert(mode.name()).second) return bad("id", "expands to a name used twice");
+      mode.set_module_role(fill(tmpl.module_role()));
+      mode.set_display_name(axis.empty() ? tmpl.display_name() : absl::StrCat(tmpl.display_name(), " (", axis, ")"));
+      mode.set_description(tmpl.description());
+      mode.set_unit_type(absl::StrCat("unitTypes/", catalogue.unit_type()));
+      mode.set_expert_rate_per_million_hours(tmpl.rate_per_million_hours());
+      mode.set_rate_per_million_hours(tmpl.rate_per_million_hours());
+      mode.set_weibull_shape(tmpl.weibull_shape());
+      mode.set_weibull_scale_hours(tmpl.weibull_scale_hours());
+      for (const auto& sig : tmpl.signature()) {
+        if (sig.scale() != "log_ratio" && sig.scale() != "tolerance" && sig.scale() != "z") {
+          return bad("signature.scale", absl::StrCat("'", sig.scale(), "' is not log_ratio, tolerance or z"));
+        }
+        if (sig.direction() == v1::Signature::DIRECTION_UNSPECIFIED) return bad("signature.direction", "is missing");
+        if (sig.change() < 0 || sig.spread() <= 0) {
+          return bad("signature", absl::StrCat(sig.parameter(), ": change must be ≥ 0 and spread > 0"));
+        }
+        v1::Signature* term = mode.add_signature();
+        *term = sig;
+        term->set_parameter(fill(sig.parameter()));
+        term->set_expert_change(sig.change());
+        term->set_expert_spread(sig.spread());
+        if (term->fraction() <= 0.0) term->set_fraction(1.0);
+      }
+      out.push_back(std::move(mode));
+    }
+  }
+  return out;
+}
+
+Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType& unit_type,
+                            const v1::DiagnosisSettings& settings) {
+  Evidence evidence;
+  evidence.verdict = report.verdict();
+  std::map<std::string, const v1::NominalParameter*> nominal;
+  for (const auto& p : unit_type.nominal()) nominal[p.name()] = &p;
+  std::set<std::string> seen;
+  std::vector<std::string> unknown_names;
+
+  // A value against its nominal, on the scale the nominal calls for.
+  const auto against_nominal = [&](const std::string& name, double value, double std_error,
+                                   const v1::NominalParameter& n, const std::string& unit) {
+    EvidenceTerm t;
+    t.name = name;
+    t.tolerance_units = (value - n.value()) / n.tolerance();
+    const double se = std::isfinite(std_error) && std_error > 0 ? std_error : 0.0;
+    const std::string u = unit.empty() ? n.unit() : unit;
+    const std::string se_text = se > 0 ? absl::StrCat(" ± ", Format(se)) : "";
+    if (n.value() > 0 && value > 0) {
+      t.scale = Scale::kLogRatio;
+      t.x = std::log(value / n.value());
+      t.measurement_sd = se / value;
+      t.healthy_sd = settings.healthy_log_ratio_fraction() * std::log1p(n.tolerance() / n.value());
+      t.line = absl::StrCat(name, " = ", Format(value), se_text, " ", u, ", ",
+                            absl::StrFormat("%.2g", value / n.value()), "× nominal ", Format(n.value()), " (",
+                            SignedFormat(t.tolerance_units), " tolerance units)");
+    } else {
+      t.scale = Scale::kTolerance;
+      t.x = t.tolerance_units;
+      t.measurement_sd = se / n.tolerance();
+      t.healthy_sd = settings.healthy_tolerance_sd();
+      t.line = absl::StrCat(name, " = ", SignedFormat(value), se_text, (u.empty() ? "" : " "), u, " (",
+                            SignedFormat(t.tolerance_units), " tolerance units, tolerance ", Format(n.tolerance()),
+                            ")");
+    }
+    return t;
+  };
+
+  for (const auto& p : report.identified()) {
+    const auto it = nominal.find(p.name());
+    if (it == nominal.end()) {
+      unknown_names.push_back(p.name());
+      continue;
+    }
+    if (!seen.insert(p.name()).second) continue;
+    EvidenceTerm t = against_nominal(p.name(), p.value(), p.std_error(), *it->second, p.unit());
+    absl::StrAppend(&t.line, ", identified (",
+                    v1::IdentifiedParameter::Method_Name(p.method()) , ")");
+    evidence.terms.push_back(std::move(t));
+  }
+  for (const auto& c : report.effect_candidates()) {
+    if (!c.identifiable() || !seen.insert(c.name()).second) continue;
+    const bool significant = c.p_value_holm() < settings.significance_level();
+    const std::string verdict =
+        significant ? absl::StrFormat(", significant (Holm p = %.2g)", c.p_value_holm())
+                    : absl::StrFormat(", not significant (Holm p = %.2g)", c.p_value_holm());
+    const auto it = nominal.find(c.name());
+    if (it != nominal.end()) {
+      EvidenceTerm t = against_nominal(c.name(), c.estimate(), c.std_error(), *it->second, c.unit());
+      t.significant = significant;
+      absl::StrAppend(&t.line, verdict);
+      evidence.terms.push_back(std::move(t));
+      continue;
+    }
+    EvidenceTerm t;
+    t.name = c.name();
+    t.scale = Scale::kZ;
+    t.x = c.std_error() > 0 ? c.estimate() / c.std_error()
+                            : std::copysign(std::sqrt(std::max(c.statistic(), 0.0)), c.estimate());
+    t.measurement_sd = 0.0;
+    t.healthy_sd = settings.healthy_z_sd();
+    t.significant = significant;
+    t.tolerance_units = 0.0;
+    t.line = absl::StrCat(c.name(), ": estimate ", Format(c.estimate()),
+                          c.std_error() > 0 ? absl::StrCat(" ± ", Format(c.std_error())) : "",
+                          c.unit().empty() ? "" : " ", c.unit(), " (", absl::StrFormat("%.1f", t.x),
+                          " standard errors)", verdict);
+    evidence.terms.push_back(std::move(t));
+  }
+  if (!unknown_names.empty()) {
+    evidence.notes.push_back(absl::StrCat("identified parameters without a nominal value in ", unit_type.name(),
+                                          " are not used: ", absl::StrJoin(unknown_names, ", ")));
+  }
+  if (evidence.terms.empty()) {
+    evidence.notes.push_back(
+        "the report carries no identified parameters or identifiable effect candidates: the diagnosis rests on "
+        "its verdict alone");
+  }
+  return evidence;
+}
+
+double ModeRatePerHour(const v1::FailureMode& mode, std::int64_t confirmed_failures, double fleet_exposure_hours,
+                       const v1::DiagnosisSettings& settings) {
+  const double h0 = settings.expert_pseudo_hours();
+  const double expert_per_hour = mode.expert_rate_per_million_hours() * 1e-6;
+  return (static_cast<double>(confirmed_failures) + expert_per_hour * h0) / (std::max(fleet_exposure_hours, 0.0) + h0);
+}
+
+v1::Diagnosis Diagnose(const Evidence& evidence, std::span<const v1::FailureMode> modes,
+                       const v1::DiagnosisSettings& settings, const PriorInputs& prior) {
+  v1::Diagnosis out;
+  for (const auto& note : evidence.notes) out.add_notes(note);
+
+  // Priors.
+  std::vector<double> rates;
+  double total_rate = 0.0;
+  for (const auto& mode : modes) {
+    const auto it = prior.confirmed_failures.find(mode.name());
+    rates.push_back(ModeRatePerHour(mode, it == prior.confirmed_failures.end() ? 0 : it->second,
+                                    prior.fleet_exposure_hours, settings));
+    total_rate += rates.back();
+  }
+  const double exposure = std::max(prior.exposure_hours, settings.minimum_exposure_hours());
+  const double u = settings.unknown_prior();
+  const double p_any = -std::expm1(-total_rate * exposure);
+
+  struct Scored {
+    v1::Hypothesis hypothesis;
+    std::vector<std::string> evidence;
+    double log_posterior = 0.0;
+  };
+  std::vector<Scored> scored;
+  const auto add = [&](const std::string& name, const std::string& module, double p, double log_likelihood,
+                       std::vector<std::string> lines) {
+    Scored s;
+    s.hypothesis.set_failure_mode(name);
+    s.hypothesis.set_module(module);
+    s.hypothesis.set_prior(p);
+    s.hypothesis.set_log_likelihood(log_likelihood);
+    s.evidence = std::move(lines);
+    s.log_posterior = std::log(p) + log_likelihood;
+    scored.push_back(std::move(s));
+  };
+
+  if (evidence.terms.empty()) {
+    // Without evidence the modes cannot be told apart: healthy or unknown, by the verdict.
+    const bool good = evidence.verdict == v1::AnalysisReport::GOOD;
+    // A finite stand-in for log 0 (JSON has no infinities).
+    add(kHealthy, kHealthy, (1.0 - u), good ? 0.0 : -1e300,
+        {good ? "verdict GOOD: the model fits the run" : "the verdict is not GOOD"});
+    add(kUnknown, kUnknown, u, 0.0,
+        {absl::StrCat("verdict ", v1::AnalysisReport::Verdict_Name(evidence.verdict),
+                      ", and no identified parameter or effect candidate to say why")});
+  } else {
+    double healthy_ll = 0.0, unknown_ll = 0.0;
+    std::vector<double> robust;
+    for (const auto& t : evidence.terms) {
+      healthy_ll += HealthyLog(t);
+      robust.push_back(RobustLog(t, settings));
+      unknown_ll += robust.back();
+    }
+    std::vector<std::string> healthy_lines = {absl::StrCat(evidence.terms.size(), " evidence terms; furthest from nominal:")};
+    for (auto& l : LargestDeviations(evidence, 3)) healthy_lines.push_back(std::move(l));
+    add(kHealthy, kHealthy, (1.0 - u) * (1.0 - p_any), healthy_ll, healthy_lines);
+    std::vector<std::string> unknown_lines = {"evidence no failure mode of this unit type explains:"};
+    for (auto& l : LargestDeviations(evidence, 3)) unknown_lines.push_back(std::move(l));
+    add(kUnknown, kUnknown, u, unknown_ll, unknown_lines);
+    for (std::size_t m = 0; m < modes.size(); ++m) {
+      const auto& mode = modes[m];
+      std::vector<bool> covered(evidence.terms.size(), false);
+      double ll = 0.0;
+      for (const auto& term : mode.signature()) {
+        const auto members = Members(term, evidence);
+        for (const auto* t : members) covered[static_cast<std::size_t>(t - evidence.terms.data())] = true;
+        if (!members.empty()) ll += LogSignatureTerm(term, members);
+      }
+      for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
+        if (!covered[i]) ll += robust[i];
+      }
+      const double p = total_rate > 0 ? (1.0 - u) * p_any * rates[m] / total_rate : 0.0;
+      add(mode.name(), mode.module_role(), p, ll, ModeEvidenceLines(mode, evidence));
+    }
+  }
+
+  // Normalise (log-sum-exp).
+  double log_total = -INFINITY;
+  for (const auto& s : scored) log_total = LogAddExp(log_total, s.log_posterior);
+  for (auto& s : scored) s.hypothesis.set_probability(std::exp(s.log_posterior - log_total));
+  std::stable_sort(scored.begin(), scored.end(), [](const Scored& a, const Scored& b) {
+    return a.hypothesis.probability() > b.hypothesis.probability();
+  });
+
+  // Modules: the sum over their modes; the most probable mode speaks for them.
+  std::map<std::string, std::pair<double, const Scored*>> modules;
+  for (const auto& s : scored) {
+    *out.add_hypotheses() = s.hypothesis;
+    auto& [p, best] = modules[ModuleOfHypothesis(s.hypothesis)];
+    p += s.hypothesis.probability();
+    if (best == nullptr) best = &s;
+  }
+  std::vector<std::pair<std::string, std::pair<double, const Scored*>>> ranked(modules.begin(), modules.end());
+  std::stable_sort(ranked.begin(), ranked.end(),
+                   [](const auto& a, const auto& b) { return a.second.first > b.second.first; });
+  for (const auto& [module, entry] : ranked) {
+    v1::Candidate* c = out.add_candidates();
+    c->set_module(module);
+    c->set_failure_mode(entry.second->hypothesis.failure_mode());
+    c->set_probability(entry.first);
+    for (const auto& line : entry.second->evidence) c->add_evidence(line);
+  }
+  return out;
+}
+
+std::optional<double> CaseValue(const v1::Signature& term, const Evidence& evidence) {
+  const auto members = Members(term, evidence);
+  if (members.empty()) return std::nullopt;
+  double sum = 0.0;
+  for (const auto* t : members) sum += t->x;
+  const double mean = sum / static_cast<double>(members.size());
+  switch (term.direction()) {
+    case v1::Signature::UP: return mean;
+    case v1::Signature::DOWN: return -mean;
+    default: break;
+  }
+  if (term.common()) return std::abs(mean);
+  double abs_sum = 0.0;
+  for (const auto* t : members) abs_sum += std::abs(t->x);
+  return abs_sum / static_cast<double>(members.size());
+}
+
+v1::Signature RefineSignature(const v1::Signature& term, std::span<const double> case_values,
+                              const v1::DiagnosisSettings& settings) {
+  v1::Signature out = term;
+  const double mu0 = term.expert_change();
+  const double s0 = term.expert_spread();
+  const double k0 = settings.expert_signature_weight();
+  const double n = static_cast<double>(case_values.size());
+  out.set_confirmed_cases(static_cast<int>(case_values.size()));
+  if (case_values.empty()) {
+    out.set_change(mu0);
+    out.set_spread(s0);
+    return out;
+  }
+  double mean = 0.0;
+  for (double c : case_values) mean += c;
+  mean /= n;
+  double ss = 0.0;
+  for (double c : case_values) ss += (c - mean) * (c - mean);
+  const double mu = (k0 * mu0 + n * mean) / (k0 + n);
+  const double s2 = (k0 * s0 * s0 + ss + k0 * n * (mean - mu0) * (mean - mu0) / (k0 + n)) / (k0 + n);
+  out.set_change(std::max(mu, 0.0));
+  out.set_spread(std::sqrt(s2));
+  return out;
+}
+
+}  // namespace insdiag::kb

@@ -1,0 +1,128 @@
+#include "store_util.h"
+
+#include <absl/strings/escaping.h>
+#include <absl/strings/match.h>
+#include <absl/strings/str_cat.h>
+#include <absl/strings/str_split.h>
+#include <absl/time/time.h>
+
+#include <algorithm>
+#include <cctype>
+
+namespace insdiag::kb::internal {
+
+absl::StatusOr<std::string> IdOf(const std::string& name, const std::string& prefix, const std::string& field) {
+  const std::string p = absl::StrCat(prefix, "/");
+  if (!absl::StartsWith(name, p) || name.size() == p.size() || name.find('/', p.size()) != std::string::npos) {
+    return absl::InvalidArgumentError(absl::StrCat(field, ": '", name, "' is not a name of the form ", prefix, "/{id}"));
+  }
+  return name.substr(p.size());
+}
+
+bool IsUuid(std::string_view text) {
+  return text.size() == 36 && std::all_of(text.begin(), text.end(), [](char c) {
+           return std::isxdigit(static_cast<unsigned char>(c)) || c == '-';
+         }) && text[8] == '-' && text[13] == '-' && text[18] == '-' && text[23] == '-';
+}
+
+absl::StatusOr<std::string> UuidOf(const std::string& name, const std::string& prefix, const std::string& field) {
+  auto id = IdOf(name, prefix, field);
+  if (!id.ok()) return id;
+  if (!IsUuid(*id)) {
+    return absl::InvalidArgumentError(absl::StrCat(field, ": '", name, "': the id after ", prefix, "/ is not a UUID"));
+  }
+  return id;
+}
+
+std::string Micros(const std::string& column) {
+  return absl::StrCat("(extract(epoch FROM ", column, ") * 1000000)::bigint");
+}
+
+google::protobuf::Timestamp TimestampOfMicros(std::int64_t micros) {
+  google::protobuf::Timestamp t;
+  std::int64_t seconds = micros / 1'000'000;
+  std::int64_t rest = micros % 1'000'000;
+  if (rest < 0) {
+    rest += 1'000'000;
+    --seconds;
+  }
+  t.set_seconds(seconds);
+  t.set_nanos(static_cast<int>(rest * 1000));
+  return t;
+}
+
+std::int64_t MicrosOf(const google::protobuf::Timestamp& t) { return t.seconds() * 1'000'000 + t.nanos() / 1000; }
+
+std::string TimestampText(const google::protobuf::Timestamp& t) {
+  return absl::FormatTime("%Y-%m-%d %H:%M:%E6S+00", absl::FromUnixMicros(MicrosOf(t)), absl::UTCTimeZone());
+}
+
+std::string EncodeToken(const std::string& a, const std::string& b) {
+  return absl::WebSafeBase64Escape(absl::StrCat(a, "|", b));
+}
+
+absl::StatusOr<std::pair<std::string, std::string>> DecodeToken(const std::string& token) {
+  std::string raw;
+  if (absl::WebSafeBase64Unescape(token, &raw)) {
+    const auto bar = raw.find('|');
+    if (bar != std::string::npos) return std::make_pair(raw.substr(0, bar), raw.substr(bar + 1));
+  }
+  return absl::InvalidArgumentError("page_token is not one this server issued");
+}
+
+int ClampPageSize(int page_size) { return std::clamp(page_size <= 0 ? 50 : page_size, 1, 1000); }
+
+std::int64_t IntOr0(const Result& rows, int row, int column) {
+  if (rows.IsNull(row, column)) return 0;
+  auto v = rows.Int(row, column);
+  return v.ok() ? *v : 0;
+}
+
+double DoubleOr0(const Result& rows, int row, int column) { return rows.OptionalDouble(row, column).value_or(0.0); }
+
+std::string TextArrayLiteral(const std::vector<std::string>& values) {
+  std::string out = "{";
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (i > 0) out += ',';
+    out += '"';
+    for (char c : values[i]) {
+      if (c == '"' || c == '\\') out += '\\';
+      out += c;
+    }
+    out += '"';
+  }
+  return out + "}";
+}
+
+std::vector<std::string> ParseTextArray(std::string_view literal) {
+  std::vector<std::string> out;
+  if (literal.size() < 2) return out;
+  std::string current;
+  bool quoted = false, in_item = false;
+  for (std::size_t i = 1; i + 1 < literal.size(); ++i) {
+    const char c = literal[i];
+    if (quoted) {
+      if (c == '\\' && i + 2 < literal.size()) {
+        current += literal[++i];
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        current += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+      in_item = true;
+    } else if (c == ',') {
+      out.push_back(current);
+      current.clear();
+      in_item = false;
+    } else {
+      current += c;
+      in_item = true;
+    }
+  }
+  if (in_item || !current.empty()) out.push_back(current);
+  return out;
+}
+
+}  // namespace insdiag::kb::internal

@@ -1,0 +1,43 @@
+// Helpers the stores share: resource names, ids, timestamps, page tokens.
+#pragma once
+
+#include <absl/status/statusor.h>
+#include <google/protobuf/timestamp.pb.h>
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <utility>
+
+#include "insdiag/kb/pg.h"
+
+namespace insdiag::kb::internal {
+
+// The id of `prefix/{id}` (one segment); INVALID_ARGUMENT naming `field`.
+absl::StatusOr<std::string> IdOf(const std::string& name, const std::string& prefix, const std::string& field);
+// As IdOf, and the id must be a UUID.
+absl::StatusOr<std::string> UuidOf(const std::string& name, const std::string& prefix, const std::string& field);
+bool IsUuid(std::string_view text);
+
+// SQL expression of a timestamptz column as microseconds since the epoch.
+std::string Micros(const std::string& column);
+google::protobuf::Timestamp TimestampOfMicros(std::int64_t micros);
+// A Timestamp as text PostgreSQL reads ("2024-01-31 12:00:00.000000+00").
+std::string TimestampText(const google::protobuf::Timestamp& t);
+std::int64_t MicrosOf(const google::protobuf::Timestamp& t);
+
+// Keyset page tokens: opaque base64 of "a|b".
+std::string EncodeToken(const std::string& a, const std::string& b);
+absl::StatusOr<std::pair<std::string, std::string>> DecodeToken(const std::string& token);
+
+int ClampPageSize(int page_size);  // default 50, within [1, 1000]
+
+// Int column or 0.
+std::int64_t IntOr0(const Result& rows, int row, int column);
+double DoubleOr0(const Result& rows, int row, int column);
+
+// A pg text[] literal of `values` ('{"a","b"}') and back.
+std::string TextArrayLiteral(const std::vector<std::string>& values);
+std::vector<std::string> ParseTextArray(std::string_view literal);
+
+}  // namespace insdiag::kb::internal

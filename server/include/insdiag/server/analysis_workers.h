@@ -1,0 +1,65 @@
+// The analysis worker pool inside insdiagd: N threads that claim queued
+// analyses (kb/analysis_store.h), run the engine on them and store the
+// results. Any number of insdiagd processes on one database share the queue.
+//
+// Per job: load the run and its samples; the a-priori model is the run's
+// datasheet, completed from the run's unit type's nominal model in the
+// knowledge base (else the engine identifies); engine::Analyze with a
+// progress callback (throttled into the row); a heartbeat renews the lease
+// every lease/3 and notices cancellation or a lost lease; then the report,
+// its queryable parts and the residual series are stored in one transaction.
+// Engine refusals (INVALID_ARGUMENT, FAILED_PRECONDITION) fail the job;
+// other errors put it back in the queue while attempts remain. Every worker
+// also reaps jobs whose lease expired (their worker died), and one thread
+// refreshes the fleet's materialised views periodically.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "insdiag/kb/analysis_store.h"
+#include "insdiag/kb/connection_pool.h"
+
+namespace insdiag::server {
+
+class AnalysisWorkers {
+ public:
+  struct Options {
+    int workers = 1;                                // 0: claim nothing (API only)
+    std::chrono::milliseconds lease{30'000};        // a dead worker's job is taken up after this
+    std::chrono::milliseconds poll{250};            // idle workers look for jobs this often
+    std::chrono::milliseconds fleet_refresh{600'000};  // 0: never refresh the fleet views
+  };
+
+  AnalysisWorkers(kb::ConnectionPool& pool, Options options);
+  ~AnalysisWorkers();  // Stop()
+  void Start();
+  // Stops claiming; waits for running analyses to finish.
+  void Stop();
+
+  // "host:pid:index" of worker `index`: the lease owner written to the row.
+  std::string OwnerName(int index) const;
+
+ private:
+  void Loop(int index);
+  void Maintain();
+  void RunJob(const kb::ClaimedJob& job, const std::string& owner);
+  bool SleepFor(std::chrono::milliseconds duration);  // false when stopping
+
+  kb::ConnectionPool& pool_;
+  Options options_;
+  kb::AnalysisStore store_;
+  std::string owner_prefix_;
+  std::vector<std::thread> threads_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool stopping_ = false;
+  bool started_ = false;
+};
+
+}  // namespace insdiag::server

@@ -1,0 +1,70 @@
+// The methods of insdiag.v1.AnalysisService, KnowledgeService and
+// FleetService, once, independent of transport: requests in, responses or
+// absl::Status out, over the knowledge base's stores. The gRPC face adapts
+// them (grpc_services.h); REST reaches them through gRPC (rest_gateway.h).
+#pragma once
+
+#include <absl/functional/function_ref.h>
+#include <absl/status/status.h>
+#include <absl/status/statusor.h>
+
+#include <chrono>
+#include <functional>
+
+#include "insdiag/kb/analysis_store.h"
+#include "insdiag/kb/fleet_store.h"
+#include "insdiag/kb/knowledge_store.h"
+#include "insdiag/v1/analyses.pb.h"
+#include "insdiag/v1/fleet.pb.h"
+#include "insdiag/v1/knowledge.pb.h"
+
+namespace insdiag::server {
+
+class AnalysisService {
+ public:
+  struct Options {
+    // WatchAnalysis polls the row this often: it sees jobs run by any
+    // insdiagd on the database.
+    std::chrono::milliseconds watch_poll{250};
+  };
+  AnalysisService(kb::AnalysisStore& store, Options options) : store_(store), options_(options) {}
+
+  absl::StatusOr<v1::Analysis> CreateAnalysis(const v1::CreateAnalysisRequest& request);
+  absl::StatusOr<v1::Analysis> GetAnalysis(const v1::GetAnalysisRequest& request);
+  absl::StatusOr<v1::ListAnalysesResponse> ListAnalyses(const v1::ListAnalysesRequest& request);
+  absl::StatusOr<v1::Analysis> CancelAnalysis(const v1::CancelAnalysisRequest& request);
+  // Calls `send` on every change until a terminal state, or until `send`
+  // returns false or `stop()` is true (client gone, server stopping).
+  absl::Status WatchAnalysis(const v1::WatchAnalysisRequest& request,
+                             absl::FunctionRef<bool(const v1::Analysis&)> send, std::function<bool()> stop);
+  absl::Status ReadResidualSeries(const v1::ReadResidualSeriesRequest& request,
+                                  absl::FunctionRef<bool(const v1::ResidualSeriesChunk&)> send);
+
+ private:
+  kb::AnalysisStore& store_;
+  Options options_;
+};
+
+class KnowledgeService {
+ public:
+  explicit KnowledgeService(kb::KnowledgeStore& store) : store_(store) {}
+
+  absl::StatusOr<v1::UnitType> GetUnitType(const v1::GetUnitTypeRequest& request);
+  absl::StatusOr<v1::ListUnitTypesResponse> ListUnitTypes(const v1::ListUnitTypesRequest& request);
+  absl::StatusOr<v1::Unit> GetUnit(const v1::GetUnitRequest& request);
+  absl::StatusOr<v1::ListUnitsResponse> ListUnits(const v1::ListUnitsRequest& request);
+  absl::StatusOr<v1::ListModulesResponse> ListModules(const v1::ListModulesRequest& request);
+  absl::StatusOr<v1::ListFailureModesResponse> ListFailureModes(const v1::ListFailureModesRequest& request);
+  absl::StatusOr<v1::FailureMode> GetFailureMode(const v1::GetFailureModeRequest& request);
+  absl::StatusOr<v1::FailureRecord> CreateFailureRecord(const v1::CreateFailureRecordRequest& request);
+  absl::StatusOr<v1::ListFailureRecordsResponse> ListFailureRecords(const v1::ListFailureRecordsRequest& request);
+  absl::StatusOr<v1::Diagnosis> CreateDiagnosis(const v1::CreateDiagnosisRequest& request);
+  absl::StatusOr<v1::Diagnosis> GetDiagnosis(const v1::GetDiagnosisRequest& request);
+  absl::StatusOr<v1::ListDiagnosesResponse> ListDiagnoses(const v1::ListDiagnosesRequest& request);
+  absl::StatusOr<v1::Diagnosis> ResolveDiagnosis(const v1::ResolveDiagnosisRequest& request);
+
+ private:
+  kb::KnowledgeStore& store_;
+};
+
+}  // namespace insdiag::server

@@ -1,0 +1,212 @@
+#include "insdiag/server/analysis_workers.h"
+
+#include <absl/strings/str_cat.h>
+#include <unistd.h>
+
+#include <exception>
+#include <iostream>
+
+#include "insdiag/api/report_codec.h"
+#include "insdiag/api/unit_types.h"
+#include "insdiag/engine/analysis.h"
+#include "insdiag/engine/model/parameters.h"
+#include "insdiag/kb/fleet_store.h"
+#include "insdiag/kb/knowledge_store.h"
+#include "insdiag/kb/run_store.h"
+
+namespace insdiag::server {
+namespace {
+
+constexpr std::chrono::milliseconds kProgressInterval{300};
+
+// Engine refusals are properties of the input: retrying cannot help.
+bool Retryable(const absl::Status& status) {
+  return status.code() != absl::StatusCode::kInvalidArgument &&
+         status.code() != absl::StatusCode::kFailedPrecondition && status.code() != absl::StatusCode::kNotFound &&
+         status.code() != absl::StatusCode::kOutOfRange;
+}
+
+std::string HostName() {
+  char name[256] = {};
+  if (gethostname(name, sizeof name - 1) != 0) return "host";
+  return name;
+}
+
+}  // namespace
+
+AnalysisWorkers::AnalysisWorkers(kb::ConnectionPool& pool, Options options)
+    : pool_(pool), options_(options), store_(pool),
+      owner_prefix_(absl::StrCat(HostName(), ":", getpid())) {}
+
+AnalysisWorkers::~AnalysisWorkers() { Stop(); }
+
+std::string AnalysisWorkers::OwnerName(int index) const { return absl::StrCat(owner_prefix_, ":", index); }
+
+void AnalysisWorkers::Start() {
+  std::lock_guard lock(mutex_);
+  if (started_) return;
+  started_ = true;
+  for (int i = 0; i < options_.workers; ++i) threads_.emplace_back([this, i] { Loop(i); });
+  threads_.emplace_back([this] { Maintain(); });
+}
+
+void AnalysisWorkers::Stop() {
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+  }
+  wake_.notify_all();
+  for (auto& t : threads_) {
+    if (t.joinable()) t.join();
+  }
+  threads_.clear();
+}
+
+bool AnalysisWorkers::SleepFor(std::chrono::milliseconds duration) {
+  std::unique_lock lock(mutex_);
+  wake_.wait_for(lock, duration, [this] { return stopping_; });
+  return !stopping_;
+}
+
+void AnalysisWorkers::Loop(int index) {
+  const std::string owner = OwnerName(index);
+  auto last_reap = std::chrono::steady_clock::now() - options_.lease;
+  for (;;) {
+    {
+      std::lock_guard lock(mutex_);
+      if (stopping_) return;
+    }
+    // Jobs of dead workers: any live worker puts them back (SKIP LOCKED keeps reapers apart).
+    if (std::chrono::steady_clock::now() - last_reap > options_.lease / 4) {
+      last_reap = std::chrono::steady_clock::now();
+      if (auto reaped = store_.Reap(); reaped.ok() && (reaped->requeued + reaped->failed) > 0) {
+        std::cerr << "insdiagd: " << owner << ": lease expired on " << reaped->requeued << " job(s) requeued, "
+                  << reaped->failed << " failed after their last attempt\n";
+      }
+    }
+    auto job = store_.Claim(owner, options_.lease);
+    if (!job.ok()) {
+      std::cerr << "insdiagd: " << owner << ": cannot claim jobs: " << job.status().message() << "\n";
+      if (!SleepFor(options_.poll * 4)) return;
+      continue;
+    }
+    if (!job->has_value()) {
+      if (!SleepFor(options_.poll)) return;
+      continue;
+    }
+    RunJob(**job, owner);
+  }
+}
+
+void AnalysisWorkers::Maintain() {
+  if (options_.fleet_refresh.count() <= 0) return;
+  kb::FleetStore fleet(pool_);
+  while (SleepFor(options_.fleet_refresh)) {
+    if (auto refreshed = fleet.RefreshViews(); !refreshed.ok()) {
+      std::cerr << "insdiagd: fleet views not refreshed: " << refreshed.status().message() << "\n";
+    }
+  }
+}
+
+void AnalysisWorkers::RunJob(const kb::ClaimedJob& job, const std::string& owner) {
+  std::atomic<bool> cancelled{false};
+  std::atomic<bool> lost{false};
+  std::atomic<bool> done{false};
+  std::mutex heartbeat_mutex;
+  std::condition_variable heartbeat_wake;
+  std::thread heartbeat([&] {
+    std::unique_lock lock(heartbeat_mutex);
+    while (!heartbeat_wake.wait_for(lock, options_.lease / 3, [&] { return done.load(); })) {
+      auto state = store_.Heartbeat(job.analysis_id, owner, options_.lease);
+      if (!state.ok()) continue;  // the database is away: try again; the lease may still hold
+      if (!state->owned) lost = true;
+      if (state->cancel_requested) cancelled = true;
+    }
+  });
+  const auto finish_heartbeat = [&] {
+    {
+      std::lock_guard lock(heartbeat_mutex);
+      done = true;
+    }
+    heartbeat_wake.notify_all();
+    heartbeat.join();
+  };
+
+  absl::Status status = [&]() -> absl::Status {
+    kb::RunStore runs(pool_);
+    auto stored = runs.Get(job.run_id);
+    if (!stored.ok()) return stored.status();
+    engine::BenchRun run;
+    run.metadata = stored->metadata;
+    run.has_temperature = stored->has_temperature;
+    run.samples.reserve(static_cast<std::size_t>(stored->sample_count));
+    if (auto read = runs.ReadSamples(job.run_id, 1 << 16,
+                                     [&](std::span<const engine::ImuSample> samples) {
+                                       run.samples.insert(run.samples.end(), samples.begin(), samples.end());
+                                       return true;
+                                     });
+        !read.ok()) {
+      return read;
+    }
+    engine::AnalysisRequest request;
+    request.add_effects.assign(job.request.effects().begin(), job.request.effects().end());
+    if (!run.metadata.unit_type.empty()) {
+      kb::KnowledgeStore knowledge(pool_);
+      auto unit_type = knowledge.GetUnitType(absl::StrCat("unitTypes/", run.metadata.unit_type));
+      if (unit_type.ok()) {
+        auto nominal = api::BaseModelOf(*unit_type);
+        if (nominal.ok()) request.nominal = std::move(*nominal);
+      } else if (unit_type.status().code() != absl::StatusCode::kNotFound &&
+                 unit_type.status().code() != absl::StatusCode::kInvalidArgument) {
+        return unit_type.status();
+      }
+    }
+    if (job.request.parameters_size() > 0) {
+      if (!request.nominal) request.nominal = engine::ErrorModel{};
+      for (const auto& p : job.request.parameters()) {
+        if (auto set = engine::SetParameter(p.name(), p.value(), *request.nominal); !set.ok()) {
+          return absl::InvalidArgumentError(absl::StrCat("analysis.model.parameters: ", set.message()));
+        }
+      }
+    }
+    engine::AnalysisOptions options;
+    options.keep_series = true;
+    auto last_progress = std::chrono::steady_clock::now() - kProgressInterval;
+    options.progress = [&](double fraction, std::string_view stage) {
+      const auto now = std::chrono::steady_clock::now();
+      if (now - last_progress < kProgressInterval && fraction < 1.0) return;
+      last_progress = now;
+      auto state = store_.UpdateProgress(job.analysis_id, owner, fraction, std::string(stage), options_.lease);
+      if (state.ok()) {
+        if (!state->owned) lost = true;
+        if (state->cancel_requested) cancelled = true;
+      }
+    };
+    absl::StatusOr<engine::Analysis> analysis = absl::InternalError("the engine did not run");
+    try {
+      analysis = engine::Analyze(run, request, options);
+    } catch (const std::exception& e) {
+      return absl::InternalError(absl::StrCat("the engine failed: ", e.what()));
+    }
+    if (!analysis.ok()) return analysis.status();
+    if (lost || cancelled) return absl::OkStatus();
+    return store_.Complete(job.analysis_id, owner, api::ToProto(analysis->report, analysis->model), &analysis->series);
+  }();
+  finish_heartbeat();
+  if (lost) {
+    std::cerr << "insdiagd: " << owner << ": lost the lease of analyses/" << job.analysis_id << "; result dropped\n";
+    return;
+  }
+  if (cancelled) {
+    (void)store_.MarkCancelled(job.analysis_id, owner);
+    return;
+  }
+  if (!status.ok()) {
+    const bool retry = Retryable(status);
+    std::cerr << "insdiagd: " << owner << ": analyses/" << job.analysis_id << " attempt " << job.attempt
+              << (retry ? " failed (will retry): " : " failed: ") << status.message() << "\n";
+    (void)store_.Fail(job.analysis_id, owner, status, retry);
+  }
+}
+
+}  // namespace insdiag::server

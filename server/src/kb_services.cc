@@ -1,0 +1,213 @@
+#include "insdiag/server/kb_services.h"
+
+#include <absl/strings/match.h>
+#include <absl/strings/str_cat.h>
+
+#include <thread>
+
+namespace insdiag::server {
+namespace {
+
+absl::StatusOr<std::string> AnalysisId(const std::string& name, const char* field = "name") {
+  const std::string prefix = "analyses/";
+  if (!absl::StartsWith(name, prefix) || name.size() == prefix.size() || name.find('/', prefix.size()) != std::string::npos) {
+    return absl::InvalidArgumentError(absl::StrCat(field, ": '", name, "' is not an analysis name (analyses/{analysis})"));
+  }
+  return name.substr(prefix.size());
+}
+
+bool Terminal(v1::Analysis::State s) {
+  return s == v1::Analysis::SUCCEEDED || s == v1::Analysis::FAILED || s == v1::Analysis::CANCELLED;
+}
+
+absl::Status CheckPageSize(int page_size) {
+  if (page_size < 0) return absl::InvalidArgumentError("page_size must not be negative");
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::StatusOr<v1::Analysis> AnalysisService::CreateAnalysis(const v1::CreateAnalysisRequest& request) {
+  const std::string& run = request.analysis().run();
+  const std::string prefix = "runs/";
+  if (run.empty()) return absl::InvalidArgumentError("analysis.run: required (runs/{run})");
+  if (!absl::StartsWith(run, prefix) || run.find('/', prefix.size()) != std::string::npos) {
+    return absl::InvalidArgumentError(absl::StrCat("analysis.run: '", run, "' is not a run name (runs/{run})"));
+  }
+  return store_.Create(run.substr(prefix.size()), request.analysis().model(), request.request_id());
+}
+
+absl::StatusOr<v1::Analysis> AnalysisService::GetAnalysis(const v1::GetAnalysisRequest& request) {
+  auto id = AnalysisId(request.name());
+  if (!id.ok()) return id.status();
+  return store_.Get(*id, true);
+}
+
+absl::StatusOr<v1::ListAnalysesResponse> AnalysisService::ListAnalyses(const v1::ListAnalysesRequest& request) {
+  if (auto s = CheckPageSize(request.page_size()); !s.ok()) return s;
+  kb::AnalysisQuery query;
+  query.page_size = request.page_size();
+  query.page_token = request.page_token();
+  query.include_reports = request.include_reports();
+  if (!request.run().empty()) {
+    if (!absl::StartsWith(request.run(), "runs/")) {
+      return absl::InvalidArgumentError(absl::StrCat("run: '", request.run(), "' is not a run name (runs/{run})"));
+    }
+    query.run_id = request.run().substr(5);
+  }
+  if (!request.unit().empty()) {
+    if (!absl::StartsWith(request.unit(), "units/")) {
+      return absl::InvalidArgumentError(absl::StrCat("unit: '", request.unit(), "' is not a unit name (units/{unit})"));
+    }
+    query.unit_serial = request.unit().substr(6);
+  }
+  auto page = store_.List(query);
+  if (!page.ok()) return page.status();
+  v1::ListAnalysesResponse response;
+  for (auto& a : page->analyses) *response.add_analyses() = std::move(a);
+  response.set_next_page_token(page->next_page_token);
+  return response;
+}
+
+absl::StatusOr<v1::Analysis> AnalysisService::CancelAnalysis(const v1::CancelAnalysisRequest& request) {
+  auto id = AnalysisId(request.name());
+  if (!id.ok()) return id.status();
+  return store_.Cancel(*id);
+}
+
+absl::Status AnalysisService::WatchAnalysis(const v1::WatchAnalysisRequest& request,
+                                            absl::FunctionRef<bool(const v1::Analysis&)> send,
+                                            std::function<bool()> stop) {
+  auto id = AnalysisId(request.name());
+  if (!id.ok()) return id.status();
+  std::string last;
+  for (;;) {
+    auto analysis = store_.Get(*id, false);
+    if (!analysis.ok()) return analysis.status();
+    const bool terminal = Terminal(analysis->state());
+    if (terminal) {
+      auto full = store_.Get(*id, true);  // the last message carries the report
+      if (!full.ok()) return full.status();
+      send(*full);
+      return absl::OkStatus();
+    }
+    const std::string key = absl::StrCat(analysis->state(), "|", analysis->progress().fraction(), "|",
+                                         analysis->progress().stage(), "|", analysis->attempts());
+    if (key != last) {
+      last = key;
+      if (!send(*analysis)) return absl::OkStatus();
+    }
+    if (stop && stop()) return absl::CancelledError("the watch was cancelled");
+    std::this_thread::sleep_for(options_.watch_poll);
+  }
+}
+
+absl::Status AnalysisService::ReadResidualSeries(const v1::ReadResidualSeriesRequest& request,
+                                                 absl::FunctionRef<bool(const v1::ResidualSeriesChunk&)> send) {
+  auto id = AnalysisId(request.name());
+  if (!id.ok()) return id.status();
+  if (request.chunk_size() < 0 || request.chunk_size() > 50'000) {
+    return absl::InvalidArgumentError("chunk_size must be within 0 … 50000");
+  }
+  const std::vector<std::string> channels(request.channels().begin(), request.channels().end());
+  return store_.ReadSeries(*id, channels, request.chunk_size() == 0 ? 5000 : static_cast<std::size_t>(request.chunk_size()),
+                           send);
+}
+
+absl::StatusOr<v1::UnitType> KnowledgeService::GetUnitType(const v1::GetUnitTypeRequest& request) {
+  return store_.GetUnitType(request.name());
+}
+
+absl::StatusOr<v1::ListUnitTypesResponse> KnowledgeService::ListUnitTypes(const v1::ListUnitTypesRequest& request) {
+  if (auto s = CheckPageSize(request.page_size()); !s.ok()) return s;
+  auto types = store_.ListUnitTypes();
+  if (!types.ok()) return types.status();
+  v1::ListUnitTypesResponse response;
+  for (auto& t : *types) *response.add_unit_types() = std::move(t);
+  return response;
+}
+
+absl::StatusOr<v1::Unit> KnowledgeService::GetUnit(const v1::GetUnitRequest& request) {
+  return store_.GetUnit(request.name());
+}
+
+absl::StatusOr<v1::ListUnitsResponse> KnowledgeService::ListUnits(const v1::ListUnitsRequest& request) {
+  if (auto s = CheckPageSize(request.page_size()); !s.ok()) return s;
+  auto page = store_.ListUnits({request.page_size(), request.page_token()}, request.unit_type(), request.batch());
+  if (!page.ok()) return page.status();
+  v1::ListUnitsResponse response;
+  for (auto& u : page->first) *response.add_units() = std::move(u);
+  response.set_next_page_token(page->second);
+  return response;
+}
+
+absl::StatusOr<v1::ListModulesResponse> KnowledgeService::ListModules(const v1::ListModulesRequest& request) {
+  auto modules = store_.ListModules(request.parent());
+  if (!modules.ok()) return modules.status();
+  v1::ListModulesResponse response;
+  for (auto& m : *modules) *response.add_modules() = std::move(m);
+  return response;
+}
+
+absl::StatusOr<v1::ListFailureModesResponse> KnowledgeService::ListFailureModes(
+    const v1::ListFailureModesRequest& request) {
+  if (auto s = CheckPageSize(request.page_size()); !s.ok()) return s;
+  auto modes = store_.ListFailureModes(request.unit_type(), request.module_role());
+  if (!modes.ok()) return modes.status();
+  v1::ListFailureModesResponse response;
+  for (auto& m : *modes) *response.add_failure_modes() = std::move(m);
+  return response;
+}
+
+absl::StatusOr<v1::FailureMode> KnowledgeService::GetFailureMode(const v1::GetFailureModeRequest& request) {
+  return store_.GetFailureMode(request.name());
+}
+
+absl::StatusOr<v1::FailureRecord> KnowledgeService::CreateFailureRecord(const v1::CreateFailureRecordRequest& request) {
+  return store_.CreateFailureRecord(request.failure_record());
+}
+
+absl::StatusOr<v1::ListFailureRecordsResponse> KnowledgeService::ListFailureRecords(
+    const v1::ListFailureRecordsRequest& request) {
+  if (auto s = CheckPageSize(request.page_size()); !s.ok()) return s;
+  kb::KnowledgeStore::RecordQuery query;
+  query.page = {request.page_size(), request.page_token()};
+  query.module = request.module();
+  query.unit = request.unit();
+  query.failure_mode = request.failure_mode();
+  auto page = store_.ListFailureRecords(query);
+  if (!page.ok()) return page.status();
+  v1::ListFailureRecordsResponse response;
+  for (auto& r : page->first) *response.add_failure_records() = std::move(r);
+  response.set_next_page_token(page->second);
+  return response;
+}
+
+absl::StatusOr<v1::Diagnosis> KnowledgeService::CreateDiagnosis(const v1::CreateDiagnosisRequest& request) {
+  if (request.analysis().empty()) return absl::InvalidArgumentError("analysis: required (analyses/{analysis})");
+  return store_.CreateDiagnosis(request.analysis());
+}
+
+absl::StatusOr<v1::Diagnosis> KnowledgeService::GetDiagnosis(const v1::GetDiagnosisRequest& request) {
+  return store_.GetDiagnosis(request.name());
+}
+
+absl::StatusOr<v1::ListDiagnosesResponse> KnowledgeService::ListDiagnoses(const v1::ListDiagnosesRequest& request) {
+  if (auto s = CheckPageSize(request.page_size()); !s.ok()) return s;
+  kb::KnowledgeStore::DiagnosisQuery query;
+  query.page = {request.page_size(), request.page_token()};
+  query.analysis = request.analysis();
+  query.unit = request.unit();
+  auto page = store_.ListDiagnoses(query);
+  if (!page.ok()) return page.status();
+  v1::ListDiagnosesResponse response;
+  for (auto& d : page->first) *response.add_diagnoses() = std::move(d);
+  response.set_next_page_token(page->second);
+  return response;
+}
+
+absl::StatusOr<v1::Diagnosis> KnowledgeService::ResolveDiagnosis(const v1::ResolveDiagnosisRequest& request) {
+  return store_.ResolveDiagnosis(request);
+}
+
+}  // namespace insdiag::server

@@ -1,0 +1,102 @@
+// Analysis reports as the engine reports them, built in tests: the
+// INS-2000 unit type's parameters at nominal with realistic standard errors,
+// and helpers to move one of them.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "insdiag/api/unit_types.h"
+#include "insdiag/kb/diagnosis.h"
+
+namespace insdiag::kb::testing {
+
+struct Fixture {
+  v1::UnitType unit_type;
+  v1::FailureModeCatalogue catalogue;
+  std::vector<v1::FailureMode> modes;
+};
+
+inline const Fixture& Ins2000() {
+  static const Fixture f = [] {
+    Fixture out;
+    auto type = api::BuiltinUnitType("INS-2000");
+    EXPECT_TRUE(type.ok()) << type.status();
+    out.unit_type = *type;
+    auto catalogue = BuiltinFailureModeCatalogue("INS-2000");
+    EXPECT_TRUE(catalogue.ok()) << catalogue.status();
+    out.catalogue = *catalogue;
+    auto modes = ExpandCatalogue(out.catalogue);
+    EXPECT_TRUE(modes.ok()) << modes.status();
+    out.modes = *modes;
+    return out;
+  }();
+  return f;
+}
+
+inline double Nominal(const std::string& name) {
+  for (const auto& p : Ins2000().unit_type.nominal()) {
+    if (p.name() == name) return p.value();
+  }
+  ADD_FAILURE() << "no nominal " << name;
+  return 0.0;
+}
+
+inline double Tolerance(const std::string& name) {
+  for (const auto& p : Ins2000().unit_type.nominal()) {
+    if (p.name() == name) return p.tolerance();
+  }
+  ADD_FAILURE() << "no tolerance " << name;
+  return 1.0;
+}
+
+// A report whose identified base-model parameters sit at nominal with
+// realistic relative standard errors (σ, τ by ACF; ARW, VRW by Allan), and
+// whose identifiable effect candidates are all absent (estimate ≈ 0).
+inline v1::AnalysisReport NominalReport() {
+  v1::AnalysisReport report;
+  report.set_verdict(v1::AnalysisReport::GOOD);
+  for (const auto& p : Ins2000().unit_type.nominal()) {
+    if (p.value() > 0) {
+      auto* id = report.add_identified();
+      id->set_name(p.name());
+      id->set_value(p.value());
+      const bool tau = p.name().find(".tau") != std::string::npos;
+      id->set_std_error(p.value() * (tau ? 0.3 : 0.12));
+      id->set_method(p.name().find("_gm") != std::string::npos ? v1::IdentifiedParameter::ACF
+                                                               : v1::IdentifiedParameter::ALLAN);
+      id->set_unit(p.unit());
+    } else {
+      auto* c = report.add_effect_candidates();
+      c->set_name(p.name());
+      c->set_family(p.name().substr(0, p.name().find('.')));
+      c->set_estimate(0.05 * p.tolerance());
+      c->set_std_error(0.1 * p.tolerance());
+      c->set_p_value(0.6);
+      c->set_p_value_holm(1.0);
+      c->set_identifiable(true);
+      c->set_unit(p.unit());
+      c->set_source("SCORE");
+    }
+  }
+  return report;
+}
+
+inline v1::IdentifiedParameter* Identified(v1::AnalysisReport& r, const std::string& name) {
+  for (auto& p : *r.mutable_identified()) {
+    if (p.name() == name) return &p;
+  }
+  return nullptr;
+}
+
+inline v1::EffectCandidate* Candidate(v1::AnalysisReport& r, const std::string& name) {
+  for (auto& c : *r.mutable_effect_candidates()) {
+    if (c.name() == name) return &c;
+  }
+  return nullptr;
+}
+
+
+}  // namespace insdiag::kb::testing

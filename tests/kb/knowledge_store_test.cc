@@ -1,0 +1,164 @@
+// The knowledge base on a real PostgreSQL: seeding, diagnosis of stored
+// analyses, resolution into failure records and its effect on later
+// diagnoses, fleet statistics over what was written.
+#include "insdiag/kb/knowledge_store.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "evidence_reports.h"
+#include "insdiag/kb/analysis_store.h"
+#include "insdiag/kb/fleet_store.h"
+#include "insdiag/kb/run_store.h"
+#include "support/database_fixture.h"
+#include "support/synthetic_run.h"
+
+namespace insdiag::kb {
+namespace {
+
+using namespace std::chrono_literals;
+
+class KnowledgeStoreTest : public insdiag::testing::DatabaseTest {
+ protected:
+  void SetUp() override {
+    DatabaseTest::SetUp();
+    if (IsSkipped() || HasFatalFailure()) return;
+    knowledge_ = std::make_unique<KnowledgeStore>(pool());
+    const auto types = api::BuiltinUnitTypes();
+    const auto catalogues = BuiltinFailureModeCatalogues();
+    ASSERT_TRUE(knowledge_->Seed(types, catalogues).ok());
+    ASSERT_TRUE(knowledge_->Seed(types, catalogues).ok()) << "seeding twice is harmless";
+  }
+
+  // A SUCCEEDED analysis of unit `serial` with `report`.
+  std::string StoreAnalysis(const std::string& serial, const v1::AnalysisReport& report) {
+    RunStore runs(pool());
+    engine::BenchRun run = insdiag::testing::SyntheticStaticRun(20, 10.0, 3);
+    run.metadata.unit_serial = serial;
+    run.metadata.unit_type = "INS-2000";
+    auto stored = runs.Create(run, {.sha256 = "x", .request_id = "", .request_fingerprint = ""});
+    EXPECT_TRUE(stored.ok()) << stored.status();
+    AnalysisStore analyses(pool());
+    auto a = analyses.Create(stored->id, v1::ErrorModel(), "");
+    auto job = analyses.Claim("t", 30s);
+    EXPECT_TRUE(job.ok() && job->has_value());
+    EXPECT_TRUE(analyses.Complete((*job)->analysis_id, "t", report, nullptr).ok());
+    return a->name();
+  }
+
+  static v1::AnalysisReport WornGyroX() {
+    v1::AnalysisReport report = testing::NominalReport();
+    auto* sigma = testing::Identified(report, "gyro_bias_gm.x.sigma");
+    sigma->set_value(3.0 * testing::Nominal("gyro_bias_gm.x.sigma"));
+    sigma->set_std_error(0.12 * sigma->value());
+    return report;
+  }
+
+  static double P(const v1::Diagnosis& d, const std::string& mode) {
+    for (const auto& h : d.hypotheses()) {
+      if (h.failure_mode() == mode) return h.probability();
+    }
+    return 0.0;
+  }
+
+  std::unique_ptr<KnowledgeStore> knowledge_;
+};
+
+TEST_F(KnowledgeStoreTest, SeedsTheUnitTypeAndItsFailureModes) {
+  auto type = knowledge_->GetUnitType("unitTypes/INS-2000");
+  ASSERT_TRUE(type.ok()) << type.status();
+  EXPECT_GT(type->nominal_size(), 50);
+  auto modes = knowledge_->ListFailureModes("unitTypes/INS-2000", "");
+  ASSERT_TRUE(modes.ok());
+  EXPECT_EQ(modes->size(), 26u);  // 7 per-axis modes × 3 axes + 5 unit-level modes
+  auto card = knowledge_->ListFailureModes("", "interface_card");
+  EXPECT_EQ(card->size(), 2u);
+  EXPECT_EQ(knowledge_->GetFailureMode("failureModes/nope").status().code(), absl::StatusCode::kNotFound);
+}
+
+TEST_F(KnowledgeStoreTest, ARunOfANewSerialRegistersTheUnitWithItsModules) {
+  StoreAnalysis("INS-0001", testing::NominalReport());
+  auto unit = knowledge_->GetUnit("units/INS-0001");
+  ASSERT_TRUE(unit.ok()) << unit.status();
+  EXPECT_EQ(unit->unit_type(), "unitTypes/INS-2000");
+  auto modules = knowledge_->ListModules("units/INS-0001");
+  ASSERT_TRUE(modules.ok());
+  EXPECT_EQ(modules->size(), 10u);
+}
+
+TEST_F(KnowledgeStoreTest, ConfirmingADiagnosisWritesAFailureRecordAndRaisesLaterPosteriors) {
+  const std::string first = StoreAnalysis("INS-0002", WornGyroX());
+  auto diagnosis = knowledge_->CreateDiagnosis(first);
+  ASSERT_TRUE(diagnosis.ok()) << diagnosis.status();
+  EXPECT_EQ(diagnosis->candidates(0).module(), "gyro.x");
+  const double before = P(*diagnosis, "failureModes/dtg-bearing-wear.x");
+
+  v1::ResolveDiagnosisRequest resolve;
+  resolve.set_name(diagnosis->name());
+  resolve.set_module("gyro.x");
+  resolve.set_failure_mode("failureModes/dtg-bearing-wear.x");
+  resolve.set_confirmed(true);
+  resolve.set_repair_action("gyro replaced");
+  auto resolved = knowledge_->ResolveDiagnosis(resolve);
+  ASSERT_TRUE(resolved.ok()) << resolved.status();
+  EXPECT_TRUE(resolved->confirmed());
+  EXPECT_FALSE(resolved->failure_record().empty());
+  EXPECT_EQ(knowledge_->ResolveDiagnosis(resolve).status().code(), absl::StatusCode::kFailedPrecondition);
+
+  auto records = knowledge_->ListFailureRecords({.page = {}, .module = "", .unit = "units/INS-0002", .failure_mode = ""});
+  ASSERT_TRUE(records.ok());
+  ASSERT_EQ(records->first.size(), 1u);
+  EXPECT_TRUE(records->first[0].confirmed());
+  EXPECT_EQ(records->first[0].module(), "units/INS-0002/modules/gyro.x");
+  EXPECT_EQ(records->first[0].analysis(), first);
+  auto mode = knowledge_->GetFailureMode("failureModes/dtg-bearing-wear.x");
+  EXPECT_EQ(mode->confirmed_failures(), 1);
+  EXPECT_EQ(mode->signature(0).confirmed_cases(), 1);
+  EXPECT_NE(mode->signature(0).change(), mode->signature(0).expert_change());
+
+  // Another unit with the same evidence: the mode is now more probable.
+  auto later = knowledge_->CreateDiagnosis(StoreAnalysis("INS-0003", WornGyroX()));
+  ASSERT_TRUE(later.ok());
+  EXPECT_GT(P(*later, "failureModes/dtg-bearing-wear.x"), before);
+
+  // A rejection is a no-fault-found record and leaves the mode's count alone.
+  auto other = knowledge_->CreateDiagnosis(StoreAnalysis("INS-0004", WornGyroX()));
+  resolve.set_name(other->name());
+  resolve.set_confirmed(false);
+  auto rejected = knowledge_->ResolveDiagnosis(resolve);
+  ASSERT_TRUE(rejected.ok()) << rejected.status();
+  EXPECT_FALSE(rejected->confirmed());
+  EXPECT_EQ(knowledge_->GetFailureMode("failureModes/dtg-bearing-wear.x")->confirmed_failures(), 1);
+
+  FleetStore fleet(pool());
+  auto stats = fleet.GetFleetStatistics({});
+  ASSERT_TRUE(stats.ok()) << stats.status();
+  EXPECT_EQ(stats->failure_count(), 1);
+  EXPECT_EQ(stats->no_fault_found_count(), 1);
+  auto pareto = fleet.GetFailurePareto({});
+  ASSERT_TRUE(pareto.ok());
+  EXPECT_EQ(pareto->entries(0).failure_mode(), "failureModes/dtg-bearing-wear.x");
+  EXPECT_EQ(pareto->entries(0).failures(), 1);
+  auto ranked = fleet.RankUnits({});
+  ASSERT_TRUE(ranked.ok()) << ranked.status();
+  EXPECT_EQ(ranked->units_size(), 3);
+}
+
+TEST_F(KnowledgeStoreTest, RefusesMalformedRecordsNamingTheField) {
+  StoreAnalysis("INS-0005", testing::NominalReport());
+  v1::FailureRecord record;
+  record.set_module("units/INS-0005/modules/gyro.x");
+  record.set_confirmed(true);
+  EXPECT_THAT(knowledge_->CreateFailureRecord(record).status().message(),
+              ::testing::HasSubstr("failure_record.failure_mode"));
+  record.set_failure_mode("failureModes/acc-bias-shift.x");
+  EXPECT_THAT(knowledge_->CreateFailureRecord(record).status().message(), ::testing::HasSubstr("is a failure of acc.x"));
+  record.set_module("units/INS-0005/modules/wheel");
+  EXPECT_EQ(knowledge_->CreateFailureRecord(record).status().code(), absl::StatusCode::kInvalidArgument);
+  record.set_module("units/INS-0005/modules/acc.x");
+  auto ok = knowledge_->CreateFailureRecord(record);
+  EXPECT_TRUE(ok.ok()) << ok.status();
+}
+
+}  // namespace
+}  // namespace insdiag::kb

@@ -1,0 +1,279 @@
+// Analyses as jobs through the real API: an in-process server with one
+// worker over a fresh database, real gRPC and HTTP clients; and two real
+// insdiagd processes sharing a database, one killed mid-job.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <chrono>
+#include <thread>
+
+#include "insdiag/api/unit_types.h"
+#include "insdiag/engine/model/parameters.h"
+#include "insdiag/engine/sim/simulator.h"
+#include "insdiag/kb/analysis_store.h"
+#include "insdiag/kb/run_store.h"
+#include "insdiag/v1/knowledge.grpc.pb.h"
+#include "server_fixture.h"
+#include "support/subprocess.h"
+
+namespace insdiag::testing {
+namespace {
+
+using namespace std::chrono_literals;
+using ::testing::HasSubstr;
+
+// A simulated INS-2000 on the table: its unit type's nominal model, with
+// `params` overridden and `effects` hidden.
+engine::BenchRun SimulatedRun(const std::string& serial, const std::string& profile_name, double rate_hz,
+                              const std::vector<std::pair<std::string, double>>& params = {},
+                              const std::string& effect = "") {
+  auto unit_type = api::BuiltinUnitType("INS-2000");
+  auto model = api::BaseModelOf(*unit_type);
+  for (const auto& [name, value] : params) EXPECT_TRUE(engine::SetParameter(name, value, *model).ok());
+  engine::sim::SimulatedUnit unit;
+  unit.serial = serial;
+  unit.type = "INS-2000";
+  unit.gyro = model->gyro;
+  unit.acc = model->acc;
+  if (!effect.empty()) {
+    auto effects = engine::sim::ParseTrueEffect(effect);
+    EXPECT_TRUE(effects.ok()) << effects.status();
+    unit.effects = *effects;
+  }
+  auto profile = engine::sim::BuiltinProfile(profile_name);
+  engine::sim::SimulationOptions options;
+  options.sample_rate_hz = rate_hz;
+  options.seed = 11;
+  options.site = {.latitude_rad = 0.97, .longitude_rad = 0.67, .height_m = 125.0};
+  auto simulated = engine::sim::Simulate(unit, *profile, options);
+  EXPECT_TRUE(simulated.ok()) << simulated.status();
+  return simulated->run;
+}
+
+double Nominal(const std::string& name) {
+  for (const auto& p : api::BuiltinUnitType("INS-2000")->nominal()) {
+    if (p.name() == name) return p.value();
+  }
+  return 0.0;
+}
+
+class AnalysesTest : public ServerTest {
+ protected:
+  void SetUp() override {
+    ServerTest::SetUp();
+    if (IsSkipped() || HasFatalFailure()) return;
+    analyses_ = v1::AnalysisService::NewStub(channel());
+    knowledge_ = v1::KnowledgeService::NewStub(channel());
+  }
+
+  std::string Upload(const engine::BenchRun& run) {
+    auto stored = client::UploadRun(runs(), run, {});
+    EXPECT_TRUE(stored.ok()) << stored.status();
+    return stored.ok() ? stored->name() : "";
+  }
+
+  v1::Analysis Create(const std::string& run, const std::vector<std::string>& effects = {}) {
+    grpc::ClientContext context;
+    v1::CreateAnalysisRequest request;
+    request.mutable_analysis()->set_run(run);
+    for (const auto& e : effects) request.mutable_analysis()->mutable_model()->add_effects(e);
+    v1::Analysis analysis;
+    const grpc::Status status = analyses_->CreateAnalysis(&context, request, &analysis);
+    EXPECT_TRUE(status.ok()) << status.error_message();
+    return analysis;
+  }
+
+  // Watches until the end; returns every message seen.
+  std::vector<v1::Analysis> Watch(const std::string& name) {
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() + 120s);
+    v1::WatchAnalysisRequest request;
+    request.set_name(name);
+    auto reader = analyses_->WatchAnalysis(&context, request);
+    std::vector<v1::Analysis> seen;
+    v1::Analysis a;
+    while (reader->Read(&a)) seen.push_back(a);
+    const grpc::Status status = reader->Finish();
+    EXPECT_TRUE(status.ok()) << status.error_message();
+    return seen;
+  }
+
+  v1::Diagnosis Diagnose(const std::string& analysis) {
+    grpc::ClientContext context;
+    v1::CreateDiagnosisRequest request;
+    request.set_analysis(analysis);
+    v1::Diagnosis diagnosis;
+    const grpc::Status status = knowledge_->CreateDiagnosis(&context, request, &diagnosis);
+    EXPECT_TRUE(status.ok()) << status.error_message();
+    return diagnosis;
+  }
+
+  // Upload, analyse through the job, diagnose.
+  v1::Diagnosis DiagnoseRun(const engine::BenchRun& run) {
+    const v1::Analysis created = Create(Upload(run));
+    const auto seen = Watch(created.name());
+    EXPECT_FALSE(seen.empty());
+    if (seen.empty()) return {};
+    EXPECT_EQ(seen.back().state(), v1::Analysis::SUCCEEDED) << seen.back().error().message();
+    return Diagnose(created.name());
+  }
+
+  std::unique_ptr<v1::AnalysisService::Stub> analyses_;
+  std::unique_ptr<v1::KnowledgeService::Stub> knowledge_;
+};
+
+TEST_F(AnalysesTest, CreateReturnsAtOnceThenWatchStreamsProgressToTheReportAndSeries) {
+  const std::string run = Upload(SimulatedRun("INS-E2E-1", "static", 10.0));
+  const auto start = std::chrono::steady_clock::now();
+  const v1::Analysis created = Create(run);
+  EXPECT_LT(std::chrono::steady_clock::now() - start, 2s);
+  EXPECT_EQ(created.state(), v1::Analysis::QUEUED);
+  EXPECT_EQ(created.run(), run);
+  EXPECT_THAT(created.name(), ::testing::StartsWith("analyses/"));
+
+  const auto seen = Watch(created.name());
+  ASSERT_FALSE(seen.empty());
+  const v1::Analysis& last = seen.back();
+  EXPECT_EQ(last.state(), v1::Analysis::SUCCEEDED) << last.error().message();
+  EXPECT_EQ(last.report().channels_size(), 6);
+  EXPECT_EQ(last.attempts(), 1);
+  EXPECT_EQ(last.unit(), "units/INS-E2E-1");
+
+  grpc::ClientContext get_context;
+  v1::GetAnalysisRequest get;
+  get.set_name(created.name());
+  v1::Analysis got;
+  ASSERT_TRUE(analyses_->GetAnalysis(&get_context, get, &got).ok());
+  EXPECT_EQ(got.report().verdict(), last.report().verdict());
+
+  grpc::ClientContext series_context;
+  v1::ReadResidualSeriesRequest series;
+  series.set_name(created.name());
+  series.add_channels("vel_n");
+  auto reader = analyses_->ReadResidualSeries(&series_context, series);
+  v1::ResidualSeriesChunk chunk;
+  int points = 0;
+  while (reader->Read(&chunk)) {
+    for (const auto& p : chunk.points()) {
+      EXPECT_EQ(p.channel(), "vel_n");
+      EXPECT_NEAR(p.residual(), p.measured() - p.predicted(), 1e-9 + 1e-6 * std::abs(p.measured()));
+      ++points;
+    }
+  }
+  ASSERT_TRUE(reader->Finish().ok());
+  EXPECT_GT(points, 1000);
+
+  // REST: the same analysis, and the watch as newline-delimited JSON.
+  auto rest = http().Get(("/v1/" + created.name()).c_str());
+  ASSERT_TRUE(rest);
+  EXPECT_EQ(rest->status, 200);
+  EXPECT_THAT(rest->body, HasSubstr("\"state\":\"SUCCEEDED\""));
+  auto watched = http().Get(("/v1/" + created.name() + ":watch").c_str());
+  ASSERT_TRUE(watched);
+  EXPECT_THAT(watched->body, HasSubstr("SUCCEEDED"));
+  auto listed = http().Get(("/v1/analyses?run=" + run).c_str());
+  ASSERT_TRUE(listed);
+  EXPECT_THAT(listed->body, HasSubstr(created.name()));
+}
+
+TEST_F(AnalysesTest, BadRequestsAreRefusedNamingTheField) {
+  grpc::ClientContext context;
+  v1::CreateAnalysisRequest request;
+  request.mutable_analysis()->set_run("nonsense");
+  v1::Analysis analysis;
+  const grpc::Status status = analyses_->CreateAnalysis(&context, request, &analysis);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(status.error_message(), HasSubstr("analysis.run"));
+  auto rest = http().Post("/v1/analyses", R"({"run":"runs/00000000-0000-0000-0000-000000000000"})", "application/json");
+  ASSERT_TRUE(rest);
+  EXPECT_EQ(rest->status, 404);
+  auto diagnosis = http().Post("/v1/diagnoses", R"({"analysis":"analyses/x"})", "application/json");
+  ASSERT_TRUE(diagnosis);
+  EXPECT_EQ(diagnosis->status, 400);
+}
+
+TEST_F(AnalysesTest, AHealthyUnitsTopHypothesisIsHealthy) {
+  const v1::Diagnosis d = DiagnoseRun(SimulatedRun("INS-E2E-2", "static", 10.0));
+  ASSERT_GT(d.candidates_size(), 0);
+  EXPECT_EQ(d.candidates(0).module(), "healthy") << d.DebugString();
+  // Through REST too, and the diagnosis can be read back.
+  auto rest = http().Get(("/v1/" + d.name()).c_str());
+  ASSERT_TRUE(rest);
+  EXPECT_EQ(rest->status, 200);
+  EXPECT_THAT(rest->body, HasSubstr("\"candidates\""));
+}
+
+// enable when the engine reports identified[] / effectCandidates[]
+TEST_F(AnalysesTest, DISABLED_ATripledGyroXDriftSigmaRanksGyroXFirst) {
+  const std::string sigma = "gyro_bias_gm.x.sigma";
+  const v1::Diagnosis d = DiagnoseRun(SimulatedRun("INS-E2E-3", "full", 10.0, {{sigma, 3.0 * Nominal(sigma)}}));
+  ASSERT_GT(d.candidates_size(), 0);
+  EXPECT_EQ(d.candidates(0).module(), "gyro.x") << d.DebugString();
+}
+
+// enable when the engine reports identified[] / effectCandidates[]
+TEST_F(AnalysesTest, DISABLED_ACommonGyroScaleFactorShiftRanksTheInterfaceCardFirst) {
+  const v1::Diagnosis d = DiagnoseRun(SimulatedRun("INS-E2E-4", "full", 10.0, {}, "gyro_scale_factor=5e-4"));
+  ASSERT_GT(d.candidates_size(), 0);
+  EXPECT_EQ(d.candidates(0).module(), "interface_card") << d.DebugString();
+}
+
+// A real insdiagd killed mid-job; another one on the same database completes the job.
+class WorkerKillTest : public DatabaseTest {};
+
+TEST_F(WorkerKillTest, AJobWhoseWorkerWasKilledIsCompletedByAnotherProcess) {
+  kb::RunStore runs(pool());
+  const engine::BenchRun run = SimulatedRun("INS-KILL-1", "full", 100.0);
+  auto stored = runs.Create(run, {.sha256 = "x", .request_id = "", .request_fingerprint = ""});
+  ASSERT_TRUE(stored.ok()) << stored.status();
+  kb::AnalysisStore analyses(pool());
+  auto created = analyses.Create(stored->id, v1::ErrorModel(), "");
+  ASSERT_TRUE(created.ok());
+  const std::string id = created->name().substr(9);
+  const auto dir = MakeTempDir("insdiag-kill");
+  const auto start = [&](const std::string& tag) {
+    std::filesystem::create_directories(dir / tag);
+    auto process = Subprocess::Start({INSDIAGD_PATH, "--database-url", database_url(), "--grpc-port", "0",
+                                      "--http-port", "0", "--bind", "127.0.0.1", "--workers", "1", "--lease-seconds",
+                                      "2", "--fleet-refresh-seconds", "0"},
+                                     dir / tag);
+    EXPECT_TRUE(process.ok()) << process.status();
+    return std::move(*process);
+  };
+  auto first = start("first");
+  // Kill it as soon as its worker holds the job.
+  const auto deadline = std::chrono::steady_clock::now() + 60s;
+  for (;;) {
+    auto a = analyses.Get(id, false);
+    ASSERT_TRUE(a.ok());
+    if (a->state() == v1::Analysis::RUNNING) break;
+    ASSERT_NE(a->state(), v1::Analysis::SUCCEEDED) << "the job finished before it could be killed";
+    ASSERT_LT(std::chrono::steady_clock::now(), deadline) << first.Stderr();
+    std::this_thread::sleep_for(10ms);
+  }
+  first.Signal(SIGKILL);
+  ASSERT_TRUE(first.Wait(10s).has_value());
+  EXPECT_EQ(analyses.Get(id, false)->state(), v1::Analysis::RUNNING) << "killed mid-job, the row still says RUNNING";
+
+  auto second = start("second");
+  v1::Analysis done;
+  for (;;) {
+    auto a = analyses.Get(id, true);
+    ASSERT_TRUE(a.ok());
+    if (a->state() == v1::Analysis::SUCCEEDED || a->state() == v1::Analysis::FAILED) {
+      done = *a;
+      break;
+    }
+    ASSERT_LT(std::chrono::steady_clock::now(), deadline + 60s) << second.Stderr();
+    std::this_thread::sleep_for(50ms);
+  }
+  EXPECT_EQ(done.state(), v1::Analysis::SUCCEEDED) << done.error().message() << "\n" << second.Stderr();
+  EXPECT_EQ(done.attempts(), 2);
+  EXPECT_EQ(done.report().channels_size(), 6);
+  second.Signal(SIGTERM);
+  second.Wait(20s);
+}
+
+}  // namespace
+}  // namespace insdiag::testing
