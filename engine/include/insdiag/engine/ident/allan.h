@@ -66,8 +66,12 @@
 //
 // Adequacy: χ²_g = eᵀV⁻¹e (e the log residuals) against χ² with n − p degrees
 // of freedom. When the model cannot explain the curve (p < `adequacy_alpha`:
-// dither, motion, temperature), the standard errors are scaled by √(χ²_g/(n−p))
-// and a note names the τ ranges that disagree.
+// dither, motion, temperature), a model-discrepancy variance δ² is added to
+// every point (V → V + δ²I, s_j² → s_j² + δ²; δ² solves eᵀ(V + δ²I)⁻¹e = n − p,
+// as a random-effects variance), the terms are selected and fitted again with
+// these weights — so the most precise short-τ points no longer decide the
+// fit alone — and the standard errors include δ. A note names the τ ranges
+// that disagree.
 #pragma once
 
 #include <absl/status/status.h>
@@ -111,9 +115,18 @@ struct AllanOptions {
   double significance_z = 2.0;
   // The fit is called inadequate when P(χ²_g) is below this.
   double adequacy_alpha = 1e-3;
-  bool allow_markov = true;
-  bool allow_bias_instability = true;
-  bool allow_rate_ramp = true;
+  // Candidate terms of the fit.
+  struct Terms {
+    bool quantization = true;
+    bool white = true;
+    bool bias_instability = true;
+    bool rate_random_walk = true;
+    bool rate_ramp = true;
+    bool markov = true;
+  } candidates;
+  // false: fit every candidate and report them all (no elimination, no
+  // structure choice; bias instability and Markov may then be fitted together).
+  bool select_terms = true;
   int max_solver_iterations = 200;
 
   absl::Status Validate() const;
@@ -195,7 +208,8 @@ struct AllanFit {
   int dof = 0;
   double p_value = 1.0;
   bool adequate = true;
-  double se_scale = 1.0;          // √(χ²_g/dof) when inadequate, else 1
+  // δ: the standard deviation of ln σ² the model cannot explain (0 when adequate).
+  double discrepancy = 0.0;
   std::vector<std::string> unresolved;  // candidate terms dropped, e.g. "B (z = 0.4)"
   std::vector<std::string> notes;
 
