@@ -244,6 +244,17 @@ struct PhaseCovariance {
     }
   }
 
+  // G without its Markov exponential and constant (second differences
+  // annihilate constants): −(N²/2 + σ_m²T)|h| + K²|h|³/12 + (B²/2π) h² ln|h|;
+  // G = Polynomial(h) − σ_m²T² e^{−|h|/T} + const.
+  double Polynomial(double h) const {
+    h = std::abs(h);
+    double g = -(half_n2 + (markov > 0.0 ? markov / markov_tau_s : 0.0)) * h + walk * h * h * h;
+    if (flicker > 0.0 && h > 0.0) g += flicker * h * h * std::log(h);
+    return g;
+  }
+
+  // G without the quantisation δ, each term in its cancellation-free form.
   double Smooth(double h) const {
     h = std::abs(h);
     double g = -half_n2 * h + walk * h * h * h;
@@ -332,12 +343,44 @@ double LagSum(const PhaseCovariance& g, double tau0, int64_t mi, int64_t mj, int
     for (double w = first; w < 0.5 * len && w < 64.0 * first; w *= 2.0) cuts.push_back(w);
     const size_t half = cuts.size();
     for (size_t k = half; k-- > 0;) cuts.push_back(len - cuts[k]);
+    // Inside the piece every tap lag d + o (o = q m_j − p m_i) keeps its sign,
+    // so the nine Markov exponentials e^{−|d+o|/T} factor into two:
+    // ea·e^{−(d−u)/T} + eb·e^{−(v−d)/T} (all exponents ≤ 0).
+    double ea = 0.0;
+    double eb = 0.0;
+    if (g.markov > 0.0) {
+      const double mid = 0.5 * static_cast<double>(u + v);
+      for (int p = 0; p < 3; ++p) {
+        for (int q = 0; q < 3; ++q) {
+          const auto o = static_cast<double>(q * mj - p * mi);
+          const double w = kTap[p] * kTap[q];
+          if (mid + o >= 0.0) {
+            ea += w * std::exp(-(static_cast<double>(u) + o) / markov_scale);
+          } else {
+            eb += w * std::exp((static_cast<double>(v) + o) / markov_scale);
+          }
+        }
+      }
+    }
+    auto inner = [&](double d) {
+      double c = 0.0;
+      for (int p = 0; p < 3; ++p) {
+        for (int q = 0; q < 3; ++q) {
+          c += kTap[p] * kTap[q] * g.Polynomial(tau0 * (d + static_cast<double>(q * mj - p * mi)));
+        }
+      }
+      if (g.markov > 0.0) {
+        c -= g.markov * (ea * std::exp(-(d - static_cast<double>(u)) / markov_scale) +
+                         eb * std::exp(-(static_cast<double>(v) - d) / markov_scale));
+      }
+      return n_of(d) * c * c;
+    };
     double integral = 0.0;
     for (size_t k = 0; k + 1 < cuts.size(); ++k) {
       const double width = cuts[k + 1] - cuts[k];
       if (!(width > 0.0)) continue;
       const double mid = static_cast<double>(u) + 0.5 * (cuts[k] + cuts[k + 1]);
-      for (int q = 0; q < 4; ++q) integral += 0.5 * width * kWeight[q] * term(mid + 0.5 * width * kNode[q]);
+      for (int q = 0; q < 4; ++q) integral += 0.5 * width * kWeight[q] * inner(mid + 0.5 * width * kNode[q]);
     }
     // The derivative term is O(1/len²) of the piece: left out.
     sum += integral + 0.5 * (at_break(u) - at_break(v));
