@@ -6,38 +6,27 @@
 //   build/tests/benchmarks/allan_benchmark --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
 
-#include <cmath>
-#include <numbers>
 #include <string>
 #include <vector>
 
+#include "bench_units.h"
 #include "insdiag/engine/ident/allan.h"
 #include "insdiag/engine/sim/simulator.h"
 
 namespace insdiag::engine::ident {
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
+using bench::kDeg;
 
 // A navigation-grade unit (the engine tests' INS-2000 class) held still for two hours.
 const BenchRun& TwoHourRun() {
   static const BenchRun run = [] {
-    sim::SimulatedUnit u;
-    u.serial = "BENCH";
-    for (auto& b : u.gyro.bias) b = {0.01 * kDeg / 3600.0, 1800.0};
-    for (auto& b : u.acc.bias) b = {30e-6 * 9.80665, 1800.0};
-    u.gyro.white_noise_density.setConstant(0.002 * kDeg / 60.0);
-    u.acc.white_noise_density.setConstant(10e-6 * 9.80665);
     sim::TableProfile p;
     p.name = "static-2h";
     p.angular_acceleration_rad_s2 = 10.0 * kDeg;
     p.thermal.ambient_degc = 25.0;
     p.segments = {{sim::TableSegment::Kind::kHold, 7200.0, 0.0, 0.0, 0.0}};
-    sim::SimulationOptions o;
-    o.sample_rate_hz = 100.0;
-    o.seed = 1;
-    o.site = {55.5672 * kDeg, 38.15 * kDeg, 125.0};
-    return sim::Simulate(u, p, o)->run;
+    return sim::Simulate(bench::NavigationGradeUnit(), p, bench::HundredHertz(1))->run;
   }();
   return run;
 }

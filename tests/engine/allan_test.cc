@@ -15,6 +15,7 @@
 
 #include "insdiag/benchrun/bench_run_csv.h"
 #include "insdiag/engine/model/parameters.h"
+#include "insdiag/engine/monitor/sample_screening.h"
 #include "scenarios.h"
 #include "support/subprocess.h"
 
@@ -196,6 +197,32 @@ std::vector<std::pair<std::string, AllanParameter>> ComparedParameters(const All
     if (fit[p].included) out.emplace_back(AllanParameterName(p), p);
   }
   return out;
+}
+
+// Compares every point of the engine's curves with allan_check.py's: the
+// deviations to 1e-9, and ν (`check_edf`) or the intervals (otherwise).
+// Returns the largest relative difference of the deviations.
+double CompareCurves(const AllanResult& r, const CheckOutput& py, bool check_edf) {
+  double worst = 0.0;
+  for (const AllanChannel& ch : r.channels) {
+    for (const AllanPoint& p : ch.curve) {
+      auto it = py.adev.find({ch.name, p.m});
+      if (it == py.adev.end()) {
+        ADD_FAILURE() << ch.name << " m = " << p.m << " missing";
+        continue;
+      }
+      worst = std::max(worst, std::abs(it->second.first / p.adev - 1.0));
+      EXPECT_NEAR(it->second.first / p.adev, 1.0, 1e-9) << ch.name << " m = " << p.m;
+      if (check_edf) {
+        EXPECT_NEAR(it->second.second / p.edf, 1.0, 1e-9) << ch.name << " m = " << p.m;
+      } else {
+        EXPECT_GT(it->second.first, p.ci_low) << ch.name << " m = " << p.m;
+        EXPECT_LT(it->second.first, p.ci_high) << ch.name << " m = " << p.m;
+      }
+    }
+  }
+  std::printf("largest relative ADEV difference: %.2e\n", worst);
+  return worst;
 }
 
 // --- equivalent degrees of freedom and the estimator's covariance -----------
@@ -485,13 +512,18 @@ TEST(AllanAnalysisTest, ShortSegmentsDropOutOfTheLargestClusters) {
   EXPECT_EQ(ch.curve.back().differences, longest + 1 - 2 * ch.curve.back().m);
 }
 
+// The analysis of a two-hour static run of `unit` at 100 Hz.
+absl::StatusOr<AllanResult> AnalyseTwoHours(const sim::SimulatedUnit& unit, uint64_t seed) {
+  const sim::SimulatedRun s = testing::SimulateOrDie(unit, StaticProfile(7200.0), 100.0, seed);
+  return AllanAnalysis(s.run, AllanOptions{});
+}
+
 // Issue requirement: a two-hour static run of the navigation-grade unit; the
 // fit recovers ARW and VRW within 10% on every axis (in fact to ~0.3%, inside
 // their standard errors), and judges its model adequate.
 TEST(AllanAnalysisTest, TwoHourStaticRunRecoversArwAndVrw) {
   const sim::SimulatedUnit unit = testing::NavigationGradeUnit();
-  const sim::SimulatedRun s = testing::SimulateOrDie(unit, StaticProfile(7200.0), 100.0, 7);
-  auto r = AllanAnalysis(s.run, AllanOptions{});
+  const absl::StatusOr<AllanResult> r = AnalyseTwoHours(unit, 7);
   ASSERT_TRUE(r.ok()) << r.status();
   ASSERT_EQ(r->segments.size(), 1u);
   EXPECT_EQ(r->samples_used, 720000u);
@@ -516,8 +548,7 @@ TEST(AllanAnalysisTest, TwoHourStaticRunRecoversArwAndVrw) {
 TEST(AllanAnalysisTest, RecoversQuantisationRateRandomWalkAndMarkovDrift) {
   const HiddenTerms h;
   const sim::SimulatedUnit u = HiddenTermsUnit(h);
-  const sim::SimulatedRun s = testing::SimulateOrDie(u, StaticProfile(7200.0), 100.0, 8);
-  auto r = AllanAnalysis(s.run, AllanOptions{});
+  const absl::StatusOr<AllanResult> r = AnalyseTwoHours(u, 8);
   ASSERT_TRUE(r.ok()) << r.status();
   auto expect_term = [](const AllanChannel& ch, AllanParameter p, double truth, double max_z) {
     SCOPED_TRACE(Describe(ch));
@@ -549,8 +580,7 @@ TEST(AllanAnalysisTest, RecoversQuantisationRateRandomWalkAndMarkovDrift) {
 TEST(AllanAnalysisTest, ParameterEstimatesAndAPrioriModel) {
   const HiddenTerms h;
   const sim::SimulatedUnit unit = HiddenTermsUnit(h);
-  const sim::SimulatedRun s = testing::SimulateOrDie(unit, StaticProfile(7200.0), 100.0, 8);
-  auto r = AllanAnalysis(s.run, AllanOptions{});
+  const absl::StatusOr<AllanResult> r = AnalyseTwoHours(unit, 8);
   ASSERT_TRUE(r.ok()) << r.status();
   const ErrorModel prior = testing::TrueBaseModel(unit);
   const std::vector<ParameterEstimate> estimates = AllanParameterEstimates(*r, &prior);
@@ -617,15 +647,8 @@ TEST(AllanCrossCheckTest, SimulatedSegmentsAgainstNumpy) {
   std::vector<std::string> args = {"--samples", path, "--tau0", tau0, "--m", MList(r->channels[0].curve)};
   for (const AllanChannel& ch : r->channels) args.insert(args.end(), {"--fit", FitRequest(ch.name, ch.fit)});
   const CheckOutput py = RunCheck(args);
-  double worst = 0.0;
+  CompareCurves(*r, py, /*check_edf=*/true);
   for (const AllanChannel& ch : r->channels) {
-    for (const AllanPoint& p : ch.curve) {
-      auto it = py.adev.find({ch.name, p.m});
-      ASSERT_NE(it, py.adev.end()) << ch.name << " m = " << p.m;
-      worst = std::max(worst, std::abs(it->second.first / p.adev - 1.0));
-      EXPECT_NEAR(it->second.first / p.adev, 1.0, 1e-9) << ch.name << " m = " << p.m;
-      EXPECT_NEAR(it->second.second / p.edf, 1.0, 1e-9) << ch.name << " m = " << p.m;
-    }
     for (const auto& [name, p] : ComparedParameters(ch.fit)) {
       auto it = py.fit.find({ch.name, name});
       ASSERT_NE(it, py.fit.end()) << ch.name << " " << name;
@@ -636,7 +659,6 @@ TEST(AllanCrossCheckTest, SimulatedSegmentsAgainstNumpy) {
       EXPECT_LT(std::abs(it->second - t.value), t.std_error) << ch.name << " " << name;
     }
   }
-  std::printf("largest relative ADEV difference: %.2e\n", worst);
 }
 
 // The README's table: overlapping ADEV of the gyro channels in °/h at
@@ -696,17 +718,9 @@ TEST(AllanCrossCheckTest, RealRingLaserGyroRecord) {
     }
   }
   const CheckOutput py = RunCheck(args);
+  CompareCurves(*r, py, /*check_edf=*/false);
 
-  double worst = 0.0;
   for (const AllanChannel& ch : r->channels) {
-    for (const AllanPoint& p : ch.curve) {
-      auto it = py.adev.find({ch.name, p.m});
-      ASSERT_NE(it, py.adev.end()) << ch.name << " m = " << p.m;
-      worst = std::max(worst, std::abs(it->second.first / p.adev - 1.0));
-      EXPECT_NEAR(it->second.first / p.adev, 1.0, 1e-9) << ch.name << " m = " << p.m;
-      EXPECT_GT(it->second.first, p.ci_low);
-      EXPECT_LT(it->second.first, p.ci_high);
-    }
     auto compare = [&](const AllanFit& fit, const std::string& label) {
       for (const auto& [name, p] : ComparedParameters(fit)) {
         auto it = py.fit.find({label, name});
@@ -743,11 +757,15 @@ TEST(AllanCrossCheckTest, RealRingLaserGyroRecord) {
       compare(f, ch.name + "@qn");
     }
   }
-  std::printf("largest relative ADEV difference: %.2e\n", worst);
 
   // The README table.
   std::vector<int64_t> m;
-  for (const ReadmeRow& row : kReadme) m.push_back(std::llround(row.tau_s / r->tau0_s));
+  std::string m_list;
+  for (const ReadmeRow& row : kReadme) {
+    m.push_back(std::llround(row.tau_s / r->tau0_s));
+    m_list += (m_list.empty() ? "" : ",") + std::to_string(m.back());
+  }
+  const CheckOutput readme_py = RunCheck({"--csv", path, "--m", m_list});
   for (int axis = 0; axis < 3; ++axis) {
     std::vector<std::vector<double>> rates(1);
     for (const ImuSample& sample : run->samples) rates[0].push_back(sample.gyro_rad_s[axis]);
@@ -756,8 +774,11 @@ TEST(AllanCrossCheckTest, RealRingLaserGyroRecord) {
     for (size_t i = 0; i < m.size(); ++i) {
       const double engine = curve[i].adev / kDegPerHour;
       const double readme = kReadme[i].value_deg_h[axis];
-      std::printf("gyro_%c τ %6.2f s: engine %.4g °/h, README %.3g °/h\n", "xyz"[axis], kReadme[i].tau_s, engine,
+      const double numpy = readme_py.adev.at({std::string(kSensorChannelNames[axis]), m[i]}).first / kDegPerHour;
+      std::printf("gyro_%c τ %6.2f s: engine %.5g °/h [%.4g, %.4g], numpy %.5g, README %.3g\n", "xyz"[axis],
+                  kReadme[i].tau_s, engine, curve[i].ci_low / kDegPerHour, curve[i].ci_high / kDegPerHour, numpy,
                   readme);
+      EXPECT_NEAR(numpy / engine, 1.0, 1e-9);
       EXPECT_NEAR(engine / readme, 1.0, 0.01) << "axis " << axis;
       if (std::abs(engine - readme) > 0.5 * kReadme[i].last_digit[axis]) {
         std::printf("  differs beyond the README's rounding (%.2f%%)\n", 100.0 * (engine / readme - 1.0));

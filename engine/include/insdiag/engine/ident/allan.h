@@ -60,9 +60,16 @@
 // significant term is dropped while z < `significance_z`. Bias instability and
 // the Markov term describe the same flat region (a Markov process looks like
 // K for τ ≪ T, like N for τ ≫ T, with a flat top between), so they are never
-// fitted together: the Markov set {Q, N, K, R, σ_m/T} is fitted first and kept
+// fitted together: the Markov set {Q, N, K, σ_m/T} is fitted first and kept
 // when σ_m and T are both significant (it is the model the engine's filter
-// uses); otherwise the flicker set {Q, N, B, K, R} is used.
+// uses); otherwise the flicker set {Q, N, B, K} is used. T is bounded so that
+// the Markov peak (τ ≈ 1.89 T) lies between 3τ_min and τ_max; on a bound the
+// term is unresolved. The rate ramp, deterministic, comes last: it is added
+// when its z under the V of the model without it (the null hypothesis) is
+// significant — under its own V a ramp claims the large-τ estimates are
+// nearly exact and would keep any rise. The working V of the eliminations is
+// that of the full Markov candidate fit. `select_terms = false` fits every
+// candidate instead.
 //
 // Adequacy: χ²_g = eᵀV⁻¹e (e the log residuals) against χ² with n − p degrees
 // of freedom. When the model cannot explain the curve (p < `adequacy_alpha`:
@@ -260,7 +267,9 @@ std::vector<AllanPoint> OverlappingAllanCurve(std::span<const std::vector<double
                                               std::span<const int64_t> cluster_sizes, const AllanOptions& options);
 
 // Fits the noise model to a curve (see above); fills fitted_adev and
-// log_residual of `curve`. Refuses a curve with fewer than two positive points.
+// log_residual (e_j/√V_jj, without δ) of `curve`. `segment_samples` are the
+// sample counts of the segments the curve pooled (for V). Refuses a curve
+// with fewer than two positive points, or no candidate term.
 absl::StatusOr<AllanFit> FitAllanCurve(std::vector<AllanPoint>& curve, double tau0_s,
                                        std::span<const size_t> segment_samples, const AllanOptions& options);
 
