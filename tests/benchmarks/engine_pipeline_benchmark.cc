@@ -8,6 +8,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "bench_units.h"
 #include "insdiag/engine/analysis.h"
 #include "insdiag/engine/filter/forward_filter.h"
 #include "insdiag/engine/filter/smoother.h"
@@ -22,17 +23,7 @@ const sim::SimulatedRun& HourRun(const std::string& profile) {
   static std::map<std::string, sim::SimulatedRun> runs;
   auto it = runs.find(profile);
   if (it != runs.end()) return it->second;
-  sim::SimulatedUnit u;
-  u.serial = "BENCH";
-  for (auto& b : u.gyro.bias) b = {0.01 * kDeg / 3600.0, 1800.0};
-  for (auto& b : u.acc.bias) b = {30e-6 * 9.80665, 1800.0};
-  u.gyro.white_noise_density.setConstant(0.002 * kDeg / 60.0);
-  u.acc.white_noise_density.setConstant(10e-6 * 9.80665);
-  sim::SimulationOptions o;
-  o.sample_rate_hz = 100.0;
-  o.seed = 1;
-  o.site = {55.5672 * kDeg, 38.15 * kDeg, 125.0};
-  auto run = sim::Simulate(u, *sim::BuiltinProfile(profile), o);
+  auto run = sim::Simulate(bench::NavigationGradeUnit(), *sim::BuiltinProfile(profile), bench::HundredHertz(1));
   return runs.emplace(profile, *std::move(run)).first->second;
 }
 
