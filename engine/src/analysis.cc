@@ -4,6 +4,11 @@
 #include <numbers>
 
 #include "insdiag/engine/filter/smoother.h"
+#include "insdiag/engine/finder/score_test.h"
+#include "insdiag/engine/ident/retarget.h"
+#include "insdiag/engine/stats/distributions.h"
+#include <Eigen/Eigenvalues>
+#include <memory>
 
 namespace insdiag::engine {
 namespace {
@@ -28,27 +33,6 @@ std::array<double, 2> RegressorRms(const BenchRun& run, const EffectTerm& term) 
   }
   const double n = static_cast<double>(run.samples.size());
   return {std::sqrt(sum[0] / n), std::sqrt(sum[1] / n)};
-}
-
-void FillSeries(const ForwardPass& fw, const SmoothedPass& sm, const MonitorResult& mon, const StateLayout& layout,
-                AnalysisSeries& series) {
-  const int K = fw.epochs();
-  series.time_s = fw.epoch_time_s;
-  series.measured = fw.z;
-  series.residual = fw.innovation;
-  series.predicted = fw.z - fw.innovation;
-  series.sigma = fw.innovation_variance.cwiseSqrt();
-  series.window_ratio = mon.window_ratio;
-  const int m = layout.sensor_count();
-  const int b = layout.sensor_begin();
-  series.state_names.clear();
-  for (const SensorState& s : layout.sensor_states()) series.state_names.push_back(s.name);
-  series.forward = fw.x_filt.middleCols(b, m);
-  series.smoothed = sm.x.middleCols(b, m);
-  series.smoothed_sigma = sm.variance.middleCols(b, m).cwiseSqrt();
-  series.backward = sm.backward_x.middleCols(b, m);
-  series.discrepancy = sm.discrepancy.middleCols(b, m);
-  (void)K;
 }
 
 }  // namespace
@@ -139,56 +123,567 @@ absl::Status AddEffects(const BenchRun& run, const std::vector<std::string>& sel
   return absl::OkStatus();
 }
 
-absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& request,
-                                 const AnalysisOptions& options) {
-  if (auto st = options.Validate(); !st.ok()) return st;
-  if (input.samples.size() < 2) return absl::InvalidArgumentError("the run has fewer than two samples");
-  Analysis out;
-  Progress(options, 0.0, "screening samples");
-  BenchRun run = input;
-  const std::vector<SampleOutlier> spikes = ScreenAndRepairSpikes(run, options.screening);
+namespace {
 
-  auto model = APrioriModel(run, request.nominal, options.reference);
-  if (!model.ok()) return model.status();
-  if (auto st = AddEffects(run, request.add_effects, options.filter.update_interval_s,
-                           options.diffuse_prior_scale, *model);
-      !st.ok()) {
-    return st;
+// One run of a model through the filter, the smoother and the monitor — and,
+// when asked, the missing-effect scan.
+struct ModelPass {
+  ErrorModel model;
+  std::unique_ptr<StateLayout> layout;
+  ForwardPass forward;
+  SmoothedPass smoothed;
+  MonitorResult monitor;
+  std::unique_ptr<ScoreTestObserver> scan;
+  std::vector<std::string> segment_motion;
+  // The innovations' log-likelihood with every added constant effect at its
+  // maximum-likelihood value (the profile likelihood), see ProfileCorrection.
+  double log_likelihood = 0.0;
+};
+
+// Constant effects enter the filter as states with a diffuse prior N(0, Σ);
+// the filter's log-likelihood is then the marginal one, lower than the
+// likelihood at the parameters' maximum by the prior's weight. With the final
+// posterior N(x, P) of the constants and the data's information I = P⁻¹ − Σ⁻¹,
+// in Σ-whitened coordinates (Σ = LLᵀ, Ĩ = Lᵀ I L with eigenpairs λ_i, u_i,
+// g = Lᵀ P⁻¹ x):
+//   ℓ_max − ℓ_marginal = ½ Σ_i [ln(1 + λ_i) + (u_iᵀ g)² / (λ_i (1 + λ_i))]
+// over the directions the data inform (Harvey, Forecasting, Structural Time
+// Series Models and the Kalman Filter, 1989, §3.4: the diffuse likelihood).
+double ProfileCorrection(const ForwardPass& fw, const ErrorModel& model, const StateLayout& layout) {
+  std::vector<int> states;
+  std::vector<double> prior_sigma;
+  for (const SensorState& s : layout.sensor_states()) {
+    if (s.dynamics != StateDynamics::kConstant || s.effect < 0) continue;
+    states.push_back(s.index);
+    prior_sigma.push_back(model.effects[static_cast<size_t>(s.effect)].prior_sigma[static_cast<size_t>(s.parameter)]);
   }
-  out.model = *model;
-  const StateLayout layout(out.model);
+  if (states.empty() || fw.epochs() == 0) return 0.0;
+  const auto m = static_cast<Eigen::Index>(states.size());
+  Eigen::MatrixXd P_full;
+  UnpackSymmetric(fw.P_filt.row(fw.epochs() - 1).data(), fw.state_size, P_full);
+  Eigen::MatrixXd P(m, m);
+  Eigen::VectorXd x(m), L(m);
+  for (Eigen::Index a = 0; a < m; ++a) {
+    x[a] = fw.x_filt(fw.epochs() - 1, states[static_cast<size_t>(a)]);
+    L[a] = prior_sigma[static_cast<size_t>(a)];
+    for (Eigen::Index b = 0; b < m; ++b) P(a, b) = P_full(states[static_cast<size_t>(a)], states[static_cast<size_t>(b)]);
+  }
+  const Eigen::LDLT<Eigen::MatrixXd> P_ldlt(P);
+  // Ĩ = L P⁻¹ L − 1 (Σ diagonal), g = L P⁻¹ x.
+  Eigen::MatrixXd I_tilde = L.asDiagonal() * P_ldlt.solve(Eigen::MatrixXd(L.asDiagonal()));
+  I_tilde.diagonal().array() -= 1.0;
+  const Eigen::VectorXd g = L.asDiagonal() * P_ldlt.solve(x);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (I_tilde + I_tilde.transpose()));
+  double correction = 0.0;
+  const double top = std::max(eig.eigenvalues().maxCoeff(), 0.0);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const double lambda = eig.eigenvalues()[i];
+    if (!(lambda > 1e-9 * top) || !(lambda > 0.0)) continue;
+    const double gi = eig.eigenvectors().col(i).dot(g);
+    correction += 0.5 * (std::log1p(lambda) + gi * gi / (lambda * (1.0 + lambda)));
+  }
+  return correction;
+}
 
-  Progress(options, 0.05, "forward filter");
-  auto forward = RunForwardFilter(run, out.model, options.filter);
+absl::StatusOr<ModelPass> RunPass(const BenchRun& run, const ErrorModel& model,
+                                  const std::vector<SampleOutlier>& spikes, const AnalysisOptions& options,
+                                  bool with_scan) {
+  ModelPass pass;
+  pass.model = model;
+  pass.layout = std::make_unique<StateLayout>(pass.model);
+  const int segment_epochs =
+      std::max(1, static_cast<int>(std::lround(options.segment_s / options.filter.update_interval_s)));
+  if (with_scan) {
+    pass.scan = std::make_unique<ScoreTestObserver>(*pass.layout, AbsentConstantCandidates(pass.model), segment_epochs);
+  }
+  auto forward = RunForwardFilter(run, pass.model, options.filter, pass.scan.get());
   if (!forward.ok()) return forward.status();
-  Progress(options, 0.6, "smoother");
-  auto smoothed = RunSmoother(*forward);
+  pass.forward = *std::move(forward);
+  auto smoothed = RunSmoother(pass.forward, ident::DriftSmootherOptions(pass.model, *pass.layout, pass.forward,
+                                                                        options.correlation));
   if (!smoothed.ok()) return smoothed.status();
-  Progress(options, 0.8, "monitoring");
-  MonitorResult monitor = Monitor(*forward, *smoothed, layout, spikes, options.monitor);
+  pass.smoothed = *std::move(smoothed);
+  pass.monitor = Monitor(pass.forward, pass.smoothed, *pass.layout, spikes, options.monitor);
+  pass.log_likelihood = pass.forward.log_likelihood + ProfileCorrection(pass.forward, pass.model, *pass.layout);
+  if (with_scan) pass.segment_motion = SegmentMotion(run, pass.forward, segment_epochs);
+  return pass;
+}
 
-  AnalysisReport& r = out.report;
-  r.verdict = monitor.verdict;
-  r.model_effects = out.model.EffectNames();
-  r.parameter_count = out.model.ParameterCount();
-  r.channels = monitor.channels;
-  r.nis_mean = monitor.nis_mean;
-  r.nis_band_low = monitor.nis_band_low;
-  r.nis_band_high = monitor.nis_band_high;
-  r.log_likelihood = forward->log_likelihood;
-  r.scalar_updates = forward->scalar_updates;
+void FillFit(const ModelPass& pass, const BenchRun& run, const AnalysisOptions& options, AnalysisReport& r) {
+  const MonitorResult& m = pass.monitor;
+  r.verdict = m.verdict;
+  r.model_effects = pass.model.EffectNames();
+  r.parameter_count = pass.model.ParameterCount();
+  r.channels = m.channels;
+  r.nis_mean = m.nis_mean;
+  r.nis_band_low = m.nis_band_low;
+  r.nis_band_high = m.nis_band_high;
+  r.log_likelihood = pass.log_likelihood;
+  r.scalar_updates = pass.forward.scalar_updates;
   r.aic = 2.0 * r.parameter_count - 2.0 * r.log_likelihood;
   r.bic = r.parameter_count * std::log(static_cast<double>(std::max(1, r.scalar_updates))) - 2.0 * r.log_likelihood;
-  r.gamma2 = monitor.gamma2;
-  r.eta2 = monitor.eta2;
-  r.faults = monitor.faults;
-  r.localisation = monitor.localisation;
-  r.discrepancies = monitor.discrepancies;
+  r.gamma2 = m.gamma2;
+  r.eta2 = m.eta2;
+  r.faults = m.faults;
+  r.localisation = m.localisation;
+  r.discrepancies = m.discrepancies;
   r.duration_s = run.DurationS();
   r.samples = run.samples.size();
   r.sample_rate_hz = 1.0 / run.NominalIntervalS();
   r.update_interval_s = options.filter.update_interval_s;
-  if (options.keep_series) FillSeries(*forward, *smoothed, monitor, layout, out.series);
+}
+
+// The added constant effects' estimates: the final filtered states (constants
+// keep their value, so the last epoch's estimate is the smoothed one).
+std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass) {
+  std::vector<ParameterEstimate> out;
+  const int K = pass.forward.epochs();
+  if (K == 0) return out;
+  for (const SensorState& s : pass.layout->sensor_states()) {
+    if (s.dynamics != StateDynamics::kConstant || s.effect < 0) continue;
+    const ModelEffect& e = pass.model.effects[static_cast<size_t>(s.effect)];
+    ParameterEstimate p;
+    p.name = s.name;
+    p.value = pass.forward.x_filt(K - 1, s.index);
+    p.std_error = std::sqrt(pass.smoothed.variance(K - 1, s.index));
+    p.method = "FILTER";
+    p.unit = std::string(e.term.family->unit);
+    out.push_back(p);
+  }
+  return out;
+}
+
+// A random-structure effect proposed by correlation processing.
+struct StructureProposal {
+  ModelEffect effect;
+  EffectCandidate candidate;
+  double screen_bonferroni = 1.0;
+};
+
+std::vector<StructureProposal> ProposeStructures(const std::vector<DriftCorrelation>& drifts, double run_s,
+                                                 double screen_alpha) {
+  std::vector<StructureProposal> out;
+  for (const DriftCorrelation& d : drifts) {
+    if (!d.analysis.resolved) continue;
+    const bool gyro = d.state.rfind("gyro", 0) == 0;
+    const char axis = d.state.back();
+    for (const ident::FamilyFit& f : d.analysis.fits) {
+      if (!f.converged || f.lr_p_value >= screen_alpha) continue;
+      StructureProposal p;
+      std::string family;
+      double grid = 1.0;
+      if (f.family == ident::CorrelationFamily::kRandomWalk) {
+        family = gyro ? "gyro_bias_rw" : "acc_bias_rw";
+        p.effect.random_walk_density = f.Parameter("density")->value;
+        p.candidate.estimate = p.effect.random_walk_density;
+        p.candidate.std_error = f.Parameter("density")->std_error;
+      } else if (f.family == ident::CorrelationFamily::kExponentialCosine) {
+        family = gyro ? "gyro_bias_second_order" : "acc_bias_second_order";
+        p.effect.second_order_sigma = f.Parameter("sigma2")->value;
+        p.effect.second_order_alpha_per_s = 1.0 / f.Parameter("tau2_s")->value;
+        p.effect.second_order_beta_rad_s = 2.0 * std::numbers::pi / f.Parameter("period_s")->value;
+        p.candidate.estimate = p.effect.second_order_sigma;
+        p.candidate.std_error = f.Parameter("sigma2")->std_error;
+        grid = 16.0;  // the profile grid of period × decay (correlation.cc)
+      } else if (f.family == ident::CorrelationFamily::kTwoExponentials &&
+                 f.Parameter("tau2_s")->value >= 0.5 * run_s) {
+        // A second exponential longer than the run: over the run it is a walk,
+        // dσ²/dt = 2σ₂²/τ₂.
+        family = gyro ? "gyro_bias_rw" : "acc_bias_rw";
+        const double s2 = f.Parameter("sigma2")->value;
+        const double t2 = f.Parameter("tau2_s")->value;
+        p.effect.random_walk_density = s2 * std::sqrt(2.0 / t2);
+        p.candidate.estimate = p.effect.random_walk_density;
+        p.candidate.std_error = f.Parameter("sigma2")->std_error * std::sqrt(2.0 / t2);
+        grid = 6.0;
+      } else {
+        continue;
+      }
+      auto terms = ParseEffectSelector(family + "." + axis);
+      if (!terms.ok()) continue;
+      p.effect.term = terms->front();
+      p.candidate.name = p.effect.term.Name();
+      p.candidate.family = family;
+      p.candidate.source = "STRUCTURE";
+      p.candidate.unit = std::string(p.effect.term.family->unit);
+      p.candidate.dof = p.effect.term.family->process == RandomProcess::kSecondOrderMarkov ? 3 : 1;
+      p.candidate.note = std::string("correlation function of ") + d.state + " is " +
+                         ident::CorrelationFamilyName(f.family) + ", not exponential";
+      p.screen_bonferroni = grid;
+      // Keep the stronger proposal when two families point at the same effect.
+      auto same = std::find_if(out.begin(), out.end(), [&](const StructureProposal& o) {
+        return o.effect.term == p.effect.term;
+      });
+      if (same == out.end()) out.push_back(p);
+    }
+  }
+  return out;
+}
+
+// Confirms each proposal with the filter's exact likelihood: model A plus the
+// effect, against model A.
+std::vector<StructureProposal> ConfirmStructures(const BenchRun& run, const ModelPass& a,
+                                                 std::vector<StructureProposal> proposals,
+                                                 const std::vector<SampleOutlier>& spikes,
+                                                 const AnalysisOptions& options) {
+  const double log_n = std::log(static_cast<double>(std::max(1, a.forward.scalar_updates)));
+  for (StructureProposal& p : proposals) {
+    ErrorModel b = a.model;
+    if (b.FindEffect(p.effect.term) >= 0) continue;
+    b.effects.push_back(p.effect);
+    auto pass = RunPass(run, b, spikes, options, /*with_scan=*/false);
+    EffectCandidate& c = p.candidate;
+    if (!pass.ok()) {
+      c.identifiable = false;
+      c.note += "; could not confirm: " + std::string(pass.status().message());
+      continue;
+    }
+    c.statistic = std::max(0.0, 2.0 * (pass->log_likelihood - a.log_likelihood));
+    c.p_value = std::min(1.0, stats::ChiSquareSurvival(c.statistic, c.dof) * p.screen_bonferroni);
+    c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
+    c.predicted_delta_bic = -c.statistic + c.dof * log_n;
+  }
+  return proposals;
+}
+
+// Terms and structures ranked together, Holm over both.
+std::vector<EffectCandidate> MergeCandidates(std::vector<EffectCandidate> terms,
+                                             const std::vector<StructureProposal>& structures) {
+  for (const StructureProposal& s : structures) terms.push_back(s.candidate);
+  std::vector<size_t> tested;
+  std::vector<double> p;
+  for (size_t i = 0; i < terms.size(); ++i) {
+    if (!terms[i].identifiable) continue;
+    tested.push_back(i);
+    p.push_back(terms[i].p_value);
+  }
+  std::vector<double> adjusted(p.size());
+  stats::HolmAdjust(p, adjusted);
+  for (size_t j = 0; j < tested.size(); ++j) terms[tested[j]].p_value_holm = adjusted[j];
+  std::stable_sort(terms.begin(), terms.end(), [](const EffectCandidate& a, const EffectCandidate& b) {
+    if (a.identifiable != b.identifiable) return a.identifiable;
+    if (a.p_value_holm != b.p_value_holm) return a.p_value_holm < b.p_value_holm;
+    return a.statistic > b.statistic;
+  });
+  return terms;
+}
+
+// Everything a report says about model A's pass: fit, identification, candidates.
+struct Findings {
+  std::vector<EffectCandidate> candidates;
+  std::vector<EffectCandidate> families;
+  std::vector<StructureProposal> structures;
+  std::vector<DriftCorrelation> drifts;
+};
+
+Findings FindMissingEffects(const BenchRun& run, const ModelPass& pass, const std::vector<SampleOutlier>& spikes,
+                            const AnalysisOptions& options, std::vector<std::string>* notes) {
+  Findings f;
+  f.drifts = ident::CorrelateDrifts(pass.forward, pass.smoothed, *pass.layout, options.correlation, notes);
+  RankedEffects ranked = RankMissingEffects(*pass.scan, pass.forward, run, pass.segment_motion, options.finder);
+  f.families = std::move(ranked.families);
+  // Screening level of a structure before the likelihood confirms it: the
+  // family-wise α over the drifts and the structural families tried.
+  const double screen_alpha = options.finder.family_wise_alpha / (6.0 * 3.0);
+  std::vector<StructureProposal> proposals = ProposeStructures(f.drifts, run.DurationS(), screen_alpha);
+  // Structures already in the model are not candidates.
+  proposals.erase(std::remove_if(proposals.begin(), proposals.end(),
+                                 [&](const StructureProposal& p) { return pass.model.FindEffect(p.effect.term) >= 0; }),
+                  proposals.end());
+  f.structures = ConfirmStructures(run, pass, std::move(proposals), spikes, options);
+  f.candidates = MergeCandidates(std::move(ranked.terms), f.structures);
+  return f;
+}
+
+// Model `base` plus `selectors`, with priors from what model A's scan and
+// correlation processing found; anything not found gets the diffuse prior.
+absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& base,
+                                       const std::vector<std::string>& selectors, const ModelPass& a,
+                                       const Findings& found, const AnalysisOptions& options) {
+  ErrorModel model = base;
+  std::vector<std::string> fallback;
+  for (const std::string& selector : selectors) {
+    auto terms = ParseEffectSelector(selector);
+    if (!terms.ok()) return terms.status();
+    for (const EffectTerm& term : *terms) {
+      if (model.FindEffect(term) >= 0) continue;
+      auto structure = std::find_if(found.structures.begin(), found.structures.end(),
+                                    [&](const StructureProposal& p) { return p.effect.term == term; });
+      if (structure != found.structures.end()) {
+        model.effects.push_back(structure->effect);
+        continue;
+      }
+      // A constant the scan estimated: prior wide against its estimate.
+      bool placed = false;
+      if (term.family->kind == EffectKind::kConstant && a.scan != nullptr) {
+        ModelEffect e;
+        e.term = term;
+        const auto& cols = a.scan->columns();
+        const Eigen::MatrixXd& I = a.scan->information();
+        const Eigen::VectorXd& s = a.scan->score();
+        placed = true;
+        for (int p = 0; p < term.family->parameters_per_term; ++p) {
+          auto it = std::find_if(cols.begin(), cols.end(),
+                                 [&](const CandidateColumn& c) { return c.term == term && c.parameter == p; });
+          const auto i = static_cast<Eigen::Index>(it - cols.begin());
+          if (it == cols.end() || !(I(i, i) > 0.0)) {
+            placed = false;
+            break;
+          }
+          const double beta = s[i] / I(i, i);
+          const double se = 1.0 / std::sqrt(I(i, i));
+          e.prior_sigma[static_cast<size_t>(p)] = options.estimated_prior_scale * std::max(std::abs(beta), 3.0 * se);
+        }
+        if (placed) model.effects.push_back(e);
+      }
+      if (!placed) fallback.push_back(term.Name());
+    }
+  }
+  if (auto st = AddEffects(run, fallback, options.filter.update_interval_s, options.diffuse_prior_scale, model); !st.ok()) {
+    return st;
+  }
+  return model;
+}
+
+ModelComparison Compare(const ModelPass& a, const ModelPass& b, const AnalysisReport& ra, const AnalysisReport& rb,
+                        double predicted_lr) {
+  ModelComparison c;
+  c.baseline_effects = a.model.EffectNames();
+  for (const std::string& e : b.model.EffectNames()) {
+    if (std::find(c.baseline_effects.begin(), c.baseline_effects.end(), e) == c.baseline_effects.end()) {
+      c.added_effects.push_back(e);
+    }
+  }
+  for (size_t i = 0; i < ra.channels.size() && i < rb.channels.size(); ++i) {
+    c.channels.push_back({ra.channels[i].name, ra.channels[i], rb.channels[i]});
+  }
+  c.nis_mean_before = ra.nis_mean;
+  c.nis_mean_after = rb.nis_mean;
+  c.log_likelihood_before = ra.log_likelihood;
+  c.log_likelihood_after = rb.log_likelihood;
+  c.aic_before = ra.aic;
+  c.aic_after = rb.aic;
+  c.bic_before = ra.bic;
+  c.bic_after = rb.bic;
+  c.realized_lr = 2.0 * (rb.log_likelihood - ra.log_likelihood);
+  c.predicted_lr = predicted_lr;
+  return c;
+}
+
+// Model A's score statistic for adding `added` jointly (the likelihood ratio it predicts).
+double PredictedLikelihoodRatio(const ModelPass& a, const std::vector<std::string>& added, const Findings& found) {
+  if (a.scan == nullptr) return 0.0;
+  std::vector<Eigen::Index> idx;
+  double structure_lr = 0.0;
+  for (const std::string& name : added) {
+    for (size_t i = 0; i < a.scan->columns().size(); ++i) {
+      if (a.scan->columns()[i].term.Name() == name) idx.push_back(static_cast<Eigen::Index>(i));
+    }
+    for (const StructureProposal& p : found.structures) {
+      if (p.candidate.name == name) structure_lr += p.candidate.statistic;
+    }
+  }
+  if (idx.empty()) return structure_lr;
+  const auto n = static_cast<Eigen::Index>(idx.size());
+  Eigen::VectorXd s(n);
+  Eigen::MatrixXd I(n, n);
+  for (Eigen::Index r = 0; r < n; ++r) {
+    s[r] = a.scan->score()[idx[static_cast<size_t>(r)]];
+    for (Eigen::Index c = 0; c < n; ++c) I(r, c) = a.scan->information()(idx[static_cast<size_t>(r)], idx[static_cast<size_t>(c)]);
+  }
+  return s.dot(I.completeOrthogonalDecomposition().solve(s)) + structure_lr;
+}
+
+void FillSeries(const ModelPass& pass, AnalysisSeries& series) {
+  const ForwardPass& fw = pass.forward;
+  const SmoothedPass& sm = pass.smoothed;
+  series.time_s = fw.epoch_time_s;
+  series.measured = fw.z;
+  series.residual = fw.innovation;
+  series.predicted = fw.z - fw.innovation;
+  series.sigma = fw.innovation_variance.cwiseSqrt();
+  series.window_ratio = pass.monitor.window_ratio;
+  const int m = pass.layout->sensor_count();
+  const int b = pass.layout->sensor_begin();
+  series.state_names.clear();
+  for (const SensorState& s : pass.layout->sensor_states()) series.state_names.push_back(s.name);
+  series.forward = fw.x_filt.middleCols(b, m);
+  series.smoothed = sm.x.middleCols(b, m);
+  series.smoothed_sigma = sm.variance.middleCols(b, m).cwiseSqrt();
+  series.backward = sm.backward_x.middleCols(b, m);
+  series.discrepancy = sm.discrepancy.middleCols(b, m);
+}
+
+// The report of one scanned pass.
+AnalysisReport ReportOf(const ModelPass& pass, const Findings& found, const BenchRun& run,
+                        const AnalysisOptions& options, const std::vector<ParameterEstimate>& identified,
+                        const std::vector<std::string>& notes) {
+  AnalysisReport r;
+  FillFit(pass, run, options, r);
+  r.effect_candidates = found.candidates;
+  r.family_candidates = found.families;
+  r.correlation = found.drifts;
+  r.identified = identified;
+  for (const ParameterEstimate& e : ConstantEffectEstimates(pass)) r.identified.push_back(e);
+  r.notes = notes;
+  return r;
+}
+
+}  // namespace
+
+absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& request,
+                                 const AnalysisOptions& options) {
+  if (auto st = options.Validate(); !st.ok()) return st;
+  if (input.samples.size() < 2) return absl::InvalidArgumentError("the run has fewer than two samples");
+  Progress(options, 0.0, "screening samples");
+  BenchRun run = input;
+  const std::vector<SampleOutlier> spikes = ScreenAndRepairSpikes(run, options.screening);
+  std::vector<std::string> notes;
+
+  Progress(options, 0.05, "Allan deviation");
+  std::optional<ident::AllanResult> allan;
+  if (options.identify) {
+    auto a = ident::AllanAnalysis(run, options.allan);
+    if (a.ok()) {
+      allan = *std::move(a);
+    } else {
+      notes.push_back("no Allan analysis: " + std::string(a.status().message()));
+    }
+  }
+
+  // The a-priori model: datasheet, nominal, else the Allan fit.
+  auto a_priori = APrioriModel(run, request.nominal, options.reference);
+  if (!a_priori.ok()) {
+    if (!allan.has_value()) return a_priori.status();
+    auto from_allan = ident::ErrorModelFromAllan(*allan, options.reference, &notes);
+    if (!from_allan.ok()) return from_allan.status();
+    a_priori = *std::move(from_allan);
+    notes.push_back("the run has no complete datasheet and no nominal model: the a-priori model comes from its "
+                    "Allan deviation");
+  }
+  ErrorModel base = *a_priori;
+  if (auto st = AddEffects(run, request.baseline_effects, options.filter.update_interval_s,
+                           options.diffuse_prior_scale, base);
+      !st.ok()) {
+    return st;
+  }
+
+  // Retargeting: identify, re-tune, until the parameters settle.
+  std::vector<ParameterEstimate> identified;
+  if (options.identify) {
+    if (allan.has_value()) {
+      identified = ident::ApplyAllanNoise(*allan, *a_priori, base);
+      for (const ParameterEstimate& p : ident::AllanParameterEstimates(*allan, &*a_priori)) {
+        // The Allan curve's rate random walk is also what a Gauss–Markov drift
+        // looks like at τ ≪ its correlation time: it is listed under its Allan
+        // name only, not as the catalogue's bias_rw effect.
+        const bool catalogue_alias = p.name.find("_bias_rw.") != std::string::npos;
+        if (!catalogue_alias && std::none_of(identified.begin(), identified.end(),
+                                             [&](const ParameterEstimate& q) { return q.name == p.name; })) {
+          identified.push_back(p);
+        }
+      }
+    }
+    for (int it = 0; it < options.max_retarget_iterations; ++it) {
+      Progress(options, 0.1 + 0.5 * it / options.max_retarget_iterations, "retargeting");
+      auto pass = RunPass(run, base, spikes, options, /*with_scan=*/false);
+      if (!pass.ok()) return pass.status();
+      const auto drifts = ident::CorrelateDrifts(pass->forward, pass->smoothed, *pass->layout, options.correlation, nullptr);
+      ident::RetargetResult step = ident::RetargetDrifts(base, *a_priori, drifts, options.settle_log_ratio,
+                                                         options.monitor.family_wise_alpha);
+      const bool reference_changed = ident::MatchReferenceNoise(pass->forward, options.monitor.family_wise_alpha,
+                                                                step.model, &notes);
+      base = step.model;
+      std::erase_if(identified, [](const ParameterEstimate& p) { return p.method == "ACF"; });
+      identified.insert(identified.end(), step.identified.begin(), step.identified.end());
+      if (step.settled && !reference_changed) break;
+      if (it + 1 == options.max_retarget_iterations) {
+        notes.push_back("the identified drift parameters had not settled after " +
+                        std::to_string(options.max_retarget_iterations) + " iterations");
+      }
+    }
+  }
+
+  Progress(options, 0.65, "missing-effect scan");
+  auto a = RunPass(run, base, spikes, options, /*with_scan=*/true);
+  if (!a.ok()) return a.status();
+  const Findings found_a = FindMissingEffects(run, *a, spikes, options, &notes);
+  AnalysisReport report_a = ReportOf(*a, found_a, run, options, identified, notes);
+
+  Analysis out;
+  if (request.discover) {
+    ModelPass current = std::move(*a);
+    Findings found = found_a;
+    AnalysisReport report = report_a;
+    for (int step = 1; step <= options.max_discovery_steps; ++step) {
+      auto top = std::find_if(found.candidates.begin(), found.candidates.end(), [&](const EffectCandidate& c) {
+        return c.identifiable && c.p_value_holm < options.finder.family_wise_alpha;
+      });
+      if (top == found.candidates.end()) break;
+      Progress(options, 0.7 + 0.3 * step / (options.max_discovery_steps + 1), "discovery: adding " + top->name);
+      auto extended = ExtendModel(run, current.model, {top->name}, current, found, options);
+      if (!extended.ok()) return extended.status();
+      auto next = RunPass(run, *extended, spikes, options, /*with_scan=*/true);
+      if (!next.ok()) return next.status();
+      Findings next_found = FindMissingEffects(run, *next, spikes, options, &notes);
+      AnalysisReport next_report = ReportOf(*next, next_found, run, options, identified, notes);
+      DiscoveryStep d;
+      d.step = step;
+      d.effect = top->name;
+      d.statistic = top->statistic;
+      d.p_value = top->p_value_holm;
+      d.unit = top->unit;
+      d.estimate = top->estimate;
+      d.std_error = top->std_error;
+      for (const ParameterEstimate& e : next_report.identified) {
+        if (e.method == "FILTER" && e.name == top->name) {
+          d.estimate = e.value;
+          d.std_error = e.std_error;
+        }
+      }
+      d.nis_mean = next_report.nis_mean;
+      d.log_likelihood = next_report.log_likelihood;
+      d.aic = next_report.aic;
+      d.bic = next_report.bic;
+      d.channels = next_report.channels;
+      report.discovery.push_back(d);
+      next_report.discovery = report.discovery;
+      current = std::move(*next);
+      found = std::move(next_found);
+      report = std::move(next_report);
+    }
+    if (!report.discovery.empty()) {
+      std::vector<std::string> added;
+      for (const DiscoveryStep& d : report.discovery) added.push_back(d.effect);
+      report.comparison = Compare(*a, current, report_a, report, PredictedLikelihoodRatio(*a, added, found_a));
+    }
+    out.report = std::move(report);
+    out.model = current.model;
+    if (options.keep_series) FillSeries(current, out.series);
+  } else if (!request.add_effects.empty()) {
+    Progress(options, 0.8, "model with the added effects");
+    auto extended = ExtendModel(run, base, request.add_effects, *a, found_a, options);
+    if (!extended.ok()) return extended.status();
+    auto b = RunPass(run, *extended, spikes, options, /*with_scan=*/true);
+    if (!b.ok()) return b.status();
+    const Findings found_b = FindMissingEffects(run, *b, spikes, options, &notes);
+    out.report = ReportOf(*b, found_b, run, options, identified, notes);
+    const std::vector<std::string> added = [&] {
+      std::vector<std::string> names;
+      for (const std::string& e : b->model.EffectNames()) {
+        if (a->model.FindEffect(*ParseEffectSelector(e)->begin()) < 0) names.push_back(e);
+      }
+      return names;
+    }();
+    out.report.comparison = Compare(*a, *b, report_a, out.report, PredictedLikelihoodRatio(*a, added, found_a));
+    out.model = b->model;
+    if (options.keep_series) FillSeries(*b, out.series);
+  } else {
+    out.report = std::move(report_a);
+    out.model = a->model;
+    if (options.keep_series) FillSeries(*a, out.series);
+  }
+  out.report.allan = std::move(allan);
   Progress(options, 1.0, "done");
   return out;
 }

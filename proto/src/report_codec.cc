@@ -56,6 +56,7 @@ void Fill(const engine::EffectCandidate& in, v1::EffectCandidate* out) {
   out->set_predicted_delta_aic(Finite(in.predicted_delta_aic));
   out->set_predicted_delta_bic(Finite(in.predicted_delta_bic));
   for (const auto& c : in.correlated_with) out->add_correlated_with(c);
+  out->set_note(in.note);
   for (const auto& w : in.where) {
     v1::SegmentContribution* s = out->add_where();
     s->set_channel(w.channel);

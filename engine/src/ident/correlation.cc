@@ -258,6 +258,10 @@ struct Problem {
   double T = 0.0;
 };
 
+// A correlation time counts as identified when its 95% interval spans less
+// than this ratio (two decades would say nothing a datasheet does not).
+constexpr double kMaxTauIntervalRatio = 10.0;
+
 // The longest decay of a second-order drift's oscillation, in periods.
 constexpr double kMaxDecayInPeriods = 2.0;
 
@@ -364,6 +368,7 @@ FamilyFit FitFamily(const Problem& pb, CorrelationFamily family, std::vector<dou
       }
     }
   }
+  fit.log_covariance = cov;
   for (int i = 0; i < k; ++i) {
     const double v = std::exp(theta[static_cast<size_t>(i)]);
     const double se_log = std::sqrt(cov(i, i));
@@ -571,8 +576,14 @@ absl::StatusOr<CorrelationAnalysis> AnalyseCorrelation(std::span<const double> s
       out.best = f.family;
     }
   }
-  out.unresolved_fraction = error_at(0) / (sigma * sigma);
-  out.resolved = exponential.converged && out.unresolved_fraction <= options.max_unresolved_fraction;
+  // Resolved: the smoother's error is a minor part of the drift's variance as
+  // the data show it (R̂(0) + R_e(0)), and the data bound τ — a finite interval
+  // narrower than kMaxTauIntervalRatio, below half the run.
+  out.unresolved_fraction = error_at(0) / (acf_full[0] + error_at(0));
+  const FittedParameter& tau_fit = exponential.parameters[1];
+  const bool tau_bounded = std::isfinite(tau_fit.std_error) && tau_fit.ci95_high < 0.5 * T &&
+                           tau_fit.ci95_high < kMaxTauIntervalRatio * tau_fit.ci95_low;
+  out.resolved = exponential.converged && tau_bounded && out.unresolved_fraction <= options.max_unresolved_fraction;
   return out;
 }
 

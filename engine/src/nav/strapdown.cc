@@ -20,8 +20,8 @@ Eigen::Vector3d GravityNed(double latitude_rad, double height_m) {
 NavState PropagateStrapdown(const NavState& s, const ImuIncrement& cur, const ImuIncrement& prev,
                             double dt) {
   const Eigen::Vector3d phi_b = cur.dtheta_rad + prev.dtheta_rad.cross(cur.dtheta_rad) / 12.0;
-  const Eigen::Vector3d dv_b = cur.dv_mps + 0.5 * cur.dtheta_rad.cross(cur.dv_mps) +
-                               (prev.dtheta_rad.cross(cur.dv_mps) + prev.dv_mps.cross(cur.dtheta_rad)) / 12.0;
+  const Eigen::Vector3d rotated = cur.dtheta_rad.cross(cur.dv_mps);
+  const Eigen::Vector3d dv_b = cur.dv_mps + 0.5 * rotated + cur.dtheta_rad.cross(rotated) / 12.0;
 
   // Earth and transport rates at the start of the interval: on a bench the
   // velocity is ~0 and the rates change by far less than the increments' noise.

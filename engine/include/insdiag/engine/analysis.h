@@ -1,13 +1,17 @@
 // The engine's entry point: one bench run and an a-priori error model in, the
 // analysis report out (docs/ARCHITECTURE.md, engine pipeline):
 //
-//   screen raw samples for spikes → strapdown mechanisation → forward
-//   error-state filter → smoother → monitoring → fit metrics
-//   (→ identification and the missing-effect scan, where enabled)
+//   screen raw samples for spikes → Allan deviation of the static segments
+//   → a-priori model → retargeting: [mechanisation → forward filter →
+//   smoother → correlation processing of the drifts → re-tuned model] until
+//   the parameters settle → final pass with the missing-effect scan →
+//   monitoring, fit metrics, ranked candidates
+//   → with `add_effects`: model B = A + effects, its pass, B against A
+//   → with `discover`: add the most significant effect, re-run, repeat
 //
 // The a-priori model comes, per parameter, from the run's datasheet metadata,
 // else from the caller's nominal model (the knowledge base's unit type), else
-// from identification on the data itself.
+// from the Allan fit of the run itself.
 #pragma once
 
 #include <absl/status/statusor.h>
@@ -20,6 +24,9 @@
 
 #include "insdiag/engine/bench_run.h"
 #include "insdiag/engine/filter/forward_filter.h"
+#include "insdiag/engine/finder/effect_finder.h"
+#include "insdiag/engine/ident/allan.h"
+#include "insdiag/engine/ident/correlation.h"
 #include "insdiag/engine/model/error_model.h"
 #include "insdiag/engine/monitor/monitoring.h"
 #include "insdiag/engine/monitor/sample_screening.h"
@@ -38,7 +45,20 @@ struct AnalysisOptions {
   // units of the parameter whose effect over one update interval equals the
   // sensor's white noise over that interval (diffuse: the data decide).
   double diffuse_prior_scale = 100.0;
+  // Prior σ of an added constant effect that the scan estimated, in multiples
+  // of max(|β̂|, 3 σ(β̂)): diffuse against what the data say.
+  double estimated_prior_scale = 10.0;
   bool keep_series = false;
+  // Identification and retargeting (off: the a-priori model as it is).
+  bool identify = true;
+  int max_retarget_iterations = 4;
+  double settle_log_ratio = 0.1;  // a parameter has settled within 10% (or one σ)
+  ident::CorrelationOptions correlation;
+  ident::AllanOptions allan;
+  FinderOptions finder;
+  // Time segments of the "where it shows" breakdown.
+  double segment_s = 60.0;
+  int max_discovery_steps = 8;
   // Progress of a long analysis: fraction done in [0, 1] and the stage's name.
   std::function<void(double, std::string_view)> progress;
 
@@ -48,8 +68,12 @@ struct AnalysisOptions {
 struct AnalysisRequest {
   // The unit type's nominal model from the knowledge base, if any.
   std::optional<ErrorModel> nominal;
-  // Catalogue effects to put into the model: terms ("gyro_scale_factor.z") or families.
+  // Model A: catalogue effects on top of the base model (terms or families).
+  std::vector<std::string> baseline_effects;
+  // Model B = A + these; the report is B's, compared with A.
   std::vector<std::string> add_effects;
+  // Walk the loop from model A (ignores add_effects).
+  bool discover = false;
 };
 
 struct Analysis {

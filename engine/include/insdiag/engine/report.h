@@ -4,24 +4,18 @@
 #pragma once
 
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "insdiag/engine/ident/allan.h"
+#include "insdiag/engine/parameter_estimate.h"
+#include "insdiag/engine/ident/correlation.h"
 #include "insdiag/engine/monitor/monitoring.h"
 
 namespace insdiag::engine {
-
-// An identified parameter of the error model.
-struct ParameterEstimate {
-  std::string name;  // "gyro_bias_gm.x.sigma", "gyro_arw.x", "gyro_scale_factor.z", …
-  double value = 0.0;
-  double std_error = std::numeric_limits<double>::quiet_NaN();
-  std::string method;  // "ACF", "ALLAN" or "FILTER"
-  std::string unit;
-  double a_priori = std::numeric_limits<double>::quiet_NaN();  // the model's value before identification
-};
 
 // Where in the run a candidate effect shows: its share of the score statistic
 // per channel and time segment.
@@ -50,6 +44,47 @@ struct EffectCandidate {
   double predicted_delta_bic = 0.0;
   std::vector<std::string> correlated_with;  // candidates it cannot be told apart from in this run
   std::vector<SegmentContribution> where;
+  std::string note;  // e.g. why it is not identifiable
+};
+
+// Correlation processing of one drift state's smoothed estimate.
+struct DriftCorrelation {
+  std::string state;  // e.g. "gyro_bias_gm.x"
+  ident::CorrelationAnalysis analysis;
+};
+
+struct ChannelComparison {
+  std::string name;
+  ChannelFit before;
+  ChannelFit after;
+};
+
+// Model B (this report's) against model A on the same run.
+struct ModelComparison {
+  std::vector<std::string> baseline_effects;  // A
+  std::vector<std::string> added_effects;     // B = A + these
+  std::vector<ChannelComparison> channels;
+  double nis_mean_before = 0.0, nis_mean_after = 0.0;
+  double log_likelihood_before = 0.0, log_likelihood_after = 0.0;
+  double aic_before = 0.0, aic_after = 0.0;
+  double bic_before = 0.0, bic_after = 0.0;
+  double realized_lr = 0.0;   // 2 (logL_B − logL_A)
+  double predicted_lr = 0.0;  // model A's score statistic for the added effects
+};
+
+struct DiscoveryStep {
+  int step = 0;
+  std::string effect;
+  double estimate = 0.0;
+  double std_error = 0.0;
+  std::string unit;
+  double statistic = 0.0;
+  double p_value = 0.0;
+  double nis_mean = 0.0;
+  double log_likelihood = 0.0;
+  double aic = 0.0;
+  double bic = 0.0;
+  std::vector<ChannelFit> channels;
 };
 
 struct AnalysisReport {
@@ -73,6 +108,10 @@ struct AnalysisReport {
   std::vector<EffectCandidate> family_candidates;  // per family
   std::vector<ParameterEstimate> identified;
   std::vector<std::string> notes;  // what the engine wants the user to know (e.g. a fallback it took)
+  std::vector<DriftCorrelation> correlation;
+  std::optional<ident::AllanResult> allan;
+  std::optional<ModelComparison> comparison;
+  std::vector<DiscoveryStep> discovery;
   double duration_s = 0.0;
   size_t samples = 0;
   double sample_rate_hz = 0.0;

@@ -94,7 +94,7 @@
 #include "insdiag/engine/bench_run.h"
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/model/error_model.h"
-#include "insdiag/engine/report.h"
+#include "insdiag/engine/parameter_estimate.h"
 
 namespace insdiag::engine::ident {
 

@@ -51,6 +51,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
 namespace insdiag::engine::ident {
 
 enum class CorrelationFamily {
@@ -87,6 +89,8 @@ struct FamilyFit {
   int lr_dof = 0;
   double lr_p_value = 1.0;
   std::vector<double> expected;  // E[R̂] at every lag 0 … max_lag under the fit
+  // Covariance of the logarithms of the parameters (NaN where undetermined).
+  Eigen::MatrixXd log_covariance;
 
   // The parameter named `name`, or nullptr.
   const FittedParameter* Parameter(const std::string& name) const;
@@ -99,7 +103,8 @@ struct CorrelationOptions {
   double max_lag_fraction = 0.4;
   int grid_lags = 40;  // lags in the fit's grid
   // A drift is identified only when the data resolve it: the smoother's mean
-  // error variance is at most this share of the fitted σ².
+  // error variance is at most this share of the series' variance, and τ's
+  // 95% interval is bounded (see correlation.cc).
   double max_unresolved_fraction = 0.5;
 
   absl::Status Validate() const;
@@ -115,7 +120,7 @@ struct CorrelationAnalysis {
   std::vector<FamilyFit> fits;         // every family tried
   CorrelationFamily best = CorrelationFamily::kExponential;  // by BIC
   bool resolved = false;               // the data resolve the drift (see options)
-  double unresolved_fraction = 0.0;    // R_e(0) / σ² of the exponential fit
+  double unresolved_fraction = 0.0;    // R_e(0) / (R̂(0) + R_e(0))
 
   const FamilyFit* Fit(CorrelationFamily f) const;
 };

@@ -8,8 +8,15 @@
 // 1998, two-sample forms with the previous interval's increments):
 //
 //   φ_k   = Δθ_k + (1/12) Δθ_{k−1} × Δθ_k                       coning-corrected rotation vector
-//   Δv_b  = Δv_k + ½ Δθ_k × Δv_k + (1/12)(Δθ_{k−1}×Δv_k + Δv_{k−1}×Δθ_k)
-//                                                                rotation + sculling compensation
+//   Δv_b  = Δv_k + ½ Δθ_k × Δv_k + (1/12) Δθ_k × (Δθ_k × Δv_k)  rotation compensation
+//
+// The velocity increment's compensation is exact to O(Δθ³) for rotation at a
+// constant rate with the specific force fixed in the navigation frame — a
+// rotary table's motion: with Δv = J f₀, J = ∫₀^h e^{−[ω×]t} dt, the
+// increment wanted is h J⁻¹ Δv = (I + ½[Δθ×] + (1/12)[Δθ×]² + O(Δθ³)) Δv.
+// The previous-interval sculling term, designed for vibration, would double
+// the O(Δθ²) residual here instead (a scale-factor-like error of Δθ²/6 on
+// the axes turning through gravity: 2 ppm at 10°/s and 50 Hz).
 //   ζ     = (ω_ie^n + ω_en^n) Δt                                 navigation-frame rotation
 //   C_b^n(k) = C(−ζ) · C_b^n(k−1) · C(φ_k)
 //   v^n(k)   = v^n(k−1) + (I − ½[ζ×]) C_b^n(k−1) Δv_b + (g^n − (2ω_ie^n + ω_en^n) × v^n) Δt

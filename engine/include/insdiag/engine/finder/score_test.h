@@ -1,0 +1,71 @@
+// One-pass score (Lagrange-multiplier) test of every constant catalogue
+// effect absent from the model, from the same forward pass.
+//
+// If the unit had an effect with parameters β that the model lacks, the
+// filter's prediction error would carry a mean A_k β, where A propagates
+// through the filter's own transitions and gains exactly as a bias-augmented
+// filter's would (Friedland, "Treatment of bias in recursive filtering", IEEE
+// Trans. AC 14(4), 1969):
+//   between epochs  A ← Φ A + W,   W = Σ_samples (the candidate's regressor
+//                                   mapped into the navigation errors, error_dynamics.h)
+//   per scalar update  X = h A,   A ← A − K X
+// and the innovations would have mean X β. The Gaussian log-likelihood of the
+// innovations as a function of β is then exactly quadratic:
+//   ℓ(β) = ℓ(0) + sᵀβ − ½ βᵀ 𝓘 β,   s = Σ Xᵀ S⁻¹ ν,   𝓘 = Σ Xᵀ S⁻¹ X
+// so the score statistic LM = sᵀ 𝓘⁻¹ s (Rao 1948; Silvey 1959) is χ²(rank 𝓘)
+// without the effect and equals the likelihood ratio 2Δℓ of adding it; the
+// one-step estimate β̂ = 𝓘⁻¹ s is its maximum-likelihood estimate with
+// covariance 𝓘⁻¹.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "insdiag/engine/filter/forward_filter.h"
+#include "insdiag/engine/model/effect_catalogue.h"
+
+namespace insdiag::engine {
+
+// One parameter of a candidate term (yaw harmonics have two).
+struct CandidateColumn {
+  EffectTerm term;
+  int parameter = 0;
+};
+
+// Every parameter of every constant catalogue term absent from `model`.
+std::vector<CandidateColumn> AbsentConstantCandidates(const ErrorModel& model);
+
+class ScoreTestObserver final : public FilterObserver {
+ public:
+  // `segment_epochs`: epochs per time segment of the per-channel, per-segment
+  // breakdown of the score.
+  ScoreTestObserver(const StateLayout& layout, std::vector<CandidateColumn> columns, int segment_epochs);
+
+  void OnSample(const NavigationDiscretisation& nav, const SampleCoupling& coupling) override;
+  void OnPrediction(const IntervalTransition& transition) override;
+  void OnScalarUpdate(int channel, const ObservationRow& h, const Eigen::VectorXd& gain, double innovation,
+                      double innovation_variance) override;
+
+  const std::vector<CandidateColumn>& columns() const { return columns_; }
+  const Eigen::VectorXd& score() const { return score_; }              // s
+  const Eigen::MatrixXd& information() const { return information_; }  // 𝓘
+  // s restricted to one channel and segment: score_by_segment()[channel](column, segment).
+  const std::vector<Eigen::MatrixXd>& score_by_segment() const { return segment_score_; }
+  int segment_epochs() const { return segment_epochs_; }
+
+ private:
+  const StateLayout& layout_;
+  std::vector<CandidateColumn> columns_;
+  int segment_epochs_;
+  int epoch_ = -1;
+  Eigen::MatrixXd W_y_;          // 9 × p, this interval, interval-start coordinates
+  Eigen::MatrixXd sensitivity_;  // n × p, A
+  Eigen::VectorXd score_;
+  Eigen::MatrixXd information_;
+  std::vector<Eigen::MatrixXd> segment_score_;  // per channel: p × segments
+  Eigen::RowVectorXd X_;
+  double regressor_[2] = {0.0, 0.0};
+};
+
+}  // namespace insdiag::engine

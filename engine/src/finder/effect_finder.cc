@@ -1,0 +1,319 @@
+#include "insdiag/engine/finder/effect_finder.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <numbers>
+
+#include "insdiag/engine/nav/rotation.h"
+#include "insdiag/engine/nav/wgs84.h"
+#include "insdiag/engine/stats/distributions.h"
+
+namespace insdiag::engine {
+namespace {
+
+// A term's columns in the scan.
+struct TermColumns {
+  EffectTerm term;
+  std::vector<Eigen::Index> columns;
+};
+
+std::vector<TermColumns> GroupByTerm(const std::vector<CandidateColumn>& cols) {
+  std::vector<TermColumns> out;
+  for (size_t i = 0; i < cols.size(); ++i) {
+    if (out.empty() || !(out.back().term == cols[i].term)) out.push_back({cols[i].term, {}});
+    out.back().columns.push_back(static_cast<Eigen::Index>(i));
+  }
+  return out;
+}
+
+Eigen::VectorXd Select(const Eigen::VectorXd& v, const std::vector<Eigen::Index>& idx) {
+  Eigen::VectorXd out(static_cast<Eigen::Index>(idx.size()));
+  for (size_t i = 0; i < idx.size(); ++i) out[static_cast<Eigen::Index>(i)] = v[idx[i]];
+  return out;
+}
+
+Eigen::MatrixXd Select(const Eigen::MatrixXd& m, const std::vector<Eigen::Index>& idx) {
+  const auto n = static_cast<Eigen::Index>(idx.size());
+  Eigen::MatrixXd out(n, n);
+  for (Eigen::Index a = 0; a < n; ++a) {
+    for (Eigen::Index b = 0; b < n; ++b) out(a, b) = m(idx[static_cast<size_t>(a)], idx[static_cast<size_t>(b)]);
+  }
+  return out;
+}
+
+// Eigenvalues below this share of the largest count as zero information.
+constexpr double kRankTolerance = 1e-10;
+
+// LM = sᵀ 𝓘⁺ s over the numerically non-zero eigen-directions of 𝓘.
+double PseudoInverseStatistic(const Eigen::VectorXd& s, const Eigen::MatrixXd& I, int* rank) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(I);
+  const Eigen::VectorXd& lambda = eig.eigenvalues();
+  const double top = lambda.size() > 0 ? lambda.maxCoeff() : 0.0;
+  double lm = 0.0;
+  *rank = 0;
+  for (Eigen::Index i = 0; i < lambda.size(); ++i) {
+    if (!(top > 0.0) || lambda[i] <= kRankTolerance * top) continue;
+    const double proj = eig.eigenvectors().col(i).dot(s);
+    lm += proj * proj / lambda[i];
+    ++*rank;
+  }
+  return lm;
+}
+
+double Percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  auto it = v.begin() + static_cast<std::ptrdiff_t>(q * static_cast<double>(v.size() - 1));
+  std::nth_element(v.begin(), it, v.end());
+  return *it;
+}
+
+}  // namespace
+
+RunExcitation MeasureExcitation(const BenchRun& run) {
+  RunExcitation e;
+  if (run.samples.size() < 2) return e;
+  const Eigen::Vector3d w_ie = wgs84::EarthRateNed(run.metadata.site.latitude_rad);
+  std::array<std::vector<double>, 3> force;
+  std::array<bool, 36> yaw_bins{};
+  double t_min = run.samples.front().temp_degc, t_max = t_min;
+  // Every tenth sample is plenty to see what the table and the oven did.
+  constexpr size_t kStride = 10;
+  for (size_t k = 1; k < run.samples.size(); k += kStride) {
+    const ImuSample& s = run.samples[k];
+    const double dt = (s.t_s - run.samples[k - 1].t_s) * kStride;
+    const Eigen::Matrix3d C_b_n = nav::EulerToDcm(s.ref_rpy_rad);
+    e.turned_rad += (s.gyro_rad_s - C_b_n.transpose() * w_ie).cwiseAbs() * dt;
+    for (int i = 0; i < 3; ++i) force[static_cast<size_t>(i)].push_back(s.acc_mps2[i]);
+    const double yaw = std::remainder(s.ref_rpy_rad.z(), 2.0 * std::numbers::pi) + std::numbers::pi;
+    yaw_bins[std::min<size_t>(35, static_cast<size_t>(yaw / (2.0 * std::numbers::pi) * 36.0))] = true;
+    t_min = std::min(t_min, s.temp_degc);
+    t_max = std::max(t_max, s.temp_degc);
+  }
+  for (int i = 0; i < 3; ++i) {
+    // Percentiles, so that noise and spikes do not pass for tilts.
+    e.force_range_mps2[i] = Percentile(force[static_cast<size_t>(i)], 0.99) - Percentile(force[static_cast<size_t>(i)], 0.01);
+  }
+  e.temperature_range_degc = run.has_temperature ? t_max - t_min : 0.0;
+  e.yaw_span_rad = 2.0 * std::numbers::pi * static_cast<double>(std::count(yaw_bins.begin(), yaw_bins.end(), true)) / 36.0;
+  return e;
+}
+
+bool Excites(const RunExcitation& e, const EffectTerm& term, const ExcitationThresholds& t, double g,
+             std::string* why) {
+  const char axes[] = "xyz";
+  auto need_turn = [&](int axis) {
+    if (e.turned_rad[axis] >= t.turned_rad) return true;
+    *why = std::string("the run does not turn the unit about its ") + axes[axis] + " axis";
+    return false;
+  };
+  auto need_force = [&](int axis) {
+    if (e.force_range_mps2[axis] >= t.force_range_g * g) return true;
+    *why = std::string("the run's tilts do not change the specific force along ") + axes[axis];
+    return false;
+  };
+  switch (term.family->regressor) {
+    case Regressor::kOne:
+    case Regressor::kNone:
+      return true;
+    case Regressor::kOwnInput:
+      return term.family->sensor == Sensor::kGyro ? need_turn(term.axis) : need_force(term.axis);
+    case Regressor::kCrossInput:
+      return term.family->sensor == Sensor::kGyro ? need_turn(term.source_axis) : need_force(term.source_axis);
+    case Regressor::kSpecificForce:
+      return need_force(term.source_axis);
+    case Regressor::kTemperature:
+      if (e.temperature_range_degc >= t.temperature_range_degc) return true;
+      *why = "the run's temperature does not change (or the run has no temp column)";
+      return false;
+    case Regressor::kYawSinCos:
+      if (e.yaw_span_rad >= t.yaw_span_rad) return true;
+      *why = "the run does not turn the table through half a turn of yaw";
+      return false;
+  }
+  return false;
+}
+
+std::vector<std::string> SegmentMotion(const BenchRun& run, const ForwardPass& fw, int segment_epochs) {
+  std::vector<std::string> labels;
+  const int K = fw.epochs();
+  for (int first = 0; first < K; first += segment_epochs) {
+    const int last = std::min(K, first + segment_epochs) - 1;
+    const size_t s0 = first == 0 ? 0 : static_cast<size_t>(fw.epoch_sample[static_cast<size_t>(first - 1)]);
+    const size_t s1 = static_cast<size_t>(fw.epoch_sample[static_cast<size_t>(last)]);
+    double turned = 0.0;
+    Eigen::Matrix3d previous = nav::EulerToDcm(run.samples[s0].ref_rpy_rad);
+    for (size_t k = s0 + 1; k <= s1; ++k) {
+      const Eigen::Matrix3d C = nav::EulerToDcm(run.samples[k].ref_rpy_rad);
+      turned += Eigen::AngleAxisd(previous.transpose() * C).angle();
+      previous = C;
+    }
+    constexpr double kStillRad = 0.5 * std::numbers::pi / 180.0;
+    constexpr double kTurningRad = 0.5 * std::numbers::pi;
+    labels.push_back(turned < kStillRad ? "still" : turned > kTurningRad ? "turning" : "tilting");
+  }
+  return labels;
+}
+
+RankedEffects RankMissingEffects(const ScoreTestObserver& scan, const ForwardPass& fw, const BenchRun& run,
+                                 const std::vector<std::string>& motion, const FinderOptions& options) {
+  RankedEffects out;
+  const RunExcitation excitation = MeasureExcitation(run);
+  const double g = wgs84::NormalGravityMps2(run.metadata.site.latitude_rad, run.metadata.site.height_m);
+  const Eigen::VectorXd& s = scan.score();
+  const Eigen::MatrixXd& I = scan.information();
+  const std::vector<TermColumns> terms = GroupByTerm(scan.columns());
+  const double log_n = std::log(static_cast<double>(std::max(1, fw.scalar_updates)));
+
+  struct Scored {
+    EffectCandidate candidate;
+    Eigen::VectorXd beta;
+    const TermColumns* columns;
+  };
+  std::vector<Scored> scored;
+  for (const TermColumns& t : terms) {
+    Scored sc;
+    sc.columns = &t;
+    EffectCandidate& c = sc.candidate;
+    c.name = t.term.Name();
+    c.family = std::string(t.term.family->name);
+    c.source = "SCORE";
+    c.unit = std::string(t.term.family->unit);
+    c.dof = static_cast<int>(t.columns.size());
+    std::string why;
+    const Eigen::VectorXd st = Select(s, t.columns);
+    const Eigen::MatrixXd It = Select(I, t.columns);
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(It);
+    const bool full_rank = eig.eigenvalues().minCoeff() > kRankTolerance * std::max(eig.eigenvalues().maxCoeff(), 0.0) &&
+                           eig.eigenvalues().minCoeff() > 0.0;
+    c.identifiable = Excites(excitation, t.term, options.excitation, g, &why) && full_rank;
+    if (!c.identifiable) {
+      if (why.empty()) why = "its signature vanishes in this run";
+      c.std_error = std::numeric_limits<double>::infinity();
+      c.p_value = c.p_value_holm = 1.0;
+      c.note = "not identifiable with this profile: " + why;
+      scored.push_back(std::move(sc));
+      continue;
+    }
+    const Eigen::MatrixXd cov = It.inverse();
+    sc.beta = cov * st;
+    c.statistic = st.dot(sc.beta);
+    c.p_value = stats::ChiSquareSurvival(c.statistic, c.dof);
+    if (c.dof == 1) {
+      c.estimate = sc.beta[0];
+      c.std_error = std::sqrt(cov(0, 0));
+    } else {
+      // Yaw harmonic magnitude √(a² + b²), delta method.
+      const double mag = sc.beta.norm();
+      c.estimate = mag;
+      const Eigen::VectorXd grad = mag > 0.0 ? Eigen::VectorXd(sc.beta / mag) : Eigen::VectorXd::Ones(c.dof) / std::sqrt(c.dof);
+      c.std_error = std::sqrt(grad.dot(cov * grad));
+    }
+    c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
+    c.predicted_delta_bic = -c.statistic + c.dof * log_n;
+    scored.push_back(std::move(sc));
+  }
+
+  // Holm over the identifiable terms.
+  std::vector<size_t> tested;
+  std::vector<double> p;
+  for (size_t i = 0; i < scored.size(); ++i) {
+    if (!scored[i].candidate.identifiable) continue;
+    tested.push_back(i);
+    p.push_back(scored[i].candidate.p_value);
+  }
+  std::vector<double> adjusted(p.size());
+  stats::HolmAdjust(p, adjusted);
+  for (size_t j = 0; j < tested.size(); ++j) scored[tested[j]].candidate.p_value_holm = adjusted[j];
+
+  // Signatures too alike to tell apart in this run.
+  for (size_t a = 0; a < tested.size(); ++a) {
+    for (size_t b = 0; b < tested.size(); ++b) {
+      if (a == b) continue;
+      const TermColumns& ta = *scored[tested[a]].columns;
+      const TermColumns& tb = *scored[tested[b]].columns;
+      double best = 0.0;
+      for (Eigen::Index i : ta.columns) {
+        for (Eigen::Index j : tb.columns) best = std::max(best, std::abs(I(i, j)) / std::sqrt(I(i, i) * I(j, j)));
+      }
+      if (best >= options.ambiguity_threshold) scored[tested[a]].candidate.correlated_with.push_back(tb.term.Name());
+    }
+  }
+
+  std::stable_sort(scored.begin(), scored.end(), [](const Scored& a, const Scored& b) {
+    if (a.candidate.identifiable != b.candidate.identifiable) return a.candidate.identifiable;
+    if (a.candidate.p_value_holm != b.candidate.p_value_holm) return a.candidate.p_value_holm < b.candidate.p_value_holm;
+    return a.candidate.statistic > b.candidate.statistic;
+  });
+
+  // Where the top candidates show: their share of the score per channel and segment.
+  const int E = scan.segment_epochs();
+  const double interval = fw.epochs() > 1 ? (fw.epoch_time_s.back() - fw.epoch_time_s.front()) / (fw.epochs() - 1) : 1.0;
+  for (int rank = 0; rank < options.top_candidates_with_segments && rank < static_cast<int>(scored.size()); ++rank) {
+    Scored& sc = scored[static_cast<size_t>(rank)];
+    if (!sc.candidate.identifiable || sc.candidate.statistic <= 0.0) continue;
+    std::vector<SegmentContribution> pieces;
+    for (int c = 0; c < kChannelCount; ++c) {
+      const Eigen::MatrixXd& by_segment = scan.score_by_segment()[static_cast<size_t>(c)];
+      for (Eigen::Index segment = 0; segment < by_segment.cols(); ++segment) {
+        double contribution = 0.0;
+        for (size_t k = 0; k < sc.columns->columns.size(); ++k) {
+          contribution += by_segment(sc.columns->columns[k], segment) * sc.beta[static_cast<Eigen::Index>(k)];
+        }
+        const double share = contribution / sc.candidate.statistic;
+        if (share <= 0.0) continue;
+        const int first = static_cast<int>(segment) * E;
+        const int last = std::min(fw.epochs(), first + E) - 1;
+        pieces.push_back({std::string(kChannelNames[static_cast<size_t>(c)]),
+                          fw.epoch_time_s[static_cast<size_t>(first)] - interval,
+                          fw.epoch_time_s[static_cast<size_t>(last)],
+                          static_cast<size_t>(segment) < motion.size() ? motion[static_cast<size_t>(segment)] : "",
+                          share});
+      }
+    }
+    std::sort(pieces.begin(), pieces.end(), [](const auto& a, const auto& b) { return a.share > b.share; });
+    if (static_cast<int>(pieces.size()) > options.segments_per_candidate) pieces.resize(static_cast<size_t>(options.segments_per_candidate));
+    sc.candidate.where = std::move(pieces);
+  }
+  for (Scored& sc : scored) out.terms.push_back(std::move(sc.candidate));
+
+  // Families: the joint test of their identifiable terms.
+  std::map<std::string, std::vector<Eigen::Index>> family_columns;
+  std::vector<std::string> family_order;
+  for (const TermColumns& t : terms) {
+    std::string why;
+    if (!Excites(excitation, t.term, options.excitation, g, &why)) continue;
+    const std::string name(t.term.family->name);
+    if (!family_columns.count(name)) family_order.push_back(name);
+    auto& cols = family_columns[name];
+    cols.insert(cols.end(), t.columns.begin(), t.columns.end());
+  }
+  std::vector<double> family_p;
+  for (const std::string& name : family_order) {
+    const auto& cols = family_columns[name];
+    EffectCandidate c;
+    c.name = name;
+    c.family = name;
+    c.source = "SCORE";
+    c.statistic = PseudoInverseStatistic(Select(s, cols), Select(I, cols), &c.dof);
+    c.identifiable = c.dof > 0;
+    c.p_value = c.dof > 0 ? stats::ChiSquareSurvival(c.statistic, c.dof) : 1.0;
+    c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
+    c.predicted_delta_bic = -c.statistic + c.dof * log_n;
+    c.unit = std::string(FindEffectFamily(name)->unit);
+    family_p.push_back(c.p_value);
+    out.families.push_back(std::move(c));
+  }
+  std::vector<double> family_adjusted(family_p.size());
+  stats::HolmAdjust(family_p, family_adjusted);
+  for (size_t i = 0; i < out.families.size(); ++i) out.families[i].p_value_holm = family_adjusted[i];
+  std::stable_sort(out.families.begin(), out.families.end(), [](const EffectCandidate& a, const EffectCandidate& b) {
+    if (a.p_value_holm != b.p_value_holm) return a.p_value_holm < b.p_value_holm;
+    return a.statistic > b.statistic;
+  });
+  return out;
+}
+
+}  // namespace insdiag::engine

@@ -1,0 +1,165 @@
+#include "insdiag/engine/ident/retarget.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "insdiag/engine/stats/distributions.h"
+
+namespace insdiag::engine::ident {
+namespace {
+
+std::string Format(const char* fmt, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, fmt, v);
+  return buf;
+}
+
+double EpochInterval(const ForwardPass& fw) {
+  return fw.epochs() > 1 ? (fw.epoch_time_s.back() - fw.epoch_time_s.front()) / (fw.epochs() - 1) : 1.0;
+}
+
+}  // namespace
+
+SmootherOptions DriftSmootherOptions(const ErrorModel& model, const StateLayout& layout, const ForwardPass& fw,
+                                     const CorrelationOptions& options) {
+  SmootherOptions o;
+  for (int i = 0; i < 6; ++i) o.error_acf_states.push_back(layout.gyro_bias() + i);
+  double tau = 0.0;
+  for (const auto* triad : {&model.gyro, &model.acc}) {
+    for (const GaussMarkov& gm : triad->bias) tau = std::max(tau, gm.tau_s);
+  }
+  // The correlation processing looks at lags up to a few τ and a share of the run.
+  const int by_tau = static_cast<int>(2.0 * options.max_lag_in_tau * tau / EpochInterval(fw)) + 1;
+  o.error_acf_max_lag = std::min(static_cast<int>(options.max_lag_fraction * fw.epochs()), by_tau);
+  return o;
+}
+
+std::vector<DriftCorrelation> CorrelateDrifts(const ForwardPass& fw, const SmoothedPass& sm, const StateLayout& layout,
+                                              const CorrelationOptions& options, std::vector<std::string>* notes) {
+  std::vector<DriftCorrelation> out;
+  const double dt = EpochInterval(fw);
+  for (int i = 0; i < 6; ++i) {
+    const int state = layout.gyro_bias() + i;
+    std::vector<double> series(static_cast<size_t>(fw.epochs()));
+    for (int k = 0; k < fw.epochs(); ++k) series[static_cast<size_t>(k)] = sm.x(k, state);
+    const std::vector<double> empty;
+    const std::vector<double>& error_acf =
+        static_cast<size_t>(i) < sm.error_autocovariance.size() ? sm.error_autocovariance[static_cast<size_t>(i)] : empty;
+    auto analysis = AnalyseCorrelation(series, error_acf, dt, options);
+    const std::string name = layout.StateName(state);
+    if (!analysis.ok()) {
+      if (notes != nullptr) notes->push_back(name + ": no correlation processing (" + std::string(analysis.status().message()) + ")");
+      continue;
+    }
+    out.push_back({name, *std::move(analysis)});
+  }
+  return out;
+}
+
+RetargetResult RetargetDrifts(const ErrorModel& current, const ErrorModel& a_priori,
+                              const std::vector<DriftCorrelation>& drifts, double settle_log_ratio, double alpha) {
+  RetargetResult r;
+  r.model = current;
+  const double reject = stats::ChiSquareQuantile(1.0 - alpha, 2.0);
+  for (const DriftCorrelation& d : drifts) {
+    const FamilyFit* fit = d.analysis.Fit(CorrelationFamily::kExponential);
+    if (!d.analysis.resolved || fit == nullptr || !fit->converged) continue;
+    const bool gyro = d.state.rfind("gyro", 0) == 0;
+    const int axis = d.state.back() - 'x';
+    GaussMarkov& gm = (gyro ? r.model.gyro : r.model.acc).bias[static_cast<size_t>(axis)];
+    const GaussMarkov& prior = (gyro ? a_priori.gyro : a_priori.acc).bias[static_cast<size_t>(axis)];
+    const FittedParameter& sigma = fit->parameters[0];
+    const FittedParameter& tau = fit->parameters[1];
+    // Does the fit reject the a-priori (σ₀, τ₀)?
+    bool rejects = true;
+    const Eigen::Matrix2d C = fit->log_covariance.topLeftCorner<2, 2>();
+    if (C.allFinite() && prior.sigma > 0.0 && prior.tau_s > 0.0) {
+      const Eigen::Vector2d d_log(std::log(sigma.value / prior.sigma), std::log(tau.value / prior.tau_s));
+      rejects = d_log.dot(C.ldlt().solve(d_log)) > reject;
+    }
+    const GaussMarkov target = rejects ? GaussMarkov{sigma.value, tau.value} : prior;
+    for (const auto& [value, new_value, estimate] :
+         {std::tuple{&gm.sigma, target.sigma, &sigma}, std::tuple{&gm.tau_s, target.tau_s, &tau}}) {
+      const double change = std::abs(std::log(new_value / std::max(*value, 1e-300)));
+      const bool within_error = std::isfinite(estimate->std_error) && std::abs(new_value - *value) < estimate->std_error;
+      if (change > settle_log_ratio && !within_error) r.settled = false;
+      *value = new_value;
+    }
+    for (const auto& [estimate, prior_value, suffix, unit] :
+         {std::tuple{&sigma, prior.sigma, ".sigma", gyro ? "rad/s" : "m/s^2"},
+          std::tuple{&tau, prior.tau_s, ".tau", "s"}}) {
+      ParameterEstimate p;
+      p.name = d.state + suffix;
+      p.value = estimate->value;
+      p.std_error = estimate->std_error;
+      p.ci95_low = estimate->ci95_low;
+      p.ci95_high = estimate->ci95_high;
+      p.method = "ACF";
+      p.unit = unit;
+      p.a_priori = prior_value;
+      r.identified.push_back(p);
+    }
+  }
+  return r;
+}
+
+std::vector<ParameterEstimate> ApplyAllanNoise(const AllanResult& allan, const ErrorModel& a_priori, ErrorModel& model) {
+  std::vector<ParameterEstimate> used;
+  for (const AllanChannel& ch : allan.channels) {
+    SensorTriadModel& triad = ch.sensor == Sensor::kGyro ? model.gyro : model.acc;
+    const SensorTriadModel& prior = ch.sensor == Sensor::kGyro ? a_priori.gyro : a_priori.acc;
+    const AllanTermEstimate& n = ch.fit[AllanParameter::kWhiteDensity];
+    const AllanTermEstimate& q = ch.fit[AllanParameter::kQuantization];
+    const std::string axis(1, "xyz"[ch.axis]);
+    if (n.included && n.value > 0.0 && std::isfinite(n.std_error)) {
+      triad.white_noise_density[ch.axis] = n.value;
+      ParameterEstimate p;
+      p.name = std::string(ch.sensor == Sensor::kGyro ? "gyro_arw." : "acc_vrw.") + axis;
+      p.value = n.value;
+      p.std_error = n.std_error;
+      p.method = "ALLAN";
+      p.unit = ch.sensor == Sensor::kGyro ? "rad/sqrt(s)" : "m/s/sqrt(s)";
+      p.a_priori = prior.white_noise_density[ch.axis];
+      used.push_back(p);
+    }
+    if (q.included && q.value > 0.0 && std::isfinite(q.std_error)) {
+      triad.quantization[ch.axis] = q.value;
+    }
+  }
+  return used;
+}
+
+bool MatchReferenceNoise(const ForwardPass& fw, double alpha, ErrorModel& model, std::vector<std::string>* notes) {
+  bool changed = false;
+  const int K = fw.epochs();
+  if (K == 0) return false;
+  for (int group = 0; group < 2; ++group) {  // position channels, then velocity channels
+    double nis = 0.0, excess = 0.0;
+    for (int c = 3 * group; c < 3 * group + 3; ++c) {
+      for (int k = 0; k < K; ++k) {
+        const double nu = fw.innovation(k, c);
+        const double S = fw.innovation_variance(k, c);
+        nis += nu * nu / S;
+        excess += nu * nu - S;  // mean(ν²) − mean(S) = r̂ − r
+      }
+    }
+    const int n = 3 * K;
+    if (nis / n <= stats::ChiSquareQuantile(1.0 - alpha, n) / n) continue;
+    double& sigma = group == 0 ? model.reference.position_sigma_m : model.reference.velocity_sigma_mps;
+    const double r = sigma * sigma + excess / n;
+    if (!(r > sigma * sigma)) continue;
+    const double before = sigma;
+    sigma = std::sqrt(r);
+    changed = true;
+    if (notes != nullptr) {
+      notes->push_back(std::string("the ") + (group == 0 ? "position" : "velocity") +
+                       " innovations exceed their predicted variance: the reference noise was raised from " +
+                       Format("%.3g", before) + " to " + Format("%.3g", sigma) + (group == 0 ? " m" : " m/s") +
+                       " — the unit moved in ways the bench's reference did not record (sway, vibration)");
+    }
+  }
+  return changed;
+}
+
+}  // namespace insdiag::engine::ident
