@@ -14,6 +14,7 @@
 #include "insdiag/server/grpc_services.h"
 #include "insdiag/server/rest_gateway.h"
 #include "insdiag/server/run_service.h"
+#include "insdiag/server/web_page.h"
 #include "insdiag/v1/analyses.grpc.pb.h"
 #include "insdiag/v1/fleet.grpc.pb.h"
 #include "insdiag/v1/knowledge.grpc.pb.h"
@@ -76,6 +77,8 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
   if (!gateway.ok()) return gateway.status();
   server->gateway_ = std::move(*gateway);
   server->http_ = std::make_unique<httplib::Server>();
+  // The page's files first: the gateway's routes take every path.
+  server->serves_page_ = ServeWebPage(*server->http_, options.web_dir);
   server->gateway_->Register(*server->http_);
   // A 1-hour 50 Hz run is ~20 MB of CSV; give slow links time.
   server->http_->set_read_timeout(std::chrono::seconds(60));
