@@ -52,7 +52,9 @@ TEST(DisplaySeriesTest, ALongSeriesShrinksToOneEnvelopePerColumnAndKeepsItsExtre
   for (int c = 0; c < out->t_size(); ++c) {
     EXPECT_LE(out->residual_min(c), out->residual_max(c));
     EXPECT_LE(out->band_low(c), out->band_high(c));
-    if (c > 0) EXPECT_LT(out->t(c - 1), out->t(c));
+    if (c > 0) {
+      EXPECT_LT(out->t(c - 1), out->t(c));
+    }
     highest = std::max(highest, out->residual_max(c));
     lowest = std::min(lowest, out->residual_min(c));
     widest = std::max(widest, out->sigma3_max(c));

@@ -15,14 +15,14 @@ const CHANNELS = ['lat', 'lon', 'height', 'vel_n', 'vel_e', 'vel_d'];
 const terminal = (state) => ['SUCCEEDED', 'FAILED', 'CANCELLED'].includes(state);
 const effectsKey = (effects) => [...(effects || [])].sort().join('|');
 
-/** Renders analyses/{a} into `view`; returns what stops its streams and plots. */
-export async function showAnalysis(view, name) {
+/** Renders analyses/{a} into `view`; puts what stops its streams and plots into `leaving`. */
+export async function showAnalysis(view, name, leaving) {
   const controller = new AbortController();
   const cleanups = [];
-  const leave = () => {
+  leaving.push(() => {
     controller.abort();
     cleanups.forEach((fn) => fn());
-  };
+  });
   let analysis = await api.getAnalysis(name);
   if (!terminal(analysis.state)) {
     const progress = progressCard(analysis);
@@ -33,23 +33,27 @@ export async function showAnalysis(view, name) {
         progress.update(message);
       }, controller.signal);
     } catch (error) {
-      if (controller.signal.aborted) return leave;
-      view.append(errorCard(error));
-      return leave;
+      if (!controller.signal.aborted) view.append(errorCard(error));
+      return;
     }
-    if (!analysis.report && analysis.state === 'SUCCEEDED') analysis = await api.getAnalysis(name);
+    if (controller.signal.aborted) return;
+    // The watch's last message carries the report; a watch cut short does not.
+    if (!terminal(analysis.state) || !analysis.report) analysis = await api.getAnalysis(name);
+    if (!terminal(analysis.state)) {
+      view.append(errorCard(new Error('The server stopped reporting progress; reload the page to follow the analysis.')));
+      return;
+    }
   }
   view.replaceChildren(header(analysis));
   if (analysis.state === 'FAILED') {
     view.append(section('The analysis failed', h('p#analysis-error', analysis.error?.message || 'no reason given')));
-    return leave;
+    return;
   }
   if (analysis.state === 'CANCELLED') {
     view.append(section('Cancelled', empty('This analysis was cancelled before it finished.')));
-    return leave;
+    return;
   }
   await showReport(view, analysis, cleanups);
-  return leave;
 }
 
 function header(analysis) {
@@ -89,11 +93,12 @@ function progressCard(analysis) {
 async function showReport(view, analysis, cleanups) {
   const report = analysis.report;
   const steps = await loopSteps(analysis);
+  if (!view.isConnected) return; // the user went elsewhere meanwhile
   const before = steps.length > 1 ? steps[steps.length - 2] : null;
   const state = { channel: pickChannel(report), highlight: null };
 
   const channelsView = channelSection(analysis, before, state, cleanups);
-  view.append(
+  view.append(...[
     summaryCard(report),
     loopSection(analysis, steps),
     channelsView.element,
@@ -101,7 +106,7 @@ async function showReport(view, analysis, cleanups) {
     discoverySection(report),
     identificationSection(report, cleanups),
     diagnosisSection(analysis),
-  );
+  ].filter(Boolean));
   channelsView.draw();
 }
 
@@ -231,6 +236,10 @@ function channelSection(analysis, before, state, cleanups) {
   const plot1 = h('div.plot#plot-measured');
   const plot2 = h('div.plot#plot-residual');
   const info = h('p.hint');
+  const faults = faultList(report, state, (f) => {
+    const pad = Math.max((num(f.endS) - num(f.startS)) * 2, 5);
+    load([num(f.startS) - pad, num(f.endS) + pad]);
+  });
   const tableBody = report.channels.map((c) => h('tr.clickable', { dataset: { channel: c.name }, onclick: () => select(c.name) },
     h('td', c.name), h('td.num', `${fmt(c.rms)} ${c.unit}`), h('td.num', fmt(c.fitPercent)), h('td.num', fmt(c.nisMean)),
     h('td.num', fmtP(c.whitenessPValue)), h('td.num', `${fmt(100 * num(c.fractionOverGamma2))} %`),
@@ -239,11 +248,7 @@ function channelSection(analysis, before, state, cleanups) {
     tabs, legend1, plot1, legend2, plot2, info,
     h('h3', 'Per channel'),
     table(['Channel', 'RMS', 'Fit %', 'NIS', 'Whiteness p', 'β² > γ²', 'Fault intervals'], tableBody, { id: 'channel-table' }),
-    faultList(report, (f) => {
-      select(f.channel);
-      const pad = Math.max((f.endS - f.startS) * 2, 5);
-      load([f.startS - pad, f.endS + pad]);
-    }));
+    faults.element);
 
   let u1 = null;
   let u2 = null;
@@ -267,6 +272,7 @@ function channelSection(analysis, before, state, cleanups) {
     state.channel = channel;
     for (const b of tabs.children) b.classList.toggle('active', b.dataset.channel === channel);
     for (const row of tableBody) row.classList.toggle('selected', row.dataset.channel === channel);
+    faults.fill();
     load(range);
   }
 
@@ -306,11 +312,12 @@ function channelSection(analysis, before, state, cleanups) {
     const n = (xs) => xs.map(num);
     const t = n(e.t);
     const data1 = [t, n(e.bandHigh), n(e.bandLow), n(e.predictedMax), n(e.predictedMin), n(e.measuredMax), n(e.measuredMin)];
-    let data2 = [t, n(e.sigma3Max), n(e.sigma3Max).map((v) => (v === null ? null : -v)), n(e.residualMax), n(e.residualMin)];
+    // The step before (when there is one) first, so this model's residual is drawn over it.
     const p = previous?.envelope;
-    if (p && p.t.length) {
-      data2 = uPlot.join([data2, [n(p.t), n(p.residualMax), n(p.residualMin)]]);
-    }
+    const sigma = [t, n(e.sigma3Max), n(e.sigma3Max).map((v) => (v === null ? null : -v))];
+    const data2 = p && p.t.length
+      ? uPlot.join([sigma, [n(p.t), n(p.residualMax), n(p.residualMin)], [t, n(e.residualMax), n(e.residualMin)]])
+      : [...sigma, n(e.residualMax), n(e.residualMin)];
     const full = [num(current.series.seriesStartS), num(current.series.seriesEndS)];
     const shown = zoom || full;
     info.replaceChildren(
@@ -321,12 +328,13 @@ function channelSection(analysis, before, state, cleanups) {
       h('span.area', { style: `--c:${colors.band}` }, 'predicted ± 3σ'),
       h('span', { style: `--c:${colors.predicted}` }, 'predicted'),
       h('span', { style: `--c:${colors.measured}` }, `measured [${unit}]`));
-    legend2.replaceChildren(
+    legend2.replaceChildren(...[
       h('span.area', { style: `--c:${colors.band}` }, '± 3σ'),
       h('span', { style: `--c:${colors.residual}` }, p ? `residual, this model` : 'residual'),
       p ? h('span', { style: `--c:${colors.before}` }, `residual, the step before (${before.model.effects.join(', ') || 'base model'})`) : null,
       h('span.area', { style: `--c:${colors.fault}` }, 'fault intervals'),
-      state.highlight ? h('span.area', { style: `--c:${colors.where}` }, `where ${state.highlight.name} shows`) : null);
+      state.highlight ? h('span.area', { style: `--c:${colors.where}` }, `where ${state.highlight.name} shows`) : null,
+    ].filter(Boolean));
 
     if (u1 && u2 && u2.series.length === data2.length) {
       replaceData(u1, data1, { min: shown[0], max: shown[1] });
@@ -356,13 +364,15 @@ function channelSection(analysis, before, state, cleanups) {
         line('measured max', colors.measured), line('measured min', colors.measured)],
       bands: [{ series: [1, 2], fill: colors.band }, { series: [3, 4], fill: colors.predicted }, { series: [5, 6], fill: colors.measured }],
     }, data1);
-    const residualSeries = [{}, line('+3σ', 'rgba(120,120,120,0.6)', { width: 0.5 }), line('−3σ', 'rgba(120,120,120,0.6)', { width: 0.5 }),
-      line('residual max', colors.residual), line('residual min', colors.residual)];
-    const residualBands = [{ series: [1, 2], fill: colors.band }, { series: [3, 4], fill: colors.residual }];
+    const residualSeries = [{}, line('+3σ', 'rgba(120,120,120,0.6)', { width: 0.5 }), line('−3σ', 'rgba(120,120,120,0.6)', { width: 0.5 })];
+    const residualBands = [{ series: [1, 2], fill: colors.band }];
     if (data2.length > 5) {
       residualSeries.push(line('before max', colors.before), line('before min', colors.before));
-      residualBands.push({ series: [5, 6], fill: colors.before });
+      residualBands.push({ series: [3, 4], fill: colors.before });
     }
+    const own = residualSeries.length;
+    residualSeries.push(line('residual max', colors.residual), line('residual min', colors.residual));
+    residualBands.push({ series: [own, own + 1], fill: colors.residual });
     u2 = plot(plot2, {
       ...common,
       axes: [secondsAxis, valueAxis(`residual [${unit}]`)],
@@ -390,24 +400,70 @@ function channelSection(analysis, before, state, cleanups) {
   };
 }
 
-function faultList(report, onPick) {
-  if (!report.faultIntervals.length) return h('div', h('h3', 'Fault intervals'), empty('No fault interval: the model holds everywhere within tolerance.'));
-  return h('div', h('h3', `Fault intervals (${report.faultIntervals.length})`),
-    table(['Channel', 'From', 'To', 'Kind', 'Peak'], report.faultIntervals.slice(0, 200).map((f) =>
-      h('tr.clickable', { onclick: () => onPick(f) },
-        h('td', f.channel), h('td.num', `${fmt(f.startS, 5)} s`), h('td.num', `${fmt(f.endS, 5)} s`), h('td', f.kind),
-        h('td.num', fmt(f.peakStatistic)))), { id: 'fault-table' }),
-    report.faultIntervals.length > 200 ? h('p.hint', `and ${report.faultIntervals.length - 200} more`) : null);
+/** The fault intervals of the selected channel (all channels' count in the heading); a click zooms onto one. */
+function faultList(report, state, onPick) {
+  const body = h('div.scroll');
+  const heading = h('h3');
+  const fill = () => {
+    const mine = report.faultIntervals.filter((f) => f.channel === state.channel);
+    heading.textContent = `Fault intervals on ${state.channel}: ${mine.length} (all channels: ${report.faultIntervals.length})`;
+    body.replaceChildren(mine.length
+      ? table(['From', 'To', 'Kind', 'Peak statistic'], mine.map((f) =>
+        h('tr.clickable', { onclick: () => onPick(f) },
+          h('td.num', `${fmt(f.startS, 5)} s`), h('td.num', `${fmt(f.endS, 5)} s`), h('td', f.kind),
+          h('td.num', fmt(f.peakStatistic)))), { id: 'fault-table' })
+      : empty(`No fault interval on ${state.channel}: the model holds there within tolerance.`));
+  };
+  return { element: h('div', heading, h('p.hint', 'Click an interval to zoom onto it.'), body), fill };
 }
 
 // --- missing effects ------------------------------------------------------------
+
+// Effect names of shared/spec/effects.md, offered while typing; the server is
+// the judge of what it accepts.
+const FAMILIES = {
+  gyro_turn_on_bias: 'xyz', gyro_scale_factor: 'xyz', gyro_misalignment: 'pairs', gyro_g_sensitivity: 'all pairs',
+  gyro_temp_coeff: 'xyz', gyro_yaw_harmonic: 'xyz', gyro_bias_rw: 'xyz', gyro_bias_second_order: 'xyz',
+  acc_turn_on_bias: 'xyz', acc_scale_factor: 'xyz', acc_misalignment: 'pairs', acc_temp_coeff: 'xyz',
+  acc_bias_rw: 'xyz', acc_bias_second_order: 'xyz',
+};
+const AXES = {
+  xyz: ['x', 'y', 'z'],
+  pairs: ['xy', 'xz', 'yx', 'yz', 'zx', 'zy'],
+  'all pairs': ['xx', 'xy', 'xz', 'yx', 'yy', 'yz', 'zx', 'zy', 'zz'],
+};
+const CATALOGUE = Object.entries(FAMILIES).flatMap(([family, axes]) => [family, ...AXES[axes].map((a) => `${family}.${a}`)]);
+
+/** Adding an effect by name: for one the ranking does not list, or a whole family. */
+function addByName(analysis) {
+  const input = h('input#add-effect-name', { list: 'effect-catalogue', placeholder: 'e.g. gyro_scale_factor.z', size: 32 });
+  const message = h('span.worse.small');
+  const add = async () => {
+    const name = input.value.trim();
+    if (!name) return;
+    if (analysis.model.effects.includes(name)) {
+      message.textContent = `${name} is in the model already`;
+      return;
+    }
+    try {
+      await startAnalysis(analysis.run, [...analysis.model.effects, name], analysis.model.effects);
+    } catch (error) {
+      message.textContent = error.message;
+    }
+  };
+  input.addEventListener('keydown', (event) => event.key === 'Enter' && add());
+  return h('div.row', { style: 'margin-top:10px' }, 'Add an effect by name: ', input,
+    h('datalist#effect-catalogue', CATALOGUE.map((name) => h('option', { value: name }))),
+    h('button.secondary#add-effect', { onclick: add }, 'Add and re-run'), message);
+}
 
 function candidatesSection(analysis, state, channelsView) {
   const report = analysis.report;
   const candidates = report.effectCandidates;
   if (!candidates.length) {
     return section('Missing effects', empty(
-      'No candidate effect in this report: either every catalogue effect is in the model, or this server\'s engine does not rank candidates yet.'));
+      'No candidate effect in this report: either every catalogue effect is in the model, or this server\'s engine does not rank candidates yet.'),
+    addByName(analysis));
   }
   const rows = candidates.map((c, i) => {
     const where = [...(c.where || [])].sort((a, b) => num(b.share) - num(a.share));
@@ -453,7 +509,8 @@ function candidatesSection(analysis, state, channelsView) {
     h('p.hint', 'Every catalogue effect the model lacks, scored from this pass. Hover or click a row to see where in the test it shows ',
       '(highlighted on the plots above); Add re-runs with it and compares.'),
     table(['#', 'Effect', 'Estimate ± SE', 'Statistic', 'p (Holm)', 'ΔAIC if added', 'Identifiable', 'Where it shows', ''], rows,
-      { id: 'candidate-table' }));
+      { id: 'candidate-table' }),
+    addByName(analysis));
 }
 
 function discoverySection(report) {

@@ -16,24 +16,26 @@ let leaveView = null; // stops the current view's streams and timers
 
 async function route() {
   if (leaveView) leaveView();
-  leaveView = null;
+  const leaving = [];
+  leaveView = () => leaving.forEach((fn) => fn());
   const path = (window.location.hash || '#/').slice(1);
   for (const link of document.querySelectorAll('header nav a')) {
     const nav = link.dataset.nav;
     link.classList.toggle('active', nav === 'fleet' ? path.startsWith('/fleet') : !path.startsWith('/fleet'));
   }
-  main.replaceChildren(h('p.muted', 'Loading…'));
+  // The view is in the page from the start: plots take their width from it,
+  // and a running analysis shows its progress while the view waits.
   const view = h('div');
+  main.replaceChildren(view);
   try {
     let match;
-    if ((match = path.match(/^\/analyses\/([^/]+)$/))) leaveView = await showAnalysis(view, `analyses/${match[1]}`);
+    if ((match = path.match(/^\/analyses\/([^/]+)$/))) await showAnalysis(view, `analyses/${match[1]}`, leaving);
     else if ((match = path.match(/^\/runs\/([^/]+)$/))) await showRun(view, `runs/${match[1]}`);
     else if (path.startsWith('/fleet')) await showFleet(view);
     else await showRuns(view);
   } catch (error) {
-    view.replaceChildren(errorCard(error));
+    if (view.isConnected) view.append(errorCard(error));
   }
-  main.replaceChildren(view);
 }
 
 // --- runs -------------------------------------------------------------------

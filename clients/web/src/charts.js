@@ -7,7 +7,7 @@ export const colors = {
   predicted: '#e07b00',
   band: 'rgba(120, 120, 120, 0.16)',
   residual: '#1f6fd1',
-  before: 'rgba(160, 40, 40, 0.75)',
+  before: 'rgba(200, 60, 60, 0.55)',
   fault: 'rgba(220, 40, 40, 0.14)',
   where: 'rgba(250, 190, 0, 0.35)',
   fits: ['#7b3fb5', '#2e9e4f', '#d1495b', '#00798c', '#8a6d00', '#555'],

@@ -78,11 +78,12 @@ export function section(title, ...children) {
   return h('section.card', h('h2', title), ...children);
 }
 
+/** A table (`attributes` go on the <table>) in a box that scrolls sideways when too wide. */
 export function table(headers, rows, attributes = {}) {
-  return h(
+  return h('div.table-wrap', h(
     'table',
     attributes,
     h('thead', h('tr', headers.map((header) => h('th', header)))),
     h('tbody', rows),
-  );
+  ));
 }
