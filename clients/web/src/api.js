@@ -80,7 +80,17 @@ export function num(value) {
   return Number.isFinite(n) ? n : null;
 }
 
-const id = (name) => name.split('/').pop();
+/** Every item of a paginated List method (AIP-158), `listPage(token)` a page at a time, at most `limit`. */
+export async function listAll(listPage, field, limit) {
+  const items = [];
+  let token = '';
+  do {
+    const page = await listPage(token);
+    items.push(...page[field]);
+    token = page.nextPageToken;
+  } while (token && items.length < limit);
+  return items;
+}
 
 export const api = {
   listRuns: (pageToken) => call('GET', '/v1/runs', { query: { pageSize: 200, pageToken } }),
@@ -112,5 +122,3 @@ export const api = {
     call('GET', `/v1/${unitType}/parameterTrends`, { query: { parameter, pageSize: 1000 } }),
   unitRanking: () => call('GET', '/v1/fleet/unitRanking', { query: { pageSize: 50 } }),
 };
-
-export { id };

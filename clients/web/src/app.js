@@ -5,7 +5,7 @@
 //   #/runs/{run}        a run and its analyses
 //   #/analyses/{a}      an analysis: the model loop (analysis.js)
 //   #/fleet             fleet statistics (fleet.js)
-import { api, ApiError, num } from './api.js';
+import { api, ApiError, listAll, num } from './api.js';
 import { h, fmt, fmtSeconds, fmtTime, empty, section, table } from './dom.js';
 import { navigate, startAnalysis, errorCard } from './nav.js';
 import { showAnalysis } from './analysis.js';
@@ -47,13 +47,7 @@ async function showRuns(view) {
 }
 
 async function fillRunList(listing) {
-  const runs = [];
-  let token = '';
-  do {
-    const page = await api.listRuns(token);
-    runs.push(...page.runs);
-    token = page.nextPageToken;
-  } while (token && runs.length < 2000);
+  const runs = await listAll(api.listRuns, 'runs', 2000);
   if (!runs.length) {
     listing.replaceChildren(empty('No runs yet: upload a bench-run file above.'));
     return;

@@ -80,10 +80,13 @@ export function section(title, ...children) {
 
 /** A table (`attributes` go on the <table>) in a box that scrolls sideways when too wide. */
 export function table(headers, rows, attributes = {}) {
+  // A heading sits on the side its column's numbers do.
+  const first = rows[0]?.children || [];
+  const numeric = (i) => Boolean(first[i]?.classList.contains('num'));
   return h('div.table-wrap', h(
     'table',
     attributes,
-    h('thead', h('tr', headers.map((header) => h('th', header)))),
+    h('thead', h('tr', headers.map((header, i) => h(numeric(i) ? 'th.num' : 'th', header)))),
     h('tbody', rows),
   ));
 }

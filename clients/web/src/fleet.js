@@ -2,7 +2,7 @@
 // with MTBF bounds, the Pareto of failure modes, the Weibull life of a module
 // role on Weibull paper with its B10, trends of an identified parameter
 // across the fleet, and the units ranked by fault probability.
-import { api, num } from './api.js';
+import { api, listAll, num } from './api.js';
 import { h, fmt, fmtTime, empty, section, table } from './dom.js';
 import { plot, line, bars, markers, formatTick, uPlot } from './charts.js';
 
@@ -37,14 +37,16 @@ function statisticsSection(s) {
 }
 
 function paretoSection(pareto, after) {
-  if (!pareto.entries.length) {
+  // Modes that never failed have no bar.
+  const entries = pareto.entries.filter((e) => num(e.failures) > 0);
+  if (!entries.length) {
     return section('Pareto of failure modes', empty('No confirmed failure yet: confirm a diagnosis to start the Pareto.'));
   }
   const container = h('div#pareto-plot');
-  const entries = pareto.entries;
   const x = entries.map((_, i) => i);
   after.push(() => plot(container, {
     height: 260,
+    legend: { show: false },
     scales: { x: { time: false, range: [-0.5, entries.length - 0.5] }, share: { range: [0, 100] } },
     axes: [
       { values: (u, ticks) => ticks.map((i) => (Number.isInteger(i) && entries[i] ? short(entries[i].displayName || entries[i].failureMode) : '')), size: 50, rotate: 0 },
@@ -110,9 +112,10 @@ async function drawWeibull(body, role) {
     h('p', `β = ${fmt(beta)} (${fmt(fit.shapeLower)} … ${fmt(fit.shapeUpper)}), η = ${fmt(eta)} h (${fmt(fit.scaleLowerHours)} … ${fmt(fit.scaleUpperHours)}), `,
       h('strong', `B10 = ${fmt(b10)} h`), ` (${fmt(fit.b10LowerHours)} … ${fmt(fit.b10UpperHours)}) · ${fit.failures} failures, ${fit.suspensions} suspensions`),
     container,
-    h('p.hint', 'Points: confirmed failures at Bernard\'s median ranks with Johnson\'s adjustment for the suspensions (censored records at their hours, the others after the last failure). Line: the maximum-likelihood fit.'));
+    h('p.hint', 'Line: the server\'s maximum-likelihood fit with right censoring. Points: each module\'s first confirmed failure at Bernard\'s median rank, the suspensions taken after the last failure (a display approximation). Green: B10.'));
   requestAnimationFrame(() => plot(container, {
     height: 280,
+    legend: { show: false },
     scales: { x: { time: false, distr: 3 }, y: { range: [weibullY(0.005), weibullY(0.995)] } },
     axes: [{ label: 'operating hours', labelSize: 18, size: 34 },
       { label: 'unreliability F', labelSize: 18, size: 60, splits: () => paperTicks.map(weibullY),
@@ -121,30 +124,23 @@ async function drawWeibull(body, role) {
   }, data));
 }
 
-/** Failure times of a role with their adjusted median ranks. */
+/**
+ * The failures behind a role's fit, as the server counts them (each module's
+ * first confirmed failure), at Bernard's median ranks among failures plus
+ * suspensions. The suspensions' hours are not listed by the API: they are
+ * taken to lie after the last failure, which is what the plot approximates.
+ */
 async function failurePoints(role, suspensions) {
-  const records = [];
-  let token = '';
-  do {
-    const page = await api.listFailureRecords(token);
-    records.push(...page.failureRecords);
-    token = page.nextPageToken;
-  } while (token && records.length < 20000);
-  const mine = records.filter((r) => r.module.split('/').pop() === role);
-  const failures = mine.filter((r) => r.confirmed && !r.censored).map((r) => ({ t: num(r.operatingHours), failed: true }));
-  const censored = mine.filter((r) => r.censored).map((r) => ({ t: num(r.operatingHours), failed: false }));
-  const later = Math.max(0, suspensions - censored.length);
-  const all = [...failures, ...censored].filter((r) => r.t > 0).sort((a, b) => a.t - b.t);
-  const n = all.length + later;
-  const out = [];
-  let rank = 0;
-  all.forEach((r, i) => {
-    if (!r.failed) return;
-    const reverse = n - i; // units at risk, this one included
-    rank += (n + 1 - rank) / (1 + reverse);
-    out.push({ t: r.t, F: (rank - 0.3) / (n + 0.4) });
-  });
-  return out;
+  const records = await listAll(api.listFailureRecords, 'failureRecords', 20000);
+  const firstFailure = new Map();
+  for (const r of records) {
+    const hours = num(r.operatingHours);
+    if (!r.confirmed || r.module.split('/').pop() !== role || !(hours > 0)) continue;
+    firstFailure.set(r.module, Math.min(hours, firstFailure.get(r.module) ?? Infinity));
+  }
+  const times = [...firstFailure.values()].sort((a, b) => a - b);
+  const n = times.length + suspensions;
+  return times.map((t, i) => ({ t, F: (i + 1 - 0.3) / (n + 0.4) }));
 }
 
 // --- parameter trends -----------------------------------------------------------

@@ -1,0 +1,13 @@
+import { chromium } from 'playwright-core';
+const [url, out] = process.argv.slice(2);
+const browser = await chromium.launch({ executablePath: '/usr/bin/chromium', headless: true, args: ['--no-sandbox', '--disable-gpu'] });
+const page = await browser.newPage({ viewport: { width: 1400, height: 1000 } });
+page.on('pageerror', (e) => console.log('pageerror:', e.message));
+page.on('response', (r) => { if (r.status() >= 400) console.log('HTTP', r.status(), r.url()); });
+await page.goto(url);
+await page.locator('#diagnose, #diagnosis-table').first().waitFor();
+if (await page.locator('#diagnose').count()) await page.locator('#diagnose').click();
+await page.locator('#diagnosis-table').waitFor();
+await page.locator('#diagnosis-table').scrollIntoViewIfNeeded();
+await page.screenshot({ path: out });
+await browser.close();
