@@ -31,6 +31,11 @@ export async function showAnalysis(view, name, leaving) {
       await api.watchAnalysis(name, (message) => {
         analysis = message;
         progress.update(message);
+        const badge = view.querySelector('#state');
+        if (badge) {
+          badge.textContent = message.state;
+          badge.className = `badge ${message.state}`;
+        }
       }, controller.signal);
     } catch (error) {
       if (!controller.signal.aborted) view.append(errorCard(error));
@@ -163,10 +168,10 @@ async function loopSteps(analysis) {
   return steps;
 }
 
-function lower(value, previous) {
-  if (previous === null || value === null) return '';
-  if (value < previous) return 'better';
-  return value > previous ? 'worse' : '';
+/** 'better' or 'worse' as `value` moved from `previous`, where less is better (or more, for a likelihood). */
+function lower(value, previous, moreIsBetter = false) {
+  if (previous === null || value === null || value === previous) return '';
+  return (value < previous) !== moreIsBetter ? 'better' : 'worse';
 }
 
 function loopSection(analysis, steps) {
@@ -178,7 +183,8 @@ function loopSection(analysis, steps) {
     const added = prior ? step.model.effects.filter((e) => !prior.model.effects.includes(e)) : step.model.effects;
     const priorChannel = (n) => prior?.report.channels.find((c) => c.name === n);
     const white = r.channels.filter((c) => num(c.whitenessPValue) >= 0.05).length;
-    const cell = (value, previous, digits = 4) => h(`td.num.${lower(value, previous) || 'plain'}`, fmt(value, digits));
+    const cell = (value, previous, digits = 4, moreIsBetter = false) =>
+      h(`td.num.${lower(value, previous, moreIsBetter) || 'plain'}`, fmt(value, digits));
     return h(`tr.clickable${step.name === analysis.name ? '.selected' : ''}`, {
       dataset: { step: i, nis: num(r.nisMean), aic: num(r.aic), rmsTotal: r.channels.reduce((s, c) => s + (num(c.rms) || 0), 0) },
       onclick: () => step.name !== analysis.name && navigate(`#/${step.name}`),
@@ -187,7 +193,7 @@ function loopSection(analysis, steps) {
     h('td', i === 0 && !added.length ? 'base model' : added.map((e) => `+ ${e}`).join(', ') || '(same model)'),
     channelNames.map((n) => cell(num(r.channels.find((c) => c.name === n)?.rms), num(priorChannel(n)?.rms), 3)),
     cell(num(r.nisMean), prior ? num(prior.report.nisMean) : null),
-    h('td.num', fmt(r.logLikelihood, 6)),
+    cell(num(r.logLikelihood), prior ? num(prior.report.logLikelihood) : null, 6, true),
     cell(num(r.aic), prior ? num(prior.report.aic) : null, 6),
     cell(num(r.bic), prior ? num(prior.report.bic) : null, 6),
     h('td.num', `${white}/${r.channels.length}`));
@@ -209,19 +215,20 @@ function loopSection(analysis, steps) {
 /** Model B against the model A it extends, as the engine compared them on one run. */
 function comparisonBlock(comparison) {
   if (!comparison || !comparison.addedEffects?.length) return null;
-  const arrow = (before, after, digits = 4) => {
+  const arrow = (before, after, digits = 4, moreIsBetter = false) => {
     const b = num(before);
     const a = num(after);
-    return h(`td.num.${lower(a, b) || 'plain'}`, `${fmt(b, digits)} → ${fmt(a, digits)}`);
+    return h(`td.num.${lower(a, b, moreIsBetter) || 'plain'}`, `${fmt(b, digits)} → ${fmt(a, digits)}`);
   };
+  const arrowP = (before, after) =>
+    h(`td.num.${lower(num(after), num(before), true) || 'plain'}`, `${fmtP(before)} → ${fmtP(after)}`);
   return h('div#comparison',
     h('h3', `Before and after: + ${comparison.addedEffects.join(', ')}`),
     table(['Channel', 'RMS', 'NIS', 'whiteness p', 'fit %'], comparison.channels.map((c) => h('tr',
       h('td', c.name), arrow(c.rmsBefore, c.rmsAfter, 3), arrow(c.nisMeanBefore, c.nisMeanAfter),
-      h('td.num', `${fmtP(c.whitenessPValueBefore)} → ${fmtP(c.whitenessPValueAfter)}`),
-      h('td.num', `${fmt(c.fitPercentBefore)} → ${fmt(c.fitPercentAfter)}`)))),
+      arrowP(c.whitenessPValueBefore, c.whitenessPValueAfter), arrow(c.fitPercentBefore, c.fitPercentAfter, 3, true)))),
     table(['', 'NIS', 'log L', 'AIC', 'BIC', 'LR realised', 'LR predicted'], [h('tr', h('td', 'model'),
-      arrow(comparison.nisMeanBefore, comparison.nisMeanAfter), arrow(comparison.logLikelihoodBefore, comparison.logLikelihoodAfter, 6),
+      arrow(comparison.nisMeanBefore, comparison.nisMeanAfter), arrow(comparison.logLikelihoodBefore, comparison.logLikelihoodAfter, 6, true),
       arrow(comparison.aicBefore, comparison.aicAfter, 6), arrow(comparison.bicBefore, comparison.bicAfter, 6),
       h('td.num', fmt(comparison.realizedLr)), h('td.num', fmt(comparison.predictedLr)))]));
 }
@@ -253,6 +260,7 @@ function channelSection(analysis, before, state, cleanups) {
   let u1 = null;
   let u2 = null;
   let range = null; // null: the whole run
+  let plotted = null; // the channel u1 and u2 show
   let request = 0;
   cleanups.push(() => {
     destroy(u1);
@@ -336,7 +344,7 @@ function channelSection(analysis, before, state, cleanups) {
       state.highlight ? h('span.area', { style: `--c:${colors.where}` }, `where ${state.highlight.name} shows`) : null,
     ].filter(Boolean));
 
-    if (u1 && u2 && u2.series.length === data2.length) {
+    if (u1 && u2 && plotted === state.channel && u2.series.length === data2.length) {
       replaceData(u1, data1, { min: shown[0], max: shown[1] });
       replaceData(u2, data2, { min: shown[0], max: shown[1] });
       return;
@@ -345,6 +353,7 @@ function channelSection(analysis, before, state, cleanups) {
     destroy(u2);
     plot1.replaceChildren();
     plot2.replaceChildren();
+    plotted = state.channel;
     const common = {
       height: 230,
       shade,
@@ -523,7 +532,7 @@ function discoverySection(report) {
           h('td.num', `${fmt(s.estimate)} ± ${fmt(s.stdError, 2)} ${s.unit || ''}`), h('td.num', fmt(s.statistic)),
           h('td.num', fmtP(s.pValue)),
           h(`td.num.${lower(num(s.nisMean), prior ? num(prior.nisMean) : null) || 'plain'}`, fmt(s.nisMean)),
-          h('td.num', fmt(s.logLikelihood, 6)),
+          h(`td.num.${lower(num(s.logLikelihood), prior ? num(prior.logLikelihood) : null, true) || 'plain'}`, fmt(s.logLikelihood, 6)),
           h(`td.num.${lower(num(s.aic), prior ? num(prior.aic) : null) || 'plain'}`, fmt(s.aic, 6)),
           h('td.num', fmt(s.bic, 6)));
       }), { id: 'discovery-table' }));

@@ -36,18 +36,26 @@ function shadingPlugin(intervals) {
   };
 }
 
-/** Calls `onZoom(min, max)` after the user zooms the x axis (drag; double-click resets). */
+/**
+ * Calls `onZoom(min, max)` after the user drags across the plot to zoom the
+ * x axis; the scale changes uPlot makes by itself (creation, resize) do not.
+ */
 function zoomPlugin(onZoom) {
-  let timer = null;
   return {
     hooks: {
-      setSelect: (u) => {
-        u._userZoom = true;
+      init: (u) => {
+        u.over.addEventListener('mousedown', () => {
+          u._dragging = true;
+        });
       },
       setScale: (u, key) => {
-        if (key !== 'x' || u._quiet) return;
-        clearTimeout(timer);
-        timer = setTimeout(() => onZoom(u.scales.x.min, u.scales.x.max), 120);
+        if (key !== 'x' || !u._dragging) return;
+        u._dragging = false;
+        onZoom(u.scales.x.min, u.scales.x.max);
+      },
+      setSelect: (u) => {
+        // A click without a drag selects nothing and zooms nothing.
+        if (u.select.width === 0) u._dragging = false;
       },
     },
   };
@@ -74,13 +82,10 @@ export function plot(container, options, data) {
   return u;
 }
 
-/** Replaces a plot's data keeping the x range the user chose. */
+/** Replaces a plot's data and shows `range` of x (null: all of it). */
 export function replaceData(u, data, range) {
-  u._quiet = true;
-  u.setData(data, false);
+  u.setData(data, !range);
   if (range) u.setScale('x', range);
-  else u.redraw();
-  u._quiet = false;
 }
 
 export function destroy(u) {
@@ -112,6 +117,7 @@ export function valueAxis(label, size = 70) {
 }
 
 export function formatTick(v) {
+  if (v === null || v === undefined) return ''; // log scales leave some ticks out
   if (v === 0) return '0';
   const a = Math.abs(v);
   return a >= 1e4 || a < 1e-2 ? v.toExponential(1) : String(Number(v.toPrecision(4)));

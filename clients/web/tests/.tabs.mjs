@@ -1,0 +1,13 @@
+import { chromium } from 'playwright-core';
+const [url] = process.argv.slice(2);
+const browser = await chromium.launch({ executablePath: '/usr/bin/chromium', headless: true, args: ['--no-sandbox', '--disable-gpu'] });
+const page = await browser.newPage({ viewport: { width: 1400, height: 1000 } });
+page.on('request', (r) => { if (r.url().includes('display')) console.log(Date.now() % 100000, 'REQ', r.url().slice(-60)); });
+page.on('requestfinished', (r) => { if (r.url().includes('display')) console.log(Date.now() % 100000, 'DONE', r.url().slice(-60)); });
+page.on('requestfailed', (r) => console.log('FAILED', r.url(), r.failure()?.errorText));
+await page.goto(url);
+await page.locator('#plot-residual canvas').first().waitFor();
+await page.locator('#channel-tabs button', { hasText: 'vel_e' }).click();
+await page.waitForTimeout(3000);
+console.log(await page.locator('#plot-residual + p.hint').innerText());
+await browser.close();
