@@ -84,9 +84,14 @@ function uploadCard() {
     h('p.hint', 'The run is stored and analysed with the base model at once; then the page shows the loop.'));
   const upload = async (file) => {
     if (!file) return;
-    status.replaceChildren(h('p.muted', `Uploading ${file.name} (${(file.size / 1e6).toFixed(1)} MB)…`));
+    const bar = h('div', { style: 'width:0%' });
+    const label = h('p.muted', `Uploading ${file.name} (${(file.size / 1e6).toFixed(1)} MB)…`);
+    status.replaceChildren(label, h('div.progress#upload-progress', bar));
     try {
-      const run = await api.uploadRun(file);
+      const run = await api.uploadRun(file, (fraction) => {
+        bar.style.width = `${Math.round(100 * fraction)}%`;
+        if (fraction >= 1) label.textContent = `Checking and storing ${file.name}…`;
+      });
       status.replaceChildren(h('p', `Stored ${run.name} (${Number(run.sampleCount).toLocaleString()} samples); analysing…`));
       await startAnalysis(run.name, [], []);
     } catch (error) {

@@ -194,6 +194,13 @@ async function drawTrend(body, { type, parameter }) {
   const limits = nominal === null ? [] : [nominal - (tolerance || 0), nominal + (tolerance || 0)];
   requestAnimationFrame(() => plot(container, {
     height: 240,
+    // The tolerance limits stay in view however the values lie.
+    scales: { y: { range: (u, min, max) => {
+      const lo = Math.min(min, ...limits);
+      const hi = Math.max(max, ...limits);
+      const pad = 0.05 * (hi - lo || Math.abs(hi) || 1);
+      return [lo - pad, hi + pad];
+    } } },
     axes: [{}, { label: `${parameter.name} [${trend.unit || parameter.unit || ''}]`, labelSize: 18, size: 70, values: (u, t) => t.map(formatTick) }],
     series,
     bands,
