@@ -43,6 +43,8 @@ let page;
 let runCsv;
 let baseAnalysisUrl;
 const foreignRequests = []; // anything the page asked of another origin
+const firstStates = new Map(); // analysis name → its state in the page's first GET of it
+const watched = new Set(); // analyses whose :watch stream the page opened
 
 function psql(sql) {
   execFileSync('psql', [databaseUrl, '-v', 'ON_ERROR_STOP=1', '-qc', sql], { stdio: 'pipe' });
@@ -107,6 +109,18 @@ before(async () => {
     if (url.origin !== baseUrl && url.protocol !== 'data:') foreignRequests.push(request.url());
   });
   page.on('pageerror', (error) => { serverLog += `\n[page error] ${error.message}`; });
+  page.on('request', (request) => {
+    const watch = new URL(request.url()).pathname.match(/^\/v1\/(analyses\/[^/:]+):watch$/);
+    if (watch) watched.add(watch[1]);
+  });
+  page.on('response', async (response) => {
+    const get = new URL(response.url()).pathname.match(/^\/v1\/(analyses\/[^/:]+)$/);
+    if (!get || response.request().method() !== 'GET' || firstStates.has(get[1])) return;
+    firstStates.set(get[1], 'pending');
+    try {
+      firstStates.set(get[1], (await response.json()).state);
+    } catch { /* a page that moved on */ }
+  });
 });
 
 after(async () => {
@@ -231,6 +245,11 @@ async function expectLoopStep(fromUrl, shot) {
   await page.locator('#progress, #verdict').first().waitFor();
   if (await page.locator('#progress').count()) await screenshot(`${shot}-running`);
   await page.locator('#verdict').waitFor({ timeout: ANALYSIS_TIMEOUT_MS });
+  // An analysis the page found queued or running was followed through its watch stream.
+  const name = `analyses/${page.url().split('#/analyses/')[1]}`;
+  if (['QUEUED', 'RUNNING'].includes(firstStates.get(name))) {
+    assert.ok(watched.has(name), `the page showed ${name}'s progress from ${name}:watch`);
+  }
   assert.match(await page.locator('#model-effects').innerText(), new RegExp(HIDDEN_EFFECT.replace('.', '\\.')));
   const rows = page.locator('#step-table tbody tr');
   await rows.nth(1).waitFor();
