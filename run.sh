@@ -27,6 +27,7 @@ fi
 
 cat <<EOM
 insdiag is starting:
+  page   http://localhost:$http_port/
   gRPC   localhost:$grpc_port   (health checking and reflection on)
   REST   http://localhost:$http_port/v1/runs   (health: http://localhost:$http_port/healthz)
   data   $data_dir

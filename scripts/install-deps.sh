@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs the Debian packages insdiag builds, tests and runs with, when missing.
+# Installs the Debian packages insdiag builds, tests and runs with, when missing,
+# and the page's npm packages (clients/web, from its package-lock.json).
 # Usage: scripts/install-deps.sh [--browser]   (--browser adds chromium for the page's end-to-end tests)
 set -euo pipefail
 
@@ -11,9 +12,10 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libcpp-httplib-dev libcli11-dev
   python3-grpcio python3-grpc-tools python3-numpy python3-scipy
+  nodejs npm
 )
 if [[ "${1:-}" == "--browser" ]]; then
-  packages+=(chromium nodejs npm)
+  packages+=(chromium)
 fi
 
 missing=()
@@ -35,3 +37,5 @@ if ((${#missing[@]})); then
   "${sudo_cmd[@]}" apt-get update -qq
   "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
+
+"$(dirname "$0")/install-web-deps.sh"

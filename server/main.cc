@@ -22,6 +22,12 @@ int Fail(const absl::Status& status) {
   return 1;
 }
 
+// The page: $INSDIAG_WEB_DIR, else where this build put it.
+std::string DefaultWebDir() {
+  const char* env = std::getenv("INSDIAG_WEB_DIR");
+  return env != nullptr && *env != '\0' ? env : INSDIAG_DEFAULT_WEB_DIR;
+}
+
 std::string DefaultDataDir() {
   const char* env = std::getenv("INSDIAG_DATA_DIR");
   return env != nullptr && *env != '\0' ? env : ".insdiag";
@@ -44,6 +50,10 @@ int main(int argc, char** argv) {
   app.add_option("--bind", options.bind_address, "Address to listen on")->capture_default_str();
   app.add_option("--migrations-dir", migrations_dir,
                  "Apply migrations from this directory instead of those built in");
+  options.web_dir = DefaultWebDir();
+  app.add_option("--web-dir", options.web_dir,
+                 "Serve the page from this directory (default $INSDIAG_WEB_DIR, else the build's)")
+      ->capture_default_str();
   const unsigned cores = std::thread::hardware_concurrency();
   int workers = cores > 1 ? static_cast<int>(cores) - 1 : 1;
   double lease_s = 30.0;
@@ -105,6 +115,13 @@ int main(int argc, char** argv) {
             << " http=" << options.bind_address << ":" << (*server)->http_port() << " database="
             << (postgres ? "embedded:" + postgres->cluster_dir().string() : std::string("external"))
             << " workers=" << workers << std::endl;
+  if ((*server)->serves_page()) {
+    std::cerr << "insdiagd: the page is at http://localhost:" << (*server)->http_port() << "/ (from "
+              << options.web_dir << ")\n";
+  } else {
+    std::cerr << "insdiagd: no page in '" << options.web_dir
+              << "' (scripts/install-deps.sh && scripts/build.sh build it); the REST API is served\n";
+  }
 
   int signal_number = 0;
   sigwait(&stop_signals, &signal_number);

@@ -61,6 +61,7 @@ INSDIAG_DELEGATE(AnalysisServiceGrpc, analyses_, CreateAnalysis, CreateAnalysisR
 INSDIAG_DELEGATE(AnalysisServiceGrpc, analyses_, GetAnalysis, GetAnalysisRequest, Analysis)
 INSDIAG_DELEGATE(AnalysisServiceGrpc, analyses_, ListAnalyses, ListAnalysesRequest, ListAnalysesResponse)
 INSDIAG_DELEGATE(AnalysisServiceGrpc, analyses_, CancelAnalysis, CancelAnalysisRequest, Analysis)
+INSDIAG_DELEGATE(AnalysisServiceGrpc, analyses_, ReadDisplaySeries, ReadDisplaySeriesRequest, DisplaySeries)
 INSDIAG_DELEGATE(KnowledgeServiceGrpc, knowledge_, GetUnitType, GetUnitTypeRequest, UnitType)
 INSDIAG_DELEGATE(KnowledgeServiceGrpc, knowledge_, ListUnitTypes, ListUnitTypesRequest, ListUnitTypesResponse)
 INSDIAG_DELEGATE(KnowledgeServiceGrpc, knowledge_, GetUnit, GetUnitRequest, Unit)

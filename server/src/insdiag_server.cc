@@ -1,6 +1,10 @@
 #include "insdiag/server/insdiag_server.h"
 
+#include <absl/strings/ascii.h>
+#include <absl/strings/match.h>
 #include <absl/strings/str_cat.h>
+#include <absl/strings/str_join.h>
+#include <absl/strings/str_split.h>
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
@@ -14,6 +18,7 @@
 #include "insdiag/server/grpc_services.h"
 #include "insdiag/server/rest_gateway.h"
 #include "insdiag/server/run_service.h"
+#include "insdiag/server/web_page.h"
 #include "insdiag/v1/analyses.grpc.pb.h"
 #include "insdiag/v1/fleet.grpc.pb.h"
 #include "insdiag/v1/knowledge.grpc.pb.h"
@@ -76,7 +81,32 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
   if (!gateway.ok()) return gateway.status();
   server->gateway_ = std::move(*gateway);
   server->http_ = std::make_unique<httplib::Server>();
+  // The page's files first: the gateway's routes take every path.
+  server->serves_page_ = ServeWebPage(*server->http_, options.web_dir);
   server->gateway_->Register(*server->http_);
+  // A thread serves one connection for as long as the client keeps it open: a
+  // browser keeps up to six per page, and a watched analysis holds one while
+  // it runs. httplib's default (a thread per core, at least 8) would queue a
+  // page's requests behind idle keep-alive connections for seconds.
+  server->http_->new_task_queue = [] { return new httplib::ThreadPool(64); };
+  // Browsers accept "gzip, deflate, br, zstd", and Debian's compiled
+  // cpp-httplib then answers with brotli at its default quality 11: seconds of
+  // CPU for a few hundred kB of JSON or JavaScript, where gzip takes
+  // milliseconds. Leaving br out of what the client accepts gets them gzip.
+  // (The request is httplib's own non-const object, handed over as const.)
+  server->http_->set_pre_routing_handler([](const httplib::Request& request, httplib::Response&) {
+    auto& headers = const_cast<httplib::Request&>(request).headers;
+    for (auto& [name, value] : headers) {
+      if (!absl::EqualsIgnoreCase(name, "Accept-Encoding") || !absl::StrContains(value, "br")) continue;
+      std::vector<std::string> kept;
+      for (absl::string_view coding : absl::StrSplit(value, ',')) {
+        coding = absl::StripAsciiWhitespace(coding);
+        if (!absl::StartsWith(coding, "br")) kept.emplace_back(coding);
+      }
+      value = absl::StrJoin(kept, ", ");
+    }
+    return httplib::Server::HandlerResponse::Unhandled;
+  });
   // A 1-hour 50 Hz run is ~20 MB of CSV; give slow links time.
   server->http_->set_read_timeout(std::chrono::seconds(60));
   server->http_port_ = options.http_port == 0 ? server->http_->bind_to_any_port(options.bind_address)

@@ -3,7 +3,11 @@
 #include <absl/strings/match.h>
 #include <absl/strings/str_cat.h>
 
+#include <algorithm>
+#include <map>
 #include <thread>
+
+#include "insdiag/server/display_series.h"
 
 namespace insdiag::server {
 namespace {
@@ -112,6 +116,56 @@ absl::Status AnalysisService::ReadResidualSeries(const v1::ReadResidualSeriesReq
   const std::vector<std::string> channels(request.channels().begin(), request.channels().end());
   return store_.ReadSeries(*id, channels, request.chunk_size() == 0 ? 5000 : static_cast<std::size_t>(request.chunk_size()),
                            send);
+}
+
+absl::StatusOr<v1::DisplaySeries> AnalysisService::ReadDisplaySeries(const v1::ReadDisplaySeriesRequest& request) {
+  constexpr int kDefaultColumns = 1000;
+  constexpr int kMaxColumns = 20'000;
+  if (request.columns() < 0 || request.columns() > kMaxColumns) {
+    return absl::InvalidArgumentError(absl::StrCat("columns must be within 0 … ", kMaxColumns, " (0: ",
+                                                   kDefaultColumns, ")"));
+  }
+  const bool whole = request.start_s() == 0 && request.end_s() == 0;
+  if (!whole && !(request.end_s() > request.start_s())) {
+    return absl::InvalidArgumentError(absl::StrCat("end_s (", request.end_s(), ") must be after start_s (",
+                                                   request.start_s(), "); both 0 ask for the whole series"));
+  }
+  auto id = AnalysisId(request.name());
+  if (!id.ok()) return id.status();
+  // The stored series arrives channel by channel, each in time order.
+  std::vector<std::string> order;
+  std::map<std::string, std::vector<SeriesEpoch>> epochs;
+  const std::vector<std::string> channels(request.channels().begin(), request.channels().end());
+  auto read = store_.ReadSeries(*id, channels, 50'000, [&](const v1::ResidualSeriesChunk& chunk) {
+    for (const auto& p : chunk.points()) {
+      auto [it, inserted] = epochs.try_emplace(p.channel());
+      if (inserted) order.push_back(p.channel());
+      it->second.push_back({p.t(), p.measured(), p.predicted(), p.residual(), p.sigma3()});
+    }
+    return true;
+  });
+  if (!read.ok()) return read;
+  v1::DisplaySeries out;
+  out.set_name(request.name());
+  out.set_columns(request.columns() == 0 ? kDefaultColumns : request.columns());
+  for (const auto& [channel, series] : epochs) {
+    if (series.empty()) continue;
+    if (out.series_start_s() == 0 && out.series_end_s() == 0) {
+      out.set_series_start_s(series.front().t);
+      out.set_series_end_s(series.back().t);
+    }
+    out.set_series_start_s(std::min(out.series_start_s(), series.front().t));
+    out.set_series_end_s(std::max(out.series_end_s(), series.back().t));
+  }
+  out.set_start_s(whole ? out.series_start_s() : request.start_s());
+  out.set_end_s(whole ? out.series_end_s() : request.end_s());
+  for (const auto& channel : order) {
+    auto envelope = DecimateForDisplay(epochs[channel], out.start_s(), out.end_s(), out.columns());
+    if (!envelope.ok()) return envelope.status();
+    envelope->set_channel(channel);
+    *out.add_channels() = std::move(*envelope);
+  }
+  return out;
 }
 
 absl::StatusOr<v1::UnitType> KnowledgeService::GetUnitType(const v1::GetUnitTypeRequest& request) {

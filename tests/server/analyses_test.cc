@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <algorithm>
 #include <chrono>
 #include <thread>
 
@@ -191,6 +192,83 @@ TEST_F(AnalysesTest, BadRequestsAreRefusedNamingTheField) {
   auto diagnosis = http().Post("/v1/diagnoses", R"({"analysis":"analyses/x"})", "application/json");
   ASSERT_TRUE(diagnosis);
   EXPECT_EQ(diagnosis->status, 400);
+}
+
+// ReadDisplaySeries (the page's plots): the stored series, decimated to a
+// min/max envelope per column of the requested range, raw when the range is short.
+TEST_F(AnalysesTest, DisplaySeriesIsTheStoredSeriesDecimatedToThePlotsWidth) {
+  const v1::Analysis created = Create(Upload(SimulatedRun("INS-E2E-3", "static", 10.0)));
+  const auto seen = Watch(created.name());
+  ASSERT_FALSE(seen.empty());
+  ASSERT_EQ(seen.back().state(), v1::Analysis::SUCCEEDED) << seen.back().error().message();
+
+  std::vector<v1::ResidualPoint> raw;
+  {
+    grpc::ClientContext context;
+    v1::ReadResidualSeriesRequest request;
+    request.set_name(created.name());
+    request.add_channels("vel_e");
+    auto reader = analyses_->ReadResidualSeries(&context, request);
+    v1::ResidualSeriesChunk chunk;
+    while (reader->Read(&chunk)) raw.insert(raw.end(), chunk.points().begin(), chunk.points().end());
+    ASSERT_TRUE(reader->Finish().ok());
+  }
+  ASSERT_GT(raw.size(), 1000u);
+
+  const auto display = [&](double start_s, double end_s, int columns) {
+    grpc::ClientContext context;
+    v1::ReadDisplaySeriesRequest request;
+    request.set_name(created.name());
+    request.add_channels("vel_e");
+    request.set_start_s(start_s);
+    request.set_end_s(end_s);
+    request.set_columns(columns);
+    v1::DisplaySeries series;
+    const grpc::Status status = analyses_->ReadDisplaySeries(&context, request, &series);
+    EXPECT_TRUE(status.ok()) << status.error_message();
+    return series;
+  };
+
+  // The whole run in 100 columns: each column holds the extremes of its epochs.
+  const v1::DisplaySeries whole = display(0, 0, 100);
+  EXPECT_DOUBLE_EQ(whole.series_start_s(), raw.front().t());
+  EXPECT_DOUBLE_EQ(whole.series_end_s(), raw.back().t());
+  ASSERT_EQ(whole.channels_size(), 1);
+  const v1::ChannelEnvelope& envelope = whole.channels(0);
+  EXPECT_EQ(envelope.channel(), "vel_e");
+  EXPECT_TRUE(envelope.decimated());
+  EXPECT_EQ(envelope.epochs(), static_cast<std::int64_t>(raw.size()));
+  ASSERT_LE(envelope.t_size(), 100);
+  ASSERT_GE(envelope.t_size(), 90);
+  double highest = -1e300;
+  double widest = 0;
+  for (const auto& p : raw) {
+    highest = std::max(highest, p.residual());
+    widest = std::max(widest, p.sigma3());
+  }
+  EXPECT_DOUBLE_EQ(*std::max_element(envelope.residual_max().begin(), envelope.residual_max().end()), highest);
+  EXPECT_DOUBLE_EQ(*std::max_element(envelope.sigma3_max().begin(), envelope.sigma3_max().end()), widest);
+
+  // Twenty seconds in 1,000 columns: the epochs themselves.
+  const double from = raw[raw.size() / 2].t();
+  const v1::DisplaySeries zoomed = display(from, from + 20, 1000);
+  ASSERT_EQ(zoomed.channels_size(), 1);
+  EXPECT_FALSE(zoomed.channels(0).decimated());
+  std::vector<double> expected;
+  for (const auto& p : raw) {
+    if (p.t() >= from && p.t() <= from + 20) expected.push_back(p.residual());
+  }
+  ASSERT_FALSE(expected.empty());
+  EXPECT_THAT(zoomed.channels(0).residual_min(), ::testing::ElementsAreArray(expected));
+
+  // REST, the page's way; a backward range is refused.
+  auto rest = http().Get(("/v1/" + created.name() + "/displaySeries?channels=vel_e&columns=50").c_str());
+  ASSERT_TRUE(rest);
+  EXPECT_EQ(rest->status, 200);
+  EXPECT_THAT(rest->body, HasSubstr("\"decimated\":true"));
+  auto backward = http().Get(("/v1/" + created.name() + "/displaySeries?startS=10&endS=5").c_str());
+  ASSERT_TRUE(backward);
+  EXPECT_EQ(backward->status, 400);
 }
 
 TEST_F(AnalysesTest, AHealthyUnitsTopHypothesisIsHealthy) {

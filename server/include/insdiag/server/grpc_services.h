@@ -42,6 +42,7 @@ class AnalysisServiceGrpc final : public v1::AnalysisService::Service {
   INSDIAG_UNARY(GetAnalysis, GetAnalysisRequest, Analysis);
   INSDIAG_UNARY(ListAnalyses, ListAnalysesRequest, ListAnalysesResponse);
   INSDIAG_UNARY(CancelAnalysis, CancelAnalysisRequest, Analysis);
+  INSDIAG_UNARY(ReadDisplaySeries, ReadDisplaySeriesRequest, DisplaySeries);
   grpc::Status WatchAnalysis(grpc::ServerContext* context, const v1::WatchAnalysisRequest* request,
                              grpc::ServerWriter<v1::Analysis>* writer) override;
   grpc::Status ReadResidualSeries(grpc::ServerContext* context, const v1::ReadResidualSeriesRequest* request,

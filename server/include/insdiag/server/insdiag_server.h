@@ -37,6 +37,8 @@ class InsdiagServer {
     std::chrono::milliseconds watch_poll{250};
     // Upsert the built-in unit types and failure modes at start.
     bool seed_knowledge_base = true;
+    // The page's files (web_page.h); empty: no page.
+    std::string web_dir;
   };
 
   // `pool` must outlive the server. UNAVAILABLE when a port cannot be bound.
@@ -45,6 +47,8 @@ class InsdiagServer {
 
   int grpc_port() const { return grpc_port_; }
   int http_port() const { return http_port_; }
+  // Whether GET / serves the page (Options::web_dir holds index.html).
+  bool serves_page() const { return serves_page_; }
 
   // Stops accepting, lets running calls finish (at most a few seconds),
   // then stops. Idempotent; safe from any thread.
@@ -60,6 +64,7 @@ class InsdiagServer {
   std::thread http_thread_;
   int grpc_port_ = 0;
   int http_port_ = 0;
+  bool serves_page_ = false;
   std::once_flag shutdown_once_;
 };
 

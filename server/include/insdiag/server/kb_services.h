@@ -39,6 +39,8 @@ class AnalysisService {
                              absl::FunctionRef<bool(const v1::Analysis&)> send, std::function<bool()> stop);
   absl::Status ReadResidualSeries(const v1::ReadResidualSeriesRequest& request,
                                   absl::FunctionRef<bool(const v1::ResidualSeriesChunk&)> send);
+  // The series decimated for a plot (display_series.h).
+  absl::StatusOr<v1::DisplaySeries> ReadDisplaySeries(const v1::ReadDisplaySeriesRequest& request);
 
  private:
   kb::AnalysisStore& store_;
