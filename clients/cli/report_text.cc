@@ -1,10 +1,12 @@
 #include "report_text.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cstdio>
 #include <string>
 
 #include "insdiag/engine/filter/observation.h"
+#include "insdiag/engine/ident/correlation.h"
 
 namespace insdiag::cli {
 namespace {
@@ -81,7 +83,78 @@ void PrintReport(const engine::AnalysisReport& r, std::ostream& out) {
       out << "\n";
     }
   }
+  if (r.comparison.has_value()) {
+    const engine::ModelComparison& c = *r.comparison;
+    out << "\nbefore → after (added:";
+    for (const auto& e : c.added_effects) out << " " << e;
+    out << ")\n";
+    out << "  NIS mean " << Format("%.4f", c.nis_mean_before) << " → " << Format("%.4f", c.nis_mean_after)
+        << ", AIC " << Format("%.1f", c.aic_before) << " → " << Format("%.1f", c.aic_after) << ", BIC "
+        << Format("%.1f", c.bic_before) << " → " << Format("%.1f", c.bic_after) << "\n";
+    out << "  2ΔlogL realised " << Format("%.1f", c.realized_lr) << ", predicted by the score test "
+        << Format("%.1f", c.predicted_lr) << "\n";
+    out << "  channel   RMS before → after        NIS before → after   whiteness p before → after\n";
+    for (const auto& ch : c.channels) {
+      out << "  " << ch.name << std::string(8 - std::min<size_t>(8, ch.name.size()), ' ')
+          << Format("%10.4g", ch.before.rms) << " → " << Format("%-10.4g", ch.after.rms) << "  "
+          << Format("%8.4f", ch.before.nis_mean) << " → " << Format("%-8.4f", ch.after.nis_mean) << "  "
+          << Format("%8.3g", ch.before.whiteness_p_value) << " → " << Format("%.3g", ch.after.whiteness_p_value)
+          << "\n";
+    }
+  }
+  if (!r.discovery.empty()) {
+    out << "\ndiscovery path:\n";
+    for (const auto& d : r.discovery) {
+      out << "  step " << d.step << ": + " << d.effect << " (statistic " << Format("%.1f", d.statistic)
+          << ", Holm p " << Format("%.2g", d.p_value) << ")  → NIS " << Format("%.4f", d.nis_mean) << ", AIC "
+          << Format("%.1f", d.aic) << "\n";
+      for (const auto& e : d.estimates) {
+        out << "      " << e.name << " = " << Format("%.4g", e.value) << " ± " << Format("%.2g", e.std_error) << " "
+            << e.unit << "\n";
+      }
+    }
+  }
   for (const auto& n : r.notes) out << "note: " << n << "\n";
+}
+
+void WriteCorrelationCsv(const engine::AnalysisReport& r, std::ostream& out) {
+  out << "state,lag_s,acf,band,error_acf,family,fit\n";
+  for (const engine::DriftCorrelation& d : r.correlation) {
+    const auto& a = d.analysis;
+    for (size_t j = 0; j < a.acf.size(); ++j) {
+      const double band = j < a.acf_band.size() ? a.acf_band[j] : 0.0;
+      const double error = j < a.error_acf.size() ? a.error_acf[j] : 0.0;
+      for (const auto& f : a.fits) {
+        if (!f.converged || j >= f.expected.size()) continue;
+        std::string line = d.state + ",";
+        AppendNumber(line, static_cast<double>(j) * a.dt_s);
+        for (double v : {a.acf[j], band, error}) {
+          line += ",";
+          AppendNumber(line, v);
+        }
+        line += ",";
+        line += engine::ident::CorrelationFamilyName(f.family);
+        line += ",";
+        AppendNumber(line, f.expected[j]);
+        out << line << "\n";
+      }
+    }
+  }
+}
+
+void WriteAllanCsv(const engine::AnalysisReport& r, std::ostream& out) {
+  out << "channel,tau_s,adev,adev_low,adev_high,fitted\n";
+  if (!r.allan.has_value()) return;
+  for (const auto& ch : r.allan->channels) {
+    for (const auto& p : ch.curve) {
+      std::string line = ch.name;
+      for (double v : {p.tau_s, p.adev, p.ci_low, p.ci_high, p.fitted_adev}) {
+        line += ",";
+        AppendNumber(line, v);
+      }
+      out << line << "\n";
+    }
+  }
 }
 
 void WriteSeriesCsv(const engine::AnalysisSeries& s, std::ostream& out) {

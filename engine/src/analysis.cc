@@ -395,6 +395,35 @@ Findings FindMissingEffects(const BenchRun& run, const ModelPass& pass, const st
   return f;
 }
 
+// Whether model A's scan finds an identifiable effect significant at the
+// finder's family-wise level.
+bool HasSignificantCandidate(const BenchRun& run, const ModelPass& pass, const AnalysisOptions& options) {
+  const RankedEffects ranked = RankMissingEffects(*pass.scan, pass.forward, run, pass.segment_motion, options.finder);
+  return std::any_of(ranked.terms.begin(), ranked.terms.end(), [&](const EffectCandidate& c) {
+    return c.identifiable && c.p_value_holm < options.finder.family_wise_alpha;
+  });
+}
+
+// The effect `--discover` adds next: among the significant, identifiable
+// candidates — single terms and whole families — the one whose predicted
+// ΔBIC is lowest. A term and its family often score alike when one axis
+// carries the effect; the family's extra parameters then cost more than they
+// explain. When every axis carries it, the family explains far more than any
+// term, and it is not mistaken for a look-alike term of another family (a
+// common scale factor for two misalignments, say). Schwarz, Ann. Stat. 6(2), 1978.
+const EffectCandidate* NextDiscovery(const Findings& found, const AnalysisOptions& options) {
+  const EffectCandidate* best = nullptr;
+  auto consider = [&](const std::vector<EffectCandidate>& candidates) {
+    for (const EffectCandidate& c : candidates) {
+      if (!c.identifiable || !(c.p_value_holm < options.finder.family_wise_alpha)) continue;
+      if (best == nullptr || c.predicted_delta_bic < best->predicted_delta_bic) best = &c;
+    }
+  };
+  consider(found.candidates);
+  consider(found.families);
+  return best;
+}
+
 // Model `base` plus `selectors`, with priors from what model A's scan and
 // correlation processing found; anything not found gets the diffuse prior.
 absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& base,
@@ -476,8 +505,14 @@ double PredictedLikelihoodRatio(const ModelPass& a, const std::vector<std::strin
   std::vector<Eigen::Index> idx;
   double structure_lr = 0.0;
   for (const std::string& name : added) {
+    // A family stands for its terms.
+    const auto terms = ParseEffectSelector(name);
     for (size_t i = 0; i < a.scan->columns().size(); ++i) {
-      if (a.scan->columns()[i].term.Name() == name) idx.push_back(static_cast<Eigen::Index>(i));
+      const std::string column = a.scan->columns()[i].term.Name();
+      const bool in_selector = terms.ok() && std::any_of(terms->begin(), terms->end(), [&](const auto& t) {
+                                 return t.Name() == column;
+                               });
+      if (in_selector) idx.push_back(static_cast<Eigen::Index>(i));
     }
     for (const StructureProposal& p : found.structures) {
       if (p.candidate.name == name) structure_lr += p.candidate.statistic;
@@ -570,24 +605,37 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
 
   // Retargeting: identify, re-tune, until the parameters settle.
   std::vector<ParameterEstimate> identified;
+  std::optional<ModelPass> scanned_a_priori;
   if (options.identify) {
     if (allan.has_value()) {
       identified = ident::ApplyAllanNoise(*allan, *a_priori, base);
       for (const ParameterEstimate& p : ident::AllanParameterEstimates(*allan, &*a_priori)) {
-        // The Allan curve's rate random walk is also what a Gauss–Markov drift
-        // looks like at τ ≪ its correlation time: it is listed under its Allan
-        // name only, not as the catalogue's bias_rw effect.
-        const bool catalogue_alias = p.name.find("_bias_rw.") != std::string::npos;
-        if (!catalogue_alias && std::none_of(identified.begin(), identified.end(),
-                                             [&](const ParameterEstimate& q) { return q.name == p.name; })) {
+        // The drifts' σ and τ are identified by correlation processing of the
+        // whole run; the Allan Markov term of the static segments only seeds
+        // an a-priori model.
+        const bool drift = p.name.find("_bias_gm.") != std::string::npos;
+        if (!drift && std::none_of(identified.begin(), identified.end(),
+                                   [&](const ParameterEstimate& q) { return q.name == p.name; })) {
           identified.push_back(p);
         }
       }
     }
     for (int it = 0; it < options.max_retarget_iterations; ++it) {
       Progress(options, 0.1 + 0.5 * it / options.max_retarget_iterations, "retargeting");
-      auto pass = RunPass(run, base, spikes, options, /*with_scan=*/false);
+      // The first pass also scans for missing effects: parameters identified
+      // under a model whose structure is wrong soak up the missing effect (a
+      // drift widened to carry a scale-factor error), so the retargeting waits
+      // until the structure is complete.
+      const bool first = it == 0;
+      auto pass = RunPass(run, base, spikes, options, /*with_scan=*/first);
       if (!pass.ok()) return pass.status();
+      if (first && HasSignificantCandidate(run, *pass, options)) {
+        notes.push_back("the a-priori model lacks significant effects: the drift and reference-noise parameters "
+                        "are not re-tuned on this model (they would absorb what the effects explain); they are "
+                        "identified when the analysis starts from a model with the effects (baseline effects)");
+        scanned_a_priori = std::move(*pass);
+        break;
+      }
       const auto drifts = ident::CorrelateDrifts(pass->forward, pass->smoothed, *pass->layout, options.correlation, nullptr);
       ident::RetargetResult step = ident::RetargetDrifts(base, *a_priori, drifts, options.settle_log_ratio,
                                                          options.monitor.family_wise_alpha);
@@ -605,23 +653,25 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   }
 
   Progress(options, 0.65, "missing-effect scan");
-  auto a = RunPass(run, base, spikes, options, /*with_scan=*/true);
+  absl::StatusOr<ModelPass> a = scanned_a_priori.has_value()
+                                    ? absl::StatusOr<ModelPass>(std::move(*scanned_a_priori))
+                                    : RunPass(run, base, spikes, options, /*with_scan=*/true);
   if (!a.ok()) return a.status();
   const Findings found_a = FindMissingEffects(run, *a, spikes, options, &notes);
   AnalysisReport report_a = ReportOf(*a, found_a, run, options, identified, notes);
 
   Analysis out;
   if (request.discover) {
-    ModelPass current = std::move(*a);
+    // Model A stays whole for the comparison; `latest` holds the last step's pass.
+    std::optional<ModelPass> latest;
+    auto current = [&]() -> const ModelPass& { return latest.has_value() ? *latest : *a; };
     Findings found = found_a;
     AnalysisReport report = report_a;
     for (int step = 1; step <= options.max_discovery_steps; ++step) {
-      auto top = std::find_if(found.candidates.begin(), found.candidates.end(), [&](const EffectCandidate& c) {
-        return c.identifiable && c.p_value_holm < options.finder.family_wise_alpha;
-      });
-      if (top == found.candidates.end()) break;
+      const EffectCandidate* top = NextDiscovery(found, options);
+      if (top == nullptr) break;
       Progress(options, 0.7 + 0.3 * step / (options.max_discovery_steps + 1), "discovery: adding " + top->name);
-      auto extended = ExtendModel(run, current.model, {top->name}, current, found, options);
+      auto extended = ExtendModel(run, current().model, {top->name}, current(), found, options);
       if (!extended.ok()) return extended.status();
       auto next = RunPass(run, *extended, spikes, options, /*with_scan=*/true);
       if (!next.ok()) return next.status();
@@ -635,7 +685,13 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       d.unit = top->unit;
       d.estimate = top->estimate;
       d.std_error = top->std_error;
+      // The added terms' estimates in the model after the step (one for a
+      // term, one per axis or pair for a family).
+      const auto added_terms = ParseEffectSelector(top->name);
       for (const ParameterEstimate& e : next_report.identified) {
+        const bool added = added_terms.ok() && std::any_of(added_terms->begin(), added_terms->end(),
+                                                           [&](const auto& t) { return t.Name() == e.name; });
+        if (e.method == "FILTER" && added) d.estimates.push_back(e);
         if (e.method == "FILTER" && e.name == top->name) {
           d.estimate = e.value;
           d.std_error = e.std_error;
@@ -648,18 +704,18 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       d.channels = next_report.channels;
       report.discovery.push_back(d);
       next_report.discovery = report.discovery;
-      current = std::move(*next);
+      latest = std::move(*next);
       found = std::move(next_found);
       report = std::move(next_report);
     }
     if (!report.discovery.empty()) {
       std::vector<std::string> added;
       for (const DiscoveryStep& d : report.discovery) added.push_back(d.effect);
-      report.comparison = Compare(*a, current, report_a, report, PredictedLikelihoodRatio(*a, added, found_a));
+      report.comparison = Compare(*a, current(), report_a, report, PredictedLikelihoodRatio(*a, added, found_a));
     }
     out.report = std::move(report);
-    out.model = current.model;
-    if (options.keep_series) FillSeries(current, out.series);
+    out.model = current().model;
+    if (options.keep_series) FillSeries(current(), out.series);
   } else if (!request.add_effects.empty()) {
     Progress(options, 0.8, "model with the added effects");
     auto extended = ExtendModel(run, base, request.add_effects, *a, found_a, options);

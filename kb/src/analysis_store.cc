@@ -36,7 +36,11 @@ v1::Analysis AnalysisFromRow(const Result& rows, int row) {
   a.set_name(absl::StrCat("analyses/", rows.String(row, 0)));
   a.set_run(absl::StrCat("runs/", rows.String(row, 1)));
   // bytea travels as hex text here: the rest of the row is text.
-  a.mutable_model()->ParseFromString(absl::HexStringToBytes(rows.String(row, 3)));
+  v1::AnalysisSpec spec;
+  spec.ParseFromString(absl::HexStringToBytes(rows.String(row, 3)));
+  *a.mutable_model() = std::move(*spec.mutable_model());
+  if (spec.has_baseline()) *a.mutable_baseline() = std::move(*spec.mutable_baseline());
+  a.set_discover(spec.discover());
   a.set_state(StateOf(rows.Get(row, 2)));
   a.mutable_progress()->set_fraction(internal::DoubleOr0(rows, row, 4));
   a.mutable_progress()->set_stage(rows.String(row, 5));
@@ -143,13 +147,13 @@ absl::Status StoreReportRows(Connection& db, const std::string& id, const v1::An
 
 }  // namespace
 
-absl::StatusOr<v1::Analysis> AnalysisStore::Create(const std::string& run_id, const v1::ErrorModel& model,
+absl::StatusOr<v1::Analysis> AnalysisStore::Create(const std::string& run_id, const v1::AnalysisSpec& spec,
                                                    const std::string& request_id, int max_attempts) {
   if (!internal::IsUuid(run_id)) return absl::InvalidArgumentError(absl::StrCat("analysis.run: '", run_id, "' is not a run id"));
   auto db = pool_.Acquire();
   if (!db.ok()) return db.status();
   std::string request_bytes;
-  model.SerializeToString(&request_bytes);
+  spec.SerializeToString(&request_bytes);
   const std::string fingerprint = absl::StrCat(run_id, "|", absl::BytesToHexString(request_bytes));
   std::string id;
   const absl::Status status = (*db)->InTransaction([&]() -> absl::Status {
@@ -249,7 +253,7 @@ absl::StatusOr<std::optional<ClaimedJob>> AnalysisStore::Claim(const std::string
   ClaimedJob job;
   job.analysis_id = rows->String(0, 0);
   job.run_id = rows->String(0, 1);
-  job.request.ParseFromString(absl::HexStringToBytes(rows->String(0, 2)));
+  job.spec.ParseFromString(absl::HexStringToBytes(rows->String(0, 2)));
   job.attempt = static_cast<int>(internal::IntOr0(*rows, 0, 3));
   return std::optional<ClaimedJob>(std::move(job));
 }

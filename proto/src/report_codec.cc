@@ -1,6 +1,7 @@
 #include "insdiag/api/report_codec.h"
 
 #include <cmath>
+#include <string_view>
 
 #include "insdiag/engine/filter/observation.h"
 #include "insdiag/engine/model/parameters.h"
@@ -67,6 +68,130 @@ void Fill(const engine::EffectCandidate& in, v1::EffectCandidate* out) {
   }
 }
 
+void Fill(const engine::ChannelFit& c, v1::ChannelFit* f) {
+  f->set_name(c.name);
+  f->set_rms(c.rms);
+  f->set_fit_percent(c.fit_percent);
+  f->set_nis_mean(c.nis_mean);
+  f->set_whiteness_p_value(c.whiteness_p_value);
+  f->set_unit(c.unit);
+  f->set_sample_count(c.count);
+  f->set_fraction_over_gamma2(c.fraction_over_gamma2);
+  f->set_fraction_over_eta2(c.fraction_over_eta2);
+}
+
+void Fill(const engine::ParameterEstimate& p, v1::IdentifiedParameter* ip) {
+  ip->set_name(p.name);
+  ip->set_value(p.value);
+  ip->set_std_error(Finite(p.std_error));
+  ip->set_method(MethodOf(p.method));
+  ip->set_unit(p.unit);
+  if (std::isfinite(p.a_priori)) ip->set_a_priori(p.a_priori);
+}
+
+// Unit of a correlation fit's parameter for a drift state of `state`'s sensor.
+std::string CorrelationParameterUnit(const std::string& state, const std::string& parameter) {
+  const bool gyro = state.rfind("gyro", 0) == 0;
+  if (parameter.find("tau") != std::string::npos || parameter.find("period") != std::string::npos) return "s";
+  if (parameter == "density") return gyro ? "rad/s/sqrt(s)" : "m/s^2/sqrt(s)";
+  return gyro ? "rad/s" : "m/s^2";
+}
+
+void Fill(const engine::DriftCorrelation& in, v1::CorrelationCurve* out) {
+  const engine::ident::CorrelationAnalysis& a = in.analysis;
+  out->set_state(in.state);
+  out->set_dt_s(a.dt_s);
+  for (double v : a.acf) out->add_acf(v);
+  for (double v : a.acf_band) out->add_band(Finite(v));
+  for (double v : a.error_acf) out->add_error_acf(v);
+  for (const engine::ident::FamilyFit& f : a.fits) {
+    if (!f.converged) continue;
+    v1::FamilyCurve* fc = out->add_fits();
+    fc->set_family(engine::ident::CorrelationFamilyName(f.family));
+    for (double v : f.expected) fc->add_expected(v);
+    fc->set_aic(Finite(f.aic));
+    fc->set_bic(Finite(f.bic));
+    fc->set_lr_statistic(Finite(f.lr_statistic));
+    fc->set_lr_p_value(f.lr_p_value);
+    for (const engine::ident::FittedParameter& p : f.parameters) {
+      v1::IdentifiedParameter* ip = fc->add_parameters();
+      ip->set_name(in.state + "." + p.name);
+      ip->set_value(p.value);
+      ip->set_std_error(Finite(p.std_error));
+      ip->set_method(v1::IdentifiedParameter::ACF);
+      ip->set_unit(CorrelationParameterUnit(in.state, p.name));
+    }
+  }
+  out->set_best_family(engine::ident::CorrelationFamilyName(a.best));
+  out->set_resolved(a.resolved);
+}
+
+void Fill(const engine::ident::AllanChannel& ch, const std::vector<engine::ParameterEstimate>& terms,
+          v1::AllanCurve* out) {
+  out->set_channel(ch.name);
+  out->set_unit(ch.unit);
+  for (const engine::ident::AllanPoint& p : ch.curve) {
+    out->add_tau_s(p.tau_s);
+    out->add_deviation(p.adev);
+    out->add_deviation_low(p.ci_low);
+    out->add_deviation_high(p.ci_high);
+    out->add_fitted(Finite(p.fitted_adev));
+  }
+  // The channel's terms: "{gyro|acc}_<term>.<axis>[.<parameter>]".
+  const std::string_view sensor = ch.sensor == engine::Sensor::kGyro ? "gyro_" : "acc_";
+  const char axis = "xyz"[ch.axis];
+  for (const engine::ParameterEstimate& t : terms) {
+    const std::string_view name = t.name;
+    const size_t dot = name.find('.');
+    const bool this_channel = name.substr(0, sensor.size()) == sensor && dot + 1 < name.size() &&
+                              name[dot + 1] == axis && (dot + 2 == name.size() || name[dot + 2] == '.');
+    if (this_channel) Fill(t, out->add_terms());
+  }
+}
+
+void Fill(const engine::ModelComparison& in, v1::ModelComparison* out) {
+  for (const auto& e : in.baseline_effects) out->add_baseline_effects(e);
+  for (const auto& e : in.added_effects) out->add_added_effects(e);
+  for (const engine::ChannelComparison& c : in.channels) {
+    v1::ChannelComparison* cc = out->add_channels();
+    cc->set_name(c.name);
+    cc->set_rms_before(c.before.rms);
+    cc->set_rms_after(c.after.rms);
+    cc->set_nis_mean_before(c.before.nis_mean);
+    cc->set_nis_mean_after(c.after.nis_mean);
+    cc->set_whiteness_p_value_before(c.before.whiteness_p_value);
+    cc->set_whiteness_p_value_after(c.after.whiteness_p_value);
+    cc->set_fit_percent_before(c.before.fit_percent);
+    cc->set_fit_percent_after(c.after.fit_percent);
+  }
+  out->set_nis_mean_before(in.nis_mean_before);
+  out->set_nis_mean_after(in.nis_mean_after);
+  out->set_log_likelihood_before(in.log_likelihood_before);
+  out->set_log_likelihood_after(in.log_likelihood_after);
+  out->set_aic_before(in.aic_before);
+  out->set_aic_after(in.aic_after);
+  out->set_bic_before(in.bic_before);
+  out->set_bic_after(in.bic_after);
+  out->set_realized_lr(in.realized_lr);
+  out->set_predicted_lr(Finite(in.predicted_lr));
+}
+
+void Fill(const engine::DiscoveryStep& in, v1::DiscoveryStep* out) {
+  out->set_step(in.step);
+  out->set_effect(in.effect);
+  out->set_estimate(Finite(in.estimate));
+  out->set_std_error(Finite(in.std_error));
+  out->set_unit(in.unit);
+  out->set_statistic(Finite(in.statistic));
+  out->set_p_value(in.p_value);
+  out->set_nis_mean(in.nis_mean);
+  out->set_log_likelihood(in.log_likelihood);
+  out->set_aic(in.aic);
+  out->set_bic(in.bic);
+  for (const engine::ChannelFit& c : in.channels) Fill(c, out->add_channels());
+  for (const engine::ParameterEstimate& e : in.estimates) Fill(e, out->add_estimates());
+}
+
 }  // namespace
 
 v1::ErrorModel ToProto(const engine::ErrorModel& model) {
@@ -85,18 +210,7 @@ v1::AnalysisReport ToProto(const engine::AnalysisReport& r, const engine::ErrorM
   v1::AnalysisReport out;
   out.set_verdict(VerdictOf(r.verdict));
   *out.mutable_model() = ToProto(model);
-  for (const engine::ChannelFit& c : r.channels) {
-    v1::ChannelFit* f = out.add_channels();
-    f->set_name(c.name);
-    f->set_rms(c.rms);
-    f->set_fit_percent(c.fit_percent);
-    f->set_nis_mean(c.nis_mean);
-    f->set_whiteness_p_value(c.whiteness_p_value);
-    f->set_unit(c.unit);
-    f->set_sample_count(c.count);
-    f->set_fraction_over_gamma2(c.fraction_over_gamma2);
-    f->set_fraction_over_eta2(c.fraction_over_eta2);
-  }
+  for (const engine::ChannelFit& c : r.channels) Fill(c, out.add_channels());
   out.set_nis_mean(r.nis_mean);
   out.set_log_likelihood(r.log_likelihood);
   out.set_aic(r.aic);
@@ -111,15 +225,7 @@ v1::AnalysisReport ToProto(const engine::AnalysisReport& r, const engine::ErrorM
   }
   for (const auto& c : r.effect_candidates) Fill(c, out.add_effect_candidates());
   for (const auto& c : r.family_candidates) Fill(c, out.add_family_candidates());
-  for (const engine::ParameterEstimate& p : r.identified) {
-    v1::IdentifiedParameter* ip = out.add_identified();
-    ip->set_name(p.name);
-    ip->set_value(p.value);
-    ip->set_std_error(Finite(p.std_error));
-    ip->set_method(MethodOf(p.method));
-    ip->set_unit(p.unit);
-    if (std::isfinite(p.a_priori)) ip->set_a_priori(p.a_priori);
-  }
+  for (const engine::ParameterEstimate& p : r.identified) Fill(p, out.add_identified());
   out.set_update_count(r.scalar_updates);
   out.set_parameter_count(r.parameter_count);
   out.set_nis_band_low(r.nis_band_low);
@@ -133,6 +239,13 @@ v1::AnalysisReport ToProto(const engine::AnalysisReport& r, const engine::ErrorM
   out.set_sample_count(static_cast<int64_t>(r.samples));
   out.set_sample_rate_hz(r.sample_rate_hz);
   out.set_update_interval_s(r.update_interval_s);
+  for (const engine::DriftCorrelation& d : r.correlation) Fill(d, out.add_correlation());
+  if (r.allan.has_value()) {
+    const std::vector<engine::ParameterEstimate> terms = engine::ident::AllanParameterEstimates(*r.allan);
+    for (const engine::ident::AllanChannel& ch : r.allan->channels) Fill(ch, terms, out.add_allan());
+  }
+  if (r.comparison.has_value()) Fill(*r.comparison, out.mutable_comparison());
+  for (const engine::DiscoveryStep& d : r.discovery) Fill(d, out.add_discovery());
   return out;
 }
 

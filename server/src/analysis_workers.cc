@@ -149,7 +149,10 @@ void AnalysisWorkers::RunJob(const kb::ClaimedJob& job, const std::string& owner
       return read;
     }
     engine::AnalysisRequest request;
-    request.add_effects.assign(job.request.effects().begin(), job.request.effects().end());
+    const v1::ErrorModel& asked = job.spec.model();
+    request.add_effects.assign(asked.effects().begin(), asked.effects().end());
+    request.baseline_effects.assign(job.spec.baseline().effects().begin(), job.spec.baseline().effects().end());
+    request.discover = job.spec.discover();
     if (!run.metadata.unit_type.empty()) {
       kb::KnowledgeStore knowledge(pool_);
       auto unit_type = knowledge.GetUnitType(absl::StrCat("unitTypes/", run.metadata.unit_type));
@@ -161,9 +164,9 @@ void AnalysisWorkers::RunJob(const kb::ClaimedJob& job, const std::string& owner
         return unit_type.status();
       }
     }
-    if (job.request.parameters_size() > 0) {
+    if (asked.parameters_size() > 0) {
       if (!request.nominal) request.nominal = engine::ErrorModel{};
-      for (const auto& p : job.request.parameters()) {
+      for (const auto& p : asked.parameters()) {
         if (auto set = engine::SetParameter(p.name(), p.value(), *request.nominal); !set.ok()) {
           return absl::InvalidArgumentError(absl::StrCat("analysis.model.parameters: ", set.message()));
         }

@@ -38,7 +38,11 @@ absl::StatusOr<v1::Analysis> AnalysisService::CreateAnalysis(const v1::CreateAna
   if (!absl::StartsWith(run, prefix) || run.find('/', prefix.size()) != std::string::npos) {
     return absl::InvalidArgumentError(absl::StrCat("analysis.run: '", run, "' is not a run name (runs/{run})"));
   }
-  return store_.Create(run.substr(prefix.size()), request.analysis().model(), request.request_id());
+  v1::AnalysisSpec spec;
+  *spec.mutable_model() = request.analysis().model();
+  if (request.analysis().has_baseline()) *spec.mutable_baseline() = request.analysis().baseline();
+  spec.set_discover(request.analysis().discover());
+  return store_.Create(run.substr(prefix.size()), spec, request.request_id());
 }
 
 absl::StatusOr<v1::Analysis> AnalysisService::GetAnalysis(const v1::GetAnalysisRequest& request) {

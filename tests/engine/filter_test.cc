@@ -94,7 +94,10 @@ TEST(TrueModelConsistency, SensorStateNeesIsInsideItsChiSquareBandOverSeeds) {
     const auto sim = testing::SimulateOrDie(unit, profile, 50.0, 100 + static_cast<uint64_t>(seed));
     auto fw = RunForwardFilter(sim.run, model, FilterOptions{});
     ASSERT_TRUE(fw.ok());
-    auto sm = RunSmoother(*fw, {.block_begin = layout.gyro_bias(), .block_size = 6});
+    SmootherOptions smoother_options;
+    smoother_options.block_begin = layout.gyro_bias();
+    smoother_options.block_size = 6;
+    auto sm = RunSmoother(*fw, smoother_options);
     ASSERT_TRUE(sm.ok());
     const int k = fw->epochs() / 2;
     const Eigen::Matrix<double, 6, 1> truth = TrueDrifts(sim, *fw, k);

@@ -41,7 +41,7 @@ TEST_F(JobQueueTest, FourConcurrentWorkersRunTwoHundredJobsEachExactlyOnce) {
   AnalysisStore store(pool());
   std::set<std::string> created;
   for (int i = 0; i < 200; ++i) {
-    auto a = store.Create(run, v1::ErrorModel(), "");
+    auto a = store.Create(run, v1::AnalysisSpec(), "");
     ASSERT_TRUE(a.ok()) << a.status();
     created.insert(a->name().substr(9));
   }
@@ -81,7 +81,7 @@ TEST_F(JobQueueTest, FourConcurrentWorkersRunTwoHundredJobsEachExactlyOnce) {
 TEST_F(JobQueueTest, AJobWhoseWorkerStoppedIsTakenUpAgainAndFailsAfterItsLastAttempt) {
   const std::string run = StoreRun();
   AnalysisStore store(pool());
-  auto a = store.Create(run, v1::ErrorModel(), "", /*max_attempts=*/2);
+  auto a = store.Create(run, v1::AnalysisSpec(), "", /*max_attempts=*/2);
   ASSERT_TRUE(a.ok());
   auto first = store.Claim("dead-worker", 1ms);
   ASSERT_TRUE(first.ok() && first->has_value());
@@ -109,8 +109,8 @@ TEST_F(JobQueueTest, AJobWhoseWorkerStoppedIsTakenUpAgainAndFailsAfterItsLastAtt
 TEST_F(JobQueueTest, CancelEndsQueuedJobsAtOnceAndRunningOnesThroughTheirWorker) {
   const std::string run = StoreRun();
   AnalysisStore store(pool());
-  auto queued = store.Create(run, v1::ErrorModel(), "");
-  auto running = store.Create(run, v1::ErrorModel(), "");
+  auto queued = store.Create(run, v1::AnalysisSpec(), "");
+  auto running = store.Create(run, v1::AnalysisSpec(), "");
   auto claimed = store.Claim("w", 30s);  // the older one
   ASSERT_TRUE(claimed.ok() && claimed->has_value());
   EXPECT_EQ((*claimed)->analysis_id, queued->name().substr(9));
@@ -128,12 +128,12 @@ TEST_F(JobQueueTest, CancelEndsQueuedJobsAtOnceAndRunningOnesThroughTheirWorker)
 TEST_F(JobQueueTest, RequestIdMakesCreationIdempotent) {
   const std::string run = StoreRun();
   AnalysisStore store(pool());
-  auto a = store.Create(run, v1::ErrorModel(), "req-1");
-  auto b = store.Create(run, v1::ErrorModel(), "req-1");
+  auto a = store.Create(run, v1::AnalysisSpec(), "req-1");
+  auto b = store.Create(run, v1::AnalysisSpec(), "req-1");
   ASSERT_TRUE(a.ok() && b.ok());
   EXPECT_EQ(a->name(), b->name());
-  v1::ErrorModel other;
-  other.add_effects("gyro_scale_factor");
+  v1::AnalysisSpec other;
+  other.mutable_model()->add_effects("gyro_scale_factor");
   EXPECT_EQ(store.Create(run, other, "req-1").status().code(), absl::StatusCode::kAlreadyExists);
   EXPECT_EQ(store.Create("00000000-0000-0000-0000-000000000000", other, "").status().code(),
             absl::StatusCode::kNotFound);

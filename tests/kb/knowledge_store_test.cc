@@ -39,7 +39,7 @@ class KnowledgeStoreTest : public insdiag::testing::DatabaseTest {
     auto stored = runs.Create(run, {.sha256 = "x", .request_id = "", .request_fingerprint = ""});
     EXPECT_TRUE(stored.ok()) << stored.status();
     AnalysisStore analyses(pool());
-    auto a = analyses.Create(stored->id, v1::ErrorModel(), "");
+    auto a = analyses.Create(stored->id, v1::AnalysisSpec(), "");
     auto job = analyses.Claim("t", 30s);
     EXPECT_TRUE(job.ok() && job->has_value());
     EXPECT_TRUE(analyses.Complete((*job)->analysis_id, "t", report, nullptr).ok());
@@ -105,7 +105,9 @@ TEST_F(KnowledgeStoreTest, ConfirmingADiagnosisWritesAFailureRecordAndRaisesLate
   EXPECT_FALSE(resolved->failure_record().empty());
   EXPECT_EQ(knowledge_->ResolveDiagnosis(resolve).status().code(), absl::StatusCode::kFailedPrecondition);
 
-  auto records = knowledge_->ListFailureRecords({.page = {}, .module = "", .unit = "units/INS-0002", .failure_mode = ""});
+  KnowledgeStore::RecordQuery unit_records;
+  unit_records.unit = "units/INS-0002";
+  auto records = knowledge_->ListFailureRecords(unit_records);
   ASSERT_TRUE(records.ok());
   ASSERT_EQ(records->first.size(), 1u);
   EXPECT_TRUE(records->first[0].confirmed());

@@ -52,12 +52,16 @@ engine::BenchRun SimulatedRun(const std::string& serial, const std::string& prof
   return simulated->run;
 }
 
-double Nominal(const std::string& name) {
-  for (const auto& p : api::BuiltinUnitType("INS-2000")->nominal()) {
-    if (p.name() == name) return p.value();
+const v1::NominalParameter* NominalOf(const std::string& name) {
+  static const auto unit_type = api::BuiltinUnitType("INS-2000");
+  for (const auto& p : unit_type->nominal()) {
+    if (p.name() == name) return &p;
   }
-  return 0.0;
+  ADD_FAILURE() << name << " has no nominal value in INS-2000";
+  return nullptr;
 }
+double Nominal(const std::string& name) { return NominalOf(name) ? NominalOf(name)->value() : 0.0; }
+double Tolerance(const std::string& name) { return NominalOf(name) ? NominalOf(name)->tolerance() : 0.0; }
 
 class AnalysesTest : public ServerTest {
  protected:
@@ -74,10 +78,11 @@ class AnalysesTest : public ServerTest {
     return stored.ok() ? stored->name() : "";
   }
 
-  v1::Analysis Create(const std::string& run, const std::vector<std::string>& effects = {}) {
+  v1::Analysis Create(const std::string& run, const std::vector<std::string>& effects = {}, bool discover = false) {
     grpc::ClientContext context;
     v1::CreateAnalysisRequest request;
     request.mutable_analysis()->set_run(run);
+    request.mutable_analysis()->set_discover(discover);
     for (const auto& e : effects) request.mutable_analysis()->mutable_model()->add_effects(e);
     v1::Analysis analysis;
     const grpc::Status status = analyses_->CreateAnalysis(&context, request, &analysis);
@@ -111,8 +116,11 @@ class AnalysesTest : public ServerTest {
   }
 
   // Upload, analyse through the job, diagnose.
+  // As `insdiag diagnose` does: the server walks the loop, so the evidence is
+  // effects estimated in the model.
   v1::Diagnosis DiagnoseRun(const engine::BenchRun& run) {
-    const v1::Analysis created = Create(Upload(run));
+    const v1::Analysis created = Create(Upload(run), {}, /*discover=*/true);
+    EXPECT_TRUE(created.discover());
     const auto seen = Watch(created.name());
     EXPECT_FALSE(seen.empty());
     if (seen.empty()) return {};
@@ -282,16 +290,18 @@ TEST_F(AnalysesTest, AHealthyUnitsTopHypothesisIsHealthy) {
   EXPECT_THAT(rest->body, HasSubstr("\"candidates\""));
 }
 
-// enable when the engine reports identified[] / effectCandidates[]
-TEST_F(AnalysesTest, DISABLED_ATripledGyroXDriftSigmaRanksGyroXFirst) {
-  const std::string sigma = "gyro_bias_gm.x.sigma";
-  const v1::Diagnosis d = DiagnoseRun(SimulatedRun("INS-E2E-3", "full", 10.0, {{sigma, 3.0 * Nominal(sigma)}}));
+TEST_F(AnalysesTest, AGyroXTorquerScaleFactorShiftRanksGyroXFirst) {
+  // One axis's scale factor: the gyro's own torquer, not the interface card
+  // that scales every axis together.
+  const double shift = 10.0 * Nominal("gyro_scale_factor.x") + 5.0 * Tolerance("gyro_scale_factor.x");
+  const v1::Diagnosis d =
+      DiagnoseRun(SimulatedRun("INS-E2E-3", "full", 10.0, {}, "gyro_scale_factor.x=" + std::to_string(shift)));
   ASSERT_GT(d.candidates_size(), 0);
   EXPECT_EQ(d.candidates(0).module(), "gyro.x") << d.DebugString();
+  EXPECT_EQ(d.candidates(0).failure_mode(), "failureModes/dtg-torquer-scale-shift.x") << d.DebugString();
 }
 
-// enable when the engine reports identified[] / effectCandidates[]
-TEST_F(AnalysesTest, DISABLED_ACommonGyroScaleFactorShiftRanksTheInterfaceCardFirst) {
+TEST_F(AnalysesTest, ACommonGyroScaleFactorShiftRanksTheInterfaceCardFirst) {
   const v1::Diagnosis d = DiagnoseRun(SimulatedRun("INS-E2E-4", "full", 10.0, {}, "gyro_scale_factor=5e-4"));
   ASSERT_GT(d.candidates_size(), 0);
   EXPECT_EQ(d.candidates(0).module(), "interface_card") << d.DebugString();
@@ -306,7 +316,7 @@ TEST_F(WorkerKillTest, AJobWhoseWorkerWasKilledIsCompletedByAnotherProcess) {
   auto stored = runs.Create(run, {.sha256 = "x", .request_id = "", .request_fingerprint = ""});
   ASSERT_TRUE(stored.ok()) << stored.status();
   kb::AnalysisStore analyses(pool());
-  auto created = analyses.Create(stored->id, v1::ErrorModel(), "");
+  auto created = analyses.Create(stored->id, v1::AnalysisSpec(), "");
   ASSERT_TRUE(created.ok());
   const std::string id = created->name().substr(9);
   const auto dir = MakeTempDir("insdiag-kill");

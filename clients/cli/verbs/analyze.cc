@@ -26,7 +26,15 @@ class AnalyzeVerb final : public Verb {
     options.Repeated("--add", &add_,
                      "Put a catalogue effect into the model: a term (gyro_scale_factor.z) or a family "
                      "(gyro_scale_factor); repeatable");
+    options.Repeated("--baseline", &baseline_,
+                     "Start from a model with this effect (term or family) in it: identification and the "
+                     "scan run on that model; repeatable");
+    options.Flag("--discover", &discover_,
+                 "Walk the loop: add the most significant missing effect, re-run, repeat until nothing is "
+                 "significant; print the path");
     options.Flag("--json", &json_, "Print the report as JSON (insdiag.v1.AnalysisReport)");
+    options.Option("--acf", &acf_, "Write each drift's autocorrelation, its band and the families' fits to CSV");
+    options.Option("--allan", &allan_, "Write the Allan deviation curves with their confidence intervals and fits to CSV");
     options.Option("--series", &series_, "Write measured, predicted, residual and ±3σ per channel and epoch to CSV");
     options.Option("--unit-type", &unit_type_,
                    "Unit type whose nominal model completes a datasheet the run lacks (default: the run's "
@@ -42,6 +50,12 @@ class AnalyzeVerb final : public Verb {
     }
     engine::AnalysisRequest request;
     request.add_effects = add_;
+    request.baseline_effects = baseline_;
+    request.discover = discover_;
+    if (discover_ && !add_.empty()) {
+      err << "insdiag analyze: --discover chooses the effects itself; use --baseline to start from yours\n";
+      return kExitUsage;
+    }
     const std::string type = unit_type_.empty() ? run->metadata.unit_type : unit_type_;
     if (!type.empty()) {
       auto unit_type = api::BuiltinUnitType(type);
@@ -74,6 +88,14 @@ class AnalyzeVerb final : public Verb {
         return kExitRefused;
       }
     }
+    auto write = [&](const std::string& path, auto writer) {
+      if (path.empty()) return true;
+      std::ofstream file(path);
+      writer(analysis->report, file);
+      if (!file) err << "insdiag analyze: cannot write " << path << "\n";
+      return static_cast<bool>(file);
+    };
+    if (!write(acf_, WriteCorrelationCsv) || !write(allan_, WriteAllanCsv)) return kExitRefused;
     if (json_) {
       auto text = api::ToJson(api::ToProto(analysis->report, analysis->model), /*pretty=*/true);
       if (!text.ok()) {
@@ -90,6 +112,10 @@ class AnalyzeVerb final : public Verb {
  private:
   std::string file_;
   std::vector<std::string> add_;
+  std::vector<std::string> baseline_;
+  bool discover_ = false;
+  std::string acf_;
+  std::string allan_;
   bool json_ = false;
   std::string series_;
   std::string unit_type_;

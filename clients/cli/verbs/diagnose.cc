@@ -28,6 +28,9 @@ class DiagnoseVerb final : public Verb {
                    "INSDIAG_SERVER");
     options.Flag("--json", &json_, "Print the diagnosis as JSON (insdiag.v1.Diagnosis)");
     options.Repeated("--add", &add_, "Put a catalogue effect into the model (term or family); repeatable");
+    options.Flag("--no-discover", &no_discover_,
+                 "Diagnose from the first model's scan only; by default the server walks the loop (adds each "
+                 "significant missing effect, re-runs) so the evidence is effects estimated in the model");
   }
 
   int Run(std::ostream& out, std::ostream& err) override {
@@ -56,6 +59,7 @@ class DiagnoseVerb final : public Verb {
       v1::CreateAnalysisRequest request;
       request.mutable_analysis()->set_run(stored->name());
       for (const auto& e : add_) request.mutable_analysis()->mutable_model()->add_effects(e);
+      request.mutable_analysis()->set_discover(!no_discover_);
       request.set_request_id(client::NewRequestId());
       if (auto s = analyses->CreateAnalysis(&context, request, &analysis); !s.ok()) {
         return fail("create analysis", client::FromGrpc(s));
@@ -113,6 +117,7 @@ class DiagnoseVerb final : public Verb {
   std::string file_;
   std::string server_ = client::kDefaultServerAddress;
   bool json_ = false;
+  bool no_discover_ = false;
   std::vector<std::string> add_;
 };
 

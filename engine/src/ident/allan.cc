@@ -1363,7 +1363,6 @@ std::vector<ParameterEstimate> AllanParameterEstimates(const AllanResult& result
         gyro ? "rad/sqrt(s)" : "m/s/sqrt(s)");
     add(AllanParameter::kBiasInstability, s + "_bias_instability." + axis, gyro ? "rad/s" : "m/s^2");
     add(AllanParameter::kRateRandomWalk, s + "_rate_random_walk." + axis, gyro ? "rad/s/sqrt(s)" : "m/s^2/sqrt(s)");
-    add(AllanParameter::kRateRandomWalk, s + "_bias_rw." + axis + ".density", gyro ? "rad/s/sqrt(s)" : "m/s^2/sqrt(s)");
     add(AllanParameter::kRateRamp, s + "_rate_ramp." + axis, gyro ? "rad/s^2" : "m/s^3");
     add(AllanParameter::kMarkovSigma, s + "_bias_gm." + axis + ".sigma", gyro ? "rad/s" : "m/s^2");
     add(AllanParameter::kMarkovTau, s + "_bias_gm." + axis + ".tau", "s");

@@ -135,17 +135,29 @@ bool MatchReferenceNoise(const ForwardPass& fw, double alpha, ErrorModel& model,
   const int K = fw.epochs();
   if (K == 0) return false;
   for (int group = 0; group < 2; ++group) {  // position channels, then velocity channels
-    double nis = 0.0, excess = 0.0;
+    double nis = 0.0, excess = 0.0, lag1 = 0.0;
     for (int c = 3 * group; c < 3 * group + 3; ++c) {
+      double previous = 0.0;
       for (int k = 0; k < K; ++k) {
         const double nu = fw.innovation(k, c);
         const double S = fw.innovation_variance(k, c);
-        nis += nu * nu / S;
+        const double normalised = nu / std::sqrt(S);
+        nis += normalised * normalised;
+        lag1 += previous * normalised;
+        previous = normalised;
         excess += nu * nu - S;  // mean(ν²) − mean(S) = r̂ − r
       }
     }
     const int n = 3 * K;
     if (nis / n <= stats::ChiSquareQuantile(1.0 - alpha, n) / n) continue;
+    // Reference noise the model lacks is white: a filter that trusts the
+    // reference too much overreacts, and its innovations alternate (lag-one
+    // correlation ≤ 0). Innovations that persist — positively correlated —
+    // are a systematic effect the model lacks, which the effect finder must
+    // see, not a noise to be widened away (Mehra, IEEE Trans. AC-15(2), 1970:
+    // covariance matching presumes the model's structure is right).
+    const double rho1 = lag1 / nis;
+    if (rho1 > stats::NormalQuantile(1.0 - alpha) / std::sqrt(static_cast<double>(n))) continue;
     double& sigma = group == 0 ? model.reference.position_sigma_m : model.reference.velocity_sigma_mps;
     const double r = sigma * sigma + excess / n;
     if (!(r > sigma * sigma)) continue;

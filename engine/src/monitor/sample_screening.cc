@@ -4,10 +4,41 @@
 #include <array>
 #include <cmath>
 
+#include "insdiag/engine/nav/rotation.h"
+#include "insdiag/engine/nav/strapdown.h"
+#include "insdiag/engine/nav/wgs84.h"
+
 namespace insdiag::engine {
 namespace {
 
 double& Channel(ImuSample& s, int c) { return c < 3 ? s.gyro_rad_s[c] : s.acc_mps2[c - 3]; }
+
+// What a perfect unit would have measured over each sample interval, from the
+// table's reference attitude: the mean body rate Log(C_{k−1}ᵀ C_k)/Δt plus the
+// Earth's rate, and the mean specific force (J/h) C_{k−1}ᵀ (−gⁿ) of a rotation
+// at constant rate (strapdown.h). The table's motion — ramps, stops, gravity
+// turning through the axes — is in it, so what is left is the sensor's own
+// error: smooth drifts and noise, against which a spike stands out even where
+// the raw signal bends faster than a median can follow (the corners of a
+// rate profile sampled at 10 Hz).
+std::vector<std::array<double, 6>> ReferenceMeasurements(const BenchRun& run) {
+  const auto& samples = run.samples;
+  std::vector<std::array<double, 6>> expected(samples.size());
+  const auto& site = run.metadata.site;
+  const Eigen::Vector3d w_ie_n = wgs84::EarthRateNed(site.latitude_rad);
+  const Eigen::Vector3d minus_g_n = -nav::GravityNed(site.latitude_rad, site.height_m);
+  for (size_t k = 1; k < samples.size(); ++k) {
+    const Eigen::Matrix3d C0 = nav::EulerToDcm(samples[k - 1].ref_rpy_rad);
+    const Eigen::Matrix3d C1 = nav::EulerToDcm(samples[k].ref_rpy_rad);
+    const double dt = samples[k].t_s - samples[k - 1].t_s;
+    const Eigen::Vector3d dtheta = nav::QuaternionToRotationVector(Eigen::Quaterniond(C0.transpose() * C1));
+    const Eigen::Vector3d rate = dtheta / dt + C0.transpose() * w_ie_n;
+    const Eigen::Vector3d force = nav::MeanBodyRotation(dtheta) * (C0.transpose() * minus_g_n);
+    expected[k] = {rate.x(), rate.y(), rate.z(), force.x(), force.y(), force.z()};
+  }
+  if (samples.size() > 1) expected[0] = expected[1];
+  return expected;
+}
 
 // Departures used to estimate the channel's robust σ.
 constexpr long kScaleSampleCount = 20000;
@@ -25,10 +56,16 @@ std::vector<SampleOutlier> ScreenAndRepairSpikes(BenchRun& run, const ScreeningO
   const int w = options.half_window;
   const auto n = static_cast<long>(run.samples.size());
   if (n < 2 * w + 1) return outliers;
+  const std::vector<std::array<double, 6>> expected = ReferenceMeasurements(run);
+  // The sample's departure from the reference motion.
+  auto residual = [&](int c, long k) {
+    const auto i = static_cast<size_t>(k);
+    return Channel(run.samples[i], c) - expected[i][static_cast<size_t>(c)];
+  };
   std::vector<double> window(static_cast<size_t>(2 * w + 1));
   auto departure_at = [&](int c, long k) {
-    for (long j = -w; j <= w; ++j) window[static_cast<size_t>(j + w)] = Channel(run.samples[static_cast<size_t>(k + j)], c);
-    return Channel(run.samples[static_cast<size_t>(k)], c) - MedianOf(window);
+    for (long j = -w; j <= w; ++j) window[static_cast<size_t>(j + w)] = residual(c, k + j);
+    return residual(c, k) - MedianOf(window);
   };
   // σ from a systematic subsample of the departures: a robust scale needs
   // thousands of values, not all of them (the full Hampel pass would cost
@@ -45,8 +82,7 @@ std::vector<SampleOutlier> ScreenAndRepairSpikes(BenchRun& run, const ScreeningO
       // is one quantum, the least a spike must exceed many times over.
       double smallest = 0.0;
       for (long k = w; k < n - w; ++k) {
-        const double m = std::abs(Channel(run.samples[static_cast<size_t>(k)], c) -
-                                  Channel(run.samples[static_cast<size_t>(k - 1)], c));
+        const double m = std::abs(residual(c, k) - residual(c, k - 1));
         if (m > 0.0 && (smallest == 0.0 || m < smallest)) smallest = m;
       }
       sigma = smallest;
@@ -58,10 +94,8 @@ std::vector<SampleOutlier> ScreenAndRepairSpikes(BenchRun& run, const ScreeningO
     candidates.clear();
     const double pre = 0.5 * options.threshold * sigma;
     for (long k = w; k < n - w; ++k) {
-      const double x = Channel(run.samples[static_cast<size_t>(k)], c);
-      const double mid = 0.5 * (Channel(run.samples[static_cast<size_t>(k - 1)], c) +
-                                Channel(run.samples[static_cast<size_t>(k + 1)], c));
-      if (std::abs(x - mid) > pre) candidates.push_back(k);
+      const double mid = 0.5 * (residual(c, k - 1) + residual(c, k + 1));
+      if (std::abs(residual(c, k) - mid) > pre) candidates.push_back(k);
     }
     for (long k : candidates) {
       const double departure = departure_at(c, k);

@@ -17,11 +17,32 @@ Eigen::Vector3d GravityNed(double latitude_rad, double height_m) {
   return {0.0, 0.0, wgs84::NormalGravityMps2(latitude_rad, height_m)};
 }
 
+Eigen::Matrix3d MeanBodyRotation(const Eigen::Vector3d& dtheta) {
+  const double theta2 = dtheta.squaredNorm();
+  // a/θ and b/θ² of the header, so that J/h = I − (a/θ)[Δθ×] + (b/θ²)[Δθ×]²;
+  // below θ = 1e-4 rad the closed forms lose digits and their series serve.
+  double a_over_theta, b_over_theta2;
+  if (theta2 < 1e-8) {
+    a_over_theta = 0.5 - theta2 / 24.0;
+    b_over_theta2 = 1.0 / 6.0 - theta2 / 120.0;
+  } else {
+    const double theta = std::sqrt(theta2);
+    a_over_theta = (1.0 - std::cos(theta)) / theta2;
+    b_over_theta2 = (theta - std::sin(theta)) / (theta2 * theta);
+  }
+  const Eigen::Matrix3d K = Skew(dtheta);
+  return Eigen::Matrix3d::Identity() - a_over_theta * K + b_over_theta2 * K * K;
+}
+
+Eigen::Vector3d UnrotateVelocityIncrement(const Eigen::Vector3d& dtheta, const Eigen::Vector3d& dv) {
+  return MeanBodyRotation(dtheta).partialPivLu().solve(dv);
+}
+
 NavState PropagateStrapdown(const NavState& s, const ImuIncrement& cur, const ImuIncrement& prev,
                             double dt) {
   const Eigen::Vector3d phi_b = cur.dtheta_rad + prev.dtheta_rad.cross(cur.dtheta_rad) / 12.0;
-  const Eigen::Vector3d rotated = cur.dtheta_rad.cross(cur.dv_mps);
-  const Eigen::Vector3d dv_b = cur.dv_mps + 0.5 * rotated + cur.dtheta_rad.cross(rotated) / 12.0;
+  const Eigen::Vector3d dv_b = UnrotateVelocityIncrement(cur.dtheta_rad, cur.dv_mps) -
+                               (cur.dtheta_rad - prev.dtheta_rad).cross(cur.dv_mps) / 12.0;
 
   // Earth and transport rates at the start of the interval: on a bench the
   // velocity is ~0 and the rates change by far less than the increments' noise.

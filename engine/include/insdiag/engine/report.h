@@ -85,6 +85,7 @@ struct DiscoveryStep {
   double aic = 0.0;
   double bic = 0.0;
   std::vector<ChannelFit> channels;
+  std::vector<ParameterEstimate> estimates;  // of the added terms, after the step
 };
 
 struct AnalysisReport {

@@ -50,7 +50,7 @@ struct AnalysisPage {
 struct ClaimedJob {
   std::string analysis_id;
   std::string run_id;
-  v1::ErrorModel request;
+  v1::AnalysisSpec spec;
   int attempt = 0;
 };
 
@@ -69,9 +69,9 @@ class AnalysisStore {
   explicit AnalysisStore(ConnectionPool& pool) : pool_(pool) {}
 
   // Queues an analysis of runs/{run_id}. With a request id already used for
-  // the same run and model: that analysis; for another: ALREADY_EXISTS.
+  // the same run and spec: that analysis; for another: ALREADY_EXISTS.
   // NOT_FOUND for an unknown run.
-  absl::StatusOr<v1::Analysis> Create(const std::string& run_id, const v1::ErrorModel& model,
+  absl::StatusOr<v1::Analysis> Create(const std::string& run_id, const v1::AnalysisSpec& spec,
                                       const std::string& request_id, int max_attempts = 3);
 
   // NOT_FOUND / INVALID_ARGUMENT (malformed id).

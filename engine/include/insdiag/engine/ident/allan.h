@@ -280,7 +280,8 @@ absl::StatusOr<AllanResult> AllanAnalysis(const BenchRun& run, const AllanOption
 // The fitted terms as identified parameters (method "ALLAN"), per channel:
 //   {gyro|acc}_quantization.{x,y,z} [rad | m/s]       {gyro_arw|acc_vrw}.{x,y,z} [rad/sqrt(s) | m/s/sqrt(s)]
 //   {gyro|acc}_bias_instability.* [rad/s | m/s^2]      {gyro|acc}_rate_random_walk.* [rad/s/sqrt(s) | m/s^2/sqrt(s)]
-//     and the same value as {gyro|acc}_bias_rw.*.density (the catalogue's rate random walk)
+//     (not named as the catalogue's bias_rw effect: a Markov drift looks the
+//     same at τ ≪ its correlation time; correlation processing tells them apart)
 //   {gyro|acc}_rate_ramp.* [rad/s^2 | m/s^3]           {gyro|acc}_bias_gm.*.sigma [rad/s | m/s^2], .tau [s]
 // Only terms in the selected model are listed. `a_priori`, when given, fills
 // ParameterEstimate::a_priori for the names it has.

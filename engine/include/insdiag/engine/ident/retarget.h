@@ -58,7 +58,8 @@ std::vector<ParameterEstimate> ApplyAllanNoise(const AllanResult& allan, const E
 
 // Raises the reference's position / velocity noise when a channel group's
 // innovations exceed their predicted variance beyond the χ² band at
-// `alpha`; true when it changed the model (a note says by how much).
+// `alpha` and are not positively correlated (a missing effect, not a
+// missing noise); true when it changed the model (a note says by how much).
 bool MatchReferenceNoise(const ForwardPass& forward, double alpha, ErrorModel& model,
                          std::vector<std::string>* notes);
 

@@ -4,11 +4,13 @@
 // velocity that no sensor model explains, so it is flagged as an outlier and
 // replaced before the mechanisation, and the estimates after it stay clean.
 //
-// A sample x_k is a spike when |x_k − med_k| > threshold · σ, where med_k is
-// the median of the 2w+1 samples around k and σ = 1.4826 · median |x − med|
-// over the channel (a robust standard deviation; Hampel, J. Amer. Stat.
-// Assoc. 69, 1974 — the "Hampel identifier"). Medians follow table ramps and
-// stops, so motion is never taken for a spike.
+// The test runs on r_k = x_k − x̂_k, the departure of each sample from what a
+// perfect unit would have measured given the table's reference attitude (body
+// rate and gravity turning with the body), so the table's motion is never
+// taken for a spike. A sample is a spike when |r_k − med_k| > threshold · σ,
+// where med_k is the median of the 2w+1 departures around k and
+// σ = 1.4826 · median |r − med| over the channel (a robust standard deviation;
+// Hampel, J. Amer. Stat. Assoc. 69, 1974 — the "Hampel identifier").
 #pragma once
 
 #include <string_view>
