@@ -352,15 +352,16 @@ absl::StatusOr<v1::RankUnitsResponse> FleetStore::RankUnits(const v1::RankUnitsR
   return out;
 }
 
-absl::StatusOr<bool> FleetStore::RefreshViews() {
+absl::StatusOr<bool> FleetStore::RefreshViews(bool concurrently) {
   auto db = pool_.Acquire();
   if (!db.ok()) return db.status();
   const std::int64_t key = AdvisoryLockKey("insdiag.fleet.refresh");
   auto locked = (*db)->Exec("SELECT pg_try_advisory_lock($1)", {Param::Int(key)});
   if (!locked.ok()) return locked.status();
   if (!locked->Bool(0, 0)) return false;
-  absl::Status status = (*db)->ExecScript("REFRESH MATERIALIZED VIEW CONCURRENTLY fleet_counts");
-  if (status.ok()) status = (*db)->ExecScript("REFRESH MATERIALIZED VIEW CONCURRENTLY parameter_trend_buckets");
+  const std::string refresh = concurrently ? "REFRESH MATERIALIZED VIEW CONCURRENTLY " : "REFRESH MATERIALIZED VIEW ";
+  absl::Status status = (*db)->ExecScript(refresh + "fleet_counts");
+  if (status.ok()) status = (*db)->ExecScript(refresh + "parameter_trend_buckets");
   (void)(*db)->Exec("SELECT pg_advisory_unlock($1)", {Param::Int(key)});
   if (!status.ok()) return status;
   return true;
