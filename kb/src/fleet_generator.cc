@@ -174,7 +174,9 @@ struct NoFaultFound {
   int test = -1;
 };
 
-enum class TestKind { kPeriodic, kFailure, kNoFaultFound };
+// kRetest: the return-to-service test after a repair or a removal without
+// fault, when the record is closed.
+enum class TestKind { kPeriodic, kFailure, kNoFaultFound, kRetest };
 
 struct Test {
   std::int64_t time_us = 0;
@@ -519,7 +521,12 @@ void PlanUnits(const Model& m, int count, Plan& plan) {
   }
 }
 
-// The tests: periodic at `interval`, plus one per failure and per no-fault-found removal.
+std::int64_t RecordDelay(const Model& m) {
+  return static_cast<std::int64_t>(m.profile.record_delay_days() * static_cast<double>(kMicrosPerDay));
+}
+
+// The tests: periodic at `interval`, plus one per failure and per
+// no-fault-found removal, each followed by a retest when the record closes.
 void PlanTests(const Model& m, Plan& plan, std::int64_t interval_us) {
   plan.interval_us = interval_us;
   const double jitter = std::clamp(m.profile.test_interval_jitter(), 0.0, 0.9);
@@ -530,14 +537,20 @@ void PlanTests(const Model& m, Plan& plan, std::int64_t interval_us) {
       u.tests.push_back({t, u.HoursAt(t), TestKind::kPeriodic, -1, 0, -1});
       t += static_cast<std::int64_t>(static_cast<double>(interval_us) * (1.0 + jitter * (2.0 * rng.Uniform() - 1.0)));
     }
+    const auto retest = [&](std::int64_t t) {
+      const std::int64_t after = t + RecordDelay(m);
+      if (after < u.end_us) u.tests.push_back({after, u.HoursAt(after), TestKind::kRetest, -1, 0, -1});
+    };
     for (std::size_t f = 0; f < u.failures.size(); ++f) {
       if (u.failures[f].realised) {
         u.tests.push_back({u.failures[f].time_us, u.failures[f].hours, TestKind::kFailure, static_cast<int>(f), 0, -1});
+        retest(u.failures[f].time_us);
       }
     }
     for (std::size_t n = 0; n < u.no_fault_found.size(); ++n) {
       const auto& e = u.no_fault_found[n];
       u.tests.push_back({e.time_us, e.hours, TestKind::kNoFaultFound, static_cast<int>(n), 0, -1});
+      retest(e.time_us);
     }
     std::stable_sort(u.tests.begin(), u.tests.end(), [](const Test& a, const Test& b) { return a.time_us < b.time_us; });
     for (std::size_t t = 0; t < u.tests.size(); ++t) {
@@ -567,11 +580,19 @@ void PlanTests(const Model& m, Plan& plan, std::int64_t interval_us) {
 }
 
 bool Diagnosed(const UnitPlan& u, std::size_t test) {
-  return test + 1 == u.tests.size() || u.tests[test].kind != TestKind::kPeriodic;
+  const TestKind kind = u.tests[test].kind;
+  return test + 1 == u.tests.size() || kind == TestKind::kFailure || kind == TestKind::kNoFaultFound;
 }
 
 // Two-sided normal p-value of a standard score.
 double PValue(double z) { return std::erfc(std::abs(z) / std::numbers::sqrt2); }
+
+// The share of a failure's signature change a test sees `ahead_us` before it.
+double PrecursorShare(const Model& m, std::int64_t ahead_us) {
+  if (ahead_us < 0 || ahead_us >= m.precursor_us) return 0.0;
+  const double elapsed = 1.0 - static_cast<double>(ahead_us) / static_cast<double>(m.precursor_us);
+  return std::pow(elapsed, m.profile.precursor_exponent());
+}
 
 TestValues Measure(const Model& m, const Plan& plan, std::size_t unit, std::size_t test) {
   const UnitPlan& u = plan.units[unit];
@@ -586,8 +607,7 @@ TestValues Measure(const Model& m, const Plan& plan, std::size_t unit, std::size
   for (const auto& f : u.failures) {
     const Part& part = u.parts[static_cast<std::size_t>(f.part)];
     if (t.time_us < part.installed_us || t.time_us > f.time_us || f.time_us - t.time_us >= m.precursor_us) continue;
-    const double elapsed = 1.0 - static_cast<double>(f.time_us - t.time_us) / static_cast<double>(m.precursor_us);
-    const double share = std::pow(elapsed, p.precursor_exponent());
+    const double share = PrecursorShare(m, f.time_us - t.time_us);
     for (const auto& s : f.shifts) {
       if (s.kind == TermKind::kIdentified) {
         v.log_ratio[static_cast<std::size_t>(s.index)] += share * s.value;
@@ -770,6 +790,7 @@ const char* KindName(TestKind kind) {
     case TestKind::kPeriodic: return "periodic";
     case TestKind::kFailure: return "failure";
     case TestKind::kNoFaultFound: return "no fault found";
+    case TestKind::kRetest: return "retest after repair";
   }
   return "";
 }
@@ -1014,7 +1035,7 @@ void Writer::EmitDiagnosis(std::size_t d, std::string& buffer, std::string& cand
 // found, and a censored record per part withdrawn with a retired unit.
 void Writer::EmitRecords(std::size_t i, std::string& buffer) const {
   const UnitPlan& u = plan_.units[i];
-  const std::int64_t delay = static_cast<std::int64_t>(m_.profile.record_delay_days() * static_cast<double>(kMicrosPerDay));
+  const std::int64_t delay = RecordDelay(m_);
   std::uint64_t next = first_record_[i];
   const auto start = [&](std::int64_t module_id, const std::string& mode) -> CopyRow {
     CopyRow row(buffer);
@@ -1172,7 +1193,8 @@ void FillTruth(const Model& m, const Plan& plan, GeneratedFleet& out) {
       if (f.realised) {
         const auto month = internal::MicrosOfMonthStart(internal::YearMonthOf(f.time_us));
         ++truth.failures[{m.mode_models[static_cast<std::size_t>(f.mode)].id, batch, month}];
-      } else if (!u.retired && f.time_us - m.end_us < m.precursor_us) {
+      } else if (!u.retired && !u.tests.empty() && f.time_us - u.tests.back().time_us < m.precursor_us &&
+                 PrecursorShare(m, f.time_us - u.tests.back().time_us) >= 0.5) {
         truth.units_about_to_fail.insert(u.serial);
       }
     }

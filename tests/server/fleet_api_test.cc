@@ -16,6 +16,8 @@
 #include <numeric>
 #include <set>
 
+#include <absl/strings/str_cat.h>
+
 #include "insdiag/api/json.h"
 #include "insdiag/client/unary.h"
 #include "insdiag/kb/diagnosis.h"
@@ -172,7 +174,8 @@ TEST_F(FleetApiTest, FailureCountsByModeTypeBatchAndMonthAreTheGeneratedFailures
       const std::int64_t month = MonthIndex(std::get<2>(key));
       expected[{std::get<0>(key), std::get<1>(key), month - month % months}] += n;
     }
-    for (const auto& c : Counts(period).counts()) {
+    const auto response = Counts(period);
+    for (const auto& c : response.counts()) {
       const std::int64_t month = MonthIndex(Micros(c.period_start()));
       EXPECT_EQ(month % months, 0) << period << " starts in month " << month % 12 + 1;
       got[{c.failure_mode().substr(std::string("failureModes/").size()), c.batch(), month}] += c.failures();
@@ -380,21 +383,41 @@ TEST_F(FleetApiTest, StatisticsParetoAndRankingAgreeWithTheRecords) {
   ASSERT_FALSE(pareto.entries().empty());
   EXPECT_NEAR(pareto.entries().rbegin()->cumulative_share(), 1.0, 1e-9);
 
-  // The units ranked first are those whose parts are failing now: their
-  // signatures are moving in their latest analysis.
+  // The ranking puts first the units whose parts are failing now (their
+  // signatures are moving in their latest analysis): the area under the ROC
+  // curve of the fault probability as a detector of them.
   v1::RankUnitsRequest rank_request;
   rank_request.set_unit_type(kUnitType);
   rank_request.set_page_size(10);
+  const auto first_page = Call<v1::RankUnitsResponse>(&v1::FleetService::Stub::RankUnits, rank_request);
+  ASSERT_EQ(first_page.units_size(), 10);
+  rank_request.set_page_size(1000);
   const auto ranked = Call<v1::RankUnitsResponse>(&v1::FleetService::Stub::RankUnits, rank_request);
-  ASSERT_EQ(ranked.units_size(), 10);
-  int about_to_fail = 0;
+  ASSERT_EQ(ranked.units_size(), fleet_->units);
+  EXPECT_EQ(ranked.units(9).unit(), first_page.units(9).unit());
+  std::vector<double> failing, others;
   for (int i = 0; i < ranked.units_size(); ++i) {
     const auto& u = ranked.units(i);
-    if (i > 0) EXPECT_LE(u.fault_probability(), ranked.units(i - 1).fault_probability());
-    about_to_fail += truth().units_about_to_fail.contains(u.unit().substr(std::string("units/").size())) ? 1 : 0;
+    if (i > 0) {
+      EXPECT_LE(u.fault_probability(), ranked.units(i - 1).fault_probability());
+    }
+    const bool coming = truth().units_about_to_fail.contains(u.unit().substr(std::string("units/").size()));
+    (coming ? failing : others).push_back(u.fault_probability());
   }
-  EXPECT_GE(about_to_fail, 7) << "of the 10 units ranked first; " << truth().units_about_to_fail.size()
-                              << " units are in a precursor window";
+  ASSERT_GE(failing.size(), 20u);
+  double wins = 0;
+  for (double f : failing) {
+    for (double o : others) wins += f > o ? 1.0 : f == o ? 0.5 : 0.0;
+  }
+  const double auc = wins / (static_cast<double>(failing.size()) * static_cast<double>(others.size()));
+  int confident = 0, confident_failing = 0;
+  for (const auto& u : ranked.units()) {
+    if (u.fault_probability() < 0.99) continue;
+    ++confident;
+    confident_failing += truth().units_about_to_fail.contains(u.unit().substr(std::string("units/").size())) ? 1 : 0;
+  }
+  EXPECT_GT(auc, 0.85) << failing.size() << " units show a failure coming; " << confident_failing << " of the "
+                      << confident << " units ranked P(fault) ≥ 0.99 are among them";
 }
 
 }  // namespace

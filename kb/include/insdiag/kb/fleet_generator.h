@@ -102,8 +102,9 @@ struct FleetTruth {
   std::map<std::pair<std::string, std::string>, double> ageing_per_year;
   // Parts of a module role's lives: installed parts, and those failed (any mode).
   std::map<std::string, std::int64_t> parts_by_role;
-  // Units with a part whose failure lies ahead within the precursor window
-  // (its signature is moving at the present), not withdrawn.
+  // Units in service whose latest analysis shows a part's signature at
+  // least half-way to its failure, which lies ahead (the failing parts a
+  // diagnosis can see now).
   std::set<std::string> units_about_to_fail;
   std::map<std::string, std::string> batch_of_unit;  // serial → batch
   std::map<std::string, std::int64_t> analyses_of_unit;  // serial → analyses
