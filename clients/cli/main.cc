@@ -17,6 +17,9 @@ class Cli11Options final : public OptionSink {
   void Positional(const std::string& name, std::string* value, const std::string& help) override {
     command_.add_option(name, *value, help)->required();
   }
+  void Positionals(const std::string& name, std::vector<std::string>* values, const std::string& help) override {
+    command_.add_option(name, *values, help);
+  }
   void Option(const std::string& flag, std::string* value, const std::string& help, const std::string& env) override {
     auto* option = command_.add_option(flag, *value, help);
     if (!env.empty()) option->envname(env);

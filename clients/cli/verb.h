@@ -22,6 +22,8 @@ class OptionSink {
   virtual ~OptionSink() = default;
   // A required positional argument, e.g. "RUN.csv".
   virtual void Positional(const std::string& name, std::string* value, const std::string& help) = 0;
+  // Optional positional arguments, e.g. "ACTION ARGS": all that remain.
+  virtual void Positionals(const std::string& name, std::vector<std::string>* values, const std::string& help) = 0;
   // "--server" with a value; `env` names an environment variable that
   // supplies the default when set.
   virtual void Option(const std::string& flag, std::string* value, const std::string& help,

@@ -8,6 +8,7 @@
 #include <set>
 
 #include "insdiag/engine/filter/observation.h"
+#include "report_rows.h"
 #include "store_util.h"
 
 namespace insdiag::kb {
@@ -54,6 +55,16 @@ v1::Analysis AnalysisFromRow(const Result& rows, int row) {
   *a.mutable_update_time() = internal::TimestampOfMicros(internal::IntOr0(rows, row, 11));
   if (!rows.IsNull(row, 12)) a.mutable_report()->ParseFromString(absl::HexStringToBytes(rows.String(row, 12)));
   return a;
+}
+
+// A SUCCEEDED analysis stored without its report bytes (generated fleet
+// history) gets the report rebuilt from its rows.
+absl::Status CompleteReport(Connection& db, const Result& rows, int row, v1::Analysis& analysis) {
+  if (analysis.state() != v1::Analysis::SUCCEEDED || !rows.IsNull(row, 12)) return absl::OkStatus();
+  auto report = internal::RebuildReport(db, rows.String(row, 0));
+  if (!report.ok()) return report.status();
+  *analysis.mutable_report() = std::move(*report);
+  return absl::OkStatus();
 }
 
 absl::Status CheckId(const std::string& id) {
@@ -198,7 +209,11 @@ absl::StatusOr<v1::Analysis> AnalysisStore::Get(const std::string& analysis_id, 
                           {Param::Text(analysis_id)}, ResultFormat::kText);
   if (!rows.ok()) return rows.status();
   if (rows->rows() == 0) return absl::NotFoundError(absl::StrCat("analyses/", analysis_id, " does not exist"));
-  return AnalysisFromRow(*rows, 0);
+  v1::Analysis analysis = AnalysisFromRow(*rows, 0);
+  if (include_report) {
+    if (auto s = CompleteReport(**db, *rows, 0, analysis); !s.ok()) return s;
+  }
+  return analysis;
 }
 
 absl::StatusOr<AnalysisPage> AnalysisStore::List(const AnalysisQuery& query) {
@@ -227,7 +242,12 @@ absl::StatusOr<AnalysisPage> AnalysisStore::List(const AnalysisQuery& query) {
   if (!rows.ok()) return rows.status();
   AnalysisPage page;
   const int shown = std::min(rows->rows(), page_size);
-  for (int row = 0; row < shown; ++row) page.analyses.push_back(AnalysisFromRow(*rows, row));
+  for (int row = 0; row < shown; ++row) {
+    page.analyses.push_back(AnalysisFromRow(*rows, row));
+    if (query.include_reports) {
+      if (auto s = CompleteReport(**db, *rows, row, page.analyses.back()); !s.ok()) return s;
+    }
+  }
   if (rows->rows() > page_size) {
     page.next_page_token = internal::EncodeToken(rows->String(shown - 1, 13), rows->String(shown - 1, 0));
   }

@@ -76,18 +76,10 @@ std::vector<double> Signs(v1::Signature::Direction d) {
 
 bool IsFamily(const std::string& parameter) { return absl::EndsWith(parameter, ".*"); }
 
-// Whether evidence term `name` is covered by signature parameter `pattern`:
-// the exact term, or for "family.*" a term "family.<axis>".
-bool Covers(const std::string& pattern, const std::string& name) {
-  if (!IsFamily(pattern)) return pattern == name;
-  const std::string family = pattern.substr(0, pattern.size() - 1);  // "family."
-  return absl::StartsWith(name, family) && name.find('.', family.size()) == std::string::npos;
-}
-
 std::vector<const EvidenceTerm*> Members(const v1::Signature& term, const Evidence& evidence) {
   std::vector<const EvidenceTerm*> out;
   for (const auto& t : evidence.terms) {
-    if (Covers(term.parameter(), t.name) && ScaleName(t.scale) == term.scale()) out.push_back(&t);
+    if (SignatureCovers(term.parameter(), t.name) && ScaleName(t.scale) == term.scale()) out.push_back(&t);
   }
   return out;
 }
@@ -348,6 +340,28 @@ Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType
         "its verdict alone");
   }
   return evidence;
+}
+
+bool SignatureCovers(const std::string& pattern, const std::string& name) {
+  if (!IsFamily(pattern)) return pattern == name;
+  const std::string family = pattern.substr(0, pattern.size() - 1);  // "family."
+  return absl::StartsWith(name, family) && name.find('.', family.size()) == std::string::npos;
+}
+
+DiagnosisHeadline HeadlineOf(const v1::Diagnosis& diagnosis) {
+  DiagnosisHeadline out;
+  double healthy = 0.0;
+  for (const auto& h : diagnosis.hypotheses()) {
+    if (h.failure_mode() == kHealthy) healthy = h.probability();
+  }
+  out.fault_probability = 1.0 - healthy;
+  for (const auto& c : diagnosis.candidates()) {
+    if (c.module() != kHealthy) {
+      out.top = &c;
+      break;
+    }
+  }
+  return out;
 }
 
 double ModeRatePerHour(const v1::FailureMode& mode, std::int64_t confirmed_failures, double fleet_exposure_hours,

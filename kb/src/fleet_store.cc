@@ -51,17 +51,18 @@ absl::StatusOr<v1::FleetStatistics> FleetStore::GetFleetStatistics(const v1::Get
   out.set_run_count(internal::IntOr0(*counts, 0, 1));
   out.set_analysis_count(internal::IntOr0(*counts, 0, 2));
   if (!counts->IsNull(0, 3)) *out.mutable_counts_time() = internal::TimestampOfMicros(internal::IntOr0(*counts, 0, 3));
-  // Exposure of each role: every installed part from installation to removal
-  // (or to the unit's present hours); failures from the records.
+  // Exposure of each role (every installed part from installation to removal
+  // or to its unit's present hours) from the materialised module_exposure,
+  // as of counts_time; failures live from the records.
   auto rows = (*db)->Exec(
-      "WITH m AS (SELECT m.role, count(*) AS modules, "
-      "  sum(greatest(coalesce(m.removed_hours, u.operating_hours) - m.installed_hours, 0)) AS hours "
-      "  FROM modules m JOIN units u USING (unit_id) WHERE $1::text IS NULL OR u.unit_type = $1 GROUP BY m.role), "
+      "WITH m AS (SELECT role, sum(modules)::bigint AS modules, sum(hours) AS hours FROM module_exposure "
+      "  WHERE $1::text IS NULL OR unit_type = $1 GROUP BY role), "
       "f AS (SELECT m.role, count(*) FILTER (WHERE r.confirmed) AS failures, "
       "  count(*) FILTER (WHERE r.no_fault_found) AS nff FROM failure_records r JOIN modules m USING (module_id) "
-      "  JOIN units u ON u.unit_id = r.unit_id WHERE $1::text IS NULL OR u.unit_type = $1 GROUP BY m.role) "
-      "SELECT m.role, m.modules, m.hours, coalesce(f.failures, 0), coalesce(f.nff, 0) FROM m LEFT JOIN f USING (role) "
-      "ORDER BY m.role",
+      "  WHERE (r.confirmed OR r.no_fault_found) "
+      "  AND ($1::text IS NULL OR r.unit_id IN (SELECT unit_id FROM units WHERE unit_type = $1)) GROUP BY m.role) "
+      "SELECT role, coalesce(m.modules, 0), coalesce(m.hours, 0), coalesce(f.failures, 0), coalesce(f.nff, 0) "
+      "FROM m FULL JOIN f USING (role) ORDER BY role",
       {Param::TextOrNull(*type)});
   if (!rows.ok()) return rows.status();
   for (int r = 0; r < rows->rows(); ++r) {
@@ -352,15 +353,21 @@ absl::StatusOr<v1::RankUnitsResponse> FleetStore::RankUnits(const v1::RankUnitsR
   return out;
 }
 
-absl::StatusOr<bool> FleetStore::RefreshViews() {
+absl::StatusOr<bool> FleetStore::RefreshViews(bool concurrently) {
   auto db = pool_.Acquire();
   if (!db.ok()) return db.status();
   const std::int64_t key = AdvisoryLockKey("insdiag.fleet.refresh");
   auto locked = (*db)->Exec("SELECT pg_try_advisory_lock($1)", {Param::Int(key)});
   if (!locked.ok()) return locked.status();
   if (!locked->Bool(0, 0)) return false;
-  absl::Status status = (*db)->ExecScript("REFRESH MATERIALIZED VIEW CONCURRENTLY fleet_counts");
-  if (status.ok()) status = (*db)->ExecScript("REFRESH MATERIALIZED VIEW CONCURRENTLY parameter_trend_buckets");
+  const std::string refresh = concurrently ? "REFRESH MATERIALIZED VIEW CONCURRENTLY " : "REFRESH MATERIALIZED VIEW ";
+  // The trend buckets sort every identified value (18 million for a fleet of
+  // a million analyses): in memory when it fits, rather than in 4 MB runs.
+  absl::Status status = (*db)->ExecScript("SET work_mem = '256MB'");
+  for (const char* view : {"fleet_counts", "module_exposure", "parameter_trend_buckets"}) {
+    if (status.ok()) status = (*db)->ExecScript(refresh + view);
+  }
+  (void)(*db)->ExecScript("RESET work_mem");
   (void)(*db)->Exec("SELECT pg_advisory_unlock($1)", {Param::Int(key)});
   if (!status.ok()) return status;
   return true;

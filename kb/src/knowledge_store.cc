@@ -7,6 +7,7 @@
 #include <map>
 #include <set>
 
+#include "report_rows.h"
 #include "store_util.h"
 
 namespace insdiag::kb {
@@ -129,61 +130,7 @@ absl::StatusOr<std::vector<v1::FailureMode>> LoadModes(Connection& db, const std
   return modes;
 }
 
-// The stored report of a SUCCEEDED analysis; for analyses stored without one
-// (generated history) a report rebuilt from its queryable rows.
-absl::StatusOr<v1::AnalysisReport> LoadReport(Connection& db, const std::string& analysis_id) {
-  auto rows = db.Exec("SELECT state, report, coalesce(verdict, '') FROM analyses WHERE analysis_id = $1::uuid",
-                      {Param::Text(analysis_id)}, ResultFormat::kBinary);
-  if (!rows.ok()) return rows.status();
-  if (rows->rows() == 0) return absl::NotFoundError(absl::StrCat("analyses/", analysis_id, " does not exist"));
-  if (rows->Get(0, 0) != "SUCCEEDED") {
-    return absl::FailedPreconditionError(
-        absl::StrCat("analyses/", analysis_id, " is ", rows->String(0, 0), ": only a SUCCEEDED analysis has evidence"));
-  }
-  v1::AnalysisReport report;
-  if (!rows->IsNull(0, 1)) {
-    report.ParseFromString(std::string(rows->Get(0, 1)));
-    return report;
-  }
-  v1::AnalysisReport::Verdict verdict = v1::AnalysisReport::VERDICT_UNSPECIFIED;
-  v1::AnalysisReport::Verdict_Parse(rows->String(0, 2), &verdict);
-  report.set_verdict(verdict);
-  auto identified = db.Exec(
-      "SELECT n.name, p.value, coalesce(p.std_error, 0), p.method FROM identified_parameters p "
-      "JOIN parameter_names n USING (parameter_id) WHERE p.analysis_id = $1::uuid ORDER BY n.name",
-      {Param::Text(analysis_id)});
-  if (!identified.ok()) return identified.status();
-  for (int r = 0; r < identified->rows(); ++r) {
-    auto* p = report.add_identified();
-    p->set_name(identified->String(r, 0));
-    p->set_value(internal::DoubleOr0(*identified, r, 1));
-    p->set_std_error(internal::DoubleOr0(*identified, r, 2));
-    v1::IdentifiedParameter::Method method = v1::IdentifiedParameter::METHOD_UNSPECIFIED;
-    v1::IdentifiedParameter::Method_Parse(identified->String(r, 3), &method);
-    p->set_method(method);
-  }
-  auto candidates = db.Exec(
-      "SELECT name, family, source, statistic, degrees_of_freedom, p_value, p_value_holm, estimate, "
-      "coalesce(std_error, 0), unit, identifiable FROM effect_candidates WHERE analysis_id = $1::uuid "
-      "AND NOT per_family ORDER BY p_value_holm, name",
-      {Param::Text(analysis_id)});
-  if (!candidates.ok()) return candidates.status();
-  for (int r = 0; r < candidates->rows(); ++r) {
-    auto* c = report.add_effect_candidates();
-    c->set_name(candidates->String(r, 0));
-    c->set_family(candidates->String(r, 1));
-    c->set_source(candidates->String(r, 2));
-    c->set_statistic(internal::DoubleOr0(*candidates, r, 3));
-    c->set_degrees_of_freedom(static_cast<int>(internal::IntOr0(*candidates, r, 4)));
-    c->set_p_value(internal::DoubleOr0(*candidates, r, 5));
-    c->set_p_value_holm(internal::DoubleOr0(*candidates, r, 6));
-    c->set_estimate(internal::DoubleOr0(*candidates, r, 7));
-    c->set_std_error(internal::DoubleOr0(*candidates, r, 8));
-    c->set_unit(candidates->String(r, 9));
-    c->set_identifiable(candidates->Bool(r, 10));
-  }
-  return report;
-}
+using internal::LoadReport;
 
 constexpr char kRecordColumns[] =
     "SELECT r.record_id::text, u.serial, m.role, coalesce(r.failure_mode, ''), coalesce(r.analysis_id::text, ''), "
@@ -695,17 +642,8 @@ absl::StatusOr<v1::Diagnosis> KnowledgeStore::CreateDiagnosis(const std::string&
     id = made->String(0, 0);
     diagnosis.set_name(absl::StrCat("diagnoses/", id));
     *diagnosis.mutable_create_time() = internal::TimestampOfMicros(internal::IntOr0(*made, 0, 1));
-    double healthy = 0.0;
-    for (const auto& h : diagnosis.hypotheses()) {
-      if (h.failure_mode() == "healthy") healthy = h.probability();
-    }
-    const v1::Candidate* top = nullptr;
-    for (const auto& c : diagnosis.candidates()) {
-      if (c.module() != "healthy") {
-        top = &c;
-        break;
-      }
-    }
+    const DiagnosisHeadline headline = HeadlineOf(diagnosis);
+    const v1::Candidate* top = headline.top;
     std::string body;
     diagnosis.SerializeToString(&body);
     std::vector<std::string> notes(diagnosis.notes().begin(), diagnosis.notes().end());
@@ -713,7 +651,7 @@ absl::StatusOr<v1::Diagnosis> KnowledgeStore::CreateDiagnosis(const std::string&
         "INSERT INTO diagnoses (diagnosis_id, analysis_id, unit_id, fault_probability, top_module, top_failure_mode, "
         "top_probability, body, notes, create_time) VALUES ($1::uuid, $2::uuid, $3, $4, $5, $6, $7, $8, $9::text[], "
         "to_timestamp($10::double precision / 1000000))",
-        {Param::Text(id), Param::Text(*analysis_id), Param::Text(unit_id), Param::Double(1.0 - healthy),
+        {Param::Text(id), Param::Text(*analysis_id), Param::Text(unit_id), Param::Double(headline.fault_probability),
          Param::Text(top ? top->module() : ""), Param::Text(top ? top->failure_mode() : ""),
          Param::Double(top ? top->probability() : 0.0), Param::Bytes(body),
          Param::Text(internal::TextArrayLiteral(notes)),
@@ -846,6 +784,21 @@ absl::StatusOr<v1::Diagnosis> KnowledgeStore::ResolveDiagnosis(const v1::Resolve
   });
   if (!status.ok()) return status;
   return LoadDiagnosis(**db, *id);
+}
+
+absl::Status KnowledgeStore::RefineSignatures(const std::string& unit_type) {
+  auto db = pool_.Acquire();
+  if (!db.ok()) return db.status();
+  auto modes = (*db)->Exec(
+      "SELECT DISTINCT r.failure_mode FROM failure_records r JOIN failure_modes f USING (failure_mode) "
+      "WHERE r.confirmed AND r.analysis_id IS NOT NULL AND ($1::text IS NULL OR f.unit_type = $1) ORDER BY 1",
+      {Param::TextOrNull(unit_type.empty() ? "" : UnitTypeId(unit_type))});
+  if (!modes.ok()) return modes.status();
+  for (int r = 0; r < modes->rows(); ++r) {
+    const std::string mode_id = modes->String(r, 0);
+    if (auto s = (*db)->InTransaction([&] { return RefineMode(**db, mode_id); }); !s.ok()) return s;
+  }
+  return absl::OkStatus();
 }
 
 }  // namespace insdiag::kb

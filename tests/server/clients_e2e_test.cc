@@ -9,6 +9,10 @@
 #include <regex>
 #include <thread>
 
+#include "insdiag/api/json.h"
+#include "insdiag/v1/analyses.pb.h"
+#include "insdiag/v1/fleet.pb.h"
+#include "insdiag/v1/knowledge.pb.h"
 #include "support/database_fixture.h"
 #include "support/subprocess.h"
 
@@ -87,6 +91,111 @@ TEST_F(ClientsTest, PythonClientUploadsAnalysesAndDiagnoses) {
   EXPECT_THAT(done->stdout_text, HasSubstr("\"candidates\""));
   EXPECT_THAT(done->stdout_text, HasSubstr("\"module\": \"healthy\""));
   EXPECT_THAT(done->stderr_text, HasSubstr("uploaded runs/"));
+}
+
+// The server verbs of `insdiag` over a fleet written by `insdiag-fleet`
+// into the server's database: statistics, Weibull, counts, ranking, trends,
+// analyses and their (rebuilt) reports, diagnoses resolved, failure records;
+// exit 0 / 1 (refused) / 2 (bad usage) per the contract.
+TEST_F(ClientsTest, ServerVerbsReadAndResolveAGeneratedFleet) {
+  auto generated = RunToCompletion({INSDIAG_FLEET_PATH, "--database-url", database_url(), "--units", "40", "--seed", "5",
+                                    "--end-time", "2025-06-01", "--years", "10", "--hours-per-year", "8000"},
+                                   dir_, 120s);
+  ASSERT_TRUE(generated.ok());
+  ASSERT_EQ(generated->exit_status, 0) << generated->stderr_text;
+  EXPECT_THAT(generated->stdout_text, HasSubstr("units 40"));
+  std::smatch failures_match;
+  ASSERT_TRUE(std::regex_search(generated->stdout_text, failures_match, std::regex(R"(confirmed_failures (\d+))")));
+  const std::string failures = failures_match[1].str();
+
+  const auto insdiag = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), INSDIAG_CLI_PATH);
+    args.push_back("--server");
+    args.push_back(address_);
+    auto done = RunToCompletion(args, dir_, 60s);
+    EXPECT_TRUE(done.ok());
+    return done.ok() ? *done : Completed{};
+  };
+  const auto json = [](const Completed& r, google::protobuf::Message* m) {
+    const auto parsed = api::FromJson(r.stdout_text, m);
+    EXPECT_TRUE(parsed.ok()) << parsed << "\n" << r.stdout_text << r.stderr_text;
+  };
+
+  auto stats = insdiag({"fleet", "stats", "--json"});
+  EXPECT_EQ(stats.exit_status, 0) << stats.stderr_text;
+  v1::FleetStatistics statistics;
+  json(stats, &statistics);
+  EXPECT_EQ(statistics.unit_count(), 40);
+  EXPECT_EQ(std::to_string(statistics.failure_count()), failures);
+  auto table = insdiag({"fleet", "stats"});
+  EXPECT_EQ(table.exit_status, 0);
+  EXPECT_THAT(table.stdout_text, HasSubstr("power_supply"));
+  EXPECT_THAT(table.stdout_text, HasSubstr("MTBF"));
+
+  auto counts = insdiag({"fleet", "counts", "--period", "year", "--json"});
+  EXPECT_EQ(counts.exit_status, 0) << counts.stderr_text;
+  v1::ListFailureCountsResponse counted;
+  json(counts, &counted);
+  EXPECT_EQ(std::to_string(counted.total()), failures);
+
+  auto weibull = insdiag({"fleet", "weibull", "--role", "gyro.x", "--json"});
+  EXPECT_EQ(weibull.exit_status, 0) << weibull.stderr_text;
+  v1::WeibullFit fit;
+  json(weibull, &fit);
+  EXPECT_GE(fit.failures(), 2);
+  EXPECT_GT(fit.shape(), 0.0);
+  EXPECT_THAT(insdiag({"fleet", "weibull", "--role", "gyro.x"}).stdout_text, HasSubstr("B10"));
+  EXPECT_EQ(insdiag({"fleet", "weibull"}).exit_status, 2);
+  EXPECT_EQ(insdiag({"fleet", "histogram"}).exit_status, 2);
+  EXPECT_EQ(insdiag({"fleet", "weibull", "--role", "flux_capacitor"}).exit_status, 1);
+  EXPECT_THAT(insdiag({"fleet", "pareto"}).stdout_text, HasSubstr("cumulative"));
+  EXPECT_THAT(insdiag({"fleet", "trend", "--parameter", "gyro_bias_gm.x.sigma"}).stdout_text, HasSubstr("per year"));
+  EXPECT_THAT(insdiag({"fleet", "trends", "--parameter", "gyro_arw.x", "--unit", "G5-00003"}).stdout_text,
+              HasSubstr("units/G5-00003"));
+  auto rank = insdiag({"fleet", "rank", "--page-size", "5", "--json"});
+  EXPECT_EQ(rank.exit_status, 0) << rank.stderr_text;
+  v1::RankUnitsResponse ranked;
+  json(rank, &ranked);
+  EXPECT_EQ(ranked.units_size(), 5);
+
+  // Analyses and their reports, rebuilt from the generated rows.
+  auto listed = insdiag({"analyses", "--unit", "G5-00001", "--json"});
+  EXPECT_EQ(listed.exit_status, 0) << listed.stderr_text;
+  v1::ListAnalysesResponse analyses;
+  json(listed, &analyses);
+  ASSERT_FALSE(analyses.analyses().empty());
+  auto report = insdiag({"report", analyses.analyses(0).name(), "--json"});
+  EXPECT_EQ(report.exit_status, 0) << report.stderr_text;
+  v1::AnalysisReport rebuilt;
+  json(report, &rebuilt);
+  EXPECT_EQ(rebuilt.identified_size(), 18);
+  EXPECT_NE(rebuilt.verdict(), v1::AnalysisReport::VERDICT_UNSPECIFIED);
+  EXPECT_THAT(insdiag({"report", analyses.analyses(0).name()}).stdout_text, HasSubstr("gyro_bias_gm.x.sigma"));
+  EXPECT_EQ(insdiag({"report", "analyses/00000000-0000-4000-8000-000000000000"}).exit_status, 1);
+
+  // The latest diagnosis of a unit, rejected: a no-fault-found record.
+  auto diagnoses = insdiag({"diagnoses", "--unit", "G5-00001", "--json"});
+  EXPECT_EQ(diagnoses.exit_status, 0) << diagnoses.stderr_text;
+  v1::ListDiagnosesResponse listed_diagnoses;
+  json(diagnoses, &listed_diagnoses);
+  ASSERT_FALSE(listed_diagnoses.diagnoses().empty());
+  const v1::Diagnosis& latest = listed_diagnoses.diagnoses(0);
+  EXPECT_TRUE(latest.failure_record().empty());
+  EXPECT_EQ(insdiag({"diagnoses", "resolve", latest.name(), "--module", "gyro.x"}).exit_status, 2);
+  auto rejected = insdiag({"diagnoses", "resolve", latest.name(), "--module", "gyro.x", "--rejected"});
+  EXPECT_EQ(rejected.exit_status, 0) << rejected.stderr_text;
+  EXPECT_THAT(rejected.stdout_text, HasSubstr("rejected (no fault found) on gyro.x"));
+  auto again = insdiag({"diagnoses", "resolve", latest.name(), "--module", "gyro.x", "--rejected"});
+  EXPECT_EQ(again.exit_status, 1);
+  EXPECT_THAT(again.stderr_text, HasSubstr("already resolved"));
+  auto records = insdiag({"failure-records", "--unit", "G5-00001", "--module", "G5-00001/gyro.x"});
+  EXPECT_EQ(records.exit_status, 0) << records.stderr_text;
+  EXPECT_THAT(records.stdout_text, HasSubstr("no fault found"));
+  auto created = insdiag({"failure-records", "create", "--module", "G5-00002/acc.x", "--hours", "1234",
+                          "--confirmed", "--mode", "acc-bias-shift.x", "--repair-action", "module replaced"});
+  EXPECT_EQ(created.exit_status, 0) << created.stderr_text;
+  EXPECT_THAT(created.stdout_text, HasSubstr("failureRecords/"));
+  EXPECT_EQ(insdiag({"failure-records", "create", "--module", "G5-00002/acc.x", "--confirmed"}).exit_status, 2);
 }
 
 }  // namespace

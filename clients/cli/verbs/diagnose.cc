@@ -10,6 +10,7 @@
 #include "insdiag/client/run_client.h"
 #include "insdiag/v1/analyses.grpc.pb.h"
 #include "insdiag/v1/knowledge.grpc.pb.h"
+#include "server_output.h"
 #include "verb.h"
 
 namespace insdiag::cli {
@@ -103,13 +104,7 @@ class DiagnoseVerb final : public Verb {
     }
     out << diagnosis.name() << " of " << diagnosis.analysis() << " (" << diagnosis.unit() << ", verdict "
         << v1::AnalysisReport::Verdict_Name(analysis.report().verdict()) << ")\n";
-    for (const auto& c : diagnosis.candidates()) {
-      if (c.probability() < 1e-4) continue;
-      out << std::fixed << std::setprecision(1) << std::setw(6) << 100.0 * c.probability() << " %  "
-          << std::left << std::setw(16) << c.module() << std::right << " " << c.failure_mode() << "\n";
-      for (const auto& line : c.evidence()) out << "           " << line << "\n";
-    }
-    for (const auto& note : diagnosis.notes()) out << "note: " << note << "\n";
+    PrintDiagnosisText(diagnosis, out);
     return kExitOk;
   }
 

@@ -104,6 +104,18 @@ struct PriorInputs {
 v1::Diagnosis Diagnose(const Evidence& evidence, std::span<const v1::FailureMode> modes,
                        const v1::DiagnosisSettings& settings, const PriorInputs& prior);
 
+// Whether signature parameter `pattern` covers evidence term `name`: the
+// same name, or for a family "f.*" a term "f.<one part>".
+bool SignatureCovers(const std::string& pattern, const std::string& name);
+
+// What a diagnosis says in one line: 1 − P(healthy), and the most probable
+// module that is not `healthy` (nullptr when there is none).
+struct DiagnosisHeadline {
+  double fault_probability = 0.0;
+  const v1::Candidate* top = nullptr;
+};
+DiagnosisHeadline HeadlineOf(const v1::Diagnosis& diagnosis);
+
 // The prior rate λ_m per hour of one mode (see above).
 double ModeRatePerHour(const v1::FailureMode& mode, std::int64_t confirmed_failures, double fleet_exposure_hours,
                        const v1::DiagnosisSettings& settings);

@@ -27,9 +27,10 @@ class FleetStore {
   absl::StatusOr<v1::ParameterTrend> GetParameterTrend(const v1::GetParameterTrendRequest& request);
   absl::StatusOr<v1::RankUnitsResponse> RankUnits(const v1::RankUnitsRequest& request);
 
-  // Refreshes the materialised views (concurrently: readers are not blocked).
-  // Skipped, returning false, when another process is refreshing.
-  absl::StatusOr<bool> RefreshViews();
+  // Refreshes the materialised views; `concurrently`, readers are not
+  // blocked (slower: the new contents are diffed into the old). Skipped,
+  // returning false, when another process is refreshing.
+  absl::StatusOr<bool> RefreshViews(bool concurrently = true);
 
  private:
   ConnectionPool& pool_;

@@ -71,6 +71,11 @@ class KnowledgeStore {
   // FAILED_PRECONDITION when already resolved.
   absl::StatusOr<v1::Diagnosis> ResolveDiagnosis(const v1::ResolveDiagnosisRequest& request);
 
+  // Re-derives the signatures of the failure modes with confirmed cases (of
+  // one unit type, or all when empty) from those cases, as confirming each
+  // would have: after a bulk load such as the fleet generator's.
+  absl::Status RefineSignatures(const std::string& unit_type);
+
  private:
   ConnectionPool& pool_;
 };

@@ -1,0 +1,124 @@
+// insdiag failure-records [list] [--unit SERIAL] [--module UNIT/ROLE] [--mode MODE]
+// insdiag failure-records create --module UNIT/ROLE --hours H
+//                                (--confirmed --mode MODE | --no-fault-found | --censored)
+//                                [--analysis ANALYSIS] [--repair-action TEXT] [--notes TEXT]
+// The refusals database: list records (newest first) or write one. A module
+// is units/{serial}/modules/{role}, or SERIAL/ROLE for short.
+// All take [--json] [--server ADDR].
+#include <ostream>
+
+#include "insdiag/client/unary.h"
+#include "insdiag/v1/knowledge.grpc.pb.h"
+#include "server_output.h"
+#include "verb.h"
+
+namespace insdiag::cli {
+namespace {
+
+// units/{serial}/modules/{role} from itself or "SERIAL/ROLE".
+std::string ModuleName(const std::string& text) {
+  if (text.empty() || text.starts_with("units/")) return text;
+  const auto slash = text.find('/');
+  if (slash == std::string::npos) return text;
+  return "units/" + text.substr(0, slash) + "/modules/" + text.substr(slash + 1);
+}
+
+class FailureRecordsVerb final : public Verb {
+ public:
+  std::string Name() const override { return "failure-records"; }
+  std::string Summary() const override {
+    return "List or write failure records (confirmed failures, no fault found, suspensions)";
+  }
+
+  void DeclareOptions(OptionSink& options) override {
+    options.Positionals("ACTION", &arguments_, "list (default) | create");
+    options.Option("--unit", &unit_, "list: only this unit's records");
+    options.Option("--module", &module_, "the module: units/{serial}/modules/{role} or SERIAL/ROLE");
+    options.Option("--mode", &mode_, "the failure mode (failureModes/{id} or the id)");
+    options.Option("--page-size", &page_size_, "list: records per page (default 50, at most 1000)");
+    options.Option("--page-token", &page_token_, "list: the next page");
+    options.Option("--hours", &hours_, "create: the unit's operating hours when the failure was detected");
+    options.Option("--analysis", &analysis_, "create: the analysis that found it");
+    options.Flag("--confirmed", &confirmed_, "create: a failure confirmed on the bench (needs --mode)");
+    options.Flag("--no-fault-found", &no_fault_found_, "create: the suspected module showed no fault");
+    options.Flag("--censored", &censored_, "create: the unit was withdrawn without failing (a suspension)");
+    options.Option("--repair-action", &repair_action_, "create: e.g. \"module replaced\"");
+    options.Option("--notes", &notes_, "create: free text");
+    options.Flag("--json", &json_, "Print the response as JSON");
+    options.Option("--server", &server_, "Server gRPC address host:port (default localhost:50051)", "INSDIAG_SERVER");
+  }
+
+  int Run(std::ostream& out, std::ostream& err) override {
+    const std::string action = arguments_.empty() ? "list" : arguments_.front();
+    if (arguments_.size() > 1 || (action != "list" && action != "create")) {
+      return UsageError(err, Name(), "expected: list | create");
+    }
+    stub_ = v1::KnowledgeService::NewStub(client::Connect(server_));
+    return action == "list" ? List(out, err) : Create(out, err);
+  }
+
+ private:
+  int List(std::ostream& out, std::ostream& err) {
+    v1::ListFailureRecordsRequest request;
+    int page_size = 0;
+    if (auto s = ParseInt(page_size_, "--page-size", &page_size); !s.ok()) return UsageError(err, Name(), std::string(s.message()));
+    request.set_page_size(page_size);
+    request.set_page_token(page_token_);
+    request.set_unit(ResourceName("units", unit_));
+    request.set_module(ModuleName(module_));
+    request.set_failure_mode(ResourceName("failureModes", mode_));
+    auto response = client::CallUnary<v1::ListFailureRecordsResponse>(
+        [&](grpc::ClientContext* c, v1::ListFailureRecordsResponse* r) { return stub_->ListFailureRecords(c, request, r); });
+    if (!response.ok()) return RequestFailed(err, Name(), "list failure records", response.status());
+    if (json_) return PrintJson(*response, out, err);
+    Table table({"detected", "module", "kind", "failure mode", "hours", "repair"});
+    for (const auto& f : response->failure_records()) {
+      const char* kind = f.confirmed() ? "confirmed" : f.no_fault_found() ? "no fault found" : f.censored() ? "censored" : "reported";
+      table.Add({DateTime(f.detected_time()), f.module(), kind, f.failure_mode(), Number(f.operating_hours(), 6),
+                 f.repair_action()});
+    }
+    table.Print(out);
+    if (!response->next_page_token().empty()) out << "next page: --page-token " << response->next_page_token() << "\n";
+    return kExitOk;
+  }
+
+  int Create(std::ostream& out, std::ostream& err) {
+    if (static_cast<int>(confirmed_) + static_cast<int>(no_fault_found_) + static_cast<int>(censored_) != 1) {
+      return UsageError(err, Name(), "create: give exactly one of --confirmed, --no-fault-found, --censored");
+    }
+    if (module_.empty()) return UsageError(err, Name(), "create: --module is required");
+    if (confirmed_ && mode_.empty()) return UsageError(err, Name(), "create --confirmed: --mode is required");
+    double hours = 0;
+    if (auto s = ParseDouble(hours_, "--hours", &hours); !s.ok()) return UsageError(err, Name(), std::string(s.message()));
+    v1::CreateFailureRecordRequest request;
+    v1::FailureRecord* f = request.mutable_failure_record();
+    f->set_module(ModuleName(module_));
+    f->set_failure_mode(ResourceName("failureModes", mode_));
+    f->set_analysis(ResourceName("analyses", analysis_));
+    f->set_operating_hours(hours);
+    f->set_confirmed(confirmed_);
+    f->set_no_fault_found(no_fault_found_);
+    f->set_censored(censored_);
+    f->set_repaired(confirmed_ && !repair_action_.empty());
+    f->set_repair_action(repair_action_);
+    f->set_notes(notes_);
+    auto record = client::CallUnary<v1::FailureRecord>(
+        [&](grpc::ClientContext* c, v1::FailureRecord* r) { return stub_->CreateFailureRecord(c, request, r); });
+    if (!record.ok()) return RequestFailed(err, Name(), "create failure record", record.status());
+    if (json_) return PrintJson(*record, out, err);
+    out << record->name() << "\n";
+    return kExitOk;
+  }
+
+  std::vector<std::string> arguments_;
+  std::string unit_, module_, mode_, page_size_, page_token_, hours_, analysis_, repair_action_, notes_;
+  bool confirmed_ = false, no_fault_found_ = false, censored_ = false, json_ = false;
+  std::string server_ = client::kDefaultServerAddress;
+  std::unique_ptr<v1::KnowledgeService::Stub> stub_;
+};
+
+}  // namespace
+
+std::unique_ptr<Verb> MakeVerb_failure_records() { return std::make_unique<FailureRecordsVerb>(); }
+
+}  // namespace insdiag::cli
