@@ -1,5 +1,7 @@
 #include "insdiag/engine/finder/score_test.h"
 
+#include <cmath>
+
 namespace insdiag::engine {
 
 std::vector<CandidateColumn> AbsentConstantCandidates(const ErrorModel& model) {
@@ -21,16 +23,36 @@ ScoreTestObserver::ScoreTestObserver(const StateLayout& layout, std::vector<Cand
   information_.setZero(p, p);
   segment_score_.assign(kChannelCount, Eigen::MatrixXd::Zero(p, 0));
   X_.setZero(p);
+  for (size_t i = 0; i < columns_.size(); ++i) {
+    const auto col = static_cast<Eigen::Index>(i);
+    if (!terms_.empty() && terms_.back().term.Name() == columns_[i].term.Name()) {
+      ++terms_.back().count;
+    } else {
+      terms_.push_back({columns_[i].term, col, 1});
+      any_yaw_ = any_yaw_ || columns_[i].term.family->regressor == Regressor::kYawSinCos;
+    }
+  }
 }
 
 void ScoreTestObserver::OnSample(const NavigationDiscretisation&, const SampleCoupling& c) {
   // The candidate's sensor error over this sample, per unit of its parameter,
   // mapped into the interval-start coordinates: 9 multiply-adds a column.
-  for (size_t i = 0; i < columns_.size(); ++i) {
-    const CandidateColumn& col = columns_[i];
-    EvaluateRegressor(col.term, c.inputs, regressor_);
-    const double r = regressor_[col.parameter];
-    if (r != 0.0) W_y_.col(static_cast<Eigen::Index>(i)) += c.Column(col.term.family->sensor, col.term.axis) * r;
+  // One regressor evaluation per term (the yaw harmonics' sin ψ, cos ψ once
+  // per sample for all axes): this loop runs for every sample of the run.
+  double sin_yaw = 0.0, cos_yaw = 0.0;
+  if (any_yaw_) {
+    sin_yaw = std::sin(c.inputs.yaw_rad);
+    cos_yaw = std::cos(c.inputs.yaw_rad);
+  }
+  for (const TermColumns& t : terms_) {
+    if (t.term.family->regressor == Regressor::kYawSinCos) {
+      regressor_[0] = sin_yaw;
+      regressor_[1] = cos_yaw;
+    } else {
+      EvaluateRegressor(t.term, c.inputs, regressor_);
+    }
+    const auto column = c.Column(t.term.family->sensor, t.term.axis);
+    for (int k = 0; k < t.count; ++k) W_y_.col(t.first + k).noalias() += column * regressor_[columns_[static_cast<size_t>(t.first + k)].parameter];
   }
 }
 

@@ -59,13 +59,21 @@ class ScoreTestObserver final : public FilterObserver {
   std::vector<CandidateColumn> columns_;
   int segment_epochs_;
   int epoch_ = -1;
-  Eigen::MatrixXd W_y_;          // 9 × p, this interval, interval-start coordinates
+  // The columns of one term, which share its regressor evaluation.
+  struct TermColumns {
+    EffectTerm term;
+    Eigen::Index first = 0;
+    int count = 1;
+  };
+  std::vector<TermColumns> terms_;
+  Eigen::Matrix<double, 9, Eigen::Dynamic> W_y_;  // 9 × p, this interval, interval-start coordinates
   Eigen::MatrixXd sensitivity_;  // n × p, A
   Eigen::VectorXd score_;
   Eigen::MatrixXd information_;
   std::vector<Eigen::MatrixXd> segment_score_;  // per channel: p × segments
   Eigen::RowVectorXd X_;
   double regressor_[2] = {0.0, 0.0};
+  bool any_yaw_ = false;
 };
 
 }  // namespace insdiag::engine
