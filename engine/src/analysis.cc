@@ -1,6 +1,7 @@
 #include "insdiag/engine/analysis.h"
 
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 
 #include "insdiag/engine/filter/smoother.h"
@@ -588,11 +589,13 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
 
   // The a-priori model: datasheet, nominal, else the Allan fit.
   auto a_priori = APrioriModel(run, request.nominal, options.reference);
+  bool a_priori_from_allan = false;
   if (!a_priori.ok()) {
     if (!allan.has_value()) return a_priori.status();
     auto from_allan = ident::ErrorModelFromAllan(*allan, options.reference, &notes);
     if (!from_allan.ok()) return from_allan.status();
     a_priori = *std::move(from_allan);
+    a_priori_from_allan = true;
     notes.push_back("the run has no complete datasheet and no nominal model: the a-priori model comes from its "
                     "Allan deviation");
   }
@@ -616,6 +619,42 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
         const bool drift = p.name.find("_bias_gm.") != std::string::npos;
         if (!drift && std::none_of(identified.begin(), identified.end(),
                                    [&](const ParameterEstimate& q) { return q.name == p.name; })) {
+          identified.push_back(p);
+        }
+      }
+    }
+    // Terms the Allan fit left at bounds: nothing else re-tunes them (the
+    // ACF retargeting needs a resolved drift, the Allan fit a resolved
+    // density), and a bound over-predicts the innovations. Their common
+    // scale per group by maximum likelihood (retarget.h).
+    const ident::UnresolvedNoise unresolved =
+        a_priori_from_allan && allan.has_value() ? ident::UnresolvedAllanTerms(*allan) : ident::UnresolvedNoise{};
+    if (options.retune_unresolved_noise && unresolved.Any()) {
+      Progress(options, 0.08, "maximum-likelihood noise scale");
+      auto scaled = ident::ScaleUnresolvedNoise(run, base, unresolved, options.filter, options.noise_scale);
+      if (!scaled.ok()) {
+        notes.push_back("the noise terms set from Allan bounds were not re-tuned: " +
+                        std::string(scaled.status().message()));
+      } else {
+        base = scaled->model;
+        for (const ident::NoiseScaleGroup& g : scaled->groups) {
+          std::string terms;
+          for (const std::string& t : g.terms) terms += (terms.empty() ? "" : ", ") + t;
+          char buf[160];
+          std::snprintf(buf, sizeof buf, "× %.3g (SE of ln: %.2g)%s", g.scale, g.log_std_error,
+                        g.at_limit ? ", at the search range's limit" : "");
+          const bool seeded = g.name.ends_with("seed");
+          notes.push_back("re-tuned by maximum likelihood of the innovations, " + g.name + " (" + terms +
+                          (seeded ? ", seeded by the Allan fit, not resolved by correlation processing): "
+                                  : ", set from Allan bounds): ") +
+                          std::string(buf));
+        }
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "%.1f after %d filter passes", scaled->log_likelihood_after -
+                      scaled->log_likelihood_before, scaled->filter_passes);
+        notes.push_back("the innovations' log-likelihood rose by " + std::string(buf));
+        for (const ParameterEstimate& p : scaled->identified) {
+          std::erase_if(identified, [&](const ParameterEstimate& q) { return q.name == p.name; });
           identified.push_back(p);
         }
       }

@@ -174,4 +174,174 @@ bool MatchReferenceNoise(const ForwardPass& fw, double alpha, ErrorModel& model,
   return changed;
 }
 
+bool UnresolvedNoise::Any() const {
+  for (const auto* flags : {&gyro_white, &acc_white, &gyro_drift, &acc_drift, &gyro_drift_seed, &acc_drift_seed}) {
+    for (bool f : *flags) {
+      if (f) return true;
+    }
+  }
+  return false;
+}
+
+UnresolvedNoise UnresolvedAllanTerms(const AllanResult& allan) {
+  UnresolvedNoise u;
+  for (const AllanChannel& ch : allan.channels) {
+    const auto axis = static_cast<size_t>(ch.axis);
+    const bool gyro = ch.sensor == Sensor::kGyro;
+    // The same tests as ErrorModelFromAllan's branches.
+    (gyro ? u.gyro_white : u.acc_white)[axis] = !ch.fit[AllanParameter::kWhiteDensity].included;
+    const bool bound = !ch.fit[AllanParameter::kMarkovSigma].included &&
+                       !ch.fit[AllanParameter::kBiasInstability].included &&
+                       !ch.fit[AllanParameter::kRateRandomWalk].included;
+    (gyro ? u.gyro_drift : u.acc_drift)[axis] = bound;
+    (gyro ? u.gyro_drift_seed : u.acc_drift_seed)[axis] = !bound;
+  }
+  return u;
+}
+
+namespace {
+
+struct ScaledTerm {
+  double* value;      // in the working model
+  double bound;       // the value it started from
+  std::string name;
+  std::string unit;
+};
+
+struct Group {
+  std::string name;
+  std::vector<ScaledTerm> terms;
+  double log_scale = 0.0;
+  double max_scale = 1.0;
+};
+
+}  // namespace
+
+absl::StatusOr<NoiseScaleResult> ScaleUnresolvedNoise(const BenchRun& run, const ErrorModel& model,
+                                                      const UnresolvedNoise& which, const FilterOptions& filter,
+                                                      const NoiseScaleOptions& options) {
+  if (!(options.min_scale > 0.0 && options.max_scale > options.min_scale && options.log_tolerance > 0.0)) {
+    return absl::InvalidArgumentError("noise scale options out of range");
+  }
+  NoiseScaleResult out;
+  out.model = model;
+  ErrorModel& m = out.model;
+  std::vector<Group> groups;
+  auto add_group = [&](const char* name, const std::array<bool, 3>& flags, SensorTriadModel& triad, bool drift,
+                       const char* prefix, const char* unit, double max_scale) {
+    Group g;
+    g.name = name;
+    g.max_scale = max_scale;
+    for (size_t a = 0; a < 3; ++a) {
+      if (!flags[a]) continue;
+      double* v = drift ? &triad.bias[a].sigma : &triad.white_noise_density[static_cast<Eigen::Index>(a)];
+      // A zero term has no scale to find.
+      if (!(*v > 0.0)) continue;
+      g.terms.push_back({v, *v, std::string(prefix) + "xyz"[a] + (drift ? ".sigma" : ""), unit});
+    }
+    if (!g.terms.empty()) groups.push_back(std::move(g));
+  };
+  const double bound = options.max_scale, seed = options.max_seed_scale;
+  add_group("gyro white", which.gyro_white, m.gyro, false, "gyro_arw.", "rad/sqrt(s)", bound);
+  add_group("acc white", which.acc_white, m.acc, false, "acc_vrw.", "m/s/sqrt(s)", bound);
+  add_group("gyro drift", which.gyro_drift, m.gyro, true, "gyro_bias_gm.", "rad/s", bound);
+  add_group("acc drift", which.acc_drift, m.acc, true, "acc_bias_gm.", "m/s^2", bound);
+  add_group("gyro drift seed", which.gyro_drift_seed, m.gyro, true, "gyro_bias_gm.", "rad/s", seed);
+  add_group("acc drift seed", which.acc_drift_seed, m.acc, true, "acc_bias_gm.", "m/s^2", seed);
+
+  auto apply = [](Group& g, double log_scale) {
+    g.log_scale = log_scale;
+    for (ScaledTerm& t : g.terms) *t.value = t.bound * std::exp(log_scale);
+  };
+  absl::Status failure = absl::OkStatus();
+  auto log_likelihood = [&]() {
+    auto fw = RunForwardFilter(run, m, filter);
+    ++out.filter_passes;
+    if (!fw.ok()) {
+      failure = fw.status();
+      return -std::numeric_limits<double>::infinity();
+    }
+    return fw->log_likelihood;
+  };
+  out.log_likelihood_before = log_likelihood();
+  if (!failure.ok()) return failure;
+  double best = out.log_likelihood_before;
+  const double lo_limit = std::log(options.min_scale);
+  const double inv_phi = (std::sqrt(5.0) - 1.0) / 2.0;  // 1/φ, the golden section
+  for (int sweep = 0; sweep < options.sweeps && !groups.empty(); ++sweep) {
+    for (Group& g : groups) {
+      const double start = g.log_scale;
+      const double hi_limit = std::log(g.max_scale);
+      auto at = [&](double log_scale) {
+        apply(g, log_scale);
+        return log_likelihood();
+      };
+      // Golden-section search for the maximum of ℓ over [lo, hi] (ℓ is
+      // unimodal in a variance scale when the structure is right).
+      double lo = lo_limit, hi = hi_limit;
+      double x1 = hi - inv_phi * (hi - lo), x2 = lo + inv_phi * (hi - lo);
+      double f1 = at(x1), f2 = at(x2);
+      while (hi - lo > options.log_tolerance) {
+        if (f1 > f2) {
+          hi = x2;
+          x2 = x1;
+          f2 = f1;
+          x1 = hi - inv_phi * (hi - lo);
+          f1 = at(x1);
+        } else {
+          lo = x1;
+          x1 = x2;
+          f1 = f2;
+          x2 = lo + inv_phi * (hi - lo);
+          f2 = at(x2);
+        }
+      }
+      if (!failure.ok()) return failure;
+      // The bracket's best point, or the ends of the range when ℓ still rises
+      // there, or the start when nothing beats it.
+      std::array<std::pair<double, double>, 3> tried = {{{f1, x1}, {f2, x2}, {best, start}}};
+      if (hi >= hi_limit - options.log_tolerance) tried[0] = {at(hi_limit), hi_limit};
+      if (lo <= lo_limit + options.log_tolerance) tried[1] = {at(lo_limit), lo_limit};
+      const auto top = *std::max_element(tried.begin(), tried.end());
+      best = top.first;
+      apply(g, top.second);
+    }
+  }
+  // Standard errors of ln ŝ from the curvature of ℓ (observed information),
+  // central second difference with step h.
+  const double h = 0.1;
+  for (Group& g : groups) {
+    NoiseScaleGroup r;
+    r.name = g.name;
+    r.scale = std::exp(g.log_scale);
+    const double x = g.log_scale;
+    const double hi_limit = std::log(g.max_scale);
+    r.at_limit = x <= lo_limit + options.log_tolerance || x >= hi_limit - options.log_tolerance;
+    apply(g, x + h);
+    const double up = log_likelihood();
+    apply(g, x - h);
+    const double down = log_likelihood();
+    apply(g, x);
+    const double curvature = (up - 2.0 * best + down) / (h * h);
+    if (curvature < 0.0 && !r.at_limit) r.log_std_error = 1.0 / std::sqrt(-curvature);
+    for (const ScaledTerm& t : g.terms) {
+      r.terms.push_back(t.name);
+      ParameterEstimate p;
+      p.name = t.name;
+      p.value = *t.value;
+      p.std_error = p.value * r.log_std_error;
+      p.ci95_low = p.value * std::exp(-1.96 * r.log_std_error);
+      p.ci95_high = p.value * std::exp(1.96 * r.log_std_error);
+      p.method = "ML";
+      p.unit = t.unit;
+      p.a_priori = t.bound;
+      out.identified.push_back(p);
+    }
+    out.groups.push_back(r);
+  }
+  if (!failure.ok()) return failure;
+  out.log_likelihood_after = best;
+  return out;
+}
+
 }  // namespace insdiag::engine::ident

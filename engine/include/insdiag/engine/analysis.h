@@ -26,6 +26,7 @@
 #include "insdiag/engine/filter/forward_filter.h"
 #include "insdiag/engine/finder/effect_finder.h"
 #include "insdiag/engine/ident/allan.h"
+#include "insdiag/engine/ident/retarget.h"
 #include "insdiag/engine/ident/correlation.h"
 #include "insdiag/engine/model/error_model.h"
 #include "insdiag/engine/monitor/monitoring.h"
@@ -55,6 +56,10 @@ struct AnalysisOptions {
   double settle_log_ratio = 0.1;  // a parameter has settled within 10% (or one σ)
   ident::CorrelationOptions correlation;
   ident::AllanOptions allan;
+  // An Allan-based a-priori model's terms set from bounds are re-tuned by
+  // maximum likelihood of the innovations (retarget.h, ScaleUnresolvedNoise).
+  bool retune_unresolved_noise = true;
+  ident::NoiseScaleOptions noise_scale;
   FinderOptions finder;
   // Time segments of the "where it shows" breakdown.
   double segment_s = 60.0;

@@ -14,6 +14,10 @@
 //              bench's reference did not record
 #pragma once
 
+#include <absl/status/statusor.h>
+
+#include <array>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -62,5 +66,78 @@ std::vector<ParameterEstimate> ApplyAllanNoise(const AllanResult& allan, const E
 // missing noise); true when it changed the model (a note says by how much).
 bool MatchReferenceNoise(const ForwardPass& forward, double alpha, ErrorModel& model,
                          std::vector<std::string>* notes);
+
+// Noise terms of an Allan-based a-priori model (ErrorModelFromAllan) that the
+// Allan fit did not resolve and that were set from bounds: the white density
+// from the tangent bound min σ̂√τ (an upper bound: σ²(τ) ≥ N²/τ), the drift
+// from the curve's lowest point (also an upper bound) when no drift term
+// (Markov, B or K) was resolved.
+struct UnresolvedNoise {
+  std::array<bool, 3> gyro_white = {false, false, false};
+  std::array<bool, 3> acc_white = {false, false, false};
+  std::array<bool, 3> gyro_drift = {false, false, false};
+  std::array<bool, 3> acc_drift = {false, false, false};
+  // Drift σ seeded by a resolved Allan term (Markov, or the constructions
+  // from B or K). The Allan fit of the static segments only seeds the
+  // drift (analysis.cc): correlation processing of the whole run identifies
+  // it where it resolves it, and nothing else re-tunes it.
+  std::array<bool, 3> gyro_drift_seed = {false, false, false};
+  std::array<bool, 3> acc_drift_seed = {false, false, false};
+
+  bool Any() const;
+};
+UnresolvedNoise UnresolvedAllanTerms(const AllanResult& allan);
+
+struct NoiseScaleOptions {
+  // Search range of each group's scale, relative to the bound it starts from.
+  // The bounds are upper bounds, so the scale stays at or below one; three
+  // decades below is beyond any bound the Allan curve of a bench run leaves.
+  double min_scale = 1e-3;
+  double max_scale = 1.0;
+  // Golden-section search stops when the bracket of ln s is this narrow.
+  // Seeded drifts were resolved by the Allan fit and may need to rise: their
+  // range reaches this far above the seed.
+  double max_seed_scale = 10.0;
+  // Golden-section search stops when the bracket of ln s is this narrow
+  // (5%: well inside the scale's standard error on any bench run).
+  double log_tolerance = 0.05;
+  // Coordinate sweeps over the groups (the groups interact weakly: white
+  // gyro noise shows in the attitude, white accelerometer noise in velocity).
+  int sweeps = 2;
+};
+
+struct NoiseScaleGroup {
+  std::string name;      // "gyro white", "acc white", "gyro drift", "acc drift", "gyro drift seed", "acc drift seed"
+  std::vector<std::string> terms;  // e.g. "gyro_arw.x", "gyro_bias_gm.z.sigma"
+  double scale = 1.0;    // ŝ: the terms' new values are ŝ × their bounds
+  double log_std_error = std::numeric_limits<double>::quiet_NaN();  // SE of ln ŝ (observed information)
+  bool at_limit = false;  // ŝ on the search range's edge (no interior maximum)
+};
+
+struct NoiseScaleResult {
+  ErrorModel model;
+  std::vector<NoiseScaleGroup> groups;
+  std::vector<ParameterEstimate> identified;  // method "ML", one per re-tuned term
+  double log_likelihood_before = 0.0;
+  double log_likelihood_after = 0.0;
+  int filter_passes = 0;
+};
+
+// Maximum-likelihood re-tuning of the noise terms set from bounds: one common
+// scale s per group (white gyro, white accelerometer, drift σ of gyros, of
+// accelerometers — only the flagged axes), multiplying the densities (and the
+// drift σ), chosen to maximise the forward filter's innovation log-likelihood
+//   ℓ(s) = −½ Σ_k [ln(2π S_k(s)) + ν_k(s)²/S_k(s)]
+// (prediction-error decomposition: Schweppe, IEEE Trans. IT-11(1), 1965;
+// noise identification by maximum likelihood: Mehra, IEEE Trans. AC-15(2),
+// 1970; Shumway & Stoffer, Time Series Analysis and Its Applications, 4th
+// ed., §6.3). Each scale is found by golden-section search on ln s (Kiefer
+// 1953; Press et al., Numerical Recipes, 3rd ed., §10.2), the groups in turn;
+// its standard error is 1/√(−∂²ℓ/∂(ln s)²) from a central second difference
+// at the maximum (observed Fisher information). The terms that were
+// resolved keep their values.
+absl::StatusOr<NoiseScaleResult> ScaleUnresolvedNoise(const BenchRun& run, const ErrorModel& model,
+                                                      const UnresolvedNoise& which, const FilterOptions& filter,
+                                                      const NoiseScaleOptions& options = {});
 
 }  // namespace insdiag::engine::ident
