@@ -611,7 +611,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   std::optional<ModelPass> scanned_a_priori;
   if (options.identify) {
     if (allan.has_value()) {
-      identified = ident::ApplyAllanNoise(*allan, *a_priori, base);
+      identified = ident::ApplyAllanNoise(*allan, *a_priori, base, options.monitor.family_wise_alpha);
       for (const ParameterEstimate& p : ident::AllanParameterEstimates(*allan, &*a_priori)) {
         // The drifts' σ and τ are identified by correlation processing of the
         // whole run; the Allan Markov term of the static segments only seeds

@@ -391,6 +391,53 @@ std::vector<double> LogSpaced(double lo, double hi, int count) {
   return v;
 }
 
+// Standard errors of an alternative's parameters under that alternative.
+// The fits whiten the sample ACF with Bartlett's covariance under the null
+// (the exponential fit): right for the likelihood-ratio test, which is made
+// under the null, but not for the alternative's magnitudes. Bartlett's
+// covariance of R̂ sums products of the true autocovariance over the lags
+// (Bartlett, J. R. Stat. Soc. B 8, 1946); a second-order or second slow
+// component the exponential leaves out adds to that sum, so the null's
+// covariance understates the sampling error of R̂ and with it that of σ₂ —
+// several-fold for a σ₂ three times the base drift (a 3% error where one
+// realisation of a 900 s decay over two hours scatters σ₂ by ~20%,
+// tests/engine/effect_finder_test.cc). Re-whiten under the fitted alternative,
+// refit from its point with the same parameters free, and take the errors
+// from there; the values and the test statistics stay as they were.
+void ErrorsUnderAlternative(const Problem& pb, const std::vector<int>& fixed, FamilyFit& fit) {
+  if (!fit.converged) return;
+  std::vector<double> p;
+  double longest_s = 0.0;
+  for (const FittedParameter& q : fit.parameters) {
+    p.push_back(q.value);
+    if (q.name.find("tau") != std::string::npos) longest_s = std::max(longest_s, q.value);
+  }
+  const std::vector<double> stationary = CovarianceOf(fit.family, p.data(), pb.N, pb.dt, pb.error_acf).stationary;
+  const int M = std::min(pb.N - 1, pb.lags.back() + static_cast<int>(6.0 * longest_s / pb.dt) + 1);
+  const auto G = static_cast<Eigen::Index>(pb.lags.size());
+  Eigen::MatrixXd C(G, G);
+  for (Eigen::Index a = 0; a < G; ++a) {
+    for (Eigen::Index b = a; b < G; ++b) {
+      C(a, b) = C(b, a) = Bartlett(stationary, pb.N, pb.lags[static_cast<size_t>(a)], pb.lags[static_cast<size_t>(b)], M);
+    }
+  }
+  C.diagonal().array() += 1e-9 * C.diagonal().mean();
+  const Eigen::LLT<Eigen::MatrixXd> llt(C);
+  if (llt.info() != Eigen::Success) return;
+  Problem alternative = pb;
+  alternative.L = llt.matrixL();
+  const FamilyFit refit = FitFamily(alternative, fit.family, p, fixed);
+  if (!refit.converged) return;
+  fit.log_covariance = refit.log_covariance;
+  for (size_t i = 0; i < fit.parameters.size(); ++i) {
+    FittedParameter& q = fit.parameters[i];
+    const double se_log = std::sqrt(refit.log_covariance(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i)));
+    q.std_error = q.value * se_log;
+    q.ci95_low = q.value * std::exp(-1.96 * se_log);
+    q.ci95_high = q.value * std::exp(1.96 * se_log);
+  }
+}
+
 // The profiled likelihood-ratio test of an alternative whose shape parameters
 // vanish under the exponential: each grid point fixes them and frees one
 // amplitude; the best point is then refitted with everything free for the
@@ -413,11 +460,13 @@ FamilyFit ProfiledAlternative(const Problem& pb, CorrelationFamily family, const
   const FittedParameter* decay = out.Parameter("tau2_s");
   const FittedParameter* period = out.Parameter("period_s");
   const bool left_family = decay != nullptr && period != nullptr && decay->value > kMaxDecayInPeriods * period->value;
-  if (!out.converged || out.chi2 > best_chi2 || left_family) {
+  const bool shape_fixed = !out.converged || out.chi2 > best_chi2 || left_family;
+  if (shape_fixed) {
     // Keep the grid's point when the free fit wanders off.
     out = FitFamily(pb, family, *best_start, shape);
     out.parameter_count += static_cast<int>(shape.size());
   }
+  ErrorsUnderAlternative(pb, shape_fixed ? shape : std::vector<int>{}, out);
   out.lr_statistic = std::max(0.0, exponential.chi2 - best_chi2);
   out.lr_dof = 1;
   out.lr_p_value = std::min(

@@ -55,10 +55,11 @@ struct RetargetResult {
 RetargetResult RetargetDrifts(const ErrorModel& current, const ErrorModel& a_priori,
                               const std::vector<DriftCorrelation>& drifts, double settle_log_ratio, double alpha);
 
-// White-noise densities and quantisation from the Allan fit where resolved;
-// returns the estimates it used (method ALLAN).
+// White-noise densities and quantisation from the Allan fit where resolved
+// and where the fit rejects the a-priori value (Wald statistic beyond
+// χ²₁(1 − α), as for the drifts); returns the estimates it used (method ALLAN).
 std::vector<ParameterEstimate> ApplyAllanNoise(const AllanResult& allan, const ErrorModel& a_priori,
-                                               ErrorModel& model);
+                                               ErrorModel& model, double alpha);
 
 // Raises the reference's position / velocity noise when a channel group's
 // innovations exceed their predicted variance beyond the χ² band at
