@@ -28,9 +28,6 @@ const skipReason = databaseUrl ? false : 'INSDIAG_TEST_DATABASE_URL is not set (
 // The hidden effect: the `full` profile turns the table about every axis, which excites it.
 const HIDDEN_EFFECT = 'gyro_scale_factor.y';
 const ANALYSIS_TIMEOUT_MS = 8 * 60_000;
-// The engine's missing-effect ranking (effectCandidates) is being filled on
-// main; the test of the top candidate's Add button waits for it.
-const ENGINE_RANKS_CANDIDATES = false;
 
 let workDir;
 let artifacts;
@@ -216,8 +213,7 @@ test('upload a run with a hidden effect, add it, and see the error fall', { skip
 });
 
 test('the hidden effect is the top missing effect, and its Add button re-runs with it', {
-  skip: skipReason || (ENGINE_RANKS_CANDIDATES ? false
-    : 'waits for the engine: on main the report has no effectCandidates yet (set ENGINE_RANKS_CANDIDATES when it does)'),
+  skip: skipReason,
   timeout: 2 * ANALYSIS_TIMEOUT_MS,
 }, async () => {
   assert.ok(baseAnalysisUrl, 'the previous test opened the base model\'s analysis');
