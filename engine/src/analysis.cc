@@ -501,19 +501,21 @@ ModelComparison Compare(const ModelPass& a, const ModelPass& b, const AnalysisRe
 }
 
 // Model A's score statistic for adding `added` jointly (the likelihood ratio it predicts).
+// Whether `term_name` is one of the terms `selector` (a term or a family) stands for.
+bool SelectorCovers(const std::string& selector, const std::string& term_name) {
+  const auto terms = ParseEffectSelector(selector);
+  return terms.ok() &&
+         std::any_of(terms->begin(), terms->end(), [&](const EffectTerm& t) { return t.Name() == term_name; });
+}
+
 double PredictedLikelihoodRatio(const ModelPass& a, const std::vector<std::string>& added, const Findings& found) {
   if (a.scan == nullptr) return 0.0;
   std::vector<Eigen::Index> idx;
   double structure_lr = 0.0;
   for (const std::string& name : added) {
     // A family stands for its terms.
-    const auto terms = ParseEffectSelector(name);
     for (size_t i = 0; i < a.scan->columns().size(); ++i) {
-      const std::string column = a.scan->columns()[i].term.Name();
-      const bool in_selector = terms.ok() && std::any_of(terms->begin(), terms->end(), [&](const auto& t) {
-                                 return t.Name() == column;
-                               });
-      if (in_selector) idx.push_back(static_cast<Eigen::Index>(i));
+      if (SelectorCovers(name, a.scan->columns()[i].term.Name())) idx.push_back(static_cast<Eigen::Index>(i));
     }
     for (const StructureProposal& p : found.structures) {
       if (p.candidate.name == name) structure_lr += p.candidate.statistic;
@@ -726,11 +728,8 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       d.std_error = top->std_error;
       // The added terms' estimates in the model after the step (one for a
       // term, one per axis or pair for a family).
-      const auto added_terms = ParseEffectSelector(top->name);
       for (const ParameterEstimate& e : next_report.identified) {
-        const bool added = added_terms.ok() && std::any_of(added_terms->begin(), added_terms->end(),
-                                                           [&](const auto& t) { return t.Name() == e.name; });
-        if (e.method == "FILTER" && added) d.estimates.push_back(e);
+        if (e.method == "FILTER" && SelectorCovers(top->name, e.name)) d.estimates.push_back(e);
         if (e.method == "FILTER" && e.name == top->name) {
           d.estimate = e.value;
           d.std_error = e.std_error;
