@@ -398,11 +398,19 @@ Findings FindMissingEffects(const BenchRun& run, const ModelPass& pass, const st
 
 // Whether model A's scan finds an identifiable effect significant at the
 // finder's family-wise level.
-bool HasSignificantCandidate(const BenchRun& run, const ModelPass& pass, const AnalysisOptions& options) {
+// The lowest predicted ΔBIC among the significant, identifiable candidates
+// of a scanned pass (terms and families); none when nothing is significant.
+std::optional<double> BestSignificantCandidateBic(const BenchRun& run, const ModelPass& pass,
+                                                  const AnalysisOptions& options) {
   const RankedEffects ranked = RankMissingEffects(*pass.scan, pass.forward, run, pass.segment_motion, options.finder);
-  return std::any_of(ranked.terms.begin(), ranked.terms.end(), [&](const EffectCandidate& c) {
-    return c.identifiable && c.p_value_holm < options.finder.family_wise_alpha;
-  });
+  std::optional<double> best;
+  for (const auto* list : {&ranked.terms, &ranked.families}) {
+    for (const EffectCandidate& c : *list) {
+      if (!c.identifiable || !(c.p_value_holm < options.finder.family_wise_alpha)) continue;
+      if (!best.has_value() || c.predicted_delta_bic < *best) best = c.predicted_delta_bic;
+    }
+  }
+  return best;
 }
 
 // The effect `--discover` adds next: among the significant, identifiable
@@ -567,6 +575,57 @@ AnalysisReport ReportOf(const ModelPass& pass, const Findings& found, const Benc
   return r;
 }
 
+// The drifts correlation processing left unresolved in `drifts` (all six
+// when it ran on none).
+ident::DriftSelection UnresolvedDrifts(const std::vector<DriftCorrelation>& drifts) {
+  ident::DriftSelection selection{};
+  for (int d = 0; d < 6; ++d) {
+    const std::string name = std::string(d < 3 ? "gyro_bias_gm." : "acc_bias_gm.") + "xyz"[d % 3];
+    selection[static_cast<size_t>(d)] = std::none_of(
+        drifts.begin(), drifts.end(), [&](const DriftCorrelation& c) { return c.state == name && c.analysis.resolved; });
+  }
+  return selection;
+}
+
+// The likelihood-ratio statistic of the drift estimates against the model's
+// values, with its degrees of freedom (one σ per drift).
+double DriftStatistic(const ident::DriftLikelihoodResult& ml) {
+  return 2.0 * (ml.log_likelihood_after - ml.log_likelihood_before);
+}
+
+// The likelihood's drift estimates (drift_likelihood.h) are reported; the
+// model takes them when they raise the innovations' log-likelihood beyond
+// the likelihood-ratio test of the model's values, χ²(m) at α for m drifts
+// (Wilks, Ann. Math. Statist. 9(1), 1938) — as the correlation retargeting
+// keeps a model the data do not contradict. True when the model took them.
+bool ApplyDriftLikelihood(const ident::DriftLikelihoodResult& ml, double alpha, ErrorModel& base,
+                          std::vector<ParameterEstimate>& identified, std::vector<std::string>& notes) {
+  if (!ml.not_identifiable.empty()) {
+    std::string names;
+    for (const std::string& n : ml.not_identifiable) names += (names.empty() ? "" : ", ") + n;
+    notes.push_back("not identifiable with this run's motion (the innovations' likelihood is flat in them): " +
+                    names);
+  }
+  if (ml.identified.empty()) return false;
+  for (const ParameterEstimate& p : ml.identified) {
+    std::erase_if(identified, [&](const ParameterEstimate& q) { return q.name == p.name; });
+    identified.push_back(p);
+  }
+  const double statistic = DriftStatistic(ml);
+  const auto dof = static_cast<int>(ml.identified.size());
+  const bool rejects = statistic > stats::ChiSquareQuantile(1.0 - alpha, dof);
+  if (rejects) base = ml.model;
+  std::string names;
+  for (const ParameterEstimate& p : ml.identified) names += (names.empty() ? "" : ", ") + p.name;
+  char buf[200];
+  std::snprintf(buf, sizeof buf, " (EM, %d iterations%s, %d filter passes): 2Δℓ = %.1f against χ²(%d) at %.2g — ",
+                ml.iterations, ml.converged ? "" : ", not converged", ml.filter_passes, statistic, dof, alpha);
+  notes.push_back("drift σ correlation processing left unresolved, identified by likelihood of the innovations: " +
+                  names + buf +
+                  (rejects ? "the model takes the estimates" : "the data do not reject the model's values, kept"));
+  return rejects;
+}
+
 }  // namespace
 
 absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& request,
@@ -661,6 +720,14 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
         }
       }
     }
+    std::vector<DriftCorrelation> drifts;
+    bool deferred = false;
+    bool drifts_by_likelihood = false;  // done already
+    auto identify_drifts = [&](const ErrorModel& model) {
+      Progress(options, 0.6, "maximum-likelihood drift identification");
+      return ident::IdentifyDriftsByLikelihood(run, model, *a_priori, UnresolvedDrifts(drifts), options.filter,
+                                               options.drift_likelihood);
+    };
     for (int it = 0; it < options.max_retarget_iterations; ++it) {
       Progress(options, 0.1 + 0.5 * it / options.max_retarget_iterations, "retargeting");
       // The first pass also scans for missing effects: parameters identified
@@ -670,25 +737,63 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       const bool first = it == 0;
       auto pass = RunPass(run, base, spikes, options, /*with_scan=*/first);
       if (!pass.ok()) return pass.status();
-      if (first && HasSignificantCandidate(run, *pass, options)) {
+      drifts = ident::CorrelateDrifts(pass->forward, pass->smoothed, *pass->layout, options.correlation, nullptr);
+      if (const auto best_bic = first ? BestSignificantCandidateBic(run, *pass, options) : std::nullopt;
+          best_bic.has_value()) {
+        // The converse soaking holds too: a drift whose σ is far larger than
+        // the model's shows as effects that follow the table's motion (a
+        // g-sensitivity, say). The two explanations compete by BIC (Schwarz,
+        // Ann. Stat. 6(2), 1978): the drifts' σ by likelihood against the
+        // best candidate's predicted ΔBIC.
+        if (options.identify_unresolved_drifts) {
+          auto ml = identify_drifts(base);
+          if (ml.ok() && !ml->identified.empty()) {
+            const double log_n = std::log(static_cast<double>(std::max(1, pass->forward.scalar_updates)));
+            const double drift_bic = -DriftStatistic(*ml) + static_cast<double>(ml->identified.size()) * log_n;
+            if (drift_bic < *best_bic &&
+                ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, base, identified, notes)) {
+              char buf[160];
+              std::snprintf(buf, sizeof buf, "ΔBIC %.1f against the best candidate's %.1f", drift_bic, *best_bic);
+              notes.push_back("the a-priori model's misfit is the drifts' σ rather than a missing effect (" +
+                              std::string(buf) + "): the model takes them and is scanned again");
+              drifts_by_likelihood = true;
+              continue;
+            }
+          }
+        }
         notes.push_back("the a-priori model lacks significant effects: the drift and reference-noise parameters "
                         "are not re-tuned on this model (they would absorb what the effects explain); they are "
                         "identified when the analysis starts from a model with the effects (baseline effects)");
         scanned_a_priori = std::move(*pass);
+        deferred = true;
         break;
       }
-      const auto drifts = ident::CorrelateDrifts(pass->forward, pass->smoothed, *pass->layout, options.correlation, nullptr);
       ident::RetargetResult step = ident::RetargetDrifts(base, *a_priori, drifts, options.settle_log_ratio,
                                                          options.monitor.family_wise_alpha);
       const bool reference_changed = ident::MatchReferenceNoise(pass->forward, options.monitor.family_wise_alpha,
                                                                 step.model, &notes);
       base = step.model;
-      std::erase_if(identified, [](const ParameterEstimate& p) { return p.method == "ACF"; });
+      // The correlation estimates replace the last ones, and the likelihood's
+      // of a drift that the re-tuned model now resolves.
+      std::erase_if(identified, [&](const ParameterEstimate& p) {
+        return p.method == "ACF" || std::any_of(step.identified.begin(), step.identified.end(),
+                                                [&](const ParameterEstimate& q) { return q.name == p.name; });
+      });
       identified.insert(identified.end(), step.identified.begin(), step.identified.end());
       if (step.settled && !reference_changed) break;
       if (it + 1 == options.max_retarget_iterations) {
         notes.push_back("the identified drift parameters had not settled after " +
                         std::to_string(options.max_retarget_iterations) + " iterations");
+      }
+    }
+    if (options.identify_unresolved_drifts && !deferred && !drifts_by_likelihood) {
+      // What correlation processing did not resolve, by likelihood.
+      auto ml = identify_drifts(base);
+      if (!ml.ok()) {
+        notes.push_back("the drifts correlation processing left unresolved were not identified by likelihood: " +
+                        std::string(ml.status().message()));
+      } else {
+        ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, base, identified, notes);
       }
     }
   }

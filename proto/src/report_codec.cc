@@ -25,6 +25,7 @@ v1::IdentifiedParameter::Method MethodOf(const std::string& method) {
   if (method == "ACF") return v1::IdentifiedParameter::ACF;
   if (method == "ALLAN") return v1::IdentifiedParameter::ALLAN;
   if (method == "FILTER") return v1::IdentifiedParameter::FILTER;
+  if (method == "ML") return v1::IdentifiedParameter::ML;
   return v1::IdentifiedParameter::METHOD_UNSPECIFIED;
 }
 

@@ -31,6 +31,8 @@ engine::BenchRun SimulatedRun(const std::string& serial, const std::string& prof
                               const std::string& effect = "") {
   auto unit_type = api::BuiltinUnitType("INS-2000");
   auto model = api::BaseModelOf(*unit_type);
+  engine::sim::SimulationOptions options;
+  options.datasheet = engine::sim::DatasheetOf(model->gyro, model->acc);  // the type's specification
   for (const auto& [name, value] : params) EXPECT_TRUE(engine::SetParameter(name, value, *model).ok());
   engine::sim::SimulatedUnit unit;
   unit.serial = serial;
@@ -43,7 +45,6 @@ engine::BenchRun SimulatedRun(const std::string& serial, const std::string& prof
     unit.effects = *effects;
   }
   auto profile = engine::sim::BuiltinProfile(profile_name);
-  engine::sim::SimulationOptions options;
   options.sample_rate_hz = rate_hz;
   options.seed = 11;
   options.site = {.latitude_rad = 0.97, .longitude_rad = 0.67, .height_m = 125.0};
@@ -299,6 +300,18 @@ TEST_F(AnalysesTest, AGyroXTorquerScaleFactorShiftRanksGyroXFirst) {
   ASSERT_GT(d.candidates_size(), 0);
   EXPECT_EQ(d.candidates(0).module(), "gyro.x") << d.DebugString();
   EXPECT_EQ(d.candidates(0).failure_mode(), "failureModes/dtg-torquer-scale-shift.x") << d.DebugString();
+}
+
+TEST_F(AnalysesTest, ATripledGyroXDriftSigmaRanksGyroXFirst) {
+  // A worn DTG rotor bearing: the drift's σ of one gyro three times its
+  // nominal. Its correlation time stays; an eight-hour drift test (the
+  // `drift` profile) spans enough correlation times for the likelihood to
+  // tell σ (a two-hour run does not: docs/IDENTIFICATION.md).
+  const double sigma = 3.0 * Nominal("gyro_bias_gm.x.sigma");
+  const v1::Diagnosis d = DiagnoseRun(SimulatedRun("INS-E2E-5", "drift", 10.0, {{"gyro_bias_gm.x.sigma", sigma}}));
+  ASSERT_GT(d.candidates_size(), 0);
+  EXPECT_EQ(d.candidates(0).module(), "gyro.x") << d.DebugString();
+  EXPECT_EQ(d.candidates(0).failure_mode(), "failureModes/dtg-bearing-wear.x") << d.DebugString();
 }
 
 TEST_F(AnalysesTest, ACommonGyroScaleFactorShiftRanksTheInterfaceCardFirst) {

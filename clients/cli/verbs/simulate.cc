@@ -71,7 +71,7 @@ class SimulateVerb final : public Verb {
   void DeclareOptions(OptionSink& options) override {
     options.Positional("OUT.csv", &file_, "Bench-run file to write");
     options.Option("--profile", &profile_,
-                   "Table profile: static, rotations, positions, thermal or full (default full: excites every "
+                   "Table profile: static, rotations, positions, thermal, full or drift (default full: excites every "
                    "effect of the catalogue)");
     options.Repeated("--effect", &effects_,
                      "Hidden effect NAME=VALUE, e.g. gyro_scale_factor.z=1e-4 (a family applies to every axis; "
@@ -86,7 +86,9 @@ class SimulateVerb final : public Verb {
     options.Repeated("--spike", &spikes_, "Fault: one-sample spike gyro.x|…|acc.z=TIME_S,SIZE");
     options.Option("--serial", &serial_, "Unit serial written to the file (default SIM-<seed>)");
     options.Option("--site", &site_, "Site LAT_DEG,LON_DEG,HEIGHT_M (default 55.5672,38.15,125)");
-    options.Flag("--no-datasheet", &no_datasheet_, "Leave the datasheet metadata out of the file");
+    options.Flag("--no-datasheet", &no_datasheet_,
+                 "Leave the datasheet metadata (the unit type's specification, not the --param values) out of the "
+                 "file");
   }
 
   int Run(std::ostream& out, std::ostream& err) override {
@@ -106,6 +108,9 @@ class SimulateVerb final : public Verb {
     if (!unit_type.ok()) return absl::InvalidArgumentError(std::string(unit_type.status().message()));
     auto model = api::BaseModelOf(*unit_type);
     if (!model.ok()) return model.status();
+    // The datasheet states the unit type's specification; --param makes this
+    // unit depart from it.
+    const engine::Datasheet specification = engine::sim::DatasheetOf(model->gyro, model->acc);
     for (const std::string& p : params_) {
       const size_t eq = p.find('=');
       auto value = Numbers(eq == std::string::npos ? "" : std::string_view(p).substr(eq + 1), "--param " + p, 1);
@@ -154,6 +159,7 @@ class SimulateVerb final : public Verb {
     options.sample_rate_hz = (*rate)[0];
     options.site = {(*site)[0] * kDeg, (*site)[1] * kDeg, (*site)[2]};
     options.write_datasheet = !no_datasheet_;
+    options.datasheet = specification;
     unit.serial = serial_.empty() ? "SIM-" + std::to_string(options.seed) : serial_;
     auto sim = engine::sim::Simulate(unit, *profile, options);
     if (!sim.ok()) return sim.status();

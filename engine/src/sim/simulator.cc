@@ -170,6 +170,17 @@ absl::StatusOr<std::vector<TrueEffect>> ParseTrueEffect(std::string_view spec) {
   return effects;
 }
 
+Datasheet DatasheetOf(const SensorTriadModel& gyro, const SensorTriadModel& acc) {
+  Datasheet d;
+  d.gyro_arw_rad_rts = AxisMean(gyro.white_noise_density);
+  d.gyro_bias_sigma_rad_s = AxisRms(gyro.bias, &GaussMarkov::sigma);
+  d.gyro_bias_tau_s = (gyro.bias[0].tau_s + gyro.bias[1].tau_s + gyro.bias[2].tau_s) / 3.0;
+  d.acc_vrw_mps_rts = AxisMean(acc.white_noise_density);
+  d.acc_bias_sigma_mps2 = AxisRms(acc.bias, &GaussMarkov::sigma);
+  d.acc_bias_tau_s = (acc.bias[0].tau_s + acc.bias[1].tau_s + acc.bias[2].tau_s) / 3.0;
+  return d;
+}
+
 absl::StatusOr<SimulatedRun> Simulate(const SimulatedUnit& unit, const TableProfile& profile,
                                       const SimulationOptions& options) {
   if (!(options.sample_rate_hz > 0.0)) return absl::InvalidArgumentError("the sample rate must be positive");
@@ -224,13 +235,7 @@ absl::StatusOr<SimulatedRun> Simulate(const SimulatedUnit& unit, const TableProf
                         {"notes", "insdiag simulate: profile " + profile.name + ", seed " +
                                       std::to_string(options.seed)}};
   if (options.write_datasheet) {
-    Datasheet& d = run.metadata.datasheet;
-    d.gyro_arw_rad_rts = AxisMean(unit.gyro.white_noise_density);
-    d.gyro_bias_sigma_rad_s = AxisRms(unit.gyro.bias, &GaussMarkov::sigma);
-    d.gyro_bias_tau_s = (unit.gyro.bias[0].tau_s + unit.gyro.bias[1].tau_s + unit.gyro.bias[2].tau_s) / 3.0;
-    d.acc_vrw_mps_rts = AxisMean(unit.acc.white_noise_density);
-    d.acc_bias_sigma_mps2 = AxisRms(unit.acc.bias, &GaussMarkov::sigma);
-    d.acc_bias_tau_s = (unit.acc.bias[0].tau_s + unit.acc.bias[1].tau_s + unit.acc.bias[2].tau_s) / 3.0;
+    run.metadata.datasheet = options.datasheet.has_value() ? *options.datasheet : DatasheetOf(unit.gyro, unit.acc);
   }
   run.has_temperature = true;
   run.samples.resize(n);

@@ -201,6 +201,22 @@ TableProfile FullProfile() {
   return p;
 }
 
+// A drift test: a drift's σ and τ are told apart only over many correlation
+// times (the relative error of a variance estimated from a record of length
+// T is about √(2τ/T) for a first-order Gauss–Markov process; Papoulis,
+// Probability, Random Variables and Stochastic Processes, §11), so the unit
+// holds still for hours — in eight tilted positions, one hour each, so that
+// every gyro and accelerometer axis is seen against gravity and Earth rate.
+TableProfile DriftProfile() {
+  TableProfile p = Base("drift",
+                        "eight hours of static holds in eight tilted positions (inner 0/90/180/270°, outer 0/180°), "
+                        "one hour each, constant temperature, unit mounted at 45° yaw: a drift test",
+                        kSkewMountYawDeg);
+  p.segments.push_back(Hold(60.0));
+  AppendPositions(p.segments, {0, 90, 180, 270}, {0, 180}, 3600.0);
+  return p;
+}
+
 }  // namespace
 
 double ThermalProfile::TemperatureAt(double t) const {
@@ -208,7 +224,7 @@ double ThermalProfile::TemperatureAt(double t) const {
          cycle_amplitude_degc * std::sin(2.0 * std::numbers::pi * t / cycle_period_s);
 }
 
-std::vector<std::string> BuiltinProfileNames() { return {"static", "rotations", "positions", "thermal", "full"}; }
+std::vector<std::string> BuiltinProfileNames() { return {"static", "rotations", "positions", "thermal", "full", "drift"}; }
 
 absl::StatusOr<TableProfile> BuiltinProfile(std::string_view name) {
   if (name == "static") return StaticProfile();
@@ -216,6 +232,7 @@ absl::StatusOr<TableProfile> BuiltinProfile(std::string_view name) {
   if (name == "positions") return PositionsProfile();
   if (name == "thermal") return ThermalCyclesProfile();
   if (name == "full") return FullProfile();
+  if (name == "drift") return DriftProfile();
   std::string names;
   for (const auto& n : BuiltinProfileNames()) names += (names.empty() ? "" : ", ") + n;
   return absl::InvalidArgumentError("unknown profile '" + std::string(name) + "'; built-in profiles: " + names);

@@ -28,6 +28,7 @@
 #include "insdiag/engine/ident/allan.h"
 #include "insdiag/engine/ident/retarget.h"
 #include "insdiag/engine/ident/correlation.h"
+#include "insdiag/engine/ident/drift_likelihood.h"
 #include "insdiag/engine/model/error_model.h"
 #include "insdiag/engine/monitor/monitoring.h"
 #include "insdiag/engine/monitor/sample_screening.h"
@@ -60,6 +61,10 @@ struct AnalysisOptions {
   // maximum likelihood of the innovations (retarget.h, ScaleUnresolvedNoise).
   bool retune_unresolved_noise = true;
   ident::NoiseScaleOptions noise_scale;
+  // Drifts that correlation processing leaves unresolved are identified by
+  // maximum likelihood of the innovations (drift_likelihood.h).
+  bool identify_unresolved_drifts = true;
+  ident::DriftLikelihoodOptions drift_likelihood;
   FinderOptions finder;
   // Time segments of the "where it shows" breakdown.
   double segment_s = 60.0;

@@ -17,6 +17,7 @@
 #include <absl/status/statusor.h>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -75,8 +76,11 @@ struct SimulationOptions {
   double sample_rate_hz = 0.0;
   uint64_t seed = 1;
   Site site;
-  // Write the unit's base model as datasheet metadata (axis averages).
+  // Write datasheet metadata: `datasheet` when given — the unit type's
+  // specification, as a real datasheet states it — else the unit's own base
+  // model (axis averages).
   bool write_datasheet = true;
+  std::optional<Datasheet> datasheet;
   // Leave the sensors perfect: no drift, noise, effects, faults or quantisation
   // (for checking the mechanisation against the table's exact motion).
   bool perfect_sensors = false;
@@ -97,6 +101,10 @@ struct SimulatedRun {
   // per state in unit.effects order (second-order terms have two columns).
   Eigen::MatrixXd random_effect_states;
 };
+
+// Datasheet metadata of a base model: axis means of the white densities and
+// correlation times, RMS over the axes of the drift σ.
+Datasheet DatasheetOf(const SensorTriadModel& gyro, const SensorTriadModel& acc);
 
 absl::StatusOr<SimulatedRun> Simulate(const SimulatedUnit& unit, const TableProfile& profile,
                                       const SimulationOptions& options);

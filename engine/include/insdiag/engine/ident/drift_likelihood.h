@@ -1,0 +1,86 @@
+// Maximum-likelihood identification of the base drifts' σ, for the drifts
+// correlation processing leaves unresolved.
+//
+// Why. Correlation processing (correlation.h) fits the ACF of the smoothed
+// drift estimates. The smoother shrinks those estimates towards what the
+// model expects: when the model's σ is far too small (a worn gyro whose drift
+// σ has tripled) the smoothed drift is flattened, its ACF looks like a walk,
+// and the fit cannot bound τ — the drift is "unresolved" however strongly the
+// innovations say the model is wrong. The innovation likelihood does not
+// depend on the smoother's shrinkage: it is the likelihood of the data under
+// the model, and its maximum is the estimate.
+//
+// What. σ of each selected drift, τ held at the model's value. A bench run
+// spans a few correlation times, and over so few the likelihood in (σ, τ) is
+// a long curved ridge with more than one local maximum (a long τ with a
+// small σ looks like a short τ with a large one over a few hours); σ at a
+// given τ is well determined and its likelihood is unimodal. τ is identified
+// by correlation processing where the run resolves it.
+//
+// How. Expectation–maximisation over the state-space model (Shumway &
+// Stoffer, J. Time Series Anal. 3(4), 1982; Shumway & Stoffer, Time Series
+// Analysis and Its Applications, 4th ed., §6.3): each drift is a first-order
+// Gauss–Markov state sampled at the epochs (seed eq. 5),
+//   x₀ ~ N(0, σ²),   x_{k+1} = φ x_k + w_k,   φ = exp(−Δt/τ),   Var w = σ²(1 − φ²),
+// whose transition is decoupled from every other state, so the M-step is
+// closed-form in the smoothed moments
+//   a_k = E[x_k² | Y] = x̂_k² + P_k,   b_k = E[x_{k+1} x_k | Y] = x̂_{k+1} x̂_k + P_{k+1,k}
+//   σ̂² = [a₀ + (Σ a_{k+1} − 2φ Σ b_k + φ² Σ a_k) / (1 − φ²)] / (n + 1).
+// All drifts are updated from one forward and one smoother pass; the
+// likelihood never falls (Dempster, Laird & Rubin, JRSS B 39(1), 1977). EM
+// crawls when the model's σ is far too small (the smoother then follows the
+// data little and the missing information is large), so the cycles are
+// extrapolated by SQUAREM (Varadhan & Roland, Scand. J. Statist. 35(2), 2008).
+// Standard errors come from the observed information: the second difference
+// of the forward filter's log-likelihood ℓ (prediction-error decomposition,
+// Schweppe, IEEE Trans. IT-11(1), 1965) in ln σ per drift, at the maximum.
+#pragma once
+
+#include <absl/status/statusor.h>
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "insdiag/engine/bench_run.h"
+#include "insdiag/engine/filter/forward_filter.h"
+#include "insdiag/engine/model/error_model.h"
+#include "insdiag/engine/parameter_estimate.h"
+
+namespace insdiag::engine::ident {
+
+// Which base drifts to identify: gyro x, y, z, then accelerometer x, y, z.
+using DriftSelection = std::array<bool, 6>;
+
+struct DriftLikelihoodOptions {
+  // EM steps at most (each a forward and a smoother pass).
+  int max_iterations = 30;
+  // Iterations stop when no ln σ moves by more than this (1%: a tenth of the
+  // smallest standard error a bench run gives a drift's σ).
+  double log_tolerance = 0.01;
+  // Step of the second difference in ln σ.
+  double curvature_step = 0.15;
+};
+
+struct DriftLikelihoodResult {
+  ErrorModel model;                           // the model with the identified σ
+  std::vector<ParameterEstimate> identified;  // method "ML": .sigma of each selected drift
+  // Selected drifts whose likelihood is flat in σ (the run cannot tell it);
+  // the model keeps their values.
+  std::vector<std::string> not_identifiable;
+  double log_likelihood_before = 0.0;
+  double log_likelihood_after = 0.0;
+  int iterations = 0;
+  int filter_passes = 0;
+  bool converged = false;
+};
+
+// Identifies σ of the selected drifts of `model` on `run`; `a_priori`
+// gives the values the report lists against the estimates.
+absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const BenchRun& run, const ErrorModel& model,
+                                                                 const ErrorModel& a_priori,
+                                                                 const DriftSelection& which,
+                                                                 const FilterOptions& filter,
+                                                                 const DriftLikelihoodOptions& options = {});
+
+}  // namespace insdiag::engine::ident
