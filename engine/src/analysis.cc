@@ -721,11 +721,16 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       }
     }
     std::vector<DriftCorrelation> drifts;
+    bool faults_flagged = false;  // by the latest pass's monitoring
     bool deferred = false;
     bool drifts_by_likelihood = false;  // done already
     auto identify_drifts = [&](const ErrorModel& model) {
       Progress(options, 0.6, "maximum-likelihood drift identification");
-      return ident::IdentifyDriftsByLikelihood(run, model, *a_priori, UnresolvedDrifts(drifts), options.filter,
+      ident::DriftSelection selection = UnresolvedDrifts(drifts);
+      // A run whose monitoring flags faults (a drift that jumped, say) is not
+      // re-tuned: a wider drift would hide the fault the diagnosis is for.
+      if (faults_flagged) selection = {};
+      return ident::IdentifyDriftsByLikelihood(run, model, *a_priori, selection, options.filter,
                                                options.drift_likelihood);
     };
     for (int it = 0; it < options.max_retarget_iterations; ++it) {
@@ -738,6 +743,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       auto pass = RunPass(run, base, spikes, options, /*with_scan=*/first);
       if (!pass.ok()) return pass.status();
       drifts = ident::CorrelateDrifts(pass->forward, pass->smoothed, *pass->layout, options.correlation, nullptr);
+      faults_flagged = !pass->monitor.faults.empty();
       if (const auto best_bic = first ? BestSignificantCandidateBic(run, *pass, options) : std::nullopt;
           best_bic.has_value()) {
         // The converse soaking holds too: a drift whose σ is far larger than

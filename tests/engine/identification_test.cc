@@ -20,6 +20,7 @@
 #include "insdiag/engine/filter/forward_filter.h"
 #include "insdiag/engine/filter/smoother.h"
 #include "insdiag/engine/ident/correlation.h"
+#include "insdiag/engine/ident/drift_likelihood.h"
 #include "insdiag/engine/ident/retarget.h"
 #include "insdiag/engine/model/state_layout.h"
 #include "scenarios.h"
@@ -333,6 +334,43 @@ TEST(CorrelationCoverageTest, IntervalsCoverTheTrueDriftsOverSeeds) {
   ASSERT_GT(gyro_checks, 0);
   EXPECT_GE(static_cast<double>(acc_covered) / acc_checks, 0.90);
   EXPECT_GE(static_cast<double>(gyro_covered) / gyro_checks, 0.70);
+}
+
+// Maximum-likelihood σ of the drifts (drift_likelihood.h): a unit whose
+// gyro-x drift σ is three times what the model says. τ = 300 s, so the 100-min
+// `full` run spans twenty correlation times. Over seeds, the true σ of every
+// identified drift lies inside its 95% interval (binomial: at 95% per check,
+// 85% of the checks is more than three standard deviations below), and the
+// tripled σ is told from the model's: its interval lies above it.
+TEST(DriftLikelihoodTest, RecoversATripledGyroDriftSigmaWithinItsIntervalOverSeeds) {
+  constexpr int kSeeds = 6;
+  constexpr double kFactor = 3.0;
+  sim::SimulatedUnit unit = CoverageUnit();
+  const ErrorModel model = testing::TrueBaseModel(unit);  // what the model says
+  unit.gyro.bias[0].sigma *= kFactor;                       // what the unit does
+  const sim::TableProfile profile = testing::BuiltinProfileOrDie("full");
+  int checks = 0, covered = 0, detected = 0;
+  for (int seed = 0; seed < kSeeds; ++seed) {
+    const sim::SimulatedRun s = testing::SimulateOrDie(unit, profile, kCoverageRateHz, 700 + seed);
+    auto ml = IdentifyDriftsByLikelihood(s.run, model, model, DriftSelection{true, true, true, true, true, true},
+                                         FilterOptions{});
+    ASSERT_TRUE(ml.ok()) << ml.status();
+    EXPECT_GT(ml->log_likelihood_after, ml->log_likelihood_before);  // EM never lowers ℓ
+    for (const ParameterEstimate& e : ml->identified) {
+      const bool gyro = e.name.rfind("gyro", 0) == 0;
+      const int axis = e.name[e.name.find('.') + 1] - 'x';
+      const double truth = (gyro ? unit.gyro : unit.acc).bias[static_cast<size_t>(axis)].sigma;
+      const bool in = e.ci95_low <= truth && truth <= e.ci95_high;
+      std::printf("seed %d %-22s %.3g [%.3g, %.3g] truth %.3g%s\n", seed, e.name.c_str(), e.value, e.ci95_low,
+                  e.ci95_high, truth, in ? "" : "  (outside)");
+      ++checks;
+      covered += in;
+      if (e.name == "gyro_bias_gm.x.sigma" && e.ci95_low > model.gyro.bias[0].sigma) ++detected;
+    }
+  }
+  ASSERT_GE(checks, 4 * kSeeds);  // the accelerometer and horizontal gyro drifts at least
+  EXPECT_GE(static_cast<double>(covered) / checks, 0.85) << covered << " of " << checks;
+  EXPECT_GE(detected, kSeeds - 1);
 }
 
 // 5. The real RLG record at rest (no datasheet): the a-priori model comes
