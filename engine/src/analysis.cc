@@ -396,41 +396,38 @@ Findings FindMissingEffects(const BenchRun& run, const ModelPass& pass, const st
   return f;
 }
 
-// Whether model A's scan finds an identifiable effect significant at the
-// finder's family-wise level.
-// The lowest predicted ΔBIC among the significant, identifiable candidates
-// of a scanned pass (terms and families); none when nothing is significant.
-std::optional<double> BestSignificantCandidateBic(const BenchRun& run, const ModelPass& pass,
-                                                  const AnalysisOptions& options) {
-  const RankedEffects ranked = RankMissingEffects(*pass.scan, pass.forward, run, pass.segment_motion, options.finder);
-  std::optional<double> best;
-  for (const auto* list : {&ranked.terms, &ranked.families}) {
+// The significant, identifiable candidate whose predicted ΔBIC is lowest,
+// among single terms and whole families; nullptr when none is significant.
+// A term and its family often score alike when one axis carries the effect;
+// the family's extra parameters then cost more than they explain. When every
+// axis carries it, the family explains far more than any term, and it is not
+// mistaken for a look-alike term of another family (a common scale factor
+// for two misalignments, say). Schwarz, Ann. Stat. 6(2), 1978.
+const EffectCandidate* LowestBicSignificant(const std::vector<EffectCandidate>& terms,
+                                            const std::vector<EffectCandidate>& families,
+                                            const AnalysisOptions& options) {
+  const EffectCandidate* best = nullptr;
+  for (const auto* list : {&terms, &families}) {
     for (const EffectCandidate& c : *list) {
       if (!c.identifiable || !(c.p_value_holm < options.finder.family_wise_alpha)) continue;
-      if (!best.has_value() || c.predicted_delta_bic < *best) best = c.predicted_delta_bic;
+      if (best == nullptr || c.predicted_delta_bic < best->predicted_delta_bic) best = &c;
     }
   }
   return best;
 }
 
-// The effect `--discover` adds next: among the significant, identifiable
-// candidates — single terms and whole families — the one whose predicted
-// ΔBIC is lowest. A term and its family often score alike when one axis
-// carries the effect; the family's extra parameters then cost more than they
-// explain. When every axis carries it, the family explains far more than any
-// term, and it is not mistaken for a look-alike term of another family (a
-// common scale factor for two misalignments, say). Schwarz, Ann. Stat. 6(2), 1978.
+// The predicted ΔBIC of a scanned pass's best significant candidate; none
+// when nothing is significant.
+std::optional<double> BestSignificantCandidateBic(const BenchRun& run, const ModelPass& pass,
+                                                  const AnalysisOptions& options) {
+  const RankedEffects ranked = RankMissingEffects(*pass.scan, pass.forward, run, pass.segment_motion, options.finder);
+  const EffectCandidate* best = LowestBicSignificant(ranked.terms, ranked.families, options);
+  return best != nullptr ? std::optional<double>(best->predicted_delta_bic) : std::nullopt;
+}
+
+// The effect `--discover` adds next.
 const EffectCandidate* NextDiscovery(const Findings& found, const AnalysisOptions& options) {
-  const EffectCandidate* best = nullptr;
-  auto consider = [&](const std::vector<EffectCandidate>& candidates) {
-    for (const EffectCandidate& c : candidates) {
-      if (!c.identifiable || !(c.p_value_holm < options.finder.family_wise_alpha)) continue;
-      if (best == nullptr || c.predicted_delta_bic < best->predicted_delta_bic) best = &c;
-    }
-  };
-  consider(found.candidates);
-  consider(found.families);
-  return best;
+  return LowestBicSignificant(found.candidates, found.families, options);
 }
 
 // Model `base` plus `selectors`, with priors from what model A's scan and
@@ -580,7 +577,7 @@ AnalysisReport ReportOf(const ModelPass& pass, const Findings& found, const Benc
 ident::DriftSelection UnresolvedDrifts(const std::vector<DriftCorrelation>& drifts) {
   ident::DriftSelection selection{};
   for (int d = 0; d < 6; ++d) {
-    const std::string name = std::string(d < 3 ? "gyro_bias_gm." : "acc_bias_gm.") + "xyz"[d % 3];
+    const std::string name = ident::DriftName(d);
     selection[static_cast<size_t>(d)] = std::none_of(
         drifts.begin(), drifts.end(), [&](const DriftCorrelation& c) { return c.state == name && c.analysis.resolved; });
   }
@@ -588,7 +585,7 @@ ident::DriftSelection UnresolvedDrifts(const std::vector<DriftCorrelation>& drif
 }
 
 // The likelihood-ratio statistic of the drift estimates against the model's
-// values, with its degrees of freedom (one σ per drift).
+// values (one degree of freedom per drift σ).
 double DriftStatistic(const ident::DriftLikelihoodResult& ml) {
   return 2.0 * (ml.log_likelihood_after - ml.log_likelihood_before);
 }

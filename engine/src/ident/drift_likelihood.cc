@@ -20,11 +20,11 @@ const GaussMarkov& DriftOf(const ErrorModel& m, int drift) {
   return (drift < 3 ? m.gyro : m.acc).bias[static_cast<size_t>(drift % 3)];
 }
 
+}  // namespace
+
 std::string DriftName(int drift) {
   return std::string(drift < 3 ? "gyro_bias_gm." : "acc_bias_gm.") + "xyz"[drift % 3];
 }
-
-}  // namespace
 
 absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const BenchRun& run, const ErrorModel& model,
                                                                  const ErrorModel& a_priori,
@@ -49,9 +49,6 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const BenchRun&
     return RunForwardFilter(run, m, filter);
   };
   if (drifts.empty()) {
-    auto fw = forward(model);
-    if (!fw.ok()) return fw.status();
-    out.log_likelihood_before = out.log_likelihood_after = fw->log_likelihood;
     out.converged = true;
     return out;
   }

@@ -52,6 +52,9 @@ namespace insdiag::engine::ident {
 // Which base drifts to identify: gyro x, y, z, then accelerometer x, y, z.
 using DriftSelection = std::array<bool, 6>;
 
+// The state name of base drift d in that order ("gyro_bias_gm.x", …, "acc_bias_gm.z").
+std::string DriftName(int drift);
+
 struct DriftLikelihoodOptions {
   // EM steps at most (each a forward and a smoother pass).
   int max_iterations = 30;
@@ -76,7 +79,8 @@ struct DriftLikelihoodResult {
 };
 
 // Identifies σ of the selected drifts of `model` on `run`; `a_priori`
-// gives the values the report lists against the estimates.
+// gives the values the report lists against the estimates. With nothing to
+// identify it runs no filter pass and returns the model as it is.
 absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const BenchRun& run, const ErrorModel& model,
                                                                  const ErrorModel& a_priori,
                                                                  const DriftSelection& which,
