@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 
 #include "insdiag/engine/filter/smoother.h"
@@ -835,10 +836,16 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       d.estimate = top->estimate;
       d.std_error = top->std_error;
       // The added terms' estimates in the model after the step (one for a
-      // term, one per axis or pair for a family).
+      // term, one per axis or pair for a family). The step's single value is
+      // the term's, or for a family its most significant term's (largest
+      // |estimate| / SE): a family has no one magnitude.
+      double largest_z = -1.0;
       for (const ParameterEstimate& e : next_report.identified) {
-        if (e.method == "FILTER" && SelectorCovers(top->name, e.name)) d.estimates.push_back(e);
-        if (e.method == "FILTER" && e.name == top->name) {
+        if (e.method != "FILTER" || !SelectorCovers(top->name, e.name)) continue;
+        d.estimates.push_back(e);
+        const double z = e.std_error > 0.0 ? std::abs(e.value) / e.std_error : 0.0;
+        if (e.name == top->name || z > largest_z) {
+          largest_z = e.name == top->name ? std::numeric_limits<double>::infinity() : z;
           d.estimate = e.value;
           d.std_error = e.std_error;
         }

@@ -360,6 +360,16 @@ TEST(TwoHiddenEffects, DiscoveredInTwoSteps) {
   const bool gyro_then_acc = Names(r.discovery[0].effect, gyro_term) && Names(r.discovery[1].effect, acc_term);
   const bool acc_then_gyro = Names(r.discovery[0].effect, acc_term) && Names(r.discovery[1].effect, gyro_term);
   EXPECT_TRUE(gyro_then_acc || acc_then_gyro) << r.discovery[0].effect << ", " << r.discovery[1].effect;
+  // Each step states one estimate with its error — for a family step, its
+  // most significant term's, which is the hidden one — within 3 SE of the truth.
+  for (const DiscoveryStep& d : r.discovery) {
+    ASSERT_TRUE(std::isfinite(d.estimate) && std::isfinite(d.std_error) && d.std_error > 0.0)
+        << d.effect << ": " << d.estimate << " ± " << d.std_error;
+    const std::string& hidden = Names(d.effect, gyro_term) ? gyro_term : acc_term;
+    const double truth = kTolerances * Tolerance(hidden);
+    EXPECT_LE(std::abs(d.estimate - truth), 3.0 * d.std_error)
+        << d.effect << ": " << d.estimate << " ± " << d.std_error << ", truth " << truth << " (" << hidden << ")";
+  }
   const auto remaining = Significant(r, options.finder.family_wise_alpha);
   EXPECT_TRUE(remaining.empty()) << remaining.front();
   EXPECT_GE(r.nis_mean, r.nis_band_low);
