@@ -255,11 +255,19 @@ std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass) {
   return out;
 }
 
-// A random-structure effect proposed by correlation processing.
+// A random-structure effect proposed by correlation processing or by the
+// likelihood's walk test.
 struct StructureProposal {
   ModelEffect effect;
   EffectCandidate candidate;
   double screen_bonferroni = 1.0;
+  bool confirmed = false;  // its statistic is a likelihood ratio already
+  // A walk fitted with its axis' drift: the drift σ the model takes with it.
+  int drift = -1;
+  double drift_sigma = 0.0;
+  // What the likelihood identified with it (K, and the drift σ), for the
+  // report of a model that takes it.
+  std::vector<ParameterEstimate> identified;
 };
 
 std::vector<StructureProposal> ProposeStructures(const std::vector<DriftCorrelation>& drifts, double run_s,
@@ -331,7 +339,7 @@ std::vector<StructureProposal> ConfirmStructures(const BenchRun& run, const Mode
   const double log_n = std::log(static_cast<double>(std::max(1, a.forward.scalar_updates)));
   for (StructureProposal& p : proposals) {
     ErrorModel b = a.model;
-    if (b.FindEffect(p.effect.term) >= 0) continue;
+    if (p.confirmed || b.FindEffect(p.effect.term) >= 0) continue;
     b.effects.push_back(p.effect);
     auto pass = RunPass(run, b, spikes, options, /*with_scan=*/false);
     EffectCandidate& c = p.candidate;
@@ -346,6 +354,54 @@ std::vector<StructureProposal> ConfirmStructures(const BenchRun& run, const Mode
     c.predicted_delta_bic = -c.statistic + c.dof * log_n;
   }
   return proposals;
+}
+
+// Bias random walks by the innovations' likelihood (drift_likelihood.h), on
+// every drift axis the model has no walk on. Not on a run whose monitoring
+// flags faults: a walk would explain a drift step away.
+std::vector<StructureProposal> WalkProposals(const BenchRun& run, const ModelPass& pass, const ErrorModel& a_priori,
+                                             const AnalysisOptions& options, std::vector<std::string>* notes) {
+  std::vector<StructureProposal> out;
+  if (!options.test_walks_by_likelihood || !pass.monitor.faults.empty()) return out;
+  ident::DriftSelection axes;
+  axes.fill(true);
+  auto walks = ident::IdentifyWalksByLikelihood(run, pass.model, a_priori, axes, options.filter,
+                                                options.drift_likelihood);
+  if (!walks.ok()) {
+    if (notes != nullptr) notes->push_back("no likelihood test of bias random walks: " + std::string(walks.status().message()));
+    return out;
+  }
+  const double log_n = std::log(static_cast<double>(std::max(1, pass.forward.scalar_updates)));
+  for (const ident::WalkEstimate& w : walks->walks) {
+    auto terms = ParseEffectSelector(w.effect);
+    if (!terms.ok()) continue;
+    StructureProposal p;
+    p.effect.term = terms->front();
+    p.effect.random_walk_density = w.density.value;
+    p.confirmed = true;
+    p.drift = w.drift;
+    p.drift_sigma = w.drift_sigma.value;
+    p.identified = {w.density, w.drift_sigma};
+    EffectCandidate& c = p.candidate;
+    c.name = w.effect;
+    c.family = std::string(p.effect.term.family->name);
+    c.source = "LIKELIHOOD";
+    c.unit = std::string(p.effect.term.family->unit);
+    c.estimate = w.density.value;
+    c.std_error = w.density.std_error;
+    c.dof = 1;
+    c.statistic = w.statistic;
+    // χ²₁ for a parameter on its boundary is conservative (drift_likelihood.h).
+    c.p_value = stats::ChiSquareSurvival(c.statistic, c.dof);
+    c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
+    c.predicted_delta_bic = -c.statistic + c.dof * log_n;
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.3g %s", w.drift_sigma.value, w.drift_sigma.unit.c_str());
+    c.note = "likelihood of the innovations with a bias random walk against without, the drift σ re-fitted in "
+             "each (" + ident::DriftName(w.drift) + ".sigma " + buf + " with the walk)";
+    out.push_back(std::move(p));
+  }
+  return out;
 }
 
 // Terms and structures ranked together, Holm over both.
@@ -378,8 +434,9 @@ struct Findings {
   std::vector<DriftCorrelation> drifts;
 };
 
-Findings FindMissingEffects(const BenchRun& run, const ModelPass& pass, const std::vector<SampleOutlier>& spikes,
-                            const AnalysisOptions& options, std::vector<std::string>* notes) {
+Findings FindMissingEffects(const BenchRun& run, const ModelPass& pass, const ErrorModel& a_priori,
+                            const std::vector<SampleOutlier>& spikes, const AnalysisOptions& options,
+                            std::vector<std::string>* notes) {
   Findings f;
   f.drifts = ident::CorrelateDrifts(pass.forward, pass.smoothed, *pass.layout, options.correlation, notes);
   RankedEffects ranked = RankMissingEffects(*pass.scan, pass.forward, run, pass.segment_motion, options.finder);
@@ -387,7 +444,15 @@ Findings FindMissingEffects(const BenchRun& run, const ModelPass& pass, const st
   // Screening level of a structure before the likelihood confirms it: the
   // family-wise α over the drifts and the structural families tried.
   const double screen_alpha = options.finder.family_wise_alpha / (6.0 * 3.0);
-  std::vector<StructureProposal> proposals = ProposeStructures(f.drifts, run.DurationS(), screen_alpha);
+  // The likelihood's walks first: where correlation processing proposes the
+  // same walk, the likelihood's estimate is kept.
+  std::vector<StructureProposal> proposals = WalkProposals(run, pass, a_priori, options, notes);
+  for (StructureProposal& p : ProposeStructures(f.drifts, run.DurationS(), screen_alpha)) {
+    if (std::none_of(proposals.begin(), proposals.end(),
+                     [&](const StructureProposal& o) { return o.effect.term == p.effect.term; })) {
+      proposals.push_back(std::move(p));
+    }
+  }
   // Structures already in the model are not candidates.
   proposals.erase(std::remove_if(proposals.begin(), proposals.end(),
                                  [&](const StructureProposal& p) { return pass.model.FindEffect(p.effect.term) >= 0; }),
@@ -431,6 +496,21 @@ const EffectCandidate* NextDiscovery(const Findings& found, const AnalysisOption
   return LowestBicSignificant(found.candidates, found.families, options);
 }
 
+// The identified parameters of a model that took structures of `found`:
+// what the likelihood identified with each (a walk's K and its drift's σ)
+// replaces the earlier estimate of the same name.
+std::vector<ParameterEstimate> WithTakenStructures(std::vector<ParameterEstimate> identified,
+                                                   const ErrorModel& model, const Findings& found) {
+  for (const StructureProposal& p : found.structures) {
+    if (model.FindEffect(p.effect.term) < 0) continue;
+    for (const ParameterEstimate& e : p.identified) {
+      std::erase_if(identified, [&](const ParameterEstimate& q) { return q.name == e.name; });
+      identified.push_back(e);
+    }
+  }
+  return identified;
+}
+
 // Model `base` plus `selectors`, with priors from what model A's scan and
 // correlation processing found; anything not found gets the diffuse prior.
 absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& base,
@@ -447,6 +527,7 @@ absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& ba
                                     [&](const StructureProposal& p) { return p.effect.term == term; });
       if (structure != found.structures.end()) {
         model.effects.push_back(structure->effect);
+        if (structure->drift >= 0) ident::DriftOf(model, structure->drift).sigma = structure->drift_sigma;
         continue;
       }
       // A constant the scan estimated: prior wide against its estimate.
@@ -807,7 +888,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
                                     ? absl::StatusOr<ModelPass>(std::move(*scanned_a_priori))
                                     : RunPass(run, base, spikes, options, /*with_scan=*/true);
   if (!a.ok()) return a.status();
-  const Findings found_a = FindMissingEffects(run, *a, spikes, options, &notes);
+  const Findings found_a = FindMissingEffects(run, *a, *a_priori, spikes, options, &notes);
   AnalysisReport report_a = ReportOf(*a, found_a, run, options, identified, notes);
 
   Analysis out;
@@ -825,7 +906,8 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       if (!extended.ok()) return extended.status();
       auto next = RunPass(run, *extended, spikes, options, /*with_scan=*/true);
       if (!next.ok()) return next.status();
-      Findings next_found = FindMissingEffects(run, *next, spikes, options, &notes);
+      Findings next_found = FindMissingEffects(run, *next, *a_priori, spikes, options, &notes);
+      identified = WithTakenStructures(std::move(identified), next->model, found);
       AnalysisReport next_report = ReportOf(*next, next_found, run, options, identified, notes);
       DiscoveryStep d;
       d.step = step;
@@ -875,8 +957,8 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
     if (!extended.ok()) return extended.status();
     auto b = RunPass(run, *extended, spikes, options, /*with_scan=*/true);
     if (!b.ok()) return b.status();
-    const Findings found_b = FindMissingEffects(run, *b, spikes, options, &notes);
-    out.report = ReportOf(*b, found_b, run, options, identified, notes);
+    const Findings found_b = FindMissingEffects(run, *b, *a_priori, spikes, options, &notes);
+    out.report = ReportOf(*b, found_b, run, options, WithTakenStructures(identified, b->model, found_a), notes);
     const std::vector<std::string> added = [&] {
       std::vector<std::string> names;
       for (const std::string& e : b->model.EffectNames()) {

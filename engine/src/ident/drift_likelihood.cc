@@ -6,12 +6,229 @@
 #include <string>
 
 #include <Eigen/Core>
+#include <Eigen/LU>
 
 #include "insdiag/engine/filter/smoother.h"
+#include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/model/state_layout.h"
 
 namespace insdiag::engine::ident {
 namespace {
+
+int WalkEffectOf(const ErrorModel& m, int drift) {
+  auto terms = ParseEffectSelector(WalkName(drift));
+  return terms.ok() ? m.FindEffect(terms->front()) : -1;
+}
+
+// One parameter of the likelihood: a drift's σ or a walk's density K.
+struct Parameter {
+  bool walk = false;
+  int drift = 0;
+};
+
+double& ValueOf(ErrorModel& m, const Parameter& p) {
+  if (!p.walk) return DriftOf(m, p.drift).sigma;
+  return m.effects[static_cast<size_t>(WalkEffectOf(m, p.drift))].random_walk_density;
+}
+double ValueOf(const ErrorModel& m, const Parameter& p) {
+  if (!p.walk) return DriftOf(m, p.drift).sigma;
+  return m.effects[static_cast<size_t>(WalkEffectOf(m, p.drift))].random_walk_density;
+}
+
+std::string NameOf(const Parameter& p) { return p.walk ? WalkName(p.drift) + ".density" : DriftName(p.drift) + ".sigma"; }
+
+const char* UnitOf(const Parameter& p) {
+  if (p.walk) return p.drift < 3 ? "rad/s/sqrt(s)" : "m/s^2/sqrt(s)";
+  return p.drift < 3 ? "rad/s" : "m/s^2";
+}
+
+// EM over θ = ln of each parameter (header), with the pass count of `out`.
+class Maximiser {
+ public:
+  Maximiser(const BenchRun& run, ErrorModel model, std::vector<Parameter> parameters, const FilterOptions& filter,
+            const DriftLikelihoodOptions& options, DriftLikelihoodResult& out)
+      : run_(run), model_(std::move(model)), layout_(model_), parameters_(std::move(parameters)), filter_(filter),
+        options_(options), out_(out) {}
+
+  Eigen::VectorXd Start() const {
+    Eigen::VectorXd theta(static_cast<Eigen::Index>(parameters_.size()));
+    for (size_t j = 0; j < parameters_.size(); ++j) theta[static_cast<Eigen::Index>(j)] = std::log(ValueOf(model_, parameters_[j]));
+    return theta;
+  }
+
+  ErrorModel ModelOf(const Eigen::VectorXd& theta) const {
+    ErrorModel m = model_;
+    for (size_t j = 0; j < parameters_.size(); ++j) ValueOf(m, parameters_[j]) = std::exp(theta[static_cast<Eigen::Index>(j)]);
+    return m;
+  }
+
+  absl::StatusOr<double> LogLikelihood(const ErrorModel& m) {
+    ++out_.filter_passes;
+    auto fw = RunForwardFilter(run_, m, filter_);
+    if (!fw.ok()) return fw.status();
+    return fw->log_likelihood;
+  }
+
+  // ℓ(θ) and the M-step's θ.
+  struct Step {
+    double log_likelihood;
+    Eigen::VectorXd next;
+  };
+  absl::StatusOr<Step> EmStep(const Eigen::VectorXd& theta) {
+    ++out_.filter_passes;
+    auto fw = RunForwardFilter(run_, ModelOf(theta), filter_);
+    if (!fw.ok()) return fw.status();
+    const int K = fw->epochs();
+    if (K < 3) return absl::InvalidArgumentError("drift likelihood: the run has fewer than three epochs");
+    auto sm = RunSmoother(*fw);
+    if (!sm.ok()) return sm.status();
+    const double dt = (fw->epoch_time_s.back() - fw->epoch_time_s.front()) / (K - 1);
+    Step step{fw->log_likelihood, theta};
+    for (size_t j = 0; j < parameters_.size(); ++j) {
+      const Parameter& p = parameters_[j];
+      const int state = p.walk ? layout_.EffectOffset(WalkEffectOf(model_, p.drift)) : layout_.gyro_bias() + p.drift;
+      double a_from = 0.0, a_to = 0.0, b = 0.0;
+      for (int k = 0; k + 1 < K; ++k) {
+        const double x0 = sm->x(k, state), x1 = sm->x(k + 1, state);
+        a_from += x0 * x0 + sm->variance(k, state);
+        a_to += x1 * x1 + sm->variance(k + 1, state);
+        b += x1 * x0 + sm->lag_one_covariance(k, state);
+      }
+      double variance = 0.0;
+      if (p.walk) {
+        variance = (a_to - 2.0 * b + a_from) / ((K - 1) * dt);  // K̂²
+      } else {
+        const double a0 = sm->x(0, state) * sm->x(0, state) + sm->variance(0, state);
+        const double phi = std::exp(-dt / DriftOf(model_, p.drift).tau_s);
+        variance = (a0 + (a_to - 2.0 * phi * b + phi * phi * a_from) / (1.0 - phi * phi)) / K;  // σ̂²
+      }
+      if (variance > 0.0) step.next[static_cast<Eigen::Index>(j)] = 0.5 * std::log(variance);
+    }
+    return step;
+  }
+
+  // SQUAREM, scheme S3 (Varadhan & Roland 2008): two EM steps give
+  // r = θ₁ − θ₀ and v = θ₂ − 2θ₁ + θ₀; with α = −‖r‖/‖v‖ (at most −1, which
+  // is θ₂ itself) θ′ = θ₀ − 2αr + α²v, whose EM step continues the cycle when
+  // its likelihood is not below θ₂'s. A step length per parameter: they are
+  // near-independent, and one that crawls must not wait for the others.
+  // Returns the maximiser; `first_likelihood` gets ℓ at the start.
+  absl::StatusOr<Eigen::VectorXd> Maximise(Eigen::VectorXd theta, double* first_likelihood) {
+    const Eigen::Index m = theta.size();
+    for (int cycle = 0, iterations = 0; iterations < options_.max_iterations; ++cycle) {
+      auto first = EmStep(theta);
+      if (!first.ok()) return first.status();
+      if (cycle == 0 && first_likelihood != nullptr) *first_likelihood = first->log_likelihood;
+      auto second = EmStep(first->next);
+      if (!second.ok()) return second.status();
+      iterations += 2;
+      const Eigen::VectorXd r = first->next - theta;
+      const Eigen::VectorXd v = second->next - first->next - r;
+      Eigen::VectorXd next = second->next;
+      Eigen::VectorXd extrapolated = second->next;
+      bool extrapolates = false;
+      for (Eigen::Index j = 0; j < m; ++j) {
+        if (!(std::abs(v[j]) > 0.0)) continue;
+        const double alpha = std::min(-1.0, -std::abs(r[j]) / std::abs(v[j]));
+        extrapolated[j] = theta[j] - 2.0 * alpha * r[j] + alpha * alpha * v[j];
+        extrapolates = extrapolates || alpha < -1.0;
+      }
+      if (extrapolates) {
+        auto third = EmStep(extrapolated);
+        if (!third.ok()) return third.status();
+        ++iterations;
+        if (third->log_likelihood >= second->log_likelihood) next = third->next;
+      }
+      const double largest_step = (next - theta).cwiseAbs().maxCoeff();
+      theta = next;
+      if (largest_step < options_.log_tolerance) {
+        converged_ = true;
+        iterations_ = iterations;
+        return theta;
+      }
+      iterations_ = iterations;
+    }
+    return theta;
+  }
+
+  // Observed information in θ_j at θ (ℓ(θ) = l0): the second difference.
+  absl::StatusOr<double> Information(const Eigen::VectorXd& theta, Eigen::Index j, double l0) {
+    const double h = options_.curvature_step;
+    double shifted[2];
+    for (int side = 0; side < 2; ++side) {
+      Eigen::VectorXd probe = theta;
+      probe[j] += side == 0 ? h : -h;
+      auto l = LogLikelihood(ModelOf(probe));
+      if (!l.ok()) return l.status();
+      shifted[side] = *l;
+    }
+    return -(shifted[0] - 2.0 * l0 + shifted[1]) / (h * h);
+  }
+
+  // Observed information of the pair (θ_i, θ_j) at θ: second differences,
+  // the mixed one from the two diagonal shifts (Abramowitz & Stegun 25.3.27).
+  absl::StatusOr<Eigen::Matrix2d> PairInformation(const Eigen::VectorXd& theta, Eigen::Index i, Eigen::Index j,
+                                                  double l0) {
+    const double h = options_.curvature_step;
+    auto at = [&](double di, double dj) -> absl::StatusOr<double> {
+      Eigen::VectorXd probe = theta;
+      probe[i] += di;
+      probe[j] += dj;
+      return LogLikelihood(ModelOf(probe));
+    };
+    double l[6];
+    const double shifts[6][2] = {{h, 0}, {-h, 0}, {0, h}, {0, -h}, {h, h}, {-h, -h}};
+    for (int k = 0; k < 6; ++k) {
+      auto v = at(shifts[k][0], shifts[k][1]);
+      if (!v.ok()) return v.status();
+      l[k] = *v;
+    }
+    Eigen::Matrix2d information;
+    information(0, 0) = -(l[0] - 2.0 * l0 + l[1]) / (h * h);
+    information(1, 1) = -(l[2] - 2.0 * l0 + l[3]) / (h * h);
+    information(0, 1) = information(1, 0) = -(l[4] + l[5] - l[0] - l[1] - l[2] - l[3] + 2.0 * l0) / (2.0 * h * h);
+    return information;
+  }
+
+  const std::vector<Parameter>& parameters() const { return parameters_; }
+  bool converged() const { return converged_; }
+  int iterations() const { return iterations_; }
+
+ private:
+  const BenchRun& run_;
+  ErrorModel model_;
+  StateLayout layout_;
+  std::vector<Parameter> parameters_;
+  const FilterOptions& filter_;
+  const DriftLikelihoodOptions& options_;
+  DriftLikelihoodResult& out_;
+  bool converged_ = false;
+  int iterations_ = 0;
+};
+
+absl::Status ValidateOptions(const DriftLikelihoodOptions& options) {
+  if (!(options.max_iterations > 0 && options.log_tolerance > 0.0 && options.curvature_step > 0.0)) {
+    return absl::InvalidArgumentError("drift likelihood options out of range");
+  }
+  return absl::OkStatus();
+}
+
+bool HasDrift(const ErrorModel& m, int drift) { return DriftOf(m, drift).sigma > 0.0 && DriftOf(m, drift).tau_s > 0.0; }
+
+ParameterEstimate EstimateOf(const Parameter& p, double value, double log_se, const ErrorModel& a_priori) {
+  ParameterEstimate e;
+  e.name = NameOf(p);
+  e.value = value;
+  e.std_error = value * log_se;
+  e.ci95_low = value * std::exp(-1.96 * log_se);
+  e.ci95_high = value * std::exp(1.96 * log_se);
+  e.method = "ML";
+  e.unit = UnitOf(p);
+  if (!p.walk) e.a_priori = DriftOf(a_priori, p.drift).sigma;
+  return e;
+}
+
+}  // namespace
 
 GaussMarkov& DriftOf(ErrorModel& m, int drift) {
   return (drift < 3 ? m.gyro : m.acc).bias[static_cast<size_t>(drift % 3)];
@@ -20,10 +237,12 @@ const GaussMarkov& DriftOf(const ErrorModel& m, int drift) {
   return (drift < 3 ? m.gyro : m.acc).bias[static_cast<size_t>(drift % 3)];
 }
 
-}  // namespace
-
 std::string DriftName(int drift) {
   return std::string(drift < 3 ? "gyro_bias_gm." : "acc_bias_gm.") + "xyz"[drift % 3];
+}
+
+std::string WalkName(int drift) {
+  return std::string(drift < 3 ? "gyro_bias_rw." : "acc_bias_rw.") + "xyz"[drift % 3];
 }
 
 absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const BenchRun& run, const ErrorModel& model,
@@ -31,150 +250,148 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const BenchRun&
                                                                  const DriftSelection& which,
                                                                  const FilterOptions& filter,
                                                                  const DriftLikelihoodOptions& options) {
-  if (!(options.max_iterations > 0 && options.log_tolerance > 0.0 && options.curvature_step > 0.0)) {
-    return absl::InvalidArgumentError("drift likelihood options out of range");
-  }
+  if (auto st = ValidateOptions(options); !st.ok()) return st;
   DriftLikelihoodResult out;
   out.model = model;
-  const StateLayout layout(model);
-  std::vector<int> drifts;
+  std::vector<Parameter> parameters;
   for (int d = 0; d < 6; ++d) {
     // A drift the model leaves out (σ = 0) has no state to identify.
-    if (which[static_cast<size_t>(d)] && DriftOf(model, d).sigma > 0.0 && DriftOf(model, d).tau_s > 0.0) {
-      drifts.push_back(d);
-    }
+    if (which[static_cast<size_t>(d)] && HasDrift(model, d)) parameters.push_back({false, d});
   }
-  auto forward = [&](const ErrorModel& m) -> absl::StatusOr<ForwardPass> {
-    ++out.filter_passes;
-    return RunForwardFilter(run, m, filter);
-  };
-  if (drifts.empty()) {
+  if (parameters.empty()) {
     out.converged = true;
     return out;
   }
-
-  // θ: ln σ of each selected drift, in `drifts` order.
-  const auto m = static_cast<Eigen::Index>(drifts.size());
-  auto model_of = [&](const Eigen::VectorXd& theta) {
-    ErrorModel result = model;
-    for (Eigen::Index j = 0; j < m; ++j) DriftOf(result, drifts[static_cast<size_t>(j)]).sigma = std::exp(theta[j]);
-    return result;
-  };
-  // One EM step from θ: ℓ(θ) and the M-step's θ (header).
-  struct Step {
-    double log_likelihood;
-    Eigen::VectorXd next;
-  };
-  auto em_step = [&](const Eigen::VectorXd& theta) -> absl::StatusOr<Step> {
-    auto fw = forward(model_of(theta));
-    if (!fw.ok()) return fw.status();
-    const int K = fw->epochs();
-    if (K < 3) return absl::InvalidArgumentError("drift likelihood: the run has fewer than three epochs");
-    auto sm = RunSmoother(*fw);
-    if (!sm.ok()) return sm.status();
-    const double dt = (fw->epoch_time_s.back() - fw->epoch_time_s.front()) / (K - 1);
-    Step step{fw->log_likelihood, theta};
-    for (Eigen::Index j = 0; j < m; ++j) {
-      const int d = drifts[static_cast<size_t>(j)];
-      const int state = layout.gyro_bias() + d;
-      double a_from = 0.0, a_to = 0.0, b = 0.0;
-      for (int k = 0; k + 1 < K; ++k) {
-        const double x0 = sm->x(k, state), x1 = sm->x(k + 1, state);
-        a_from += x0 * x0 + sm->variance(k, state);
-        a_to += x1 * x1 + sm->variance(k + 1, state);
-        b += x1 * x0 + sm->lag_one_covariance(k, state);
-      }
-      const double a0 = sm->x(0, state) * sm->x(0, state) + sm->variance(0, state);
-      const double phi = std::exp(-dt / DriftOf(model, d).tau_s);
-      const double sigma2 = (a0 + (a_to - 2.0 * phi * b + phi * phi * a_from) / (1.0 - phi * phi)) / K;
-      if (sigma2 > 0.0) step.next[j] = 0.5 * std::log(sigma2);
-    }
-    return step;
-  };
-
-  // SQUAREM, scheme S3 (Varadhan & Roland 2008): two EM steps give
-  // r = θ₁ − θ₀ and v = θ₂ − 2θ₁ + θ₀; with α = −‖r‖/‖v‖ (at most −1, which
-  // is θ₂ itself) θ′ = θ₀ − 2αr + α²v, whose EM step continues the cycle when
-  // its likelihood is not below θ₂'s. A step length per drift: the drifts are
-  // near-independent, and one that crawls must not wait for the others.
-  Eigen::VectorXd theta(m);
-  for (Eigen::Index j = 0; j < m; ++j) theta[j] = std::log(DriftOf(model, drifts[static_cast<size_t>(j)]).sigma);
-  for (int cycle = 0; out.iterations < options.max_iterations; ++cycle) {
-    auto first = em_step(theta);
-    if (!first.ok()) return first.status();
-    if (cycle == 0) out.log_likelihood_before = first->log_likelihood;
-    auto second = em_step(first->next);
-    if (!second.ok()) return second.status();
-    out.iterations += 2;
-    const Eigen::VectorXd r = first->next - theta;
-    const Eigen::VectorXd v = second->next - first->next - r;
-    Eigen::VectorXd next = second->next;
-    Eigen::VectorXd extrapolated = second->next;
-    bool extrapolates = false;
-    for (Eigen::Index j = 0; j < m; ++j) {
-      if (!(std::abs(v[j]) > 0.0)) continue;
-      const double alpha = std::min(-1.0, -std::abs(r[j]) / std::abs(v[j]));
-      extrapolated[j] = theta[j] - 2.0 * alpha * r[j] + alpha * alpha * v[j];
-      extrapolates = extrapolates || alpha < -1.0;
-    }
-    if (extrapolates) {
-      auto third = em_step(extrapolated);
-      if (!third.ok()) return third.status();
-      ++out.iterations;
-      if (third->log_likelihood >= second->log_likelihood) next = third->next;
-    }
-    const double largest_step = (next - theta).cwiseAbs().maxCoeff();
-    theta = next;
-    if (largest_step < options.log_tolerance) {
-      out.converged = true;
-      break;
-    }
-  }
-  out.model = model_of(theta);
+  Maximiser em(run, model, parameters, filter, options, out);
+  auto theta = em.Maximise(em.Start(), &out.log_likelihood_before);
+  if (!theta.ok()) return theta.status();
+  out.iterations = em.iterations();
+  out.converged = em.converged();
+  out.model = em.ModelOf(*theta);
 
   // ℓ at the estimate and its curvature in ln σ per drift (observed information).
-  auto at_estimate = forward(out.model);
-  if (!at_estimate.ok()) return at_estimate.status();
-  const double l0 = at_estimate->log_likelihood;
-  out.log_likelihood_after = l0;
-  const double h = options.curvature_step;
+  auto l0 = em.LogLikelihood(out.model);
+  if (!l0.ok()) return l0.status();
+  out.log_likelihood_after = *l0;
   bool any_flat = false;
-  for (Eigen::Index j = 0; j < m; ++j) {
-    const int d = drifts[static_cast<size_t>(j)];
-    double shifted[2];
-    for (int side = 0; side < 2; ++side) {
-      Eigen::VectorXd probe = theta;
-      probe[j] += side == 0 ? h : -h;
-      auto fw = forward(model_of(probe));
-      if (!fw.ok()) return fw.status();
-      shifted[side] = fw->log_likelihood;
-    }
-    const double information = -(shifted[0] - 2.0 * l0 + shifted[1]) / (h * h);
-    if (!(information > 0.0)) {
+  for (size_t j = 0; j < parameters.size(); ++j) {
+    const Parameter& p = parameters[j];
+    auto information = em.Information(*theta, static_cast<Eigen::Index>(j), *l0);
+    if (!information.ok()) return information.status();
+    if (!(*information > 0.0)) {
       // The likelihood is flat in this σ: the run's motion does not make the
       // drift observable (a level gyro's heading drift on a still table). Not
       // an estimate — the model keeps its value.
-      DriftOf(out.model, d).sigma = DriftOf(model, d).sigma;
-      out.not_identifiable.push_back(DriftName(d) + ".sigma");
+      ValueOf(out.model, p) = ValueOf(model, p);
+      out.not_identifiable.push_back(NameOf(p));
       any_flat = true;
       continue;
     }
-    const double log_se = 1.0 / std::sqrt(information);
-    ParameterEstimate e;
-    e.name = DriftName(d) + ".sigma";
-    e.value = std::exp(theta[j]);
-    e.std_error = e.value * log_se;
-    e.ci95_low = e.value * std::exp(-1.96 * log_se);
-    e.ci95_high = e.value * std::exp(1.96 * log_se);
-    e.method = "ML";
-    e.unit = d < 3 ? "rad/s" : "m/s^2";
-    e.a_priori = DriftOf(a_priori, d).sigma;
-    out.identified.push_back(e);
+    out.identified.push_back(EstimateOf(p, std::exp((*theta)[static_cast<Eigen::Index>(j)]),
+                                        1.0 / std::sqrt(*information), a_priori));
   }
   if (any_flat) {
-    auto kept = forward(out.model);
+    auto kept = em.LogLikelihood(out.model);
     if (!kept.ok()) return kept.status();
-    out.log_likelihood_after = kept->log_likelihood;
+    out.log_likelihood_after = *kept;
+  }
+  return out;
+}
+
+absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const BenchRun& run, const ErrorModel& model,
+                                                                const ErrorModel& a_priori,
+                                                                const DriftSelection& axes,
+                                                                const FilterOptions& filter,
+                                                                const DriftLikelihoodOptions& options) {
+  if (auto st = ValidateOptions(options); !st.ok()) return st;
+  DriftLikelihoodResult out;
+  out.model = model;
+  out.converged = true;
+
+  // Every candidate walk at the walk hypothesis (header): the drift at its
+  // a-priori σ (not wider: a widened drift took the slow variance a walk
+  // would explain) and the walk at that drift's short-term level σ√(2/τ).
+  ErrorModel trial = model;
+  std::vector<Parameter> parameters;
+  for (int d = 0; d < 6; ++d) {
+    if (!axes[static_cast<size_t>(d)] || !HasDrift(model, d) || WalkEffectOf(model, d) >= 0) continue;
+    auto terms = ParseEffectSelector(WalkName(d));
+    if (!terms.ok()) return terms.status();
+    ModelEffect walk;
+    walk.term = terms->front();
+    const GaussMarkov& specified = HasDrift(a_priori, d) ? DriftOf(a_priori, d) : DriftOf(model, d);
+    GaussMarkov& drift = DriftOf(trial, d);
+    drift.sigma = std::min(drift.sigma, specified.sigma);
+    walk.random_walk_density = drift.sigma * std::sqrt(2.0 / specified.tau_s);
+    trial.effects.push_back(walk);
+    parameters.push_back({false, d});
+    parameters.push_back({true, d});
+  }
+  if (parameters.empty()) return out;
+
+  // The screen: one EM step; a walk whose K falls is not told from the drift.
+  Eigen::VectorXd start(static_cast<Eigen::Index>(parameters.size()));
+  std::vector<int> kept_axes;
+  {
+    Maximiser screen(run, trial, parameters, filter, options, out);
+    auto step = screen.EmStep(screen.Start());
+    if (!step.ok()) return step.status();
+    out.log_likelihood_before = step->log_likelihood;
+    for (size_t j = 0; j < parameters.size(); ++j) {
+      const auto i = static_cast<Eigen::Index>(j);
+      if (parameters[j].walk && step->next[i] > screen.Start()[i]) kept_axes.push_back(parameters[j].drift);
+    }
+  }
+  if (kept_axes.empty()) return out;
+
+  // The kept walks with their drifts, jointly.
+  ErrorModel joint = model;
+  std::vector<Parameter> kept;
+  for (int d : kept_axes) {
+    joint.effects.push_back(trial.effects[static_cast<size_t>(WalkEffectOf(trial, d))]);
+    kept.push_back({false, d});
+    kept.push_back({true, d});
+  }
+  Maximiser em(run, joint, kept, filter, options, out);
+  auto theta = em.Maximise(em.Start(), nullptr);
+  if (!theta.ok()) return theta.status();
+  out.iterations = em.iterations();
+  out.converged = em.converged();
+  out.model = em.ModelOf(*theta);
+  auto l_hat = em.LogLikelihood(out.model);
+  if (!l_hat.ok()) return l_hat.status();
+  out.log_likelihood_after = *l_hat;
+
+  for (size_t j = 0; j < kept.size(); ++j) {
+    if (!kept[j].walk) continue;
+    const int d = kept[j].drift;
+    const auto i = static_cast<Eigen::Index>(j);
+    WalkEstimate w;
+    w.drift = d;
+    w.effect = WalkName(d);
+    // Its error with the drift σ's: over a bench run the two trade along a
+    // ridge of the likelihood, and K's curvature alone would hide it.
+    auto information = em.PairInformation(*theta, i - 1, i, *l_hat);
+    if (!information.ok()) return information.status();
+    const bool definite = (*information)(0, 0) > 0.0 && information->determinant() > 0.0;
+    const Eigen::Matrix2d covariance = definite ? Eigen::Matrix2d(information->inverse())
+                                                : Eigen::Matrix2d::Constant(std::numeric_limits<double>::infinity());
+    w.drift_sigma = EstimateOf(kept[j - 1], std::exp((*theta)[i - 1]), std::sqrt(covariance(0, 0)), a_priori);
+    w.density = EstimateOf(kept[j], std::exp((*theta)[i]), std::sqrt(covariance(1, 1)), a_priori);
+    // ℓ̂₀: the joint model without this walk, its drift σ re-fitted alone.
+    ErrorModel without = out.model;
+    without.effects.erase(without.effects.begin() + WalkEffectOf(without, d));
+    DriftLikelihoodResult scratch;
+    Maximiser alone(run, without, {Parameter{false, d}}, filter, options, scratch);
+    auto sigma = alone.Maximise(alone.Start(), nullptr);
+    if (!sigma.ok()) return sigma.status();
+    auto l0 = alone.LogLikelihood(alone.ModelOf(*sigma));
+    if (!l0.ok()) return l0.status();
+    out.filter_passes += scratch.filter_passes;
+    w.log_likelihood_without = *l0;
+    w.statistic = std::max(0.0, 2.0 * (*l_hat - *l0));
+    out.identified.push_back(w.density);
+    out.walks.push_back(std::move(w));
   }
   return out;
 }

@@ -64,6 +64,11 @@ struct AnalysisOptions {
   // Drifts that correlation processing leaves unresolved are identified by
   // maximum likelihood of the innovations (drift_likelihood.h).
   bool identify_unresolved_drifts = true;
+  // Test a bias random walk on every drift axis by the innovations'
+  // likelihood, each fitted with its axis' drift σ (drift_likelihood.h):
+  // correlation processing cannot show a walk whose wander is as slow as the
+  // run is long.
+  bool test_walks_by_likelihood = true;
   ident::DriftLikelihoodOptions drift_likelihood;
   FinderOptions finder;
   // Time segments of the "where it shows" breakdown.

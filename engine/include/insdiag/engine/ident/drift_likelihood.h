@@ -1,5 +1,6 @@
 // Maximum-likelihood identification of the base drifts' σ, for the drifts
-// correlation processing leaves unresolved.
+// correlation processing leaves unresolved, and of the bias random walks
+// (catalogue: gyro_bias_rw, acc_bias_rw) the drifts may hide.
 //
 // Why. Correlation processing (correlation.h) fits the ACF of the smoothed
 // drift estimates. The smoother shrinks those estimates towards what the
@@ -34,6 +35,21 @@
 // Standard errors come from the observed information: the second difference
 // of the forward filter's log-likelihood ℓ (prediction-error decomposition,
 // Schweppe, IEEE Trans. IT-11(1), 1965) in ln σ per drift, at the maximum.
+//
+// Walks. A bias random walk (ḃ = w, E[w²] = K², effects.md) started at zero
+// with the run is, sampled at the epochs, x_{k+1} = x_k + w_k with
+// Var w_k = K²Δt; its M-step is as closed-form:
+//   K̂² = Σ (a_{k+1} − 2 b_k + a_k) / ((n − 1) Δt).
+// Over a bench run a walk and the drift of the same axis share the slow
+// variance, so a walk is fitted together with its axis' drift σ. Its
+// likelihood-ratio statistic is 2(ℓ̂ − ℓ̂₀), with ℓ̂₀ the maximum without the
+// walk (the drift σ re-fitted alone): nested, one parameter on its boundary,
+// so χ²₁ is conservative (Self & Liang, JASA 82(398), 1987). The fit starts
+// from the walk hypothesis: the drift at its a-priori σ and the walk at that
+// drift's own short-term level σ√(2/τ) (the Gauss–Markov process's
+// rate-random-walk asymptote, IEEE Std 952-1997 annex C). A walk whose first
+// EM step falls below that start is one the run does not tell from the
+// drift: it is dropped from the fit without costing it further passes.
 #pragma once
 
 #include <absl/status/statusor.h>
@@ -54,6 +70,9 @@ using DriftSelection = std::array<bool, 6>;
 
 // The state name of base drift d in that order ("gyro_bias_gm.x", …, "acc_bias_gm.z").
 std::string DriftName(int drift);
+// Its Gauss–Markov parameters in a model.
+GaussMarkov& DriftOf(ErrorModel& model, int drift);
+const GaussMarkov& DriftOf(const ErrorModel& model, int drift);
 
 struct DriftLikelihoodOptions {
   // EM steps at most (each a forward and a smoother pass).
@@ -65,9 +84,20 @@ struct DriftLikelihoodOptions {
   double curvature_step = 0.15;
 };
 
+// A bias random walk fitted with its axis' drift σ.
+struct WalkEstimate {
+  int drift = 0;                   // axis, in DriftSelection order
+  std::string effect;              // "gyro_bias_rw.z"
+  ParameterEstimate density;       // K (method "ML")
+  ParameterEstimate drift_sigma;   // the axis' drift σ fitted with it (method "ML")
+  double log_likelihood_without = 0.0;  // ℓ̂₀: the maximum without the walk
+  double statistic = 0.0;          // 2(ℓ̂ − ℓ̂₀)
+};
+
 struct DriftLikelihoodResult {
-  ErrorModel model;                           // the model with the identified σ
-  std::vector<ParameterEstimate> identified;  // method "ML": .sigma of each selected drift
+  ErrorModel model;                           // the model with the identified σ (and walks)
+  std::vector<ParameterEstimate> identified;  // method "ML": .sigma of each selected drift, .density of each walk
+  std::vector<WalkEstimate> walks;            // the walks kept after the first EM step
   // Selected drifts whose likelihood is flat in σ (the run cannot tell it);
   // the model keeps their values.
   std::vector<std::string> not_identifiable;
@@ -86,5 +116,18 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const BenchRun&
                                                                  const DriftSelection& which,
                                                                  const FilterOptions& filter,
                                                                  const DriftLikelihoodOptions& options = {});
+
+// Fits a bias random walk on each selected axis that has a drift and no walk
+// in `model`, each with its axis' drift σ (header), and tests each against
+// the model without it. The result's model holds the walks that the first
+// EM step kept; `walks` their estimates and statistics.
+absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const BenchRun& run, const ErrorModel& model,
+                                                                const ErrorModel& a_priori,
+                                                                const DriftSelection& axes,
+                                                                const FilterOptions& filter,
+                                                                const DriftLikelihoodOptions& options = {});
+
+// The walk effect of axis `drift` ("gyro_bias_rw.x", …, "acc_bias_rw.z").
+std::string WalkName(int drift);
 
 }  // namespace insdiag::engine::ident
