@@ -357,12 +357,20 @@ std::vector<StructureProposal> ConfirmStructures(const BenchRun& run, const Mode
 }
 
 // Bias random walks by the innovations' likelihood (drift_likelihood.h), on
-// every drift axis the model has no walk on. Not on a run whose monitoring
-// flags faults: a walk would explain a drift step away.
+// every drift axis the model has no walk on. Also on a run whose monitoring
+// flags faults: a walk that has wandered far trips the drift monitor, and the
+// candidate hides nothing — the report keeps the fault intervals of its model.
+// As correlation processing's structures, a walk is screened, then measured
+// against model A: the screen is the nested test (the walk beyond its drift σ
+// re-fitted alone, χ²₁, at `screen_alpha`) — a wider drift alone is not a
+// walk; the statistic is 2(ℓ̂ − ℓ_A), what the walk with its re-fitted drift
+// explains of model A's innovations, on two degrees of freedom (K, σ), the
+// scale every other candidate is ranked on.
 std::vector<StructureProposal> WalkProposals(const BenchRun& run, const ModelPass& pass, const ErrorModel& a_priori,
-                                             const AnalysisOptions& options, std::vector<std::string>* notes) {
+                                             double screen_alpha, const AnalysisOptions& options,
+                                             std::vector<std::string>* notes) {
   std::vector<StructureProposal> out;
-  if (!options.test_walks_by_likelihood || !pass.monitor.faults.empty()) return out;
+  if (!options.test_walks_by_likelihood) return out;
   ident::DriftSelection axes;
   axes.fill(true);
   auto walks = ident::IdentifyWalksByLikelihood(run, pass.model, a_priori, axes, options.filter,
@@ -374,7 +382,7 @@ std::vector<StructureProposal> WalkProposals(const BenchRun& run, const ModelPas
   const double log_n = std::log(static_cast<double>(std::max(1, pass.forward.scalar_updates)));
   for (const ident::WalkEstimate& w : walks->walks) {
     auto terms = ParseEffectSelector(w.effect);
-    if (!terms.ok()) continue;
+    if (!terms.ok() || !(stats::ChiSquareSurvival(w.statistic, 1) < screen_alpha)) continue;
     StructureProposal p;
     p.effect.term = terms->front();
     p.effect.random_walk_density = w.density.value;
@@ -389,16 +397,21 @@ std::vector<StructureProposal> WalkProposals(const BenchRun& run, const ModelPas
     c.unit = std::string(p.effect.term.family->unit);
     c.estimate = w.density.value;
     c.std_error = w.density.std_error;
-    c.dof = 1;
-    c.statistic = w.statistic;
-    // χ²₁ for a parameter on its boundary is conservative (drift_likelihood.h).
+    c.dof = 2;
+    // With several walks kept, the joint gain less the other walks' own.
+    double others = 0.0;
+    for (const ident::WalkEstimate& o : walks->walks) others += o.drift == w.drift ? 0.0 : o.statistic;
+    c.statistic = std::max(w.statistic, 2.0 * (walks->log_likelihood_after - pass.log_likelihood) - others);
+    // χ² for a parameter on its boundary is conservative (drift_likelihood.h).
     c.p_value = stats::ChiSquareSurvival(c.statistic, c.dof);
     c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
     c.predicted_delta_bic = -c.statistic + c.dof * log_n;
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.3g %s", w.drift_sigma.value, w.drift_sigma.unit.c_str());
-    c.note = "likelihood of the innovations with a bias random walk against without, the drift σ re-fitted in "
-             "each (" + ident::DriftName(w.drift) + ".sigma " + buf + " with the walk)";
+    char nested[96];
+    std::snprintf(nested, sizeof nested, "2Δℓ = %.1f beyond the drift σ re-fitted alone", w.statistic);
+    c.note = "likelihood of the innovations with a bias random walk and its drift σ re-fitted (" +
+             ident::DriftName(w.drift) + ".sigma " + buf + " with the walk); " + nested;
     out.push_back(std::move(p));
   }
   return out;
@@ -446,7 +459,7 @@ Findings FindMissingEffects(const BenchRun& run, const ModelPass& pass, const Er
   const double screen_alpha = options.finder.family_wise_alpha / (6.0 * 3.0);
   // The likelihood's walks first: where correlation processing proposes the
   // same walk, the likelihood's estimate is kept.
-  std::vector<StructureProposal> proposals = WalkProposals(run, pass, a_priori, options, notes);
+  std::vector<StructureProposal> proposals = WalkProposals(run, pass, a_priori, screen_alpha, options, notes);
   for (StructureProposal& p : ProposeStructures(f.drifts, run.DurationS(), screen_alpha)) {
     if (std::none_of(proposals.begin(), proposals.end(),
                      [&](const StructureProposal& o) { return o.effect.term == p.effect.term; })) {
@@ -677,7 +690,10 @@ double DriftStatistic(const ident::DriftLikelihoodResult& ml) {
 // the likelihood-ratio test of the model's values, χ²(m) at α for m drifts
 // (Wilks, Ann. Math. Statist. 9(1), 1938) — as the correlation retargeting
 // keeps a model the data do not contradict. True when the model took them.
-bool ApplyDriftLikelihood(const ident::DriftLikelihoodResult& ml, double alpha, ErrorModel& base,
+// A model whose values are placeholders (an Allan-fit a-priori model: its τ
+// a bound of the static segments) has nothing the data must overturn: it
+// takes the estimates whatever the statistic.
+bool ApplyDriftLikelihood(const ident::DriftLikelihoodResult& ml, double alpha, bool placeholders, ErrorModel& base,
                           std::vector<ParameterEstimate>& identified, std::vector<std::string>& notes) {
   if (!ml.not_identifiable.empty()) {
     std::string names;
@@ -693,16 +709,19 @@ bool ApplyDriftLikelihood(const ident::DriftLikelihoodResult& ml, double alpha, 
   const double statistic = DriftStatistic(ml);
   const auto dof = static_cast<int>(ml.identified.size());
   const bool rejects = statistic > stats::ChiSquareQuantile(1.0 - alpha, dof);
-  if (rejects) base = ml.model;
+  const bool takes = rejects || placeholders;
+  if (takes) base = ml.model;
   std::string names;
   for (const ParameterEstimate& p : ml.identified) names += (names.empty() ? "" : ", ") + p.name;
   char buf[200];
   std::snprintf(buf, sizeof buf, " (EM, %d iterations%s, %d filter passes): 2Δℓ = %.1f against χ²(%d) at %.2g — ",
                 ml.iterations, ml.converged ? "" : ", not converged", ml.filter_passes, statistic, dof, alpha);
-  notes.push_back("drift σ correlation processing left unresolved, identified by likelihood of the innovations: " +
+  notes.push_back("drift parameters correlation processing left unresolved, identified by likelihood of the innovations: " +
                   names + buf +
-                  (rejects ? "the model takes the estimates" : "the data do not reject the model's values, kept"));
-  return rejects;
+                  (rejects        ? "the model takes the estimates"
+                   : placeholders ? "the model's values were the Allan fit's placeholders: it takes the estimates"
+                                  : "the data do not reject the model's values, kept"));
+  return takes;
 }
 
 }  // namespace
@@ -809,7 +828,10 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       // A run whose monitoring flags faults (a drift that jumped, say) is not
       // re-tuned: a wider drift would hide the fault the diagnosis is for.
       if (faults_flagged) selection = {};
-      return ident::IdentifyDriftsByLikelihood(run, model, *a_priori, selection, options.filter,
+      // τ too where the a-priori model is the Allan fit's: its τ is a bound
+      // or a guess from static segments shorter than the drift's τ.
+      const ident::DriftSelection tau_too = a_priori_from_allan ? selection : ident::DriftSelection{};
+      return ident::IdentifyDriftsByLikelihood(run, model, *a_priori, selection, tau_too, options.filter,
                                                options.drift_likelihood);
     };
     for (int it = 0; it < options.max_retarget_iterations; ++it) {
@@ -823,7 +845,12 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       if (!pass.ok()) return pass.status();
       drifts = ident::CorrelateDrifts(pass->forward, pass->smoothed, *pass->layout, options.correlation, nullptr);
       faults_flagged = !pass->monitor.faults.empty();
-      if (const auto best_bic = first ? BestSignificantCandidateBic(run, *pass, options) : std::nullopt;
+      // An a-priori model from the Allan fit is not a specification to
+      // protect: its drift τ is a bound of the static segments (the longest τ
+      // analysed) or a guess from them, and its misfit shows as effects. Its
+      // drifts are re-tuned by the whole run before the scan.
+      const bool may_defer = first && !a_priori_from_allan;
+      if (const auto best_bic = may_defer ? BestSignificantCandidateBic(run, *pass, options) : std::nullopt;
           best_bic.has_value()) {
         // The converse soaking holds too: a drift whose σ is far larger than
         // the model's shows as effects that follow the table's motion (a
@@ -836,7 +863,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
             const double log_n = std::log(static_cast<double>(std::max(1, pass->forward.scalar_updates)));
             const double drift_bic = -DriftStatistic(*ml) + static_cast<double>(ml->identified.size()) * log_n;
             if (drift_bic < *best_bic &&
-                ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, base, identified, notes)) {
+                ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, a_priori_from_allan, base, identified, notes)) {
               char buf[160];
               std::snprintf(buf, sizeof buf, "ΔBIC %.1f against the best candidate's %.1f", drift_bic, *best_bic);
               notes.push_back("the a-priori model's misfit is the drifts' σ rather than a missing effect (" +
@@ -878,7 +905,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
         notes.push_back("the drifts correlation processing left unresolved were not identified by likelihood: " +
                         std::string(ml.status().message()));
       } else {
-        ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, base, identified, notes);
+        ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, a_priori_from_allan, base, identified, notes);
       }
     }
   }

@@ -483,7 +483,8 @@ function candidatesSection(analysis, state, channelsView) {
       onclick: () => highlight(c, true),
     },
     h('td.num', String(i + 1)),
-    h('td', h('strong', c.name), c.source === 'STRUCTURE' ? h('div.small.muted', 'correlation structure') : null),
+    h('td', h('strong', c.name), c.source === 'STRUCTURE' ? h('div.small.muted', 'correlation structure')
+      : c.source === 'LIKELIHOOD' ? h('div.small.muted', 'likelihood-ratio test') : null),
     h('td.num', `${fmt(c.estimate)} ± ${fmt(c.stdError, 2)}${c.unit ? ` ${c.unit}` : ''}`),
     h('td.num', fmt(c.statistic)),
     h('td.num', fmtP(c.pValueHolm || c.pValue)),

@@ -5,6 +5,7 @@
 #include "insdiag/engine/stats/distributions.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -278,16 +279,24 @@ std::vector<int> LagGrid(int max_lag, int count) {
   return g;
 }
 
+// Bartlett's C over the grid for a series of autocovariance `stationary`,
+// summed to M lags.
+Eigen::MatrixXd BartlettOnGrid(const Problem& pb, const std::vector<double>& stationary, int M);
+
 // C over the grid from the exponential model (σ, τ) less the smoother's error.
 Eigen::MatrixXd GridCovariance(const Problem& pb, double sigma, double tau, std::vector<double>* stationary) {
   const double p[2] = {sigma, tau};
   *stationary = CovarianceOf(CorrelationFamily::kExponential, p, pb.N, pb.dt, pb.error_acf).stationary;
   const int M = std::min(pb.N - 1, pb.lags.back() + static_cast<int>(6.0 * tau / pb.dt) + 1);
+  return BartlettOnGrid(pb, *stationary, M);
+}
+
+Eigen::MatrixXd BartlettOnGrid(const Problem& pb, const std::vector<double>& stationary, int M) {
   const auto G = static_cast<Eigen::Index>(pb.lags.size());
   Eigen::MatrixXd C(G, G);
   for (Eigen::Index a = 0; a < G; ++a) {
     for (Eigen::Index b = a; b < G; ++b) {
-      C(a, b) = C(b, a) = Bartlett(*stationary, pb.N, pb.lags[static_cast<size_t>(a)], pb.lags[static_cast<size_t>(b)], M);
+      C(a, b) = C(b, a) = Bartlett(stationary, pb.N, pb.lags[static_cast<size_t>(a)], pb.lags[static_cast<size_t>(b)], M);
     }
   }
   // Loading the diagonal by a part in 10⁹ keeps the factorisation defined when
@@ -546,9 +555,28 @@ absl::StatusOr<CorrelationAnalysis> AnalyseCorrelation(std::span<const double> s
     pb.lags = LagGrid(max_lag, options.grid_lags);
     pb.data.resize(static_cast<Eigen::Index>(pb.lags.size()));
     for (size_t i = 0; i < pb.lags.size(); ++i) pb.data[static_cast<Eigen::Index>(i)] = acf_full[static_cast<size_t>(pb.lags[i])];
-    const Eigen::MatrixXd C = GridCovariance(pb, sigma, tau, &stationary);
-    const Eigen::LLT<Eigen::MatrixXd> llt(C);
-    if (llt.info() != Eigen::Success) return absl::InternalError("correlation processing: covariance not positive definite");
+    Eigen::LLT<Eigen::MatrixXd> llt(GridCovariance(pb, sigma, tau, &stationary));
+    if (llt.info() != Eigen::Success) {
+      // The model less the smoother's error is no covariance when the model
+      // that smoothed the series is far off (its error exceeds the drift it
+      // assumes): Bartlett's formula then takes the sample autocovariance,
+      // which the 1/N estimator keeps positive semi-definite (Box & Jenkins,
+      // Time Series Analysis, §2.1.6).
+      // Truncated to the lags analysed it may still fall short of definite
+      // by rounding; its eigenvalues are then floored at a part in 10⁶ of the
+      // largest (the nearest such matrix: Higham, Linear Algebra Appl. 103,
+      // 1988).
+      stationary.assign(acf_full.begin(), acf_full.end());
+      const int M = std::min(capacity, pb.lags.back() + static_cast<int>(6.0 * tau / dt) + 1);
+      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(BartlettOnGrid(pb, stationary, M));
+      const double floor = 1e-6 * eig.eigenvalues().cwiseAbs().maxCoeff();
+      if (!(floor > 0.0)) return absl::InternalError("correlation processing: covariance not positive definite");
+      const Eigen::VectorXd clipped = eig.eigenvalues().cwiseMax(floor);
+      llt.compute(eig.eigenvectors() * clipped.asDiagonal() * eig.eigenvectors().transpose());
+      if (llt.info() != Eigen::Success) {
+        return absl::InternalError("correlation processing: covariance not positive definite");
+      }
+    }
     pb.L = llt.matrixL();
     exponential = FitFamily(pb, CorrelationFamily::kExponential, {sigma, tau});
     const double new_tau = exponential.parameters[1].value;

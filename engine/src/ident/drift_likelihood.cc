@@ -20,26 +20,58 @@ int WalkEffectOf(const ErrorModel& m, int drift) {
   return terms.ok() ? m.FindEffect(terms->front()) : -1;
 }
 
-// One parameter of the likelihood: a drift's σ or a walk's density K.
+// One parameter of the likelihood: a drift's σ or τ, or a walk's density K.
+enum class Kind { kSigma, kTau, kWalk };
 struct Parameter {
-  bool walk = false;
+  Kind kind = Kind::kSigma;
   int drift = 0;
 };
 
 double& ValueOf(ErrorModel& m, const Parameter& p) {
-  if (!p.walk) return DriftOf(m, p.drift).sigma;
+  switch (p.kind) {
+    case Kind::kSigma:
+      return DriftOf(m, p.drift).sigma;
+    case Kind::kTau:
+      return DriftOf(m, p.drift).tau_s;
+    case Kind::kWalk:
+      break;
+  }
   return m.effects[static_cast<size_t>(WalkEffectOf(m, p.drift))].random_walk_density;
 }
 double ValueOf(const ErrorModel& m, const Parameter& p) {
-  if (!p.walk) return DriftOf(m, p.drift).sigma;
+  switch (p.kind) {
+    case Kind::kSigma:
+      return DriftOf(m, p.drift).sigma;
+    case Kind::kTau:
+      return DriftOf(m, p.drift).tau_s;
+    case Kind::kWalk:
+      break;
+  }
   return m.effects[static_cast<size_t>(WalkEffectOf(m, p.drift))].random_walk_density;
 }
 
-std::string NameOf(const Parameter& p) { return p.walk ? WalkName(p.drift) + ".density" : DriftName(p.drift) + ".sigma"; }
+std::string NameOf(const Parameter& p) {
+  switch (p.kind) {
+    case Kind::kSigma:
+      return DriftName(p.drift) + ".sigma";
+    case Kind::kTau:
+      return DriftName(p.drift) + ".tau";
+    case Kind::kWalk:
+      break;
+  }
+  return WalkName(p.drift) + ".density";
+}
 
 const char* UnitOf(const Parameter& p) {
-  if (p.walk) return p.drift < 3 ? "rad/s/sqrt(s)" : "m/s^2/sqrt(s)";
-  return p.drift < 3 ? "rad/s" : "m/s^2";
+  switch (p.kind) {
+    case Kind::kSigma:
+      return p.drift < 3 ? "rad/s" : "m/s^2";
+    case Kind::kTau:
+      return "s";
+    case Kind::kWalk:
+      break;
+  }
+  return p.drift < 3 ? "rad/s/sqrt(s)" : "m/s^2/sqrt(s)";
 }
 
 // EM over θ = ln of each parameter (header), with the pass count of `out`.
@@ -48,7 +80,11 @@ class Maximiser {
   Maximiser(const BenchRun& run, ErrorModel model, std::vector<Parameter> parameters, const FilterOptions& filter,
             const DriftLikelihoodOptions& options, DriftLikelihoodResult& out)
       : run_(run), model_(std::move(model)), layout_(model_), parameters_(std::move(parameters)), filter_(filter),
-        options_(options), out_(out) {}
+        options_(options), out_(out) {
+    for (const Parameter& p : parameters_) {
+      if (p.kind == Kind::kTau) tau_free_[static_cast<size_t>(p.drift)] = true;
+    }
+  }
 
   Eigen::VectorXd Start() const {
     Eigen::VectorXd theta(static_cast<Eigen::Index>(parameters_.size()));
@@ -86,7 +122,8 @@ class Maximiser {
     Step step{fw->log_likelihood, theta};
     for (size_t j = 0; j < parameters_.size(); ++j) {
       const Parameter& p = parameters_[j];
-      const int state = p.walk ? layout_.EffectOffset(WalkEffectOf(model_, p.drift)) : layout_.gyro_bias() + p.drift;
+      const bool walk = p.kind == Kind::kWalk;
+      const int state = walk ? layout_.EffectOffset(WalkEffectOf(model_, p.drift)) : layout_.gyro_bias() + p.drift;
       double a_from = 0.0, a_to = 0.0, b = 0.0;
       for (int k = 0; k + 1 < K; ++k) {
         const double x0 = sm->x(k, state), x1 = sm->x(k + 1, state);
@@ -94,15 +131,28 @@ class Maximiser {
         a_to += x1 * x1 + sm->variance(k + 1, state);
         b += x1 * x0 + sm->lag_one_covariance(k, state);
       }
-      double variance = 0.0;
-      if (p.walk) {
-        variance = (a_to - 2.0 * b + a_from) / ((K - 1) * dt);  // K̂²
+      const double a0 = sm->x(0, state) * sm->x(0, state) + sm->variance(0, state);
+      const auto i = static_cast<Eigen::Index>(j);
+      if (walk) {
+        const double k2 = (a_to - 2.0 * b + a_from) / ((K - 1) * dt);  // K̂²
+        if (k2 > 0.0) step.next[i] = 0.5 * std::log(k2);
+      } else if (tau_free_[static_cast<size_t>(p.drift)]) {
+        // σ and τ together: the AR(1) regression of the header, φ̂ = Σb / Σa,
+        // q̂ = Σ E[(x_{k+1} − φ̂ x_k)²] / (n − 1), σ̂² = q̂ / (1 − φ̂²) (the
+        // initial state's term, one of n, left out of the φ step).
+        const double phi = b / a_from;
+        if (!(phi > 0.0 && phi < 1.0)) continue;
+        const double q = (a_to - 2.0 * phi * b + phi * phi * a_from) / (K - 1);
+        if (p.kind == Kind::kTau) {
+          step.next[i] = std::log(-dt / std::log(phi));
+        } else if (q > 0.0) {
+          step.next[i] = 0.5 * std::log(q / (1.0 - phi * phi));
+        }
       } else {
-        const double a0 = sm->x(0, state) * sm->x(0, state) + sm->variance(0, state);
         const double phi = std::exp(-dt / DriftOf(model_, p.drift).tau_s);
-        variance = (a0 + (a_to - 2.0 * phi * b + phi * phi * a_from) / (1.0 - phi * phi)) / K;  // σ̂²
+        const double sigma2 = (a0 + (a_to - 2.0 * phi * b + phi * phi * a_from) / (1.0 - phi * phi)) / K;  // σ̂²
+        if (sigma2 > 0.0) step.next[i] = 0.5 * std::log(sigma2);
       }
-      if (variance > 0.0) step.next[static_cast<Eigen::Index>(j)] = 0.5 * std::log(variance);
     }
     return step;
   }
@@ -202,6 +252,7 @@ class Maximiser {
   const FilterOptions& filter_;
   const DriftLikelihoodOptions& options_;
   DriftLikelihoodResult& out_;
+  DriftSelection tau_free_{};  // drifts whose τ is a parameter too
   bool converged_ = false;
   int iterations_ = 0;
 };
@@ -224,7 +275,7 @@ ParameterEstimate EstimateOf(const Parameter& p, double value, double log_se, co
   e.ci95_high = value * std::exp(1.96 * log_se);
   e.method = "ML";
   e.unit = UnitOf(p);
-  if (!p.walk) e.a_priori = DriftOf(a_priori, p.drift).sigma;
+  if (p.kind != Kind::kWalk) e.a_priori = ValueOf(a_priori, p);
   return e;
 }
 
@@ -248,6 +299,7 @@ std::string WalkName(int drift) {
 absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const BenchRun& run, const ErrorModel& model,
                                                                  const ErrorModel& a_priori,
                                                                  const DriftSelection& which,
+                                                                 const DriftSelection& tau_too,
                                                                  const FilterOptions& filter,
                                                                  const DriftLikelihoodOptions& options) {
   if (auto st = ValidateOptions(options); !st.ok()) return st;
@@ -256,7 +308,9 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const BenchRun&
   std::vector<Parameter> parameters;
   for (int d = 0; d < 6; ++d) {
     // A drift the model leaves out (σ = 0) has no state to identify.
-    if (which[static_cast<size_t>(d)] && HasDrift(model, d)) parameters.push_back({false, d});
+    if (!which[static_cast<size_t>(d)] || !HasDrift(model, d)) continue;
+    parameters.push_back({Kind::kSigma, d});
+    if (tau_too[static_cast<size_t>(d)]) parameters.push_back({Kind::kTau, d});
   }
   if (parameters.empty()) {
     out.converged = true;
@@ -269,26 +323,45 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const BenchRun&
   out.converged = em.converged();
   out.model = em.ModelOf(*theta);
 
-  // ℓ at the estimate and its curvature in ln σ per drift (observed information).
+  // ℓ at the estimate and its curvature (observed information) in ln σ, or
+  // in (ln σ, ln τ) jointly where τ is identified too: the two trade along a
+  // ridge, and their errors must show it.
   auto l0 = em.LogLikelihood(out.model);
   if (!l0.ok()) return l0.status();
   out.log_likelihood_after = *l0;
   bool any_flat = false;
   for (size_t j = 0; j < parameters.size(); ++j) {
     const Parameter& p = parameters[j];
-    auto information = em.Information(*theta, static_cast<Eigen::Index>(j), *l0);
-    if (!information.ok()) return information.status();
-    if (!(*information > 0.0)) {
-      // The likelihood is flat in this σ: the run's motion does not make the
-      // drift observable (a level gyro's heading drift on a still table). Not
-      // an estimate — the model keeps its value.
-      ValueOf(out.model, p) = ValueOf(model, p);
-      out.not_identifiable.push_back(NameOf(p));
-      any_flat = true;
-      continue;
+    if (p.kind != Kind::kSigma) continue;
+    const auto i = static_cast<Eigen::Index>(j);
+    const bool with_tau = j + 1 < parameters.size() && parameters[j + 1].kind == Kind::kTau;
+    std::vector<double> log_se;
+    if (with_tau) {
+      auto information = em.PairInformation(*theta, i, i + 1, *l0);
+      if (!information.ok()) return information.status();
+      if ((*information)(0, 0) > 0.0 && information->determinant() > 0.0) {
+        const Eigen::Matrix2d covariance = information->inverse();
+        log_se = {std::sqrt(covariance(0, 0)), std::sqrt(covariance(1, 1))};
+      }
+    } else {
+      auto information = em.Information(*theta, i, *l0);
+      if (!information.ok()) return information.status();
+      if (*information > 0.0) log_se = {1.0 / std::sqrt(*information)};
     }
-    out.identified.push_back(EstimateOf(p, std::exp((*theta)[static_cast<Eigen::Index>(j)]),
-                                        1.0 / std::sqrt(*information), a_priori));
+    const size_t count = with_tau ? 2 : 1;
+    for (size_t k = 0; k < count; ++k) {
+      const Parameter& q = parameters[j + k];
+      if (log_se.empty()) {
+        // The likelihood is flat here: the run's motion does not make the
+        // drift observable (a level gyro's heading drift on a still table).
+        // Not an estimate — the model keeps its value.
+        ValueOf(out.model, q) = ValueOf(model, q);
+        out.not_identifiable.push_back(NameOf(q));
+        any_flat = true;
+        continue;
+      }
+      out.identified.push_back(EstimateOf(q, std::exp((*theta)[i + static_cast<Eigen::Index>(k)]), log_se[k], a_priori));
+    }
   }
   if (any_flat) {
     auto kept = em.LogLikelihood(out.model);
@@ -324,8 +397,8 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const BenchRun& 
     drift.sigma = std::min(drift.sigma, specified.sigma);
     walk.random_walk_density = drift.sigma * std::sqrt(2.0 / specified.tau_s);
     trial.effects.push_back(walk);
-    parameters.push_back({false, d});
-    parameters.push_back({true, d});
+    parameters.push_back({Kind::kSigma, d});
+    parameters.push_back({Kind::kWalk, d});
   }
   if (parameters.empty()) return out;
 
@@ -339,7 +412,7 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const BenchRun& 
     out.log_likelihood_before = step->log_likelihood;
     for (size_t j = 0; j < parameters.size(); ++j) {
       const auto i = static_cast<Eigen::Index>(j);
-      if (parameters[j].walk && step->next[i] > screen.Start()[i]) kept_axes.push_back(parameters[j].drift);
+      if (parameters[j].kind == Kind::kWalk && step->next[i] > screen.Start()[i]) kept_axes.push_back(parameters[j].drift);
     }
   }
   if (kept_axes.empty()) return out;
@@ -349,8 +422,8 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const BenchRun& 
   std::vector<Parameter> kept;
   for (int d : kept_axes) {
     joint.effects.push_back(trial.effects[static_cast<size_t>(WalkEffectOf(trial, d))]);
-    kept.push_back({false, d});
-    kept.push_back({true, d});
+    kept.push_back({Kind::kSigma, d});
+    kept.push_back({Kind::kWalk, d});
   }
   Maximiser em(run, joint, kept, filter, options, out);
   auto theta = em.Maximise(em.Start(), nullptr);
@@ -363,7 +436,7 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const BenchRun& 
   out.log_likelihood_after = *l_hat;
 
   for (size_t j = 0; j < kept.size(); ++j) {
-    if (!kept[j].walk) continue;
+    if (kept[j].kind != Kind::kWalk) continue;
     const int d = kept[j].drift;
     const auto i = static_cast<Eigen::Index>(j);
     WalkEstimate w;
@@ -382,7 +455,7 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const BenchRun& 
     ErrorModel without = out.model;
     without.effects.erase(without.effects.begin() + WalkEffectOf(without, d));
     DriftLikelihoodResult scratch;
-    Maximiser alone(run, without, {Parameter{false, d}}, filter, options, scratch);
+    Maximiser alone(run, without, {Parameter{Kind::kSigma, d}}, filter, options, scratch);
     auto sigma = alone.Maximise(alone.Start(), nullptr);
     if (!sigma.ok()) return sigma.status();
     auto l0 = alone.LogLikelihood(alone.ModelOf(*sigma));

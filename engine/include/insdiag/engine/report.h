@@ -31,7 +31,9 @@ struct SegmentContribution {
 struct EffectCandidate {
   std::string name;  // "gyro_scale_factor.z" (or a family name in family_candidates)
   std::string family;
-  std::string source;  // "SCORE" (Lagrange-multiplier test) or "STRUCTURE" (correlation-function family)
+  // "SCORE" (Lagrange-multiplier test), "STRUCTURE" (correlation-function
+  // family) or "LIKELIHOOD" (a bias random walk by the innovations' likelihood)
+  std::string source;
   double statistic = 0.0;
   int dof = 0;
   double p_value = 1.0;

@@ -108,12 +108,17 @@ struct DriftLikelihoodResult {
   bool converged = false;
 };
 
-// Identifies σ of the selected drifts of `model` on `run`; `a_priori`
-// gives the values the report lists against the estimates. With nothing to
-// identify it runs no filter pass and returns the model as it is.
+// Identifies σ of the selected drifts of `model` on `run`, and τ too of
+// those in `tau_too` (where the model's τ is a placeholder no datasheet
+// states: the joint M-step is the AR(1) regression φ̂ = Σ b_k / Σ a_k,
+// q̂ = Σ (a_{k+1} − 2φ̂ b_k + φ̂² a_k) / (n − 1), σ̂² = q̂ / (1 − φ̂²),
+// τ̂ = −Δt / ln φ̂; Shumway & Stoffer §6.3). `a_priori` gives the values the
+// report lists against the estimates. With nothing to identify it runs no
+// filter pass and returns the model as it is.
 absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const BenchRun& run, const ErrorModel& model,
                                                                  const ErrorModel& a_priori,
                                                                  const DriftSelection& which,
+                                                                 const DriftSelection& tau_too,
                                                                  const FilterOptions& filter,
                                                                  const DriftLikelihoodOptions& options = {});
 
