@@ -282,15 +282,18 @@ INSTANTIATE_TEST_SUITE_P(
                       FamilyCase{"GyroBiasSecondOrder", "gyro_bias_second_order.y", "full", Size::kSecondOrderSigma, 3.0}),
     [](const ::testing::TestParamInfo<FamilyCase>& p) { return p.param.label; });
 
-// An accelerometer bias random walk, on the eight-hour `drift` profile (a
-// walk as slow as the base drift needs several of its correlation times to
-// tell apart): the likelihood's walk test finds it significant, its K within
-// 3 SE of the truth; adding it fits the run and explains the offset that the
-// same axis' turn-on bias would otherwise take. Over one realisation the
-// walk's offset from zero looks like a turn-on bias too, so the walk must
-// rank first or second behind exactly that bias.
-TEST(HiddenBiasRandomWalk, AccelerometerWalkFoundByLikelihoodAndAddingItFitsTheRun) {
-  const FamilyCase c{"AccBiasRw", "acc_bias_rw.x", "drift", Size::kWalkOverTau, 3.0};
+// A bias random walk, on the eight-hour `drift` profile (a walk as slow as
+// the base drift needs several of its correlation times to tell apart): the
+// likelihood's walk test finds it significant, its K within 3 SE of the
+// truth; adding it fits the run and explains the offset that the same axis'
+// turn-on bias would otherwise take. Over one realisation the walk's offset
+// from zero looks like a turn-on bias too, so the walk must rank first, or
+// second behind exactly that bias.
+class HiddenBiasRandomWalk : public ::testing::TestWithParam<FamilyCase> {};
+
+TEST_P(HiddenBiasRandomWalk, FoundByLikelihoodAndAddingItFitsTheRun) {
+  const FamilyCase& c = GetParam();
+  const std::string turn_on = c.term.substr(0, c.term.find('_')) + "_turn_on_bias" + c.term.substr(c.term.rfind('.'));
   auto unit = testing::NavigationGradeUnit();
   const sim::TrueEffect truth = HiddenEffect(c, unit);
   unit.effects.push_back(truth);
@@ -310,7 +313,7 @@ TEST(HiddenBiasRandomWalk, AccelerometerWalkFoundByLikelihoodAndAddingItFitsTheR
               top->name.c_str(), rank, walk->estimate, walk->std_error, truth.random_walk_density, walk->p_value_holm);
   EXPECT_EQ(walk->source, "LIKELIHOOD");
   EXPECT_LT(walk->p_value_holm, alpha);
-  EXPECT_TRUE(rank == 1 || (rank == 2 && top->name == "acc_turn_on_bias.x")) << "rank " << rank << ", top " << top->name;
+  EXPECT_TRUE(rank == 1 || (rank == 2 && top->name == turn_on)) << "rank " << rank << ", top " << top->name;
   // The likelihood identifies ln K (a scale: its likelihood is near-quadratic
   // there, not in K); the reported SE is the delta method's K·SE(ln K).
   const double log_se = walk->std_error / walk->estimate;
@@ -336,6 +339,12 @@ TEST(HiddenBiasRandomWalk, AccelerometerWalkFoundByLikelihoodAndAddingItFitsTheR
   EXPECT_DOUBLE_EQ(k->value, walk->estimate);
   EXPECT_TRUE(Significant(rb, alpha).empty()) << Significant(rb, alpha).front();
 }
+
+INSTANTIATE_TEST_SUITE_P(
+    Walks, HiddenBiasRandomWalk,
+    ::testing::Values(FamilyCase{"AccBiasRw", "acc_bias_rw.x", "drift", Size::kWalkOverTau, 3.0},
+                      FamilyCase{"GyroBiasRw", "gyro_bias_rw.x", "drift", Size::kWalkOverTau, 3.0}),
+    [](const ::testing::TestParamInfo<FamilyCase>& p) { return p.param.label; });
 
 // ---------------------------------------------------------------------------
 // 2. No hidden effect.
