@@ -452,8 +452,13 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const BenchRun& 
     w.drift_sigma = EstimateOf(kept[j - 1], std::exp((*theta)[i - 1]), std::sqrt(covariance(0, 0)), a_priori);
     w.density = EstimateOf(kept[j], std::exp((*theta)[i]), std::sqrt(covariance(1, 1)), a_priori);
     // ℓ̂₀: the joint model without this walk, its drift σ re-fitted alone.
+    // EM for σ alone starts from the model's σ, not the joint fit's: from a
+    // σ the walk has relieved, EM crawls up and would stop below ℓ̂₀ (its
+    // steps fall under the tolerance long before it gets there), which
+    // inflates the statistic.
     ErrorModel without = out.model;
     without.effects.erase(without.effects.begin() + WalkEffectOf(without, d));
+    DriftOf(without, d).sigma = DriftOf(model, d).sigma;
     DriftLikelihoodResult scratch;
     Maximiser alone(run, without, {Parameter{Kind::kSigma, d}}, filter, options, scratch);
     auto sigma = alone.Maximise(alone.Start(), nullptr);
