@@ -423,15 +423,7 @@ void ErrorsUnderAlternative(const Problem& pb, const std::vector<int>& fixed, Fa
   }
   const std::vector<double> stationary = CovarianceOf(fit.family, p.data(), pb.N, pb.dt, pb.error_acf).stationary;
   const int M = std::min(pb.N - 1, pb.lags.back() + static_cast<int>(6.0 * longest_s / pb.dt) + 1);
-  const auto G = static_cast<Eigen::Index>(pb.lags.size());
-  Eigen::MatrixXd C(G, G);
-  for (Eigen::Index a = 0; a < G; ++a) {
-    for (Eigen::Index b = a; b < G; ++b) {
-      C(a, b) = C(b, a) = Bartlett(stationary, pb.N, pb.lags[static_cast<size_t>(a)], pb.lags[static_cast<size_t>(b)], M);
-    }
-  }
-  C.diagonal().array() += 1e-9 * C.diagonal().mean();
-  const Eigen::LLT<Eigen::MatrixXd> llt(C);
+  const Eigen::LLT<Eigen::MatrixXd> llt(BartlettOnGrid(pb, stationary, M));
   if (llt.info() != Eigen::Success) return;
   Problem alternative = pb;
   alternative.L = llt.matrixL();
