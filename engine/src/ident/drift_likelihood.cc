@@ -266,6 +266,20 @@ absl::Status ValidateOptions(const DriftLikelihoodOptions& options) {
 
 bool HasDrift(const ErrorModel& m, int drift) { return DriftOf(m, drift).sigma > 0.0 && DriftOf(m, drift).tau_s > 0.0; }
 
+// Maximises from the model's values into `out` (model, iterations,
+// convergence, ℓ at the estimate); `first_likelihood` gets ℓ at the start.
+absl::StatusOr<Eigen::VectorXd> FitInto(Maximiser& em, DriftLikelihoodResult& out, double* first_likelihood) {
+  auto theta = em.Maximise(em.Start(), first_likelihood);
+  if (!theta.ok()) return theta.status();
+  out.iterations = em.iterations();
+  out.converged = em.converged();
+  out.model = em.ModelOf(*theta);
+  auto l = em.LogLikelihood(out.model);
+  if (!l.ok()) return l.status();
+  out.log_likelihood_after = *l;
+  return theta;
+}
+
 ParameterEstimate EstimateOf(const Parameter& p, double value, double log_se, const ErrorModel& a_priori) {
   ParameterEstimate e;
   e.name = NameOf(p);
@@ -317,18 +331,13 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const BenchRun&
     return out;
   }
   Maximiser em(run, model, parameters, filter, options, out);
-  auto theta = em.Maximise(em.Start(), &out.log_likelihood_before);
+  auto theta = FitInto(em, out, &out.log_likelihood_before);
   if (!theta.ok()) return theta.status();
-  out.iterations = em.iterations();
-  out.converged = em.converged();
-  out.model = em.ModelOf(*theta);
+  const double l0 = out.log_likelihood_after;
 
-  // ℓ at the estimate and its curvature (observed information) in ln σ, or
-  // in (ln σ, ln τ) jointly where τ is identified too: the two trade along a
+  // The curvature at the estimate (observed information) in ln σ, or in
+  // (ln σ, ln τ) jointly where τ is identified too: the two trade along a
   // ridge, and their errors must show it.
-  auto l0 = em.LogLikelihood(out.model);
-  if (!l0.ok()) return l0.status();
-  out.log_likelihood_after = *l0;
   bool any_flat = false;
   for (size_t j = 0; j < parameters.size(); ++j) {
     const Parameter& p = parameters[j];
@@ -337,14 +346,14 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const BenchRun&
     const bool with_tau = j + 1 < parameters.size() && parameters[j + 1].kind == Kind::kTau;
     std::vector<double> log_se;
     if (with_tau) {
-      auto information = em.PairInformation(*theta, i, i + 1, *l0);
+      auto information = em.PairInformation(*theta, i, i + 1, l0);
       if (!information.ok()) return information.status();
       if ((*information)(0, 0) > 0.0 && information->determinant() > 0.0) {
         const Eigen::Matrix2d covariance = information->inverse();
         log_se = {std::sqrt(covariance(0, 0)), std::sqrt(covariance(1, 1))};
       }
     } else {
-      auto information = em.Information(*theta, i, *l0);
+      auto information = em.Information(*theta, i, l0);
       if (!information.ok()) return information.status();
       if (*information > 0.0) log_se = {1.0 / std::sqrt(*information)};
     }
@@ -426,14 +435,9 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const BenchRun& 
     kept.push_back({Kind::kWalk, d});
   }
   Maximiser em(run, joint, kept, filter, options, out);
-  auto theta = em.Maximise(em.Start(), nullptr);
+  auto theta = FitInto(em, out, nullptr);
   if (!theta.ok()) return theta.status();
-  out.iterations = em.iterations();
-  out.converged = em.converged();
-  out.model = em.ModelOf(*theta);
-  auto l_hat = em.LogLikelihood(out.model);
-  if (!l_hat.ok()) return l_hat.status();
-  out.log_likelihood_after = *l_hat;
+  const double l_hat = out.log_likelihood_after;
 
   for (size_t j = 0; j < kept.size(); ++j) {
     if (kept[j].kind != Kind::kWalk) continue;
@@ -444,7 +448,7 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const BenchRun& 
     w.effect = WalkName(d);
     // Its error with the drift σ's: over a bench run the two trade along a
     // ridge of the likelihood, and K's curvature alone would hide it.
-    auto information = em.PairInformation(*theta, i - 1, i, *l_hat);
+    auto information = em.PairInformation(*theta, i - 1, i, l_hat);
     if (!information.ok()) return information.status();
     const bool definite = (*information)(0, 0) > 0.0 && information->determinant() > 0.0;
     const Eigen::Matrix2d covariance = definite ? Eigen::Matrix2d(information->inverse())
@@ -467,7 +471,7 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const BenchRun& 
     if (!l0.ok()) return l0.status();
     out.filter_passes += scratch.filter_passes;
     w.log_likelihood_without = *l0;
-    w.statistic = std::max(0.0, 2.0 * (*l_hat - *l0));
+    w.statistic = std::max(0.0, 2.0 * (l_hat - *l0));
     out.identified.push_back(w.density);
     out.walks.push_back(std::move(w));
   }
