@@ -261,13 +261,10 @@ struct StructureProposal {
   ModelEffect effect;
   EffectCandidate candidate;
   double screen_bonferroni = 1.0;
-  bool confirmed = false;  // its statistic is a likelihood ratio already
-  // A walk fitted with its axis' drift: the drift σ the model takes with it.
-  int drift = -1;
-  double drift_sigma = 0.0;
-  // What the likelihood identified with it (K, and the drift σ), for the
-  // report of a model that takes it.
-  std::vector<ParameterEstimate> identified;
+  // A walk from the likelihood's test: its statistic is a likelihood ratio
+  // already, and a model that takes it takes its K and the drift σ fitted
+  // with it, and reports both.
+  std::optional<ident::WalkEstimate> walk;
 };
 
 std::vector<StructureProposal> ProposeStructures(const std::vector<DriftCorrelation>& drifts, double run_s,
@@ -339,7 +336,7 @@ std::vector<StructureProposal> ConfirmStructures(const BenchRun& run, const Mode
   const double log_n = std::log(static_cast<double>(std::max(1, a.forward.scalar_updates)));
   for (StructureProposal& p : proposals) {
     ErrorModel b = a.model;
-    if (p.confirmed || b.FindEffect(p.effect.term) >= 0) continue;
+    if (p.walk.has_value() || b.FindEffect(p.effect.term) >= 0) continue;
     b.effects.push_back(p.effect);
     auto pass = RunPass(run, b, spikes, options, /*with_scan=*/false);
     EffectCandidate& c = p.candidate;
@@ -386,10 +383,7 @@ std::vector<StructureProposal> WalkProposals(const BenchRun& run, const ModelPas
     StructureProposal p;
     p.effect.term = terms->front();
     p.effect.random_walk_density = w.density.value;
-    p.confirmed = true;
-    p.drift = w.drift;
-    p.drift_sigma = w.drift_sigma.value;
-    p.identified = {w.density, w.drift_sigma};
+    p.walk = w;
     EffectCandidate& c = p.candidate;
     c.name = w.effect;
     c.family = std::string(p.effect.term.family->name);
@@ -515,8 +509,8 @@ const EffectCandidate* NextDiscovery(const Findings& found, const AnalysisOption
 std::vector<ParameterEstimate> WithTakenStructures(std::vector<ParameterEstimate> identified,
                                                    const ErrorModel& model, const Findings& found) {
   for (const StructureProposal& p : found.structures) {
-    if (model.FindEffect(p.effect.term) < 0) continue;
-    for (const ParameterEstimate& e : p.identified) {
+    if (!p.walk.has_value() || model.FindEffect(p.effect.term) < 0) continue;
+    for (const ParameterEstimate& e : {p.walk->density, p.walk->drift_sigma}) {
       std::erase_if(identified, [&](const ParameterEstimate& q) { return q.name == e.name; });
       identified.push_back(e);
     }
@@ -540,7 +534,9 @@ absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& ba
                                     [&](const StructureProposal& p) { return p.effect.term == term; });
       if (structure != found.structures.end()) {
         model.effects.push_back(structure->effect);
-        if (structure->drift >= 0) ident::DriftOf(model, structure->drift).sigma = structure->drift_sigma;
+        if (structure->walk.has_value()) {
+          ident::DriftOf(model, structure->walk->drift).sigma = structure->walk->drift_sigma.value;
+        }
         continue;
       }
       // A constant the scan estimated: prior wide against its estimate.

@@ -164,15 +164,25 @@ double TruthOf(const sim::TrueEffect& e, int parameter) {
   return std::nan("");
 }
 
+// A scenario's run: the navigation-grade unit with the case's effect hidden,
+// on the case's profile, seed 7.
+struct HiddenRun {
+  sim::TrueEffect truth;
+  sim::SimulatedRun sim;
+};
+HiddenRun SimulateHidden(const FamilyCase& c) {
+  auto unit = testing::NavigationGradeUnit();
+  const sim::TrueEffect truth = HiddenEffect(c, unit);
+  unit.effects.push_back(truth);
+  return {truth, testing::SimulateOrDie(unit, testing::BuiltinProfileOrDie(c.profile), kFindRate10Hz, 7)};
+}
+
 class HiddenFamily : public ::testing::TestWithParam<FamilyCase> {};
 
 TEST_P(HiddenFamily, RankedFirstAndAddingItFitsTheRun) {
   const FamilyCase& c = GetParam();
-  auto unit = testing::NavigationGradeUnit();
-  const sim::TrueEffect truth = HiddenEffect(c, unit);
-  unit.effects.push_back(truth);
+  const auto [truth, sim] = SimulateHidden(c);
   const std::string family(truth.term.family->name);
-  const auto sim = testing::SimulateOrDie(unit, testing::BuiltinProfileOrDie(c.profile), kFindRate10Hz, 7);
   AnalysisOptions options;
   const double alpha = options.finder.family_wise_alpha;
 
@@ -294,10 +304,7 @@ class HiddenBiasRandomWalk : public ::testing::TestWithParam<FamilyCase> {};
 TEST_P(HiddenBiasRandomWalk, FoundByLikelihoodAndAddingItFitsTheRun) {
   const FamilyCase& c = GetParam();
   const std::string turn_on = c.term.substr(0, c.term.find('_')) + "_turn_on_bias" + c.term.substr(c.term.rfind('.'));
-  auto unit = testing::NavigationGradeUnit();
-  const sim::TrueEffect truth = HiddenEffect(c, unit);
-  unit.effects.push_back(truth);
-  const auto sim = testing::SimulateOrDie(unit, testing::BuiltinProfileOrDie(c.profile), kFindRate10Hz, 7);
+  const auto [truth, sim] = SimulateHidden(c);
   AnalysisOptions options;
   const double alpha = options.finder.family_wise_alpha;
   AnalysisRequest request;

@@ -27,18 +27,9 @@ struct Parameter {
   int drift = 0;
 };
 
-double& ValueOf(ErrorModel& m, const Parameter& p) {
-  switch (p.kind) {
-    case Kind::kSigma:
-      return DriftOf(m, p.drift).sigma;
-    case Kind::kTau:
-      return DriftOf(m, p.drift).tau_s;
-    case Kind::kWalk:
-      break;
-  }
-  return m.effects[static_cast<size_t>(WalkEffectOf(m, p.drift))].random_walk_density;
-}
-double ValueOf(const ErrorModel& m, const Parameter& p) {
+// The parameter's value in a model: a reference into it (const for a const model).
+template <typename Model>
+auto& ValueOf(Model& m, const Parameter& p) {
   switch (p.kind) {
     case Kind::kSigma:
       return DriftOf(m, p.drift).sigma;
@@ -412,16 +403,16 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const BenchRun& 
   if (parameters.empty()) return out;
 
   // The screen: one EM step; a walk whose K falls is not told from the drift.
-  Eigen::VectorXd start(static_cast<Eigen::Index>(parameters.size()));
   std::vector<int> kept_axes;
   {
     Maximiser screen(run, trial, parameters, filter, options, out);
-    auto step = screen.EmStep(screen.Start());
+    const Eigen::VectorXd start = screen.Start();
+    auto step = screen.EmStep(start);
     if (!step.ok()) return step.status();
     out.log_likelihood_before = step->log_likelihood;
     for (size_t j = 0; j < parameters.size(); ++j) {
       const auto i = static_cast<Eigen::Index>(j);
-      if (parameters[j].kind == Kind::kWalk && step->next[i] > screen.Start()[i]) kept_axes.push_back(parameters[j].drift);
+      if (parameters[j].kind == Kind::kWalk && step->next[i] > start[i]) kept_axes.push_back(parameters[j].drift);
     }
   }
   if (kept_axes.empty()) return out;
@@ -463,15 +454,12 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const BenchRun& 
     ErrorModel without = out.model;
     without.effects.erase(without.effects.begin() + WalkEffectOf(without, d));
     DriftOf(without, d).sigma = DriftOf(model, d).sigma;
-    DriftLikelihoodResult scratch;
-    Maximiser alone(run, without, {Parameter{Kind::kSigma, d}}, filter, options, scratch);
-    auto sigma = alone.Maximise(alone.Start(), nullptr);
-    if (!sigma.ok()) return sigma.status();
-    auto l0 = alone.LogLikelihood(alone.ModelOf(*sigma));
-    if (!l0.ok()) return l0.status();
-    out.filter_passes += scratch.filter_passes;
-    w.log_likelihood_without = *l0;
-    w.statistic = std::max(0.0, 2.0 * (l_hat - *l0));
+    DriftLikelihoodResult alone_result;
+    Maximiser alone(run, without, {Parameter{Kind::kSigma, d}}, filter, options, alone_result);
+    if (auto fitted = FitInto(alone, alone_result, nullptr); !fitted.ok()) return fitted.status();
+    out.filter_passes += alone_result.filter_passes;
+    w.log_likelihood_without = alone_result.log_likelihood_after;
+    w.statistic = std::max(0.0, 2.0 * (l_hat - w.log_likelihood_without));
     out.identified.push_back(w.density);
     out.walks.push_back(std::move(w));
   }
