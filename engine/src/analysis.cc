@@ -663,13 +663,12 @@ AnalysisReport ReportOf(const ModelPass& pass, const Findings& found, const Benc
   return r;
 }
 
-// The drifts correlation processing left unresolved in `drifts` (all six
-// when it ran on none).
-ident::DriftSelection UnresolvedDrifts(const std::vector<DriftCorrelation>& drifts) {
+// The drifts correlation processing resolved in `drifts`.
+ident::DriftSelection ResolvedDrifts(const std::vector<DriftCorrelation>& drifts) {
   ident::DriftSelection selection{};
   for (int d = 0; d < 6; ++d) {
     const std::string name = ident::DriftName(d);
-    selection[static_cast<size_t>(d)] = std::none_of(
+    selection[static_cast<size_t>(d)] = std::any_of(
         drifts.begin(), drifts.end(), [&](const DriftCorrelation& c) { return c.state == name && c.analysis.resolved; });
   }
   return selection;
@@ -712,7 +711,7 @@ bool ApplyDriftLikelihood(const ident::DriftLikelihoodResult& ml, double alpha, 
   char buf[200];
   std::snprintf(buf, sizeof buf, " (EM, %d iterations%s, %d filter passes): 2Δℓ = %.1f against χ²(%d) at %.2g — ",
                 ml.iterations, ml.converged ? "" : ", not converged", ml.filter_passes, statistic, dof, alpha);
-  notes.push_back("drift parameters correlation processing left unresolved, identified by likelihood of the innovations: " +
+  notes.push_back("drift parameters identified by likelihood of the innovations: " +
                   names + buf +
                   (rejects        ? "the model takes the estimates"
                    : placeholders ? "the model's values were the Allan fit's placeholders: it takes the estimates"
@@ -817,16 +816,27 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
     std::vector<DriftCorrelation> drifts;
     bool faults_flagged = false;  // by the latest pass's monitoring
     bool deferred = false;
-    bool drifts_by_likelihood = false;  // done already
-    auto identify_drifts = [&](const ErrorModel& model) {
+    bool drifts_by_likelihood = false;  // the deferral's competition took them
+    // The drifts by the innovations' likelihood (drift_likelihood.h), from
+    // `model`, one of two sets at a time. The drifts correlation processing
+    // left unresolved: their σ (τ held at the model's value, which the run
+    // does not tell — unless it is an Allan-fit placeholder, a bound or a
+    // guess from static segments shorter than the drift's τ). The drifts it
+    // resolved: σ and τ, from its estimates (which the retargeted model
+    // holds where the data rejected the a-priori values), a start near the
+    // likelihood's ridge. Apart, because one EM over both sets crawls: on an
+    // eight-hour run with a tripled gyro σ it had not converged after 30
+    // steps, that σ still 15 % short.
+    auto identify_drifts = [&](const ErrorModel& model, bool resolved_set) {
       Progress(options, 0.6, "maximum-likelihood drift identification");
-      ident::DriftSelection selection = UnresolvedDrifts(drifts);
-      // A run whose monitoring flags faults (a drift that jumped, say) is not
-      // re-tuned: a wider drift would hide the fault the diagnosis is for.
-      if (faults_flagged) selection = {};
-      // τ too where the a-priori model is the Allan fit's: its τ is a bound
-      // or a guess from static segments shorter than the drift's τ.
-      const ident::DriftSelection tau_too = a_priori_from_allan ? selection : ident::DriftSelection{};
+      const ident::DriftSelection resolved = ResolvedDrifts(drifts);
+      ident::DriftSelection selection{}, tau_too{};
+      for (size_t d = 0; d < selection.size(); ++d) {
+        // A run whose monitoring flags faults (a drift that jumped, say) is
+        // not re-tuned: a wider drift would hide the fault the diagnosis is for.
+        selection[d] = !faults_flagged && resolved[d] == resolved_set;
+        tau_too[d] = selection[d] && (resolved_set || a_priori_from_allan);
+      }
       return ident::IdentifyDriftsByLikelihood(run, model, *a_priori, selection, tau_too, options.filter,
                                                options.drift_likelihood);
     };
@@ -853,8 +863,8 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
         // g-sensitivity, say). The two explanations compete by BIC (Schwarz,
         // Ann. Stat. 6(2), 1978): the drifts' σ by likelihood against the
         // best candidate's predicted ΔBIC.
-        if (options.identify_unresolved_drifts) {
-          auto ml = identify_drifts(base);
+        if (options.identify_drifts_by_likelihood) {
+          auto ml = identify_drifts(base, /*resolved_set=*/false);
           if (ml.ok() && !ml->identified.empty()) {
             const double log_n = std::log(static_cast<double>(std::max(1, pass->forward.scalar_updates)));
             const double drift_bic = -DriftStatistic(*ml) + static_cast<double>(ml->identified.size()) * log_n;
@@ -894,14 +904,22 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
                         std::to_string(options.max_retarget_iterations) + " iterations");
       }
     }
-    if (options.identify_unresolved_drifts && !deferred && !drifts_by_likelihood) {
-      // What correlation processing did not resolve, by likelihood.
-      auto ml = identify_drifts(base);
-      if (!ml.ok()) {
-        notes.push_back("the drifts correlation processing left unresolved were not identified by likelihood: " +
-                        std::string(ml.status().message()));
-      } else {
-        ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, a_priori_from_allan, base, identified, notes);
+    if (options.identify_drifts_by_likelihood && !deferred) {
+      // The drifts' final values, by likelihood: correlation processing of
+      // the smoothed estimates gives the drifts' structure and a start, but
+      // the smoother's shrinkage biases its σ and τ low together along the
+      // fit's ridge (docs/IDENTIFICATION.md, coverage); the likelihood's
+      // estimates carry no such bias and their intervals cover the truth.
+      // The unresolved set is done already when the deferral's competition
+      // took it.
+      for (const bool resolved_set : {false, true}) {
+        if (!resolved_set && drifts_by_likelihood) continue;
+        auto ml = identify_drifts(base, resolved_set);
+        if (!ml.ok()) {
+          notes.push_back("the drifts were not identified by likelihood: " + std::string(ml.status().message()));
+        } else {
+          ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, a_priori_from_allan, base, identified, notes);
+        }
       }
     }
   }

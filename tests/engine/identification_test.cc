@@ -340,6 +340,61 @@ TEST(CorrelationCoverageTest, IntervalsCoverTheTrueDriftsOverSeeds) {
   EXPECT_GE(static_cast<double>(gyro_covered) / gyro_checks, 0.70);
 }
 
+// The drifts' σ and τ the analysis reports (identified[], method ML: the
+// likelihood's estimates started from correlation processing's), over the
+// same 20 seeds as above, the a-priori model the truth. Every drift's σ is
+// reported, and τ where correlation processing resolved the drift; each
+// reported interval is a check. At 95% per check, 90% of ~170 checks is more
+// than three standard deviations below the nominal rate. At 10 Hz: at 5 Hz
+// the strapdown's two-sample algorithm leaves a velocity error at each
+// start and end of the table's rate ramps that the scan takes for scale
+// factors (docs/IDENTIFICATION.md), and the analysis defers the re-tuning.
+TEST(AnalysisDriftCoverageTest, ReportedDriftIntervalsCoverTheTruthOverSeeds) {
+  constexpr double kRateHz = 10.0;
+  const sim::SimulatedUnit unit = CoverageUnit();
+  const sim::TableProfile profile = testing::BuiltinProfileOrDie("full");
+  AnalysisRequest request;
+  request.nominal = testing::TrueBaseModel(unit);
+  AnalysisOptions options;
+  options.test_walks_by_likelihood = false;  // the scan is not what this checks
+  std::map<std::string, std::array<int, 2>> tally;  // reported, covered
+  for (int seed = 0; seed < kCoverageSeeds; ++seed) {
+    const sim::SimulatedRun s = testing::SimulateOrDie(unit, profile, kRateHz, 500 + seed);
+    auto a = Analyze(s.run, request, options);
+    ASSERT_TRUE(a.ok()) << a.status();
+    if (std::none_of(a->report.identified.begin(), a->report.identified.end(),
+                     [](const ParameterEstimate& e) { return e.method == "ML"; })) {
+      std::printf("seed %d: no drift identified by likelihood (%zu notes)\n", 500 + seed, a->report.notes.size());
+    }
+    for (const ParameterEstimate& e : a->report.identified) {
+      if (e.method != "ML" || e.name.find("_bias_gm.") == std::string::npos) continue;
+      const bool gyro = e.name.rfind("gyro", 0) == 0;
+      const GaussMarkov& g = (gyro ? unit.gyro : unit.acc).bias[static_cast<size_t>(e.name[e.name.find('.') + 1] - 'x')];
+      const double truth = e.name.ends_with(".sigma") ? g.sigma : g.tau_s;
+      const bool in = e.ci95_low <= truth && truth <= e.ci95_high;
+      auto& t = tally[e.name];
+      ++t[0];
+      t[1] += in;
+    }
+  }
+  int checks = 0, covered = 0;
+  for (const auto& [name, t] : tally) {
+    std::printf("%-22s reported in %2d of %d runs, covers the truth in %2d\n", name.c_str(), t[0], kCoverageSeeds,
+                t[1]);
+    checks += t[0];
+    covered += t[1];
+  }
+  std::printf("coverage of the reported 95%% intervals: %d of %d\n", covered, checks);
+  // Every drift's σ in most runs (a run whose monitoring flags a fault, or
+  // whose model lacks a significant effect, is not re-tuned).
+  for (const std::string axis : {"x", "y", "z"}) {
+    EXPECT_GE(tally["gyro_bias_gm." + axis + ".sigma"][0], kCoverageSeeds - 2) << axis;
+    EXPECT_GE(tally["acc_bias_gm." + axis + ".sigma"][0], kCoverageSeeds - 2) << axis;
+  }
+  ASSERT_GT(checks, 0);
+  EXPECT_GE(static_cast<double>(covered) / checks, 0.90) << covered << " of " << checks;
+}
+
 // Maximum-likelihood σ of the drifts (drift_likelihood.h): a unit whose
 // gyro-x drift σ is three times what the model says. τ = 300 s, so the 100-min
 // `full` run spans twenty correlation times. Over seeds, the true σ of every

@@ -61,9 +61,11 @@ struct AnalysisOptions {
   // maximum likelihood of the innovations (retarget.h, ScaleUnresolvedNoise).
   bool retune_unresolved_noise = true;
   ident::NoiseScaleOptions noise_scale;
-  // Drifts that correlation processing leaves unresolved are identified by
-  // maximum likelihood of the innovations (drift_likelihood.h).
-  bool identify_unresolved_drifts = true;
+  // The drifts' σ (and τ where the run resolves it) are identified by
+  // maximum likelihood of the innovations (drift_likelihood.h), started from
+  // correlation processing's estimates; and, first, the σ of the drifts it
+  // leaves unresolved when they compete with the missing effects.
+  bool identify_drifts_by_likelihood = true;
   // Test a bias random walk on every drift axis by the innovations'
   // likelihood, each fitted with its axis' drift σ (drift_likelihood.h):
   // correlation processing cannot show a walk whose wander is as slow as the
