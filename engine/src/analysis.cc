@@ -675,14 +675,15 @@ ident::DriftSelection ResolvedDrifts(const std::vector<DriftCorrelation>& drifts
 }
 
 // The likelihood-ratio statistic of the drift estimates against the model's
-// values (one degree of freedom per drift σ).
+// values (one degree of freedom per identified parameter, σ or τ).
 double DriftStatistic(const ident::DriftLikelihoodResult& ml) {
   return 2.0 * (ml.log_likelihood_after - ml.log_likelihood_before);
 }
 
 // The likelihood's drift estimates (drift_likelihood.h) are reported; the
 // model takes them when they raise the innovations' log-likelihood beyond
-// the likelihood-ratio test of the model's values, χ²(m) at α for m drifts
+// the likelihood-ratio test of the model's values, χ²(m) at α for m
+// identified parameters
 // (Wilks, Ann. Math. Statist. 9(1), 1938) — as the correlation retargeting
 // keeps a model the data do not contradict. True when the model took them.
 // A model whose values are placeholders (an Allan-fit a-priori model: its τ

@@ -280,6 +280,13 @@ sim::SimulatedUnit CoverageUnit() {
   return u;
 }
 
+// The unit's true drift that a drift state or parameter names
+// ("gyro_bias_gm.x", "acc_bias_gm.z.tau").
+const GaussMarkov& TrueDrift(const sim::SimulatedUnit& unit, const std::string& name) {
+  const bool gyro = name.rfind("gyro", 0) == 0;
+  return (gyro ? unit.gyro : unit.acc).bias[static_cast<size_t>(name[name.find('.') + 1] - 'x')];
+}
+
 TEST(CorrelationCoverageTest, IntervalsCoverTheTrueDriftsOverSeeds) {
   const sim::SimulatedUnit unit = CoverageUnit();
   const ErrorModel model = testing::TrueBaseModel(unit);  // the a-priori model is the truth
@@ -298,8 +305,7 @@ TEST(CorrelationCoverageTest, IntervalsCoverTheTrueDriftsOverSeeds) {
       auto& t = tally[d.state];
       const FamilyFit* e = d.analysis.Fit(CorrelationFamily::kExponential);
       if (!d.analysis.resolved || e == nullptr || !e->converged) continue;
-      const bool gyro = d.state.rfind("gyro", 0) == 0;
-      const GaussMarkov& truth = (gyro ? unit.gyro : unit.acc).bias[static_cast<size_t>(d.state.back() - 'x')];
+      const GaussMarkov& truth = TrueDrift(unit, d.state);
       const FittedParameter* sigma = e->Parameter("sigma");
       const FittedParameter* tau = e->Parameter("tau_s");
       const bool sigma_in = sigma->ci95_low <= truth.sigma && truth.sigma <= sigma->ci95_high;
@@ -368,8 +374,7 @@ TEST(AnalysisDriftCoverageTest, ReportedDriftIntervalsCoverTheTruthOverSeeds) {
     }
     for (const ParameterEstimate& e : a->report.identified) {
       if (e.method != "ML" || e.name.find("_bias_gm.") == std::string::npos) continue;
-      const bool gyro = e.name.rfind("gyro", 0) == 0;
-      const GaussMarkov& g = (gyro ? unit.gyro : unit.acc).bias[static_cast<size_t>(e.name[e.name.find('.') + 1] - 'x')];
+      const GaussMarkov& g = TrueDrift(unit, e.name);
       const double truth = e.name.ends_with(".sigma") ? g.sigma : g.tau_s;
       const bool in = e.ci95_low <= truth && truth <= e.ci95_high;
       auto& t = tally[e.name];
@@ -416,9 +421,7 @@ TEST(DriftLikelihoodTest, RecoversATripledGyroDriftSigmaWithinItsIntervalOverSee
     ASSERT_TRUE(ml.ok()) << ml.status();
     EXPECT_GT(ml->log_likelihood_after, ml->log_likelihood_before);  // EM never lowers ℓ
     for (const ParameterEstimate& e : ml->identified) {
-      const bool gyro = e.name.rfind("gyro", 0) == 0;
-      const int axis = e.name[e.name.find('.') + 1] - 'x';
-      const double truth = (gyro ? unit.gyro : unit.acc).bias[static_cast<size_t>(axis)].sigma;
+      const double truth = TrueDrift(unit, e.name).sigma;
       const bool in = e.ci95_low <= truth && truth <= e.ci95_high;
       std::printf("seed %d %-22s %.3g [%.3g, %.3g] truth %.3g%s\n", seed, e.name.c_str(), e.value, e.ci95_low,
                   e.ci95_high, truth, in ? "" : "  (outside)");
