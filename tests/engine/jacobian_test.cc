@@ -145,7 +145,7 @@ class TransitionJacobian : public ::testing::Test {
       in.acc_mps2 = smp.acc_mps2;
       in.temperature_delta_degc = smp.temp_degc - run_.samples[0].temp_degc;
       in.yaw_rad = smp.ref_rpy_rad.z();
-      acc.AddSample(disc, D, Qs, q0.slerp(0.5, s.q_b_n).toRotationMatrix(), in);
+      acc.AddSample(disc, D, Qs, nav::Midway(q0, s.q_b_n).toRotationMatrix(), in);
     }
     return acc.Finish();
   }

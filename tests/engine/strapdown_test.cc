@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <random>
 
 #include "insdiag/engine/nav/rotation.h"
 #include "insdiag/engine/nav/wgs84.h"
@@ -81,6 +82,22 @@ sim::SimulatedRun PerfectRun(const std::string& profile_name, double rate_hz) {
   auto run = sim::Simulate(sim::SimulatedUnit{}, *profile, options);
   EXPECT_TRUE(run.ok()) << run.status();
   return *std::move(run);
+}
+
+// The midway rotation the filter takes for a sample's attitude is slerp at
+// ½, also when the two quaternions lie in opposite hemispheres (q and −q are
+// one rotation).
+TEST(Rotation, MidwayIsSlerpAtOneHalf) {
+  std::mt19937_64 rng(17);
+  std::normal_distribution<double> normal;
+  for (int i = 0; i < 200; ++i) {
+    const Eigen::Quaterniond a = Eigen::Quaterniond(Eigen::Vector4d(normal(rng), normal(rng), normal(rng), normal(rng))).normalized();
+    const Eigen::Vector3d step(normal(rng), normal(rng), normal(rng));
+    Eigen::Quaterniond b = (a * nav::RotationVectorToQuaternion(0.5 * step)).normalized();
+    if (i % 2 == 1) b.coeffs() = -b.coeffs();
+    const Eigen::Matrix3d expected = a.slerp(0.5, b).toRotationMatrix();
+    EXPECT_LT((nav::Midway(a, b).toRotationMatrix() - expected).cwiseAbs().maxCoeff(), 1e-12) << "case " << i;
+  }
 }
 
 TEST(Strapdown, PerfectSensorsStayAtTheSiteThroughAnHourOfTableMotion) {

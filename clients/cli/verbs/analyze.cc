@@ -1,5 +1,7 @@
 // insdiag analyze RUN.csv [--add EFFECT]... [--json] [--series OUT.csv]
 // Runs the engine locally on a bench-run file, no server needed.
+#include <chrono>
+#include <cstdio>
 #include <fstream>
 #include <ostream>
 
@@ -40,6 +42,7 @@ class AnalyzeVerb final : public Verb {
                    "Unit type whose nominal model completes a datasheet the run lacks (default: the run's "
                    "unit_type when insdiag knows it)");
     options.Option("--update-interval", &update_interval_, "Seconds between filter updates (default 1)");
+    options.Flag("--progress", &progress_, "Print each stage of the analysis with the seconds elapsed to stderr");
   }
 
   int Run(std::ostream& out, std::ostream& err) override {
@@ -75,6 +78,16 @@ class AnalyzeVerb final : public Verb {
       return kExitUsage;
     }
     options.keep_series = !series_.empty();
+    const auto started = std::chrono::steady_clock::now();
+    if (progress_) {
+      options.progress = [&err, started](double fraction, std::string_view stage) {
+        const std::chrono::duration<double> elapsed = std::chrono::steady_clock::now() - started;
+        char line[160];
+        std::snprintf(line, sizeof line, "%7.1f s  %3.0f %%  %.*s\n", elapsed.count(), 100.0 * fraction,
+                      static_cast<int>(stage.size()), stage.data());
+        err << line << std::flush;
+      };
+    }
     auto analysis = engine::Analyze(*run, request, options);
     if (!analysis.ok()) {
       err << "insdiag analyze: " << file_ << ": " << analysis.status().message() << "\n";
@@ -117,6 +130,7 @@ class AnalyzeVerb final : public Verb {
   std::string acf_;
   std::string allan_;
   bool json_ = false;
+  bool progress_ = false;
   std::string series_;
   std::string unit_type_;
   std::string update_interval_ = "1";

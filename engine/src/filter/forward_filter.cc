@@ -160,7 +160,7 @@ absl::StatusOr<ForwardPass> RunForwardFilter(const BenchRun& run, const ErrorMod
   Eigen::MatrixXd P = InitialCovariance(model, layout);
   out.x0 = x;
   out.P0 = P;
-  Eigen::VectorXd PH(n), gain(n);
+  Eigen::VectorXd PH(n), gain(n), half_joseph(n);
 
   IntervalAccumulator accumulator(model, layout, nominal, samples_per_epoch);
   const double temperature0 = run.samples[0].temp_degc;
@@ -193,7 +193,7 @@ absl::StatusOr<ForwardPass> RunForwardFilter(const BenchRun& run, const ErrorMod
     inputs.acc_mps2 = s.acc_mps2;
     inputs.temperature_delta_degc = run.has_temperature ? s.temp_degc - temperature0 : 0.0;
     inputs.yaw_rad = MidAngle(run.samples[k - 1].ref_rpy_rad.z(), s.ref_rpy_rad.z());
-    const Eigen::Matrix3d C_mid = q_start.slerp(0.5, ins.q_b_n).toRotationMatrix();
+    const Eigen::Matrix3d C_mid = nav::Midway(q_start, ins.q_b_n).toRotationMatrix();
     const SampleCoupling& coupling = accumulator.AddSample(*disc, *D, *Qs, C_mid, inputs);
     if (observer != nullptr) observer->OnSample(*disc, coupling);
     ++in_interval;
@@ -227,9 +227,11 @@ absl::StatusOr<ForwardPass> RunForwardFilter(const BenchRun& run, const ErrorMod
       const double nu = z[static_cast<size_t>(c)] - h.sign * x[h.state];
       gain = PH / S;
       x += gain * nu;
-      P.noalias() -= gain * PH.transpose();
-      P.noalias() -= PH * gain.transpose();
-      P.noalias() += (S * gain) * gain.transpose();
+      // The expanded Joseph form (header) as a symmetric rank-two update,
+      // P += K wᵀ + w Kᵀ with w = ½ S K − Phᵀ: two outer products, not three.
+      half_joseph = 0.5 * S * gain - PH;
+      P.noalias() += gain * half_joseph.transpose();
+      P.noalias() += half_joseph * gain.transpose();
       out.log_likelihood += -0.5 * (std::log(2.0 * std::numbers::pi * S) + nu * nu / S);
       ++out.scalar_updates;
       out.z(e, c) = z[static_cast<size_t>(c)];

@@ -151,10 +151,9 @@ class IntervalAccumulator {
   Matrix9d T_, T_inverse_;
   SampleCoupling coupling_;
   IntervalTransition t_;
-  Matrix9d Qnn_y_;
+  Matrix9d Qnn_half_y_;  // H: Qnn = H + Hᵀ in interval-start coordinates
   Eigen::MatrixXd B_y_, Qns_y_;  // 9 × m, interval-start coordinates
   Eigen::VectorXd regressors_;   // r_s of the last sample
-  Eigen::MatrixXd Bj_, V_;       // 9 × m work space
   Eigen::Vector3d white_gyro_var_, white_acc_var_, acc_quantization_var_;
 };
 

@@ -32,4 +32,12 @@ Eigen::Quaterniond RotationVectorToQuaternion(const Eigen::Vector3d& phi_rad);
 // Rotation vector of a unit quaternion, angle in [0, π].
 Eigen::Vector3d QuaternionToRotationVector(const Eigen::Quaterniond& q);
 
+// The rotation halfway between two unit quaternions along the shorter arc:
+// slerp at ½, which is their normalised sum (the sum bisects the arc; Shoemake,
+// SIGGRAPH '85) — no trigonometric call, unlike a general slerp.
+inline Eigen::Quaterniond Midway(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {
+  const double sign = a.coeffs().dot(b.coeffs()) < 0.0 ? -1.0 : 1.0;
+  return Eigen::Quaterniond(a.coeffs() + sign * b.coeffs()).normalized();
+}
+
 }  // namespace insdiag::engine::nav
