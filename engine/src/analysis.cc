@@ -256,15 +256,15 @@ std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass) {
 }
 
 // A random-structure effect proposed by correlation processing or by the
-// likelihood's walk test.
+// likelihood's structure tests.
 struct StructureProposal {
   ModelEffect effect;
   EffectCandidate candidate;
   double screen_bonferroni = 1.0;
-  // A walk from the likelihood's test: its statistic is a likelihood ratio
-  // already, and a model that takes it takes its K and the drift σ fitted
-  // with it, and reports both.
-  std::optional<ident::WalkEstimate> walk;
+  // A walk or pair from the likelihood's tests: its statistic is a
+  // likelihood ratio already, and a model that takes it takes its
+  // parameters and the drift σ fitted with it, and reports them.
+  std::optional<ident::StructureEstimate> fitted;
 };
 
 std::vector<StructureProposal> ProposeStructures(const std::vector<DriftCorrelation>& drifts, double run_s,
@@ -336,7 +336,7 @@ std::vector<StructureProposal> ConfirmStructures(const BenchRun& run, const Mode
   const double log_n = std::log(static_cast<double>(std::max(1, a.forward.scalar_updates)));
   for (StructureProposal& p : proposals) {
     ErrorModel b = a.model;
-    if (p.walk.has_value() || b.FindEffect(p.effect.term) >= 0) continue;
+    if (p.fitted.has_value() || b.FindEffect(p.effect.term) >= 0) continue;
     b.effects.push_back(p.effect);
     auto pass = RunPass(run, b, spikes, options, /*with_scan=*/false);
     EffectCandidate& c = p.candidate;
@@ -353,60 +353,111 @@ std::vector<StructureProposal> ConfirmStructures(const BenchRun& run, const Mode
   return proposals;
 }
 
-// Bias random walks by the innovations' likelihood (drift_likelihood.h), on
-// every drift axis the model has no walk on. Also on a run whose monitoring
-// flags faults: a walk that has wandered far trips the drift monitor, and the
-// candidate hides nothing — the report keeps the fault intervals of its model.
-// As correlation processing's structures, a walk is screened, then measured
-// against model A: the screen is the nested test (the walk beyond its drift σ
-// re-fitted alone, χ²₁, at `screen_alpha`) — a wider drift alone is not a
-// walk; the statistic is 2(ℓ̂ − ℓ_A), what the walk with its re-fitted drift
-// explains of model A's innovations, on two degrees of freedom (K, σ), the
-// scale every other candidate is ranked on.
-std::vector<StructureProposal> WalkProposals(const BenchRun& run, const ModelPass& pass, const ErrorModel& a_priori,
-                                             double screen_alpha, const AnalysisOptions& options,
-                                             std::vector<std::string>* notes) {
-  std::vector<StructureProposal> out;
-  if (!options.test_walks_by_likelihood) return out;
-  ident::DriftSelection axes;
-  axes.fill(true);
-  auto walks = ident::IdentifyWalksByLikelihood(run, pass.model, a_priori, axes, options.filter,
-                                                options.drift_likelihood);
-  if (!walks.ok()) {
-    if (notes != nullptr) notes->push_back("no likelihood test of bias random walks: " + std::string(walks.status().message()));
-    return out;
+// The drifts correlation processing resolved, in DriftSelection order.
+ident::DriftSelection ResolvedDrifts(const std::vector<DriftCorrelation>& drifts) {
+  ident::DriftSelection selection{};
+  for (int d = 0; d < 6; ++d) {
+    const std::string name = ident::DriftName(d);
+    selection[static_cast<size_t>(d)] = std::any_of(
+        drifts.begin(), drifts.end(), [&](const DriftCorrelation& c) { return c.state == name && c.analysis.resolved; });
   }
+  return selection;
+}
+
+// Bias random walks and second-order pairs by the innovations' likelihood
+// (drift_likelihood.h), on every drift axis the model has none on. Also on a
+// run whose monitoring flags faults: a walk that has wandered far trips the
+// drift monitor, and the candidate hides nothing — the report keeps the
+// fault intervals of its model. As correlation processing's structures, a
+// structure is screened, then measured against model A: the screen is the
+// nested test (the structure beyond its drift σ re-fitted alone, χ² with its
+// own parameters, at `screen_alpha` over the fit's starting points) — a
+// wider drift alone is not a structure; the statistic is 2(ℓ̂ − ℓ_A), what
+// the structure with its re-fitted drift explains of model A's innovations,
+// on its parameters and the drift σ, the scale every other candidate is
+// ranked on.
+//
+// Walks on every axis. Second-order pairs on the axes whose drift
+// correlation processing left unresolved — where it resolves the drift, its
+// exponential-cosine family tests the pair (ProposeStructures) — and only
+// while no constant term is significant: a pair fitted to a model that lacks
+// a constant effect soaks up that effect's signal (a drift widened to carry
+// a scale factor, in another guise), and each of its passes costs more than
+// a base pass (two states an axis). The constant effect is added first; the
+// next scan tests the pairs.
+std::vector<StructureProposal> LikelihoodStructureProposals(const BenchRun& run, const ModelPass& pass,
+                                                            const ErrorModel& a_priori,
+                                                            const std::vector<DriftCorrelation>& drifts,
+                                                            bool constant_significant, double screen_alpha,
+                                                            const AnalysisOptions& options,
+                                                            std::vector<std::string>* notes) {
+  std::vector<StructureProposal> out;
+  ident::DriftSelection every_axis;
+  every_axis.fill(true);
+  ident::DriftSelection unresolved = ResolvedDrifts(drifts);
+  for (bool& axis : unresolved) axis = !axis;
   const double log_n = std::log(static_cast<double>(std::max(1, pass.forward.scalar_updates)));
-  for (const ident::WalkEstimate& w : walks->walks) {
-    auto terms = ParseEffectSelector(w.effect);
-    if (!terms.ok() || !(stats::ChiSquareSurvival(w.statistic, 1) < screen_alpha)) continue;
-    StructureProposal p;
-    p.effect.term = terms->front();
-    p.effect.random_walk_density = w.density.value;
-    p.walk = w;
-    EffectCandidate& c = p.candidate;
-    c.name = w.effect;
-    c.family = std::string(p.effect.term.family->name);
-    c.source = "LIKELIHOOD";
-    c.unit = std::string(p.effect.term.family->unit);
-    c.estimate = w.density.value;
-    c.std_error = w.density.std_error;
-    c.dof = 2;
-    // With several walks kept, the joint gain less the other walks' own.
-    double others = 0.0;
-    for (const ident::WalkEstimate& o : walks->walks) others += o.drift == w.drift ? 0.0 : o.statistic;
-    c.statistic = std::max(w.statistic, 2.0 * (walks->log_likelihood_after - pass.log_likelihood) - others);
-    // χ² for a parameter on its boundary is conservative (drift_likelihood.h).
-    c.p_value = stats::ChiSquareSurvival(c.statistic, c.dof);
-    c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
-    c.predicted_delta_bic = -c.statistic + c.dof * log_n;
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.3g %s", w.drift_sigma.value, w.drift_sigma.unit.c_str());
-    char nested[96];
-    std::snprintf(nested, sizeof nested, "2Δℓ = %.1f beyond the drift σ re-fitted alone", w.statistic);
-    c.note = "likelihood of the innovations with a bias random walk and its drift σ re-fitted (" +
-             ident::DriftName(w.drift) + ".sigma " + buf + " with the walk); " + nested;
-    out.push_back(std::move(p));
+  struct Test {
+    bool enabled;
+    const char* what;
+    decltype(&ident::IdentifyWalksByLikelihood) fit;
+    ident::DriftSelection axes;
+    size_t starts;
+  };
+  const Test tests[] = {
+      {options.test_walks_by_likelihood, "bias random walks", &ident::IdentifyWalksByLikelihood, every_axis, 1},
+      {options.test_second_orders_by_likelihood && !constant_significant, "second-order drifts",
+       &ident::IdentifySecondOrdersByLikelihood, unresolved,
+       options.drift_likelihood.second_order_start_periods_s.size()},
+  };
+  for (const Test& test : tests) {
+    if (!test.enabled) continue;
+    auto fitted = test.fit(run, pass.model, a_priori, test.axes, screen_alpha, options.filter, options.drift_likelihood);
+    if (!fitted.ok()) {
+      if (notes != nullptr) {
+        notes->push_back(std::string("no likelihood test of ") + test.what + ": " +
+                         std::string(fitted.status().message()));
+      }
+      continue;
+    }
+    const double starts = static_cast<double>(test.starts);
+    for (const ident::StructureEstimate& w : fitted->structures) {
+      auto terms = ParseEffectSelector(w.effect);
+      if (!terms.ok() || !(stats::ChiSquareSurvival(w.statistic, w.dof) * starts < screen_alpha)) continue;
+      StructureProposal p;
+      p.effect = w.fitted;
+      p.fitted = w;
+      EffectCandidate& c = p.candidate;
+      c.name = w.effect;
+      c.family = std::string(p.effect.term.family->name);
+      c.source = "LIKELIHOOD";
+      c.unit = std::string(p.effect.term.family->unit);
+      c.estimate = w.parameters.front().value;
+      c.std_error = w.parameters.front().std_error;
+      c.dof = w.dof + 1;
+      // With several structures kept, the joint gain less the others' own.
+      double others = 0.0;
+      for (const ident::StructureEstimate& o : fitted->structures) others += o.drift == w.drift ? 0.0 : o.statistic;
+      c.statistic = std::max(w.statistic, 2.0 * (fitted->log_likelihood_after - pass.log_likelihood) - others);
+      // χ² for a parameter on its boundary is conservative (drift_likelihood.h).
+      c.p_value = std::min(1.0, stats::ChiSquareSurvival(c.statistic, c.dof) * starts);
+      c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
+      c.predicted_delta_bic = -c.statistic + c.dof * log_n;
+      std::string parameters;
+      for (const ParameterEstimate& e : w.parameters) {
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "%s%s %.3g %s", parameters.empty() ? "" : ", ",
+                      e.name.substr(e.name.rfind('.') + 1).c_str(), e.value, e.unit.c_str());
+        parameters += buf;
+      }
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%.3g %s", w.drift_sigma.value, w.drift_sigma.unit.c_str());
+      char nested[96];
+      std::snprintf(nested, sizeof nested, "2Δℓ = %.1f beyond the drift σ re-fitted alone", w.statistic);
+      c.note = "likelihood of the innovations with " + parameters + " and the drift σ re-fitted (" +
+               ident::DriftName(w.drift) + ".sigma " + buf + " with it); " + nested;
+      out.push_back(std::move(p));
+    }
   }
   return out;
 }
@@ -451,9 +502,14 @@ Findings FindMissingEffects(const BenchRun& run, const ModelPass& pass, const Er
   // Screening level of a structure before the likelihood confirms it: the
   // family-wise α over the drifts and the structural families tried.
   const double screen_alpha = options.finder.family_wise_alpha / (6.0 * 3.0);
-  // The likelihood's walks first: where correlation processing proposes the
-  // same walk, the likelihood's estimate is kept.
-  std::vector<StructureProposal> proposals = WalkProposals(run, pass, a_priori, screen_alpha, options, notes);
+  // The likelihood's structures first: where correlation processing proposes
+  // the same structure, the likelihood's estimate is kept.
+  const bool constant_significant =
+      std::any_of(ranked.terms.begin(), ranked.terms.end(), [&](const EffectCandidate& c) {
+        return c.identifiable && c.p_value_holm < options.finder.family_wise_alpha;
+      });
+  std::vector<StructureProposal> proposals =
+      LikelihoodStructureProposals(run, pass, a_priori, f.drifts, constant_significant, screen_alpha, options, notes);
   for (StructureProposal& p : ProposeStructures(f.drifts, run.DurationS(), screen_alpha)) {
     if (std::none_of(proposals.begin(), proposals.end(),
                      [&](const StructureProposal& o) { return o.effect.term == p.effect.term; })) {
@@ -509,8 +565,10 @@ const EffectCandidate* NextDiscovery(const Findings& found, const AnalysisOption
 std::vector<ParameterEstimate> WithTakenStructures(std::vector<ParameterEstimate> identified,
                                                    const ErrorModel& model, const Findings& found) {
   for (const StructureProposal& p : found.structures) {
-    if (!p.walk.has_value() || model.FindEffect(p.effect.term) < 0) continue;
-    for (const ParameterEstimate& e : {p.walk->density, p.walk->drift_sigma}) {
+    if (!p.fitted.has_value() || model.FindEffect(p.effect.term) < 0) continue;
+    std::vector<ParameterEstimate> taken = p.fitted->parameters;
+    taken.push_back(p.fitted->drift_sigma);
+    for (const ParameterEstimate& e : taken) {
       std::erase_if(identified, [&](const ParameterEstimate& q) { return q.name == e.name; });
       identified.push_back(e);
     }
@@ -534,8 +592,8 @@ absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& ba
                                     [&](const StructureProposal& p) { return p.effect.term == term; });
       if (structure != found.structures.end()) {
         model.effects.push_back(structure->effect);
-        if (structure->walk.has_value()) {
-          ident::DriftOf(model, structure->walk->drift).sigma = structure->walk->drift_sigma.value;
+        if (structure->fitted.has_value()) {
+          ident::DriftOf(model, structure->fitted->drift).sigma = structure->fitted->drift_sigma.value;
         }
         continue;
       }
@@ -661,17 +719,6 @@ AnalysisReport ReportOf(const ModelPass& pass, const Findings& found, const Benc
   for (const ParameterEstimate& e : ConstantEffectEstimates(pass)) r.identified.push_back(e);
   r.notes = notes;
   return r;
-}
-
-// The drifts correlation processing resolved in `drifts`.
-ident::DriftSelection ResolvedDrifts(const std::vector<DriftCorrelation>& drifts) {
-  ident::DriftSelection selection{};
-  for (int d = 0; d < 6; ++d) {
-    const std::string name = ident::DriftName(d);
-    selection[static_cast<size_t>(d)] = std::any_of(
-        drifts.begin(), drifts.end(), [&](const DriftCorrelation& c) { return c.state == name && c.analysis.resolved; });
-  }
-  return selection;
 }
 
 // The likelihood-ratio statistic of the drift estimates against the model's

@@ -38,6 +38,10 @@ absl::StatusOr<SmoothedPass> RunSmoother(const ForwardPass& fw, const SmootherOp
   out.backward_variance.resize(K, n);
   out.discrepancy.resize(K, n);
   if (options.block_size > 0) out.block_covariance.resize(K, PackedSize(options.block_size));
+  for (int i : options.pair_states) {
+    if (i < 0 || i + 1 >= n) return absl::InvalidArgumentError("smoother: a moment pair is outside the state");
+  }
+  out.pair_moments.assign(options.pair_states.size(), Eigen::Matrix<double, Eigen::Dynamic, 7>::Zero(K, 7));
 
   Eigen::MatrixXd P_s, P_f, P_p, gain_T, diff;
   Eigen::VectorXd x_s = fw.x_filt.row(K - 1).transpose();
@@ -51,6 +55,10 @@ absl::StatusOr<SmoothedPass> RunSmoother(const ForwardPass& fw, const SmootherOp
       const Eigen::MatrixXd block =
           Ps.block(options.block_begin, options.block_begin, options.block_size, options.block_size);
       PackSymmetric(block, out.block_covariance.row(k).data());
+    }
+    for (size_t p = 0; p < options.pair_states.size(); ++p) {
+      const int i = options.pair_states[p];
+      out.pair_moments[p].block<1, 3>(k, 0) << Ps(i, i), Ps(i, i + 1), Ps(i + 1, i + 1);
     }
     for (int i = 0; i < n; ++i) {
       const double pf = Pf(i, i);
@@ -131,6 +139,10 @@ absl::StatusOr<SmoothedPass> RunSmoother(const ForwardPass& fw, const SmootherOp
     diff = P_s - P_p;
     const Eigen::MatrixXd lag = P_s * gain_T;  // P_{k+1,k|K} = P_{k+1|K} C_kᵀ
     out.lag_one_covariance.row(k) = lag.diagonal().transpose();
+    for (size_t p = 0; p < options.pair_states.size(); ++p) {
+      const int i = options.pair_states[p];
+      out.pair_moments[p].block<1, 4>(k, 3) << lag(i, i), lag(i, i + 1), lag(i + 1, i), lag(i + 1, i + 1);
+    }
     P_s = P_f + gain_T.transpose() * diff * gain_T;
     P_s = 0.5 * (P_s + P_s.transpose()).eval();
     record(k, x_s, P_s, P_f);

@@ -3,29 +3,36 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <string>
 
 #include <Eigen/Core>
+#include <Eigen/Cholesky>
 #include <Eigen/LU>
 
 #include "insdiag/engine/filter/smoother.h"
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/model/state_layout.h"
+#include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::engine::ident {
 namespace {
 
-int WalkEffectOf(const ErrorModel& m, int drift) {
-  auto terms = ParseEffectSelector(WalkName(drift));
+int EffectOf(const ErrorModel& m, const std::string& name) {
+  auto terms = ParseEffectSelector(name);
   return terms.ok() ? m.FindEffect(terms->front()) : -1;
 }
+int WalkEffectOf(const ErrorModel& m, int drift) { return EffectOf(m, WalkName(drift)); }
+int PairEffectOf(const ErrorModel& m, int drift) { return EffectOf(m, SecondOrderName(drift)); }
 
-// One parameter of the likelihood: a drift's σ or τ, or a walk's density K.
-enum class Kind { kSigma, kTau, kWalk };
+// One parameter of the likelihood: a drift's σ or τ, a walk's density K, or
+// a second-order pair's σ₂, α or β.
+enum class Kind { kSigma, kTau, kWalk, kPairSigma, kPairDecayRate, kPairFrequency };
 struct Parameter {
   Kind kind = Kind::kSigma;
   int drift = 0;
 };
+bool IsPair(Kind k) { return k == Kind::kPairSigma || k == Kind::kPairDecayRate || k == Kind::kPairFrequency; }
 
 // The parameter's value in a model: a reference into it (const for a const model).
 template <typename Model>
@@ -36,9 +43,15 @@ auto& ValueOf(Model& m, const Parameter& p) {
     case Kind::kTau:
       return DriftOf(m, p.drift).tau_s;
     case Kind::kWalk:
+      return m.effects[static_cast<size_t>(WalkEffectOf(m, p.drift))].random_walk_density;
+    case Kind::kPairSigma:
+      return m.effects[static_cast<size_t>(PairEffectOf(m, p.drift))].second_order_sigma;
+    case Kind::kPairDecayRate:
+      return m.effects[static_cast<size_t>(PairEffectOf(m, p.drift))].second_order_alpha_per_s;
+    case Kind::kPairFrequency:
       break;
   }
-  return m.effects[static_cast<size_t>(WalkEffectOf(m, p.drift))].random_walk_density;
+  return m.effects[static_cast<size_t>(PairEffectOf(m, p.drift))].second_order_beta_rad_s;
 }
 
 std::string NameOf(const Parameter& p) {
@@ -48,21 +61,70 @@ std::string NameOf(const Parameter& p) {
     case Kind::kTau:
       return DriftName(p.drift) + ".tau";
     case Kind::kWalk:
+      return WalkName(p.drift) + ".density";
+    case Kind::kPairSigma:
+      return SecondOrderName(p.drift) + ".sigma";
+    case Kind::kPairDecayRate:
+      return SecondOrderName(p.drift) + ".alpha";
+    case Kind::kPairFrequency:
       break;
   }
-  return WalkName(p.drift) + ".density";
+  return SecondOrderName(p.drift) + ".beta";
 }
 
 const char* UnitOf(const Parameter& p) {
+  const bool gyro = p.drift < 3;
   switch (p.kind) {
     case Kind::kSigma:
-      return p.drift < 3 ? "rad/s" : "m/s^2";
+    case Kind::kPairSigma:
+      return gyro ? "rad/s" : "m/s^2";
     case Kind::kTau:
       return "s";
     case Kind::kWalk:
+      return gyro ? "rad/s/sqrt(s)" : "m/s^2/sqrt(s)";
+    case Kind::kPairDecayRate:
+      return "1/s";
+    case Kind::kPairFrequency:
       break;
   }
-  return p.drift < 3 ? "rad/s/sqrt(s)" : "m/s^2/sqrt(s)";
+  return "rad/s";
+}
+
+// The M-step of a second-order pair (header: Second-order pairs) from its
+// smoothed means (columns i, i+1 of x) and moments; false when the
+// regression leaves the stationary region (ρ ≥ 1) or has no variance.
+struct PairStep {
+  double sigma = 0.0, alpha_per_s = 0.0, beta_rad_s = 0.0;
+};
+bool PairMStep(const Eigen::MatrixXd& x, int i, const Eigen::Matrix<double, Eigen::Dynamic, 7>& moments, double dt,
+               PairStep& out) {
+  const auto K = x.rows();
+  Eigen::Matrix2d S00 = Eigen::Matrix2d::Zero(), S11 = Eigen::Matrix2d::Zero(), S10 = Eigen::Matrix2d::Zero();
+  auto second_moment = [&](Eigen::Index k) {
+    const Eigen::Vector2d m = x.block<1, 2>(k, i).transpose();
+    Eigen::Matrix2d P;
+    P << moments(k, 0), moments(k, 1), moments(k, 1), moments(k, 2);
+    return Eigen::Matrix2d(m * m.transpose() + P);
+  };
+  for (Eigen::Index k = 0; k + 1 < K; ++k) {
+    const Eigen::Vector2d m0 = x.block<1, 2>(k, i).transpose();
+    const Eigen::Vector2d m1 = x.block<1, 2>(k + 1, i).transpose();
+    Eigen::Matrix2d L;
+    L << moments(k, 3), moments(k, 4), moments(k, 5), moments(k, 6);
+    S00 += second_moment(k);
+    S11 += second_moment(k + 1);
+    S10 += m1 * m0.transpose() + L;
+  }
+  const double tr00 = S00.trace(), tr10 = S10.trace(), skew = S10(1, 0) - S10(0, 1);
+  if (!(tr00 > 0.0)) return false;
+  const double a = tr10 / tr00, b = skew / tr00;
+  const double rho2 = a * a + b * b;
+  const double q = (S11.trace() - 2.0 * (a * tr10 + b * skew) + rho2 * tr00) / (2.0 * static_cast<double>(K - 1));
+  if (!(rho2 > 0.0 && rho2 < 1.0 && q > 0.0)) return false;
+  out.sigma = std::sqrt(q / (1.0 - rho2));
+  out.alpha_per_s = -0.5 * std::log(rho2) / dt;
+  out.beta_rad_s = std::abs(std::atan2(b, a)) / dt;
+  return out.beta_rad_s > 0.0;
 }
 
 // EM over θ = ln of each parameter (header), with the pass count of `out`.
@@ -74,6 +136,10 @@ class Maximiser {
         options_(options), out_(out) {
     for (const Parameter& p : parameters_) {
       if (p.kind == Kind::kTau) tau_free_[static_cast<size_t>(p.drift)] = true;
+      if (p.kind == Kind::kPairSigma) {
+        pair_slot_[static_cast<size_t>(p.drift)] = static_cast<int>(smoother_.pair_states.size());
+        smoother_.pair_states.push_back(layout_.EffectOffset(PairEffectOf(model_, p.drift)));
+      }
     }
   }
 
@@ -107,12 +173,25 @@ class Maximiser {
     if (!fw.ok()) return fw.status();
     const int K = fw->epochs();
     if (K < 3) return absl::InvalidArgumentError("drift likelihood: the run has fewer than three epochs");
-    auto sm = RunSmoother(*fw);
+    auto sm = RunSmoother(*fw, smoother_);
     if (!sm.ok()) return sm.status();
     const double dt = (fw->epoch_time_s.back() - fw->epoch_time_s.front()) / (K - 1);
     Step step{fw->log_likelihood, theta};
     for (size_t j = 0; j < parameters_.size(); ++j) {
       const Parameter& p = parameters_[j];
+      const auto i = static_cast<Eigen::Index>(j);
+      if (IsPair(p.kind)) {
+        const int slot = pair_slot_[static_cast<size_t>(p.drift)];
+        PairStep pair;
+        if (!PairMStep(sm->x, smoother_.pair_states[static_cast<size_t>(slot)], sm->pair_moments[static_cast<size_t>(slot)],
+                       dt, pair)) {
+          continue;
+        }
+        step.next[i] = std::log(p.kind == Kind::kPairSigma       ? pair.sigma
+                                : p.kind == Kind::kPairDecayRate ? pair.alpha_per_s
+                                                                 : pair.beta_rad_s);
+        continue;
+      }
       const bool walk = p.kind == Kind::kWalk;
       const int state = walk ? layout_.EffectOffset(WalkEffectOf(model_, p.drift)) : layout_.gyro_bias() + p.drift;
       double a_from = 0.0, a_to = 0.0, b = 0.0;
@@ -123,7 +202,6 @@ class Maximiser {
         b += x1 * x0 + sm->lag_one_covariance(k, state);
       }
       const double a0 = sm->x(0, state) * sm->x(0, state) + sm->variance(0, state);
-      const auto i = static_cast<Eigen::Index>(j);
       if (walk) {
         const double k2 = (a_to - 2.0 * b + a_from) / ((K - 1) * dt);  // K̂²
         if (k2 > 0.0) step.next[i] = 0.5 * std::log(k2);
@@ -175,10 +253,13 @@ class Maximiser {
         extrapolates = extrapolates || alpha < -1.0;
       }
       if (extrapolates) {
+        // An extrapolation far out along a ridge can leave a model whose
+        // smoother fails (two states the run cannot tell apart, their
+        // covariance singular): that step is refused, as one whose
+        // likelihood falls is.
         auto third = EmStep(extrapolated);
-        if (!third.ok()) return third.status();
         ++iterations;
-        if (third->log_likelihood >= second->log_likelihood) next = third->next;
+        if (third.ok() && third->log_likelihood >= second->log_likelihood) next = third->next;
       }
       const double largest_step = (next - theta).cwiseAbs().maxCoeff();
       theta = next;
@@ -206,28 +287,40 @@ class Maximiser {
     return -(shifted[0] - 2.0 * l0 + shifted[1]) / (h * h);
   }
 
-  // Observed information of the pair (θ_i, θ_j) at θ: second differences,
-  // the mixed one from the two diagonal shifts (Abramowitz & Stegun 25.3.27).
-  absl::StatusOr<Eigen::Matrix2d> PairInformation(const Eigen::VectorXd& theta, Eigen::Index i, Eigen::Index j,
-                                                  double l0) {
+  // Observed information of the block of parameters `at` at θ (ℓ(θ) = l0):
+  // second differences, the mixed ones from the diagonal shifts
+  // (Abramowitz & Stegun 25.3.27); r(r + 1) passes for r parameters.
+  absl::StatusOr<Eigen::MatrixXd> BlockInformation(const Eigen::VectorXd& theta, const std::vector<Eigen::Index>& at,
+                                                   double l0) {
     const double h = options_.curvature_step;
-    auto at = [&](double di, double dj) -> absl::StatusOr<double> {
+    const auto r = static_cast<Eigen::Index>(at.size());
+    auto shifted = [&](Eigen::Index a, double da, Eigen::Index b, double db) -> absl::StatusOr<double> {
       Eigen::VectorXd probe = theta;
-      probe[i] += di;
-      probe[j] += dj;
+      probe[at[static_cast<size_t>(a)]] += da;
+      probe[at[static_cast<size_t>(b)]] += db;
       return LogLikelihood(ModelOf(probe));
     };
-    double l[6];
-    const double shifts[6][2] = {{h, 0}, {-h, 0}, {0, h}, {0, -h}, {h, h}, {-h, -h}};
-    for (int k = 0; k < 6; ++k) {
-      auto v = at(shifts[k][0], shifts[k][1]);
-      if (!v.ok()) return v.status();
-      l[k] = *v;
+    Eigen::VectorXd up(r), down(r);
+    for (Eigen::Index a = 0; a < r; ++a) {
+      auto u = shifted(a, h, a, 0.0);
+      if (!u.ok()) return u.status();
+      auto d = shifted(a, -h, a, 0.0);
+      if (!d.ok()) return d.status();
+      up[a] = *u;
+      down[a] = *d;
     }
-    Eigen::Matrix2d information;
-    information(0, 0) = -(l[0] - 2.0 * l0 + l[1]) / (h * h);
-    information(1, 1) = -(l[2] - 2.0 * l0 + l[3]) / (h * h);
-    information(0, 1) = information(1, 0) = -(l[4] + l[5] - l[0] - l[1] - l[2] - l[3] + 2.0 * l0) / (2.0 * h * h);
+    Eigen::MatrixXd information(r, r);
+    for (Eigen::Index a = 0; a < r; ++a) {
+      information(a, a) = -(up[a] - 2.0 * l0 + down[a]) / (h * h);
+      for (Eigen::Index b = a + 1; b < r; ++b) {
+        auto both_up = shifted(a, h, b, h);
+        if (!both_up.ok()) return both_up.status();
+        auto both_down = shifted(a, -h, b, -h);
+        if (!both_down.ok()) return both_down.status();
+        information(a, b) = information(b, a) =
+            -(*both_up + *both_down - up[a] - down[a] - up[b] - down[b] + 2.0 * l0) / (2.0 * h * h);
+      }
+    }
     return information;
   }
 
@@ -244,12 +337,15 @@ class Maximiser {
   const DriftLikelihoodOptions& options_;
   DriftLikelihoodResult& out_;
   DriftSelection tau_free_{};  // drifts whose τ is a parameter too
+  SmootherOptions smoother_;   // with the moments of each fitted pair
+  std::array<int, 6> pair_slot_{};  // per drift: its pair's index among smoother_.pair_states
   bool converged_ = false;
   int iterations_ = 0;
 };
 
 absl::Status ValidateOptions(const DriftLikelihoodOptions& options) {
-  if (!(options.max_iterations > 0 && options.log_tolerance > 0.0 && options.curvature_step > 0.0)) {
+  if (!(options.max_iterations > 0 && options.second_order_max_iterations > 0 && options.log_tolerance > 0.0 &&
+        options.curvature_step > 0.0)) {
     return absl::InvalidArgumentError("drift likelihood options out of range");
   }
   return absl::OkStatus();
@@ -280,7 +376,7 @@ ParameterEstimate EstimateOf(const Parameter& p, double value, double log_se, co
   e.ci95_high = value * std::exp(1.96 * log_se);
   e.method = "ML";
   e.unit = UnitOf(p);
-  if (p.kind != Kind::kWalk) e.a_priori = ValueOf(a_priori, p);
+  if (p.kind == Kind::kSigma || p.kind == Kind::kTau) e.a_priori = ValueOf(a_priori, p);
   return e;
 }
 
@@ -295,6 +391,10 @@ const GaussMarkov& DriftOf(const ErrorModel& m, int drift) {
 
 std::string DriftName(int drift) {
   return std::string(drift < 3 ? "gyro_bias_gm." : "acc_bias_gm.") + "xyz"[drift % 3];
+}
+
+std::string SecondOrderName(int drift) {
+  return std::string(drift < 3 ? "gyro_bias_second_order." : "acc_bias_second_order.") + "xyz"[drift % 3];
 }
 
 std::string WalkName(int drift) {
@@ -337,10 +437,10 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const BenchRun&
     const bool with_tau = j + 1 < parameters.size() && parameters[j + 1].kind == Kind::kTau;
     std::vector<double> log_se;
     if (with_tau) {
-      auto information = em.PairInformation(*theta, i, i + 1, l0);
+      auto information = em.BlockInformation(*theta, {i, i + 1}, l0);
       if (!information.ok()) return information.status();
       if ((*information)(0, 0) > 0.0 && information->determinant() > 0.0) {
-        const Eigen::Matrix2d covariance = information->inverse();
+        const Eigen::MatrixXd covariance = information->inverse();
         log_se = {std::sqrt(covariance(0, 0)), std::sqrt(covariance(1, 1))};
       }
     } else {
@@ -371,99 +471,238 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const BenchRun&
   return out;
 }
 
-absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const BenchRun& run, const ErrorModel& model,
-                                                                const ErrorModel& a_priori,
-                                                                const DriftSelection& axes,
-                                                                const FilterOptions& filter,
-                                                                const DriftLikelihoodOptions& options) {
+namespace {
+
+// A structure kind the likelihood tests: its parameters after the axis'
+// drift σ (the first is its magnitude) and its effect at a start.
+struct StructureKind {
+  bool second_order = false;
+  std::string Name(int drift) const { return second_order ? SecondOrderName(drift) : WalkName(drift); }
+  std::vector<Kind> Kinds() const {
+    if (second_order) return {Kind::kPairSigma, Kind::kPairDecayRate, Kind::kPairFrequency};
+    return {Kind::kWalk};
+  }
+  // Starting points: one for a walk, one per starting period for a pair.
+  size_t Starts(const DriftLikelihoodOptions& o) const {
+    return second_order ? o.second_order_start_periods_s.size() : 1;
+  }
+  // The effect at start `start` for a drift of a-priori σ and τ `specified`
+  // (header: a walk at the drift's short-term level σ√(2/τ); a pair of the
+  // drift's σ, its decay time the starting period).
+  absl::StatusOr<ModelEffect> At(int drift, size_t start, const GaussMarkov& specified,
+                                 const DriftLikelihoodOptions& o) const {
+    auto terms = ParseEffectSelector(Name(drift));
+    if (!terms.ok()) return terms.status();
+    ModelEffect e;
+    e.term = terms->front();
+    if (second_order) {
+      const double period_s = o.second_order_start_periods_s[start];
+      e.second_order_sigma = specified.sigma;
+      e.second_order_alpha_per_s = 1.0 / period_s;
+      e.second_order_beta_rad_s = 2.0 * std::numbers::pi / period_s;
+    } else {
+      e.random_walk_density = specified.sigma * std::sqrt(2.0 / specified.tau_s);
+    }
+    return e;
+  }
+};
+
+// The report's parameters of a fitted structure from its estimates in θ
+// (value, SE of its log): a walk's K; a pair's σ₂, τ₂ = 1/α and period 2π/β
+// (ln τ₂ = −ln α: the same SE in the log).
+std::vector<ParameterEstimate> ReportedParameters(const StructureKind& kind, int drift,
+                                                  const std::vector<ParameterEstimate>& fitted) {
+  if (!kind.second_order) return fitted;
+  std::vector<ParameterEstimate> out{fitted[0]};
+  for (size_t k = 1; k < 3; ++k) {
+    ParameterEstimate e = fitted[k];
+    const double log_se = e.std_error / e.value;
+    const double scale = k == 1 ? 1.0 : 2.0 * std::numbers::pi;
+    e.name = SecondOrderName(drift) + (k == 1 ? ".tau" : ".period");
+    e.value = scale / fitted[k].value;
+    e.std_error = e.value * log_se;
+    e.ci95_low = e.value * std::exp(-1.96 * log_se);
+    e.ci95_high = e.value * std::exp(1.96 * log_se);
+    e.unit = std::string("s");
+    out.push_back(e);
+  }
+  return out;
+}
+
+// Fits a structure of `kind` on each selected axis with its drift σ (header:
+// Walks, Second-order pairs): the screen's first EM step from each start,
+// the kept axes jointly from their best starts, each tested against the
+// model without it.
+absl::StatusOr<DriftLikelihoodResult> FitStructures(const BenchRun& run, const ErrorModel& model,
+                                                    const ErrorModel& a_priori, const DriftSelection& axes,
+                                                    const StructureKind& kind, double screen_alpha,
+                                                    const FilterOptions& filter,
+                                                    const DriftLikelihoodOptions& options) {
   if (auto st = ValidateOptions(options); !st.ok()) return st;
   DriftLikelihoodResult out;
   out.model = model;
   out.converged = true;
+  const std::vector<Kind> kinds = kind.Kinds();
+  const auto per_axis = static_cast<Eigen::Index>(kinds.size()) + 1;  // the drift σ, then the structure's
 
-  // Every candidate walk at the walk hypothesis (header): the drift at its
-  // a-priori σ (not wider: a widened drift took the slow variance a walk
-  // would explain) and the walk at that drift's short-term level σ√(2/τ).
-  ErrorModel trial = model;
-  std::vector<Parameter> parameters;
+  std::vector<int> candidates;
   for (int d = 0; d < 6; ++d) {
-    if (!axes[static_cast<size_t>(d)] || !HasDrift(model, d) || WalkEffectOf(model, d) >= 0) continue;
-    auto terms = ParseEffectSelector(WalkName(d));
-    if (!terms.ok()) return terms.status();
-    ModelEffect walk;
-    walk.term = terms->front();
-    const GaussMarkov& specified = HasDrift(a_priori, d) ? DriftOf(a_priori, d) : DriftOf(model, d);
-    GaussMarkov& drift = DriftOf(trial, d);
-    drift.sigma = std::min(drift.sigma, specified.sigma);
-    walk.random_walk_density = drift.sigma * std::sqrt(2.0 / specified.tau_s);
-    trial.effects.push_back(walk);
-    parameters.push_back({Kind::kSigma, d});
-    parameters.push_back({Kind::kWalk, d});
+    if (axes[static_cast<size_t>(d)] && HasDrift(model, d) && EffectOf(model, kind.Name(d)) < 0) candidates.push_back(d);
   }
-  if (parameters.empty()) return out;
+  if (candidates.empty()) return out;
+  auto specified = [&](int d) { return HasDrift(a_priori, d) ? DriftOf(a_priori, d) : DriftOf(model, d); };
 
-  // The screen: one EM step; a walk whose K falls is not told from the drift.
-  std::vector<int> kept_axes;
-  {
-    Maximiser screen(run, trial, parameters, filter, options, out);
-    const Eigen::VectorXd start = screen.Start();
-    auto step = screen.EmStep(start);
-    if (!step.ok()) return step.status();
-    out.log_likelihood_before = step->log_likelihood;
-    for (size_t j = 0; j < parameters.size(); ++j) {
-      const auto i = static_cast<Eigen::Index>(j);
-      if (parameters[j].kind == Kind::kWalk && step->next[i] > start[i]) kept_axes.push_back(parameters[j].drift);
+  // The screen: from each start, every candidate at the structure hypothesis
+  // (the drift at its a-priori σ, not wider: a widened drift took the slow
+  // variance the structure would explain), one EM step; an axis keeps the
+  // start whose step lets the magnitude grow most.
+  std::array<double, 6> best_growth;
+  best_growth.fill(0.0);
+  std::array<size_t, 6> best_start{};
+  for (size_t start = 0; start < kind.Starts(options); ++start) {
+    ErrorModel trial = model;
+    std::vector<Parameter> parameters;
+    for (int d : candidates) {
+      auto effect = kind.At(d, start, specified(d), options);
+      if (!effect.ok()) return effect.status();
+      GaussMarkov& drift = DriftOf(trial, d);
+      drift.sigma = std::min(drift.sigma, specified(d).sigma);
+      trial.effects.push_back(*effect);
+      parameters.push_back({Kind::kSigma, d});
+      for (Kind k : kinds) parameters.push_back({k, d});
     }
+    Maximiser screen(run, trial, parameters, filter, options, out);
+    const Eigen::VectorXd theta = screen.Start();
+    auto step = screen.EmStep(theta);
+    if (!step.ok()) return step.status();
+    if (start == 0) out.log_likelihood_before = step->log_likelihood;
+    for (size_t c = 0; c < candidates.size(); ++c) {
+      const auto magnitude = static_cast<Eigen::Index>(c) * per_axis + 1;
+      const double growth = step->next[magnitude] - theta[magnitude];
+      const auto d = static_cast<size_t>(candidates[c]);
+      if (growth > best_growth[d]) {
+        best_growth[d] = growth;
+        best_start[d] = start;
+      }
+    }
+  }
+  std::vector<int> kept_axes;
+  for (int d : candidates) {
+    if (best_growth[static_cast<size_t>(d)] > 0.0) kept_axes.push_back(d);
   }
   if (kept_axes.empty()) return out;
 
-  // The kept walks with their drifts, jointly.
+  // The kept structures with their drifts, jointly, each from its best start.
   ErrorModel joint = model;
   std::vector<Parameter> kept;
   for (int d : kept_axes) {
-    joint.effects.push_back(trial.effects[static_cast<size_t>(WalkEffectOf(trial, d))]);
+    auto effect = kind.At(d, best_start[static_cast<size_t>(d)], specified(d), options);
+    if (!effect.ok()) return effect.status();
+    joint.effects.push_back(*effect);
     kept.push_back({Kind::kSigma, d});
-    kept.push_back({Kind::kWalk, d});
+    for (Kind k : kinds) kept.push_back({k, d});
   }
-  Maximiser em(run, joint, kept, filter, options, out);
+  // A pair's joint fit is capped (options): past the cap its statistic is a
+  // lower bound. A structure significant at the cap is fitted on to
+  // convergence before its errors are taken: the information is that of
+  // the maximum, not of a point on the way to it.
+  DriftLikelihoodOptions capped = options;
+  if (kind.second_order) capped.max_iterations = std::min(options.max_iterations, options.second_order_max_iterations);
+  Maximiser em(run, joint, kept, filter, capped, out);
   auto theta = FitInto(em, out, nullptr);
   if (!theta.ok()) return theta.status();
-  const double l_hat = out.log_likelihood_after;
 
-  for (size_t j = 0; j < kept.size(); ++j) {
-    if (kept[j].kind != Kind::kWalk) continue;
-    const int d = kept[j].drift;
-    const auto i = static_cast<Eigen::Index>(j);
-    WalkEstimate w;
+  std::vector<StructureEstimate> fits;
+  auto significant = [&](const StructureEstimate& w) {
+    return stats::ChiSquareSurvival(w.statistic, w.dof) * static_cast<double>(kind.Starts(options)) < screen_alpha;
+  };
+  for (int d : kept_axes) {
+    StructureEstimate w;
     w.drift = d;
-    w.effect = WalkName(d);
-    // Its error with the drift σ's: over a bench run the two trade along a
-    // ridge of the likelihood, and K's curvature alone would hide it.
-    auto information = em.PairInformation(*theta, i - 1, i, l_hat);
-    if (!information.ok()) return information.status();
-    const bool definite = (*information)(0, 0) > 0.0 && information->determinant() > 0.0;
-    const Eigen::Matrix2d covariance = definite ? Eigen::Matrix2d(information->inverse())
-                                                : Eigen::Matrix2d::Constant(std::numeric_limits<double>::infinity());
-    w.drift_sigma = EstimateOf(kept[j - 1], std::exp((*theta)[i - 1]), std::sqrt(covariance(0, 0)), a_priori);
-    w.density = EstimateOf(kept[j], std::exp((*theta)[i]), std::sqrt(covariance(1, 1)), a_priori);
-    // ℓ̂₀: the joint model without this walk, its drift σ re-fitted alone.
-    // EM for σ alone starts from the model's σ, not the joint fit's: from a
-    // σ the walk has relieved, EM crawls up and would stop below ℓ̂₀ (its
-    // steps fall under the tolerance long before it gets there), which
-    // inflates the statistic.
+    w.effect = kind.Name(d);
+    w.dof = static_cast<int>(kinds.size());
+    // ℓ̂₀: the joint model without this structure, its drift σ re-fitted
+    // alone. EM for σ alone starts from the model's σ, not the joint fit's:
+    // from a σ the structure has relieved, EM crawls up and would stop below
+    // ℓ̂₀ (its steps fall under the tolerance long before it gets there),
+    // which inflates the statistic.
     ErrorModel without = out.model;
-    without.effects.erase(without.effects.begin() + WalkEffectOf(without, d));
+    without.effects.erase(without.effects.begin() + EffectOf(without, w.effect));
     DriftOf(without, d).sigma = DriftOf(model, d).sigma;
     DriftLikelihoodResult alone_result;
     Maximiser alone(run, without, {Parameter{Kind::kSigma, d}}, filter, options, alone_result);
-    if (auto fitted = FitInto(alone, alone_result, nullptr); !fitted.ok()) return fitted.status();
+    if (auto fitted_alone = FitInto(alone, alone_result, nullptr); !fitted_alone.ok()) return fitted_alone.status();
     out.filter_passes += alone_result.filter_passes;
     w.log_likelihood_without = alone_result.log_likelihood_after;
-    w.statistic = std::max(0.0, 2.0 * (l_hat - w.log_likelihood_without));
-    out.identified.push_back(w.density);
-    out.walks.push_back(std::move(w));
+    w.statistic = std::max(0.0, 2.0 * (out.log_likelihood_after - w.log_likelihood_without));
+    fits.push_back(std::move(w));
+  }
+  if (!out.converged && std::any_of(fits.begin(), fits.end(), significant)) {
+    const int capped_iterations = out.iterations;
+    Maximiser on(run, out.model, kept, filter, options, out);
+    theta = FitInto(on, out, nullptr);
+    if (!theta.ok()) return theta.status();
+    out.iterations += capped_iterations;
+    for (StructureEstimate& w : fits) {
+      w.statistic = std::max(0.0, 2.0 * (out.log_likelihood_after - w.log_likelihood_without));
+    }
+  }
+  const double l_hat = out.log_likelihood_after;
+  Maximiser at_estimate(run, out.model, kept, filter, options, out);
+  for (size_t c = 0; c < fits.size(); ++c) {
+    StructureEstimate& w = fits[c];
+    const auto first = static_cast<Eigen::Index>(c) * per_axis;
+    w.fitted = out.model.effects[static_cast<size_t>(EffectOf(out.model, w.effect))];
+    // Its errors with the drift σ's (and a pair's with each other): over a
+    // bench run they trade along ridges of the likelihood, and one
+    // parameter's curvature alone would hide it. Only for a structure the
+    // nested test keeps: the block costs r(r + 1) passes.
+    Eigen::MatrixXd covariance = Eigen::MatrixXd::Constant(per_axis, per_axis, std::numeric_limits<double>::quiet_NaN());
+    if (significant(w)) {
+      std::vector<Eigen::Index> block;
+      for (Eigen::Index k = 0; k < per_axis; ++k) block.push_back(first + k);
+      auto information = at_estimate.BlockInformation(*theta, block, l_hat);
+      if (!information.ok()) return information.status();
+      covariance.setConstant(std::numeric_limits<double>::infinity());
+      const Eigen::LLT<Eigen::MatrixXd> llt(*information);
+      if (llt.info() == Eigen::Success) covariance = llt.solve(Eigen::MatrixXd::Identity(per_axis, per_axis));
+    }
+    auto estimate = [&](Eigen::Index k) {
+      return EstimateOf(kept[static_cast<size_t>(first + k)], std::exp((*theta)[first + k]), std::sqrt(covariance(k, k)),
+                        a_priori);
+    };
+    w.drift_sigma = estimate(0);
+    std::vector<ParameterEstimate> fitted;
+    for (Eigen::Index k = 1; k < per_axis; ++k) fitted.push_back(estimate(k));
+    w.parameters = ReportedParameters(kind, w.drift, fitted);
+    out.identified.insert(out.identified.end(), w.parameters.begin(), w.parameters.end());
+    out.structures.push_back(std::move(w));
   }
   return out;
+}
+
+}  // namespace
+
+absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const BenchRun& run, const ErrorModel& model,
+                                                                const ErrorModel& a_priori,
+                                                                const DriftSelection& axes, double screen_alpha,
+                                                                const FilterOptions& filter,
+                                                                const DriftLikelihoodOptions& options) {
+  return FitStructures(run, model, a_priori, axes, StructureKind{false}, screen_alpha, filter, options);
+}
+
+absl::StatusOr<DriftLikelihoodResult> IdentifySecondOrdersByLikelihood(const BenchRun& run, const ErrorModel& model,
+                                                                       const ErrorModel& a_priori,
+                                                                       const DriftSelection& axes,
+                                                                       double screen_alpha,
+                                                                       const FilterOptions& filter,
+                                                                       const DriftLikelihoodOptions& options) {
+  if (options.second_order_start_periods_s.empty() ||
+      std::any_of(options.second_order_start_periods_s.begin(), options.second_order_start_periods_s.end(),
+                  [](double p) { return !(p > 0.0); })) {
+    return absl::InvalidArgumentError("drift likelihood: second-order starting periods must be positive");
+  }
+  return FitStructures(run, model, a_priori, axes, StructureKind{true}, screen_alpha, filter, options);
 }
 
 }  // namespace insdiag::engine::ident

@@ -71,6 +71,10 @@ struct AnalysisOptions {
   // correlation processing cannot show a walk whose wander is as slow as the
   // run is long.
   bool test_walks_by_likelihood = true;
+  // Test a second-order Markov pair on every drift axis the same way: the
+  // smoother flattens a poorly observable drift (a horizontal gyro's), and
+  // its correlation function then cannot show the oscillation.
+  bool test_second_orders_by_likelihood = true;
   ident::DriftLikelihoodOptions drift_likelihood;
   FinderOptions finder;
   // Time segments of the "where it shows" breakdown.

@@ -52,6 +52,12 @@ struct SmoothedPass {
   PackedCovariances block_covariance;
   // R_e(j), j = 0 … max lag, per requested state (SmootherOptions::error_acf_states).
   std::vector<std::vector<double>> error_autocovariance;
+  // Per requested pair of states (i, i+1) (SmootherOptions::pair_states), K
+  // rows of the pair's smoothed covariance and lag-one covariance:
+  //   [P₀₀ P₀₁ P₁₁ | L₀₀ L₀₁ L₁₀ L₁₁],  P = Cov(x_k | all data),
+  //   L_ij = Cov(x_{k+1,i}, x_{k,j} | all data)  (row K−1: L = 0)
+  // — the second moments the M-step of a second-order Markov pair needs.
+  std::vector<Eigen::Matrix<double, Eigen::Dynamic, 7>> pair_moments;
 };
 
 struct SmootherOptions {
@@ -63,6 +69,8 @@ struct SmootherOptions {
   std::vector<int> error_acf_states;
   int error_acf_max_lag = 0;
   int error_acf_references = 32;
+  // First states of the pairs whose 2×2 moments to keep (SmoothedPass::pair_moments).
+  std::vector<int> pair_states;
 };
 
 absl::StatusOr<SmoothedPass> RunSmoother(const ForwardPass& forward, const SmootherOptions& options = {});

@@ -53,6 +53,22 @@
 // rate-random-walk asymptote, IEEE Std 952-1997 annex C). A walk whose first
 // EM step falls below that start is one the run does not tell from the
 // drift: it is dropped from the fit without costing it further passes.
+//
+// Second-order pairs. The catalogue's pair ẋ = (−α I + β J) x + w (effects.md,
+// error_model.h) sampled at the epochs is x_{k+1} = Φ x_k + w_k with
+// Φ = ρ [cos βΔt −sin βΔt; sin βΔt cos βΔt], ρ = e^{−αΔt}, Var w = σ₂²(1 − ρ²) I.
+// With Φ = [a −b; b a] and the smoothed pair moments S₀₀ = Σ E[x_k x_kᵀ],
+// S₁₀ = Σ E[x_{k+1} x_kᵀ], S₁₁ = Σ E[x_{k+1} x_{k+1}ᵀ] (k = 0 … n−2), the
+// expected complete-data log-likelihood −(n−1) ln q − Σ E|x_{k+1} − Φx_k|²/(2q)
+// is maximised by
+//   a = tr S₁₀ / tr S₀₀,   b = (S₁₀[1,0] − S₁₀[0,1]) / tr S₀₀,
+//   q = (tr S₁₁ − 2(a tr S₁₀ + b (S₁₀[1,0] − S₁₀[0,1])) + (a² + b²) tr S₀₀) / (2(n − 1)),
+// whence ρ = √(a² + b²), α = −ln ρ / Δt, β = |atan2(b, a)| / Δt, σ₂² = q / (1 − ρ²)
+// (the rotation-constrained AR(1) regression; Shumway & Stoffer §6.3 for the
+// unconstrained one). The pair is fitted with its axis' drift σ, screened by
+// its first EM step from each starting period, and tested as the walk is,
+// 2(ℓ̂ − ℓ̂₀) with three parameters of its own; its errors come from the
+// observed information of the four (drift σ, σ₂, α, β) jointly.
 #pragma once
 
 #include <absl/status/statusor.h>
@@ -85,22 +101,37 @@ struct DriftLikelihoodOptions {
   double log_tolerance = 0.01;
   // Step of the second difference in ln σ.
   double curvature_step = 0.15;
+  // Starting periods of a second-order pair's fit [s] (its decay time starts
+  // at the period): over a few hours the likelihood in the period has a
+  // local maximum near each multiple of the true one, so EM starts from a
+  // grid and each axis keeps the start its first step favours.
+  std::vector<double> second_order_start_periods_s = {200.0, 600.0, 1800.0};
+  // EM steps at most for the joint fit of the kept pairs: past them the
+  // statistic is a lower bound (EM's likelihood only rises), which keeps the
+  // test conservative, and a pair the screen kept by chance costs no more.
+  int second_order_max_iterations = 12;
 };
 
-// A bias random walk fitted with its axis' drift σ.
-struct WalkEstimate {
+// A random structure fitted with its axis' drift σ: a bias random walk or a
+// second-order Markov pair.
+struct StructureEstimate {
   int drift = 0;                   // axis, in DriftSelection order
-  std::string effect;              // "gyro_bias_rw.z"
-  ParameterEstimate density;       // K (method "ML")
+  std::string effect;              // "gyro_bias_rw.z", "gyro_bias_second_order.y"
+  ModelEffect fitted;              // the effect with its identified parameters
+  // Method "ML": K (<effect>.density) of a walk; σ₂, τ₂ = 1/α and the period
+  // 2π/β (<effect>.sigma, .tau, .period) of a second-order pair. The first
+  // is the structure's magnitude.
+  std::vector<ParameterEstimate> parameters;
   ParameterEstimate drift_sigma;   // the axis' drift σ fitted with it (method "ML")
-  double log_likelihood_without = 0.0;  // ℓ̂₀: the maximum without the walk
+  double log_likelihood_without = 0.0;  // ℓ̂₀: the maximum without the structure
   double statistic = 0.0;          // 2(ℓ̂ − ℓ̂₀)
+  int dof = 1;                     // the structure's own parameters
 };
 
 struct DriftLikelihoodResult {
   ErrorModel model;                           // the model with the identified σ (and walks)
   std::vector<ParameterEstimate> identified;  // method "ML": .sigma of each selected drift, .density of each walk
-  std::vector<WalkEstimate> walks;            // the walks kept after the first EM step
+  std::vector<StructureEstimate> structures;  // the walks or pairs kept after the screen
   // Selected drifts whose likelihood is flat in σ (the run cannot tell it);
   // the model keeps their values.
   std::vector<std::string> not_identifiable;
@@ -128,14 +159,32 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const BenchRun&
 // Fits a bias random walk on each selected axis that has a drift and no walk
 // in `model`, each with its axis' drift σ (header), and tests each against
 // the model without it. The result's model holds the walks that the first
-// EM step kept; `walks` their estimates and statistics.
+// EM step kept; `structures` their estimates and statistics — with standard
+// errors for those whose nested test passes at `screen_alpha` (the others'
+// are NaN: their information would cost passes for nothing).
 absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const BenchRun& run, const ErrorModel& model,
                                                                 const ErrorModel& a_priori,
-                                                                const DriftSelection& axes,
+                                                                const DriftSelection& axes, double screen_alpha,
                                                                 const FilterOptions& filter,
                                                                 const DriftLikelihoodOptions& options = {});
 
+// Fits a second-order Markov pair (catalogue: gyro_bias_second_order,
+// acc_bias_second_order) on each selected axis that has a drift and no pair
+// in `model`, each with its axis' drift σ, from each starting period of the
+// options; keeps the axes whose first EM step lets the pair grow, fits them
+// jointly and tests each against the model without it (header: Second-order
+// pairs). `screen_alpha` as for the walks, over the starting periods
+// (Bonferroni).
+absl::StatusOr<DriftLikelihoodResult> IdentifySecondOrdersByLikelihood(const BenchRun& run, const ErrorModel& model,
+                                                                       const ErrorModel& a_priori,
+                                                                       const DriftSelection& axes,
+                                                                       double screen_alpha,
+                                                                       const FilterOptions& filter,
+                                                                       const DriftLikelihoodOptions& options = {});
+
 // The walk effect of axis `drift` ("gyro_bias_rw.x", …, "acc_bias_rw.z").
 std::string WalkName(int drift);
+// The second-order effect of axis `drift` ("gyro_bias_second_order.x", …).
+std::string SecondOrderName(int drift);
 
 }  // namespace insdiag::engine::ident
