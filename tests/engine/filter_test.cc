@@ -118,6 +118,42 @@ TEST(TrueModelConsistency, SensorStateNeesIsInsideItsChiSquareBandOverSeeds) {
   EXPECT_LT(smoothed_nees, high);
 }
 
+// The 2×2 moments the second-order M-step reads (SmootherOptions::pair_states)
+// are the smoother's own: the pair's block of P_{k|K} and, off the diagonal
+// too, Cov(x_{k+1}, x_k | all data) — checked against the block covariance
+// and the per-state lag-one covariance on two neighbouring drift states.
+TEST(Smoother, PairMomentsAreTheSmoothedBlockAndLagOneCovariances) {
+  const auto unit = testing::NavigationGradeUnit();
+  const ErrorModel model = testing::TrueBaseModel(unit);
+  const StateLayout layout(model);
+  const auto sim = testing::SimulateOrDie(unit, testing::ShortTurnsProfile(300.0, 600.0), 50.0, 5);
+  auto fw = RunForwardFilter(sim.run, model, FilterOptions{});
+  ASSERT_TRUE(fw.ok());
+  SmootherOptions options;
+  options.block_begin = layout.gyro_bias();
+  options.block_size = 2;
+  options.pair_states = {layout.gyro_bias()};
+  auto sm = RunSmoother(*fw, options);
+  ASSERT_TRUE(sm.ok());
+  ASSERT_EQ(sm->pair_moments.size(), 1u);
+  const auto& m = sm->pair_moments.front();
+  const int i = layout.gyro_bias();
+  for (int k = 0; k < fw->epochs(); ++k) {
+    Eigen::MatrixXd block;
+    UnpackSymmetric(sm->block_covariance.row(k).data(), 2, block);
+    EXPECT_DOUBLE_EQ(m(k, 0), block(0, 0));
+    EXPECT_DOUBLE_EQ(m(k, 1), block(0, 1));
+    EXPECT_DOUBLE_EQ(m(k, 2), block(1, 1));
+    EXPECT_DOUBLE_EQ(m(k, 3), sm->lag_one_covariance(k, i));
+    EXPECT_DOUBLE_EQ(m(k, 6), sm->lag_one_covariance(k, i + 1));
+  }
+  // The lag-one cross terms are not zero: the two gyro drifts are coupled through the attitude.
+  EXPECT_GT(m.col(4).cwiseAbs().maxCoeff(), 0.0);
+  // A pair that leaves the state is refused.
+  options.pair_states = {fw->state_size - 1};
+  EXPECT_FALSE(RunSmoother(*fw, options).ok());
+}
+
 TEST(Robustness, FourHourRunKeepsTheCovarianceSymmetricPositiveDefinite) {
   // Four hours: the full profile twice, then still to the four-hour mark, at 20 Hz.
   auto profile = testing::BuiltinProfileOrDie("full");
