@@ -1039,6 +1039,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
     }
     out.report = std::move(report);
     out.model = current().model;
+    out.base_report = std::move(report_a);
     if (options.keep_series) FillSeries(current(), out.series);
   } else if (!request.add_effects.empty()) {
     Progress(options, 0.8, "model with the added effects");
@@ -1057,6 +1058,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
     }();
     out.report.comparison = Compare(*a, *b, report_a, out.report, PredictedLikelihoodRatio(*a, added, found_a));
     out.model = b->model;
+    out.base_report = std::move(report_a);
     if (options.keep_series) FillSeries(*b, out.series);
   } else {
     out.report = std::move(report_a);

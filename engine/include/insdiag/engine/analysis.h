@@ -101,6 +101,10 @@ struct Analysis {
   AnalysisReport report;
   AnalysisSeries series;  // filled when AnalysisOptions::keep_series
   ErrorModel model;       // the model the report was computed with
+  // Model A's own report (its candidates, identification, fit) when effects
+  // were added or discovered: what the same run analysed without them
+  // reports, so that a caller comparing the two need not analyse twice.
+  std::optional<AnalysisReport> base_report;
 };
 
 absl::StatusOr<Analysis> Analyze(const BenchRun& run, const AnalysisRequest& request,
