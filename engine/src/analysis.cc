@@ -402,13 +402,11 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const BenchRun& run,
     const char* what;
     decltype(&ident::IdentifyWalksByLikelihood) fit;
     ident::DriftSelection axes;
-    size_t starts;
   };
   const Test tests[] = {
-      {options.test_walks_by_likelihood, "bias random walks", &ident::IdentifyWalksByLikelihood, every_axis, 1},
+      {options.test_walks_by_likelihood, "bias random walks", &ident::IdentifyWalksByLikelihood, every_axis},
       {options.test_second_orders_by_likelihood && !constant_significant, "second-order drifts",
-       &ident::IdentifySecondOrdersByLikelihood, unresolved,
-       options.drift_likelihood.second_order_start_periods_s.size()},
+       &ident::IdentifySecondOrdersByLikelihood, unresolved},
   };
   for (const Test& test : tests) {
     if (!test.enabled) continue;
@@ -420,10 +418,9 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const BenchRun& run,
       }
       continue;
     }
-    const double starts = static_cast<double>(test.starts);
     for (const ident::StructureEstimate& w : fitted->structures) {
       auto terms = ParseEffectSelector(w.effect);
-      if (!terms.ok() || !(stats::ChiSquareSurvival(w.statistic, w.dof) * starts < screen_alpha)) continue;
+      if (!terms.ok() || !(ident::NestedPValue(w) < screen_alpha)) continue;
       StructureProposal p;
       p.effect = w.fitted;
       p.fitted = w;
@@ -440,7 +437,7 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const BenchRun& run,
       for (const ident::StructureEstimate& o : fitted->structures) others += o.drift == w.drift ? 0.0 : o.statistic;
       c.statistic = std::max(w.statistic, 2.0 * (fitted->log_likelihood_after - pass.log_likelihood) - others);
       // χ² for a parameter on its boundary is conservative (drift_likelihood.h).
-      c.p_value = std::min(1.0, stats::ChiSquareSurvival(c.statistic, c.dof) * starts);
+      c.p_value = std::min(1.0, stats::ChiSquareSurvival(c.statistic, c.dof) * static_cast<double>(w.starts));
       c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
       c.predicted_delta_bic = -c.statistic + c.dof * log_n;
       std::string parameters;
@@ -560,7 +557,8 @@ const EffectCandidate* NextDiscovery(const Findings& found, const AnalysisOption
 }
 
 // The identified parameters of a model that took structures of `found`:
-// what the likelihood identified with each (a walk's K and its drift's σ)
+// what the likelihood identified with each (a walk's K or a pair's σ₂, τ₂
+// and period, and the drift σ fitted with it)
 // replaces the earlier estimate of the same name.
 std::vector<ParameterEstimate> WithTakenStructures(std::vector<ParameterEstimate> identified,
                                                    const ErrorModel& model, const Findings& found) {

@@ -177,21 +177,28 @@ HiddenRun SimulateHidden(const FamilyCase& c) {
   return {truth, testing::SimulateOrDie(unit, testing::BuiltinProfileOrDie(c.profile), kFindRate10Hz, 7)};
 }
 
+// One analysis of a scenario's run from the nominal model with the case's
+// term added: its base report is model A's, as an analysis without the
+// request reports it (test BaseReport), its report model B's.
+absl::StatusOr<Analysis> AnalyzeAddingTheTerm(const HiddenRun& hidden, const FamilyCase& c,
+                                              const AnalysisOptions& options) {
+  AnalysisRequest request;
+  request.nominal = NominalModel();
+  request.add_effects = {c.term};
+  return Analyze(hidden.sim.run, request, options);
+}
+
 class HiddenFamily : public ::testing::TestWithParam<FamilyCase> {};
 
 TEST_P(HiddenFamily, RankedFirstAndAddingItFitsTheRun) {
   const FamilyCase& c = GetParam();
-  const auto [truth, sim] = SimulateHidden(c);
+  const HiddenRun hidden = SimulateHidden(c);
+  const sim::TrueEffect& truth = hidden.truth;
   const std::string family(truth.term.family->name);
   AnalysisOptions options;
   const double alpha = options.finder.family_wise_alpha;
 
-  // One analysis with the effect added: its base report is model A's, as an
-  // analysis without the request reports it.
-  AnalysisRequest add_request;
-  add_request.nominal = NominalModel();
-  add_request.add_effects = {c.term};
-  auto b = Analyze(sim.run, add_request, options);
+  auto b = AnalyzeAddingTheTerm(hidden, c, options);
   ASSERT_TRUE(b.ok()) << b.status();
   ASSERT_TRUE(b->base_report.has_value());
   const AnalysisReport& ra = *b->base_report;
@@ -301,13 +308,11 @@ class HiddenBiasRandomWalk : public ::testing::TestWithParam<FamilyCase> {};
 TEST_P(HiddenBiasRandomWalk, FoundByLikelihoodAndAddingItFitsTheRun) {
   const FamilyCase& c = GetParam();
   const std::string turn_on = c.term.substr(0, c.term.find('_')) + "_turn_on_bias" + c.term.substr(c.term.rfind('.'));
-  const auto [truth, sim] = SimulateHidden(c);
+  const HiddenRun hidden = SimulateHidden(c);
+  const sim::TrueEffect& truth = hidden.truth;
   AnalysisOptions options;
   const double alpha = options.finder.family_wise_alpha;
-  AnalysisRequest request;
-  request.nominal = NominalModel();
-  request.add_effects = {c.term};
-  auto b = Analyze(sim.run, request, options);
+  auto b = AnalyzeAddingTheTerm(hidden, c, options);
   ASSERT_TRUE(b.ok()) << b.status();
   ASSERT_TRUE(b->base_report.has_value());
   const AnalysisReport& ra = *b->base_report;  // model A's report, as without the request

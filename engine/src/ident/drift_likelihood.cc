@@ -393,6 +393,10 @@ std::string DriftName(int drift) {
   return std::string(drift < 3 ? "gyro_bias_gm." : "acc_bias_gm.") + "xyz"[drift % 3];
 }
 
+double NestedPValue(const StructureEstimate& s) {
+  return std::min(1.0, stats::ChiSquareSurvival(s.statistic, s.dof) * static_cast<double>(s.starts));
+}
+
 std::string SecondOrderName(int drift) {
   return std::string(drift < 3 ? "gyro_bias_second_order." : "acc_bias_second_order.") + "xyz"[drift % 3];
 }
@@ -613,14 +617,13 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const BenchRun& run, const E
   if (!theta.ok()) return theta.status();
 
   std::vector<StructureEstimate> fits;
-  auto significant = [&](const StructureEstimate& w) {
-    return stats::ChiSquareSurvival(w.statistic, w.dof) * static_cast<double>(kind.Starts(options)) < screen_alpha;
-  };
+  auto significant = [&](const StructureEstimate& w) { return NestedPValue(w) < screen_alpha; };
   for (int d : kept_axes) {
     StructureEstimate w;
     w.drift = d;
     w.effect = kind.Name(d);
     w.dof = static_cast<int>(kinds.size());
+    w.starts = static_cast<int>(kind.Starts(options));
     // ℓ̂₀: the joint model without this structure, its drift σ re-fitted
     // alone. EM for σ alone starts from the model's σ, not the joint fit's:
     // from a σ the structure has relieved, EM crawls up and would stop below

@@ -129,27 +129,6 @@ void SensorBlocks::RightMultiplyTranspose(Eigen::Ref<Eigen::MatrixXd> M) const {
   }
 }
 
-void SensorBlocks::RightMultiply(Eigen::Ref<Eigen::MatrixXd> M) const {
-  for (const Block& b : blocks) {
-    if (b.size == 1) {
-      M.col(b.offset) *= b.m(0, 0);
-    } else {
-      const Eigen::MatrixXd cols = M.middleCols(b.offset, 2) * b.m;
-      M.middleCols(b.offset, 2) = cols;
-    }
-  }
-}
-
-void SensorBlocks::PreMultiply(const SensorBlocks& later) {
-  for (size_t i = 0; i < blocks.size(); ++i) blocks[i].m = later.blocks[i].m * blocks[i].m;
-}
-
-void SensorBlocks::Propagate(const SensorBlocks& D, const SensorBlocks& Q) {
-  for (size_t i = 0; i < blocks.size(); ++i) {
-    blocks[i].m = D.blocks[i].m * blocks[i].m * D.blocks[i].m.transpose() + Q.blocks[i].m;
-  }
-}
-
 Eigen::MatrixXd SensorBlocks::Dense(int m) const {
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(m, m);
   for (const Block& b : blocks) out.block(b.offset, b.offset, b.size, b.size) = b.m.topLeftCorner(b.size, b.size);

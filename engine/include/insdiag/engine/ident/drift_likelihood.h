@@ -126,7 +126,12 @@ struct StructureEstimate {
   double log_likelihood_without = 0.0;  // ℓ̂₀: the maximum without the structure
   double statistic = 0.0;          // 2(ℓ̂ − ℓ̂₀)
   int dof = 1;                     // the structure's own parameters
+  int starts = 1;                  // starting points the screen searched (a pair's periods)
 };
+
+// The nested test's p-value of a structure: χ² with its own parameters,
+// Bonferroni over the starting points searched (at most 1).
+double NestedPValue(const StructureEstimate& s);
 
 struct DriftLikelihoodResult {
   ErrorModel model;                           // the model with the identified σ (and walks)

@@ -93,12 +93,6 @@ class SensorBlocks {
 
   // M ← M · thisᵀ (columns of M are sensor states).
   void RightMultiplyTranspose(Eigen::Ref<Eigen::MatrixXd> M) const;
-  // M ← M · this.
-  void RightMultiply(Eigen::Ref<Eigen::MatrixXd> M) const;
-  // this ← later · this.
-  void PreMultiply(const SensorBlocks& later);
-  // this ← D · this · Dᵀ + Q (this is a covariance).
-  void Propagate(const SensorBlocks& D, const SensorBlocks& Q);
   Eigen::MatrixXd Dense(int m) const;
 };
 
