@@ -132,12 +132,12 @@ CorrelationAnalysis AnalyseOrDie(const std::vector<double>& x) {
 }
 
 // 2. Each structural family is detected when present and not reported when
-// absent. Per family, over kFamilySeeds seeds: detected in all but at most
-// one; on a pure exponential drift, no family is reported in all but at most
-// one (the header: an oscillatory alternative fits R̂'s long-lag wander in a
+// absent. Per family, over kFamilySeeds seeds of 200 τ: detected in at least
+// 7 (the sum of two exponentials needs a longer series: 2b); on a pure
+// exponential drift, no family is reported in all but at most one (the header: an oscillatory alternative fits R̂'s long-lag wander in a
 // few per cent of drift-free runs; the analysis then confirms with the filter).
 TEST(CorrelationFamilyTest, DetectsEachStructureWhenPresentAndOnlyThen) {
-  int false_reports = 0, exact_two = 0;
+  int false_reports = 0;
   std::map<CorrelationFamily, int> detected;
   for (int seed = 0; seed < kFamilySeeds; ++seed) {
     std::mt19937_64 rng(1000 + seed);
@@ -175,22 +175,6 @@ TEST(CorrelationFamilyTest, DetectsEachStructureWhenPresentAndOnlyThen) {
       else std::printf("seed %d, second order missed: %s\n", seed, Describe(a).c_str());
     }
     {
-      // Second exponential ten times slower, same σ.
-      std::vector<double> x = base;
-      Add(x, GaussMarkovSeries(rng, kSeriesLength, kSeriesDtS, kBaseSigma, 10.0 * kBaseTauS));
-      const CorrelationAnalysis a = AnalyseOrDie(x);
-      // Measured: the screen names it a random walk or two exponentials (a
-      // second correlation time of T/20 is walk-like over the fit's lags);
-      // either is a non-exponential structure the likelihood then confirms.
-      const auto r = Reported(a);
-      if (Has(r, CorrelationFamily::kTwoExponentials)) ++exact_two;
-      if (Has(r, CorrelationFamily::kTwoExponentials) || Has(r, CorrelationFamily::kRandomWalk)) {
-        ++detected[CorrelationFamily::kTwoExponentials];
-      } else {
-        std::printf("seed %d, two exponentials missed: %s\n", seed, Describe(a).c_str());
-      }
-    }
-    {
       // Turn-on bias: a constant of half the drift's σ, about five standard
       // deviations of the run's mean (σ √(2τ/T) ≈ 0.1 σ).
       std::vector<double> x = base;
@@ -205,18 +189,47 @@ TEST(CorrelationFamilyTest, DetectsEachStructureWhenPresentAndOnlyThen) {
   }
   std::printf("false reports on exponential drifts: %d of %d\n", false_reports, kFamilySeeds);
   EXPECT_LE(false_reports, 1);
-  // Two exponentials (τ₂ = 10 τ, σ₂ = σ) are NOT asserted: measured 1 of 10
-  // at the screening level (the Bonferroni-corrected profile test over τ₂
-  // gives p ≈ 0.01–0.2) — a finding, docs/IDENTIFICATION.md.
-  std::printf("%s (or a walk) screened in %d of %d\n", CorrelationFamilyName(CorrelationFamily::kTwoExponentials),
-              detected[CorrelationFamily::kTwoExponentials], kFamilySeeds);
   for (CorrelationFamily f : {CorrelationFamily::kRandomWalk, CorrelationFamily::kExponentialCosine,
                               CorrelationFamily::kExponentialPlusConstant}) {
     std::printf("%s detected in %d of %d\n", CorrelationFamilyName(f), detected[f], kFamilySeeds);
     // Measured (seeds 1000–1009): walk 7, exponential-cosine 10, constant 8 of 10.
     EXPECT_GE(detected[f], kFamilySeeds * 7 / 10) << CorrelationFamilyName(f);
   }
-  std::printf("two exponentials named as such in %d of %d\n", exact_two, kFamilySeeds);
+}
+
+// 2b. A second, slower exponential (τ₂ = 10 τ, σ₂ = σ), over a run long
+// enough to resolve it. What any test can do is bounded by the information
+// in the series: the expected likelihood-ratio statistic against the nearest
+// single exponential is twice the Kullback–Leibler divergence between the two
+// spectra (Whittle's approximation, summed over the Fourier frequencies) —
+// 8.9 over 200 τ, 48.6 over 1000 τ — against the screen's threshold of 15.3
+// (χ²₁ at α_FW/18, Bonferroni over the six τ₂ of the profile). Over the 200 τ
+// of the other families no test finds it reliably (this screen: 1 of 10 seeds);
+// over 1000 τ the slow component has a hundred correlation times. It counts
+// as found when screened as two exponentials or as a walk, the family's limit
+// as τ₂ outgrows the fitted lags; either leads the analysis to the
+// likelihood's walk test (ProposeStructures).
+TEST(CorrelationFamilyTest, DetectsTwoExponentialsOverAThousandCorrelationTimes) {
+  const size_t length = static_cast<size_t>(1000.0 * kBaseTauS / kSeriesDtS);
+  const double slow_tau_s = 10.0 * kBaseTauS;
+  int screened = 0, named = 0, tau2_covered = 0;
+  for (int seed = 0; seed < kFamilySeeds; ++seed) {
+    std::mt19937_64 rng(5000 + seed);
+    std::vector<double> x = GaussMarkovSeries(rng, length, kSeriesDtS, kBaseSigma, kBaseTauS);
+    Add(x, GaussMarkovSeries(rng, length, kSeriesDtS, kBaseSigma, slow_tau_s));
+    const CorrelationAnalysis a = AnalyseOrDie(x);
+    const auto r = Reported(a);
+    if (Has(r, CorrelationFamily::kTwoExponentials) || Has(r, CorrelationFamily::kRandomWalk)) ++screened;
+    else std::printf("seed %d, two exponentials missed: %s\n", seed, Describe(a).c_str());
+    if (a.best == CorrelationFamily::kTwoExponentials) ++named;
+    const FittedParameter* tau2 = a.Fit(CorrelationFamily::kTwoExponentials)->Parameter("tau2_s");
+    if (tau2->ci95_low <= slow_tau_s && slow_tau_s <= tau2->ci95_high) ++tau2_covered;
+  }
+  // Measured (seeds 5000–5009): screened 10, named best by BIC 5 (the walk
+  // otherwise: one parameter fewer, χ² within 1–4), τ₂ inside its 95% interval 8.
+  std::printf("two exponentials screened in %d of %d, named best in %d, tau2 covered in %d\n", screened,
+              kFamilySeeds, named, tau2_covered);
+  EXPECT_GE(screened, kFamilySeeds * 7 / 10);
 }
 
 // 4. Seed eq. 9 against numpy (tests/engine/acf_check.py) on the same series.
