@@ -272,8 +272,8 @@ std::vector<StructureProposal> ProposeStructures(const std::vector<DriftCorrelat
   std::vector<StructureProposal> out;
   for (const DriftCorrelation& d : drifts) {
     if (!d.analysis.resolved) continue;
-    const bool gyro = d.state.rfind("gyro", 0) == 0;
-    const char axis = d.state.back();
+    const bool gyro = d.sensor == Sensor::kGyro;
+    const char axis = static_cast<char>('x' + d.axis);
     for (const ident::FamilyFit& f : d.analysis.fits) {
       if (!f.converged || f.lr_p_value >= screen_alpha) continue;
       StructureProposal p;

@@ -52,7 +52,8 @@ std::vector<DriftCorrelation> CorrelateDrifts(const ForwardPass& fw, const Smoot
       if (notes != nullptr) notes->push_back(name + ": no correlation processing (" + std::string(analysis.status().message()) + ")");
       continue;
     }
-    out.push_back({name, *std::move(analysis)});
+    const SensorState& drift = layout.sensor_states()[static_cast<size_t>(state - layout.sensor_begin())];
+    out.push_back({name, drift.sensor, drift.axis, *std::move(analysis)});
   }
   return out;
 }
@@ -65,10 +66,9 @@ RetargetResult RetargetDrifts(const ErrorModel& current, const ErrorModel& a_pri
   for (const DriftCorrelation& d : drifts) {
     const FamilyFit* fit = d.analysis.Fit(CorrelationFamily::kExponential);
     if (!d.analysis.resolved || fit == nullptr || !fit->converged) continue;
-    const bool gyro = d.state.rfind("gyro", 0) == 0;
-    const int axis = d.state.back() - 'x';
-    GaussMarkov& gm = (gyro ? r.model.gyro : r.model.acc).bias[static_cast<size_t>(axis)];
-    const GaussMarkov& prior = (gyro ? a_priori.gyro : a_priori.acc).bias[static_cast<size_t>(axis)];
+    const bool gyro = d.sensor == Sensor::kGyro;
+    GaussMarkov& gm = (gyro ? r.model.gyro : r.model.acc).bias[static_cast<size_t>(d.axis)];
+    const GaussMarkov& prior = (gyro ? a_priori.gyro : a_priori.acc).bias[static_cast<size_t>(d.axis)];
     const FittedParameter& sigma = fit->parameters[0];
     const FittedParameter& tau = fit->parameters[1];
     // Does the fit reject the a-priori (σ₀, τ₀)?

@@ -52,6 +52,8 @@ struct EffectCandidate {
 // Correlation processing of one drift state's smoothed estimate.
 struct DriftCorrelation {
   std::string state;  // e.g. "gyro_bias_gm.x"
+  Sensor sensor = Sensor::kGyro;
+  int axis = 0;
   ident::CorrelationAnalysis analysis;
 };
 
