@@ -72,6 +72,12 @@ void PrintReport(const engine::AnalysisReport& r, std::ostream& out) {
           << "estimate " << Format("%.3g", c.estimate) << " ± " << Format("%.2g", c.std_error) << " " << c.unit
           << ", statistic " << Format("%.1f", c.statistic) << ", p " << Format("%.2g", c.p_value_holm)
           << " (Holm), ΔAIC " << Format("%.1f", c.predicted_delta_aic) << "\n";
+      if (!c.correlated_with.empty()) {
+        out << "      not told apart in this run from:";
+        for (const auto& other : c.correlated_with) out << " " << other;
+        out << "\n";
+      }
+      if (!c.note.empty()) out << "      " << c.note << "\n";
     }
   }
   if (!r.identified.empty()) {

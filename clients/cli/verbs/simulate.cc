@@ -71,8 +71,9 @@ class SimulateVerb final : public Verb {
   void DeclareOptions(OptionSink& options) override {
     options.Positional("OUT.csv", &file_, "Bench-run file to write");
     options.Option("--profile", &profile_,
-                   "Table profile: static, rotations, positions, thermal, full or drift (default full: excites every "
-                   "effect of the catalogue)");
+                   "Table profile: static, rotations, positions, thermal, full or drift (default full, two hours: excites "
+                   "every constant effect of the catalogue and the second-order drifts; a bias random walk needs the "
+                   "eight hours of drift)");
     options.Repeated("--effect", &effects_,
                      "Hidden effect NAME=VALUE, e.g. gyro_scale_factor.z=1e-4 (a family applies to every axis; "
                      "yaw harmonics SIN[,COS]; bias_rw K; bias_second_order SIGMA,TAU_S,PERIOD_S)");

@@ -175,7 +175,8 @@ TableProfile ThermalCyclesProfile() {
 TableProfile FullProfile() {
   TableProfile p = Base("full",
                         "two hours: tilts, turns about three independent body directions in both senses, "
-                        "warm-up and thermal cycles; unit mounted at 45° yaw — excites every catalogue effect",
+                        "warm-up and thermal cycles; unit mounted at 45° yaw — excites every constant catalogue effect "
+                        "and the second-order drifts (a bias random walk needs the hours of `drift`)",
                         kSkewMountYawDeg);
   auto& s = p.segments;
   s.push_back(Hold(300.0));
