@@ -232,13 +232,11 @@ TEST(CorrelationFamilyTest, DetectsTwoExponentialsOverAThousandCorrelationTimes)
   EXPECT_GE(screened, kFamilySeeds * 7 / 10);
 }
 
-// 4. Seed eq. 9 against numpy (tests/engine/acf_check.py) on the same series.
-TEST(CorrelationCrossCheckTest, SampleAutocovarianceAgainstNumpy) {
-  std::mt19937_64 rng(77);
-  std::vector<double> x = GaussMarkovSeries(rng, kSeriesLength, kSeriesDtS, kBaseSigma, kBaseTauS);
-  for (double& v : x) v += 3.0 * kBaseSigma;  // a mean to remove
-  const int max_lag = 600;
-  const auto dir = insdiag::testing::MakeTempDir("acf-check");
+// Writes `x` (one value a line, %.17g) and runs tests/engine/SCRIPT on it with
+// Debian's python3 (numpy, scipy); its standard output, or why it failed.
+absl::StatusOr<std::string> RunPythonOnSeries(const std::string& script, const std::vector<double>& x,
+                                              const std::string& argument) {
+  const auto dir = insdiag::testing::MakeTempDir("series-check");
   const std::string path = (dir / "series.txt").string();
   {
     std::ofstream f(path);
@@ -247,15 +245,26 @@ TEST(CorrelationCrossCheckTest, SampleAutocovarianceAgainstNumpy) {
       std::snprintf(buf, sizeof buf, "%.17g\n", v);
       f << buf;
     }
-    ASSERT_TRUE(f.good());
+    if (!f.good()) return absl::InternalError("cannot write " + path);
   }
   auto done = insdiag::testing::RunToCompletion(
-      {"/usr/bin/python3", std::string(INSDIAG_SOURCE_DIR) + "/tests/engine/acf_check.py", path, std::to_string(max_lag)},
-      dir, std::chrono::seconds(120));
-  ASSERT_TRUE(done.ok()) << done.status();
-  ASSERT_EQ(done->exit_status, 0) << done->stderr_text;
+      {"/usr/bin/python3", std::string(INSDIAG_SOURCE_DIR) + "/tests/engine/" + script, path, argument}, dir,
+      std::chrono::seconds(120));
+  if (!done.ok()) return done.status();
+  if (done->exit_status != 0) return absl::InternalError(script + " failed: " + done->stderr_text);
+  return done->stdout_text;
+}
+
+// 4. Seed eq. 9 against numpy (tests/engine/acf_check.py) on the same series.
+TEST(CorrelationCrossCheckTest, SampleAutocovarianceAgainstNumpy) {
+  std::mt19937_64 rng(77);
+  std::vector<double> x = GaussMarkovSeries(rng, kSeriesLength, kSeriesDtS, kBaseSigma, kBaseTauS);
+  for (double& v : x) v += 3.0 * kBaseSigma;  // a mean to remove
+  const int max_lag = 600;
+  const absl::StatusOr<std::string> out = RunPythonOnSeries("acf_check.py", x, std::to_string(max_lag));
+  ASSERT_TRUE(out.ok()) << out.status();
   std::vector<double> numpy(static_cast<size_t>(max_lag) + 1, std::nan(""));
-  std::istringstream in(done->stdout_text);
+  std::istringstream in(*out);
   std::string kind;
   int j = 0;
   double v = 0.0;
@@ -273,6 +282,43 @@ TEST(CorrelationCrossCheckTest, SampleAutocovarianceAgainstNumpy) {
     EXPECT_LE(rel, 1e-9) << "lag " << k << ": engine " << engine[k] << ", numpy " << numpy[k];
   }
   std::printf("largest relative difference engine vs numpy: %.2e over %d lags\n", worst, max_lag + 1);
+}
+
+// 5. The exponential fit (seed eq. 8) against an independent estimator on the
+// same series: the exact Gaussian maximum likelihood of the zero-mean
+// Gauss–Markov process (the base model, whose fit counts the mean too), by scipy (tests/engine/acf_fit_check.py). Both estimate the same
+// (σ, τ); the likelihood's is efficient, so the variance of the difference is
+// the fit's variance less the likelihood's (Hausman, Econometrica 46(6),
+// 1978, Lemma 2.1), at most the fit's: the two agree within 3 of the fit's
+// standard errors (in ln σ, ln τ) on every seed, and the likelihood's errors
+// are no larger than the fit's.
+TEST(CorrelationCrossCheckTest, ExponentialFitAgreesWithScipyMaximumLikelihood) {
+  constexpr int kSeeds = 5;
+  for (int seed = 0; seed < kSeeds; ++seed) {
+    std::mt19937_64 rng(7000 + seed);
+    const std::vector<double> x = GaussMarkovSeries(rng, kSeriesLength, kSeriesDtS, kBaseSigma, kBaseTauS);
+    const CorrelationAnalysis a = AnalyseOrDie(x);
+    const FamilyFit* fit = a.Fit(CorrelationFamily::kExponential);
+    ASSERT_NE(fit, nullptr);
+    ASSERT_TRUE(fit->converged);
+    const absl::StatusOr<std::string> out = RunPythonOnSeries("acf_fit_check.py", x, std::to_string(kSeriesDtS));
+    ASSERT_TRUE(out.ok()) << out.status();
+    std::map<std::string, std::pair<double, double>> ml;  // value, SE of its log
+    std::istringstream in(*out);
+    std::string kind, name;
+    double value = 0.0, se_log = 0.0;
+    while (in >> kind >> name >> value >> se_log) ml[name] = {value, se_log};
+    for (int i = 0; i < 2; ++i) {
+      const FittedParameter& p = fit->parameters[static_cast<size_t>(i)];
+      ASSERT_TRUE(ml.count(p.name)) << p.name << " missing from: " << *out;
+      const auto [ml_value, ml_se_log] = ml[p.name];
+      const double fit_se_log = std::sqrt(fit->log_covariance(i, i));
+      std::printf("seed %d %s: ACF fit %.4g (SE of log %.3f), scipy ML %.4g (%.3f)\n", 7000 + seed, p.name.c_str(),
+                  p.value, fit_se_log, ml_value, ml_se_log);
+      EXPECT_LE(std::abs(std::log(p.value / ml_value)), 3.0 * fit_se_log) << p.name << ", seed " << 7000 + seed;
+      EXPECT_LE(ml_se_log, 1.05 * fit_se_log) << p.name << ", seed " << 7000 + seed;
+    }
+  }
 }
 
 // --- simulated runs --------------------------------------------------------
