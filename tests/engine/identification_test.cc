@@ -134,8 +134,9 @@ CorrelationAnalysis AnalyseOrDie(const std::vector<double>& x) {
 // 2. Each structural family is detected when present and not reported when
 // absent. Per family, over kFamilySeeds seeds of 200 τ: detected in at least
 // 7 (the sum of two exponentials needs a longer series: 2b); on a pure
-// exponential drift, no family is reported in all but at most one (the header: an oscillatory alternative fits R̂'s long-lag wander in a
-// few per cent of drift-free runs; the analysis then confirms with the filter).
+// exponential drift, no family is reported in all but at most one (the
+// header: an oscillatory alternative fits R̂'s long-lag wander in a few per
+// cent of drift-free runs; the analysis then confirms with the filter).
 TEST(CorrelationFamilyTest, DetectsEachStructureWhenPresentAndOnlyThen) {
   int false_reports = 0;
   std::map<CorrelationFamily, int> detected;
@@ -286,8 +287,9 @@ TEST(CorrelationCrossCheckTest, SampleAutocovarianceAgainstNumpy) {
 
 // 5. The exponential fit (seed eq. 8) against an independent estimator on the
 // same series: the exact Gaussian maximum likelihood of the zero-mean
-// Gauss–Markov process (the base model, whose fit counts the mean too), by scipy (tests/engine/acf_fit_check.py). Both estimate the same
-// (σ, τ); the likelihood's is efficient, so the variance of the difference is
+// Gauss–Markov process (the base model, whose fit counts the mean too), by
+// scipy (tests/engine/acf_fit_check.py). Both estimate the same (σ, τ); the
+// likelihood's is efficient, so the variance of the difference is
 // the fit's variance less the likelihood's (Hausman, Econometrica 46(6),
 // 1978, Lemma 2.1), at most the fit's: the two agree within 3 of the fit's
 // standard errors (in ln σ, ln τ) on every seed, and the likelihood's errors

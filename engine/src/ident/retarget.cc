@@ -41,19 +41,18 @@ std::vector<DriftCorrelation> CorrelateDrifts(const ForwardPass& fw, const Smoot
   const double dt = EpochInterval(fw);
   for (int i = 0; i < 6; ++i) {
     const int state = layout.gyro_bias() + i;
+    const SensorState& drift = layout.sensor_states()[static_cast<size_t>(state - layout.sensor_begin())];
     std::vector<double> series(static_cast<size_t>(fw.epochs()));
     for (int k = 0; k < fw.epochs(); ++k) series[static_cast<size_t>(k)] = sm.x(k, state);
     const std::vector<double> empty;
     const std::vector<double>& error_acf =
         static_cast<size_t>(i) < sm.error_autocovariance.size() ? sm.error_autocovariance[static_cast<size_t>(i)] : empty;
     auto analysis = AnalyseCorrelation(series, error_acf, dt, options);
-    const std::string name = layout.StateName(state);
     if (!analysis.ok()) {
-      if (notes != nullptr) notes->push_back(name + ": no correlation processing (" + std::string(analysis.status().message()) + ")");
+      if (notes != nullptr) notes->push_back(drift.name + ": no correlation processing (" + std::string(analysis.status().message()) + ")");
       continue;
     }
-    const SensorState& drift = layout.sensor_states()[static_cast<size_t>(state - layout.sensor_begin())];
-    out.push_back({name, drift.sensor, drift.axis, *std::move(analysis)});
+    out.push_back({drift.name, drift.sensor, drift.axis, *std::move(analysis)});
   }
   return out;
 }
