@@ -542,15 +542,6 @@ const EffectCandidate* LowestBicSignificant(const std::vector<EffectCandidate>& 
   return best;
 }
 
-// The predicted ΔBIC of a scanned pass's best significant candidate; none
-// when nothing is significant.
-std::optional<double> BestSignificantCandidateBic(const BenchRun& run, const ModelPass& pass,
-                                                  const AnalysisOptions& options) {
-  const RankedEffects ranked = RankMissingEffects(*pass.scan, pass.forward, run, pass.segment_motion, options.finder);
-  const EffectCandidate* best = LowestBicSignificant(ranked.terms, ranked.families, options);
-  return best != nullptr ? std::optional<double>(best->predicted_delta_bic) : std::nullopt;
-}
-
 // The effect `--discover` adds next.
 const EffectCandidate* NextDiscovery(const Findings& found, const AnalysisOptions& options) {
   return LowestBicSignificant(found.candidates, found.families, options);
@@ -809,6 +800,8 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   // Retargeting: identify, re-tune, until the parameters settle.
   std::vector<ParameterEstimate> identified;
   std::optional<ModelPass> scanned_a_priori;
+  std::optional<Findings> found_a_priori;  // its findings, with the notes they wrote
+  std::vector<std::string> found_a_priori_notes;
   if (options.identify) {
     if (allan.has_value()) {
       identified = ident::ApplyAllanNoise(*allan, *a_priori, base, options.monitor.family_wise_alpha);
@@ -902,7 +895,17 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       // analysed) or a guess from them, and its misfit shows as effects. Its
       // drifts are re-tuned by the whole run before the scan.
       const bool may_defer = first && !a_priori_from_allan;
-      if (const auto best_bic = may_defer ? BestSignificantCandidateBic(run, *pass, options) : std::nullopt;
+      // The a-priori model's missing effects, the likelihood's structures
+      // among them: a walk is a missing effect as much as a constant term,
+      // and a drift σ re-tuned before it is tested takes the walk's slow
+      // variance (a wider or slower drift over the run), which the walk's
+      // nested test then cannot tell from it.
+      std::optional<Findings> found;
+      std::vector<std::string> found_notes;
+      if (may_defer) found = FindMissingEffects(run, *pass, *a_priori, spikes, options, &found_notes);
+      const EffectCandidate* best =
+          found.has_value() ? LowestBicSignificant(found->candidates, found->families, options) : nullptr;
+      if (const auto best_bic = best != nullptr ? std::optional<double>(best->predicted_delta_bic) : std::nullopt;
           best_bic.has_value()) {
         // The converse soaking holds too: a drift whose σ is far larger than
         // the model's shows as effects that follow the table's motion (a
@@ -929,6 +932,8 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
                         "are not re-tuned on this model (they would absorb what the effects explain); they are "
                         "identified when the analysis starts from a model with the effects (baseline effects)");
         scanned_a_priori = std::move(*pass);
+        found_a_priori = std::move(found);
+        found_a_priori_notes = std::move(found_notes);
         deferred = true;
         break;
       }
@@ -975,7 +980,9 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
                                     ? absl::StatusOr<ModelPass>(std::move(*scanned_a_priori))
                                     : RunPass(run, base, spikes, options, /*with_scan=*/true);
   if (!a.ok()) return a.status();
-  const Findings found_a = FindMissingEffects(run, *a, *a_priori, spikes, options, &notes);
+  if (found_a_priori.has_value()) notes.insert(notes.end(), found_a_priori_notes.begin(), found_a_priori_notes.end());
+  const Findings found_a = found_a_priori.has_value() ? std::move(*found_a_priori)
+                                                      : FindMissingEffects(run, *a, *a_priori, spikes, options, &notes);
   AnalysisReport report_a = ReportOf(*a, found_a, run, options, identified, notes);
 
   Analysis out;

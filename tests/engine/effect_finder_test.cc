@@ -284,18 +284,6 @@ INSTANTIATE_TEST_SUITE_P(
                       FamilyCase{"GyroBiasSecondOrder", "gyro_bias_second_order.y", "full", Size::kSecondOrderSigma, 3.0}),
     [](const ::testing::TestParamInfo<FamilyCase>& p) { return p.param.label; });
 
-// Families the finder does NOT find yet (docs/EFFECT_FINDER_SCENARIOS.md has
-// the measurements). Disabled on purpose, and listed by ctest as disabled; run
-// them with --gtest_also_run_disabled_tests.
-//   gyro_bias_rw (on the 8-hour drift profile): the likelihood's walk test
-//     proposes it, but weakly (2Δℓ ≈ 5, not significant): the heading-axis
-//     drift's σ re-tune takes the slow variance first. The accelerometer walk
-//     is found (HiddenBiasRandomWalk above).
-INSTANTIATE_TEST_SUITE_P(
-    DISABLED_NotFoundYet, HiddenFamily,
-    ::testing::Values(FamilyCase{"GyroBiasRw", "gyro_bias_rw.z", "drift", Size::kWalkOverTau, 3.0}),
-    [](const ::testing::TestParamInfo<FamilyCase>& p) { return p.param.label; });
-
 // A bias random walk, on the eight-hour `drift` profile (a walk as slow as
 // the base drift needs several of its correlation times to tell apart): the
 // likelihood's walk test finds it significant, its K within 3 SE of the
@@ -327,6 +315,7 @@ TEST_P(HiddenBiasRandomWalk, FoundByLikelihoodAndAddingItFitsTheRun) {
   EXPECT_TRUE(rank == 1 || (rank == 2 && top->name == turn_on)) << "rank " << rank << ", top " << top->name;
   // The likelihood identifies ln K (a scale: its likelihood is near-quadratic
   // there, not in K); the reported SE is the delta method's K·SE(ln K).
+  ASSERT_TRUE(std::isfinite(walk->std_error)) << "no standard error";
   const double log_se = walk->std_error / walk->estimate;
   EXPECT_LE(std::abs(std::log(walk->estimate / truth.random_walk_density)), 3.0 * log_se)
       << walk->estimate << " ± " << walk->std_error << ", truth " << truth.random_walk_density;
@@ -352,6 +341,18 @@ INSTANTIATE_TEST_SUITE_P(
     Walks, HiddenBiasRandomWalk,
     ::testing::Values(FamilyCase{"AccBiasRw", "acc_bias_rw.x", "drift", Size::kWalkOverTau, 3.0},
                       FamilyCase{"GyroBiasRw", "gyro_bias_rw.x", "drift", Size::kWalkOverTau, 3.0}),
+    [](const ::testing::TestParamInfo<FamilyCase>& p) { return p.param.label; });
+
+// Not found yet (docs/EFFECT_FINDER_SCENARIOS.md, "Walk detection over
+// seeds"): the heading-axis walk at this seed. Disabled on purpose, and
+// listed by ctest as disabled; run it with --gtest_also_run_disabled_tests.
+// A walk of this size is near what eight hours resolve: over seeds the walk
+// is found on 2 of 7 seeds for z and 5 of 7 for x and y; at this seed the z walk's
+// excursion looks like a turn-on offset and a wider drift, and its nested
+// test stays below the screen (also at K = 5 σ_GM/√τ_GM).
+INSTANTIATE_TEST_SUITE_P(
+    DISABLED_NotFoundYet, HiddenBiasRandomWalk,
+    ::testing::Values(FamilyCase{"GyroBiasRwZ", "gyro_bias_rw.z", "drift", Size::kWalkOverTau, 3.0}),
     [](const ::testing::TestParamInfo<FamilyCase>& p) { return p.param.label; });
 
 // ---------------------------------------------------------------------------
