@@ -437,7 +437,7 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const BenchRun& run,
       for (const ident::StructureEstimate& o : fitted->structures) others += o.drift == w.drift ? 0.0 : o.statistic;
       c.statistic = std::max(w.statistic, 2.0 * (fitted->log_likelihood_after - pass.log_likelihood) - others);
       // χ² for a parameter on its boundary is conservative (drift_likelihood.h).
-      c.p_value = std::min(1.0, stats::ChiSquareSurvival(c.statistic, c.dof) * static_cast<double>(w.starts));
+      c.p_value = ident::StructurePValue(c.statistic, c.dof, w.starts);
       c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
       c.predicted_delta_bic = -c.statistic + c.dof * log_n;
       std::string parameters;
@@ -487,6 +487,14 @@ struct Findings {
   std::vector<EffectCandidate> families;
   std::vector<StructureProposal> structures;
   std::vector<DriftCorrelation> drifts;
+};
+
+// A model's pass scanned for missing effects, what the scan found and the
+// notes it wrote.
+struct ScannedModel {
+  ModelPass pass;
+  Findings found;
+  std::vector<std::string> notes;
 };
 
 Findings FindMissingEffects(const BenchRun& run, const ModelPass& pass, const ErrorModel& a_priori,
@@ -799,9 +807,8 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
 
   // Retargeting: identify, re-tune, until the parameters settle.
   std::vector<ParameterEstimate> identified;
-  std::optional<ModelPass> scanned_a_priori;
-  std::optional<Findings> found_a_priori;  // its findings, with the notes they wrote
-  std::vector<std::string> found_a_priori_notes;
+  // The a-priori model's scan, when its missing effects go before any re-tune.
+  std::optional<ScannedModel> deferred;
   if (options.identify) {
     if (allan.has_value()) {
       identified = ident::ApplyAllanNoise(*allan, *a_priori, base, options.monitor.family_wise_alpha);
@@ -854,7 +861,6 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
     }
     std::vector<DriftCorrelation> drifts;
     bool faults_flagged = false;  // by the latest pass's monitoring
-    bool deferred = false;
     bool drifts_by_likelihood = false;  // the deferral's competition took them
     // The drifts by the innovations' likelihood (drift_likelihood.h), from
     // `model`, one of two sets at a time. The drifts correlation processing
@@ -900,13 +906,14 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       // and a drift σ re-tuned before it is tested takes the walk's slow
       // variance (a wider or slower drift over the run), which the walk's
       // nested test then cannot tell from it.
-      std::optional<Findings> found;
+      Findings found;
       std::vector<std::string> found_notes;
-      if (may_defer) found = FindMissingEffects(run, *pass, *a_priori, spikes, options, &found_notes);
-      const EffectCandidate* best =
-          found.has_value() ? LowestBicSignificant(found->candidates, found->families, options) : nullptr;
-      if (const auto best_bic = best != nullptr ? std::optional<double>(best->predicted_delta_bic) : std::nullopt;
-          best_bic.has_value()) {
+      const EffectCandidate* best = nullptr;
+      if (may_defer) {
+        found = FindMissingEffects(run, *pass, *a_priori, spikes, options, &found_notes);
+        best = LowestBicSignificant(found.candidates, found.families, options);
+      }
+      if (best != nullptr) {
         // The converse soaking holds too: a drift whose σ is far larger than
         // the model's shows as effects that follow the table's motion (a
         // g-sensitivity, say). The two explanations compete by BIC (Schwarz,
@@ -917,10 +924,11 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
           if (ml.ok() && !ml->identified.empty()) {
             const double log_n = std::log(static_cast<double>(std::max(1, pass->forward.scalar_updates)));
             const double drift_bic = -DriftStatistic(*ml) + static_cast<double>(ml->identified.size()) * log_n;
-            if (drift_bic < *best_bic &&
+            if (drift_bic < best->predicted_delta_bic &&
                 ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, a_priori_from_allan, base, identified, notes)) {
               char buf[160];
-              std::snprintf(buf, sizeof buf, "ΔBIC %.1f against the best candidate's %.1f", drift_bic, *best_bic);
+              std::snprintf(buf, sizeof buf, "ΔBIC %.1f against the best candidate's %.1f", drift_bic,
+                            best->predicted_delta_bic);
               notes.push_back("the a-priori model's misfit is the drifts' σ rather than a missing effect (" +
                               std::string(buf) + "): the model takes them and is scanned again");
               drifts_by_likelihood = true;
@@ -931,10 +939,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
         notes.push_back("the a-priori model lacks significant effects: the drift and reference-noise parameters "
                         "are not re-tuned on this model (they would absorb what the effects explain); they are "
                         "identified when the analysis starts from a model with the effects (baseline effects)");
-        scanned_a_priori = std::move(*pass);
-        found_a_priori = std::move(found);
-        found_a_priori_notes = std::move(found_notes);
-        deferred = true;
+        deferred = ScannedModel{std::move(*pass), std::move(found), std::move(found_notes)};
         break;
       }
       ident::RetargetResult step = ident::RetargetDrifts(base, *a_priori, drifts, options.settle_log_ratio,
@@ -955,7 +960,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
                         std::to_string(options.max_retarget_iterations) + " iterations");
       }
     }
-    if (options.identify_drifts_by_likelihood && !deferred) {
+    if (options.identify_drifts_by_likelihood && !deferred.has_value()) {
       // The drifts' final values, by likelihood: correlation processing of
       // the smoothed estimates gives the drifts' structure and a start, but
       // the smoother's shrinkage biases its σ and τ low together along the
@@ -976,13 +981,12 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   }
 
   Progress(options, 0.65, "missing-effect scan");
-  absl::StatusOr<ModelPass> a = scanned_a_priori.has_value()
-                                    ? absl::StatusOr<ModelPass>(std::move(*scanned_a_priori))
-                                    : RunPass(run, base, spikes, options, /*with_scan=*/true);
+  absl::StatusOr<ModelPass> a = deferred.has_value() ? absl::StatusOr<ModelPass>(std::move(deferred->pass))
+                                                     : RunPass(run, base, spikes, options, /*with_scan=*/true);
   if (!a.ok()) return a.status();
-  if (found_a_priori.has_value()) notes.insert(notes.end(), found_a_priori_notes.begin(), found_a_priori_notes.end());
-  const Findings found_a = found_a_priori.has_value() ? std::move(*found_a_priori)
-                                                      : FindMissingEffects(run, *a, *a_priori, spikes, options, &notes);
+  if (deferred.has_value()) notes.insert(notes.end(), deferred->notes.begin(), deferred->notes.end());
+  const Findings found_a = deferred.has_value() ? std::move(deferred->found)
+                                                : FindMissingEffects(run, *a, *a_priori, spikes, options, &notes);
   AnalysisReport report_a = ReportOf(*a, found_a, run, options, identified, notes);
 
   Analysis out;

@@ -393,9 +393,11 @@ std::string DriftName(int drift) {
   return std::string(drift < 3 ? "gyro_bias_gm." : "acc_bias_gm.") + "xyz"[drift % 3];
 }
 
-double NestedPValue(const StructureEstimate& s) {
-  return std::min(1.0, stats::ChiSquareSurvival(s.statistic, s.dof) * static_cast<double>(s.starts));
+double StructurePValue(double statistic, int dof, int starts) {
+  return std::min(1.0, stats::ChiSquareSurvival(statistic, dof) * static_cast<double>(starts));
 }
+
+double NestedPValue(const StructureEstimate& s) { return StructurePValue(s.statistic, s.dof, s.starts); }
 
 std::string SecondOrderName(int drift) {
   return std::string(drift < 3 ? "gyro_bias_second_order." : "acc_bias_second_order.") + "xyz"[drift % 3];

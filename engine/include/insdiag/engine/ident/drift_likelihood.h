@@ -129,8 +129,10 @@ struct StructureEstimate {
   int starts = 1;                  // starting points the screen searched (a pair's periods)
 };
 
-// The nested test's p-value of a structure: χ² with its own parameters,
-// Bonferroni over the starting points searched (at most 1).
+// A structure's p-value of `statistic`: χ² with `dof`, Bonferroni over the
+// `starts` its fit searched (at most 1).
+double StructurePValue(double statistic, int dof, int starts);
+// The nested test's: its statistic on the structure's own parameters.
 double NestedPValue(const StructureEstimate& s);
 
 struct DriftLikelihoodResult {
