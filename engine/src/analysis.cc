@@ -497,11 +497,12 @@ struct ScannedModel {
   std::vector<std::string> notes;
 };
 
-Findings FindMissingEffects(const BenchRun& run, const ModelPass& pass, const ErrorModel& a_priori,
-                            const std::vector<SampleOutlier>& spikes, const AnalysisOptions& options,
-                            std::vector<std::string>* notes) {
+// `drifts`: correlation processing of this pass's smoothed drifts.
+Findings FindMissingEffects(const BenchRun& run, const ModelPass& pass, std::vector<DriftCorrelation> drifts,
+                            const ErrorModel& a_priori, const std::vector<SampleOutlier>& spikes,
+                            const AnalysisOptions& options, std::vector<std::string>* notes) {
   Findings f;
-  f.drifts = ident::CorrelateDrifts(pass.forward, pass.smoothed, *pass.layout, options.correlation, notes);
+  f.drifts = std::move(drifts);
   RankedEffects ranked = RankMissingEffects(*pass.scan, pass.forward, run, pass.segment_motion, options.finder);
   f.families = std::move(ranked.families);
   // Screening level of a structure before the likelihood confirms it: the
@@ -528,6 +529,14 @@ Findings FindMissingEffects(const BenchRun& run, const ModelPass& pass, const Er
   f.structures = ConfirmStructures(run, pass, std::move(proposals), spikes, options);
   f.candidates = MergeCandidates(std::move(ranked.terms), f.structures);
   return f;
+}
+
+Findings FindMissingEffects(const BenchRun& run, const ModelPass& pass, const ErrorModel& a_priori,
+                            const std::vector<SampleOutlier>& spikes, const AnalysisOptions& options,
+                            std::vector<std::string>* notes) {
+  return FindMissingEffects(run, pass,
+                            ident::CorrelateDrifts(pass.forward, pass.smoothed, *pass.layout, options.correlation, notes),
+                            a_priori, spikes, options, notes);
 }
 
 // The significant, identifiable candidate whose predicted ΔBIC is lowest,
@@ -807,8 +816,10 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
 
   // Retargeting: identify, re-tune, until the parameters settle.
   std::vector<ParameterEstimate> identified;
-  // The a-priori model's scan, when its missing effects go before any re-tune.
-  std::optional<ScannedModel> deferred;
+  // The a-priori model's scan: the report's when its missing effects go
+  // before any re-tune (`deferred`), or when the re-tunes leave its model.
+  std::optional<ScannedModel> scanned;
+  bool deferred = false;
   if (options.identify) {
     if (allan.has_value()) {
       identified = ident::ApplyAllanNoise(*allan, *a_priori, base, options.monitor.family_wise_alpha);
@@ -894,23 +905,24 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       const bool first = it == 0;
       auto pass = RunPass(run, base, spikes, options, /*with_scan=*/first);
       if (!pass.ok()) return pass.status();
-      drifts = ident::CorrelateDrifts(pass->forward, pass->smoothed, *pass->layout, options.correlation, nullptr);
-      faults_flagged = !pass->monitor.faults.empty();
       // An a-priori model from the Allan fit is not a specification to
       // protect: its drift τ is a bound of the static segments (the longest τ
       // analysed) or a guess from them, and its misfit shows as effects. Its
       // drifts are re-tuned by the whole run before the scan.
       const bool may_defer = first && !a_priori_from_allan;
+      std::vector<std::string> found_notes;
+      drifts = ident::CorrelateDrifts(pass->forward, pass->smoothed, *pass->layout, options.correlation,
+                                      may_defer ? &found_notes : nullptr);
+      faults_flagged = !pass->monitor.faults.empty();
       // The a-priori model's missing effects, the likelihood's structures
       // among them: a walk is a missing effect as much as a constant term,
       // and a drift σ re-tuned before it is tested takes the walk's slow
       // variance (a wider or slower drift over the run), which the walk's
       // nested test then cannot tell from it.
       Findings found;
-      std::vector<std::string> found_notes;
       const EffectCandidate* best = nullptr;
       if (may_defer) {
-        found = FindMissingEffects(run, *pass, *a_priori, spikes, options, &found_notes);
+        found = FindMissingEffects(run, *pass, drifts, *a_priori, spikes, options, &found_notes);
         best = LowestBicSignificant(found.candidates, found.families, options);
       }
       if (best != nullptr) {
@@ -939,13 +951,17 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
         notes.push_back("the a-priori model lacks significant effects: the drift and reference-noise parameters "
                         "are not re-tuned on this model (they would absorb what the effects explain); they are "
                         "identified when the analysis starts from a model with the effects (baseline effects)");
-        deferred = ScannedModel{std::move(*pass), std::move(found), std::move(found_notes)};
+        scanned = ScannedModel{std::move(*pass), std::move(found), std::move(found_notes)};
+        deferred = true;
         break;
       }
       ident::RetargetResult step = ident::RetargetDrifts(base, *a_priori, drifts, options.settle_log_ratio,
                                                          options.monitor.family_wise_alpha);
       const bool reference_changed = ident::MatchReferenceNoise(pass->forward, options.monitor.family_wise_alpha,
                                                                 step.model, &notes);
+      // Nothing significant: the report's scan when nothing below re-tunes
+      // the model (the unit's a-priori model fits), else a new one.
+      if (may_defer) scanned = ScannedModel{std::move(*pass), std::move(found), std::move(found_notes)};
       base = step.model;
       // The correlation estimates replace the last ones, and the likelihood's
       // of a drift that the re-tuned model now resolves.
@@ -960,7 +976,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
                         std::to_string(options.max_retarget_iterations) + " iterations");
       }
     }
-    if (options.identify_drifts_by_likelihood && !deferred.has_value()) {
+    if (options.identify_drifts_by_likelihood && !deferred) {
       // The drifts' final values, by likelihood: correlation processing of
       // the smoothed estimates gives the drifts' structure and a start, but
       // the smoother's shrinkage biases its σ and τ low together along the
@@ -981,12 +997,13 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   }
 
   Progress(options, 0.65, "missing-effect scan");
-  absl::StatusOr<ModelPass> a = deferred.has_value() ? absl::StatusOr<ModelPass>(std::move(deferred->pass))
-                                                     : RunPass(run, base, spikes, options, /*with_scan=*/true);
+  if (scanned.has_value() && !(scanned->pass.model == base)) scanned.reset();
+  absl::StatusOr<ModelPass> a = scanned.has_value() ? absl::StatusOr<ModelPass>(std::move(scanned->pass))
+                                                    : RunPass(run, base, spikes, options, /*with_scan=*/true);
   if (!a.ok()) return a.status();
-  if (deferred.has_value()) notes.insert(notes.end(), deferred->notes.begin(), deferred->notes.end());
-  const Findings found_a = deferred.has_value() ? std::move(deferred->found)
-                                                : FindMissingEffects(run, *a, *a_priori, spikes, options, &notes);
+  if (scanned.has_value()) notes.insert(notes.end(), scanned->notes.begin(), scanned->notes.end());
+  const Findings found_a = scanned.has_value() ? std::move(scanned->found)
+                                               : FindMissingEffects(run, *a, *a_priori, spikes, options, &notes);
   AnalysisReport report_a = ReportOf(*a, found_a, run, options, identified, notes);
 
   Analysis out;

@@ -28,6 +28,8 @@ namespace insdiag::engine {
 struct GaussMarkov {
   double sigma = 0.0;  // steady-state σ in the sensor's unit (rad/s or m/s²)
   double tau_s = 0.0;  // correlation time
+
+  bool operator==(const GaussMarkov&) const = default;
 };
 
 // The base model of one sensor triad (gyros or accelerometers).
@@ -35,6 +37,8 @@ struct SensorTriadModel {
   std::array<GaussMarkov, 3> bias;                                // per axis
   Eigen::Vector3d white_noise_density = Eigen::Vector3d::Zero();  // ARW [rad/√s] | VRW [m/s/√s]
   Eigen::Vector3d quantization = Eigen::Vector3d::Zero();         // Q [rad] | [m/s]; 0 = none
+
+  bool operator==(const SensorTriadModel&) const = default;
 };
 
 // One catalogue term in the model with its prior / process parameters.
@@ -48,6 +52,8 @@ struct ModelEffect {
   double second_order_sigma = 0.0;
   double second_order_alpha_per_s = 0.0;
   double second_order_beta_rad_s = 0.0;
+
+  bool operator==(const ModelEffect&) const = default;
 };
 
 // Accuracy of the bench's reference: the table's attitude (initial attitude),
@@ -57,6 +63,8 @@ struct ReferenceAccuracy {
   double attitude_sigma_rad = 0.0;
   double position_sigma_m = 0.0;
   double velocity_sigma_mps = 0.0;
+
+  bool operator==(const ReferenceAccuracy&) const = default;
 };
 
 struct ErrorModel {
@@ -64,6 +72,9 @@ struct ErrorModel {
   SensorTriadModel acc;   // m/s²
   std::vector<ModelEffect> effects;
   ReferenceAccuracy reference;
+
+  // The same model to the bit: a pass of one is a pass of the other.
+  bool operator==(const ErrorModel&) const = default;
 
   // Index of the effect with this term in `effects`, or −1.
   int FindEffect(const EffectTerm& term) const;
