@@ -260,7 +260,9 @@ std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass) {
 struct StructureProposal {
   ModelEffect effect;
   EffectCandidate candidate;
-  double screen_bonferroni = 1.0;
+  // Starting points its screen searched (the fit's profile grid): the
+  // Bonferroni factor of its p-value.
+  int searched_starts = 1;
   // A walk or pair from the likelihood's tests: its statistic is a
   // likelihood ratio already, and a model that takes it takes its
   // parameters and the drift σ fitted with it, and reports them.
@@ -278,7 +280,7 @@ std::vector<StructureProposal> ProposeStructures(const std::vector<DriftCorrelat
       if (!f.converged || f.lr_p_value >= screen_alpha) continue;
       StructureProposal p;
       std::string family;
-      double grid = 1.0;
+      int grid = 1;
       if (f.family == ident::CorrelationFamily::kRandomWalk) {
         family = gyro ? "gyro_bias_rw" : "acc_bias_rw";
         p.effect.random_walk_density = f.Parameter("density")->value;
@@ -291,7 +293,7 @@ std::vector<StructureProposal> ProposeStructures(const std::vector<DriftCorrelat
         p.effect.second_order_beta_rad_s = 2.0 * std::numbers::pi / f.Parameter("period_s")->value;
         p.candidate.estimate = p.effect.second_order_sigma;
         p.candidate.std_error = f.Parameter("sigma2")->std_error;
-        grid = 16.0;  // the profile grid of period × decay (correlation.cc)
+        grid = 16;  // the profile grid of period × decay (correlation.cc)
       } else if (f.family == ident::CorrelationFamily::kTwoExponentials &&
                  f.Parameter("tau2_s")->value >= 0.5 * run_s) {
         // A second exponential longer than the run: over the run it is a walk,
@@ -302,7 +304,7 @@ std::vector<StructureProposal> ProposeStructures(const std::vector<DriftCorrelat
         p.effect.random_walk_density = s2 * std::sqrt(2.0 / t2);
         p.candidate.estimate = p.effect.random_walk_density;
         p.candidate.std_error = f.Parameter("sigma2")->std_error * std::sqrt(2.0 / t2);
-        grid = 6.0;
+        grid = 6;
       } else {
         continue;
       }
@@ -316,7 +318,7 @@ std::vector<StructureProposal> ProposeStructures(const std::vector<DriftCorrelat
       p.candidate.dof = p.effect.term.family->process == RandomProcess::kSecondOrderMarkov ? 3 : 1;
       p.candidate.note = std::string("correlation function of ") + d.state + " is " +
                          ident::CorrelationFamilyName(f.family) + ", not exponential";
-      p.screen_bonferroni = grid;
+      p.searched_starts = grid;
       // Keep the stronger proposal when two families point at the same effect.
       auto same = std::find_if(out.begin(), out.end(), [&](const StructureProposal& o) {
         return o.effect.term == p.effect.term;
@@ -346,7 +348,7 @@ std::vector<StructureProposal> ConfirmStructures(const BenchRun& run, const Mode
       continue;
     }
     c.statistic = std::max(0.0, 2.0 * (pass->log_likelihood - a.log_likelihood));
-    c.p_value = std::min(1.0, stats::ChiSquareSurvival(c.statistic, c.dof) * p.screen_bonferroni);
+    c.p_value = ident::StructurePValue(c.statistic, c.dof, p.searched_starts);
     c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
     c.predicted_delta_bic = -c.statistic + c.dof * log_n;
   }
@@ -997,7 +999,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   }
 
   Progress(options, 0.65, "missing-effect scan");
-  if (scanned.has_value() && !(scanned->pass.model == base)) scanned.reset();
+  if (scanned.has_value() && scanned->pass.model != base) scanned.reset();
   absl::StatusOr<ModelPass> a = scanned.has_value() ? absl::StatusOr<ModelPass>(std::move(scanned->pass))
                                                     : RunPass(run, base, spikes, options, /*with_scan=*/true);
   if (!a.ok()) return a.status();
