@@ -3,7 +3,9 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <numbers>
+#include <optional>
 
 #include "insdiag/engine/filter/smoother.h"
 #include "insdiag/engine/finder/score_test.h"
@@ -269,61 +271,89 @@ struct StructureProposal {
   std::optional<ident::StructureEstimate> fitted;
 };
 
+// What a scan's structure tests said of the random structures they did not
+// propose, by effect name: each one's statistic below its screen, or why it
+// was not tested. The report lists every catalogue effect the model lacks.
+using StructureOutcomes = std::map<std::string, EffectCandidate>;
+
+// The drift of a sensor axis in DriftSelection order (gyro x, y, z, then accelerometer).
+int DriftIndex(Sensor sensor, int axis) { return (sensor == Sensor::kGyro ? 0 : 3) + axis; }
+int DriftIndex(const EffectTerm& term) { return DriftIndex(term.family->sensor, term.axis); }
+
+// The catalogue effect a correlation-function family of drift `d` means, with
+// its magnitude: a walk (random walk; a second exponential longer than half
+// the run, dσ²/dt = 2σ₂²/τ₂), a second-order pair (exponential-cosine).
+std::optional<StructureProposal> StructureOfFit(const DriftCorrelation& d, const ident::FamilyFit& f, double run_s) {
+  const int drift = DriftIndex(d.sensor, d.axis);
+  StructureProposal p;
+  std::string effect;
+  if (f.family == ident::CorrelationFamily::kRandomWalk) {
+    effect = ident::WalkName(drift);
+    p.effect.random_walk_density = f.Parameter("density")->value;
+    p.candidate.estimate = p.effect.random_walk_density;
+    p.candidate.std_error = f.Parameter("density")->std_error;
+  } else if (f.family == ident::CorrelationFamily::kExponentialCosine) {
+    effect = ident::SecondOrderName(drift);
+    p.effect.second_order_sigma = f.Parameter("sigma2")->value;
+    p.effect.second_order_alpha_per_s = 1.0 / f.Parameter("tau2_s")->value;
+    p.effect.second_order_beta_rad_s = 2.0 * std::numbers::pi / f.Parameter("period_s")->value;
+    p.candidate.estimate = p.effect.second_order_sigma;
+    p.candidate.std_error = f.Parameter("sigma2")->std_error;
+    p.searched_starts = 16;  // the profile grid of period × decay (correlation.cc)
+  } else if (f.family == ident::CorrelationFamily::kTwoExponentials && f.Parameter("tau2_s")->value >= 0.5 * run_s) {
+    effect = ident::WalkName(drift);
+    const double s2 = f.Parameter("sigma2")->value;
+    const double t2 = f.Parameter("tau2_s")->value;
+    p.effect.random_walk_density = s2 * std::sqrt(2.0 / t2);
+    p.candidate.estimate = p.effect.random_walk_density;
+    p.candidate.std_error = f.Parameter("sigma2")->std_error * std::sqrt(2.0 / t2);
+    p.searched_starts = 6;
+  } else {
+    return std::nullopt;
+  }
+  auto terms = ParseEffectSelector(effect);
+  if (!terms.ok()) return std::nullopt;
+  p.effect.term = terms->front();
+  p.candidate.name = effect;
+  p.candidate.family = std::string(p.effect.term.family->name);
+  p.candidate.source = "STRUCTURE";
+  p.candidate.unit = std::string(p.effect.term.family->unit);
+  p.candidate.dof = p.effect.term.family->process == RandomProcess::kSecondOrderMarkov ? 3 : 1;
+  p.candidate.note = std::string("correlation function of ") + d.state + " is " +
+                     ident::CorrelationFamilyName(f.family) + ", not exponential";
+  return p;
+}
+
+// Correlation processing's structures on the drifts it resolved: those whose
+// family beats the exponential at `screen_alpha` are proposed; the others'
+// tests go to `outcomes` (the stronger where two families mean one effect).
 std::vector<StructureProposal> ProposeStructures(const std::vector<DriftCorrelation>& drifts, double run_s,
-                                                 double screen_alpha) {
+                                                 double screen_alpha, StructureOutcomes& outcomes) {
   std::vector<StructureProposal> out;
   for (const DriftCorrelation& d : drifts) {
     if (!d.analysis.resolved) continue;
-    const bool gyro = d.sensor == Sensor::kGyro;
-    const char axis = static_cast<char>('x' + d.axis);
     for (const ident::FamilyFit& f : d.analysis.fits) {
-      if (!f.converged || f.lr_p_value >= screen_alpha) continue;
-      StructureProposal p;
-      std::string family;
-      int grid = 1;
-      if (f.family == ident::CorrelationFamily::kRandomWalk) {
-        family = gyro ? "gyro_bias_rw" : "acc_bias_rw";
-        p.effect.random_walk_density = f.Parameter("density")->value;
-        p.candidate.estimate = p.effect.random_walk_density;
-        p.candidate.std_error = f.Parameter("density")->std_error;
-      } else if (f.family == ident::CorrelationFamily::kExponentialCosine) {
-        family = gyro ? "gyro_bias_second_order" : "acc_bias_second_order";
-        p.effect.second_order_sigma = f.Parameter("sigma2")->value;
-        p.effect.second_order_alpha_per_s = 1.0 / f.Parameter("tau2_s")->value;
-        p.effect.second_order_beta_rad_s = 2.0 * std::numbers::pi / f.Parameter("period_s")->value;
-        p.candidate.estimate = p.effect.second_order_sigma;
-        p.candidate.std_error = f.Parameter("sigma2")->std_error;
-        grid = 16;  // the profile grid of period × decay (correlation.cc)
-      } else if (f.family == ident::CorrelationFamily::kTwoExponentials &&
-                 f.Parameter("tau2_s")->value >= 0.5 * run_s) {
-        // A second exponential longer than the run: over the run it is a walk,
-        // dσ²/dt = 2σ₂²/τ₂.
-        family = gyro ? "gyro_bias_rw" : "acc_bias_rw";
-        const double s2 = f.Parameter("sigma2")->value;
-        const double t2 = f.Parameter("tau2_s")->value;
-        p.effect.random_walk_density = s2 * std::sqrt(2.0 / t2);
-        p.candidate.estimate = p.effect.random_walk_density;
-        p.candidate.std_error = f.Parameter("sigma2")->std_error * std::sqrt(2.0 / t2);
-        grid = 6;
-      } else {
+      if (!f.converged) continue;
+      std::optional<StructureProposal> p = StructureOfFit(d, f, run_s);
+      if (!p.has_value()) continue;
+      if (f.lr_p_value >= screen_alpha) {
+        EffectCandidate c = p->candidate;
+        c.statistic = f.lr_statistic;
+        c.dof = f.lr_dof;
+        c.p_value = f.lr_p_value;
+        char buf[128];
+        std::snprintf(buf, sizeof buf, "; its fit to the correlation function gains χ² %.1f, p = %.2g (%d starts): "
+                      "below the screen", f.lr_statistic, f.lr_p_value, p->searched_starts);
+        c.note = "correlation function of " + d.state + " against " + ident::CorrelationFamilyName(f.family) + buf;
+        auto [it, inserted] = outcomes.emplace(c.name, c);
+        if (!inserted && c.p_value < it->second.p_value) it->second = c;
         continue;
       }
-      auto terms = ParseEffectSelector(family + "." + axis);
-      if (!terms.ok()) continue;
-      p.effect.term = terms->front();
-      p.candidate.name = p.effect.term.Name();
-      p.candidate.family = family;
-      p.candidate.source = "STRUCTURE";
-      p.candidate.unit = std::string(p.effect.term.family->unit);
-      p.candidate.dof = p.effect.term.family->process == RandomProcess::kSecondOrderMarkov ? 3 : 1;
-      p.candidate.note = std::string("correlation function of ") + d.state + " is " +
-                         ident::CorrelationFamilyName(f.family) + ", not exponential";
-      p.searched_starts = grid;
-      // Keep the stronger proposal when two families point at the same effect.
-      auto same = std::find_if(out.begin(), out.end(), [&](const StructureProposal& o) {
-        return o.effect.term == p.effect.term;
-      });
-      if (same == out.end()) out.push_back(p);
+      // The first family that means an effect proposes it.
+      if (std::none_of(out.begin(), out.end(),
+                       [&](const StructureProposal& o) { return o.effect.term == p->effect.term; })) {
+        out.push_back(*std::move(p));
+      }
     }
   }
   return out;
@@ -366,6 +396,27 @@ ident::DriftSelection ResolvedDrifts(const std::vector<DriftCorrelation>& drifts
   return selection;
 }
 
+// A random structure's candidate of the likelihood's tests, with nothing
+// measured yet: no statistic, no estimate (p = 1).
+EffectCandidate LikelihoodCandidate(const EffectTerm& term) {
+  EffectCandidate c;
+  c.name = term.Name();
+  c.family = std::string(term.family->name);
+  c.unit = std::string(term.family->unit);
+  c.source = "LIKELIHOOD";
+  c.dof = term.family->process == RandomProcess::kSecondOrderMarkov ? 3 : 1;
+  c.std_error = std::numeric_limits<double>::infinity();
+  return c;
+}
+
+// A random structure no test measured on this model, and why.
+EffectCandidate UntestedStructure(const EffectTerm& term, const std::string& why) {
+  EffectCandidate c = LikelihoodCandidate(term);
+  c.tested = false;
+  c.note = "not tested on this model: " + why;
+  return c;
+}
+
 // Bias random walks and second-order pairs by the innovations' likelihood
 // (drift_likelihood.h), on every drift axis the model has none on. Also on a
 // run whose monitoring flags faults: a walk that has wandered far trips the
@@ -392,6 +443,7 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const BenchRun& run,
                                                             const std::vector<DriftCorrelation>& drifts,
                                                             bool constant_significant, double screen_alpha,
                                                             const AnalysisOptions& options,
+                                                            StructureOutcomes& outcomes,
                                                             std::vector<std::string>* notes) {
   std::vector<StructureProposal> out;
   ident::DriftSelection every_axis;
@@ -404,12 +456,26 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const BenchRun& run,
     const char* what;
     decltype(&ident::IdentifyWalksByLikelihood) fit;
     ident::DriftSelection axes;
+    decltype(&ident::WalkName) structure_name;
   };
   const Test tests[] = {
-      {options.test_walks_by_likelihood, "bias random walks", &ident::IdentifyWalksByLikelihood, every_axis},
+      {options.test_walks_by_likelihood, "bias random walks", &ident::IdentifyWalksByLikelihood, every_axis,
+       &ident::WalkName},
       {options.test_second_orders_by_likelihood && !constant_significant, "second-order drifts",
-       &ident::IdentifySecondOrdersByLikelihood, unresolved},
+       &ident::IdentifySecondOrdersByLikelihood, unresolved, &ident::SecondOrderName},
   };
+  if (options.test_second_orders_by_likelihood && constant_significant) {
+    for (int d = 0; d < 6; ++d) {
+      if (!unresolved[static_cast<size_t>(d)]) continue;
+      auto terms = ParseEffectSelector(ident::SecondOrderName(d));
+      if (!terms.ok()) continue;
+      outcomes.insert_or_assign(
+          terms->front().Name(),
+          UntestedStructure(terms->front(), "a constant term is significant, and a pair fitted beside a missing "
+                                            "constant effect soaks up its signal: the model with that effect "
+                                            "tests it"));
+    }
+  }
   for (const Test& test : tests) {
     if (!test.enabled) continue;
     auto fitted = test.fit(run, pass.model, a_priori, test.axes, screen_alpha, options.filter, options.drift_likelihood);
@@ -420,9 +486,35 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const BenchRun& run,
       }
       continue;
     }
+    // The axes the test fitted (drift_likelihood.h): a structure its first
+    // EM step shrank is one this run does not tell from the axis' drift.
+    for (int d = 0; d < 6; ++d) {
+      const std::string name = test.structure_name(d);
+      const bool fitted_axis = test.axes[static_cast<size_t>(d)] && ident::DriftOf(pass.model, d).sigma > 0.0;
+      auto terms = ParseEffectSelector(name);
+      if (!fitted_axis || !terms.ok() || pass.model.FindEffect(terms->front()) >= 0) continue;
+      EffectCandidate c = LikelihoodCandidate(terms->front());
+      c.note = std::string("likelihood of the innovations: the first EM step from the structure hypothesis "
+                           "shrank it — this run does not tell it from a wider ") + ident::DriftName(d) + " drift";
+      outcomes.insert_or_assign(name, c);
+    }
     for (const ident::StructureEstimate& w : fitted->structures) {
       auto terms = ParseEffectSelector(w.effect);
-      if (!terms.ok() || !(ident::NestedPValue(w) < screen_alpha)) continue;
+      if (!terms.ok()) continue;
+      if (!(ident::NestedPValue(w) < screen_alpha)) {
+        EffectCandidate c = LikelihoodCandidate(terms->front());
+        c.estimate = w.parameters.front().value;
+        c.statistic = w.statistic;
+        c.dof = w.dof;
+        c.p_value = ident::NestedPValue(w);
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "likelihood of the innovations: 2Δℓ = %.1f beyond the drift σ re-fitted "
+                      "alone, p = %.2g (%d starts) — below the screen; no standard error computed",
+                      w.statistic, c.p_value, w.starts);
+        c.note = buf;
+        outcomes.insert_or_assign(w.effect, c);
+        continue;
+      }
       StructureProposal p;
       p.effect = w.fitted;
       p.fitted = w;
@@ -461,14 +553,17 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const BenchRun& run,
   return out;
 }
 
-// Terms and structures ranked together, Holm over both.
+// Terms and structures ranked together, Holm over all that were tested:
+// the structures proposed, and the others with what their tests said.
 std::vector<EffectCandidate> MergeCandidates(std::vector<EffectCandidate> terms,
-                                             const std::vector<StructureProposal>& structures) {
+                                             const std::vector<StructureProposal>& structures,
+                                             std::vector<EffectCandidate> other_structures) {
   for (const StructureProposal& s : structures) terms.push_back(s.candidate);
+  for (EffectCandidate& c : other_structures) terms.push_back(std::move(c));
   std::vector<size_t> tested;
   std::vector<double> p;
   for (size_t i = 0; i < terms.size(); ++i) {
-    if (!terms[i].identifiable) continue;
+    if (!terms[i].identifiable || !terms[i].tested) continue;
     tested.push_back(i);
     p.push_back(terms[i].p_value);
   }
@@ -516,9 +611,10 @@ Findings FindMissingEffects(const BenchRun& run, const ModelPass& pass, std::vec
       std::any_of(ranked.terms.begin(), ranked.terms.end(), [&](const EffectCandidate& c) {
         return c.identifiable && c.p_value_holm < options.finder.family_wise_alpha;
       });
-  std::vector<StructureProposal> proposals =
-      LikelihoodStructureProposals(run, pass, a_priori, f.drifts, constant_significant, screen_alpha, options, notes);
-  for (StructureProposal& p : ProposeStructures(f.drifts, run.DurationS(), screen_alpha)) {
+  StructureOutcomes likelihood_outcomes, correlation_outcomes;
+  std::vector<StructureProposal> proposals = LikelihoodStructureProposals(
+      run, pass, a_priori, f.drifts, constant_significant, screen_alpha, options, likelihood_outcomes, notes);
+  for (StructureProposal& p : ProposeStructures(f.drifts, run.DurationS(), screen_alpha, correlation_outcomes)) {
     if (std::none_of(proposals.begin(), proposals.end(),
                      [&](const StructureProposal& o) { return o.effect.term == p.effect.term; })) {
       proposals.push_back(std::move(p));
@@ -528,8 +624,30 @@ Findings FindMissingEffects(const BenchRun& run, const ModelPass& pass, std::vec
   proposals.erase(std::remove_if(proposals.begin(), proposals.end(),
                                  [&](const StructureProposal& p) { return pass.model.FindEffect(p.effect.term) >= 0; }),
                   proposals.end());
+  // Every other random structure of the catalogue the model lacks, with what
+  // its test said (the likelihood's where it ran), or why none ran.
+  std::vector<EffectCandidate> others;
+  for (const EffectTerm& term : AllCatalogueTerms()) {
+    if (term.family->kind != EffectKind::kRandom || pass.model.FindEffect(term) >= 0 ||
+        std::any_of(proposals.begin(), proposals.end(), [&](const StructureProposal& p) { return p.effect.term == term; })) {
+      continue;
+    }
+    const std::string name = term.Name();
+    if (auto it = likelihood_outcomes.find(name); it != likelihood_outcomes.end()) {
+      others.push_back(it->second);
+    } else if (auto jt = correlation_outcomes.find(name); jt != correlation_outcomes.end()) {
+      others.push_back(jt->second);
+    } else {
+      others.push_back(UntestedStructure(
+          term, ident::DriftOf(pass.model, DriftIndex(term)).sigma > 0.0
+                    ? "neither the likelihood's test (off, or failed: see the notes) nor correlation processing's "
+                      "(the " + ident::DriftName(DriftIndex(term)) + " drift unresolved, or its fit not converged) "
+                      "measured it"
+                    : "the model has no " + ident::DriftName(DriftIndex(term)) + " drift to test it beside"));
+    }
+  }
   f.structures = ConfirmStructures(run, pass, std::move(proposals), spikes, options);
-  f.candidates = MergeCandidates(std::move(ranked.terms), f.structures);
+  f.candidates = MergeCandidates(std::move(ranked.terms), f.structures, std::move(others));
   return f;
 }
 

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -429,6 +430,36 @@ TEST(BaseReport, IsTheReportOfTheAnalysisWithoutTheAddedEffects) {
   for (size_t i = 0; i < a.identified.size(); ++i) EXPECT_EQ(a.identified[i].value, b.identified[i].value);
   // The request's own report is model B's, not A's.
   EXPECT_NE(added->report.log_likelihood, b.log_likelihood);
+}
+
+// The ranking lists every catalogue effect the model lacks, each once — the
+// random structures too, with what their test said or why none ran on this
+// model — and none the model has.
+TEST(Ranking, ListsEveryCatalogueEffectTheModelLacks) {
+  const auto sim = testing::SimulateOrDie(testing::NavigationGradeUnit(), testing::ShortTurnsProfile(300.0, 900.0),
+                                          kFindRate10Hz, 32);
+  AnalysisRequest request;
+  request.nominal = NominalModel();
+  request.baseline_effects = {"gyro_bias_rw.x", "acc_scale_factor.y"};
+  auto a = Analyze(sim.run, request, AnalysisOptions{});
+  ASSERT_TRUE(a.ok()) << a.status();
+  std::multiset<std::string> listed;
+  for (const EffectCandidate& c : a->report.effect_candidates) listed.insert(c.name);
+  for (const EffectTerm& term : AllCatalogueTerms()) {
+    const bool in_model = a->model.FindEffect(term) >= 0;
+    EXPECT_EQ(listed.count(term.Name()), in_model ? 0u : 1u) << term.Name();
+  }
+  EXPECT_EQ(listed.count("gyro_bias_rw.x"), 0u);
+  for (const EffectCandidate& c : a->report.effect_candidates) {
+    if (FindEffectFamily(c.family)->kind != EffectKind::kRandom) continue;
+    EXPECT_TRUE(c.source == "LIKELIHOOD" || c.source == "STRUCTURE") << c.name;
+    EXPECT_FALSE(c.note.empty()) << c.name << ": says nothing of its test";
+    if (!c.tested) {
+      EXPECT_TRUE(c.note.starts_with("not tested on this model: ")) << c.name << ": " << c.note;
+      EXPECT_EQ(c.p_value_holm, 1.0) << c.name;
+    }
+    EXPECT_GE(c.p_value_holm, c.p_value) << c.name;
+  }
 }
 
 TEST(TwoHiddenEffects, DiscoveredInTwoSteps) {

@@ -32,7 +32,8 @@ struct EffectCandidate {
   std::string name;  // "gyro_scale_factor.z" (or a family name in family_candidates)
   std::string family;
   // "SCORE" (Lagrange-multiplier test), "STRUCTURE" (correlation-function
-  // family) or "LIKELIHOOD" (a bias random walk by the innovations' likelihood)
+  // family) or "LIKELIHOOD" (a bias random walk or second-order pair by the
+  // innovations' likelihood)
   std::string source;
   double statistic = 0.0;
   int dof = 0;
@@ -42,6 +43,10 @@ struct EffectCandidate {
   double std_error = std::numeric_limits<double>::quiet_NaN();
   std::string unit;
   bool identifiable = true;  // false: the run's motion or temperature cannot excite it
+  // false: no test of it ran on this model (a random structure the scan
+  // left for a later model; `note` says why). Its p-value is 1 and it counts
+  // in no family-wise correction.
+  bool tested = true;
   double predicted_delta_aic = 0.0;
   double predicted_delta_bic = 0.0;
   std::vector<std::string> correlated_with;  // candidates it cannot be told apart from in this run
