@@ -13,6 +13,7 @@
 
 #include "failure_mode_data.h"
 #include "insdiag/api/json.h"
+#include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::kb {
 namespace {
@@ -302,7 +303,8 @@ Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType
     evidence.terms.push_back(std::move(t));
   }
   for (const auto& c : report.effect_candidates()) {
-    if (!c.identifiable() || !seen.insert(c.name()).second) continue;
+    // A candidate no test measured is no evidence either way.
+    if (!c.identifiable() || c.not_tested() || !seen.insert(c.name()).second) continue;
     const bool significant = c.p_value_holm() < settings.significance_level();
     const std::string verdict =
         significant ? absl::StrFormat(", significant (Holm p = %.2g)", c.p_value_holm())
@@ -318,8 +320,14 @@ Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType
     EvidenceTerm t;
     t.name = c.name();
     t.scale = Scale::kZ;
-    t.x = c.std_error() > 0 ? c.estimate() / c.std_error()
-                            : std::copysign(std::sqrt(std::max(c.statistic(), 0.0)), c.estimate());
+    // Without a standard error (a structure below its test's screen), the z
+    // of the same two-sided p-value: √χ² on one degree of freedom, and on
+    // more not an inflated √χ² (a pair's 2Δℓ has three).
+    t.x = c.std_error() > 0      ? c.estimate() / c.std_error()
+          : c.degrees_of_freedom() <= 1 ? std::copysign(std::sqrt(std::max(c.statistic(), 0.0)), c.estimate())
+                                        : std::copysign(-engine::stats::NormalQuantile(
+                                                            0.5 * std::clamp(c.p_value(), 1e-300, 1.0)),
+                                                        c.estimate());
     t.measurement_sd = 0.0;
     t.healthy_sd = settings.healthy_z_sd();
     t.significant = significant;

@@ -55,6 +55,7 @@ void Fill(const engine::EffectCandidate& in, v1::EffectCandidate* out) {
   out->set_source(in.source);
   out->set_p_value_holm(in.p_value_holm);
   out->set_identifiable(in.identifiable);
+  out->set_not_tested(!in.tested);
   out->set_predicted_delta_aic(Finite(in.predicted_delta_aic));
   out->set_predicted_delta_bic(Finite(in.predicted_delta_bic));
   for (const auto& c : in.correlated_with) out->add_correlated_with(c);

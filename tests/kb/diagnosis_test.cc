@@ -127,6 +127,44 @@ TEST(DiagnosisTest, EvidenceNoModeExplainsGoesToUnknown) {
   EXPECT_EQ(DiagnoseReport(report).candidates(0).module(), "unknown") << DiagnoseReport(report).DebugString();
 }
 
+// The engine lists every random structure the model lacks: one no test
+// measured is no evidence, and one below its test's screen (no standard
+// error) weighs as the z of its p-value, not as √χ² on three degrees of freedom.
+TEST(DiagnosisTest, UntestedStructuresAreNoEvidenceAndScreenedOnesWeighByTheirPValue) {
+  v1::AnalysisReport report = NominalReport();
+  auto* untested = report.add_effect_candidates();
+  untested->set_name("gyro_bias_second_order.x");
+  untested->set_family("gyro_bias_second_order");
+  untested->set_source("LIKELIHOOD");
+  untested->set_degrees_of_freedom(3);
+  untested->set_p_value(1.0);
+  untested->set_p_value_holm(1.0);
+  untested->set_identifiable(true);
+  untested->set_not_tested(true);
+  auto* screened = report.add_effect_candidates();
+  screened->set_name("gyro_bias_second_order.y");
+  screened->set_family("gyro_bias_second_order");
+  screened->set_source("LIKELIHOOD");
+  screened->set_degrees_of_freedom(3);
+  screened->set_statistic(5.07);
+  screened->set_estimate(7e-8);
+  screened->set_p_value(0.5);
+  screened->set_p_value_holm(1.0);
+  screened->set_identifiable(true);
+  const auto& f = Ins2000();
+  const Evidence evidence = EvidenceFromReport(report, f.unit_type, f.catalogue.settings());
+  const EvidenceTerm* x = nullptr;
+  const EvidenceTerm* y = nullptr;
+  for (const EvidenceTerm& t : evidence.terms) {
+    if (t.name == "gyro_bias_second_order.x") x = &t;
+    if (t.name == "gyro_bias_second_order.y") y = &t;
+  }
+  EXPECT_EQ(x, nullptr) << "an untested candidate counted as evidence";
+  ASSERT_NE(y, nullptr);
+  EXPECT_EQ(y->scale, Scale::kZ);
+  EXPECT_NEAR(y->x, 0.6745, 1e-3);  // Φ⁻¹(1 − 0.5/2)
+}
+
 TEST(DiagnosisTest, ReportWithoutEvidenceIsHealthyWhenGoodAndUnknownOtherwise) {
   v1::AnalysisReport report;
   report.set_verdict(v1::AnalysisReport::GOOD);

@@ -486,7 +486,7 @@ function candidatesSection(analysis, state, channelsView) {
     h('td', h('strong', c.name), c.source === 'STRUCTURE' ? h('div.small.muted', 'correlation structure')
       : c.source === 'LIKELIHOOD' ? h('div.small.muted', 'likelihood-ratio test') : null,
     // Why a candidate has no p-value of its own: not excitable by this run, or left to a later model.
-    c.note && (!c.identifiable || c.note.startsWith('not tested')) ? h('div.small.muted', c.note) : null),
+    c.note && (!c.identifiable || c.notTested) ? h('div.small.muted', c.note) : null),
     h('td.num', `${fmt(c.estimate)} ± ${fmt(c.stdError, 2)}${c.unit ? ` ${c.unit}` : ''}`),
     h('td.num', fmt(c.statistic)),
     h('td.num', fmtP(c.pValueHolm || c.pValue)),
