@@ -503,6 +503,27 @@ TEST(DriftLikelihoodTest, RecoversATripledGyroDriftSigmaWithinItsIntervalOverSee
 // are re-tuned by maximum likelihood, and the model then predicts the
 // innovations' variance: NIS mean within 20% of 1 (it was 0.52 without the
 // re-tuning).
+// A structure's errors from its information block: the inverse where it is
+// positive definite; with the drift σ flat at its boundary, the structure's
+// own block; otherwise unknown — never the own block's smaller errors.
+TEST(StructureCovarianceTest, OwnBlockOnlyWhenTheDriftSigmaIsFlatAtItsBoundary) {
+  Eigen::Matrix2d concave;
+  concave << 4.0, 1.0, 1.0, 2.0;
+  EXPECT_TRUE(StructureCovariance(concave).isApprox(concave.inverse()));
+
+  Eigen::Matrix2d flat_sigma;  // σ → 0 beside a walk: no curvature in ln σ
+  flat_sigma << 0.0, 0.5, 0.5, 2.0;
+  const Eigen::MatrixXd held = StructureCovariance(flat_sigma);
+  EXPECT_TRUE(std::isinf(held(0, 0)));
+  EXPECT_DOUBLE_EQ(held(1, 1), 0.5);
+
+  Eigen::Matrix2d saddle;  // curved in ln σ, not concave jointly: the ridge is the structure's
+  saddle << 1.0, 2.0, 2.0, 1.0;
+  const Eigen::MatrixXd unknown = StructureCovariance(saddle);
+  EXPECT_TRUE(std::isinf(unknown(0, 0)));
+  EXPECT_TRUE(std::isinf(unknown(1, 1))) << "the own block's 1.0 would understate the error";
+}
+
 TEST(NoiseRetuneTest, RealRecordNisNearOne) {
   const std::string path = std::string(INSDIAG_SHARED_DIR) + "/data/real/rlg-static-psins.csv";
   auto run = benchrun::ReadBenchRunFile(path);

@@ -668,22 +668,7 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const BenchRun& run, const E
       for (Eigen::Index k = 0; k < per_axis; ++k) block.push_back(first + k);
       auto information = at_estimate.BlockInformation(*theta, block, l_hat);
       if (!information.ok()) return information.status();
-      covariance.setConstant(std::numeric_limits<double>::infinity());
-      const Eigen::LLT<Eigen::MatrixXd> llt(*information);
-      if (llt.info() == Eigen::Success) {
-        covariance = llt.solve(Eigen::MatrixXd::Identity(per_axis, per_axis));
-      } else {
-        // Not concave with the drift σ: with the structure carrying the slow
-        // variance, the σ fell to its boundary (σ → 0 next to a walk) where
-        // the likelihood is flat in ln σ. A parameter on its boundary is held
-        // there, and the others' errors are those of their own block (Self &
-        // Liang, J. Am. Stat. Assoc. 82(398), 1987); the σ's stays unknown.
-        const Eigen::Index r = per_axis - 1;
-        const Eigen::LLT<Eigen::MatrixXd> own(information->bottomRightCorner(r, r));
-        if (own.info() == Eigen::Success) {
-          covariance.bottomRightCorner(r, r) = own.solve(Eigen::MatrixXd::Identity(r, r));
-        }
-      }
+      covariance = StructureCovariance(*information);
     }
     auto estimate = [&](Eigen::Index k) {
       return EstimateOf(kept[static_cast<size_t>(first + k)], std::exp((*theta)[first + k]), std::sqrt(covariance(k, k)),
@@ -700,6 +685,19 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const BenchRun& run, const E
 }
 
 }  // namespace
+
+Eigen::MatrixXd StructureCovariance(const Eigen::MatrixXd& information) {
+  const Eigen::Index n = information.rows();
+  Eigen::MatrixXd covariance = Eigen::MatrixXd::Constant(n, n, std::numeric_limits<double>::infinity());
+  const Eigen::LLT<Eigen::MatrixXd> llt(information);
+  if (llt.info() == Eigen::Success) return llt.solve(Eigen::MatrixXd::Identity(n, n));
+  if (n > 1 && information(0, 0) <= 0.0) {
+    const Eigen::Index r = n - 1;
+    const Eigen::LLT<Eigen::MatrixXd> own(information.bottomRightCorner(r, r));
+    if (own.info() == Eigen::Success) covariance.bottomRightCorner(r, r) = own.solve(Eigen::MatrixXd::Identity(r, r));
+  }
+  return covariance;
+}
 
 absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const BenchRun& run, const ErrorModel& model,
                                                                 const ErrorModel& a_priori,

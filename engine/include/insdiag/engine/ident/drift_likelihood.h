@@ -71,6 +71,7 @@
 // observed information of the four (drift σ, σ₂, α, β) jointly.
 #pragma once
 
+#include <Eigen/Core>
 #include <absl/status/statusor.h>
 
 #include <array>
@@ -188,6 +189,18 @@ absl::StatusOr<DriftLikelihoodResult> IdentifySecondOrdersByLikelihood(const Ben
                                                                        double screen_alpha,
                                                                        const FilterOptions& filter,
                                                                        const DriftLikelihoodOptions& options = {});
+
+// The covariance of a fitted structure's (ln σ of its drift, then its own
+// ln parameters) from their observed information at the maximum: the
+// inverse where the information is positive definite. Where it is not and
+// the likelihood is flat in the drift's ln σ — the σ fell to its boundary
+// (σ → 0 next to a walk that carries the slow variance) — the σ is held
+// there and the structure's errors are those of its own block (Self &
+// Liang, J. Am. Stat. Assoc. 82(398), 1987); the σ's stays unknown
+// (infinite). Where the σ is not flat the lack of concavity is the
+// structure's own and every error stays unknown: conditioning on the σ
+// would understate them.
+Eigen::MatrixXd StructureCovariance(const Eigen::MatrixXd& information);
 
 // The walk effect of axis `drift` ("gyro_bias_rw.x", …, "acc_bias_rw.z").
 std::string WalkName(int drift);
