@@ -462,6 +462,38 @@ TEST(Ranking, ListsEveryCatalogueEffectTheModelLacks) {
   }
 }
 
+// While a constant term is significant the second-order pairs wait for the
+// model with it: listed as not tested, with the reason, and left out of
+// Holm's correction, which counts exactly the candidates tested.
+TEST(Ranking, PairsWaitForTheSignificantConstantTermAndHolmCountsOnlyTheTested) {
+  auto unit = testing::NavigationGradeUnit();
+  // Twenty tolerances: the short run must show it beyond doubt.
+  const FamilyCase c{"GyroScaleFactor", "gyro_scale_factor.z", "rotations", Size::kTolerances, 20.0};
+  unit.effects.push_back(HiddenEffect(c, unit));
+  const auto sim = testing::SimulateOrDie(unit, testing::ShortTurnsProfile(300.0, 900.0), kFindRate10Hz, 33);
+  AnalysisRequest request;
+  request.nominal = NominalModel();
+  auto a = Analyze(sim.run, request, AnalysisOptions{});
+  ASSERT_TRUE(a.ok()) << a.status();
+  const std::vector<EffectCandidate>& ranked = a->report.effect_candidates;
+  ASSERT_FALSE(ranked.empty());
+  ASSERT_EQ(ranked.front().name, c.term);
+  ASSERT_LT(ranked.front().p_value_holm, AnalysisOptions{}.finder.family_wise_alpha);
+  int untested_pairs = 0, tested = 0;
+  for (const EffectCandidate& e : ranked) {
+    if (e.identifiable && e.tested) ++tested;
+    if (e.family.ends_with("_bias_second_order") && !e.tested) {
+      ++untested_pairs;
+      EXPECT_NE(e.note.find("a constant term is significant"), std::string::npos) << e.name << ": " << e.note;
+      EXPECT_EQ(e.p_value_holm, 1.0);
+    }
+  }
+  EXPECT_GT(untested_pairs, 0);
+  // Holm's first step: the smallest p times the number of hypotheses tested.
+  EXPECT_NEAR(ranked.front().p_value_holm, std::min(1.0, tested * ranked.front().p_value),
+              1e-9 * ranked.front().p_value_holm + 1e-300);
+}
+
 TEST(TwoHiddenEffects, DiscoveredInTwoSteps) {
   const std::string gyro_term = "gyro_scale_factor.z";
   const std::string acc_term = "acc_misalignment.yz";
