@@ -341,7 +341,7 @@ std::vector<StructureProposal> ProposeStructures(const std::vector<DriftCorrelat
         c.statistic = f.lr_statistic;
         c.dof = f.lr_dof;
         c.p_value = f.lr_p_value;
-        char buf[128];
+        char buf[192];
         std::snprintf(buf, sizeof buf, "; its fit to the correlation function gains χ² %.1f, p = %.2g (%d starts): "
                       "below the screen", f.lr_statistic, f.lr_p_value, p->searched_starts);
         c.note = "correlation function of " + d.state + " against " + ident::CorrelationFamilyName(f.family) + buf;
@@ -507,7 +507,7 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const BenchRun& run,
         c.statistic = w.statistic;
         c.dof = w.dof;
         c.p_value = ident::NestedPValue(w);
-        char buf[160];
+        char buf[256];
         std::snprintf(buf, sizeof buf, "likelihood of the innovations: 2Δℓ = %.1f beyond the drift σ re-fitted "
                       "alone, p = %.2g (%d starts) — below the screen; no standard error computed",
                       w.statistic, c.p_value, w.starts);
