@@ -280,6 +280,20 @@ using StructureOutcomes = std::map<std::string, EffectCandidate>;
 int DriftIndex(Sensor sensor, int axis) { return (sensor == Sensor::kGyro ? 0 : 3) + axis; }
 int DriftIndex(const EffectTerm& term) { return DriftIndex(term.family->sensor, term.axis); }
 
+// A random structure's candidate from `source` ("STRUCTURE", "LIKELIHOOD")
+// with nothing measured yet: no statistic, no estimate (p = 1); its degrees
+// of freedom are the structure's own parameters.
+EffectCandidate StructureCandidate(const EffectTerm& term, const char* source) {
+  EffectCandidate c;
+  c.name = term.Name();
+  c.family = std::string(term.family->name);
+  c.unit = std::string(term.family->unit);
+  c.source = source;
+  c.dof = term.family->process == RandomProcess::kSecondOrderMarkov ? 3 : 1;
+  c.std_error = std::numeric_limits<double>::infinity();
+  return c;
+}
+
 // The catalogue effect a correlation-function family of drift `d` means, with
 // its magnitude: a walk (random walk; a second exponential longer than half
 // the run, dσ²/dt = 2σ₂²/τ₂), a second-order pair (exponential-cosine).
@@ -314,13 +328,12 @@ std::optional<StructureProposal> StructureOfFit(const DriftCorrelation& d, const
   auto terms = ParseEffectSelector(effect);
   if (!terms.ok()) return std::nullopt;
   p.effect.term = terms->front();
-  p.candidate.name = effect;
-  p.candidate.family = std::string(p.effect.term.family->name);
-  p.candidate.source = "STRUCTURE";
-  p.candidate.unit = std::string(p.effect.term.family->unit);
-  p.candidate.dof = p.effect.term.family->process == RandomProcess::kSecondOrderMarkov ? 3 : 1;
-  p.candidate.note = std::string("correlation function of ") + d.state + " is " +
-                     ident::CorrelationFamilyName(f.family) + ", not exponential";
+  EffectCandidate c = StructureCandidate(p.effect.term, "STRUCTURE");
+  c.estimate = p.candidate.estimate;
+  c.std_error = p.candidate.std_error;
+  c.note = std::string("correlation function of ") + d.state + " is " + ident::CorrelationFamilyName(f.family) +
+           ", not exponential";
+  p.candidate = std::move(c);
   return p;
 }
 
@@ -396,22 +409,9 @@ ident::DriftSelection ResolvedDrifts(const std::vector<DriftCorrelation>& drifts
   return selection;
 }
 
-// A random structure's candidate of the likelihood's tests, with nothing
-// measured yet: no statistic, no estimate (p = 1).
-EffectCandidate LikelihoodCandidate(const EffectTerm& term) {
-  EffectCandidate c;
-  c.name = term.Name();
-  c.family = std::string(term.family->name);
-  c.unit = std::string(term.family->unit);
-  c.source = "LIKELIHOOD";
-  c.dof = term.family->process == RandomProcess::kSecondOrderMarkov ? 3 : 1;
-  c.std_error = std::numeric_limits<double>::infinity();
-  return c;
-}
-
 // A random structure no test measured on this model, and why.
 EffectCandidate UntestedStructure(const EffectTerm& term, const std::string& why) {
-  EffectCandidate c = LikelihoodCandidate(term);
+  EffectCandidate c = StructureCandidate(term, "LIKELIHOOD");
   c.tested = false;
   c.note = "not tested on this model: " + why;
   return c;
@@ -486,14 +486,13 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const BenchRun& run,
       }
       continue;
     }
-    // The axes the test fitted (drift_likelihood.h): a structure its first
-    // EM step shrank is one this run does not tell from the axis' drift.
+    // The axes the screen tried: a structure its first EM step shrank (not
+    // among `structures`) is one this run does not tell from the axis' drift.
     for (int d = 0; d < 6; ++d) {
       const std::string name = test.structure_name(d);
-      const bool fitted_axis = test.axes[static_cast<size_t>(d)] && ident::DriftOf(pass.model, d).sigma > 0.0;
       auto terms = ParseEffectSelector(name);
-      if (!fitted_axis || !terms.ok() || pass.model.FindEffect(terms->front()) >= 0) continue;
-      EffectCandidate c = LikelihoodCandidate(terms->front());
+      if (!fitted->screened[static_cast<size_t>(d)] || !terms.ok()) continue;
+      EffectCandidate c = StructureCandidate(terms->front(), "LIKELIHOOD");
       c.note = std::string("likelihood of the innovations: the first EM step from the structure hypothesis "
                            "shrank it — this run does not tell it from a wider ") + ident::DriftName(d) + " drift";
       outcomes.insert_or_assign(name, c);
@@ -502,10 +501,9 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const BenchRun& run,
       auto terms = ParseEffectSelector(w.effect);
       if (!terms.ok()) continue;
       if (!(ident::NestedPValue(w) < screen_alpha)) {
-        EffectCandidate c = LikelihoodCandidate(terms->front());
+        EffectCandidate c = StructureCandidate(terms->front(), "LIKELIHOOD");
         c.estimate = w.parameters.front().value;
         c.statistic = w.statistic;
-        c.dof = w.dof;
         c.p_value = ident::NestedPValue(w);
         char buf[256];
         std::snprintf(buf, sizeof buf, "likelihood of the innovations: 2Δℓ = %.1f beyond the drift σ re-fitted "
@@ -518,11 +516,8 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const BenchRun& run,
       StructureProposal p;
       p.effect = w.fitted;
       p.fitted = w;
+      p.candidate = StructureCandidate(p.effect.term, "LIKELIHOOD");
       EffectCandidate& c = p.candidate;
-      c.name = w.effect;
-      c.family = std::string(p.effect.term.family->name);
-      c.source = "LIKELIHOOD";
-      c.unit = std::string(p.effect.term.family->unit);
       c.estimate = w.parameters.front().value;
       c.std_error = w.parameters.front().std_error;
       c.dof = w.dof + 1;

@@ -553,7 +553,10 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const BenchRun& run, const E
 
   std::vector<int> candidates;
   for (int d = 0; d < 6; ++d) {
-    if (axes[static_cast<size_t>(d)] && HasDrift(model, d) && EffectOf(model, kind.Name(d)) < 0) candidates.push_back(d);
+    if (axes[static_cast<size_t>(d)] && HasDrift(model, d) && EffectOf(model, kind.Name(d)) < 0) {
+      candidates.push_back(d);
+      out.screened[static_cast<size_t>(d)] = true;
+    }
   }
   if (candidates.empty()) return out;
   auto specified = [&](int d) { return HasDrift(a_priori, d) ? DriftOf(a_priori, d) : DriftOf(model, d); };

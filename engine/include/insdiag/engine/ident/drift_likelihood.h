@@ -140,6 +140,10 @@ struct DriftLikelihoodResult {
   ErrorModel model;                           // the model with the identified σ (and walks)
   std::vector<ParameterEstimate> identified;  // method "ML": .sigma of each selected drift, .density of each walk
   std::vector<StructureEstimate> structures;  // the walks or pairs kept after the screen
+  // Structure tests: the axes the screen tried (selected, with a drift, and
+  // no such structure in the model); those not in `structures` its first EM
+  // step shrank.
+  DriftSelection screened{};
   // Selected drifts whose likelihood is flat in σ (the run cannot tell it);
   // the model keeps their values.
   std::vector<std::string> not_identifiable;
