@@ -189,7 +189,7 @@ double ProfileCorrection(const ForwardPass& fw, const ErrorModel& model, const S
   return correction;
 }
 
-absl::StatusOr<ModelPass> RunPass(const BenchRun& run, const ErrorModel& model,
+absl::StatusOr<ModelPass> RunPass(const BenchRun& run, const EpochRun& epochs, const ErrorModel& model,
                                   const std::vector<SampleOutlier>& spikes, const AnalysisOptions& options,
                                   bool with_scan) {
   ModelPass pass;
@@ -198,9 +198,9 @@ absl::StatusOr<ModelPass> RunPass(const BenchRun& run, const ErrorModel& model,
   const int segment_epochs =
       std::max(1, static_cast<int>(std::lround(options.segment_s / options.filter.update_interval_s)));
   if (with_scan) {
-    pass.scan = std::make_unique<ScoreTestObserver>(*pass.layout, AbsentConstantCandidates(pass.model), segment_epochs);
+    pass.scan = std::make_unique<ScoreTestObserver>(*pass.layout, epochs, AbsentConstantCandidates(pass.model), segment_epochs);
   }
-  auto forward = RunForwardFilter(run, pass.model, options.filter, pass.scan.get());
+  auto forward = RunForwardFilter(epochs, pass.model, pass.scan.get());
   if (!forward.ok()) return forward.status();
   pass.forward = *std::move(forward);
   auto smoothed = RunSmoother(pass.forward, ident::DriftSmootherOptions(pass.model, *pass.layout, pass.forward,
@@ -374,7 +374,7 @@ std::vector<StructureProposal> ProposeStructures(const std::vector<DriftCorrelat
 
 // Confirms each proposal with the filter's exact likelihood: model A plus the
 // effect, against model A.
-std::vector<StructureProposal> ConfirmStructures(const BenchRun& run, const ModelPass& a,
+std::vector<StructureProposal> ConfirmStructures(const BenchRun& run, const EpochRun& epochs, const ModelPass& a,
                                                  std::vector<StructureProposal> proposals,
                                                  const std::vector<SampleOutlier>& spikes,
                                                  const AnalysisOptions& options) {
@@ -383,7 +383,7 @@ std::vector<StructureProposal> ConfirmStructures(const BenchRun& run, const Mode
     ErrorModel b = a.model;
     if (p.fitted.has_value() || b.FindEffect(p.effect.term) >= 0) continue;
     b.effects.push_back(p.effect);
-    auto pass = RunPass(run, b, spikes, options, /*with_scan=*/false);
+    auto pass = RunPass(run, epochs, b, spikes, options, /*with_scan=*/false);
     EffectCandidate& c = p.candidate;
     if (!pass.ok()) {
       c.identifiable = false;
@@ -438,7 +438,7 @@ EffectCandidate UntestedStructure(const EffectTerm& term, const std::string& why
 // a scale factor, in another guise), and each of its passes costs more than
 // a base pass (two states an axis). The constant effect is added first; the
 // next scan tests the pairs.
-std::vector<StructureProposal> LikelihoodStructureProposals(const BenchRun& run, const ModelPass& pass,
+std::vector<StructureProposal> LikelihoodStructureProposals(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass,
                                                             const ErrorModel& a_priori,
                                                             const std::vector<DriftCorrelation>& drifts,
                                                             bool constant_significant, double screen_alpha,
@@ -478,7 +478,7 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const BenchRun& run,
   }
   for (const Test& test : tests) {
     if (!test.enabled) continue;
-    auto fitted = test.fit(run, pass.model, a_priori, test.axes, screen_alpha, options.filter, options.drift_likelihood);
+    auto fitted = test.fit(epochs, pass.model, a_priori, test.axes, screen_alpha, options.drift_likelihood);
     if (!fitted.ok()) {
       if (notes != nullptr) {
         notes->push_back(std::string("no likelihood test of ") + test.what + ": " +
@@ -590,7 +590,7 @@ struct ScannedModel {
 };
 
 // `drifts`: correlation processing of this pass's smoothed drifts.
-Findings FindMissingEffects(const BenchRun& run, const ModelPass& pass, std::vector<DriftCorrelation> drifts,
+Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass, std::vector<DriftCorrelation> drifts,
                             const ErrorModel& a_priori, const std::vector<SampleOutlier>& spikes,
                             const AnalysisOptions& options, std::vector<std::string>* notes) {
   Findings f;
@@ -608,7 +608,7 @@ Findings FindMissingEffects(const BenchRun& run, const ModelPass& pass, std::vec
       });
   StructureOutcomes likelihood_outcomes, correlation_outcomes;
   std::vector<StructureProposal> proposals = LikelihoodStructureProposals(
-      run, pass, a_priori, f.drifts, constant_significant, screen_alpha, options, likelihood_outcomes, notes);
+      run, epochs, pass, a_priori, f.drifts, constant_significant, screen_alpha, options, likelihood_outcomes, notes);
   for (StructureProposal& p : ProposeStructures(f.drifts, run.DurationS(), screen_alpha, correlation_outcomes)) {
     if (std::none_of(proposals.begin(), proposals.end(),
                      [&](const StructureProposal& o) { return o.effect.term == p.effect.term; })) {
@@ -641,15 +641,15 @@ Findings FindMissingEffects(const BenchRun& run, const ModelPass& pass, std::vec
                     : "the model has no " + ident::DriftName(DriftIndex(term)) + " drift to test it beside"));
     }
   }
-  f.structures = ConfirmStructures(run, pass, std::move(proposals), spikes, options);
+  f.structures = ConfirmStructures(run, epochs, pass, std::move(proposals), spikes, options);
   f.candidates = MergeCandidates(std::move(ranked.terms), f.structures, std::move(others));
   return f;
 }
 
-Findings FindMissingEffects(const BenchRun& run, const ModelPass& pass, const ErrorModel& a_priori,
+Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass, const ErrorModel& a_priori,
                             const std::vector<SampleOutlier>& spikes, const AnalysisOptions& options,
                             std::vector<std::string>* notes) {
-  return FindMissingEffects(run, pass,
+  return FindMissingEffects(run, epochs, pass,
                             ident::CorrelateDrifts(pass.forward, pass.smoothed, *pass.layout, options.correlation, notes),
                             a_priori, spikes, options, notes);
 }
@@ -929,6 +929,11 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
     return st;
   }
 
+  // The run condensed to its update epochs once: every pass below filters the epochs.
+  auto condensed = CondenseRun(run, base, options.filter.update_interval_s);
+  if (!condensed.ok()) return condensed.status();
+  const EpochRun& epochs = *condensed;
+
   // Retargeting: identify, re-tune, until the parameters settle.
   std::vector<ParameterEstimate> identified;
   // The a-priori model's scan: the report's when its missing effects go
@@ -957,7 +962,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
         a_priori_from_allan && allan.has_value() ? ident::UnresolvedAllanTerms(*allan) : ident::UnresolvedNoise{};
     if (options.retune_unresolved_noise && unresolved.Any()) {
       Progress(options, 0.08, "maximum-likelihood noise scale");
-      auto scaled = ident::ScaleUnresolvedNoise(run, base, unresolved, options.filter, options.noise_scale);
+      auto scaled = ident::ScaleUnresolvedNoise(epochs, base, unresolved, options.noise_scale);
       if (!scaled.ok()) {
         notes.push_back("the noise terms set from Allan bounds were not re-tuned: " +
                         std::string(scaled.status().message()));
@@ -1008,7 +1013,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
         selection[d] = !faults_flagged && resolved[d] == resolved_set;
         tau_too[d] = selection[d] && (resolved_set || a_priori_from_allan);
       }
-      return ident::IdentifyDriftsByLikelihood(run, model, *a_priori, selection, tau_too, options.filter,
+      return ident::IdentifyDriftsByLikelihood(epochs, model, *a_priori, selection, tau_too,
                                                options.drift_likelihood);
     };
     for (int it = 0; it < options.max_retarget_iterations; ++it) {
@@ -1018,7 +1023,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       // drift widened to carry a scale-factor error), so the retargeting waits
       // until the structure is complete.
       const bool first = it == 0;
-      auto pass = RunPass(run, base, spikes, options, /*with_scan=*/first);
+      auto pass = RunPass(run, epochs, base, spikes, options, /*with_scan=*/first);
       if (!pass.ok()) return pass.status();
       // An a-priori model from the Allan fit is not a specification to
       // protect: its drift τ is a bound of the static segments (the longest τ
@@ -1037,7 +1042,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       Findings found;
       const EffectCandidate* best = nullptr;
       if (may_defer) {
-        found = FindMissingEffects(run, *pass, drifts, *a_priori, spikes, options, &found_notes);
+        found = FindMissingEffects(run, epochs, *pass, drifts, *a_priori, spikes, options, &found_notes);
         best = LowestBicSignificant(found.candidates, found.families, options);
       }
       if (best != nullptr) {
@@ -1114,11 +1119,11 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   Progress(options, 0.65, "missing-effect scan");
   if (scanned.has_value() && scanned->pass.model != base) scanned.reset();
   absl::StatusOr<ModelPass> a = scanned.has_value() ? absl::StatusOr<ModelPass>(std::move(scanned->pass))
-                                                    : RunPass(run, base, spikes, options, /*with_scan=*/true);
+                                                    : RunPass(run, epochs, base, spikes, options, /*with_scan=*/true);
   if (!a.ok()) return a.status();
   if (scanned.has_value()) notes.insert(notes.end(), scanned->notes.begin(), scanned->notes.end());
   const Findings found_a = scanned.has_value() ? std::move(scanned->found)
-                                               : FindMissingEffects(run, *a, *a_priori, spikes, options, &notes);
+                                               : FindMissingEffects(run, epochs, *a, *a_priori, spikes, options, &notes);
   AnalysisReport report_a = ReportOf(*a, found_a, run, options, identified, notes);
 
   Analysis out;
@@ -1134,9 +1139,9 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       Progress(options, 0.7 + 0.3 * step / (options.max_discovery_steps + 1), "discovery: adding " + top->name);
       auto extended = ExtendModel(run, current().model, {top->name}, current(), found, options);
       if (!extended.ok()) return extended.status();
-      auto next = RunPass(run, *extended, spikes, options, /*with_scan=*/true);
+      auto next = RunPass(run, epochs, *extended, spikes, options, /*with_scan=*/true);
       if (!next.ok()) return next.status();
-      Findings next_found = FindMissingEffects(run, *next, *a_priori, spikes, options, &notes);
+      Findings next_found = FindMissingEffects(run, epochs, *next, *a_priori, spikes, options, &notes);
       identified = WithTakenStructures(std::move(identified), next->model, found);
       AnalysisReport next_report = ReportOf(*next, next_found, run, options, identified, notes);
       DiscoveryStep d;
@@ -1186,9 +1191,9 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
     Progress(options, 0.8, "model with the added effects");
     auto extended = ExtendModel(run, base, request.add_effects, *a, found_a, options);
     if (!extended.ok()) return extended.status();
-    auto b = RunPass(run, *extended, spikes, options, /*with_scan=*/true);
+    auto b = RunPass(run, epochs, *extended, spikes, options, /*with_scan=*/true);
     if (!b.ok()) return b.status();
-    const Findings found_b = FindMissingEffects(run, *b, *a_priori, spikes, options, &notes);
+    const Findings found_b = FindMissingEffects(run, epochs, *b, *a_priori, spikes, options, &notes);
     out.report = ReportOf(*b, found_b, run, options, WithTakenStructures(identified, b->model, found_a), notes);
     const std::vector<std::string> added = [&] {
       std::vector<std::string> names;

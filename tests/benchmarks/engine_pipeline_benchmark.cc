@@ -56,22 +56,40 @@ ErrorModel NavigationGradeBaseModel() {
   return m;
 }
 
-// The base filter pass; with state.range(0) = 1 also the one-pass score test
-// of every absent catalogue effect (the missing-effect scan), whose cost the
-// issue bounds at twice the base pass.
+// The sweep over the samples that condenses a run to its update epochs
+// (mechanisation, couplings, the pilot filter): once per analysis.
+void BM_CondenseRun(benchmark::State& state) {
+  BenchRun hour = HourRun("rotations").run;
+  hour.samples.resize(std::min<size_t>(hour.samples.size(), 360000));
+  const ErrorModel m = NavigationGradeBaseModel();
+  double bytes_per_epoch = 0.0;
+  for (auto _ : state) {
+    auto epochs = CondenseRun(hour, m, FilterOptions{}.update_interval_s);
+    bytes_per_epoch = epochs->BytesPerEpoch();
+    benchmark::DoNotOptimize(epochs);
+  }
+  state.counters["stored_bytes_per_epoch"] = bytes_per_epoch;
+}
+BENCHMARK(BM_CondenseRun)->Unit(benchmark::kMillisecond);
+
+// One model's filter pass over the condensed run: what every identification
+// step, structure test and model comparison costs. With state.range(0) = 1
+// also the one-pass score test of every absent catalogue effect (the
+// missing-effect scan).
 void BM_ForwardFilter(benchmark::State& state) {
   const bool with_scan = state.range(0) != 0;
   BenchRun hour = HourRun("rotations").run;
   hour.samples.resize(std::min<size_t>(hour.samples.size(), 360000));
   const ErrorModel m = NavigationGradeBaseModel();
   const StateLayout layout(m);
+  const auto epochs = CondenseRun(hour, m, FilterOptions{}.update_interval_s);
   const int segment_epochs = static_cast<int>(AnalysisOptions{}.segment_s / FilterOptions{}.update_interval_s);
   double bytes_per_sample = 0.0;
   size_t candidates = 0;
   for (auto _ : state) {
     std::unique_ptr<ScoreTestObserver> scan;
-    if (with_scan) scan = std::make_unique<ScoreTestObserver>(layout, AbsentConstantCandidates(m), segment_epochs);
-    auto fw = RunForwardFilter(hour, m, FilterOptions{}, scan.get());
+    if (with_scan) scan = std::make_unique<ScoreTestObserver>(layout, *epochs, AbsentConstantCandidates(m), segment_epochs);
+    auto fw = RunForwardFilter(*epochs, m, scan.get());
     bytes_per_sample = fw->BytesPerSample(hour.samples.size());
     candidates = scan ? scan->columns().size() : 0;
     benchmark::DoNotOptimize(fw);

@@ -479,8 +479,10 @@ TEST(DriftLikelihoodTest, RecoversATripledGyroDriftSigmaWithinItsIntervalOverSee
   int checks = 0, covered = 0, detected = 0;
   for (int seed = 0; seed < kSeeds; ++seed) {
     const sim::SimulatedRun s = testing::SimulateOrDie(unit, profile, kCoverageRateHz, 700 + seed);
-    auto ml = IdentifyDriftsByLikelihood(s.run, model, model, DriftSelection{true, true, true, true, true, true}, DriftSelection{},
-                                         FilterOptions{});
+    const auto epochs = CondenseRun(s.run, model, FilterOptions{}.update_interval_s);
+    ASSERT_TRUE(epochs.ok()) << epochs.status();
+    auto ml = IdentifyDriftsByLikelihood(*epochs, model, model, DriftSelection{true, true, true, true, true, true},
+                                         DriftSelection{});
     ASSERT_TRUE(ml.ok()) << ml.status();
     EXPECT_GT(ml->log_likelihood_after, ml->log_likelihood_before);  // EM never lowers ℓ
     for (const ParameterEstimate& e : ml->identified) {
@@ -566,7 +568,9 @@ TEST(NoiseRetuneTest, RecoversKnownWhiteDensitiesFromTheirBoundsOverSeeds) {
   for (int seed = 0; seed < kSeeds; ++seed) {
     const sim::SimulatedRun s =
         testing::SimulateOrDie(unit, testing::BuiltinProfileOrDie("rotations"), 10.0, 700 + seed);
-    auto scaled = ScaleUnresolvedNoise(s.run, bound, which, FilterOptions{});
+    const auto epochs = CondenseRun(s.run, bound, FilterOptions{}.update_interval_s);
+    ASSERT_TRUE(epochs.ok()) << epochs.status();
+    auto scaled = ScaleUnresolvedNoise(*epochs, bound, which);
     ASSERT_TRUE(scaled.ok()) << scaled.status();
     for (const NoiseScaleGroup& g : scaled->groups) {
       const double true_scale = 1.0 / kBoundOverTruth;

@@ -4,7 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
+#include <optional>
 
+#include "insdiag/engine/filter/model_transitions.h"
 #include "insdiag/engine/filter/observation.h"
 #include "insdiag/engine/model/error_dynamics.h"
 #include "insdiag/engine/nav/rotation.h"
@@ -60,6 +63,12 @@ TEST(EffectJacobian, ParsesEveryTermNameBack) {
   EXPECT_FALSE(ParseEffectSelector("gyro_scale_factor.q").ok());
   EXPECT_FALSE(ParseEffectSelector("gyro_misalignment.xx").ok());
   EXPECT_EQ(ParseEffectSelector("gyro_g_sensitivity")->size(), 9u);
+}
+
+Eigen::MatrixXd MatrixPower(const Eigen::MatrixXd& m, int k) {
+  Eigen::MatrixXd out = Eigen::MatrixXd::Identity(m.rows(), m.cols());
+  for (int i = 0; i < k; ++i) out = out * m;
+  return out;
 }
 
 // Error-state coordinates of `perturbed` relative to `nominal` (the filter's
@@ -124,30 +133,17 @@ class TransitionJacobian : public ::testing::Test {
     return s;
   }
 
-  // The filter's interval transition over the same samples (as RunForwardFilter builds it).
+  // The filter's interval transition over the same samples: the run from
+  // sample first_ condensed into one interval, as RunForwardFilter builds it.
   IntervalTransition Transition(const ErrorModel& model, int count) const {
+    BenchRun part = run_;
+    part.samples.assign(run_.samples.begin() + static_cast<std::ptrdiff_t>(first_),
+                        run_.samples.begin() + static_cast<std::ptrdiff_t>(first_) + count + 1);
+    const auto epochs = CondenseRun(part, model, count * 0.01);
+    EXPECT_TRUE(epochs.ok()) << epochs.status();
     const StateLayout layout(model);
-    const auto disc = DiscretiseNavigation(NavigationErrorMatrix(site_, layout), 0.01);
-    SensorBlocks D, Qs;
-    SensorBlocks::Discretise(model, layout, 0.01, D, Qs);
-    IntervalAccumulator acc(model, layout, disc, count);
-    nav::NavState s = StartState();
-    const double dt = 0.01;
-    nav::ImuIncrement prev{run_.samples[first_].gyro_rad_s * dt, run_.samples[first_].acc_mps2 * dt};
-    for (int j = 1; j <= count; ++j) {
-      const ImuSample& smp = run_.samples[first_ + static_cast<size_t>(j)];
-      const nav::ImuIncrement cur{smp.gyro_rad_s * dt, smp.acc_mps2 * dt};
-      const Eigen::Quaterniond q0 = s.q_b_n;
-      s = nav::PropagateStrapdown(s, cur, prev, dt);
-      prev = cur;
-      RegressorInputs in;
-      in.gyro_rad_s = smp.gyro_rad_s;
-      in.acc_mps2 = smp.acc_mps2;
-      in.temperature_delta_degc = smp.temp_degc - run_.samples[0].temp_degc;
-      in.yaw_rad = smp.ref_rpy_rad.z();
-      acc.AddSample(disc, D, Qs, nav::Midway(q0, s.q_b_n).toRotationMatrix(), in);
-    }
-    return acc.Finish();
+    ModelTransitions transitions(model, layout, *epochs);
+    return transitions.Build(epochs->epochs.front());
   }
 
   BenchRun run_;
@@ -217,6 +213,103 @@ TEST_F(TransitionJacobian, EveryEffectColumnMatchesTheMechanisation) {
       const double scale = linear.cwiseAbs().maxCoeff();
       for (int r = 0; r < 9; ++r) {
         EXPECT_NEAR(numeric[r], linear[r], 5e-3 * scale + 1e-14) << term.ParameterName(p) << " row " << r;
+      }
+    }
+  }
+}
+
+// The condensed interval's B, Q_ns and the process noise's part of Q_nn for
+// drifts, walks and pairs (their coupling reconstructed as a quadratic from
+// three moments, epoch_run.h) against the sums over the samples themselves,
+// with each sample's coupling b_j taken from the mechanisation: one second
+// of a table whose turn is ramping up, so the coupling rotates and bends.
+TEST_F(TransitionJacobian, DecayingStatesMatchTheSumsOverTheirSamples) {
+  const int count = 100;
+  const double dt = 0.01;
+  const nav::NavState nominal = Mechanise(StartState(), count, [](const ImuSample&, auto&, auto&) {});
+  // b_j per sensor axis (gyro x, y, z, accelerometer x, y, z) by a small error on sample j alone.
+  std::vector<Matrix96d> b(static_cast<size_t>(count) + 1, Matrix96d::Zero());
+  for (int axis = 0; axis < 6; ++axis) {
+    // Large enough that the position change stands far above the ~1e-9 m
+    // resolution of latitude in double precision, small enough to stay linear.
+    const double size = axis < 3 ? 1e-3 : 1e-1;
+    for (int j = 1; j <= count; ++j) {
+      const double t_j = run_.samples[first_ + static_cast<size_t>(j)].t_s;
+      const nav::NavState end = Mechanise(StartState(), count, [&](const ImuSample& smp, auto& g, auto& a) {
+        if (smp.t_s == t_j) (axis < 3 ? g : a)[axis % 3] += size;
+      });
+      b[static_cast<size_t>(j)].col(axis) = ErrorBetween(end, nominal, site_) / size;
+    }
+  }
+  struct Case {
+    const char* what;
+    Sensor sensor;
+    int axis;
+    std::optional<std::string> effect;  // none: the axis' Gauss–Markov drift
+    double tau_s;
+  };
+  const Case cases[] = {
+      {"slow gyro drift", Sensor::kGyro, 0, std::nullopt, 1000.0},
+      {"fast accelerometer drift", Sensor::kAccelerometer, 1, std::nullopt, 0.05},
+      {"gyro walk", Sensor::kGyro, 2, "gyro_bias_rw.z", 0.0},
+      {"accelerometer second-order pair", Sensor::kAccelerometer, 0, "acc_bias_second_order.x", 0.0},
+  };
+  for (const Case& c : cases) {
+    ErrorModel model;  // nothing else makes noise: Q is this state's alone
+    model.reference = model_.reference;
+    int state = 0;
+    if (c.effect.has_value()) {
+      ModelEffect e;
+      e.term = ParseEffectSelector(*c.effect)->front();
+      e.random_walk_density = 1e-4;
+      e.second_order_sigma = 1e-3;
+      e.second_order_alpha_per_s = 1.0 / 3.0;
+      e.second_order_beta_rad_s = 2.0 * std::numbers::pi / 0.7;
+      model.effects.push_back(e);
+      state = StateLayout(model).EffectOffset(0) - StateLayout::kNavigationSize;
+    } else {
+      (c.sensor == Sensor::kGyro ? model.gyro : model.acc).bias[static_cast<size_t>(c.axis)] = {1e-3, c.tau_s};
+      state = SensorAxisIndex(c.sensor, c.axis);
+    }
+    const StateLayout layout(model);
+    SensorBlocks d_sample, q_sample;
+    SensorBlocks::Discretise(model, layout, dt, d_sample, q_sample);
+    const SensorBlocks::Block* d = nullptr;
+    const SensorBlocks::Block* q = nullptr;
+    for (size_t k = 0; k < d_sample.blocks.size(); ++k) {
+      if (d_sample.blocks[k].offset == state) d = &d_sample.blocks[k], q = &q_sample.blocks[k];
+    }
+    ASSERT_NE(d, nullptr);
+    const int size = d->size;
+    const Eigen::MatrixXd D = d->m.topLeftCorner(size, size);
+    const double q_sample_var = q->m(0, 0);
+    // Exact sums: B = Σ_j b_j e₀ᵀ D^{j−1}; the noise w_i injected after sample i
+    // reaches the epoch through β_i = Σ_{j>i} b_j e₀ᵀ D^{j−1−i} and the state through D^{M−i}.
+    const int a = SensorAxisIndex(c.sensor, c.axis);
+    Eigen::MatrixXd B = Eigen::MatrixXd::Zero(9, size), Qns = Eigen::MatrixXd::Zero(9, size);
+    Eigen::MatrixXd Qnn = Eigen::MatrixXd::Zero(9, 9);
+    Eigen::RowVectorXd e0 = Eigen::RowVectorXd::Zero(size);
+    e0[0] = 1.0;
+    for (int j = 1; j <= count; ++j) {
+      B += b[static_cast<size_t>(j)].col(a) * (e0 * MatrixPower(D, j - 1));
+    }
+    for (int i = 1; i <= count; ++i) {
+      Eigen::MatrixXd beta = Eigen::MatrixXd::Zero(9, size);
+      for (int j = i + 1; j <= count; ++j) beta += b[static_cast<size_t>(j)].col(a) * (e0 * MatrixPower(D, j - 1 - i));
+      Qnn += q_sample_var * beta * beta.transpose();
+      Qns += q_sample_var * beta * MatrixPower(D, count - i).transpose();
+    }
+    const IntervalTransition t = Transition(model, count);
+    const double b_scale = B.cwiseAbs().maxCoeff();
+    const double qns_scale = Qns.cwiseAbs().maxCoeff();
+    const double qnn_scale = Qnn.cwiseAbs().maxCoeff();
+    for (int r = 0; r < 9; ++r) {
+      for (int k = 0; k < size; ++k) {
+        EXPECT_NEAR(t.B(r, state + k), B(r, k), 2e-3 * b_scale) << c.what << " B row " << r;
+        EXPECT_NEAR(t.Qns(r, state + k), Qns(r, k), 2e-3 * qns_scale) << c.what << " Qns row " << r;
+      }
+      for (int k = 0; k < 9; ++k) {
+        EXPECT_NEAR(t.Qnn(r, k), Qnn(r, k), 2e-3 * qnn_scale) << c.what << " Qnn " << r << "," << k;
       }
     }
   }

@@ -130,9 +130,9 @@ bool PairMStep(const Eigen::MatrixXd& x, int i, const Eigen::Matrix<double, Eige
 // EM over θ = ln of each parameter (header), with the pass count of `out`.
 class Maximiser {
  public:
-  Maximiser(const BenchRun& run, ErrorModel model, std::vector<Parameter> parameters, const FilterOptions& filter,
+  Maximiser(const EpochRun& run, ErrorModel model, std::vector<Parameter> parameters,
             const DriftLikelihoodOptions& options, DriftLikelihoodResult& out)
-      : run_(run), model_(std::move(model)), layout_(model_), parameters_(std::move(parameters)), filter_(filter),
+      : run_(run), model_(std::move(model)), layout_(model_), parameters_(std::move(parameters)), 
         options_(options), out_(out) {
     for (const Parameter& p : parameters_) {
       if (p.kind == Kind::kTau) tau_free_[static_cast<size_t>(p.drift)] = true;
@@ -157,7 +157,7 @@ class Maximiser {
 
   absl::StatusOr<double> LogLikelihood(const ErrorModel& m) {
     ++out_.filter_passes;
-    auto fw = RunForwardFilter(run_, m, filter_);
+    auto fw = RunForwardFilter(run_, m);
     if (!fw.ok()) return fw.status();
     return fw->log_likelihood;
   }
@@ -169,7 +169,7 @@ class Maximiser {
   };
   absl::StatusOr<Step> EmStep(const Eigen::VectorXd& theta) {
     ++out_.filter_passes;
-    auto fw = RunForwardFilter(run_, ModelOf(theta), filter_);
+    auto fw = RunForwardFilter(run_, ModelOf(theta));
     if (!fw.ok()) return fw.status();
     const int K = fw->epochs();
     if (K < 3) return absl::InvalidArgumentError("drift likelihood: the run has fewer than three epochs");
@@ -329,11 +329,10 @@ class Maximiser {
   int iterations() const { return iterations_; }
 
  private:
-  const BenchRun& run_;
+  const EpochRun& run_;
   ErrorModel model_;
   StateLayout layout_;
   std::vector<Parameter> parameters_;
-  const FilterOptions& filter_;
   const DriftLikelihoodOptions& options_;
   DriftLikelihoodResult& out_;
   DriftSelection tau_free_{};  // drifts whose τ is a parameter too
@@ -407,11 +406,10 @@ std::string WalkName(int drift) {
   return std::string(drift < 3 ? "gyro_bias_rw." : "acc_bias_rw.") + "xyz"[drift % 3];
 }
 
-absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const BenchRun& run, const ErrorModel& model,
+absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const EpochRun& run, const ErrorModel& model,
                                                                  const ErrorModel& a_priori,
                                                                  const DriftSelection& which,
                                                                  const DriftSelection& tau_too,
-                                                                 const FilterOptions& filter,
                                                                  const DriftLikelihoodOptions& options) {
   if (auto st = ValidateOptions(options); !st.ok()) return st;
   DriftLikelihoodResult out;
@@ -427,7 +425,7 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const BenchRun&
     out.converged = true;
     return out;
   }
-  Maximiser em(run, model, parameters, filter, options, out);
+  Maximiser em(run, model, parameters, options, out);
   auto theta = FitInto(em, out, &out.log_likelihood_before);
   if (!theta.ok()) return theta.status();
   const double l0 = out.log_likelihood_after;
@@ -539,10 +537,9 @@ std::vector<ParameterEstimate> ReportedParameters(const StructureKind& kind, int
 // Walks, Second-order pairs): the screen's first EM step from each start,
 // the kept axes jointly from their best starts, each tested against the
 // model without it.
-absl::StatusOr<DriftLikelihoodResult> FitStructures(const BenchRun& run, const ErrorModel& model,
+absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const ErrorModel& model,
                                                     const ErrorModel& a_priori, const DriftSelection& axes,
                                                     const StructureKind& kind, double screen_alpha,
-                                                    const FilterOptions& filter,
                                                     const DriftLikelihoodOptions& options) {
   if (auto st = ValidateOptions(options); !st.ok()) return st;
   DriftLikelihoodResult out;
@@ -580,7 +577,7 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const BenchRun& run, const E
       parameters.push_back({Kind::kSigma, d});
       for (Kind k : kinds) parameters.push_back({k, d});
     }
-    Maximiser screen(run, trial, parameters, filter, options, out);
+    Maximiser screen(run, trial, parameters, options, out);
     const Eigen::VectorXd theta = screen.Start();
     auto step = screen.EmStep(theta);
     if (!step.ok()) return step.status();
@@ -617,7 +614,7 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const BenchRun& run, const E
   // the maximum, not of a point on the way to it.
   DriftLikelihoodOptions capped = options;
   if (kind.second_order) capped.max_iterations = std::min(options.max_iterations, options.second_order_max_iterations);
-  Maximiser em(run, joint, kept, filter, capped, out);
+  Maximiser em(run, joint, kept, capped, out);
   auto theta = FitInto(em, out, nullptr);
   if (!theta.ok()) return theta.status();
 
@@ -638,7 +635,7 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const BenchRun& run, const E
     without.effects.erase(without.effects.begin() + EffectOf(without, w.effect));
     DriftOf(without, d).sigma = DriftOf(model, d).sigma;
     DriftLikelihoodResult alone_result;
-    Maximiser alone(run, without, {Parameter{Kind::kSigma, d}}, filter, options, alone_result);
+    Maximiser alone(run, without, {Parameter{Kind::kSigma, d}}, options, alone_result);
     if (auto fitted_alone = FitInto(alone, alone_result, nullptr); !fitted_alone.ok()) return fitted_alone.status();
     out.filter_passes += alone_result.filter_passes;
     w.log_likelihood_without = alone_result.log_likelihood_after;
@@ -647,7 +644,7 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const BenchRun& run, const E
   }
   if (!out.converged && std::any_of(fits.begin(), fits.end(), significant)) {
     const int capped_iterations = out.iterations;
-    Maximiser on(run, out.model, kept, filter, options, out);
+    Maximiser on(run, out.model, kept, options, out);
     theta = FitInto(on, out, nullptr);
     if (!theta.ok()) return theta.status();
     out.iterations += capped_iterations;
@@ -656,7 +653,7 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const BenchRun& run, const E
     }
   }
   const double l_hat = out.log_likelihood_after;
-  Maximiser at_estimate(run, out.model, kept, filter, options, out);
+  Maximiser at_estimate(run, out.model, kept, options, out);
   for (size_t c = 0; c < fits.size(); ++c) {
     StructureEstimate& w = fits[c];
     const auto first = static_cast<Eigen::Index>(c) * per_axis;
@@ -702,26 +699,24 @@ Eigen::MatrixXd StructureCovariance(const Eigen::MatrixXd& information) {
   return covariance;
 }
 
-absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const BenchRun& run, const ErrorModel& model,
+absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const EpochRun& run, const ErrorModel& model,
                                                                 const ErrorModel& a_priori,
                                                                 const DriftSelection& axes, double screen_alpha,
-                                                                const FilterOptions& filter,
                                                                 const DriftLikelihoodOptions& options) {
-  return FitStructures(run, model, a_priori, axes, StructureKind{false}, screen_alpha, filter, options);
+  return FitStructures(run, model, a_priori, axes, StructureKind{false}, screen_alpha, options);
 }
 
-absl::StatusOr<DriftLikelihoodResult> IdentifySecondOrdersByLikelihood(const BenchRun& run, const ErrorModel& model,
+absl::StatusOr<DriftLikelihoodResult> IdentifySecondOrdersByLikelihood(const EpochRun& run, const ErrorModel& model,
                                                                        const ErrorModel& a_priori,
                                                                        const DriftSelection& axes,
                                                                        double screen_alpha,
-                                                                       const FilterOptions& filter,
                                                                        const DriftLikelihoodOptions& options) {
   if (options.second_order_start_periods_s.empty() ||
       std::any_of(options.second_order_start_periods_s.begin(), options.second_order_start_periods_s.end(),
                   [](double p) { return !(p > 0.0); })) {
     return absl::InvalidArgumentError("drift likelihood: second-order starting periods must be positive");
   }
-  return FitStructures(run, model, a_priori, axes, StructureKind{true}, screen_alpha, filter, options);
+  return FitStructures(run, model, a_priori, axes, StructureKind{true}, screen_alpha, options);
 }
 
 }  // namespace insdiag::engine::ident

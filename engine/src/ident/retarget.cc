@@ -235,9 +235,8 @@ struct Group {
 
 }  // namespace
 
-absl::StatusOr<NoiseScaleResult> ScaleUnresolvedNoise(const BenchRun& run, const ErrorModel& model,
-                                                      const UnresolvedNoise& which, const FilterOptions& filter,
-                                                      const NoiseScaleOptions& options) {
+absl::StatusOr<NoiseScaleResult> ScaleUnresolvedNoise(const EpochRun& run, const ErrorModel& model,
+                                                      const UnresolvedNoise& which, const NoiseScaleOptions& options) {
   if (!(options.min_scale > 0.0 && options.max_scale > options.min_scale && options.log_tolerance > 0.0)) {
     return absl::InvalidArgumentError("noise scale options out of range");
   }
@@ -273,7 +272,7 @@ absl::StatusOr<NoiseScaleResult> ScaleUnresolvedNoise(const BenchRun& run, const
   };
   absl::Status failure = absl::OkStatus();
   auto log_likelihood = [&]() {
-    auto fw = RunForwardFilter(run, m, filter);
+    auto fw = RunForwardFilter(run, m);
     ++out.filter_passes;
     if (!fw.ok()) {
       failure = fw.status();

@@ -95,6 +95,15 @@ std::vector<EffectTerm> AllCatalogueTerms() {
   return all;
 }
 
+std::vector<ConstantParameter> AllConstantParameters() {
+  std::vector<ConstantParameter> out;
+  for (const EffectTerm& term : AllCatalogueTerms()) {
+    if (term.family->kind != EffectKind::kConstant) continue;
+    for (int p = 0; p < term.family->parameters_per_term; ++p) out.push_back({term, p});
+  }
+  return out;
+}
+
 absl::StatusOr<std::vector<EffectTerm>> ParseEffectSelector(std::string_view selector) {
   const size_t dot = selector.find('.');
   const std::string_view family_name = selector.substr(0, dot);

@@ -2,6 +2,20 @@
 
 namespace insdiag::engine {
 
+absl::Status ValidateErrorModel(const ErrorModel& model) {
+  for (const SensorTriadModel* triad : {&model.gyro, &model.acc}) {
+    for (const GaussMarkov& gm : triad->bias) {
+      if (!(gm.sigma >= 0.0) || (gm.sigma > 0.0 && !(gm.tau_s > 0.0))) {
+        return absl::InvalidArgumentError("error model: a Gauss–Markov drift needs σ ≥ 0 and τ > 0");
+      }
+    }
+    if (!(triad->white_noise_density.array() >= 0.0).all() || !(triad->quantization.array() >= 0.0).all()) {
+      return absl::InvalidArgumentError("error model: noise densities and quantisation must be ≥ 0");
+    }
+  }
+  return absl::OkStatus();
+}
+
 int ErrorModel::FindEffect(const EffectTerm& term) const {
   for (size_t k = 0; k < effects.size(); ++k) {
     if (effects[k].term == term) return static_cast<int>(k);

@@ -1,10 +1,12 @@
 // Forward error-state Kalman filter over a bench run.
 //
-// The mechanisation (nav/strapdown.h) runs at the sample rate; the filter
-// propagates the error state over each update interval with the exact
-// interval transition Φ and noise Q (model/error_dynamics.h) and then
-// processes the six observation channels one by one as scalar updates
-// (seed: channel-wise processing), each in Joseph form:
+// The mechanisation (nav/strapdown.h) runs at the sample rate, once per run,
+// while the run is condensed to its update epochs (filter/epoch_run.h); the
+// filter propagates the error state over each update interval with the
+// exact interval transition Φ and noise Q of its model
+// (filter/model_transitions.h) and then processes the six observation
+// channels one by one as scalar updates (seed: channel-wise processing),
+// each in Joseph form:
 //
 //   S = h P hᵀ + r,  ν = z − h x,  K = P hᵀ / S
 //   x ← x + K ν
@@ -14,10 +16,12 @@
 // α² = S and β² = ν²/α² (seed, monitoring section) and the innovations'
 // log-likelihood −½ Σ (ln 2πS + ν²/S).
 //
-// After the updates the navigation part of the estimate is fed back into the
-// mechanisation (closed loop: attitude, velocity, position reset, their error
-// mean returns to zero) so that the linearisation stays exact over hours; the
-// sensor states keep their estimates.
+// After the updates the navigation part of the estimate was fed back into
+// the mechanisation when the run was condensed (closed loop: attitude,
+// velocity, position reset, so that the linearisation stays exact over
+// hours); the filter subtracts that known correction u_k from its
+// navigation errors, x_nav ← x_nav − u_k. The sensor states keep their
+// estimates.
 #pragma once
 
 #include <absl/status/statusor.h>
@@ -27,6 +31,8 @@
 #include <Eigen/Core>
 
 #include "insdiag/engine/bench_run.h"
+#include "insdiag/engine/filter/epoch_run.h"
+#include "insdiag/engine/filter/model_transitions.h"
 #include "insdiag/engine/filter/observation.h"
 #include "insdiag/engine/model/error_dynamics.h"
 #include "insdiag/engine/model/error_model.h"
@@ -42,16 +48,13 @@ struct FilterOptions {
   absl::Status Validate() const;
 };
 
-// The per-sample and per-update hooks of the forward pass, for computations
+// The per-epoch and per-update hooks of the forward pass, for computations
 // that must ride along the same pass (the missing-effect score test).
 class FilterObserver {
  public:
   virtual ~FilterObserver() = default;
-  // Each sample's coupling, in the interval-start coordinates of the accumulator.
-  virtual void OnSample(const NavigationDiscretisation& nav, const SampleCoupling& coupling) = 0;
-  // After the prior of an epoch is formed with `transition` (whose A also maps
-  // interval-start coordinates to the epoch).
-  virtual void OnPrediction(const IntervalTransition& transition) = 0;
+  // After the prior of epoch `index` is formed with `transition` over the interval `epoch`.
+  virtual void OnPrediction(int index, const EpochInterval& epoch, const IntervalTransition& transition) = 0;
   // After a scalar update of `channel`: row h, gain K, innovation ν, its variance S.
   virtual void OnScalarUpdate(int channel, const ObservationRow& h, const Eigen::VectorXd& gain,
                               double innovation, double innovation_variance) = 0;
@@ -95,8 +98,44 @@ struct ForwardPass {
   double BytesPerSample(size_t samples) const;
 };
 
-// Runs the mechanisation and the forward filter. Needs at least two samples
-// and a model whose parameters are valid (σ ≥ 0, τ > 0 where σ > 0).
+// The forward filter of one model stepped epoch by epoch over a condensed run.
+class EpochFilter {
+ public:
+  // `model`, `layout` and `run` must outlive the filter.
+  EpochFilter(const ErrorModel& model, const StateLayout& layout, const EpochRun& run);
+
+  // Predicts over epoch `index`'s interval and processes its observations;
+  // records the epoch into `pass` when given.
+  void Step(int index, ForwardPass* pass, FilterObserver* observer);
+  // The mechanisation was corrected by `u` after the step: x_nav ← x_nav − u.
+  void ApplyFeedback(const Eigen::Matrix<double, 9, 1>& u);
+  // The navigation errors' estimate after the last step's updates, before the feedback.
+  const Eigen::Matrix<double, 9, 1>& navigation_estimate() const { return navigation_estimate_; }
+  double log_likelihood() const { return log_likelihood_; }
+  int scalar_updates() const { return scalar_updates_; }
+  const Eigen::VectorXd& x() const { return x_; }
+  const Eigen::MatrixXd& P() const { return P_; }
+
+ private:
+  const ErrorModel& model_;
+  const StateLayout& layout_;
+  const EpochRun& run_;
+  ModelTransitions transitions_;
+  std::array<ObservationRow, kChannelCount> rows_;
+  Eigen::VectorXd x_;
+  Eigen::MatrixXd P_;
+  Eigen::VectorXd PH_, gain_, half_joseph_;
+  Eigen::Matrix<double, 9, 1> navigation_estimate_ = Eigen::Matrix<double, 9, 1>::Zero();
+  double log_likelihood_ = 0.0;
+  int scalar_updates_ = 0;
+};
+
+// The forward filter of `model` over a condensed run.
+absl::StatusOr<ForwardPass> RunForwardFilter(const EpochRun& run, const ErrorModel& model,
+                                             FilterObserver* observer = nullptr);
+
+// Condenses `run` with `model` as its own pilot, then filters it: the
+// feedback is the model's own estimate.
 absl::StatusOr<ForwardPass> RunForwardFilter(const BenchRun& run, const ErrorModel& model,
                                              const FilterOptions& options, FilterObserver* observer = nullptr);
 

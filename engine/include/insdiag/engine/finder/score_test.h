@@ -7,7 +7,8 @@
 // filter's would (Friedland, "Treatment of bias in recursive filtering", IEEE
 // Trans. AC 14(4), 1969):
 //   between epochs  A ← Φ A + W,   W = Σ_samples (the candidate's regressor
-//                                   mapped into the navigation errors, error_dynamics.h)
+//                                   mapped into the navigation errors: the
+//                                   condensed interval's catalogue column, epoch_run.h)
 //   per scalar update  X = h A,   A ← A − K X
 // and the innovations would have mean X β. The Gaussian log-likelihood of the
 // innovations as a function of β is then exactly quadratic:
@@ -28,10 +29,7 @@
 namespace insdiag::engine {
 
 // One parameter of a candidate term (yaw harmonics have two).
-struct CandidateColumn {
-  EffectTerm term;
-  int parameter = 0;
-};
+using CandidateColumn = ConstantParameter;
 
 // Every parameter of every constant catalogue term absent from `model`.
 std::vector<CandidateColumn> AbsentConstantCandidates(const ErrorModel& model);
@@ -39,11 +37,11 @@ std::vector<CandidateColumn> AbsentConstantCandidates(const ErrorModel& model);
 class ScoreTestObserver final : public FilterObserver {
  public:
   // `segment_epochs`: epochs per time segment of the per-channel, per-segment
-  // breakdown of the score.
-  ScoreTestObserver(const StateLayout& layout, std::vector<CandidateColumn> columns, int segment_epochs);
+  // breakdown of the score. `run` is the condensed run the pass filters.
+  ScoreTestObserver(const StateLayout& layout, const EpochRun& run, std::vector<CandidateColumn> columns,
+                    int segment_epochs);
 
-  void OnSample(const NavigationDiscretisation& nav, const SampleCoupling& coupling) override;
-  void OnPrediction(const IntervalTransition& transition) override;
+  void OnPrediction(int index, const EpochInterval& epoch, const IntervalTransition& transition) override;
   void OnScalarUpdate(int channel, const ObservationRow& h, const Eigen::VectorXd& gain, double innovation,
                       double innovation_variance) override;
 
@@ -59,21 +57,12 @@ class ScoreTestObserver final : public FilterObserver {
   std::vector<CandidateColumn> columns_;
   int segment_epochs_;
   int epoch_ = -1;
-  // The columns of one term, which share its regressor evaluation.
-  struct TermColumns {
-    EffectTerm term;
-    Eigen::Index first = 0;
-    int count = 1;
-  };
-  std::vector<TermColumns> terms_;
-  Eigen::Matrix<double, 9, Eigen::Dynamic> W_y_;  // 9 × p, this interval, interval-start coordinates
+  std::vector<int> run_columns_;  // each column's index among the condensed run's constant columns
   Eigen::MatrixXd sensitivity_;  // n × p, A
   Eigen::VectorXd score_;
   Eigen::MatrixXd information_;
   std::vector<Eigen::MatrixXd> segment_score_;  // per channel: p × segments
   Eigen::RowVectorXd X_;
-  double regressor_[2] = {0.0, 0.0};
-  bool any_yaw_ = false;
 };
 
 }  // namespace insdiag::engine

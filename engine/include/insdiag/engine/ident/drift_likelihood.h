@@ -161,11 +161,10 @@ struct DriftLikelihoodResult {
 // τ̂ = −Δt / ln φ̂; Shumway & Stoffer §6.3). `a_priori` gives the values the
 // report lists against the estimates. With nothing to identify it runs no
 // filter pass and returns the model as it is.
-absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const BenchRun& run, const ErrorModel& model,
+absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const EpochRun& run, const ErrorModel& model,
                                                                  const ErrorModel& a_priori,
                                                                  const DriftSelection& which,
                                                                  const DriftSelection& tau_too,
-                                                                 const FilterOptions& filter,
                                                                  const DriftLikelihoodOptions& options = {});
 
 // Fits a bias random walk on each selected axis that has a drift and no walk
@@ -174,10 +173,9 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const BenchRun&
 // EM step kept; `structures` their estimates and statistics — with standard
 // errors for those whose nested test passes at `screen_alpha` (the others'
 // are NaN: their information would cost passes for nothing).
-absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const BenchRun& run, const ErrorModel& model,
+absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const EpochRun& run, const ErrorModel& model,
                                                                 const ErrorModel& a_priori,
                                                                 const DriftSelection& axes, double screen_alpha,
-                                                                const FilterOptions& filter,
                                                                 const DriftLikelihoodOptions& options = {});
 
 // Fits a second-order Markov pair (catalogue: gyro_bias_second_order,
@@ -187,11 +185,10 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const BenchRun& 
 // jointly and tests each against the model without it (header: Second-order
 // pairs). `screen_alpha` as for the walks, over the starting periods
 // (Bonferroni).
-absl::StatusOr<DriftLikelihoodResult> IdentifySecondOrdersByLikelihood(const BenchRun& run, const ErrorModel& model,
+absl::StatusOr<DriftLikelihoodResult> IdentifySecondOrdersByLikelihood(const EpochRun& run, const ErrorModel& model,
                                                                        const ErrorModel& a_priori,
                                                                        const DriftSelection& axes,
                                                                        double screen_alpha,
-                                                                       const FilterOptions& filter,
                                                                        const DriftLikelihoodOptions& options = {});
 
 // The covariance of a fitted structure's (ln σ of its drift, then its own

@@ -137,8 +137,7 @@ struct NoiseScaleResult {
 // its standard error is 1/√(−∂²ℓ/∂(ln s)²) from a central second difference
 // at the maximum (observed Fisher information). The terms that were
 // resolved keep their values.
-absl::StatusOr<NoiseScaleResult> ScaleUnresolvedNoise(const BenchRun& run, const ErrorModel& model,
-                                                      const UnresolvedNoise& which, const FilterOptions& filter,
-                                                      const NoiseScaleOptions& options = {});
+absl::StatusOr<NoiseScaleResult> ScaleUnresolvedNoise(const EpochRun& run, const ErrorModel& model,
+                                                      const UnresolvedNoise& which, const NoiseScaleOptions& options = {});
 
 }  // namespace insdiag::engine::ident

@@ -99,6 +99,15 @@ std::vector<EffectTerm> TermsOf(const EffectFamily& family);
 // Every term of the whole catalogue.
 std::vector<EffectTerm> AllCatalogueTerms();
 
+// One parameter of a constant term (yaw harmonics have two).
+struct ConstantParameter {
+  EffectTerm term;
+  int parameter = 0;
+};
+
+// Every parameter of every constant catalogue term, in catalogue order.
+std::vector<ConstantParameter> AllConstantParameters();
+
 // Parses "family" (all its terms) or "family.axis" (one term). Unknown names
 // are refused with the list of valid families or axes.
 absl::StatusOr<std::vector<EffectTerm>> ParseEffectSelector(std::string_view selector);

@@ -24,13 +24,10 @@
 //   x_sens ← D x_sens + w,                   D, E[wwᵀ] block diagonal (error_model.h)
 //   white sensor noise n_g, n_a: E[n nᵀ] = N²/Δt per axis, entering through g_att, g_vel.
 //
-// IntervalAccumulator composes these per-sample maps into the interval's
-// Φ = [A_acc B_acc; 0 D_acc] and Q, exactly (no approximation beyond holding
-// C_b^n and the regressors at their mid-interval values within a sample).
-// It accumulates in coordinates pulled back to the interval's start,
-// y = T_j⁻¹ x with T_j = A_j ⋯ A_1: there the navigation transition is the
-// identity and each sample adds only its low-rank terms, with T_j⁻¹Γ taken
-// from tables for the run's nominal step; Finish() maps back with T_M.
+// The run's samples are condensed into each update interval's Φ and Q once
+// per run (filter/epoch_run.h), with C_b^n and the regressors held at their
+// mid-sample values within a sample; each model's interval transition is
+// then built from the condensed interval (filter/model_transitions.h).
 #pragma once
 
 #include <vector>
@@ -58,21 +55,6 @@ struct NavigationDiscretisation {
   double dt_s = 0.0;
 };
 NavigationDiscretisation DiscretiseNavigation(const Matrix9d& F, double dt_s);
-
-// How one sample couples sensor errors into the navigation errors, in the
-// interval-start coordinates of the accumulator: a sensor error e held over
-// the sample adds T_j⁻¹·(g_att|g_vel)·e to y (T_M maps it to the interval's end).
-struct SampleCoupling {
-  Matrix93d g_att;  // per unit rad/s of gyro error:  −T_j⁻¹ Γ_{:,ψ} C_b^n
-  Matrix93d g_vel;  // per unit m/s² of accelerometer error: T_j⁻¹ Γ_{:,δv} C_b^n
-  RegressorInputs inputs;
-  double dt_s = 0.0;
-
-  // The column a sensor error on (sensor, axis) adds, per unit.
-  auto Column(Sensor sensor, int axis) const {
-    return sensor == Sensor::kGyro ? g_att.col(axis) : g_vel.col(axis);
-  }
-};
 
 // Block-diagonal transition (and process noise) of the sensor states: 1×1
 // blocks for drifts, constants and random walks, 2×2 for second-order pairs.
@@ -114,45 +96,5 @@ struct IntervalTransition {
   void PropagateRows(Eigen::MatrixXd& M) const;
   Eigen::MatrixXd DenseTransition(int n) const;
 };
-
-// Accumulates the per-sample maps of one filter interval. Preallocated: no
-// allocation per sample.
-class IntervalAccumulator {
- public:
-  // `nominal` is the run's regular sample step; `samples_per_interval` sizes its tables.
-  IntervalAccumulator(const ErrorModel& model, const StateLayout& layout, const NavigationDiscretisation& nominal,
-                      int samples_per_interval);
-
-  void Reset();
-  // Adds one sample of step `nav` (the nominal one or an irregular one) and
-  // returns its coupling in interval-start coordinates.
-  const SampleCoupling& AddSample(const NavigationDiscretisation& nav, const SensorBlocks& D, const SensorBlocks& Qs,
-                                  const Eigen::Matrix3d& C_b_n_mid, const RegressorInputs& inputs);
-  // The interval's Φ and Q in end coordinates (valid until the next Reset).
-  const IntervalTransition& Finish();
-  const Eigen::VectorXd& regressors() const { return regressors_; }
-
- private:
-  const ErrorModel& model_;
-  const StateLayout& layout_;
-  // Tables for the nominal step, j = 0 … capacity: A^j, −A^{−j}Γ_{:,ψ}, A^{−j}Γ_{:,δv}.
-  std::vector<Matrix9d> power_, inverse_power_;
-  std::vector<Matrix93d> att_input_, vel_input_;
-  double nominal_dt_ = 0.0;
-  // Samples so far; while every step is nominal the tables hold T_j, else T_ and T_inverse_.
-  int samples_ = 0;
-  bool regular_ = true;
-  Matrix9d T_, T_inverse_;
-  SampleCoupling coupling_;
-  IntervalTransition t_;
-  Matrix9d Qnn_half_y_;  // H: Qnn = H + Hᵀ in interval-start coordinates
-  Eigen::MatrixXd B_y_, Qns_y_;  // 9 × m, interval-start coordinates
-  Eigen::VectorXd regressors_;   // r_s of the last sample
-  Eigen::Vector3d white_gyro_var_, white_acc_var_, acc_quantization_var_;
-};
-
-// r_s(u) of every sensor state for one sample's inputs.
-void EvaluateStateRegressors(const ErrorModel& model, const StateLayout& layout, const RegressorInputs& in,
-                             Eigen::VectorXd& r);
 
 }  // namespace insdiag::engine

@@ -15,6 +15,8 @@
 // Constant effects: parameters with a Gaussian prior N(0, σ_prior²) and no process noise.
 #pragma once
 
+#include <absl/status/status.h>
+
 #include <array>
 #include <string>
 #include <vector>
@@ -84,5 +86,9 @@ struct ErrorModel {
   // model's noise parameters plus each effect's parameters.
   int ParameterCount() const;
 };
+
+// OK when every parameter is usable by the filter: σ ≥ 0, τ > 0 where σ > 0,
+// noise densities and quantisation ≥ 0.
+absl::Status ValidateErrorModel(const ErrorModel& model);
 
 }  // namespace insdiag::engine

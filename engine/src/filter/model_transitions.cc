@@ -1,0 +1,155 @@
+#include "insdiag/engine/filter/model_transitions.h"
+
+#include <cmath>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+namespace insdiag::engine {
+namespace {
+
+using GramMatrix = Eigen::Matrix<double, kCouplingMoments, kCouplingMoments>;
+
+// S⁻¹ of the leading (degree + 1) block of the Gram, zero elsewhere.
+GramMatrix InverseGram(const GramMatrix& gram, int degree) {
+  GramMatrix inverse = GramMatrix::Zero();
+  const int n = degree + 1;
+  // The moments span seconds⁰ to seconds⁴: scale so the solve sees a
+  // well-conditioned matrix.
+  Eigen::VectorXd scale(n);
+  for (int i = 0; i < n; ++i) scale[i] = 1.0 / std::sqrt(std::max(gram(i, i), 1e-300));
+  const Eigen::MatrixXd scaled = scale.asDiagonal() * gram.topLeftCorner(n, n) * scale.asDiagonal();
+  inverse.topLeftCorner(n, n) = scale.asDiagonal() * scaled.inverse() * scale.asDiagonal();
+  return inverse;
+}
+
+}  // namespace
+
+StateGridWeights GridWeights(const Eigen::Matrix2d& d_full, int size, double q, int samples, double dt,
+                             const GramMatrix& gram) {
+  const int degree = std::min(kCouplingDegree, samples - 1);
+  const Eigen::MatrixXd d = d_full.topLeftCorner(size, size);
+  // w_p = Σ_j s_j^p e₀ᵀ d^{j−1}, s_j = (j − 1)Δt.
+  Eigen::MatrixXd w = Eigen::MatrixXd::Zero(kCouplingMoments, size);
+  Eigen::RowVectorXd e = Eigen::RowVectorXd::Zero(size);
+  e[0] = 1.0;
+  Eigen::RowVectorXd power = e;  // e₀ᵀ d^{j−1}
+  for (int j = 1; j <= samples; ++j) {
+    const double s = (j - 1) * dt;
+    double sp = 1.0;
+    for (int p = 0; p <= degree; ++p, sp *= s) w.row(p) += sp * power;
+    power = power * d;
+  }
+  // a_p,i = s_{i+1}^p e₀ᵀ + a_p,i+1 d (a_p,M = 0); v_p = Σ_i a_p,i (d^{M−i})ᵀ; U_pr = Σ_i a_p,i a_r,iᵀ.
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(kCouplingMoments, size);
+  Eigen::MatrixXd v = Eigen::MatrixXd::Zero(kCouplingMoments, size);
+  GramMatrix U = GramMatrix::Zero();
+  Eigen::MatrixXd tail = Eigen::MatrixXd::Identity(size, size);  // d^{M−i}
+  for (int i = samples; i >= 1; --i) {
+    if (i < samples) {
+      const double s = i * dt;  // s_{i+1}
+      double sp = 1.0;
+      Eigen::MatrixXd next = a * d;
+      for (int p = 0; p <= degree; ++p, sp *= s) next.row(p) += sp * e;
+      a = next;
+    }
+    v += a * tail.transpose();
+    U += a * a.transpose();
+    tail = tail * d;
+  }
+  const GramMatrix S_inv = InverseGram(gram, degree);
+  StateGridWeights out;
+  out.w.leftCols(size) = S_inv * w;
+  out.v.leftCols(size) = q * (S_inv * v);
+  const GramMatrix U_tilde = q * (S_inv * U * S_inv);
+  // U is a Gram matrix (positive semidefinite): factor it through its
+  // eigenvectors so that tiny negative rounding cannot upset a Cholesky.
+  const Eigen::SelfAdjointEigenSolver<GramMatrix> eig(0.5 * (U_tilde + U_tilde.transpose()));
+  for (int k = 0; k < kCouplingMoments; ++k) {
+    const double lambda = eig.eigenvalues()[k];
+    if (lambda > 0.0) out.L.col(k) = eig.eigenvectors().col(k) * std::sqrt(lambda);
+  }
+  return out;
+}
+
+ModelTransitions::ModelTransitions(const ErrorModel& model, const StateLayout& layout, const EpochRun& run)
+    : model_(model), layout_(layout), run_(run) {
+  const auto& states = layout.sensor_states();
+  const SensorBlocks structure = SensorBlocks::Identity(layout);
+  for (size_t b = 0; b < structure.blocks.size(); ++b) {
+    const SensorBlocks::Block& block = structure.blocks[b];
+    const SensorState& s = states[static_cast<size_t>(block.offset)];
+    StateSource src;
+    src.state = block.offset;
+    src.block = static_cast<int>(b);
+    src.size = block.size;
+    src.axis = SensorAxisIndex(s.sensor, s.axis);
+    if (s.dynamics == StateDynamics::kConstant && s.effect >= 0) {
+      src.constant_column = run.ConstantColumn(model.effects[static_cast<size_t>(s.effect)].term, s.parameter);
+    }
+    sources_.push_back(src);
+  }
+  const int m = layout.sensor_count();
+  t_.B.setZero(9, m);
+  t_.Qns.setZero(9, m);
+  for (int a = 0; a < 3; ++a) {
+    white_var_[a] = model.gyro.white_noise_density[a] * model.gyro.white_noise_density[a];
+    white_var_[3 + a] = model.acc.white_noise_density[a] * model.acc.white_noise_density[a];
+  }
+  quantisation_var_ = model.acc.quantization.cwiseAbs2();
+}
+
+void ModelTransitions::PrepareGrid(int samples, double dt, const GramMatrix& gram, double interval_s) {
+  grid_samples_ = samples;
+  grid_dt_ = dt;
+  grid_gram_ = gram;
+  SensorBlocks d_sample, q_sample;
+  SensorBlocks::Discretise(model_, layout_, dt, d_sample, q_sample);
+  SensorBlocks::Discretise(model_, layout_, interval_s, D_, Qs_);
+  weights_.assign(sources_.size(), StateGridWeights{});
+  for (size_t i = 0; i < sources_.size(); ++i) {
+    const StateSource& src = sources_[i];
+    if (src.constant_column >= 0) continue;
+    const auto b = static_cast<size_t>(src.block);
+    // The per-sample noise is isotropic in a pair (error_model.h): q = its (0, 0).
+    weights_[i] = GridWeights(d_sample.blocks[b].m, src.size, q_sample.blocks[b].m(0, 0), samples, dt, gram);
+  }
+}
+
+const IntervalTransition& ModelTransitions::Build(const EpochInterval& e) {
+  const double interval_s = e.time_s - e.start_s;
+  if (e.samples != grid_samples_ || std::abs(e.sample_interval_s - grid_dt_) > 1e-12 * grid_dt_ ||
+      e.gram != grid_gram_) {
+    PrepareGrid(e.samples, e.sample_interval_s, e.gram, interval_s);
+  }
+  t_.A = e.A;
+  t_.D = D_;
+  t_.Qss = Qs_;
+  t_.duration_s = interval_s;
+  Matrix9d Qnn = Matrix9d::Zero();
+  for (int a = 0; a < kSensorAxisCount; ++a) {
+    if (white_var_[a] > 0.0) Qnn.noalias() += white_var_[a] * Unpack9(e.white[static_cast<size_t>(a)]);
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (quantisation_var_[a] > 0.0) Qnn.noalias() += quantisation_var_[a] * Unpack9(e.quantisation[static_cast<size_t>(a)]);
+  }
+  for (size_t i = 0; i < sources_.size(); ++i) {
+    const StateSource& src = sources_[i];
+    if (src.constant_column >= 0) {
+      t_.B.col(src.state) = e.constants.col(src.constant_column);
+      t_.Qns.col(src.state).setZero();
+      continue;
+    }
+    const StateGridWeights& w = weights_[i];
+    Eigen::Matrix<double, 9, kCouplingMoments> mu;
+    for (int p = 0; p < kCouplingMoments; ++p) mu.col(p) = e.moments[static_cast<size_t>(p)].col(src.axis);
+    t_.B.middleCols(src.state, src.size).noalias() = mu * w.w.leftCols(src.size);
+    t_.Qns.middleCols(src.state, src.size).noalias() = mu * w.v.leftCols(src.size);
+    const Eigen::Matrix<double, 9, kCouplingMoments> nu = mu * w.L;
+    Qnn.noalias() += nu * nu.transpose();
+  }
+  t_.Qnn = 0.5 * (Qnn + Qnn.transpose());
+  return t_;
+}
+
+}  // namespace insdiag::engine
