@@ -438,7 +438,7 @@ EffectCandidate UntestedStructure(const EffectTerm& term, const std::string& why
 // a scale factor, in another guise), and each of its passes costs more than
 // a base pass (two states an axis). The constant effect is added first; the
 // next scan tests the pairs.
-std::vector<StructureProposal> LikelihoodStructureProposals(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass,
+std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epochs, const ModelPass& pass,
                                                             const ErrorModel& a_priori,
                                                             const std::vector<DriftCorrelation>& drifts,
                                                             bool constant_significant, double screen_alpha,
@@ -608,7 +608,7 @@ Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const M
       });
   StructureOutcomes likelihood_outcomes, correlation_outcomes;
   std::vector<StructureProposal> proposals = LikelihoodStructureProposals(
-      run, epochs, pass, a_priori, f.drifts, constant_significant, screen_alpha, options, likelihood_outcomes, notes);
+      epochs, pass, a_priori, f.drifts, constant_significant, screen_alpha, options, likelihood_outcomes, notes);
   for (StructureProposal& p : ProposeStructures(f.drifts, run.DurationS(), screen_alpha, correlation_outcomes)) {
     if (std::none_of(proposals.begin(), proposals.end(),
                      [&](const StructureProposal& o) { return o.effect.term == p.effect.term; })) {

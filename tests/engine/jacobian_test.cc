@@ -12,6 +12,7 @@
 #include "insdiag/engine/model/error_dynamics.h"
 #include "insdiag/engine/nav/rotation.h"
 #include "insdiag/engine/nav/strapdown.h"
+#include "insdiag/engine/nav/table_motion.h"
 #include "insdiag/engine/nav/wgs84.h"
 #include "scenarios.h"
 
@@ -121,14 +122,13 @@ class TransitionJacobian : public ::testing::Test {
   template <typename ErrorFn>
   nav::NavState Mechanise(nav::NavState s, int count, ErrorFn error) const {
     const double dt = 0.01;
-    nav::ImuIncrement prev{run_.samples[first_].gyro_rad_s * dt, run_.samples[first_].acc_mps2 * dt};
+    nav::ReferenceMotion motion(run_);
     for (int j = 1; j <= count; ++j) {
       const ImuSample& smp = run_.samples[first_ + static_cast<size_t>(j)];
       Eigen::Vector3d g = smp.gyro_rad_s, a = smp.acc_mps2;
       error(smp, g, a);
       const nav::ImuIncrement cur{g * dt, a * dt};
-      s = nav::PropagateStrapdown(s, cur, prev, dt);
-      prev = cur;
+      s = nav::PropagateStrapdown(s, cur, motion.Compensation(first_ + static_cast<size_t>(j)), dt);
     }
     return s;
   }

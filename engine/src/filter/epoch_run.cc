@@ -8,6 +8,7 @@
 #include "insdiag/engine/filter/observation.h"
 #include "insdiag/engine/nav/rotation.h"
 #include "insdiag/engine/nav/strapdown.h"
+#include "insdiag/engine/nav/table_motion.h"
 #include "insdiag/engine/nav/wgs84.h"
 
 namespace insdiag::engine {
@@ -247,7 +248,7 @@ absl::StatusOr<EpochRun> CondenseRun(const BenchRun& run, const ErrorModel& pilo
   ins.latitude_rad = site.latitude_rad;
   ins.longitude_rad = site.longitude_rad;
   ins.height_m = site.height_m;
-  nav::ImuIncrement previous{run.samples[0].gyro_rad_s * dt_nominal, run.samples[0].acc_mps2 * dt_nominal};
+  nav::ReferenceMotion motion(run);
   const double temperature0 = run.samples[0].temp_degc;
   Eigen::Quaterniond q_ref_previous(nav::EulerToDcm(run.samples[0].ref_rpy_rad));
   condenser.Reset(run.samples[0].t_s);
@@ -263,8 +264,7 @@ absl::StatusOr<EpochRun> CondenseRun(const BenchRun& run, const ErrorModel& pilo
       disc = &irregular;
     }
     const nav::ImuIncrement current{s.gyro_rad_s * dt, s.acc_mps2 * dt};
-    ins = nav::PropagateStrapdown(ins, current, previous, dt);
-    previous = current;
+    ins = nav::PropagateStrapdown(ins, current, motion.Compensation(k), dt);
 
     const Eigen::Quaterniond q_ref(nav::EulerToDcm(s.ref_rpy_rad));
     RegressorInputs inputs;

@@ -34,15 +34,11 @@ Eigen::Matrix3d MeanBodyRotation(const Eigen::Vector3d& dtheta) {
   return Eigen::Matrix3d::Identity() - a_over_theta * K + b_over_theta2 * K * K;
 }
 
-Eigen::Vector3d UnrotateVelocityIncrement(const Eigen::Vector3d& dtheta, const Eigen::Vector3d& dv) {
-  return MeanBodyRotation(dtheta).partialPivLu().solve(dv);
-}
-
-NavState PropagateStrapdown(const NavState& s, const ImuIncrement& cur, const ImuIncrement& prev,
+NavState PropagateStrapdown(const NavState& s, const ImuIncrement& cur, const IntervalCompensation& compensation,
                             double dt) {
-  const Eigen::Vector3d phi_b = cur.dtheta_rad + prev.dtheta_rad.cross(cur.dtheta_rad) / 12.0;
-  const Eigen::Vector3d dv_b = UnrotateVelocityIncrement(cur.dtheta_rad, cur.dv_mps) -
-                               (cur.dtheta_rad - prev.dtheta_rad).cross(cur.dv_mps) / 12.0;
+  const Eigen::Vector3d phi_b = cur.dtheta_rad + compensation.coning_rad;
+  const Eigen::Vector3d dv_b = MeanBodyRotation(cur.dtheta_rad).partialPivLu().solve(cur.dv_mps) +
+                               compensation.velocity_map_correction * cur.dv_mps;
 
   // Earth and transport rates at the start of the interval: on a bench the
   // velocity is ~0 and the rates change by far less than the increments' noise.

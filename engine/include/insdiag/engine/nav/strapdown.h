@@ -3,27 +3,25 @@
 // velocity and position.
 //
 // One step over the sample interval (t[k−1], t[k]] with body increments
-// Δθ_k = ω̃·Δt [rad] and Δv_k = f̃·Δt [m/s] (Savage, "Strapdown Inertial
-// Navigation Integration Algorithm Design", J. Guidance Control Dyn. 21(1–2),
-// 1998, two-sample forms with the previous interval's increments):
+// Δθ_k = ω̃·Δt [rad] and Δv_k = f̃·Δt [m/s] and the interval's compensation
+// from the table's reference motion (table_motion.h):
 //
-//   φ_k   = Δθ_k + (1/12) Δθ_{k−1} × Δθ_k                       coning-corrected rotation vector
-//   Δv_b  = (J/h)⁻¹ Δv_k − (1/12)(Δθ_k − Δθ_{k−1}) × Δv_k
-//           J/h = I − a [u×] + b [u×]²,  θ = |Δθ_k|, u = Δθ_k/θ,
-//           a = (1 − cos θ)/θ,  b = (θ − sin θ)/θ                rotation compensation
+//   φ_k   = Δθ_k + c_k                              rotation vector (c_k: the motion's coning)
+//   Δv_b  = [(J(Δθ_k)/h)⁻¹ + ΔM_k] Δv_k              the increment in the body frame at t[k−1]
 //
-// The compensation is exact for rotation at a constant rate with the specific
-// force fixed in the navigation frame — a rotary table's motion: then
-// Δv = J f₀ with J = ∫₀^h e^{−[ω×]t} dt (Rodrigues' formula integrated), and
-// the increment wanted is h f₀ = h J⁻¹ Δv = (I + ½[Δθ×] + (1/12)[Δθ×]² + …) Δv.
-// Truncated forms leave a residual that turns with the body and builds up over
-// each half turn (1e-3 m/s at 10°/s and 10 Hz for the second-order form); the
-// previous-interval sculling term, designed for vibration, doubles the
-// O(Δθ²) residual instead (a scale-factor-like error of Δθ²/6 on the axes
-// turning through gravity: 2 ppm at 10°/s and 50 Hz). While the table's rate
-// ramps (θ(t) = ω₀t + ½αt²) the remainder is (αh³/12) × f₀ to first order;
-// αh² ≈ Δθ_k − Δθ_{k−1} gives the second term (1.4e-3 m/s over a one-second
-// 10°/s² ramp at 10 Hz without it).
+// J/h = (1/h)∫ R(t)ᵀ dt with R(t) the body's rotation since t[k−1]; for a
+// constant rate, J(Δθ)/h = I − a [u×] + b [u×]², θ = |Δθ|, u = Δθ/θ,
+// a = (1 − cos θ)/θ, b = (θ − sin θ)/θ (Rodrigues' formula integrated with
+// the specific force fixed in the navigation frame; MeanBodyRotation below).
+// ΔM_k = (J_ref/h)⁻¹ − (J(Δθ_ref)/h)⁻¹ is what the table's actual motion
+// within the interval adds to that (zero at a constant rate): the measured
+// increment keeps the sensor errors' own effect within the interval (the
+// attitude error they build up over it), the reference supplies the shape
+// of the motion. Classical two-sample coning and sculling terms (Savage,
+// "Strapdown Inertial Navigation Integration Algorithm Design", J. Guidance
+// Control Dyn. 21(1–2), 1998) assume instead that the rate changes linearly
+// across two samples; on a table whose rate steps they add the errors they
+// are meant to remove.
 //   ζ     = (ω_ie^n + ω_en^n) Δt                                 navigation-frame rotation
 //   C_b^n(k) = C(−ζ) · C_b^n(k−1) · C(φ_k)
 //   v^n(k)   = v^n(k−1) + (I − ½[ζ×]) C_b^n(k−1) Δv_b + (g^n − (2ω_ie^n + ω_en^n) × v^n) Δt
@@ -54,18 +52,23 @@ struct ImuIncrement {
   Eigen::Vector3d dv_mps = Eigen::Vector3d::Zero();      // ∫f^b dt
 };
 
-// Advances `state` over one interval of `dt_s` seconds with the current and
-// the previous interval's increments (zero `previous` at the first step).
+// The compensation of one interval (table_motion.h builds it from the reference).
+struct IntervalCompensation {
+  // ΔM: what the motion's shape adds to the constant-rate velocity map (header).
+  Eigen::Matrix3d velocity_map_correction = Eigen::Matrix3d::Zero();
+  // Rotation vector of the interval less the integral of the body rate.
+  Eigen::Vector3d coning_rad = Eigen::Vector3d::Zero();
+};
+
+// Advances `state` over one interval of `dt_s` seconds with the interval's
+// increments and compensation.
 NavState PropagateStrapdown(const NavState& state, const ImuIncrement& current,
-                            const ImuIncrement& previous, double dt_s);
+                            const IntervalCompensation& compensation, double dt_s);
 
 // J/h = (1/h)∫₀^h e^{−[ω×]t} dt for a rotation Δθ = ωh at a constant rate: the
 // interval mean of a navigation-frame-fixed vector seen in the turning body,
 // relative to its value in the frame at the interval's start (see above).
 Eigen::Matrix3d MeanBodyRotation(const Eigen::Vector3d& dtheta_rad);
-
-// (J/h)⁻¹ Δv: the velocity increment in the frame at the interval's start (see above).
-Eigen::Vector3d UnrotateVelocityIncrement(const Eigen::Vector3d& dtheta_rad, const Eigen::Vector3d& dv_mps);
 
 // Transport rate ω_en^n [rad/s] for the velocity and position of `state`.
 Eigen::Vector3d TransportRateNed(const NavState& state);
