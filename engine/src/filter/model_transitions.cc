@@ -25,6 +25,13 @@ GramMatrix InverseGram(const GramMatrix& gram, int degree) {
 
 }  // namespace
 
+Eigen::Matrix<double, 9, 1> FaultColumn(const EpochInterval& e, int sensor_axis, Regressor fault, double onset_s) {
+  const auto a = static_cast<Eigen::Index>(sensor_axis);
+  if (0.5 * (e.start_s + e.time_s) < onset_s) return Eigen::Matrix<double, 9, 1>::Zero();
+  if (fault == Regressor::kStep) return e.moments[0].col(a);
+  return e.moments[1].col(a) + (e.start_s + 0.5 * e.sample_interval_s - onset_s) * e.moments[0].col(a);
+}
+
 StateGridWeights GridWeights(const Eigen::Matrix2d& d_full, int size, double q, int samples, double dt,
                              const GramMatrix& gram) {
   const int degree = std::min(kCouplingDegree, samples - 1);
@@ -85,7 +92,13 @@ ModelTransitions::ModelTransitions(const ErrorModel& model, const StateLayout& l
     src.size = block.size;
     src.axis = SensorAxisIndex(s.sensor, s.axis);
     if (s.dynamics == StateDynamics::kConstant && s.effect >= 0) {
-      src.constant_column = run.ConstantColumn(model.effects[static_cast<size_t>(s.effect)].term, s.parameter);
+      const ModelEffect& effect = model.effects[static_cast<size_t>(s.effect)];
+      if (effect.term.family->kind == EffectKind::kFault) {
+        src.fault = effect.term.family->regressor;
+        src.onset_s = effect.onset_s;
+      } else {
+        src.constant_column = run.ConstantColumn(effect.term, s.parameter);
+      }
     }
     sources_.push_back(src);
   }
@@ -109,7 +122,7 @@ void ModelTransitions::PrepareGrid(int samples, double dt, const GramMatrix& gra
   weights_.assign(sources_.size(), StateGridWeights{});
   for (size_t i = 0; i < sources_.size(); ++i) {
     const StateSource& src = sources_[i];
-    if (src.constant_column >= 0) continue;
+    if (src.constant_column >= 0 || src.fault != Regressor::kNone) continue;
     const auto b = static_cast<size_t>(src.block);
     // The per-sample noise is isotropic in a pair (error_model.h): q = its (0, 0).
     weights_[i] = GridWeights(d_sample.blocks[b].m, src.size, q_sample.blocks[b].m(0, 0), samples, dt, gram);
@@ -137,6 +150,11 @@ const IntervalTransition& ModelTransitions::Build(const EpochInterval& e) {
     const StateSource& src = sources_[i];
     if (src.constant_column >= 0) {
       t_.B.col(src.state) = e.constants.col(src.constant_column);
+      t_.Qns.col(src.state).setZero();
+      continue;
+    }
+    if (src.fault != Regressor::kNone) {
+      t_.B.col(src.state) = FaultColumn(e, src.axis, src.fault, src.onset_s);
       t_.Qns.col(src.state).setZero();
       continue;
     }

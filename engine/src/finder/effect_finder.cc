@@ -116,6 +116,8 @@ bool Excites(const RunExcitation& e, const EffectTerm& term, const ExcitationThr
   };
   switch (term.family->regressor) {
     case Regressor::kOne:
+    case Regressor::kStep:
+    case Regressor::kRamp:
     case Regressor::kNone:
       return true;
     case Regressor::kOwnInput:

@@ -1,12 +1,14 @@
 #include "insdiag/engine/model/effect_catalogue.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <string>
 
 namespace insdiag::engine {
 namespace {
 
-constexpr std::array<EffectFamily, 14> kCatalogue = {{
+constexpr std::array<EffectFamily, 18> kCatalogue = {{
     {"gyro_turn_on_bias", Sensor::kGyro, EffectKind::kConstant, AxisSet::kSingle, Regressor::kOne,
      RandomProcess::kNone, 1, Excitation::kAlways, "rad/s", "run-to-run constant gyro bias c_i"},
     {"gyro_scale_factor", Sensor::kGyro, EffectKind::kConstant, AxisSet::kSingle, Regressor::kOwnInput,
@@ -41,6 +43,15 @@ constexpr std::array<EffectFamily, 14> kCatalogue = {{
     {"acc_bias_second_order", Sensor::kAccelerometer, EffectKind::kRandom, AxisSet::kSingle,
      Regressor::kNone, RandomProcess::kSecondOrderMarkov, 1, Excitation::kAlways, "m/s^2",
      "accelerometer bias with correlation σ²·e^(−α|τ|)·cos(βτ)"},
+    {"gyro_bias_step", Sensor::kGyro, EffectKind::kFault, AxisSet::kSingle, Regressor::kStep, RandomProcess::kNone,
+     1, Excitation::kAlways, "rad/s", "gyro bias jump c_i·1(t ≥ t₀) at an unknown onset t₀"},
+    {"gyro_bias_ramp", Sensor::kGyro, EffectKind::kFault, AxisSet::kSingle, Regressor::kRamp, RandomProcess::kNone,
+     1, Excitation::kAlways, "rad/s^2", "gyro drift rate r_i·(t − t₀)·1(t ≥ t₀) from an unknown onset t₀"},
+    {"acc_bias_step", Sensor::kAccelerometer, EffectKind::kFault, AxisSet::kSingle, Regressor::kStep,
+     RandomProcess::kNone, 1, Excitation::kAlways, "m/s^2", "accelerometer bias jump c_i·1(t ≥ t₀) at an unknown onset t₀"},
+    {"acc_bias_ramp", Sensor::kAccelerometer, EffectKind::kFault, AxisSet::kSingle, Regressor::kRamp,
+     RandomProcess::kNone, 1, Excitation::kAlways, "m/s^3",
+     "accelerometer bias rate r_i·(t − t₀)·1(t ≥ t₀) from an unknown onset t₀"},
 }};
 
 constexpr std::array<char, 3> kAxisNames = {'x', 'y', 'z'};
@@ -104,7 +115,29 @@ std::vector<ConstantParameter> AllConstantParameters() {
   return out;
 }
 
-absl::StatusOr<std::vector<EffectTerm>> ParseEffectSelector(std::string_view selector) {
+absl::StatusOr<std::optional<double>> ParseOnset(std::string_view selector) {
+  const size_t at = selector.find('@');
+  if (at == std::string_view::npos) return std::optional<double>();
+  const std::string text(selector.substr(at + 1));
+  char* end = nullptr;
+  const double onset_s = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(onset_s)) {
+    return absl::InvalidArgumentError("effect '" + std::string(selector) + "': the onset after '@' must be a number of "
+                                      "seconds of run time, e.g. gyro_bias_step.x@1500");
+  }
+  return std::optional<double>(onset_s);
+}
+
+absl::StatusOr<std::vector<EffectTerm>> ParseEffectSelector(std::string_view full_selector) {
+  const std::string_view selector = full_selector.substr(0, full_selector.find('@'));
+  if (selector.size() != full_selector.size()) {
+    const EffectFamily* f = FindEffectFamily(selector.substr(0, selector.find('.')));
+    if (f != nullptr && f->kind != EffectKind::kFault) {
+      return absl::InvalidArgumentError("effect '" + std::string(full_selector) +
+                                        "': only fault effects (bias steps and ramps) take an onset '@SECONDS'");
+    }
+    if (auto onset = ParseOnset(full_selector); !onset.ok()) return onset.status();
+  }
   const size_t dot = selector.find('.');
   const std::string_view family_name = selector.substr(0, dot);
   const EffectFamily* family = FindEffectFamily(family_name);
@@ -149,6 +182,12 @@ void EvaluateRegressor(const EffectTerm& term, const RegressorInputs& in, double
       out[0] = std::sin(in.yaw_rad);
       out[1] = std::cos(in.yaw_rad);
       return;
+    case Regressor::kStep:
+      out[0] = in.time_since_onset_s >= 0.0 ? 1.0 : 0.0;
+      return;
+    case Regressor::kRamp:
+      out[0] = std::max(0.0, in.time_since_onset_s);
+      return;
     case Regressor::kNone:
       return;
   }
@@ -183,6 +222,12 @@ Eigen::Vector3d ConstantEffectError(const EffectTerm& term, const RegressorInput
       e = amplitude * std::sin(in.yaw_rad + phase);
       break;
     }
+    case Regressor::kStep:  // the bias jumps at the onset and stays
+      e = in.time_since_onset_s < 0.0 ? 0.0 : p[0];
+      break;
+    case Regressor::kRamp:  // the bias drifts at a constant rate from the onset
+      e = in.time_since_onset_s < 0.0 ? 0.0 : p[0] * in.time_since_onset_s;
+      break;
     case Regressor::kNone:
       break;
   }

@@ -36,7 +36,8 @@ int ErrorModel::ParameterCount() const {
   for (const auto& e : effects) {
     switch (e.term.family->process) {
       case RandomProcess::kNone:
-        count += e.term.family->parameters_per_term;
+        // A fault's onset is a parameter the analysis estimated as well.
+        count += e.term.family->parameters_per_term + (e.term.family->kind == EffectKind::kFault ? 1 : 0);
         break;
       case RandomProcess::kRandomWalk:
         count += 1;

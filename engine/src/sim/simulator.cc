@@ -132,7 +132,17 @@ absl::StatusOr<std::vector<TrueEffect>> ParseTrueEffect(std::string_view spec) {
   }
   auto terms = ParseEffectSelector(spec.substr(0, eq));
   if (!terms.ok()) return terms.status();
-  auto values = ParseNumbers(spec.substr(eq + 1), spec);
+  // A fault's onset follows its value: gyro_bias_step.x=3e-6@1500.
+  const std::string_view value_text = spec.substr(eq + 1, spec.find('@', eq) - eq - 1);
+  auto onset = ParseOnset(spec.substr(eq));
+  if (!onset.ok()) return onset.status();
+  if (terms->front().family->kind == EffectKind::kFault && !onset->has_value()) {
+    return absl::InvalidArgumentError("--effect " + std::string(spec) + ": a fault takes its onset, NAME=VALUE@SECONDS");
+  }
+  if (terms->front().family->kind != EffectKind::kFault && onset->has_value()) {
+    return absl::InvalidArgumentError("--effect " + std::string(spec) + ": only faults take an onset '@SECONDS'");
+  }
+  auto values = ParseNumbers(value_text, spec);
   if (!values.ok()) return values.status();
   const EffectFamily& family = *terms->front().family;
   const auto& v = *values;
@@ -144,6 +154,7 @@ absl::StatusOr<std::vector<TrueEffect>> ParseTrueEffect(std::string_view spec) {
   for (const EffectTerm& term : *terms) {
     TrueEffect e;
     e.term = term;
+    e.onset_s = onset->value_or(0.0);
     switch (family.process) {
       case RandomProcess::kNone:
         if (v.empty() || v.size() > static_cast<size_t>(family.parameters_per_term)) {
@@ -283,6 +294,9 @@ absl::StatusOr<SimulatedRun> Simulate(const SimulatedUnit& unit, const TableProf
     inputs.yaw_rad = std::atan2(integrals.sin_yaw_s, integrals.cos_yaw_s);
     for (const TrueEffect& e : unit.effects) {
       if (e.term.family->process != RandomProcess::kNone) continue;
+      // A fault's regressor at the sample's middle: its mean over the sample
+      // once the onset is past (a step within the sample counts from its middle).
+      inputs.time_since_onset_s = 0.5 * (t0 + t1) - e.onset_s;
       const Eigen::Vector3d err = ConstantEffectError(e.term, inputs, e.value);
       (e.term.family->sensor == Sensor::kGyro ? gyro_error : acc_error) += err;
     }

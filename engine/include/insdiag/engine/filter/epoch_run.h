@@ -5,7 +5,7 @@
 //
 // One sweep over the samples (CondenseRun) runs the strapdown mechanisation
 // (nav/strapdown.h, the table's reference motion for the intra-sample
-// compensation, nav/table_kinematics.h) and condenses each update interval's
+// compensation, nav/table_motion.h) and condenses each update interval's
 // samples j = 1 … M into, in interval-end coordinates (error_dynamics.h):
 //
 //   A = T_M                                      navigation transition over the interval

@@ -4,6 +4,9 @@
 //
 // Per sensor state (error_model.h, state_layout.h):
 //   constant effect      B column = the interval's catalogue column K[:, i]
+//   fault effect         B column = 0 before the onset; after it, the step's
+//                        μ_0 or the ramp's μ_1 + (t_start + Δt/2 − t₀) μ_0 of
+//                        its sensor axis (the sample means of 1 and t − t₀)
 //   drift, walk, pair    B, Q_ns, Q_nn from the coupling's quadratic
 //                        reconstruction and the state's per-sample transition
 //                        d and noise q (epoch_run.h, header)
@@ -45,6 +48,11 @@ struct StateGridWeights {
 StateGridWeights GridWeights(const Eigen::Matrix2d& d, int size, double q, int samples, double dt,
                              const Eigen::Matrix<double, kCouplingMoments, kCouplingMoments>& gram);
 
+// A fault effect's column over interval `e` for a unit value of its
+// parameter on `sensor_axis` (SensorAxisIndex): zero while the interval's
+// middle is before `onset_s`.
+Eigen::Matrix<double, 9, 1> FaultColumn(const EpochInterval& e, int sensor_axis, Regressor fault, double onset_s);
+
 class ModelTransitions {
  public:
   // `model`, `layout` and `run` must outlive this object.
@@ -60,6 +68,8 @@ class ModelTransitions {
     int size = 1;             // 2 for a second-order pair
     int axis = 0;             // sensor axis (SensorAxisIndex)
     int constant_column = -1; // ≥ 0: a constant effect's catalogue column
+    Regressor fault = Regressor::kNone;  // kStep or kRamp for a fault effect
+    double onset_s = 0.0;
   };
   void PrepareGrid(int samples, double dt, const Eigen::Matrix<double, kCouplingMoments, kCouplingMoments>& gram,
                    double interval_s);

@@ -14,6 +14,10 @@
 //   g_sensitivity.ij    r = f_j                        p = d_ij           [rad/s per m/s²]
 //   temp_coeff.i        r = T − T0                     p = k_i            [rad/s/°C | m/s²/°C]
 //   yaw_harmonic.i      r = (sin ψ, cos ψ)             p = (a_i, b_i)     [rad/s]
+// Fault effects are constant parameters whose regressor starts at an onset
+// t₀ that is estimated with them (shared/spec/effects.md):
+//   bias_step.i         r = 1(t ≥ t₀)                  p = c_i            [rad/s | m/s²]
+//   bias_ramp.i         r = (t − t₀)·1(t ≥ t₀)          p = r_i            [rad/s² | m/s³]
 // Random effects add states with process noise (their equations are in
 // model/error_model.h).
 #pragma once
@@ -21,6 +25,7 @@
 #include <absl/status/statusor.h>
 
 #include <array>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -35,6 +40,7 @@ enum class Sensor { kGyro, kAccelerometer };
 enum class EffectKind {
   kConstant,  // unknown parameters: states with zero process noise
   kRandom,    // changes the structure of the drift model: states with process noise
+  kFault,     // a constant that starts at an unknown onset: a state with zero process noise
 };
 
 // Which axis labels a family has.
@@ -52,6 +58,8 @@ enum class Regressor {
   kSpecificForce,  // specific force on axis j (gyro g-sensitivity)
   kTemperature,    // T − T0
   kYawSinCos,      // (sin ψ, cos ψ) of the table's reference yaw
+  kStep,           // 1(t ≥ t₀)
+  kRamp,           // (t − t₀)·1(t ≥ t₀)
   kNone,           // random effects
 };
 
@@ -109,8 +117,14 @@ struct ConstantParameter {
 std::vector<ConstantParameter> AllConstantParameters();
 
 // Parses "family" (all its terms) or "family.axis" (one term). Unknown names
-// are refused with the list of valid families or axes.
+// are refused with the list of valid families or axes. A fault family may
+// carry its onset, "gyro_bias_step.x@1500" (seconds of run time): see
+// ParseOnset; other families refuse one.
 absl::StatusOr<std::vector<EffectTerm>> ParseEffectSelector(std::string_view selector);
+
+// The onset of a selector "name@SECONDS", nullopt when it names none;
+// INVALID_ARGUMENT when the onset does not parse as a finite number.
+absl::StatusOr<std::optional<double>> ParseOnset(std::string_view selector);
 
 // The inputs a constant effect's regressor reads, for one sample interval.
 struct RegressorInputs {
@@ -118,6 +132,7 @@ struct RegressorInputs {
   Eigen::Vector3d acc_mps2 = Eigen::Vector3d::Zero();    // f
   double temperature_delta_degc = 0.0;                   // T − T0
   double yaw_rad = 0.0;                                  // reference yaw ψ
+  double time_since_onset_s = 0.0;                       // t − t₀ of a fault effect
 };
 
 // The regressor row(s) of a constant term: error on term.axis = rᵀ p.

@@ -12,7 +12,8 @@
 //                      the output x₁ has R(t) = σ² e^{−α|t|} cos(βt)
 //                      (Gelb, Applied Optimal Estimation, 1974, Table 3.8-1: damped
 //                      oscillatory process, here built from a rotating pair of states)
-// Constant effects: parameters with a Gaussian prior N(0, σ_prior²) and no process noise.
+// Constant effects: parameters with a Gaussian prior N(0, σ_prior²) and no process noise;
+// fault effects likewise, with the regressor starting at their onset.
 #pragma once
 
 #include <absl/status/status.h>
@@ -54,6 +55,9 @@ struct ModelEffect {
   double second_order_sigma = 0.0;
   double second_order_alpha_per_s = 0.0;
   double second_order_beta_rad_s = 0.0;
+  // kFault families: the onset t₀ [s of run time]. The filter starts the
+  // fault's regressor with the first update interval whose middle is past it.
+  double onset_s = 0.0;
 
   bool operator==(const ModelEffect&) const = default;
 };

@@ -40,12 +40,15 @@ struct TrueEffect {
   double second_order_sigma = 0.0;
   double second_order_alpha_per_s = 0.0;
   double second_order_beta_rad_s = 0.0;
+  // Fault families (bias steps and ramps): the onset [s of run time].
+  double onset_s = 0.0;
 };
 
 // Parses `NAME=VALUE[,VALUE…]` (insdiag simulate --effect): NAME is a term
 // ("gyro_scale_factor.z") or a family (every axis gets the value). Values:
 // constant families one value (yaw harmonics: sin[,cos]); bias_rw K;
-// bias_second_order σ,τ_s,period_s (α = 1/τ, β = 2π/period).
+// bias_second_order σ,τ_s,period_s (α = 1/τ, β = 2π/period); faults
+// VALUE@ONSET_S (gyro_bias_ramp.x=1e-9@1500).
 absl::StatusOr<std::vector<TrueEffect>> ParseTrueEffect(std::string_view spec);
 
 struct BiasStep {

@@ -1,0 +1,87 @@
+// Bias steps and ramps at an unknown onset: the generalised likelihood ratio
+// over every onset, from one filter pass (Willsky & Jones, "A generalized
+// likelihood ratio approach to the detection and estimation of jumps in
+// linear systems", IEEE Trans. AC 21(1), 1976).
+//
+// A fault that starts at the beginning of update interval θ adds W_k β to
+// the navigation errors over every interval k ≥ θ, where W_k is the
+// interval's column for a unit fault (model_transitions.h, FaultColumn): a
+// step's μ_0, a ramp's μ_1 + (t_start + Δt/2 − t₀) μ_0 of its sensor axis.
+// As in the score test (score_test.h) the filter, which does not know of the
+// fault, turns it into an innovation mean X_k β, with
+//   A_k = F_k A_{k−1} + W_k,  X_k = H̃_k A_k,  F_k = Φ_k L_{k−1}
+// where L_k = Π_c (I − K_c h_c) is the epoch's sequence of scalar updates and
+// row c of H̃_k is h_c Π_{c'<c} (I − K_c' h_c'). Its score and information
+//   s(θ) = Σ_{k≥θ} X_kᵀ S_k⁻¹ ν_k,   I(θ) = Σ_{k≥θ} X_kᵀ S_k⁻¹ X_k
+// for every θ at once come from one backward sweep of the adjoint
+//   λ_k = H̃_kᵀ S_k⁻¹ ν_k + F_{k+1}ᵀ λ_{k+1}          (innovations seen from k on)
+//   Γ_k = H̃_kᵀ S_k⁻¹ H̃_k + F_{k+1}ᵀ Γ_{k+1} F_{k+1}    (their information)
+//   m_k = F_{k+1}ᵀ (Γ_{k+1} W_{k+1} + m_{k+1})
+//   s(θ) = s(θ+1) + W_θᵀ λ_θ
+//   I(θ) = I(θ+1) + W_θᵀ Γ_θ W_θ + W_θᵀ m_θ + m_θᵀ W_θ
+//   Cov(s(θ), s(θ+1)) = I(θ+1) + W_θᵀ m_θ
+// (the gains are rebuilt from the stored covariances: they do not depend on
+// the data). Per sensor axis, the step's and the ramp's columns share one
+// pair Z = [μ_0, μ_1 + (t_start + Δt/2 − t_c) μ_0] (t_c the run's middle, for
+// conditioning); a ramp from t₀ is Z v with v = (t_c − t₀, 1).
+//
+// At each onset T(θ) = s(θ)² / I(θ) is the likelihood ratio 2Δℓ of the
+// fault with its magnitude at the maximum, β̂ = s/I, SE 1/√I. Its maximum
+// over the onsets is not χ²(1): the p-value is Davies' bound for the
+// maximum of a χ²(1) process (Davies, Biometrika 74(1), 1987; Rice's
+// up-crossing formula, Bell Syst. Tech. J. 23, 1944),
+//   P(max T > u) ≤ P(χ²₁ > u) + V e^{−u/2} / π,
+// with V the length of the path the standardised score traces over the
+// onsets, Σ_θ arccos ρ(θ, θ+1), ρ the correlation of successive scores.
+// The onset: the median of its posterior under flat priors on the onset and
+// the magnitude, weights ∝ e^{T(θ)/2} I(θ)^{−1/2} (the likelihood integrated
+// over the magnitude; Smith, "A Bayesian approach to inference about a
+// change-point in a sequence of random variables", Biometrika 62(2), 1975),
+// with its standard deviation and central interval. The magnitude is the
+// one at that onset. Where a still stretch hides the sensor axis the
+// likelihood is flat in the onset, and the interval says so.
+#pragma once
+
+#include <vector>
+
+#include "insdiag/engine/filter/epoch_run.h"
+#include "insdiag/engine/filter/forward_filter.h"
+#include "insdiag/engine/model/effect_catalogue.h"
+#include "insdiag/engine/model/state_layout.h"
+
+namespace insdiag::engine {
+
+struct OnsetScanOptions {
+  // Onsets are tried where the run holds at least this much on either side:
+  // a jump in the first seconds is the turn-on bias, one in the last cannot
+  // be told from noise.
+  double min_side_s = 60.0;
+  // Each tail of the onset's posterior left outside its interval (0.16: ±1σ).
+  double interval_tail = 0.16;
+};
+
+// The best onset of one fault term.
+struct OnsetFit {
+  EffectTerm term;           // gyro_bias_step.x, acc_bias_ramp.z, …
+  bool identifiable = false;  // false: the run carries no information on it
+  int onset_epoch = -1;       // the first update interval with the fault (posterior median)
+  double onset_s = 0.0;       // its start
+  double onset_std_s = 0.0;   // the posterior's standard deviation
+  double onset_low_s = 0.0, onset_high_s = 0.0;  // its central interval
+  double statistic = 0.0;     // max over onsets of T = 2Δℓ
+  double p_value = 1.0;       // Davies' bound over the onsets tried
+  double estimate = 0.0;      // β̂ at the onset, in the family's unit
+  double std_error = 0.0;
+  double path_length = 0.0;   // V
+  int onsets_tried = 0;
+};
+
+// Every fault term of the catalogue absent from `model`.
+std::vector<EffectTerm> AbsentFaultTerms(const ErrorModel& model);
+
+// The scan of `terms` (fault terms) over the forward pass `forward` of the
+// model laid out by `layout` on the condensed run `run`.
+std::vector<OnsetFit> ScanOnsets(const ForwardPass& forward, const StateLayout& layout, const EpochRun& run,
+                                 const std::vector<EffectTerm>& terms, const OnsetScanOptions& options);
+
+}  // namespace insdiag::engine

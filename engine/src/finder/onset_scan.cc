@@ -1,0 +1,230 @@
+#include "insdiag/engine/finder/onset_scan.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+
+#include "insdiag/engine/filter/observation.h"
+#include "insdiag/engine/stats/distributions.h"
+
+namespace insdiag::engine {
+namespace {
+
+// Two columns per sensor axis: the step's and the ramp's pair (header).
+constexpr int kColumns = 2 * kSensorAxisCount;
+using Matrix9c = Eigen::Matrix<double, 9, kColumns>;
+using MatrixCc = Eigen::Matrix<double, kColumns, kColumns>;
+
+// Z of one interval, centred on `centre_s`.
+Matrix9c FaultColumns(const EpochInterval& e, double centre_s) {
+  Matrix9c Z;
+  const double mid_offset_s = e.start_s + 0.5 * e.sample_interval_s - centre_s;
+  for (int a = 0; a < kSensorAxisCount; ++a) {
+    Z.col(2 * a) = e.moments[0].col(a);
+    Z.col(2 * a + 1) = e.moments[1].col(a) + mid_offset_s * e.moments[0].col(a);
+  }
+  return Z;
+}
+
+// One epoch's update sequence rebuilt from its prior covariance: the rows
+// H̃ (6 × n) through which a navigation error before the updates reaches each
+// innovation, and the map L (n × n) of the updates on the filter's error.
+void UpdateSequence(const ForwardPass& fw, int k, const std::array<ObservationRow, kChannelCount>& rows,
+                    Eigen::MatrixXd& P, Eigen::VectorXd& PH, Eigen::VectorXd& gain, Eigen::MatrixXd& H,
+                    Eigen::MatrixXd& L) {
+  const int n = fw.state_size;
+  UnpackSymmetric(fw.P_pred.row(k).data(), n, P);
+  L.setIdentity();
+  for (int c = 0; c < kChannelCount; ++c) {
+    const ObservationRow& h = rows[static_cast<size_t>(c)];
+    PH = h.sign * P.col(h.state);
+    const double S = fw.innovation_variance(k, c);
+    gain = PH / S;
+    H.row(c) = h.sign * L.row(h.state);
+    L.noalias() -= gain * H.row(c);
+    P.noalias() -= gain * PH.transpose();
+    P.noalias() -= PH * gain.transpose();
+    P.noalias() += (S * gain) * gain.transpose();
+  }
+}
+
+void DenseTransition(const StoredTransition& t, int m, Eigen::MatrixXd& Phi) {
+  Phi.setZero();
+  Phi.topLeftCorner<9, 9>() = t.A;
+  if (m > 0) {
+    Phi.topRightCorner(9, m) = t.B;
+    Phi.bottomRightCorner(m, m) = t.D.Dense(m);
+  }
+}
+
+// Per onset θ and sensor axis: the axis pair's score, information and the
+// covariance of successive scores (header).
+struct AxisPair {
+  Eigen::Vector2d score;
+  Eigen::Matrix2d information;
+  Eigen::Matrix2d successive;  // Cov(s(θ), s(θ+1))
+};
+using PairSums = std::vector<std::array<AxisPair, kSensorAxisCount>>;
+
+PairSums BackwardSweep(const ForwardPass& fw, const StateLayout& layout, const EpochRun& run, double centre_s) {
+  const int K = fw.epochs();
+  const int n = fw.state_size;
+  const int m = layout.sensor_count();
+  const auto rows = ObservationRows(layout);
+  PairSums out(static_cast<size_t>(K));
+  Eigen::MatrixXd P(n, n), H(kChannelCount, n), L(n, n), Phi(n, n), F(n, n), Gamma = Eigen::MatrixXd::Zero(n, n);
+  Eigen::MatrixXd FtGamma(n, n), adjoint_columns = Eigen::MatrixXd::Zero(n, kColumns), next_gamma_w(n, kColumns);
+  Eigen::VectorXd PH(n), gain(n), lambda = Eigen::VectorXd::Zero(n), weighted(n);
+  Eigen::Matrix<double, kColumns, 1> score = Eigen::Matrix<double, kColumns, 1>::Zero();
+  MatrixCc information = MatrixCc::Zero();
+  Matrix9c Z_next = Matrix9c::Zero();
+  for (int k = K - 1; k >= 0; --k) {
+    UpdateSequence(fw, k, rows, P, PH, gain, H, L);
+    if (k + 1 < K) {
+      DenseTransition(fw.transitions[static_cast<size_t>(k + 1)], m, Phi);
+      F.noalias() = Phi * L;
+      next_gamma_w.noalias() = Gamma.leftCols<9>() * Z_next;
+      next_gamma_w += adjoint_columns;
+      adjoint_columns.noalias() = F.transpose() * next_gamma_w;
+      weighted.noalias() = F.transpose() * lambda;
+      lambda = weighted;
+      FtGamma.noalias() = F.transpose() * Gamma;
+      Gamma.noalias() = FtGamma * F;
+    }
+    for (int c = 0; c < kChannelCount; ++c) {
+      const double S = fw.innovation_variance(k, c);
+      lambda.noalias() += H.row(c).transpose() * (fw.innovation(k, c) / S);
+      Gamma.noalias() += H.row(c).transpose() * (H.row(c) / S);
+    }
+    const Matrix9c Z = FaultColumns(run.epochs[static_cast<size_t>(k)], centre_s);
+    const MatrixCc cross = Z.transpose() * adjoint_columns.topRows<9>();
+    const MatrixCc successive = information + cross;
+    score.noalias() += Z.transpose() * lambda.head<9>();
+    information += Z.transpose() * Gamma.topLeftCorner<9, 9>() * Z + cross + cross.transpose();
+    for (int a = 0; a < kSensorAxisCount; ++a) {
+      AxisPair& p = out[static_cast<size_t>(k)][static_cast<size_t>(a)];
+      p.score = score.segment<2>(2 * a);
+      p.information = information.block<2, 2>(2 * a, 2 * a);
+      p.successive = successive.block<2, 2>(2 * a, 2 * a);
+    }
+    Z_next = Z;
+  }
+  return out;
+}
+
+// The statistic profile of one term over the onsets, and its best onset.
+OnsetFit FitTerm(const EffectTerm& term, const PairSums& sums, const EpochRun& run, int first, int last,
+                 double centre_s, const OnsetScanOptions& options) {
+  OnsetFit fit;
+  fit.term = term;
+  const int axis = SensorAxisIndex(term.family->sensor, term.axis);
+  const bool ramp = term.family->regressor == Regressor::kRamp;
+  auto direction = [&](int theta) {
+    return ramp ? Eigen::Vector2d(centre_s - run.epochs[static_cast<size_t>(theta)].start_s, 1.0)
+                : Eigen::Vector2d(1.0, 0.0);
+  };
+  auto pair = [&](int theta) -> const AxisPair& {
+    return sums[static_cast<size_t>(theta)][static_cast<size_t>(axis)];
+  };
+  std::vector<double> T(static_cast<size_t>(last - first + 1), 0.0);
+  fit.identifiable = last >= first;
+  for (int theta = first; theta <= last; ++theta) {
+    const Eigen::Vector2d v = direction(theta);
+    const double s = v.dot(pair(theta).score);
+    const double info = v.dot(pair(theta).information * v);
+    if (!(info > 0.0) || !std::isfinite(info)) {
+      fit.identifiable = false;
+      break;
+    }
+    const double t = s * s / info;
+    T[static_cast<size_t>(theta - first)] = t;
+    if (theta < last) {
+      const Eigen::Vector2d w = direction(theta + 1);
+      const double next_info = w.dot(pair(theta + 1).information * w);
+      const double rho = v.dot(pair(theta).successive * w) / std::sqrt(info * next_info);
+      fit.path_length += std::acos(std::clamp(rho, -1.0, 1.0));
+    }
+    if (t > fit.statistic || fit.onset_epoch < 0) {
+      fit.statistic = t;
+      fit.onset_epoch = theta;
+      fit.estimate = s / info;
+      fit.std_error = 1.0 / std::sqrt(info);
+    }
+  }
+  fit.onsets_tried = std::max(0, last - first + 1);
+  if (!fit.identifiable || fit.onset_epoch < 0) {
+    fit.identifiable = false;
+    fit.statistic = 0.0;
+    fit.p_value = 1.0;
+    return fit;
+  }
+  // The onset's posterior under a flat prior on onset and magnitude: the
+  // likelihood integrated over the magnitude, ∝ e^{T/2} I^{−1/2}. Its median
+  // is the reported onset, its quantiles the interval: a step where the
+  // run cannot place it (a still stretch that hides the axis) spreads it.
+  std::vector<double> weight(T.size());
+  double total = 0.0;
+  for (int theta = first; theta <= last; ++theta) {
+    const auto j = static_cast<size_t>(theta - first);
+    const Eigen::Vector2d v = direction(theta);
+    const double info = v.dot(pair(theta).information * v);
+    weight[j] = std::exp(0.5 * (T[j] - fit.statistic)) / std::sqrt(info * fit.std_error * fit.std_error);
+    total += weight[j];
+  }
+  auto quantile = [&](double q) {
+    double cumulative = 0.0;
+    for (int theta = first; theta <= last; ++theta) {
+      cumulative += weight[static_cast<size_t>(theta - first)] / total;
+      if (cumulative >= q) return theta;
+    }
+    return last;
+  };
+  double mean_s = 0.0, square_s2 = 0.0;
+  for (int theta = first; theta <= last; ++theta) {
+    const double t = run.epochs[static_cast<size_t>(theta)].start_s;
+    const double w = weight[static_cast<size_t>(theta - first)] / total;
+    mean_s += w * t;
+    square_s2 += w * t * t;
+  }
+  fit.onset_std_s = std::sqrt(std::max(0.0, square_s2 - mean_s * mean_s));
+  fit.onset_epoch = quantile(0.5);
+  const Eigen::Vector2d v = direction(fit.onset_epoch);
+  const double info = v.dot(pair(fit.onset_epoch).information * v);
+  fit.estimate = v.dot(pair(fit.onset_epoch).score) / info;
+  fit.std_error = 1.0 / std::sqrt(info);
+  fit.onset_s = run.epochs[static_cast<size_t>(fit.onset_epoch)].start_s;
+  fit.onset_low_s = run.epochs[static_cast<size_t>(quantile(options.interval_tail))].start_s;
+  fit.onset_high_s = run.epochs[static_cast<size_t>(quantile(1.0 - options.interval_tail))].start_s;
+  fit.p_value = std::min(1.0, stats::ChiSquareSurvival(fit.statistic, 1) +
+                                  fit.path_length * std::exp(-0.5 * fit.statistic) / std::numbers::pi);
+  return fit;
+}
+
+}  // namespace
+
+std::vector<EffectTerm> AbsentFaultTerms(const ErrorModel& model) {
+  std::vector<EffectTerm> out;
+  for (const EffectTerm& term : AllCatalogueTerms()) {
+    if (term.family->kind == EffectKind::kFault && model.FindEffect(term) < 0) out.push_back(term);
+  }
+  return out;
+}
+
+std::vector<OnsetFit> ScanOnsets(const ForwardPass& fw, const StateLayout& layout, const EpochRun& run,
+                                 const std::vector<EffectTerm>& terms, const OnsetScanOptions& options) {
+  std::vector<OnsetFit> out;
+  const int K = fw.epochs();
+  if (terms.empty() || K < 2 || run.size() != K) return out;
+  const double begin_s = run.epochs.front().start_s;
+  const double end_s = run.epochs.back().time_s;
+  int first = 0, last = K - 1;
+  while (first < K && run.epochs[static_cast<size_t>(first)].start_s < begin_s + options.min_side_s) ++first;
+  while (last >= 0 && run.epochs[static_cast<size_t>(last)].start_s > end_s - options.min_side_s) --last;
+  const double centre_s = 0.5 * (begin_s + end_s);
+  const PairSums sums = BackwardSweep(fw, layout, run, centre_s);
+  for (const EffectTerm& term : terms) out.push_back(FitTerm(term, sums, run, first, last, centre_s, options));
+  return out;
+}
+
+}  // namespace insdiag::engine
