@@ -52,9 +52,11 @@ void PrintReport(const engine::AnalysisReport& r, std::ostream& out) {
     }
   }
   for (const auto& l : r.localisation) {
-    out << "  failed sensor: " << l.state << " jumped by " << Format("%.3g", l.jump) << " ± "
-        << Format("%.2g", l.jump_std_error) << " at " << Format("%.1f", l.time_s) << " s (p "
-        << Format("%.2g", l.p_value) << ")\n";
+    // A ramp's estimate is a rate from its onset, not a jump.
+    const bool ramp = l.state.find("_bias_ramp.") != std::string::npos;
+    out << "  failed sensor: " << l.state << (ramp ? " drifting at " : " jumped by ") << Format("%.3g", l.jump)
+        << " ± " << Format("%.2g", l.jump_std_error) << (ramp ? " per s from " : " at ") << Format("%.1f", l.time_s)
+        << " s (p " << Format("%.2g", l.p_value) << ")\n";
   }
   if (!r.discrepancies.empty()) {
     out << "\nforward/backward discrepancies:\n";

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "insdiag/engine/filter/smoother.h"
+#include "insdiag/engine/finder/fault_findings.h"
 #include "insdiag/engine/finder/score_test.h"
 #include "insdiag/engine/ident/retarget.h"
 #include "insdiag/engine/stats/distributions.h"
@@ -91,16 +92,31 @@ absl::Status AddEffects(const BenchRun& run, const std::vector<std::string>& sel
   for (const std::string& selector : selectors) {
     auto terms = ParseEffectSelector(selector);
     if (!terms.ok()) return terms.status();
+    auto onset = ParseOnset(selector);
+    if (!onset.ok()) return onset.status();
     for (const EffectTerm& term : *terms) {
       if (model.FindEffect(term) >= 0) continue;
       ModelEffect e;
       e.term = term;
+      if (term.family->kind == EffectKind::kFault) {
+        if (!onset->has_value()) {
+          return absl::InvalidArgumentError("effect '" + selector + "' is a fault: name its onset, " + term.Name() +
+                                            "@SECONDS, or add it after a scan has estimated the onset");
+        }
+        e.onset_s = **onset;
+      }
       const SensorTriadModel& triad = term.family->sensor == Sensor::kGyro ? model.gyro : model.acc;
       // The sensor's white noise averaged over one update interval: the size of
       // error the data resolve in one step.
       const double noise = triad.white_noise_density.maxCoeff() / std::sqrt(update_interval_s);
       const double drift = std::max({triad.bias[0].sigma, triad.bias[1].sigma, triad.bias[2].sigma});
       const double scale = diffuse_prior_scale * std::max(noise, drift);
+      if (term.family->kind == EffectKind::kFault) {
+        // A step on the scale of a turn-on bias; a ramp that reaches it over the run.
+        e.prior_sigma[0] = term.family->regressor == Regressor::kRamp ? scale / std::max(run.DurationS(), 1.0) : scale;
+        model.effects.push_back(e);
+        continue;
+      }
       switch (term.family->process) {
         case RandomProcess::kNone: {
           const auto rms = RegressorRms(run, term);
@@ -138,6 +154,7 @@ struct ModelPass {
   SmoothedPass smoothed;
   MonitorResult monitor;
   std::unique_ptr<ScoreTestObserver> scan;
+  std::vector<OnsetFit> onsets;  // the fault terms' scan, with `scan`
   std::vector<std::string> segment_motion;
   // The innovations' log-likelihood with every added constant effect at its
   // maximum-likelihood value (the profile likelihood), see ProfileCorrection.
@@ -209,7 +226,10 @@ absl::StatusOr<ModelPass> RunPass(const BenchRun& run, const EpochRun& epochs, c
   pass.smoothed = *std::move(smoothed);
   pass.monitor = Monitor(pass.forward, pass.smoothed, *pass.layout, spikes, options.monitor);
   pass.log_likelihood = pass.forward.log_likelihood + ProfileCorrection(pass.forward, pass.model, *pass.layout);
-  if (with_scan) pass.segment_motion = SegmentMotion(run, pass.forward, segment_epochs);
+  if (with_scan) {
+    pass.segment_motion = SegmentMotion(run, pass.forward, segment_epochs);
+    pass.onsets = ScanOnsets(pass.forward, *pass.layout, epochs, AbsentFaultTerms(pass.model), options.onset_scan);
+  }
   return pass;
 }
 
@@ -642,6 +662,7 @@ Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const M
     }
   }
   f.structures = ConfirmStructures(run, epochs, pass, std::move(proposals), spikes, options);
+  for (EffectCandidate& c : FaultCandidates(pass.onsets, pass.forward.scalar_updates)) others.push_back(std::move(c));
   f.candidates = MergeCandidates(std::move(ranked.terms), f.structures, std::move(others));
   return f;
 }
@@ -707,8 +728,29 @@ absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& ba
   for (const std::string& selector : selectors) {
     auto terms = ParseEffectSelector(selector);
     if (!terms.ok()) return terms.status();
+    auto onset = ParseOnset(selector);
+    if (!onset.ok()) return onset.status();
     for (const EffectTerm& term : *terms) {
       if (model.FindEffect(term) >= 0) continue;
+      if (term.family->kind == EffectKind::kFault) {
+        // At the onset named, else at the scan's: prior wide against the scan's estimate.
+        const auto c = std::find_if(found.candidates.begin(), found.candidates.end(), [&](const EffectCandidate& x) {
+          return x.name == term.Name() && x.onset_s.has_value();
+        });
+        const std::optional<double> onset_s = onset->has_value() ? *onset
+                                              : c != found.candidates.end() ? c->onset_s
+                                                                            : std::nullopt;
+        if (c == found.candidates.end() || !onset_s.has_value()) {
+          fallback.push_back(onset_s.has_value() ? term.Name() + "@" + std::to_string(*onset_s) : term.Name());
+          continue;
+        }
+        ModelEffect e;
+        e.term = term;
+        e.onset_s = *onset_s;
+        e.prior_sigma[0] = options.estimated_prior_scale * std::max(std::abs(c->estimate), 3.0 * c->std_error);
+        model.effects.push_back(e);
+        continue;
+      }
       auto structure = std::find_if(found.structures.begin(), found.structures.end(),
                                     [&](const StructureProposal& p) { return p.effect.term == term; });
       if (structure != found.structures.end()) {
@@ -795,6 +837,10 @@ double PredictedLikelihoodRatio(const ModelPass& a, const std::vector<std::strin
     for (const StructureProposal& p : found.structures) {
       if (p.candidate.name == name) structure_lr += p.candidate.statistic;
     }
+    // A fault: the onset scan's likelihood ratio at its onset.
+    for (const EffectCandidate& c : found.candidates) {
+      if (c.source == "GLR" && c.name == name.substr(0, name.find('@'))) structure_lr += c.statistic;
+    }
   }
   if (idx.empty()) return structure_lr;
   const auto n = static_cast<Eigen::Index>(idx.size());
@@ -827,12 +873,31 @@ void FillSeries(const ModelPass& pass, AnalysisSeries& series) {
   series.discrepancy = sm.discrepancy.middleCols(b, m);
 }
 
+// The faults a pass shows: significant fault candidates of its scan, and the
+// fault effects of its model whose estimates differ from zero.
+std::vector<FaultFinding> FaultFindings(const ModelPass& pass, const Findings& found, const AnalysisOptions& options) {
+  const double alpha = options.finder.family_wise_alpha;
+  std::vector<FaultFinding> findings = SignificantFaults(found.candidates, alpha);
+  const int K = pass.forward.epochs();
+  if (K == 0) return findings;
+  for (const SensorState& s : pass.layout->sensor_states()) {
+    if (s.effect < 0) continue;
+    const ModelEffect& e = pass.model.effects[static_cast<size_t>(s.effect)];
+    if (e.term.family->kind != EffectKind::kFault) continue;
+    const auto f = FaultInModel(e.term, e.onset_s, pass.forward.x_filt(K - 1, s.index),
+                                std::sqrt(pass.smoothed.variance(K - 1, s.index)), alpha);
+    if (f.has_value()) findings.push_back(*f);
+  }
+  return findings;
+}
+
 // The report of one scanned pass.
 AnalysisReport ReportOf(const ModelPass& pass, const Findings& found, const BenchRun& run,
                         const AnalysisOptions& options, const std::vector<ParameterEstimate>& identified,
                         const std::vector<std::string>& notes) {
   AnalysisReport r;
   FillFit(pass, run, options, r);
+  ReportFaults(FaultFindings(pass, found, options), run.samples.back().t_s, r);
   r.effect_candidates = found.candidates;
   r.family_candidates = found.families;
   r.correlation = found.drifts;
@@ -1033,7 +1098,11 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       std::vector<std::string> found_notes;
       drifts = ident::CorrelateDrifts(pass->forward, pass->smoothed, *pass->layout, options.correlation,
                                       may_defer ? &found_notes : nullptr);
-      faults_flagged = !pass->monitor.faults.empty();
+      // A bias step or ramp the onset scan finds counts too (Bonferroni over its terms).
+      faults_flagged = !pass->monitor.faults.empty() ||
+                       std::any_of(pass->onsets.begin(), pass->onsets.end(), [&](const OnsetFit& f) {
+                         return f.p_value * static_cast<double>(pass->onsets.size()) < options.finder.family_wise_alpha;
+                       });
       // The a-priori model's missing effects, the likelihood's structures
       // among them: a walk is a missing effect as much as a constant term,
       // and a drift σ re-tuned before it is tested takes the walk's slow

@@ -101,7 +101,16 @@ std::string PackSeries(const engine::AnalysisSeries& s) {
 }
 
 const char* KindName(v1::FaultInterval::Kind kind) {
-  return kind == v1::FaultInterval::OUTLIER ? "OUTLIER" : kind == v1::FaultInterval::GRADUAL ? "GRADUAL" : "UNSPECIFIED";
+  switch (kind) {
+    case v1::FaultInterval::OUTLIER:
+      return "OUTLIER";
+    case v1::FaultInterval::GRADUAL:
+      return "GRADUAL";
+    case v1::FaultInterval::ABRUPT:
+      return "ABRUPT";
+    default:
+      return "UNSPECIFIED";
+  }
 }
 
 double Finite(double v) { return std::isfinite(v) ? v : 0.0; }

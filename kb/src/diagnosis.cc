@@ -13,6 +13,7 @@
 
 #include "failure_mode_data.h"
 #include "insdiag/api/json.h"
+#include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::kb {
@@ -252,6 +253,33 @@ absl::StatusOr<std::vector<v1::FailureMode>> ExpandCatalogue(const v1::FailureMo
   return out;
 }
 
+namespace {
+
+// A fault effect (bias step or ramp): nominally absent in every unit type.
+bool IsFaultEffect(const std::string& name) {
+  const engine::EffectFamily* f = engine::FindEffectFamily(name.substr(0, name.find('.')));
+  return f != nullptr && f->kind == engine::EffectKind::kFault;
+}
+
+// An evidence term on the standard-score scale: a healthy unit scatters as N(0, 1).
+EvidenceTerm StandardScoreTerm(const std::string& name, double estimate, double std_error, const std::string& unit,
+                               double z, bool significant, const std::string& suffix,
+                               const v1::DiagnosisSettings& settings) {
+  EvidenceTerm t;
+  t.name = name;
+  t.scale = Scale::kZ;
+  t.x = z;
+  t.measurement_sd = 0.0;
+  t.healthy_sd = settings.healthy_z_sd();
+  t.significant = significant;
+  t.tolerance_units = 0.0;
+  t.line = absl::StrCat(name, ": estimate ", Format(estimate), std_error > 0 ? absl::StrCat(" ± ", Format(std_error)) : "",
+                        unit.empty() ? "" : " ", unit, " (", absl::StrFormat("%.1f", z), " standard errors)", suffix);
+  return t;
+}
+
+}  // namespace
+
 Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType& unit_type,
                             const v1::DiagnosisSettings& settings) {
   Evidence evidence;
@@ -292,6 +320,13 @@ Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType
 
   for (const auto& p : report.identified()) {
     const auto it = nominal.find(p.name());
+    if (it == nominal.end() && IsFaultEffect(p.name()) && p.std_error() > 0 && seen.insert(p.name()).second) {
+      // A fault the model holds (added at its onset): nominally absent, its
+      // estimate in standard errors.
+      evidence.terms.push_back(StandardScoreTerm(p.name(), p.value(), p.std_error(), p.unit(),
+                                                 p.value() / p.std_error(), true, ", in the model", settings));
+      continue;
+    }
     if (it == nominal.end()) {
       unknown_names.push_back(p.name());
       continue;
@@ -317,26 +352,24 @@ Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType
       evidence.terms.push_back(std::move(t));
       continue;
     }
-    EvidenceTerm t;
-    t.name = c.name();
-    t.scale = Scale::kZ;
     // Without a standard error (a structure below its test's screen), the z
     // of the same two-sided p-value: √χ² on one degree of freedom, and on
-    // more not an inflated √χ² (a pair's 2Δℓ has three).
-    t.x = c.std_error() > 0      ? c.estimate() / c.std_error()
-          : c.degrees_of_freedom() <= 1 ? std::copysign(std::sqrt(std::max(c.statistic(), 0.0)), c.estimate())
-                                        : std::copysign(-engine::stats::NormalQuantile(
-                                                            0.5 * std::clamp(c.p_value(), 1e-300, 1.0)),
-                                                        c.estimate());
-    t.measurement_sd = 0.0;
-    t.healthy_sd = settings.healthy_z_sd();
-    t.significant = significant;
-    t.tolerance_units = 0.0;
-    t.line = absl::StrCat(c.name(), ": estimate ", Format(c.estimate()),
-                          c.std_error() > 0 ? absl::StrCat(" ± ", Format(c.std_error())) : "",
-                          c.unit().empty() ? "" : " ", c.unit(), " (", absl::StrFormat("%.1f", t.x),
-                          " standard errors)", verdict);
-    evidence.terms.push_back(std::move(t));
+    // more not an inflated √χ² (a pair's 2Δℓ has three). A fault from the
+    // onset scan: its estimate over its SE is the best onset's, inflated by
+    // the search over onsets; the z of its p-value (Davies' bound over the
+    // onsets) is what a healthy unit scatters like N(0, 1).
+    const auto z_of_p = [&] {
+      return std::copysign(-engine::stats::NormalQuantile(0.5 * std::clamp(c.p_value(), 1e-300, 1.0)),
+                           c.estimate());
+    };
+    const double z = c.source() == "GLR"             ? z_of_p()
+                     : c.std_error() > 0            ? c.estimate() / c.std_error()
+                     : c.degrees_of_freedom() <= 1 ? std::copysign(std::sqrt(std::max(c.statistic(), 0.0)), c.estimate())
+                                                    : z_of_p();
+    std::string where;
+    if (c.has_onset_s()) where = absl::StrFormat(" from %.0f ± %.0f s", c.onset_s(), c.onset_std_s());
+    evidence.terms.push_back(StandardScoreTerm(c.name(), c.estimate(), c.std_error(), c.unit(), z, significant,
+                                               where + verdict, settings));
   }
   if (!unknown_names.empty()) {
     evidence.notes.push_back(absl::StrCat("identified parameters without a nominal value in ", unit_type.name(),

@@ -60,6 +60,12 @@ void Fill(const engine::EffectCandidate& in, v1::EffectCandidate* out) {
   out->set_predicted_delta_bic(Finite(in.predicted_delta_bic));
   for (const auto& c : in.correlated_with) out->add_correlated_with(c);
   out->set_note(in.note);
+  if (in.onset_s.has_value()) {
+    out->set_onset_s(*in.onset_s);
+    out->set_onset_std_s(in.onset_std_s);
+    out->set_onset_low_s(in.onset_low_s);
+    out->set_onset_high_s(in.onset_high_s);
+  }
   for (const auto& w : in.where) {
     v1::SegmentContribution* s = out->add_where();
     s->set_channel(w.channel);
@@ -222,7 +228,9 @@ v1::AnalysisReport ToProto(const engine::AnalysisReport& r, const engine::ErrorM
     fi->set_channel(f.channel);
     fi->set_start_s(f.start_s);
     fi->set_end_s(f.end_s);
-    fi->set_kind(f.kind == engine::FaultKind::kOutlier ? v1::FaultInterval::OUTLIER : v1::FaultInterval::GRADUAL);
+    fi->set_kind(f.kind == engine::FaultKind::kOutlier  ? v1::FaultInterval::OUTLIER
+                 : f.kind == engine::FaultKind::kAbrupt ? v1::FaultInterval::ABRUPT
+                                                        : v1::FaultInterval::GRADUAL);
     fi->set_peak_statistic(Finite(f.peak_statistic));
   }
   for (const auto& c : r.effect_candidates) Fill(c, out.add_effect_candidates());

@@ -36,9 +36,9 @@ double ProbabilityOf(const v1::Diagnosis& d, const std::string& mode) {
   return 0.0;
 }
 
-TEST(FailureModeCatalogueTest, Ins2000HasADozenArguedModesWhoseTermsTheUnitTypeOrTheEngineNames) {
+TEST(FailureModeCatalogueTest, Ins2000HasSixteenArguedModesWhoseTermsTheUnitTypeOrTheEngineNames) {
   const auto& f = Ins2000();
-  EXPECT_EQ(f.catalogue.modes_size(), 12);
+  EXPECT_EQ(f.catalogue.modes_size(), 16);
   std::set<std::string> roles;
   std::set<std::string> nominal;
   for (const auto& p : f.unit_type.nominal()) nominal.insert(p.name());

@@ -484,7 +484,8 @@ function candidatesSection(analysis, state, channelsView) {
     },
     h('td.num', String(i + 1)),
     h('td', h('strong', c.name), c.source === 'STRUCTURE' ? h('div.small.muted', 'correlation structure')
-      : c.source === 'LIKELIHOOD' ? h('div.small.muted', 'likelihood-ratio test') : null,
+      : c.source === 'LIKELIHOOD' ? h('div.small.muted', 'likelihood-ratio test')
+      : c.source === 'GLR' ? h('div.small.muted', `from ${fmt(c.onsetS, 5)} ± ${fmt(c.onsetStdS, 2)} s (likelihood ratio over onsets)`) : null,
     // Why a candidate has no p-value of its own: not excitable by this run, or left to a later model.
     c.note && (!c.identifiable || c.notTested) ? h('div.small.muted', c.note) : null),
     h('td.num', `${fmt(c.estimate)} ± ${fmt(c.stdError, 2)}${c.unit ? ` ${c.unit}` : ''}`),
@@ -502,7 +503,9 @@ function candidatesSection(analysis, state, channelsView) {
       onclick: async (event) => {
         event.stopPropagation();
         event.target.disabled = true;
-        await startAnalysis(analysis.run, [...analysis.model.effects, c.name], analysis.model.effects);
+        // A fault goes in at the onset the scan estimated.
+        const added = c.onsetS !== undefined ? `${c.name}@${num(c.onsetS)}` : c.name;
+        await startAnalysis(analysis.run, [...analysis.model.effects, added], analysis.model.effects);
       },
     }, 'Add')));
     return row;

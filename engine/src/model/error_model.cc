@@ -1,5 +1,7 @@
 #include "insdiag/engine/model/error_model.h"
 
+#include <cstdio>
+
 namespace insdiag::engine {
 
 absl::Status ValidateErrorModel(const ErrorModel& model) {
@@ -26,7 +28,16 @@ int ErrorModel::FindEffect(const EffectTerm& term) const {
 std::vector<std::string> ErrorModel::EffectNames() const {
   std::vector<std::string> names;
   names.reserve(effects.size());
-  for (const auto& e : effects) names.push_back(e.term.Name());
+  for (const auto& e : effects) {
+    if (e.term.family->kind != EffectKind::kFault) {
+      names.push_back(e.term.Name());
+      continue;
+    }
+    // A fault's name carries its onset, so that the name adds it back (effect_catalogue.h, ParseOnset).
+    char onset[32];
+    std::snprintf(onset, sizeof onset, "@%.10g", e.onset_s);
+    names.push_back(e.term.Name() + onset);
+  }
   return names;
 }
 

@@ -40,7 +40,17 @@ const char* VerdictName(Verdict v) {
   return "";
 }
 
-const char* FaultKindName(FaultKind k) { return k == FaultKind::kOutlier ? "OUTLIER" : "GRADUAL"; }
+const char* FaultKindName(FaultKind k) {
+  switch (k) {
+    case FaultKind::kOutlier:
+      return "OUTLIER";
+    case FaultKind::kGradual:
+      return "GRADUAL";
+    case FaultKind::kAbrupt:
+      return "ABRUPT";
+  }
+  return "GRADUAL";
+}
 
 MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const StateLayout& layout,
                       const std::vector<SampleOutlier>& spikes, const MonitorOptions& options) {

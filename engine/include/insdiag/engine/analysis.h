@@ -25,6 +25,7 @@
 #include "insdiag/engine/bench_run.h"
 #include "insdiag/engine/filter/forward_filter.h"
 #include "insdiag/engine/finder/effect_finder.h"
+#include "insdiag/engine/finder/onset_scan.h"
 #include "insdiag/engine/ident/allan.h"
 #include "insdiag/engine/ident/retarget.h"
 #include "insdiag/engine/ident/correlation.h"
@@ -77,6 +78,8 @@ struct AnalysisOptions {
   bool test_second_orders_by_likelihood = true;
   ident::DriftLikelihoodOptions drift_likelihood;
   FinderOptions finder;
+  // Bias steps and ramps at an unknown onset (finder/onset_scan.h).
+  OnsetScanOptions onset_scan;
   // Time segments of the "where it shows" breakdown.
   double segment_s = 60.0;
   int max_discovery_steps = 8;

@@ -32,8 +32,9 @@ struct EffectCandidate {
   std::string name;  // "gyro_scale_factor.z" (or a family name in family_candidates)
   std::string family;
   // "SCORE" (Lagrange-multiplier test), "STRUCTURE" (correlation-function
-  // family) or "LIKELIHOOD" (a bias random walk or second-order pair by the
-  // innovations' likelihood)
+  // family), "LIKELIHOOD" (a bias random walk or second-order pair by the
+  // innovations' likelihood) or "GLR" (a bias step or ramp at an unknown
+  // onset: the generalised likelihood ratio over onsets, finder/onset_scan.h)
   std::string source;
   double statistic = 0.0;
   int dof = 0;
@@ -52,6 +53,12 @@ struct EffectCandidate {
   std::vector<std::string> correlated_with;  // candidates it cannot be told apart from in this run
   std::vector<SegmentContribution> where;
   std::string note;  // e.g. why it is not identifiable
+  // Fault effects (source "GLR"): the onset [s of run time], its posterior
+  // standard deviation and central interval.
+  std::optional<double> onset_s;
+  double onset_std_s = 0.0;
+  double onset_low_s = 0.0;
+  double onset_high_s = 0.0;
 };
 
 // Correlation processing of one drift state's smoothed estimate.

@@ -38,7 +38,9 @@
 namespace insdiag::engine {
 
 enum class Verdict { kGood, kOperable, kFaulty };
-enum class FaultKind { kOutlier, kGradual };
+// kAbrupt: a bias step found by the onset scan (finder/onset_scan.h); a
+// ramp found there is kGradual.
+enum class FaultKind { kOutlier, kGradual, kAbrupt };
 
 struct FaultInterval {
   std::string channel;  // observation channel ("vel_n") or raw sensor channel ("gyro_x")
@@ -66,7 +68,10 @@ struct Localisation {
   double time_s = 0.0;     // the jump's onset, or the discrepancy's peak
   double statistic = 0.0;  // ℓ of the jump, or d_i at its peak
   double p_value = 0.0;    // family-wise
-  std::string method;      // "JUMP" (likelihood ratio) or "FORWARD_BACKWARD" (discrepancy)
+  // "JUMP" (likelihood ratio of a state's jump), "FORWARD_BACKWARD"
+  // (discrepancy) or "GLR" (a fault effect's onset scan, or its estimate in
+  // a model that holds it)
+  std::string method;
   double jump = 0.0;       // the jump's estimate in the state's unit (JUMP only)
   double jump_std_error = 0.0;
 };

@@ -1,0 +1,122 @@
+#include "insdiag/engine/finder/fault_findings.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "insdiag/engine/stats/distributions.h"
+
+namespace insdiag::engine {
+namespace {
+
+std::string RawChannel(const EffectTerm& term) {
+  return std::string(term.family->sensor == Sensor::kGyro ? "gyro_" : "acc_") + "xyz"[term.axis];
+}
+
+}  // namespace
+
+std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, int scalar_updates) {
+  std::vector<EffectCandidate> out;
+  const double log_n = std::log(static_cast<double>(std::max(1, scalar_updates)));
+  for (const OnsetFit& f : fits) {
+    EffectCandidate c;
+    c.name = f.term.Name();
+    c.family = std::string(f.term.family->name);
+    c.source = "GLR";
+    c.unit = std::string(f.term.family->unit);
+    c.dof = 2;
+    c.identifiable = f.identifiable;
+    if (!f.identifiable) {
+      c.std_error = std::numeric_limits<double>::infinity();
+      c.note = "not identifiable with this profile: the run leaves no onset with room on both sides, or its "
+               "signature vanishes";
+      out.push_back(std::move(c));
+      continue;
+    }
+    c.statistic = f.statistic;
+    c.p_value = f.p_value;
+    c.estimate = f.estimate;
+    c.std_error = f.std_error;
+    c.predicted_delta_aic = -f.statistic + 2.0 * c.dof;
+    c.predicted_delta_bic = -f.statistic + c.dof * log_n;
+    c.onset_s = f.onset_s;
+    c.onset_std_s = f.onset_std_s;
+    c.onset_low_s = f.onset_low_s;
+    c.onset_high_s = f.onset_high_s;
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "likelihood ratio over %d onsets: max 2Δℓ %.1f; onset %.0f s (±1σ %.0f–%.0f s)",
+                  f.onsets_tried, f.statistic, f.onset_s, f.onset_low_s, f.onset_high_s);
+    c.note = buf;
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+std::vector<FaultFinding> SignificantFaults(const std::vector<EffectCandidate>& candidates, double alpha) {
+  double best_other_bic = std::numeric_limits<double>::infinity();
+  for (const EffectCandidate& c : candidates) {
+    if (c.source != "GLR" && c.identifiable && c.tested && c.p_value_holm < alpha) {
+      best_other_bic = std::min(best_other_bic, c.predicted_delta_bic);
+    }
+  }
+  std::vector<const EffectCandidate*> by_bic;
+  for (const EffectCandidate& c : candidates) {
+    if (c.source == "GLR" && c.identifiable && c.p_value_holm < alpha && c.onset_s.has_value() &&
+        c.predicted_delta_bic < best_other_bic) {
+      by_bic.push_back(&c);
+    }
+  }
+  std::stable_sort(by_bic.begin(), by_bic.end(), [](const EffectCandidate* a, const EffectCandidate* b) {
+    return a->predicted_delta_bic < b->predicted_delta_bic;
+  });
+  std::vector<FaultFinding> out;
+  for (const EffectCandidate* c : by_bic) {
+    const auto terms = ParseEffectSelector(c->name);
+    if (!terms.ok() || terms->size() != 1) continue;
+    // One fault per sensor axis: a step and a ramp on the same axis are two
+    // explanations of one failure; the lower ΔBIC stands.
+    const EffectTerm& term = terms->front();
+    const auto same_axis = [&](const FaultFinding& f) {
+      return f.term.family->sensor == term.family->sensor && f.term.axis == term.axis;
+    };
+    if (std::any_of(out.begin(), out.end(), same_axis)) continue;
+    out.push_back({term, *c->onset_s, c->statistic, c->p_value_holm, c->estimate, c->std_error});
+  }
+  return out;
+}
+
+std::optional<FaultFinding> FaultInModel(const EffectTerm& term, double onset_s, double estimate, double std_error,
+                                         double alpha) {
+  if (!(std_error > 0.0) || !std::isfinite(std_error)) return std::nullopt;
+  const double z = estimate / std_error;
+  const double p = stats::ChiSquareSurvival(z * z, 1);
+  if (!(p < alpha)) return std::nullopt;
+  return FaultFinding{term, onset_s, z * z, p, estimate, std_error};
+}
+
+void ReportFaults(const std::vector<FaultFinding>& findings, double run_end_s, AnalysisReport& report) {
+  for (const FaultFinding& f : findings) {
+    report.verdict = Verdict::kFaulty;
+    FaultInterval interval;
+    interval.channel = RawChannel(f.term);
+    interval.start_s = f.onset_s;
+    interval.end_s = run_end_s;
+    interval.kind = f.term.family->regressor == Regressor::kStep ? FaultKind::kAbrupt : FaultKind::kGradual;
+    interval.peak_statistic = f.statistic;
+    report.faults.push_back(interval);
+    Localisation where;
+    where.state = f.term.Name();
+    where.time_s = f.onset_s;
+    where.statistic = f.statistic;
+    where.p_value = f.p_value;
+    where.method = "GLR";
+    where.jump = f.estimate;
+    where.jump_std_error = f.std_error;
+    report.localisation.push_back(where);
+  }
+  std::stable_sort(report.faults.begin(), report.faults.end(),
+                   [](const FaultInterval& a, const FaultInterval& b) { return a.start_s < b.start_s; });
+}
+
+}  // namespace insdiag::engine
