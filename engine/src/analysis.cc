@@ -1121,7 +1121,15 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
         // Ann. Stat. 6(2), 1978): the drifts' σ by likelihood against the
         // best candidate's predicted ΔBIC.
         if (options.identify_drifts_by_likelihood) {
-          auto ml = identify_drifts(base, /*resolved_set=*/false);
+          // Every drift's σ and τ, from the a-priori values and from starts
+          // a decade either side: a unit far from its type's nominal model
+          // is the case this competition is for. Also when faults are
+          // flagged: a drift far wider than the model's trips the monitor
+          // and the onset scan as a jump would, and BIC decides which it is.
+          ident::DriftSelection every_drift{};
+          every_drift.fill(true);
+          auto ml = ident::IdentifyDriftsFromStarts(epochs, base, *a_priori, every_drift, options.drift_tau_start_factors,
+                                                    options.drift_likelihood);
           if (ml.ok() && !ml->identified.empty()) {
             const double log_n = std::log(static_cast<double>(std::max(1, pass->forward.scalar_updates)));
             const double drift_bic = -DriftStatistic(*ml) + static_cast<double>(ml->identified.size()) * log_n;

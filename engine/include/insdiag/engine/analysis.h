@@ -16,6 +16,7 @@
 
 #include <absl/status/statusor.h>
 
+#include <array>
 #include <functional>
 #include <optional>
 #include <string>
@@ -77,6 +78,10 @@ struct AnalysisOptions {
   // its correlation function then cannot show the oscillation.
   bool test_second_orders_by_likelihood = true;
   ident::DriftLikelihoodOptions drift_likelihood;
+  // Where the a-priori model's misfit competes with its missing effects, its
+  // drifts' τ are searched from these multiples of the a-priori τ besides
+  // the a-priori value itself (ident::IdentifyDriftsFromStarts).
+  std::array<double, 2> drift_tau_start_factors = {0.1, 10.0};
   FinderOptions finder;
   // Bias steps and ramps at an unknown onset (finder/onset_scan.h).
   OnsetScanOptions onset_scan;

@@ -75,6 +75,7 @@
 #include <absl/status/statusor.h>
 
 #include <array>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -166,6 +167,21 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const EpochRun&
                                                                  const DriftSelection& which,
                                                                  const DriftSelection& tau_too,
                                                                  const DriftLikelihoodOptions& options = {});
+
+// σ and τ of the selected drifts from several starting points: EM from the
+// model's values and from each of `tau_start_factors` × the model's τ
+// (clipped to [two update intervals, the run's length]), σ started at the
+// model's; the fit with the highest likelihood is kept. Over a few
+// correlation times the likelihood in (σ, τ) has more than one maximum
+// along its ridge, and EM climbs the one nearest its start: a unit whose
+// drift is far from its type's nominal model (τ a tenth, σ ten times) needs
+// a start on its side of the ridge. The result's `iterations` and
+// `filter_passes` count every start.
+absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& run, const ErrorModel& model,
+                                                               const ErrorModel& a_priori,
+                                                               const DriftSelection& which,
+                                                               std::span<const double> tau_start_factors,
+                                                               const DriftLikelihoodOptions& options = {});
 
 // Fits a bias random walk on each selected axis that has a drift and no walk
 // in `model`, each with its axis' drift σ (header), and tests each against

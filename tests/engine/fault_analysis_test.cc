@@ -1,0 +1,82 @@
+// Faulty units through the whole analysis: a bias step at an unknown onset
+// is named with its onset and the verdict, and a healthy unit is not called
+// faulty, over seeds, axes and onsets (the scenario matrix in
+// docs/FAULT_SCENARIOS.md runs more of both, on both simulators).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "insdiag/engine/analysis.h"
+#include "scenarios.h"
+
+namespace insdiag::engine {
+namespace {
+
+// The analysis of one hour of static tilts at 10 Hz with its datasheet.
+AnalysisReport AnalyseOrDie(const sim::SimulatedUnit& unit, uint64_t seed) {
+  const auto sim = testing::SimulateOrDie(unit, testing::BuiltinProfileOrDie("positions"), 10.0, seed);
+  auto analysis = Analyze(sim.run, {}, AnalysisOptions{});
+  EXPECT_TRUE(analysis.ok()) << analysis.status();
+  return analysis.ok() ? analysis->report : AnalysisReport{};
+}
+
+const EffectCandidate* TopCandidate(const AnalysisReport& r) {
+  return r.effect_candidates.empty() ? nullptr : &r.effect_candidates.front();
+}
+
+TEST(FaultyUnit, BiasStepsOfFiveDriftSigmaAreNamedWithTheirOnsetAndMakeTheUnitFaulty) {
+  std::mt19937_64 rng(77);
+  std::uniform_real_distribution<double> onset(1200.0, 3000.0);
+  int runs = 0, named_first = 0, onset_within_60_s = 0, faulty = 0;
+  for (Sensor sensor : {Sensor::kGyro, Sensor::kAccelerometer}) {
+    for (int axis = 0; axis < 3; ++axis) {
+      auto unit = testing::NavigationGradeUnit();
+      const double sigma = (sensor == Sensor::kGyro ? unit.gyro : unit.acc).bias[static_cast<size_t>(axis)].sigma;
+      const double t0 = onset(rng);
+      unit.bias_steps.push_back({sensor, axis, t0, (axis % 2 == 0 ? 5.0 : -5.0) * sigma});
+      const AnalysisReport r = AnalyseOrDie(unit, 300 + static_cast<uint64_t>(runs));
+      ++runs;
+      const std::string expected = std::string(sensor == Sensor::kGyro ? "gyro" : "acc") + "_bias_step." + "xyz"[axis];
+      const EffectCandidate* top = TopCandidate(r);
+      ASSERT_NE(top, nullptr);
+      std::printf("%s at %.0f s: top %s (Holm p %.2g) onset %.0f ± %.0f s, verdict %s\n", expected.c_str(), t0,
+                  top->name.c_str(), top->p_value_holm, top->onset_s.value_or(-1.0), top->onset_std_s,
+                  VerdictName(r.verdict));
+      faulty += r.verdict == Verdict::kFaulty ? 1 : 0;
+      if (top->name != expected || !(top->p_value_holm < 0.01)) continue;
+      ++named_first;
+      onset_within_60_s += top->onset_s.has_value() && std::abs(*top->onset_s - t0) <= 60.0 ? 1 : 0;
+    }
+  }
+  std::printf("steps: named first %d of %d, onset within 60 s %d, FAULTY %d\n", named_first, runs,
+              onset_within_60_s, faulty);
+  EXPECT_GE(named_first, 5);
+  EXPECT_GE(onset_within_60_s, 4);
+  EXPECT_GE(faulty, 5);
+}
+
+TEST(HealthyUnit, IsNotCalledFaultyAtTenHertz) {
+  int good = 0, nothing_significant = 0;
+  constexpr int kRuns = 4;
+  for (int seed = 1; seed <= kRuns; ++seed) {
+    const AnalysisReport r = AnalyseOrDie(testing::NavigationGradeUnit(), 700 + static_cast<uint64_t>(seed));
+    good += r.verdict != Verdict::kFaulty ? 1 : 0;
+    const bool any = std::any_of(r.effect_candidates.begin(), r.effect_candidates.end(), [](const EffectCandidate& c) {
+      return c.identifiable && c.tested && c.p_value_holm < 0.01;
+    });
+    nothing_significant += any ? 0 : 1;
+    if (any || r.verdict == Verdict::kFaulty) {
+      std::printf("seed %d: verdict %s, top %s (Holm p %.2g)\n", seed, VerdictName(r.verdict),
+                  r.effect_candidates.front().name.c_str(), r.effect_candidates.front().p_value_holm);
+    }
+  }
+  // Each run is FAULTY with probability ≤ α = 1 %: all four pass with
+  // probability ≥ 96 %, three or more with probability > 99.9 %.
+  EXPECT_GE(good, kRuns - 1);
+  EXPECT_GE(nothing_significant, kRuns - 1);
+}
+
+}  // namespace
+}  // namespace insdiag::engine
