@@ -12,6 +12,7 @@
 #include "insdiag/engine/analysis.h"
 #include "insdiag/engine/filter/forward_filter.h"
 #include "insdiag/engine/filter/smoother.h"
+#include "insdiag/engine/finder/onset_scan.h"
 #include "insdiag/engine/finder/score_test.h"
 #include "insdiag/engine/model/state_layout.h"
 #include "insdiag/engine/sim/simulator.h"
@@ -98,6 +99,23 @@ void BM_ForwardFilter(benchmark::State& state) {
   state.counters["candidate_columns"] = static_cast<double>(candidates);
 }
 BENCHMARK(BM_ForwardFilter)->ArgName("scan")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// The bias step and ramp scan over every onset of every sensor axis (one
+// backward sweep over a stored filter pass): beside BM_ForwardFilter/scan:0,
+// the cost of a base pass.
+void BM_OnsetScan(benchmark::State& state) {
+  BenchRun hour = HourRun("rotations").run;
+  hour.samples.resize(std::min<size_t>(hour.samples.size(), 360000));
+  const ErrorModel m = NavigationGradeBaseModel();
+  const StateLayout layout(m);
+  const auto epochs = CondenseRun(hour, m, FilterOptions{}.update_interval_s);
+  const auto fw = RunForwardFilter(*epochs, m);
+  const std::vector<EffectTerm> terms = AbsentFaultTerms(m);
+  for (auto _ : state) benchmark::DoNotOptimize(ScanOnsets(*fw, layout, *epochs, terms, OnsetScanOptions{}));
+  state.counters["fault_terms"] = static_cast<double>(terms.size());
+  state.counters["epochs"] = static_cast<double>(epochs->size());
+}
+BENCHMARK(BM_OnsetScan)->Unit(benchmark::kMillisecond);
 
 void BM_Smoother(benchmark::State& state) {
   BenchRun hour = HourRun("static").run;

@@ -43,18 +43,19 @@ void UpdateSequence(const ForwardPass& fw, int k, const std::array<ObservationRo
     gain = PH / S;
     H.row(c) = h.sign * L.row(h.state);
     L.noalias() -= gain * H.row(c);
+    // With the optimal gain the Joseph form the filter used equals P − K (Phᵀ)ᵀ.
     P.noalias() -= gain * PH.transpose();
-    P.noalias() -= PH * gain.transpose();
-    P.noalias() += (S * gain) * gain.transpose();
   }
 }
 
+// Φ = [A B; 0 D] written into `Phi` (zero below the navigation rows and off D's blocks).
 void DenseTransition(const StoredTransition& t, int m, Eigen::MatrixXd& Phi) {
   Phi.setZero();
   Phi.topLeftCorner<9, 9>() = t.A;
-  if (m > 0) {
-    Phi.topRightCorner(9, m) = t.B;
-    Phi.bottomRightCorner(m, m) = t.D.Dense(m);
+  if (m == 0) return;
+  Phi.topRightCorner(9, m) = t.B;
+  for (const SensorBlocks::Block& b : t.D.blocks) {
+    Phi.block(9 + b.offset, 9 + b.offset, b.size, b.size) = b.m.topLeftCorner(b.size, b.size);
   }
 }
 
