@@ -14,15 +14,16 @@ For each run the report's verdict, its most significant candidate and the
 identified drift parameters are read, and per scenario the script prints:
 
   detected      the analysis says the unit is not healthy: verdict FAULTY, or a
-                candidate significant at family-wise 1 %, or an identified drift
-                parameter whose 99 % interval excludes the nominal value
+                candidate significant at family-wise 1 %, or an identified drift or
+                noise parameter whose family-wise 1 % interval (Bonferroni over the
+                parameters compared) excludes the nominal value
   right effect  the top significant candidate (or, for drift and noise
                 changes, the parameter that departs most) is the injected one,
                 on the injected axis
   right module  the failure-mode catalogue (data/failure-modes) maps that
                 effect to the injected sensor's module (gyro.x, acc.z, ...)
   onset error   |onset − truth| of the top candidate for steps and ramps
-  false alarm   for healthy units: verdict FAULTY or anything significant
+  false alarm   for healthy units: the "detected" column
 
 Usage:
   scripts/fault_matrix.py [--runs N] [--duration S] [--simulators cpp,py]
@@ -196,17 +197,31 @@ def significant(candidate):
     return candidate.get("identifiable") and not candidate.get("notTested") and candidate.get("pValueHolm", 1) < 0.01
 
 
+def normal_quantile(p):
+    """Φ⁻¹(p) by bisection on math.erf (no scipy needed)."""
+    low, high = -40.0, 40.0
+    for _ in range(200):
+        mid = 0.5 * (low + high)
+        if 0.5 * (1.0 + math.erf(mid / math.sqrt(2.0))) < p:
+            low = mid
+        else:
+            high = mid
+    return 0.5 * (low + high)
+
+
 def departures(report):
-    """Identified drift and noise parameters against the nominal: (|z|, name) where the 99 % interval excludes it."""
-    out = []
+    """Identified drift and noise parameters against the nominal, (|z|, name), where the
+    family-wise 1 % interval (Bonferroni over the parameters compared) excludes it."""
+    compared = []
     for p in report.get("identified", []):
         name, value, se = p["name"], p.get("value", 0.0), p.get("stdError", 0.0)
         if name not in NOMINAL or not (se and se > 0 and value > 0):
             continue
-        z = abs(math.log(value / NOMINAL[name])) / (se / value)
-        if z > 2.576:
-            out.append((z, name))
-    return sorted(out, reverse=True)
+        compared.append((abs(math.log(value / NOMINAL[name])) / (se / value), name))
+    if not compared:
+        return []
+    threshold = -normal_quantile(0.005 / len(compared))
+    return sorted((c for c in compared if c[0] > threshold), reverse=True)
 
 
 def judge(fault, report):
@@ -215,7 +230,8 @@ def judge(fault, report):
     moved = departures(report)
     named = top["name"] if top else (moved[0][1] if moved else None)
     result = dict(verdict=report.get("verdict"), top=named, detected=False, right_effect=False, right_module=False,
-                  onset_error_s=None)
+                  onset_error_s=None, significant=[c["name"] for c in candidates if significant(c)][:5],
+                  departures=[[round(z, 1), n] for z, n in moved[:5]])
     result["detected"] = report.get("verdict") == "FAULTY" or top is not None or bool(moved)
     if fault["kind"] is None:
         return result

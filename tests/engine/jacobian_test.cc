@@ -66,6 +66,24 @@ TEST(EffectJacobian, ParsesEveryTermNameBack) {
   EXPECT_EQ(ParseEffectSelector("gyro_g_sensitivity")->size(), 9u);
 }
 
+TEST(EffectJacobian, FaultsTakeTheirOnsetAndOthersRefuseOne) {
+  auto step = ParseEffectSelector("gyro_bias_step.x@1500.5");
+  ASSERT_TRUE(step.ok()) << step.status();
+  EXPECT_EQ(step->front().Name(), "gyro_bias_step.x");
+  EXPECT_EQ(ParseOnset("gyro_bias_step.x@1500.5")->value_or(-1.0), 1500.5);
+  EXPECT_FALSE(ParseOnset("acc_bias_ramp.z")->has_value());
+  EXPECT_FALSE(ParseEffectSelector("gyro_scale_factor.x@10").ok());
+  EXPECT_FALSE(ParseEffectSelector("gyro_bias_step.x@soon").ok());
+  // A model's name of a fault carries its onset, and parses back to the term and the onset.
+  ErrorModel model;
+  model.effects.push_back({.term = step->front(), .onset_s = 1500.5});
+  const std::string name = model.EffectNames().front();
+  EXPECT_EQ(name, "gyro_bias_step.x@1500.5");
+  EXPECT_EQ(ParseEffectSelector(name)->front(), step->front());
+  EXPECT_EQ(ParseOnset(name)->value_or(-1.0), 1500.5);
+  EXPECT_EQ(model.ParameterCount(), ErrorModel{}.ParameterCount() + 2);  // magnitude and onset
+}
+
 Eigen::MatrixXd MatrixPower(const Eigen::MatrixXd& m, int k) {
   Eigen::MatrixXd out = Eigen::MatrixXd::Identity(m.rows(), m.cols());
   for (int i = 0; i < k; ++i) out = out * m;
