@@ -1128,10 +1128,11 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
           // and the onset scan as a jump would, and BIC decides which it is.
           ident::DriftSelection every_drift{};
           every_drift.fill(true);
+          const double log_n = std::log(static_cast<double>(std::max(1, pass->forward.scalar_updates)));
           auto ml = ident::IdentifyDriftsFromStarts(epochs, base, *a_priori, every_drift, options.drift_tau_start_factors,
                                                     options.drift_likelihood);
+          if (ml.ok()) ml = ident::KeepDriftsWorthTheirParameters(epochs, base, *std::move(ml), log_n);
           if (ml.ok() && !ml->identified.empty()) {
-            const double log_n = std::log(static_cast<double>(std::max(1, pass->forward.scalar_updates)));
             const double drift_bic = -DriftStatistic(*ml) + static_cast<double>(ml->identified.size()) * log_n;
             if (drift_bic < best->predicted_delta_bic &&
                 ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, a_priori_from_allan, base, identified, notes)) {
@@ -1143,6 +1144,23 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
               drifts_by_likelihood = true;
               continue;
             }
+            // The drifts stay as the a-priori model has them, but what the
+            // likelihood measured of them is reported: a drift far from its
+            // nominal is evidence for the diagnosis whichever explanation wins.
+            for (const ParameterEstimate& p : ml->identified) {
+              std::erase_if(identified, [&](const ParameterEstimate& q) { return q.name == p.name; });
+              identified.push_back(p);
+            }
+            char buf[240];
+            std::snprintf(buf, sizeof buf, "the drifts' σ and τ by likelihood (%zu parameters worth their cost) reach "
+                          "ΔBIC %.1f against the best candidate's %.1f: the candidates stand, and the drift estimates "
+                          "are reported beside the a-priori model's values", ml->identified.size(), drift_bic,
+                          best->predicted_delta_bic);
+            notes.push_back(buf);
+          } else if (!ml.ok()) {
+            notes.push_back("the drifts were not identified against the candidates: " + std::string(ml.status().message()));
+          } else {
+            notes.push_back("no drift's σ and τ by likelihood are worth their parameters against the candidates");
           }
         }
         notes.push_back("the a-priori model lacks significant effects: the drift and reference-noise parameters "

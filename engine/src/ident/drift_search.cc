@@ -78,4 +78,39 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
   return *std::move(result);
 }
 
+absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const EpochRun& run, const ErrorModel& model,
+                                                                     DriftLikelihoodResult fit, double log_n) {
+  auto pass = RunForwardFilter(run, model);
+  if (!pass.ok()) return pass.status();
+  const double before = pass->log_likelihood;
+  ErrorModel kept = model;
+  std::vector<std::string> kept_names;
+  for (int d = 0; d < 6; ++d) {
+    if (DriftOf(fit.model, d) == DriftOf(model, d)) continue;
+    const std::string name = DriftName(d);
+    const int parameters = static_cast<int>(std::count_if(fit.identified.begin(), fit.identified.end(),
+                                                          [&](const ParameterEstimate& p) {
+                                                            return p.name.rfind(name + ".", 0) == 0;
+                                                          }));
+    ErrorModel alone = model;
+    DriftOf(alone, d) = DriftOf(fit.model, d);
+    auto trial = RunForwardFilter(run, alone);
+    ++fit.filter_passes;
+    if (!trial.ok() || !(2.0 * (trial->log_likelihood - before) > parameters * log_n)) continue;
+    DriftOf(kept, d) = DriftOf(fit.model, d);
+    kept_names.push_back(name + ".");
+  }
+  std::erase_if(fit.identified, [&](const ParameterEstimate& p) {
+    return std::none_of(kept_names.begin(), kept_names.end(),
+                        [&](const std::string& prefix) { return p.name.rfind(prefix, 0) == 0; });
+  });
+  auto after = RunForwardFilter(run, kept);
+  if (!after.ok()) return after.status();
+  ++fit.filter_passes;
+  fit.model = kept;
+  fit.log_likelihood_before = before;
+  fit.log_likelihood_after = after->log_likelihood;
+  return fit;
+}
+
 }  // namespace insdiag::engine::ident

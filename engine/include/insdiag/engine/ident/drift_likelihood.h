@@ -183,6 +183,16 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
                                                                std::span<const double> tau_start_factors,
                                                                const DriftLikelihoodOptions& options = {});
 
+// The drifts of `fit` (a fit from `model`) worth their parameters by BIC:
+// each drift's σ and τ alone in `model` must raise the log-likelihood by more
+// than `log_n` a parameter (2Δℓ > k ln N, Schwarz 1978); the result holds
+// those drifts only, its identified parameters and likelihood theirs. The
+// others keep the model's values: a run tells some axes' drifts and not
+// others, and a parameter re-tuned without cause costs the competition its
+// ln N. One filter pass per drift and one for the kept set.
+absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const EpochRun& run, const ErrorModel& model,
+                                                                     DriftLikelihoodResult fit, double log_n);
+
 // Fits a bias random walk on each selected axis that has a drift and no walk
 // in `model`, each with its axis' drift σ (header), and tests each against
 // the model without it. The result's model holds the walks that the first
