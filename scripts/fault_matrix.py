@@ -44,6 +44,8 @@ import tempfile
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CLI = os.environ.get("INSDIAG_CLI", os.path.join(ROOT, "build", "clients", "insdiag"))
 BENCHSIM = os.path.join(ROOT, "tests", "benchsim", "benchsim.py")
+# The Debian interpreter, which has numpy and scipy (scripts/install-deps.sh).
+PYTHON = "/usr/bin/python3" if os.path.exists("/usr/bin/python3") else sys.executable
 UNIT_TYPE = os.path.join(ROOT, "data", "unit-types", "INS-2000.json")
 
 RATES_HZ = [10.0, 50.0, 100.0]
@@ -165,7 +167,7 @@ def simulate(simulator, fault, rate_hz, profile, seed, duration_s, path):
         elif fault["kind"] == "param":
             cmd += ["--param", f"{fault['name']}={fault['value']:.6g}"]
     else:
-        cmd = [sys.executable, BENCHSIM, "--out", path, "--preset", "nav", "--profile", profile, "--rate-hz",
+        cmd = [PYTHON, BENCHSIM, "--out", path, "--preset", "nav", "--profile", profile, "--rate-hz",
                f"{rate_hz:g}", "--duration", f"{duration_s:g}", "--seed", str(seed), "--datasheet", "yes",
                "--unit-type", "INS-2000"]
         if fault["kind"] == "effect":

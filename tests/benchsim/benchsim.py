@@ -1,0 +1,197 @@
+#!/usr/bin/python3
+"""An independent bench-run simulator: a unit on a rotary table, written from
+shared/spec (bench-run format, catalogue of effects) and the physics alone,
+to check the insdiag engine on data its own code did not generate.
+
+Usage:
+  benchsim.py --out RUN.csv [--preset nav] [--profile positions] [--rate-hz 50]
+              [--duration 3600] [--seed 1] [--ramp-accel DEG_S2] [--jitter 1.0]
+              [--fault NAME=VALUE[@ONSET_S]]... [--fault PARAM*FACTOR]...
+              [--datasheet yes|no] [--unit-type INS-2000|none] [--serial S]
+Faults: gyro_bias_step.x=3e-6@1500.3, acc_bias_ramp.y=1e-7@900,
+gyro_turn_on_bias.z=1e-6, gyro_scale_factor.x=5e-5 (a family without an axis:
+every axis), gyro_bias_rw.y=1e-9 (rate random walk density), and
+multipliers of the preset's parameters: gyro_bias_gm.x.sigma*3,
+gyro_bias_gm.y.tau*0.1, gyro_arw.z*2. The truth goes to RUN.csv.truth.json.
+"""
+import argparse
+import json
+import math
+import os
+import re
+import sys
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import kinematics  # noqa: E402
+import profiles  # noqa: E402
+import sensors  # noqa: E402
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+AXES = "xyz"
+DEG = math.pi / 180.0
+MICRO_G = 9.80665e-6
+
+
+def nav_preset():
+    """The INS-2000 nominal values (data/unit-types/INS-2000.json)."""
+    with open(os.path.join(ROOT, "data", "unit-types", "INS-2000.json")) as f:
+        nominal = {p["name"]: p["value"] for p in json.load(f)["nominal"]}
+    preset = {}
+    for sensor, noise in (("gyro", "gyro_arw"), ("acc", "acc_vrw")):
+        for a in AXES:
+            preset[f"{sensor}_bias_gm.{a}.sigma"] = nominal[f"{sensor}_bias_gm.{a}.sigma"]
+            preset[f"{sensor}_bias_gm.{a}.tau"] = nominal[f"{sensor}_bias_gm.{a}.tau"]
+            preset[f"{noise}.{a}"] = nominal[f"{noise}.{a}"]
+    return preset
+
+
+def uniform_preset(gyro_sigma, gyro_tau, arw, acc_sigma, acc_tau, vrw):
+    p = {}
+    for a in AXES:
+        p.update({f"gyro_bias_gm.{a}.sigma": gyro_sigma, f"gyro_bias_gm.{a}.tau": gyro_tau, f"gyro_arw.{a}": arw,
+                  f"acc_bias_gm.{a}.sigma": acc_sigma, f"acc_bias_gm.{a}.tau": acc_tau, f"acc_vrw.{a}": vrw})
+    return p
+
+
+PRESETS = {
+    "nav": nav_preset,
+    "tactical": lambda: uniform_preset(1.0 * DEG / 3600, 300.0, 0.1 * DEG / 60, 1000 * MICRO_G, 300.0, 50 * MICRO_G),
+    "mems": lambda: uniform_preset(10.0 * DEG / 3600, 100.0, 0.3 * DEG / 60, 500 * MICRO_G, 100.0, 100 * MICRO_G),
+}
+
+FAULT = re.compile(r"^(?P<name>[a-z_]+(\.[xyz])?(\.(sigma|tau))?)(=(?P<value>[^@]+)(@(?P<onset>.+))?|\*(?P<factor>.+))$")
+
+
+def parse_faults(specs, parameters):
+    """Effects to inject, and the preset's parameters with multipliers applied."""
+    effects = []
+    for spec in specs:
+        m = FAULT.match(spec)
+        if not m:
+            raise ValueError(f"--fault {spec}: expected NAME=VALUE[@ONSET_S] or PARAM*FACTOR")
+        name = m.group("name")
+        if m.group("factor") is not None:
+            if name not in parameters:
+                raise ValueError(f"--fault {spec}: no parameter '{name}' in the preset")
+            parameters[name] *= float(m.group("factor"))
+            continue
+        family, _, axis = name.partition(".")
+        for a in (axis,) if axis else AXES:
+            effects.append(dict(family=family, axis=a, value=float(m.group("value")),
+                                onset_s=float(m.group("onset")) if m.group("onset") else None))
+    return effects
+
+
+def simulate(config):
+    """Writes the run to config['out'] and its truth beside it; returns the truth."""
+    rng = np.random.default_rng(config["seed"])
+    rate_hz, duration_s = config["rate_hz"], config["duration_s"]
+    latitude = config["latitude_deg"] * DEG
+    gravity = kinematics.normal_gravity_mps2(latitude, config["height_m"])
+    parameters = PRESETS[config["preset"]]()
+    nominal_parameters = dict(parameters)
+    effects = parse_faults(config["faults"], parameters)
+    yaw, roll = profiles.build(config["profile"], duration_s, rng, config["ramp_accel_deg_s2"], config["jitter_s"])
+
+    n = int(round(duration_s * rate_hz))
+    dt = 1.0 / rate_hz
+    edges = np.arange(n + 1) * dt  # sample k covers (edges[k], edges[k+1]]
+    breakpoints = yaw.breakpoints() + roll.breakpoints()
+
+    def integrand(t):
+        w, f, psi = kinematics.true_rates_and_forces(t, yaw, roll, latitude, gravity)
+        return np.concatenate([w, f, np.sin(psi)[:, None], np.cos(psi)[:, None]], axis=1)
+
+    means = kinematics.interval_means(edges, breakpoints, integrand)
+    true_rate, true_force = means[:, 0:3], means[:, 3:6]
+
+    measured = {"gyro": true_rate.copy(), "acc": true_force.copy()}
+    true_input = {"gyro": true_rate, "acc": true_force}
+    for sensor, noise in (("gyro", "gyro_arw"), ("acc", "acc_vrw")):
+        for i, a in enumerate(AXES):
+            measured[sensor][:, i] += sensors.gauss_markov_means(
+                rng, parameters[f"{sensor}_bias_gm.{a}.sigma"], parameters[f"{sensor}_bias_gm.{a}.tau"], dt, n)
+            measured[sensor][:, i] += sensors.white_noise(rng, parameters[f"{noise}.{a}"], dt, n)
+    for e in effects:
+        sensor = "gyro" if e["family"].startswith("gyro") else "acc"
+        kind = e["family"].split("_", 1)[1]
+        i = AXES.index(e["axis"])
+        column = measured[sensor][:, i]
+        if kind == "turn_on_bias":
+            column += e["value"]
+        elif kind == "scale_factor":
+            column += e["value"] * true_input[sensor][:, i]
+        elif kind == "bias_step":
+            column += sensors.step_means(edges, e["onset_s"], e["value"])
+        elif kind == "bias_ramp":
+            column += sensors.ramp_means(edges, e["onset_s"], e["value"])
+        elif kind == "bias_rw":
+            column += sensors.random_walk_means(rng, e["value"], dt, n)
+        else:
+            raise ValueError(f"--fault {e['family']}: this simulator does not inject that family")
+
+    C = kinematics.body_attitude(*[m.evaluate(edges[1:])[0] for m in (yaw, roll)])
+    ref_roll, ref_pitch, ref_yaw = kinematics.euler_zyx(C)
+    write_csv(config, nominal_parameters, edges[1:], measured, ref_roll, ref_pitch, ref_yaw)
+    truth = dict(preset=config["preset"], profile=config["profile"], rate_hz=rate_hz, duration_s=duration_s,
+                 seed=config["seed"], parameters=parameters, effects=effects,
+                 ramp_accel_deg_s2=config["ramp_accel_deg_s2"], gravity_mps2=gravity)
+    with open(config["out"] + ".truth.json", "w") as f:
+        json.dump(truth, f, indent=1)
+    return truth
+
+
+def write_csv(config, datasheet, times, measured, ref_roll, ref_pitch, ref_yaw):
+    lines = ["# format: insdiag-bench-run/1", f"# unit_serial: {config['serial']}"]
+    if config["unit_type"] != "none":
+        lines.append(f"# unit_type: {config['unit_type']}")
+    lines += [f"# site_latitude_deg: {config['latitude_deg']}", f"# site_longitude_deg: {config['longitude_deg']}",
+              f"# site_height_m: {config['height_m']}", "# bench: independent simulator (tests/benchsim)"]
+    if config["datasheet"] == "yes":
+        mean = lambda key: float(np.mean([datasheet[f"{key}.{a}"] for a in AXES]))
+        rms = lambda key: float(np.sqrt(np.mean([datasheet[f"{key}.{a}.sigma"] ** 2 for a in AXES])))
+        lines += [f"# gyro_arw: {mean('gyro_arw'):.12g}", f"# gyro_bias_sigma: {rms('gyro_bias_gm'):.12g}",
+                  f"# gyro_bias_tau: {float(np.mean([datasheet[f'gyro_bias_gm.{a}.tau'] for a in AXES])):.12g}",
+                  f"# acc_vrw: {mean('acc_vrw'):.12g}", f"# acc_bias_sigma: {rms('acc_bias_gm'):.12g}",
+                  f"# acc_bias_tau: {float(np.mean([datasheet[f'acc_bias_gm.{a}.tau'] for a in AXES])):.12g}"]
+    lines.append("t,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,ref_roll,ref_pitch,ref_yaw")
+    table = np.column_stack([times, measured["gyro"], measured["acc"], ref_roll, ref_pitch, ref_yaw])
+    with open(config["out"], "w") as f:
+        f.write("\n".join(lines) + "\n")
+        np.savetxt(f, table, fmt=["%.6f"] + ["%.12g"] * 9, delimiter=",")
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--out", required=True)
+    p.add_argument("--preset", default="nav", choices=sorted(PRESETS))
+    p.add_argument("--profile", default="positions", choices=sorted(profiles.PROFILES))
+    p.add_argument("--rate-hz", type=float, default=50.0)
+    p.add_argument("--duration", type=float, default=3600.0)
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--ramp-accel", type=float, default=None, help="rate changes ramp at this deg/s² (default: steps)")
+    p.add_argument("--jitter", type=float, default=1.0, help="holds lengthened by up to this many seconds (seeded)")
+    p.add_argument("--fault", action="append", default=[])
+    p.add_argument("--datasheet", default="yes", choices=["yes", "no"])
+    p.add_argument("--unit-type", default="INS-2000")
+    p.add_argument("--serial", default=None)
+    p.add_argument("--latitude-deg", type=float, default=48.137)
+    p.add_argument("--longitude-deg", type=float, default=11.575)
+    p.add_argument("--height-m", type=float, default=519.0)
+    a = p.parse_args(argv)
+    config = dict(out=a.out, preset=a.preset, profile=a.profile, rate_hz=a.rate_hz, duration_s=a.duration,
+                  seed=a.seed, ramp_accel_deg_s2=a.ramp_accel, jitter_s=a.jitter, faults=a.fault,
+                  datasheet=a.datasheet, unit_type=a.unit_type, serial=a.serial or f"BSIM-{a.seed}",
+                  latitude_deg=a.latitude_deg, longitude_deg=a.longitude_deg, height_m=a.height_m)
+    try:
+        simulate(config)
+    except ValueError as e:
+        print(f"benchsim: {e}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,139 @@
+"""Self-tests of the independent bench-run simulator against the physics."""
+import math
+import os
+import sys
+import tempfile
+import unittest
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import benchsim  # noqa: E402
+import kinematics  # noqa: E402
+import sensors  # noqa: E402
+
+DEG = math.pi / 180.0
+
+
+def so3_log(R):
+    angle = math.acos(max(-1.0, min(1.0, (np.trace(R) - 1.0) / 2.0)))
+    if angle < 1e-12:
+        return np.zeros(3)
+    return angle / (2.0 * math.sin(angle)) * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+
+
+def motion_with_step_mid_sample():
+    yaw, roll = kinematics.AxisMotion(), kinematics.AxisMotion()
+    roll.add_piece(0.0, 0.0, 0.0)
+    roll.add_piece(0.3, 0.0, 0.0)
+    roll.add_piece(0.5, 0.0, 0.0)  # still roll at 0: yaw starts inside a sample
+    yaw.add_piece(1.037, 10.0 * DEG, 0.0)  # a rate step at 1.037 s
+    yaw.add_piece(2.0, 0.0, 20.0 * DEG, keep_rate=True)  # then a ramp
+    roll.add_piece(2.6, 5.0 * DEG, 0.0)
+    return yaw, roll
+
+
+class Kinematics(unittest.TestCase):
+    def test_body_rate_is_the_derivative_of_the_attitude(self):
+        yaw, roll = motion_with_step_mid_sample()
+        latitude = 48.0 * DEG
+        for t in (1.5, 2.3, 2.9):
+            h = 1e-6
+            C = kinematics.body_attitude(*[np.array([m.evaluate([t])[0][0]]) for m in (yaw, roll)])[0]
+            C2 = kinematics.body_attitude(*[np.array([m.evaluate([t + h])[0][0]]) for m in (yaw, roll)])[0]
+            w_nb = so3_log(C.T @ C2) / h
+            w_ib, _, _ = kinematics.true_rates_and_forces(np.array([t + h / 2]), yaw, roll, latitude, 9.8)
+            w_ie = kinematics.EARTH_RATE_RAD_S * np.array([math.cos(latitude), 0.0, -math.sin(latitude)])
+            np.testing.assert_allclose(w_ib[0] - C.T @ w_ie, w_nb, atol=1e-6)
+
+    def test_interval_means_match_a_fine_integral_across_steps_and_ramps(self):
+        yaw, roll = motion_with_step_mid_sample()
+        edges = np.arange(0.0, 3.01, 0.1)
+
+        def integrand(t):
+            w, f, _ = kinematics.true_rates_and_forces(t, yaw, roll, 0.8, 9.8)
+            return np.concatenate([w, f], axis=1)
+
+        means = kinematics.interval_means(edges, yaw.breakpoints() + roll.breakpoints(), integrand)
+        for k in (10, 20, 26):  # the rate step, the ramp's start, the roll's start
+            fine = np.linspace(edges[k], edges[k + 1], 200001)
+            values = integrand(fine)
+            brute = np.trapz(values, fine, axis=0) / (edges[k + 1] - edges[k])
+            # The trapezoid's own error at a rate step is jump·h/2 per interval (≈ 4e-7 here).
+            np.testing.assert_allclose(means[k], brute, rtol=0, atol=1e-6)
+        # The step's interval exactly: 10 °/s over the 63 ms after 1.037 s, plus the Earth's rate.
+        earth_z = -kinematics.EARTH_RATE_RAD_S * math.sin(0.8)
+        self.assertAlmostEqual(means[10][2], 10.0 * DEG * 0.63 + earth_z, places=12)
+        # Inside the ramp (no breakpoint): the trapezoid is exact to its h², so 1e-9 holds.
+        k = 22
+        fine = np.linspace(edges[k], edges[k + 1], 20001)
+        brute = np.trapz(integrand(fine), fine, axis=0) / (edges[k + 1] - edges[k])
+        np.testing.assert_allclose(means[k], brute, rtol=0, atol=1e-9)
+
+    def test_a_still_level_unit_senses_gravity_and_the_earth_rate(self):
+        yaw, roll = kinematics.AxisMotion(), kinematics.AxisMotion()
+        g = kinematics.normal_gravity_mps2(0.7, 100.0)
+        w, f, _ = kinematics.true_rates_and_forces(np.array([5.0]), yaw, roll, 0.7, g)
+        np.testing.assert_allclose(f[0], [0.0, 0.0, -g], atol=1e-12)
+        np.testing.assert_allclose(w[0], kinematics.EARTH_RATE_RAD_S * np.array([math.cos(0.7), 0, -math.sin(0.7)]),
+                                   atol=1e-18)
+        self.assertAlmostEqual(kinematics.normal_gravity_mps2(0.0, 0.0), 9.7803253359, places=9)
+
+
+class SensorErrors(unittest.TestCase):
+    def test_gauss_markov_interval_means_have_the_variance_of_a_time_average(self):
+        # Var of the mean of a stationary OU over Δ: 2σ²/(βΔ)² (βΔ − 1 + e^{−βΔ}).
+        rng = np.random.default_rng(4)
+        sigma, tau, dt, n = 2.0, 1.0, 0.5, 400000
+        means = sensors.gauss_markov_means(rng, sigma, tau, dt, n)
+        x = dt / tau
+        expected = 2.0 * sigma ** 2 / x ** 2 * (x - 1.0 + math.exp(-x))
+        # Effective samples ≈ n·Δ/(2τ): a 5σ bound on the relative error of the variance.
+        tolerance = 5.0 * math.sqrt(2.0 / (n * dt / (2.0 * tau)))
+        self.assertLess(abs(np.var(means) / expected - 1.0), tolerance)
+        # Lag-one covariance of the means: σ² (1 − e^{−x})² e^{0}/x² for adjacent intervals.
+        lag1 = np.mean((means[1:] - means.mean()) * (means[:-1] - means.mean()))
+        expected_lag1 = sigma ** 2 * (1.0 - math.exp(-x)) ** 2 / x ** 2
+        self.assertLess(abs(lag1 / expected_lag1 - 1.0), 2 * tolerance)
+
+    def test_random_walk_means_grow_as_the_walk(self):
+        rng = np.random.default_rng(5)
+        walks = np.array([sensors.random_walk_means(rng, 0.1, 1.0, 100)[-1] for _ in range(4000)])
+        # The last interval's mean of a walk from zero: Var = K²(t_{n−1} + Δ/3).
+        expected = 0.01 * (99.0 + 1.0 / 3.0)
+        self.assertLess(abs(np.var(walks) / expected - 1.0), 5.0 * math.sqrt(2.0 / 4000))
+
+    def test_steps_and_ramps_count_the_share_of_the_sample_after_their_onset(self):
+        edges = np.array([0.0, 1.0, 2.0, 3.0])
+        np.testing.assert_allclose(sensors.step_means(edges, 1.25, 2.0), [0.0, 1.5, 2.0])
+        np.testing.assert_allclose(sensors.ramp_means(edges, 1.5, 1.0), [0.0, 0.125, 1.0])
+
+
+class Files(unittest.TestCase):
+    def run_sim(self, directory, *extra):
+        out = os.path.join(directory, "run.csv")
+        args = ["--out", out, "--profile", "mixed", "--rate-hz", "10", "--duration", "600", "--seed", "9", *extra]
+        self.assertEqual(benchsim.main(args), 0)
+        return out
+
+    def test_the_file_has_the_format_and_the_same_seed_the_same_bytes(self):
+        with tempfile.TemporaryDirectory() as d1, tempfile.TemporaryDirectory() as d2:
+            a = self.run_sim(d1, "--fault", "gyro_bias_step.x=1e-6@300.37")
+            b = self.run_sim(d2, "--fault", "gyro_bias_step.x=1e-6@300.37")
+            with open(a, "rb") as fa, open(b, "rb") as fb:
+                self.assertEqual(fa.read(), fb.read())
+            with open(a) as f:
+                lines = f.read().splitlines()
+            self.assertEqual(lines[0], "# format: insdiag-bench-run/1")
+            header = next(line for line in lines if not line.startswith("#"))
+            self.assertEqual(header, "t,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,ref_roll,ref_pitch,ref_yaw")
+            data = np.loadtxt(a, delimiter=",", comments="#", skiprows=lines.index(header) + 1)
+            self.assertEqual(data.shape, (6000, 10))
+            self.assertTrue(np.all(np.diff(data[:, 0]) > 0))
+            g = np.linalg.norm(data[:10, 4:7], axis=1).mean()
+            self.assertLess(abs(g - 9.808), 0.01)
+            self.assertTrue(os.path.exists(a + ".truth.json"))
+
+
+if __name__ == "__main__":
+    unittest.main()
