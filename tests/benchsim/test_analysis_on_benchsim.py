@@ -1,0 +1,67 @@
+"""The engine on runs of the independent simulator: `insdiag analyze` on a
+healthy unit with instantaneous rate changes at 10 Hz, an accelerometer step
+and a gyro ramp (the short version of scripts/fault_matrix.py). Needs the
+CLI: INSDIAG_CLI, else build/clients/insdiag."""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+CLI = os.environ.get("INSDIAG_CLI", os.path.join(ROOT, "build", "clients", "insdiag"))
+sys.path.insert(0, HERE)
+import benchsim  # noqa: E402
+
+
+def analyse(directory, *args):
+    out = os.path.join(directory, "run.csv")
+    if benchsim.main(["--out", out, "--duration", "2400", *args]) != 0:
+        raise RuntimeError("the simulator refused its arguments")
+    done = subprocess.run([CLI, "analyze", out, "--json"], capture_output=True, text=True, check=True)
+    with open(out + ".truth.json") as f:
+        return json.loads(done.stdout), json.load(f)
+
+
+def significant(report):
+    return [c for c in report["effectCandidates"]
+            if c.get("identifiable") and not c.get("notTested") and c.get("pValueHolm", 1.0) < 0.01]
+
+
+@unittest.skipUnless(os.path.exists(CLI), f"no insdiag CLI at {CLI}")
+class EngineOnIndependentRuns(unittest.TestCase):
+    def test_a_healthy_unit_with_rate_steps_inside_samples_is_not_faulty_at_10_hz(self):
+        with tempfile.TemporaryDirectory() as d:
+            report, _ = analyse(d, "--profile", "mixed", "--rate-hz", "10", "--seed", "21")
+        self.assertNotEqual(report["verdict"], "FAULTY", report.get("faultIntervals"))
+        self.assertEqual([c["name"] for c in significant(report)], [])
+        self.assertFalse([f for f in report.get("faultIntervals", []) if f["kind"] == "OUTLIER"])
+
+    def test_an_accelerometer_step_is_named_with_its_onset(self):
+        sigma = 30.0 * 9.80665e-6
+        with tempfile.TemporaryDirectory() as d:
+            report, truth = analyse(d, "--profile", "turns", "--rate-hz", "50", "--seed", "22",
+                                    "--fault", f"acc_bias_step.y={-5.0 * sigma}@1234.567")
+        found = significant(report)
+        self.assertTrue(found)
+        self.assertEqual(found[0]["name"], "acc_bias_step.y")
+        self.assertLess(abs(found[0]["onsetS"] - truth["effects"][0]["onset_s"]), 60.0)
+        self.assertLess(abs(found[0]["estimate"] + 5.0 * sigma), 4.0 * found[0]["stdError"])
+        self.assertEqual(report["verdict"], "FAULTY")
+        self.assertIn("ABRUPT", [f["kind"] for f in report["faultIntervals"]])
+
+    def test_a_gyro_ramp_is_named(self):
+        sigma = 0.01 * 3.141592653589793 / 180.0 / 3600.0
+        with tempfile.TemporaryDirectory() as d:
+            report, _ = analyse(d, "--profile", "positions", "--rate-hz", "100", "--seed", "23",
+                                "--fault", f"gyro_bias_ramp.x={5.0 * sigma / 1000.0}@700.25")
+        found = significant(report)
+        self.assertTrue(found)
+        self.assertEqual(found[0]["name"], "gyro_bias_ramp.x")
+        self.assertEqual(report["verdict"], "FAULTY")
+
+
+if __name__ == "__main__":
+    unittest.main()
