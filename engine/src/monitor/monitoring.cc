@@ -52,6 +52,15 @@ const char* FaultKindName(FaultKind k) {
   return "GRADUAL";
 }
 
+namespace {
+
+// The (1 − p) quantile of χ²_ν/ν, for the effective ν of a window.
+double GradualThreshold(double p, double effective_dof) {
+  return stats::ChiSquareQuantile(1.0 - p, effective_dof) / effective_dof;
+}
+
+}  // namespace
+
 MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const StateLayout& layout,
                       const std::vector<SampleOutlier>& spikes, const MonitorOptions& options) {
   MonitorResult out;
@@ -81,7 +90,7 @@ MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const State
     fit.count = K;
     double nu2 = 0.0, nis = 0.0, z_mean = 0.0;
     int over_gamma = 0, windows = 0, over_eta = 0;
-    double window_nu2 = 0.0, window_s = 0.0;
+    double window_nu2 = 0.0, window_s = 0.0, window_s2 = 0.0;
     for (int k = 0; k < K; ++k) z_mean += fw.z(k, c) / K;
     double z_spread = 0.0;
     for (int k = 0; k < K; ++k) {
@@ -100,16 +109,25 @@ MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const State
       }
       window_nu2 += nu * nu;
       window_s += S;
+      window_s2 += S * S;
       if (k >= W) {
+        const double S_old = fw.innovation_variance(k - W, c);
         window_nu2 -= fw.innovation(k - W, c) * fw.innovation(k - W, c);
-        window_s -= fw.innovation_variance(k - W, c);
+        window_s -= S_old;
+        window_s2 -= S_old * S_old;
       }
       if (k >= W - 1) {
         const double F = window_nu2 / window_s;
         out.window_ratio(k, c) = F;
         ++windows;
         if (F > out.eta2) ++over_eta;
-        if (F > gradual_threshold) {
+        // F = Σν²/ΣS weighs each β² by its S: where S changes within the
+        // window (the filter's start-up) it is a weighted sum of χ²₁ with
+        // ν = (ΣS)²/ΣS² ≤ W effective degrees of freedom (Satterthwaite,
+        // Biometrics Bull. 2(6), 1946), and its quantile is higher than
+        // χ²_W/W's; checked only past the cheaper W-dof threshold.
+        if (F > gradual_threshold &&
+            F > GradualThreshold(alpha / (kChannelCount * independent_windows), window_s * window_s / window_s2)) {
           AddInterval(out.faults, fit.name, fw.epoch_time_s[static_cast<size_t>(k - W + 1)] - epoch_interval,
                       fw.epoch_time_s[static_cast<size_t>(k)], FaultKind::kGradual, F, epoch_interval);
         }
