@@ -247,6 +247,8 @@ def judge(fault, report):
     result["right_module"] = named is not None and want_module is not None and module_of(named) == want_module
     if top is not None and "onset_s" in fault and "onsetS" in top:
         result["onset_error_s"] = abs(top["onsetS"] - fault["onset_s"])
+        result["onset_interval_s"] = [top.get("onsetLowS"), top.get("onsetHighS")]
+        result["onset_covered"] = top.get("onsetLowS", 0) <= fault["onset_s"] <= top.get("onsetHighS", 0)
     return result
 
 

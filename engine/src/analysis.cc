@@ -569,10 +569,16 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
 }
 
 // Terms and structures ranked together, Holm over all that were tested:
-// the structures proposed, and the others with what their tests said.
+// the structures proposed, and the others with what their tests said. The
+// candidates significant at family-wise `alpha` come first, the most probable
+// explanation first: lowest predicted ΔBIC, the order in which the analysis
+// adds them (Schwarz, Ann. Stat. 6(2), 1978). Beyond significance a p-value
+// no longer ranks explanations: a step and a ramp on one axis carry the same
+// evidence, but the bound on the maximum over onsets penalises them unequally.
+// The rest follow by Holm-adjusted p-value.
 std::vector<EffectCandidate> MergeCandidates(std::vector<EffectCandidate> terms,
                                              const std::vector<StructureProposal>& structures,
-                                             std::vector<EffectCandidate> other_structures) {
+                                             std::vector<EffectCandidate> other_structures, double alpha) {
   for (const StructureProposal& s : structures) terms.push_back(s.candidate);
   for (EffectCandidate& c : other_structures) terms.push_back(std::move(c));
   std::vector<size_t> tested;
@@ -585,8 +591,15 @@ std::vector<EffectCandidate> MergeCandidates(std::vector<EffectCandidate> terms,
   std::vector<double> adjusted(p.size());
   stats::HolmAdjust(p, adjusted);
   for (size_t j = 0; j < tested.size(); ++j) terms[tested[j]].p_value_holm = adjusted[j];
-  std::stable_sort(terms.begin(), terms.end(), [](const EffectCandidate& a, const EffectCandidate& b) {
+  const auto significant = [alpha](const EffectCandidate& c) {
+    return c.identifiable && c.tested && c.p_value_holm < alpha;
+  };
+  std::stable_sort(terms.begin(), terms.end(), [&](const EffectCandidate& a, const EffectCandidate& b) {
     if (a.identifiable != b.identifiable) return a.identifiable;
+    if (significant(a) != significant(b)) return significant(a);
+    if (significant(a) && a.predicted_delta_bic != b.predicted_delta_bic) {
+      return a.predicted_delta_bic < b.predicted_delta_bic;
+    }
     if (a.p_value_holm != b.p_value_holm) return a.p_value_holm < b.p_value_holm;
     return a.statistic > b.statistic;
   });
@@ -663,7 +676,8 @@ Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const M
   }
   f.structures = ConfirmStructures(run, epochs, pass, std::move(proposals), spikes, options);
   for (EffectCandidate& c : FaultCandidates(pass.onsets, pass.forward.scalar_updates)) others.push_back(std::move(c));
-  f.candidates = MergeCandidates(std::move(ranked.terms), f.structures, std::move(others));
+  f.candidates = MergeCandidates(std::move(ranked.terms), f.structures, std::move(others),
+                                 options.finder.family_wise_alpha);
   return f;
 }
 
@@ -988,6 +1002,10 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
                     "Allan deviation");
   }
   ErrorModel base = *a_priori;
+  const Datasheet& datasheet = run.metadata.datasheet;
+  const bool drifts_from_datasheet = datasheet.gyro_bias_sigma_rad_s.has_value() &&
+                                     datasheet.gyro_bias_tau_s.has_value() &&
+                                     datasheet.acc_bias_sigma_mps2.has_value() && datasheet.acc_bias_tau_s.has_value();
   if (auto st = AddEffects(run, request.baseline_effects, options.filter.update_interval_s,
                            options.diffuse_prior_scale, base);
       !st.ok()) {
@@ -1129,7 +1147,13 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
           ident::DriftSelection every_drift{};
           every_drift.fill(true);
           const double log_n = std::log(static_cast<double>(std::max(1, pass->forward.scalar_updates)));
-          auto ml = ident::IdentifyDriftsFromStarts(epochs, base, *a_priori, every_drift, options.drift_tau_start_factors,
+          // The grid searches decades from the a-priori drifts: for a type's
+          // nominal model or an Allan fit, a class prior a unit may be far
+          // from. A datasheet's drifts are the unit's own specification; a
+          // unit far from it shows as a re-tuned drift or as effects near it.
+          ident::DriftStartOptions starts = options.drift_starts;
+          if (drifts_from_datasheet) starts.grid_tau_points = 0;
+          auto ml = ident::IdentifyDriftsFromStarts(epochs, base, *a_priori, every_drift, starts,
                                                     options.drift_likelihood);
           if (ml.ok()) ml = ident::KeepDriftsWorthTheirParameters(epochs, base, *std::move(ml), log_n);
           if (ml.ok() && !ml->identified.empty()) {

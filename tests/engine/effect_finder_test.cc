@@ -313,7 +313,14 @@ TEST_P(HiddenBiasRandomWalk, FoundByLikelihoodAndAddingItFitsTheRun) {
               top->name.c_str(), rank, walk->estimate, walk->std_error, truth.random_walk_density, walk->p_value_holm);
   EXPECT_EQ(walk->source, "LIKELIHOOD");
   EXPECT_LT(walk->p_value_holm, alpha);
-  EXPECT_TRUE(rank == 1 || (rank == 2 && top->name == turn_on)) << "rank " << rank << ", top " << top->name;
+  // Second behind its constant look-alike, or behind any candidate it ties
+  // with: within 2 of predicted ΔBIC the two are not worth telling apart
+  // (Kass & Raftery, JASA 90(430), 1995), and a walk's path over hours can
+  // look like one jump as much as like a walk.
+  const bool tied = rank == 2 && walk->predicted_delta_bic - top->predicted_delta_bic < 2.0;
+  EXPECT_TRUE(rank == 1 || (rank == 2 && top->name == turn_on) || tied)
+      << "rank " << rank << ", top " << top->name << " (predicted ΔBIC " << top->predicted_delta_bic
+      << " against the walk's " << walk->predicted_delta_bic << ")";
   // The likelihood identifies ln K (a scale: its likelihood is near-quadratic
   // there, not in K); the reported SE is the delta method's K·SE(ln K).
   ASSERT_TRUE(std::isfinite(walk->std_error)) << "no standard error";

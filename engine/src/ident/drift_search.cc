@@ -1,33 +1,78 @@
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <optional>
 
 #include "insdiag/engine/ident/drift_likelihood.h"
 
 namespace insdiag::engine::ident {
+namespace {
+
+// The best point of the coarse (σ, τ) grid of DriftStartOptions, one drift
+// at a time in turn, each searched with the drifts before it at their best
+// (coordinate ascent: one drift's misfit swamps another's likelihood until
+// it is fitted). Counts its passes into `passes`.
+ErrorModel GridStart(const EpochRun& run, const ErrorModel& model, const DriftSelection& which,
+                     const DriftStartOptions& starts, double shortest_tau_s, double longest_tau_s, int& passes) {
+  ErrorModel best = model;
+  auto likelihood = [&](const ErrorModel& m) {
+    auto pass = RunForwardFilter(run, m);
+    ++passes;
+    return pass.ok() ? pass->log_likelihood : -std::numeric_limits<double>::infinity();
+  };
+  double best_ll = likelihood(best);
+  const int points = starts.grid_tau_points;
+  for (int d = 0; d < kDriftCount; ++d) {
+    if (!which[static_cast<size_t>(d)] || !(DriftOf(model, d).sigma > 0.0)) continue;
+    const GaussMarkov specified = DriftOf(model, d);
+    GaussMarkov chosen = DriftOf(best, d);
+    for (int t = 0; t < points; ++t) {
+      const double fraction = points > 1 ? static_cast<double>(t) / (points - 1) : 0.5;
+      const double tau_s = shortest_tau_s * std::pow(longest_tau_s / shortest_tau_s, fraction);
+      for (double factor : starts.grid_sigma_factors) {
+        ErrorModel trial = best;
+        DriftOf(trial, d) = GaussMarkov{specified.sigma * factor, tau_s};
+        const double ll = likelihood(trial);
+        if (ll > best_ll) {
+          best_ll = ll;
+          chosen = DriftOf(trial, d);
+        }
+      }
+    }
+    DriftOf(best, d) = chosen;
+  }
+  return best;
+}
+
+}  // namespace
 
 absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& run, const ErrorModel& model,
                                                                const ErrorModel& a_priori,
                                                                const DriftSelection& which,
-                                                               std::span<const double> tau_start_factors,
+                                                               const DriftStartOptions& starts,
                                                                const DriftLikelihoodOptions& options) {
-  std::vector<double> factors = {1.0};
-  factors.insert(factors.end(), tau_start_factors.begin(), tau_start_factors.end());
   const double shortest_tau_s = 2.0 * run.update_interval_s;
   const double longest_tau_s = std::max(run.duration_s, shortest_tau_s);
-  std::vector<DriftLikelihoodResult> fits;
-  std::optional<double> before;  // the likelihood of the model as given: the first start's
   int iterations = 0, passes = 0;
-  for (double factor : factors) {
+  std::vector<ErrorModel> start_models = {model};
+  for (double factor : starts.tau_factors) {
     ErrorModel start = model;
-    for (int d = 0; d < static_cast<int>(which.size()); ++d) {
+    for (int d = 0; d < kDriftCount; ++d) {
       if (!which[static_cast<size_t>(d)]) continue;
       GaussMarkov& drift = DriftOf(start, d);
       drift.tau_s = std::clamp(drift.tau_s * factor, shortest_tau_s, longest_tau_s);
     }
-    auto fit = IdentifyDriftsByLikelihood(run, start, a_priori, which, which, options);
+    start_models.push_back(std::move(start));
+  }
+  if (starts.grid_tau_points > 0) {
+    start_models.push_back(GridStart(run, model, which, starts, shortest_tau_s, longest_tau_s, passes));
+  }
+  std::vector<DriftLikelihoodResult> fits;
+  std::optional<double> before;  // the likelihood of the model as given: the first start's
+  for (size_t i = 0; i < start_models.size(); ++i) {
+    auto fit = IdentifyDriftsByLikelihood(run, start_models[i], a_priori, which, which, options);
     if (!fit.ok()) continue;
-    if (!before.has_value() && factor == 1.0) before = fit->log_likelihood_before;
+    if (i == 0) before = fit->log_likelihood_before;
     iterations += fit->iterations;
     passes += fit->filter_passes;
     fits.push_back(*std::move(fit));
@@ -47,7 +92,7 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
   };
   double combined_ll = likelihood(combined);
   bool changed = false;
-  for (int d = 0; d < static_cast<int>(which.size()); ++d) {
+  for (int d = 0; d < kDriftCount; ++d) {
     if (!which[static_cast<size_t>(d)]) continue;
     for (const DriftLikelihoodResult& other : fits) {
       if (&other == &*best || DriftOf(other.model, d) == DriftOf(combined, d)) continue;
@@ -71,7 +116,7 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
       if (polished->log_likelihood_after > best->log_likelihood_after) result = *std::move(polished);
     }
   }
-    // The improvement is measured from the model as given, not from a start.
+  // The improvement is measured from the model as given, not from a start.
   if (before.has_value()) result->log_likelihood_before = *before;
   result->iterations = iterations;
   result->filter_passes = passes;
@@ -80,36 +125,53 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
 
 absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const EpochRun& run, const ErrorModel& model,
                                                                      DriftLikelihoodResult fit, double log_n) {
-  auto pass = RunForwardFilter(run, model);
-  if (!pass.ok()) return pass.status();
-  const double before = pass->log_likelihood;
-  ErrorModel kept = model;
-  std::vector<std::string> kept_names;
-  for (int d = 0; d < 6; ++d) {
-    if (DriftOf(fit.model, d) == DriftOf(model, d)) continue;
-    const std::string name = DriftName(d);
-    const int parameters = static_cast<int>(std::count_if(fit.identified.begin(), fit.identified.end(),
-                                                          [&](const ParameterEstimate& p) {
-                                                            return p.name.rfind(name + ".", 0) == 0;
-                                                          }));
-    ErrorModel alone = model;
-    DriftOf(alone, d) = DriftOf(fit.model, d);
-    auto trial = RunForwardFilter(run, alone);
+  auto likelihood = [&](const ErrorModel& m) -> absl::StatusOr<double> {
+    auto pass = RunForwardFilter(run, m);
     ++fit.filter_passes;
-    if (!trial.ok() || !(2.0 * (trial->log_likelihood - before) > parameters * log_n)) continue;
-    DriftOf(kept, d) = DriftOf(fit.model, d);
-    kept_names.push_back(name + ".");
+    if (!pass.ok()) return pass.status();
+    return pass->log_likelihood;
+  };
+  const auto before = likelihood(model);
+  if (!before.ok()) return before.status();
+  ErrorModel kept = fit.model;
+  auto kept_ll = likelihood(kept);
+  if (!kept_ll.ok()) return kept_ll.status();
+  auto parameters_of = [&](int d) {
+    const std::string prefix = DriftName(d) + ".";
+    return static_cast<int>(std::count_if(fit.identified.begin(), fit.identified.end(), [&](const ParameterEstimate& p) {
+      return p.name.rfind(prefix, 0) == 0;
+    }));
+  };
+  for (;;) {
+    int least = -1;
+    double least_margin = 0.0, least_ll = 0.0;
+    for (int d = 0; d < kDriftCount; ++d) {
+      if (DriftOf(kept, d) == DriftOf(model, d)) continue;
+      ErrorModel without = kept;
+      DriftOf(without, d) = DriftOf(model, d);
+      const auto ll = likelihood(without);
+      // A drift the filter cannot run without is worth its parameters.
+      if (!ll.ok()) continue;
+      const double margin = 2.0 * (*kept_ll - *ll) - parameters_of(d) * log_n;
+      if (least < 0 || margin < least_margin) {
+        least = d;
+        least_margin = margin;
+        least_ll = *ll;
+      }
+    }
+    if (least < 0 || least_margin > 0.0) break;
+    DriftOf(kept, least) = DriftOf(model, least);
+    *kept_ll = least_ll;
   }
   std::erase_if(fit.identified, [&](const ParameterEstimate& p) {
-    return std::none_of(kept_names.begin(), kept_names.end(),
-                        [&](const std::string& prefix) { return p.name.rfind(prefix, 0) == 0; });
+    for (int d = 0; d < kDriftCount; ++d) {
+      if (DriftOf(kept, d) != DriftOf(model, d) && p.name.rfind(DriftName(d) + ".", 0) == 0) return false;
+    }
+    return true;
   });
-  auto after = RunForwardFilter(run, kept);
-  if (!after.ok()) return after.status();
-  ++fit.filter_passes;
   fit.model = kept;
-  fit.log_likelihood_before = before;
-  fit.log_likelihood_after = after->log_likelihood;
+  fit.log_likelihood_before = *before;
+  fit.log_likelihood_after = *kept_ll;
   return fit;
 }
 

@@ -79,9 +79,9 @@ struct AnalysisOptions {
   bool test_second_orders_by_likelihood = true;
   ident::DriftLikelihoodOptions drift_likelihood;
   // Where the a-priori model's misfit competes with its missing effects, its
-  // drifts' τ are searched from these multiples of the a-priori τ besides
-  // the a-priori value itself (ident::IdentifyDriftsFromStarts).
-  std::array<double, 2> drift_tau_start_factors = {0.1, 10.0};
+  // drifts are searched from these starts besides the a-priori values
+  // (ident::IdentifyDriftsFromStarts).
+  ident::DriftStartOptions drift_starts;
   FinderOptions finder;
   // Bias steps and ramps at an unknown onset (finder/onset_scan.h).
   OnsetScanOptions onset_scan;

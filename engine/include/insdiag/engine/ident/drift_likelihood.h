@@ -86,8 +86,10 @@
 
 namespace insdiag::engine::ident {
 
-// Which base drifts to identify: gyro x, y, z, then accelerometer x, y, z.
-using DriftSelection = std::array<bool, 6>;
+// The base drifts: gyro x, y, z, then accelerometer x, y, z.
+inline constexpr int kDriftCount = 6;
+// Which base drifts to identify, in that order.
+using DriftSelection = std::array<bool, kDriftCount>;
 
 // The state name of base drift d in that order ("gyro_bias_gm.x", …, "acc_bias_gm.z").
 std::string DriftName(int drift);
@@ -168,28 +170,48 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const EpochRun&
                                                                  const DriftSelection& tau_too,
                                                                  const DriftLikelihoodOptions& options = {});
 
-// σ and τ of the selected drifts from several starting points: EM from the
-// model's values and from each of `tau_start_factors` × the model's τ
-// (clipped to [two update intervals, the run's length]), σ started at the
-// model's; the fit with the highest likelihood is kept. Over a few
-// correlation times the likelihood in (σ, τ) has more than one maximum
-// along its ridge, and EM climbs the one nearest its start: a unit whose
-// drift is far from its type's nominal model (τ a tenth, σ ten times) needs
-// a start on its side of the ridge. The result's `iterations` and
-// `filter_passes` count every start.
+// Where EM starts when the drifts may be far from the model's values.
+struct DriftStartOptions {
+  // EM from these multiples of the model's τ (σ at the model's), besides
+  // the model's values.
+  std::array<double, 2> tau_factors = {0.1, 10.0};
+  // And from the best point of a coarse grid of the likelihood, searched one
+  // drift at a time: σ at these multiples of the model's, τ at
+  // `grid_tau_points` log-spaced from two update intervals to the run's
+  // length. EM creeps from a σ far below the truth (the smoothed drift is
+  // held at its small prior, so each step moves σ little), and from a τ on
+  // the far side of the likelihood's ridge; the grid needs no start.
+  std::array<double, 6> grid_sigma_factors = {0.1, 0.3, 1.0, 3.0, 10.0, 30.0};
+  int grid_tau_points = 5;  // 0: no grid start
+};
+
+// σ and τ of the selected drifts from several starting points (`starts`),
+// the fit with the highest likelihood kept, then axis by axis another
+// start's drift where it raises the likelihood, and EM again from that
+// combination. Over a few correlation times the likelihood in (σ, τ) has
+// more than one maximum along its ridge, and EM climbs the one nearest its
+// start: a unit whose drift is far from its type's nominal model (τ a
+// tenth, σ ten times) needs a start on its side of the ridge. The result's
+// `iterations` and `filter_passes` count every start and the grid.
 absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& run, const ErrorModel& model,
                                                                const ErrorModel& a_priori,
                                                                const DriftSelection& which,
-                                                               std::span<const double> tau_start_factors,
+                                                               const DriftStartOptions& starts,
                                                                const DriftLikelihoodOptions& options = {});
 
-// The drifts of `fit` (a fit from `model`) worth their parameters by BIC:
-// each drift's σ and τ alone in `model` must raise the log-likelihood by more
-// than `log_n` a parameter (2Δℓ > k ln N, Schwarz 1978); the result holds
-// those drifts only, its identified parameters and likelihood theirs. The
-// others keep the model's values: a run tells some axes' drifts and not
-// others, and a parameter re-tuned without cause costs the competition its
-// ln N. One filter pass per drift and one for the kept set.
+// The drifts of `fit` (a fit from `model`) worth their parameters by BIC,
+// by backward elimination in the joint fit: each drift's σ and τ must raise
+// the log-likelihood of the fit with every other kept drift by more than
+// `log_n` a parameter (2Δℓ > k ln N, Schwarz 1978); the least worth is put
+// back to the model's values and the rest weighed again, until every kept
+// drift is worth its cost. The result holds those drifts only, its
+// identified parameters and likelihood theirs. Weighed in the joint fit, not
+// alone in `model`: one axis's drift far from the model's swamps the
+// innovations, and another axis's drift tried alone beside that misfit
+// looks worthless, then shows as steps and walks once the first is taken. A
+// run tells some axes' drifts and not others, and a parameter re-tuned
+// without cause costs the competition its ln N. One filter pass per kept
+// drift per round, one for `model` and one for the fit.
 absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const EpochRun& run, const ErrorModel& model,
                                                                      DriftLikelihoodResult fit, double log_n);
 
