@@ -1,0 +1,167 @@
+#!/usr/bin/env python3
+"""The diagnosis's first module over seeds, through a real server: `insdiag diagnose`.
+
+Starts insdiagd on loopback ports with its own embedded PostgreSQL in a
+temporary directory (the knowledge base holds the built-in unit types and
+failure modes), simulates each run on both simulators as
+scripts/fault_matrix.py does, diagnoses it, and prints per scenario and
+simulator how often the first-ranked module is the right one.
+
+  drift_sigma_x3_long  one gyro's drift σ × 3 (axis from the seed), no
+                       datasheet, unit type INS-2000, 4 h of a multi-position
+                       drift test with tilted positions (cpp: the `drift`
+                       profile's first 4 h; py: `positions`), 10 or 50 Hz.
+                       Right: the first module is that gyro's.
+  healthy              1 h, datasheet, rates 10/50/100 Hz, three profiles a
+                       simulator (the independent one alternating instantaneous
+                       and ramped rate changes). Right: the first hypothesis
+                       is `healthy`.
+
+Usage:
+  scripts/diagnosis_sweep.py [--runs N] [--scenarios a,b] [--simulators cpp,py] [--out results.json]
+The figures in docs/FAULT_SCENARIOS.md come from
+  scripts/diagnosis_sweep.py --runs 5 --scenarios drift_sigma_x3_long
+  scripts/diagnosis_sweep.py --runs 6 --scenarios healthy
+"""
+import argparse
+import importlib.util
+import json
+import os
+import random
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+spec = importlib.util.spec_from_file_location("fault_matrix", os.path.join(HERE, "fault_matrix.py"))
+matrix = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(matrix)
+
+SERVER = os.path.join(matrix.ROOT, "build", "server", "insdiagd")
+LONG_S = 4 * 3600.0
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def start_server(data_dir):
+    grpc, http = free_port(), free_port()
+    log = open(os.path.join(os.path.dirname(data_dir), "insdiag-diagnosis-sweep-server.log"), "w")
+    proc = subprocess.Popen([SERVER, "--data-dir", os.path.join(data_dir, "pg"), "--grpc-port", str(grpc),
+                             "--http-port", str(http), "--bind", "127.0.0.1", "--workers", "1",
+                             "--fleet-refresh-seconds", "0"], stdout=log, stderr=subprocess.STDOUT)
+    for _ in range(600):
+        if proc.poll() is not None:
+            sys.exit(f"insdiagd exited with {proc.returncode}; see {log.name}")
+        try:
+            with socket.create_connection(("127.0.0.1", grpc), timeout=1):
+                return proc, f"127.0.0.1:{grpc}"
+        except OSError:
+            time.sleep(0.5)
+    proc.kill()
+    sys.exit("insdiagd did not start")
+
+
+def make_run(simulator, scenario, index, path):
+    """Simulates one run; returns what was hidden (axis or None) and how."""
+    rng = random.Random(f"{simulator}/{scenario}/{index}")
+    seed = 2000 + index
+    if scenario == "healthy":
+        rate = matrix.RATES_HZ[index % 3]
+        profile = matrix.PROFILES[simulator][(index // 3) % 3]
+        fault = dict(kind=None)
+        matrix.simulate(simulator, fault, rate, profile, seed, 3600.0, path)
+        if simulator == "cpp":
+            matrix.truncate(path, 3600.0)
+        return dict(axis=None, rate_hz=rate, profile=profile)
+    axis = rng.choice(matrix.AXES)
+    rate = [10.0, 50.0][index % 2]
+    name = f"gyro_bias_gm.{axis}.sigma"
+    if simulator == "cpp":
+        cmd = [matrix.CLI, "simulate", path, "--profile", "drift", "--rate", f"{rate:g}", "--seed", str(seed),
+               "--no-datasheet", "--param", f"{name}={matrix.NOMINAL[name] * 3.0:.6g}"]
+        subprocess.run(cmd, check=True, capture_output=True, text=True)
+        matrix.truncate(path, LONG_S)
+        profile = "drift (first 4 h)"
+    else:
+        cmd = [matrix.PYTHON, matrix.BENCHSIM, "--out", path, "--preset", "nav", "--profile", "positions",
+               "--rate-hz", f"{rate:g}", "--duration", f"{LONG_S:g}", "--seed", str(seed), "--datasheet", "no",
+               "--unit-type", "INS-2000", "--fault", f"{name}*3"]
+        subprocess.run(cmd, check=True, capture_output=True, text=True)
+        profile = "positions"
+    return dict(axis=axis, rate_hz=rate, profile=profile)
+
+
+def diagnose(server, path):
+    done = subprocess.run([matrix.CLI, "diagnose", path, "--json", "--server", server], capture_output=True,
+                          text=True)
+    if done.returncode != 0:
+        return None, done.stderr.strip()[-300:]
+    return json.loads(done.stdout), None
+
+
+def modules(diagnosis):
+    """The diagnosis's candidates: (module, probability), most probable first
+    (`healthy` and `unknown` are candidates too)."""
+    ranked = [(c.get("module"), c.get("probability", 0.0)) for c in diagnosis.get("candidates", [])]
+    return sorted(ranked, key=lambda x: -x[1])
+
+
+def judge(scenario, hidden, diagnosis):
+    ranked = modules(diagnosis)
+    first, probability = ranked[0] if ranked else (None, 0.0)
+    right = first == ("healthy" if scenario == "healthy" else f"gyro.{hidden['axis']}")
+    return dict(first=first, probability=probability, right=right, ranked=ranked[:4])
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--scenarios", default="drift_sigma_x3_long,healthy")
+    parser.add_argument("--simulators", default="cpp,py")
+    parser.add_argument("--out", default=None)
+    args = parser.parse_args()
+    results = []
+    with tempfile.TemporaryDirectory() as tmp:
+        os.chmod(tmp, 0o755)  # run as root, the embedded PostgreSQL runs as `postgres` and must enter it
+        proc, server = start_server(tmp)
+        try:
+            for scenario in args.scenarios.split(","):
+                for simulator in args.simulators.split(","):
+                    for index in range(args.runs):
+                        path = os.path.join(tmp, "run.csv")
+                        hidden = make_run(simulator, scenario, index, path)
+                        started = time.monotonic()
+                        diagnosis, error = diagnose(server, path)
+                        r = dict(scenario=scenario, simulator=simulator, index=index, **hidden,
+                                 seconds=round(time.monotonic() - started, 1))
+                        r.update(dict(error=error) if error else judge(scenario, hidden, diagnosis))
+                        results.append(r)
+                        print(json.dumps(r), file=sys.stderr, flush=True)
+        finally:
+            proc.terminate()
+            proc.wait(timeout=60)
+    if args.out:
+        with open(args.out, "w") as f:
+            json.dump(results, f, indent=1)
+    print("| scenario | simulator | runs | first module right | its probability (median) |")
+    print("|---|---|---|---|---|")
+    groups = {}
+    for r in results:
+        groups.setdefault((r["scenario"], r["simulator"]), []).append(r)
+    for (scenario, simulator), rs in groups.items():
+        ok = [r for r in rs if "error" not in r]
+        p = sorted(r["probability"] for r in ok)
+        median = f"{p[len(p) // 2]:.3f}" if p else "—"
+        failed = len(rs) - len(ok)
+        print(f"| {scenario} | {simulator} | {len(ok)}{f' ({failed} failed)' if failed else ''} | "
+              f"{sum(r['right'] for r in ok)} | {median} |")
+
+
+if __name__ == "__main__":
+    main()
