@@ -17,7 +17,8 @@ identified drift parameters are read, and per scenario the script prints:
                 candidate significant at family-wise 1 %, or an identified drift or
                 noise parameter whose family-wise 1 % interval (Bonferroni over the
                 parameters compared) excludes the nominal value
-  right effect  the top significant candidate (or, for drift and noise
+  right effect  the analysis's best explanation: the significant term or family with
+                the lowest predicted ΔBIC, which `--discover` adds first (or, for drift and noise
                 changes, the parameter that departs most) is the injected one,
                 on the injected axis
   right module  the failure-mode catalogue (data/failure-modes) maps that
@@ -228,7 +229,10 @@ def departures(report):
 
 def judge(fault, report):
     candidates = report.get("effectCandidates", [])
-    top = next((c for c in candidates if significant(c)), None)
+    # The analysis's best explanation, the effect `--discover` adds first: the
+    # significant term or whole family with the lowest predicted ΔBIC.
+    explanations = [c for c in candidates + report.get("familyCandidates", []) if significant(c)]
+    top = min(explanations, key=lambda c: c.get("predictedDeltaBic", 0.0), default=None)
     moved = departures(report)
     named = top["name"] if top else (moved[0][1] if moved else None)
     result = dict(verdict=report.get("verdict"), top=named, detected=False, right_effect=False, right_module=False,

@@ -1096,6 +1096,11 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
         selection[d] = !faults_flagged && resolved[d] == resolved_set;
         tau_too[d] = selection[d] && (resolved_set || a_priori_from_allan);
       }
+      // A class prior's drifts may be far from the unit's: EM starts from the grid's best point.
+      if (!drifts_from_datasheet && options.drift_starts.grid_tau_points > 0) {
+        return ident::IdentifyDriftsFromGrid(epochs, model, *a_priori, selection, tau_too, options.drift_starts,
+                                             options.drift_likelihood);
+      }
       return ident::IdentifyDriftsByLikelihood(epochs, model, *a_priori, selection, tau_too,
                                                options.drift_likelihood);
     };

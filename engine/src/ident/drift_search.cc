@@ -8,12 +8,19 @@
 namespace insdiag::engine::ident {
 namespace {
 
-// The best point of the coarse (σ, τ) grid of DriftStartOptions, one drift
-// at a time in turn, each searched with the drifts before it at their best
+// The best point of the coarse grid of DriftStartOptions, one drift at a
+// time in turn, each searched with the drifts before it at their best
 // (coordinate ascent: one drift's misfit swamps another's likelihood until
-// it is fitted). Counts its passes into `passes`.
+// it is fitted): σ for the drifts of `which`, and τ too for those of
+// `tau_too` (the others keep the model's τ). The grid includes the model's
+// own point for a σ-only drift, and the result is never below the model's
+// likelihood. Counts its passes into `passes`; `model_log_likelihood` gets
+// the model's.
 ErrorModel GridStart(const EpochRun& run, const ErrorModel& model, const DriftSelection& which,
-                     const DriftStartOptions& starts, double shortest_tau_s, double longest_tau_s, int& passes) {
+                     const DriftSelection& tau_too, const DriftStartOptions& starts, int& passes,
+                     double& model_log_likelihood) {
+  const double shortest_tau_s = 2.0 * run.update_interval_s;
+  const double longest_tau_s = std::max(run.duration_s, shortest_tau_s);
   ErrorModel best = model;
   auto likelihood = [&](const ErrorModel& m) {
     auto pass = RunForwardFilter(run, m);
@@ -21,15 +28,19 @@ ErrorModel GridStart(const EpochRun& run, const ErrorModel& model, const DriftSe
     return pass.ok() ? pass->log_likelihood : -std::numeric_limits<double>::infinity();
   };
   double best_ll = likelihood(best);
-  const int points = starts.grid_tau_points;
+  model_log_likelihood = best_ll;
+  const int points = std::max(1, starts.grid_tau_points);
   for (int d = 0; d < kDriftCount; ++d) {
     if (!which[static_cast<size_t>(d)] || !(DriftOf(model, d).sigma > 0.0)) continue;
     const GaussMarkov specified = DriftOf(model, d);
+    const bool with_tau = tau_too[static_cast<size_t>(d)];
     GaussMarkov chosen = DriftOf(best, d);
-    for (int t = 0; t < points; ++t) {
+    for (int t = 0; t < (with_tau ? points : 1); ++t) {
       const double fraction = points > 1 ? static_cast<double>(t) / (points - 1) : 0.5;
-      const double tau_s = shortest_tau_s * std::pow(longest_tau_s / shortest_tau_s, fraction);
+      const double tau_s =
+          with_tau ? shortest_tau_s * std::pow(longest_tau_s / shortest_tau_s, fraction) : specified.tau_s;
       for (double factor : starts.grid_sigma_factors) {
+        if (!with_tau && factor == 1.0) continue;  // the model's own point, already weighed
         ErrorModel trial = best;
         DriftOf(trial, d) = GaussMarkov{specified.sigma * factor, tau_s};
         const double ll = likelihood(trial);
@@ -65,7 +76,8 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
     start_models.push_back(std::move(start));
   }
   if (starts.grid_tau_points > 0) {
-    start_models.push_back(GridStart(run, model, which, starts, shortest_tau_s, longest_tau_s, passes));
+    double unused_model_log_likelihood = 0.0;
+    start_models.push_back(GridStart(run, model, which, which, starts, passes, unused_model_log_likelihood));
   }
   std::vector<DriftLikelihoodResult> fits;
   std::optional<double> before;  // the likelihood of the model as given: the first start's
@@ -121,6 +133,25 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
   result->iterations = iterations;
   result->filter_passes = passes;
   return *std::move(result);
+}
+
+absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromGrid(const EpochRun& run, const ErrorModel& model,
+                                                             const ErrorModel& a_priori, const DriftSelection& which,
+                                                             const DriftSelection& tau_too,
+                                                             const DriftStartOptions& starts,
+                                                             const DriftLikelihoodOptions& options) {
+  if (std::none_of(which.begin(), which.end(), [](bool b) { return b; })) {
+    return IdentifyDriftsByLikelihood(run, model, a_priori, which, tau_too, options);
+  }
+  int passes = 0;
+  double model_log_likelihood = 0.0;
+  const ErrorModel start = GridStart(run, model, which, tau_too, starts, passes, model_log_likelihood);
+  auto fit = IdentifyDriftsByLikelihood(run, start, a_priori, which, tau_too, options);
+  if (!fit.ok()) return fit.status();
+  // The improvement is measured from the model as given, not from the grid's point.
+  fit->log_likelihood_before = model_log_likelihood;
+  fit->filter_passes += passes;
+  return fit;
 }
 
 absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const EpochRun& run, const ErrorModel& model,

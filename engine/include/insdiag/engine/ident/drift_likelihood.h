@@ -199,6 +199,18 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
                                                                const DriftStartOptions& starts,
                                                                const DriftLikelihoodOptions& options = {});
 
+// σ (and τ where `tau_too`) of the selected drifts by EM from the best
+// point of DriftStartOptions' grid rather than from the model's values: for
+// a model whose drifts are a class prior (a unit type's nominal, an Allan
+// fit), which EM started there creeps away from (a σ tripled stays within
+// 15 % of the prior after six steps). `log_likelihood_before` is the
+// model's, and `filter_passes` counts the grid's.
+absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromGrid(const EpochRun& run, const ErrorModel& model,
+                                                             const ErrorModel& a_priori, const DriftSelection& which,
+                                                             const DriftSelection& tau_too,
+                                                             const DriftStartOptions& starts,
+                                                             const DriftLikelihoodOptions& options = {});
+
 // The drifts of `fit` (a fit from `model`) worth their parameters by BIC,
 // by backward elimination in the joint fit: each drift's σ and τ must raise
 // the log-likelihood of the fit with every other kept drift by more than
