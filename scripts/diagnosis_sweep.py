@@ -13,9 +13,9 @@ simulator how often the first-ranked module is the right one.
                        profile's first 4 h; py: `positions`), 10 or 50 Hz.
                        Right: the first module is that gyro's.
   healthy              1 h, datasheet, rates 10/50/100 Hz, three profiles a
-                       simulator (the independent one alternating instantaneous
-                       and ramped rate changes). Right: the first hypothesis
-                       is `healthy`.
+                       simulator (the project's ramps its rate changes, the
+                       independent one makes them instantaneous). Right: the
+                       first module is `healthy`.
 
 Usage:
   scripts/diagnosis_sweep.py [--runs N] [--scenarios a,b] [--simulators cpp,py] [--out results.json]
