@@ -923,6 +923,24 @@ AnalysisReport ReportOf(const ModelPass& pass, const Findings& found, const Benc
 
 // The likelihood-ratio statistic of the drift estimates against the model's
 // values (one degree of freedom per identified parameter, σ or τ).
+// The drift estimates' SEs made consistent with their likelihood ratio
+// against `reference` (ident::WidenErrorsToTheLikelihoodRatio), with a note
+// naming the drifts widened.
+void WidenErrorsOrSay(const EpochRun& epochs, const ErrorModel& reference, ident::DriftLikelihoodResult& ml,
+                      std::vector<std::string>& notes) {
+  auto widened = ident::WidenErrorsToTheLikelihoodRatio(epochs, reference, ml);
+  if (!widened.ok()) {
+    notes.push_back("the drift estimates' standard errors were not checked against their likelihood ratio: " +
+                    std::string(widened.status().message()));
+    return;
+  }
+  if (widened->empty()) return;
+  std::string names;
+  for (const std::string& n : *widened) names += (names.empty() ? "" : ", ") + n;
+  notes.push_back("standard errors widened to the likelihood ratio against the a-priori values (the curvature at "
+                  "the estimate understated how flat the likelihood stays along the σ–τ ridge): " + names);
+}
+
 double DriftStatistic(const ident::DriftLikelihoodResult& ml) {
   return 2.0 * (ml.log_likelihood_after - ml.log_likelihood_before);
 }
@@ -1161,6 +1179,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
           auto ml = ident::IdentifyDriftsFromStarts(epochs, base, *a_priori, every_drift, starts,
                                                     options.drift_likelihood);
           if (ml.ok()) ml = ident::KeepDriftsWorthTheirParameters(epochs, base, *std::move(ml), log_n);
+          if (ml.ok()) WidenErrorsOrSay(epochs, *a_priori, *ml, notes);
           if (ml.ok() && !ml->identified.empty()) {
             const double drift_bic = -DriftStatistic(*ml) + static_cast<double>(ml->identified.size()) * log_n;
             if (drift_bic < best->predicted_delta_bic &&
@@ -1231,6 +1250,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       for (const bool resolved_set : {false, true}) {
         if (!resolved_set && drifts_by_likelihood) continue;
         auto ml = identify_drifts(base, resolved_set);
+        if (ml.ok()) WidenErrorsOrSay(epochs, *a_priori, *ml, notes);
         if (!ml.ok()) {
           notes.push_back("the drifts were not identified by likelihood: " + std::string(ml.status().message()));
         } else {

@@ -4,6 +4,7 @@
 #include <optional>
 
 #include "insdiag/engine/ident/drift_likelihood.h"
+#include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::engine::ident {
 namespace {
@@ -152,6 +153,57 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromGrid(const EpochRun& run
   fit->log_likelihood_before = model_log_likelihood;
   fit->filter_passes += passes;
   return fit;
+}
+
+absl::StatusOr<std::vector<std::string>> WidenErrorsToTheLikelihoodRatio(const EpochRun& run,
+                                                                         const ErrorModel& reference,
+                                                                         DriftLikelihoodResult& fit) {
+  std::vector<std::string> widened;
+  if (fit.identified.empty()) return widened;
+  auto likelihood = [&](const ErrorModel& m) -> absl::StatusOr<double> {
+    auto pass = RunForwardFilter(run, m);
+    ++fit.filter_passes;
+    if (!pass.ok()) return pass.status();
+    return pass->log_likelihood;
+  };
+  const auto at_fit = likelihood(fit.model);
+  if (!at_fit.ok()) return at_fit.status();
+  for (int d = 0; d < kDriftCount; ++d) {
+    const GaussMarkov& estimate = DriftOf(fit.model, d);
+    const GaussMarkov& before = DriftOf(reference, d);
+    if (estimate == before || !(before.sigma > 0.0) || !(before.tau_s > 0.0)) continue;
+    const std::string prefix = DriftName(d) + ".";
+    double wald = 0.0;
+    std::vector<ParameterEstimate*> estimates;
+    for (ParameterEstimate& p : fit.identified) {
+      if (p.name.rfind(prefix, 0) != 0 || !(p.value > 0.0) || !(p.std_error > 0.0)) continue;
+      const bool sigma = p.name == prefix + "sigma";
+      const double reference_value = sigma ? before.sigma : before.tau_s;
+      const double z = std::log(p.value / reference_value) / (p.std_error / p.value);
+      wald += z * z;
+      estimates.push_back(&p);
+    }
+    if (estimates.empty()) continue;
+    ErrorModel without = fit.model;
+    DriftOf(without, d) = before;
+    const auto at_reference = likelihood(without);
+    if (!at_reference.ok()) continue;
+    // The floor is χ²'s median: below it neither statistic says the estimate
+    // departs from the reference, and a test-based SE would only measure how
+    // near the two points are.
+    const double floor = stats::ChiSquareQuantile(0.5, static_cast<double>(estimates.size()));
+    const double statistic = std::max(2.0 * (*at_fit - *at_reference), floor);
+    if (!(wald > statistic)) continue;
+    const double widen = std::sqrt(wald / statistic);
+    for (ParameterEstimate* p : estimates) {
+      const double log_se = widen * p->std_error / p->value;
+      p->std_error = p->value * log_se;
+      p->ci95_low = p->value * std::exp(-1.96 * log_se);
+      p->ci95_high = p->value * std::exp(1.96 * log_se);
+    }
+    widened.push_back(DriftName(d));
+  }
+  return widened;
 }
 
 absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const EpochRun& run, const ErrorModel& model,

@@ -211,6 +211,23 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromGrid(const EpochRun& run
                                                              const DriftStartOptions& starts,
                                                              const DriftLikelihoodOptions& options = {});
 
+// The standard errors of `fit`'s drift estimates made consistent with the
+// likelihood ratio against `reference` (the model's values before the fit):
+// per drift, the Wald statistic W = Σ ((ln v̂ − ln v₀)/SE(ln v̂))² over its σ
+// and τ is set against 2Δℓ of the fit with that drift put back to
+// `reference`'s values, and where W exceeds it the drift's SEs (and 95 %
+// intervals) are widened by √(W/2Δℓ) — test-based standard errors
+// (Miettinen, Am. J. Epidemiol. 103(2), 1976). Along a drift's σ–τ ridge the
+// curvature at the estimate says little about how far the likelihood stays
+// flat: one hour of a 30-minute drift gave σ and τ 6.6 and 5.9 SE from the
+// datasheet's values where 2Δℓ between the two points was 9.0 (the SEs
+// widen 3 ×). 2Δℓ is floored at χ²'s median for the drift's parameter count.
+// Never narrows an SE. One filter pass per drift and one for the fit.
+// Returns the names of the drifts widened.
+absl::StatusOr<std::vector<std::string>> WidenErrorsToTheLikelihoodRatio(const EpochRun& run,
+                                                                         const ErrorModel& reference,
+                                                                         DriftLikelihoodResult& fit);
+
 // The drifts of `fit` (a fit from `model`) worth their parameters by BIC,
 // by backward elimination in the joint fit: each drift's σ and τ must raise
 // the log-likelihood of the fit with every other kept drift by more than
