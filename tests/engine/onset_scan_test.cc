@@ -10,6 +10,7 @@
 #include "insdiag/engine/filter/forward_filter.h"
 #include "insdiag/engine/filter/model_transitions.h"
 #include "insdiag/engine/filter/observation.h"
+#include "insdiag/engine/finder/fault_findings.h"
 #include "insdiag/engine/finder/onset_scan.h"
 #include "scenarios.h"
 
@@ -181,6 +182,31 @@ TEST(OnsetScan, FindsAStepOfFiveDriftSigmaAtItsOnsetOnEverySensorAxis) {
   EXPECT_GE(within_60_s, 8);
   EXPECT_GE(placed, 11);
   EXPECT_GE(covered, 10);
+}
+
+// A step and a ramp on one axis that explain the run equally (2Δℓ within 2)
+// name each other, so the report shows the reader that the shape is open;
+// a step on another axis, or a ramp far behind, is no look-alike.
+TEST(FaultCandidates, AStepAndARampOfOneAxisThatTieNameEachOther) {
+  auto fit = [](const std::string& name, double statistic) {
+    OnsetFit f;
+    f.term = ParseEffectSelector(name)->front();
+    f.identifiable = true;
+    f.statistic = statistic;
+    f.p_value = 1e-6;
+    f.std_error = 1.0;
+    return f;
+  };
+  const std::vector<OnsetFit> fits = {fit("gyro_bias_step.z", 50.0), fit("gyro_bias_ramp.z", 49.0),
+                                      fit("gyro_bias_step.x", 49.5), fit("acc_bias_step.x", 10.0),
+                                      fit("acc_bias_ramp.x", 30.0)};
+  const auto candidates = FaultCandidates(fits, 10000);
+  ASSERT_EQ(candidates.size(), fits.size());
+  EXPECT_EQ(candidates[0].correlated_with, std::vector<std::string>{"gyro_bias_ramp.z"});
+  EXPECT_EQ(candidates[1].correlated_with, std::vector<std::string>{"gyro_bias_step.z"});
+  EXPECT_TRUE(candidates[2].correlated_with.empty());
+  EXPECT_TRUE(candidates[3].correlated_with.empty());
+  EXPECT_TRUE(candidates[4].correlated_with.empty());
 }
 
 }  // namespace

@@ -50,6 +50,21 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
     c.note = buf;
     out.push_back(std::move(c));
   }
+  // A step and a ramp of one sensor axis whose 2Δℓ are within 2 of each
+  // other (their parameter counts are equal) are not worth telling apart
+  // (Kass & Raftery, JASA 90(430), 1995): each names the other.
+  constexpr double kIndistinguishableDeltaBic = 2.0;
+  for (size_t i = 0; i < out.size(); ++i) {
+    for (size_t j = 0; j < out.size(); ++j) {
+      const OnsetFit& a = fits[i];
+      const OnsetFit& b = fits[j];
+      if (i == j || !a.identifiable || !b.identifiable || a.term.family->sensor != b.term.family->sensor ||
+          a.term.axis != b.term.axis || a.term.family == b.term.family) {
+        continue;
+      }
+      if (std::abs(a.statistic - b.statistic) < kIndistinguishableDeltaBic) out[i].correlated_with.push_back(out[j].name);
+    }
+  }
   return out;
 }
 

@@ -15,6 +15,8 @@ namespace insdiag::engine {
 // The scan's fits as missing-effect candidates (source "GLR"). Their
 // likelihood ratio has two parameters, the magnitude and the onset: an added
 // fault changes AIC by −T + 4 and BIC by −T + 2 ln N.
+// A step and a ramp of one sensor axis within 2 of 2Δℓ name each other as
+// look-alikes (correlated_with).
 std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, int scalar_updates);
 
 // A fault the report must show.
