@@ -591,13 +591,10 @@ std::vector<EffectCandidate> MergeCandidates(std::vector<EffectCandidate> terms,
   std::vector<double> adjusted(p.size());
   stats::HolmAdjust(p, adjusted);
   for (size_t j = 0; j < tested.size(); ++j) terms[tested[j]].p_value_holm = adjusted[j];
-  const auto significant = [alpha](const EffectCandidate& c) {
-    return c.identifiable && c.tested && c.p_value_holm < alpha;
-  };
-  std::stable_sort(terms.begin(), terms.end(), [&](const EffectCandidate& a, const EffectCandidate& b) {
+  std::stable_sort(terms.begin(), terms.end(), [alpha](const EffectCandidate& a, const EffectCandidate& b) {
     if (a.identifiable != b.identifiable) return a.identifiable;
-    if (significant(a) != significant(b)) return significant(a);
-    if (significant(a) && a.predicted_delta_bic != b.predicted_delta_bic) {
+    if (a.SignificantAt(alpha) != b.SignificantAt(alpha)) return a.SignificantAt(alpha);
+    if (a.SignificantAt(alpha) && a.predicted_delta_bic != b.predicted_delta_bic) {
       return a.predicted_delta_bic < b.predicted_delta_bic;
     }
     if (a.p_value_holm != b.p_value_holm) return a.p_value_holm < b.p_value_holm;
@@ -637,7 +634,7 @@ Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const M
   // the same structure, the likelihood's estimate is kept.
   const bool constant_significant =
       std::any_of(ranked.terms.begin(), ranked.terms.end(), [&](const EffectCandidate& c) {
-        return c.identifiable && c.p_value_holm < options.finder.family_wise_alpha;
+        return c.SignificantAt(options.finder.family_wise_alpha);
       });
   StructureOutcomes likelihood_outcomes, correlation_outcomes;
   std::vector<StructureProposal> proposals = LikelihoodStructureProposals(
@@ -702,7 +699,7 @@ const EffectCandidate* LowestBicSignificant(const std::vector<EffectCandidate>& 
   const EffectCandidate* best = nullptr;
   for (const auto* list : {&terms, &families}) {
     for (const EffectCandidate& c : *list) {
-      if (!c.identifiable || !(c.p_value_holm < options.finder.family_wise_alpha)) continue;
+      if (!c.SignificantAt(options.finder.family_wise_alpha)) continue;
       if (best == nullptr || c.predicted_delta_bic < best->predicted_delta_bic) best = &c;
     }
   }
@@ -921,8 +918,6 @@ AnalysisReport ReportOf(const ModelPass& pass, const Findings& found, const Benc
   return r;
 }
 
-// The likelihood-ratio statistic of the drift estimates against the model's
-// values (one degree of freedom per identified parameter, σ or τ).
 // The drift estimates' SEs made consistent with their likelihood ratio
 // against `reference` (ident::WidenErrorsToTheLikelihoodRatio), with a note
 // naming the drifts widened.
@@ -941,6 +936,8 @@ void WidenErrorsOrSay(const EpochRun& epochs, const ErrorModel& reference, ident
                   "the estimate understated how flat the likelihood stays along the σ–τ ridge): " + names);
 }
 
+// The likelihood-ratio statistic of the drift estimates against the model's
+// values (one degree of freedom per identified parameter, σ or τ).
 double DriftStatistic(const ident::DriftLikelihoodResult& ml) {
   return 2.0 * (ml.log_likelihood_after - ml.log_likelihood_before);
 }
@@ -1020,10 +1017,16 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
                     "Allan deviation");
   }
   ErrorModel base = *a_priori;
-  const Datasheet& datasheet = run.metadata.datasheet;
-  const bool drifts_from_datasheet = datasheet.gyro_bias_sigma_rad_s.has_value() &&
-                                     datasheet.gyro_bias_tau_s.has_value() &&
-                                     datasheet.acc_bias_sigma_mps2.has_value() && datasheet.acc_bias_tau_s.has_value();
+  // Where drift identification starts: the grid searches decades from the
+  // a-priori drifts, for a type's nominal model or an Allan fit — a class
+  // prior a unit may be far from. A datasheet's drifts are the unit's own
+  // specification; a unit far from it shows as a re-tuned drift or as
+  // effects near it.
+  ident::DriftStartOptions drift_starts = options.drift_starts;
+  if (const Datasheet& d = run.metadata.datasheet; d.gyro_bias_sigma_rad_s && d.gyro_bias_tau_s &&
+                                                   d.acc_bias_sigma_mps2 && d.acc_bias_tau_s) {
+    drift_starts.grid_tau_points = 0;
+  }
   if (auto st = AddEffects(run, request.baseline_effects, options.filter.update_interval_s,
                            options.diffuse_prior_scale, base);
       !st.ok()) {
@@ -1114,9 +1117,8 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
         selection[d] = !faults_flagged && resolved[d] == resolved_set;
         tau_too[d] = selection[d] && (resolved_set || a_priori_from_allan);
       }
-      // A class prior's drifts may be far from the unit's: EM starts from the grid's best point.
-      if (!drifts_from_datasheet && options.drift_starts.grid_tau_points > 0) {
-        return ident::IdentifyDriftsFromGrid(epochs, model, *a_priori, selection, tau_too, options.drift_starts,
+      if (drift_starts.grid_tau_points > 0) {
+        return ident::IdentifyDriftsFromGrid(epochs, model, *a_priori, selection, tau_too, drift_starts,
                                              options.drift_likelihood);
       }
       return ident::IdentifyDriftsByLikelihood(epochs, model, *a_priori, selection, tau_too,
@@ -1170,13 +1172,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
           ident::DriftSelection every_drift{};
           every_drift.fill(true);
           const double log_n = std::log(static_cast<double>(std::max(1, pass->forward.scalar_updates)));
-          // The grid searches decades from the a-priori drifts: for a type's
-          // nominal model or an Allan fit, a class prior a unit may be far
-          // from. A datasheet's drifts are the unit's own specification; a
-          // unit far from it shows as a re-tuned drift or as effects near it.
-          ident::DriftStartOptions starts = options.drift_starts;
-          if (drifts_from_datasheet) starts.grid_tau_points = 0;
-          auto ml = ident::IdentifyDriftsFromStarts(epochs, base, *a_priori, every_drift, starts,
+          auto ml = ident::IdentifyDriftsFromStarts(epochs, base, *a_priori, every_drift, drift_starts,
                                                     options.drift_likelihood);
           if (ml.ok()) ml = ident::KeepDriftsWorthTheirParameters(epochs, base, *std::move(ml), log_n);
           if (ml.ok()) WidenErrorsOrSay(epochs, *a_priori, *ml, notes);

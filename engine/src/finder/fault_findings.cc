@@ -71,13 +71,13 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
 std::vector<FaultFinding> SignificantFaults(const std::vector<EffectCandidate>& candidates, double alpha) {
   double best_other_bic = std::numeric_limits<double>::infinity();
   for (const EffectCandidate& c : candidates) {
-    if (c.source != "GLR" && c.identifiable && c.tested && c.p_value_holm < alpha) {
+    if (c.source != "GLR" && c.SignificantAt(alpha)) {
       best_other_bic = std::min(best_other_bic, c.predicted_delta_bic);
     }
   }
   std::vector<const EffectCandidate*> by_bic;
   for (const EffectCandidate& c : candidates) {
-    if (c.source == "GLR" && c.identifiable && c.p_value_holm < alpha && c.onset_s.has_value() &&
+    if (c.source == "GLR" && c.SignificantAt(alpha) && c.onset_s.has_value() &&
         c.predicted_delta_bic < best_other_bic) {
       by_bic.push_back(&c);
     }

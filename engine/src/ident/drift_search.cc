@@ -9,51 +9,67 @@
 namespace insdiag::engine::ident {
 namespace {
 
+// ℓ of `model` on `run` by one filter pass, counted into `passes`.
+absl::StatusOr<double> LogLikelihoodOf(const EpochRun& run, const ErrorModel& model, int& passes) {
+  auto pass = RunForwardFilter(run, model);
+  ++passes;
+  if (!pass.ok()) return pass.status();
+  return pass->log_likelihood;
+}
+
+// ℓ for comparing candidates: a model the filter cannot run is never the better.
+double LogLikelihoodOrWorst(const EpochRun& run, const ErrorModel& model, int& passes) {
+  return LogLikelihoodOf(run, model, passes).value_or(-std::numeric_limits<double>::infinity());
+}
+
+// The correlation times a search tries: from two update intervals to the run's length.
+struct TauRange {
+  double shortest_s = 0.0, longest_s = 0.0;
+  explicit TauRange(const EpochRun& run)
+      : shortest_s(2.0 * run.update_interval_s), longest_s(std::max(run.duration_s, shortest_s)) {}
+};
+
+struct GridPoint {
+  ErrorModel model;
+  double model_log_likelihood = 0.0;  // ℓ of the model the grid started from
+};
+
 // The best point of the coarse grid of DriftStartOptions, one drift at a
 // time in turn, each searched with the drifts before it at their best
 // (coordinate ascent: one drift's misfit swamps another's likelihood until
 // it is fitted): σ for the drifts of `which`, and τ too for those of
 // `tau_too` (the others keep the model's τ). The grid includes the model's
 // own point for a σ-only drift, and the result is never below the model's
-// likelihood. Counts its passes into `passes`; `model_log_likelihood` gets
-// the model's.
-ErrorModel GridStart(const EpochRun& run, const ErrorModel& model, const DriftSelection& which,
-                     const DriftSelection& tau_too, const DriftStartOptions& starts, int& passes,
-                     double& model_log_likelihood) {
-  const double shortest_tau_s = 2.0 * run.update_interval_s;
-  const double longest_tau_s = std::max(run.duration_s, shortest_tau_s);
-  ErrorModel best = model;
-  auto likelihood = [&](const ErrorModel& m) {
-    auto pass = RunForwardFilter(run, m);
-    ++passes;
-    return pass.ok() ? pass->log_likelihood : -std::numeric_limits<double>::infinity();
-  };
-  double best_ll = likelihood(best);
-  model_log_likelihood = best_ll;
+// likelihood. Counts its passes into `passes`.
+GridPoint GridStart(const EpochRun& run, const ErrorModel& model, const DriftSelection& which,
+                    const DriftSelection& tau_too, const DriftStartOptions& starts, int& passes) {
+  const TauRange range(run);
+  GridPoint out{model, LogLikelihoodOrWorst(run, model, passes)};
+  double best_ll = out.model_log_likelihood;
   const int points = std::max(1, starts.grid_tau_points);
   for (int d = 0; d < kDriftCount; ++d) {
     if (!which[static_cast<size_t>(d)] || !(DriftOf(model, d).sigma > 0.0)) continue;
     const GaussMarkov specified = DriftOf(model, d);
     const bool with_tau = tau_too[static_cast<size_t>(d)];
-    GaussMarkov chosen = DriftOf(best, d);
+    GaussMarkov chosen = DriftOf(out.model, d);
     for (int t = 0; t < (with_tau ? points : 1); ++t) {
       const double fraction = points > 1 ? static_cast<double>(t) / (points - 1) : 0.5;
       const double tau_s =
-          with_tau ? shortest_tau_s * std::pow(longest_tau_s / shortest_tau_s, fraction) : specified.tau_s;
+          with_tau ? range.shortest_s * std::pow(range.longest_s / range.shortest_s, fraction) : specified.tau_s;
       for (double factor : starts.grid_sigma_factors) {
         if (!with_tau && factor == 1.0) continue;  // the model's own point, already weighed
-        ErrorModel trial = best;
+        ErrorModel trial = out.model;
         DriftOf(trial, d) = GaussMarkov{specified.sigma * factor, tau_s};
-        const double ll = likelihood(trial);
+        const double ll = LogLikelihoodOrWorst(run, trial, passes);
         if (ll > best_ll) {
           best_ll = ll;
           chosen = DriftOf(trial, d);
         }
       }
     }
-    DriftOf(best, d) = chosen;
+    DriftOf(out.model, d) = chosen;
   }
-  return best;
+  return out;
 }
 
 }  // namespace
@@ -63,8 +79,7 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
                                                                const DriftSelection& which,
                                                                const DriftStartOptions& starts,
                                                                const DriftLikelihoodOptions& options) {
-  const double shortest_tau_s = 2.0 * run.update_interval_s;
-  const double longest_tau_s = std::max(run.duration_s, shortest_tau_s);
+  const TauRange range(run);
   int iterations = 0, passes = 0;
   std::vector<ErrorModel> start_models = {model};
   for (double factor : starts.tau_factors) {
@@ -72,14 +87,11 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
     for (int d = 0; d < kDriftCount; ++d) {
       if (!which[static_cast<size_t>(d)]) continue;
       GaussMarkov& drift = DriftOf(start, d);
-      drift.tau_s = std::clamp(drift.tau_s * factor, shortest_tau_s, longest_tau_s);
+      drift.tau_s = std::clamp(drift.tau_s * factor, range.shortest_s, range.longest_s);
     }
     start_models.push_back(std::move(start));
   }
-  if (starts.grid_tau_points > 0) {
-    double unused_model_log_likelihood = 0.0;
-    start_models.push_back(GridStart(run, model, which, which, starts, passes, unused_model_log_likelihood));
-  }
+  if (starts.grid_tau_points > 0) start_models.push_back(GridStart(run, model, which, which, starts, passes).model);
   std::vector<DriftLikelihoodResult> fits;
   std::optional<double> before;  // the likelihood of the model as given: the first start's
   for (size_t i = 0; i < start_models.size(); ++i) {
@@ -98,12 +110,7 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
   // starts climb one ridge per axis, and the best joint fit may hold an axis
   // on its worse side.
   ErrorModel combined = best->model;
-  auto likelihood = [&](const ErrorModel& m) -> double {
-    auto pass = RunForwardFilter(run, m);
-    ++passes;
-    return pass.ok() ? pass->log_likelihood : -std::numeric_limits<double>::infinity();
-  };
-  double combined_ll = likelihood(combined);
+  double combined_ll = best->log_likelihood_after;
   bool changed = false;
   for (int d = 0; d < kDriftCount; ++d) {
     if (!which[static_cast<size_t>(d)]) continue;
@@ -111,7 +118,7 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
       if (&other == &*best || DriftOf(other.model, d) == DriftOf(combined, d)) continue;
       ErrorModel trial = combined;
       DriftOf(trial, d) = DriftOf(other.model, d);
-      const double ll = likelihood(trial);
+      const double ll = LogLikelihoodOrWorst(run, trial, passes);
       if (ll > combined_ll) {
         combined = trial;
         combined_ll = ll;
@@ -145,12 +152,11 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromGrid(const EpochRun& run
     return IdentifyDriftsByLikelihood(run, model, a_priori, which, tau_too, options);
   }
   int passes = 0;
-  double model_log_likelihood = 0.0;
-  const ErrorModel start = GridStart(run, model, which, tau_too, starts, passes, model_log_likelihood);
-  auto fit = IdentifyDriftsByLikelihood(run, start, a_priori, which, tau_too, options);
+  const GridPoint start = GridStart(run, model, which, tau_too, starts, passes);
+  auto fit = IdentifyDriftsByLikelihood(run, start.model, a_priori, which, tau_too, options);
   if (!fit.ok()) return fit.status();
   // The improvement is measured from the model as given, not from the grid's point.
-  fit->log_likelihood_before = model_log_likelihood;
+  fit->log_likelihood_before = start.model_log_likelihood;
   fit->filter_passes += passes;
   return fit;
 }
@@ -160,14 +166,7 @@ absl::StatusOr<std::vector<std::string>> WidenErrorsToTheLikelihoodRatio(const E
                                                                          DriftLikelihoodResult& fit) {
   std::vector<std::string> widened;
   if (fit.identified.empty()) return widened;
-  auto likelihood = [&](const ErrorModel& m) -> absl::StatusOr<double> {
-    auto pass = RunForwardFilter(run, m);
-    ++fit.filter_passes;
-    if (!pass.ok()) return pass.status();
-    return pass->log_likelihood;
-  };
-  const auto at_fit = likelihood(fit.model);
-  if (!at_fit.ok()) return at_fit.status();
+  const double at_fit = fit.log_likelihood_after;
   for (int d = 0; d < kDriftCount; ++d) {
     const GaussMarkov& estimate = DriftOf(fit.model, d);
     const GaussMarkov& before = DriftOf(reference, d);
@@ -186,13 +185,13 @@ absl::StatusOr<std::vector<std::string>> WidenErrorsToTheLikelihoodRatio(const E
     if (estimates.empty()) continue;
     ErrorModel without = fit.model;
     DriftOf(without, d) = before;
-    const auto at_reference = likelihood(without);
+    const auto at_reference = LogLikelihoodOf(run, without, fit.filter_passes);
     if (!at_reference.ok()) continue;
     // The floor is χ²'s median: below it neither statistic says the estimate
     // departs from the reference, and a test-based SE would only measure how
     // near the two points are.
     const double floor = stats::ChiSquareQuantile(0.5, static_cast<double>(estimates.size()));
-    const double statistic = std::max(2.0 * (*at_fit - *at_reference), floor);
+    const double statistic = std::max(2.0 * (at_fit - *at_reference), floor);
     if (!(wald > statistic)) continue;
     const double widen = std::sqrt(wald / statistic);
     for (ParameterEstimate* p : estimates) {
@@ -208,17 +207,10 @@ absl::StatusOr<std::vector<std::string>> WidenErrorsToTheLikelihoodRatio(const E
 
 absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const EpochRun& run, const ErrorModel& model,
                                                                      DriftLikelihoodResult fit, double log_n) {
-  auto likelihood = [&](const ErrorModel& m) -> absl::StatusOr<double> {
-    auto pass = RunForwardFilter(run, m);
-    ++fit.filter_passes;
-    if (!pass.ok()) return pass.status();
-    return pass->log_likelihood;
-  };
-  const auto before = likelihood(model);
+  const auto before = LogLikelihoodOf(run, model, fit.filter_passes);
   if (!before.ok()) return before.status();
   ErrorModel kept = fit.model;
-  auto kept_ll = likelihood(kept);
-  if (!kept_ll.ok()) return kept_ll.status();
+  double kept_ll = fit.log_likelihood_after;
   auto parameters_of = [&](int d) {
     const std::string prefix = DriftName(d) + ".";
     return static_cast<int>(std::count_if(fit.identified.begin(), fit.identified.end(), [&](const ParameterEstimate& p) {
@@ -232,10 +224,10 @@ absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const Epoch
       if (DriftOf(kept, d) == DriftOf(model, d)) continue;
       ErrorModel without = kept;
       DriftOf(without, d) = DriftOf(model, d);
-      const auto ll = likelihood(without);
+      const auto ll = LogLikelihoodOf(run, without, fit.filter_passes);
       // A drift the filter cannot run without is worth its parameters.
       if (!ll.ok()) continue;
-      const double margin = 2.0 * (*kept_ll - *ll) - parameters_of(d) * log_n;
+      const double margin = 2.0 * (kept_ll - *ll) - parameters_of(d) * log_n;
       if (least < 0 || margin < least_margin) {
         least = d;
         least_margin = margin;
@@ -244,7 +236,7 @@ absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const Epoch
     }
     if (least < 0 || least_margin > 0.0) break;
     DriftOf(kept, least) = DriftOf(model, least);
-    *kept_ll = least_ll;
+    kept_ll = least_ll;
   }
   std::erase_if(fit.identified, [&](const ParameterEstimate& p) {
     for (int d = 0; d < kDriftCount; ++d) {
@@ -254,7 +246,7 @@ absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const Epoch
   });
   fit.model = kept;
   fit.log_likelihood_before = *before;
-  fit.log_likelihood_after = *kept_ll;
+  fit.log_likelihood_after = kept_ll;
   return fit;
 }
 

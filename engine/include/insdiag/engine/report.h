@@ -59,6 +59,9 @@ struct EffectCandidate {
   double onset_std_s = 0.0;
   double onset_low_s = 0.0;
   double onset_high_s = 0.0;
+
+  // Tested, identifiable and significant at family-wise `alpha` (Holm).
+  bool SignificantAt(double alpha) const { return identifiable && tested && p_value_holm < alpha; }
 };
 
 // Correlation processing of one drift state's smoothed estimate.

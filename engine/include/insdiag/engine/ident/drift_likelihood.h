@@ -150,8 +150,8 @@ struct DriftLikelihoodResult {
   // Selected drifts whose likelihood is flat in σ (the run cannot tell it);
   // the model keeps their values.
   std::vector<std::string> not_identifiable;
-  double log_likelihood_before = 0.0;
-  double log_likelihood_after = 0.0;
+  double log_likelihood_before = 0.0;  // ℓ of the model the identification was given
+  double log_likelihood_after = 0.0;   // ℓ of `model`
   int iterations = 0;
   int filter_passes = 0;
   bool converged = false;
@@ -222,8 +222,8 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromGrid(const EpochRun& run
 // flat: one hour of a 30-minute drift gave σ and τ 6.6 and 5.9 SE from the
 // datasheet's values where 2Δℓ between the two points was 9.0 (the SEs
 // widen 3 ×). 2Δℓ is floored at χ²'s median for the drift's parameter count.
-// Never narrows an SE. One filter pass per drift and one for the fit.
-// Returns the names of the drifts widened.
+// Never narrows an SE. One filter pass per drift. Returns the names of the
+// drifts widened.
 absl::StatusOr<std::vector<std::string>> WidenErrorsToTheLikelihoodRatio(const EpochRun& run,
                                                                          const ErrorModel& reference,
                                                                          DriftLikelihoodResult& fit);
@@ -240,7 +240,7 @@ absl::StatusOr<std::vector<std::string>> WidenErrorsToTheLikelihoodRatio(const E
 // looks worthless, then shows as steps and walks once the first is taken. A
 // run tells some axes' drifts and not others, and a parameter re-tuned
 // without cause costs the competition its ln N. One filter pass per kept
-// drift per round, one for `model` and one for the fit.
+// drift per round and one for `model`.
 absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const EpochRun& run, const ErrorModel& model,
                                                                      DriftLikelihoodResult fit, double log_n);
 
