@@ -1,5 +1,8 @@
 #include "insdiag/engine/analysis.h"
 
+#include <absl/strings/str_cat.h>
+#include <absl/strings/str_format.h>
+
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -85,6 +88,33 @@ absl::StatusOr<ErrorModel> APrioriModel(const BenchRun& run, const std::optional
                                          ": the run's datasheet lacks it and no nominal model was given");
   }
   return model;
+}
+
+// Measures the constant biases on the static segments and removes the
+// dominant ones from `run` (ident/static_constants.h); they are returned as
+// identified turn-on biases.
+std::vector<ParameterEstimate> RemoveDominantConstants(BenchRun& run, const std::optional<ident::AllanResult>& allan,
+                                                       const ErrorModel& a_priori, const AnalysisOptions& options,
+                                                       std::vector<std::string>& notes) {
+  absl::StatusOr<std::vector<ident::StaticSegment>> segments =
+      allan.has_value() ? absl::StatusOr<std::vector<ident::StaticSegment>>(allan->segments)
+                        : ident::FindStaticSegments(run, options.allan);
+  if (!segments.ok() || segments->empty()) return {};
+  auto constants = ident::MeasureStaticConstants(run, *segments, a_priori, options.dominant_constants);
+  if (!constants.ok() || !constants->AnyDominant()) return {};
+  ident::RemoveDominantConstants(*constants, run);
+  std::string list;
+  for (const ident::StaticConstant& c : constants->axes) {
+    if (!c.dominant) continue;
+    absl::StrAppend(&list, list.empty() ? "" : ", ",
+                    absl::StrFormat("%s %.3g ± %.2g %s (%.0f a-priori drift σ)", c.TermName(), c.bias, c.std_error,
+                                    c.Unit(), std::abs(c.bias) / c.drift_sigma));
+  }
+  notes.push_back(absl::StrFormat(
+      "constant biases far beyond the a-priori model, measured over %.0f s of static segments against the reference "
+      "and removed from the samples before identification: %s",
+      constants->static_s, list));
+  return ident::DominantConstantEstimates(*constants);
 }
 
 absl::Status AddEffects(const BenchRun& run, const std::vector<std::string>& selectors, double update_interval_s,
@@ -1027,6 +1057,9 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
                                                    d.acc_bias_sigma_mps2 && d.acc_bias_tau_s) {
     drift_starts.grid_tau_points = 0;
   }
+  const std::vector<ParameterEstimate> removed_constants =
+      options.remove_dominant_constants ? RemoveDominantConstants(run, allan, *a_priori, options, notes)
+                                        : std::vector<ParameterEstimate>{};
   if (auto st = AddEffects(run, request.baseline_effects, options.filter.update_interval_s,
                            options.diffuse_prior_scale, base);
       !st.ok()) {
@@ -1264,6 +1297,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   if (scanned.has_value()) notes.insert(notes.end(), scanned->notes.begin(), scanned->notes.end());
   const Findings found_a = scanned.has_value() ? std::move(scanned->found)
                                                : FindMissingEffects(run, epochs, *a, *a_priori, spikes, options, &notes);
+  identified.insert(identified.begin(), removed_constants.begin(), removed_constants.end());
   AnalysisReport report_a = ReportOf(*a, found_a, run, options, identified, notes);
 
   Analysis out;

@@ -26,6 +26,7 @@ v1::IdentifiedParameter::Method MethodOf(const std::string& method) {
   if (method == "ALLAN") return v1::IdentifiedParameter::ALLAN;
   if (method == "FILTER") return v1::IdentifiedParameter::FILTER;
   if (method == "ML") return v1::IdentifiedParameter::ML;
+  if (method == "STATIC") return v1::IdentifiedParameter::STATIC;
   return v1::IdentifiedParameter::METHOD_UNSPECIFIED;
 }
 

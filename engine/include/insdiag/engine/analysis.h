@@ -2,7 +2,7 @@
 // analysis report out (docs/ARCHITECTURE.md, engine pipeline):
 //
 //   screen raw samples for spikes → Allan deviation of the static segments
-//   → a-priori model → retargeting: [mechanisation → forward filter →
+//   → a-priori model → dominant constant biases removed → retargeting: [mechanisation → forward filter →
 //   smoother → correlation processing of the drifts → re-tuned model] until
 //   the parameters settle → final pass with the missing-effect scan →
 //   monitoring, fit metrics, ranked candidates
@@ -29,6 +29,7 @@
 #include "insdiag/engine/finder/onset_scan.h"
 #include "insdiag/engine/ident/allan.h"
 #include "insdiag/engine/ident/retarget.h"
+#include "insdiag/engine/ident/static_constants.h"
 #include "insdiag/engine/ident/correlation.h"
 #include "insdiag/engine/ident/drift_likelihood.h"
 #include "insdiag/engine/model/error_model.h"
@@ -55,6 +56,11 @@ struct AnalysisOptions {
   bool keep_series = false;
   // Identification and retargeting (off: the a-priori model as it is).
   bool identify = true;
+  // Constant biases far beyond the a-priori model, measured on the static
+  // segments and removed from the samples before any filter pass
+  // (ident/static_constants.h).
+  bool remove_dominant_constants = true;
+  ident::DominantConstantOptions dominant_constants;
   int max_retarget_iterations = 4;
   double settle_log_ratio = 0.1;  // a parameter has settled within 10% (or one σ)
   ident::CorrelationOptions correlation;

@@ -11,7 +11,7 @@ struct ParameterEstimate {
   std::string name;  // "gyro_bias_gm.x.sigma", "gyro_arw.x", "gyro_scale_factor.z", …
   double value = 0.0;
   double std_error = std::numeric_limits<double>::quiet_NaN();
-  std::string method;  // "ACF", "ALLAN", "FILTER" or "ML" (innovation likelihood)
+  std::string method;  // "ACF", "ALLAN", "FILTER", "ML" (innovation likelihood) or "STATIC" (static means)
   std::string unit;
   double a_priori = std::numeric_limits<double>::quiet_NaN();  // the model's value before identification
   // 95% interval (NaN when the estimator gives none beyond ± 1.96 σ).

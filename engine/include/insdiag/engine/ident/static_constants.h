@@ -1,0 +1,96 @@
+// The run's constant sensor biases measured directly from the samples, before
+// any filter pass, and the dominant ones removed.
+//
+// Over a static segment (allan.h) the table holds the body at a known
+// attitude C_b^n, and a perfect unit reads (Titterton & Weston, Strapdown
+// Inertial Navigation Technology, 2nd ed., §10.3: the multi-position static
+// test):
+//   ω_ib^b = (C_b^n)ᵀ ω_ie^n          Earth rate at the site (wgs84.h)
+//   f_ib^b = (C_b^n)ᵀ (0, 0, −g)ᵀ     normal gravity at the site, NED
+// The mean of the reading minus this over every static sample is each axis'
+// constant bias b̂ (its turn-on bias plus the drift's mean over those
+// samples). Its standard error from the a-priori model, for a total static
+// time T: white noise N²/T and the mean of a first-order Gauss–Markov drift,
+//   Var = N²/T + (2σ²τ/T)·(1 − (τ/T)(1 − e^{−T/τ}))
+// (Papoulis & Pillai, Probability, Random Variables and Stochastic
+// Processes, 4th ed., §9-5: the variance of a time average), or the batch
+// means' standard error where the data scatter more (an a-priori drift
+// smaller than the unit's).
+//
+// Why measure them before the filter. The a-priori model holds a constant
+// bias only as its drift state, N(0, σ²). A unit far from that model — a
+// MEMS unit's turn-on bias of 0.1–1 °/s under a drift of 10 °/h, hundreds of
+// drift σ — is explained by nothing the filter may try: maximum likelihood
+// inflates the drift σ and the noise to absorb it, and the scan's one-step
+// estimates leave their linear range (a 100 % scale factor on a static run).
+// Such a bias is dominant: beyond `drift_sigmas` a-priori drift σ and beyond
+// `standard_errors` of its own standard error. The analysis removes the
+// dominant biases from the samples and reports them as identified turn-on
+// biases; everything after (identification, scan, comparison) works on the
+// remainder, where the a-priori model is again a starting point.
+#pragma once
+
+#include <absl/status/statusor.h>
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "insdiag/engine/bench_run.h"
+#include "insdiag/engine/ident/allan.h"
+#include "insdiag/engine/model/effect_catalogue.h"
+#include "insdiag/engine/model/error_model.h"
+#include "insdiag/engine/parameter_estimate.h"
+
+namespace insdiag::engine::ident {
+
+struct DominantConstantOptions {
+  // A hidden turn-on bias of three tolerances of a navigation-grade type
+  // sits at about 15 a-priori drift σ, and the missing-effect scan finds it
+  // (the loop's own tests). MEMS-class turn-on biases sit at 20–150 σ of
+  // their drift, where a Gaussian drift prior gives them a probability below
+  // e^{−200}.
+  double drift_sigmas = 20.0;
+  double standard_errors = 5.0;
+  // Batches for the data's own standard error of the means: the larger of it
+  // and the a-priori model's is reported.
+  int batches = 20;
+};
+
+// One sensor axis' measured constant bias.
+struct StaticConstant {
+  Sensor sensor = Sensor::kGyro;
+  int axis = 0;
+  double bias = 0.0;          // rad/s | m/s²
+  double std_error = 0.0;     // rad/s | m/s²
+  double drift_sigma = 0.0;   // the a-priori drift σ it is weighed against
+  bool dominant = false;
+
+  // The catalogue term it is reported as: "gyro_turn_on_bias.x".
+  std::string TermName() const;
+  std::string Unit() const;
+};
+
+struct StaticConstants {
+  double static_s = 0.0;  // total static time measured
+  // Gyro x, y, z, accelerometer x, y, z (SensorAxisIndex order).
+  std::array<StaticConstant, 6> axes;
+
+  bool AnyDominant() const;
+};
+
+// The constant bias of every sensor axis over the static segments, weighed
+// against the a-priori model. FailedPrecondition when the run has no static
+// segment.
+absl::StatusOr<StaticConstants> MeasureStaticConstants(const BenchRun& run,
+                                                       const std::vector<StaticSegment>& segments,
+                                                       const ErrorModel& a_priori,
+                                                       const DominantConstantOptions& options = {});
+
+// Subtracts the dominant constants from every sample of `run`.
+void RemoveDominantConstants(const StaticConstants& constants, BenchRun& run);
+
+// The dominant constants as identified parameters (method "STATIC").
+std::vector<ParameterEstimate> DominantConstantEstimates(const StaticConstants& constants);
+
+}  // namespace insdiag::engine::ident
