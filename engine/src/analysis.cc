@@ -1,8 +1,5 @@
 #include "insdiag/engine/analysis.h"
 
-#include <absl/strings/str_cat.h>
-#include <absl/strings/str_format.h>
-
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -90,31 +87,17 @@ absl::StatusOr<ErrorModel> APrioriModel(const BenchRun& run, const std::optional
   return model;
 }
 
-// Measures the constant biases on the static segments and removes the
-// dominant ones from `run` (ident/static_constants.h); they are returned as
-// identified turn-on biases.
+// The dominant constant biases removed from `run` (ident/static_constants.h),
+// on the Allan analysis's static segments when it ran.
 std::vector<ParameterEstimate> RemoveDominantConstants(BenchRun& run, const std::optional<ident::AllanResult>& allan,
                                                        const ErrorModel& a_priori, const AnalysisOptions& options,
                                                        std::vector<std::string>& notes) {
-  absl::StatusOr<std::vector<ident::StaticSegment>> segments =
-      allan.has_value() ? absl::StatusOr<std::vector<ident::StaticSegment>>(allan->segments)
-                        : ident::FindStaticSegments(run, options.allan);
-  if (!segments.ok() || segments->empty()) return {};
-  auto constants = ident::MeasureStaticConstants(run, *segments, a_priori, options.dominant_constants);
-  if (!constants.ok() || !constants->AnyDominant()) return {};
-  ident::RemoveDominantConstants(*constants, run);
-  std::string list;
-  for (const ident::StaticConstant& c : constants->axes) {
-    if (!c.dominant) continue;
-    absl::StrAppend(&list, list.empty() ? "" : ", ",
-                    absl::StrFormat("%s %.3g ± %.2g %s (%.0f a-priori drift σ)", c.TermName(), c.bias, c.std_error,
-                                    c.Unit(), std::abs(c.bias) / c.drift_sigma));
+  if (allan.has_value()) {
+    return ident::RemoveDominantConstants(run, allan->segments, a_priori, options.dominant_constants, notes);
   }
-  notes.push_back(absl::StrFormat(
-      "constant biases far beyond the a-priori model, measured over %.0f s of static segments against the reference "
-      "and removed from the samples before identification: %s",
-      constants->static_s, list));
-  return ident::DominantConstantEstimates(*constants);
+  auto segments = ident::FindStaticSegments(run, options.allan);
+  if (!segments.ok()) return {};
+  return ident::RemoveDominantConstants(run, *segments, a_priori, options.dominant_constants, notes);
 }
 
 absl::Status AddEffects(const BenchRun& run, const std::vector<std::string>& selectors, double update_interval_s,

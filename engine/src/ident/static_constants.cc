@@ -1,5 +1,8 @@
 #include "insdiag/engine/ident/static_constants.h"
 
+#include <absl/strings/str_cat.h>
+#include <absl/strings/str_format.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -21,34 +24,7 @@ double MeanVariance(double white_density, const GaussMarkov& drift, double durat
   return variance;
 }
 
-// The standard error of each axis' mean from the data: the scatter of the
-// means of `batches` equal batches of the static samples (batch means,
-// Law & Kelton, Simulation Modeling and Analysis, 3rd ed., §9.5.3). It
-// stands in when the a-priori drift is smaller than the unit's.
-Eigen::Matrix<double, 6, 1> BatchMeanStandardErrors(const std::vector<Eigen::Matrix<double, 6, 1>>& residuals,
-                                                    int batches) {
-  Eigen::Matrix<double, 6, 1> se = Eigen::Matrix<double, 6, 1>::Zero();
-  const size_t per_batch = residuals.size() / static_cast<size_t>(batches);
-  if (per_batch == 0) return se;
-  std::vector<Eigen::Matrix<double, 6, 1>> means(static_cast<size_t>(batches), Eigen::Matrix<double, 6, 1>::Zero());
-  Eigen::Matrix<double, 6, 1> grand = Eigen::Matrix<double, 6, 1>::Zero();
-  for (size_t b = 0; b < means.size(); ++b) {
-    for (size_t k = b * per_batch; k < (b + 1) * per_batch; ++k) means[b] += residuals[k];
-    means[b] /= static_cast<double>(per_batch);
-    grand += means[b];
-  }
-  grand /= static_cast<double>(batches);
-  for (const auto& m : means) se += (m - grand).cwiseAbs2();
-  return (se / (static_cast<double>(batches) * (batches - 1))).cwiseSqrt();
-}
-
 }  // namespace
-
-std::string StaticConstant::TermName() const {
-  return std::string(sensor == Sensor::kGyro ? "gyro" : "acc") + "_turn_on_bias." + "xyz"[axis];
-}
-
-std::string StaticConstant::Unit() const { return sensor == Sensor::kGyro ? "rad/s" : "m/s^2"; }
 
 bool StaticConstants::AnyDominant() const {
   return std::any_of(axes.begin(), axes.end(), [](const StaticConstant& c) { return c.dominant; });
@@ -62,70 +38,110 @@ absl::StatusOr<StaticConstants> MeasureStaticConstants(const BenchRun& run,
   const Eigen::Vector3d earth_rate_n = wgs84::EarthRateNed(site.latitude_rad);
   const Eigen::Vector3d specific_force_n(0.0, 0.0, -wgs84::NormalGravityMps2(site.latitude_rad, site.height_m));
 
-  // Reading minus a perfect unit's, per static sample (gyro x, y, z, acc x, y, z).
-  std::vector<Eigen::Matrix<double, 6, 1>> residuals;
-  Eigen::Matrix<double, 6, 1> sum = Eigen::Matrix<double, 6, 1>::Zero();
+  size_t count = 0;
   double static_s = 0.0;
   for (const StaticSegment& s : segments) {
-    for (size_t k = s.first_sample; k < s.end_sample && k < run.samples.size(); ++k) {
-      const ImuSample& sample = run.samples[k];
-      const Eigen::Matrix3d C_n_b = nav::EulerToDcm(sample.ref_rpy_rad).transpose();
-      Eigen::Matrix<double, 6, 1> r;
-      r << sample.gyro_rad_s - C_n_b * earth_rate_n, sample.acc_mps2 - C_n_b * specific_force_n;
-      residuals.push_back(r);
-      sum += r;
-    }
+    const size_t end = std::min(s.end_sample, run.samples.size());
+    count += end > s.first_sample ? end - s.first_sample : 0;
     static_s += s.end_s - s.start_s;
   }
-  const size_t count = residuals.size();
   if (count == 0 || !(static_s > 0.0)) {
     return absl::FailedPreconditionError("the run has no static segment to measure its constant biases on");
   }
 
-  const Eigen::Matrix<double, 6, 1> batch_se = BatchMeanStandardErrors(residuals, options.batches);
+  // Reading minus a perfect unit's, per static sample (gyro x, y, z, acc x,
+  // y, z), summed whole and per batch. The standard error of each mean from
+  // the data: the scatter of the means of equal consecutive batches (batch
+  // means, Law & Kelton, Simulation Modeling and Analysis, 3rd ed., §9.5.3);
+  // it stands in when the a-priori drift is smaller than the unit's.
+  using Vector6d = Eigen::Matrix<double, 6, 1>;
+  const size_t batches = static_cast<size_t>(std::max(options.batches, 2));
+  const size_t per_batch = count / batches;
+  std::vector<Vector6d> batch_means;
+  batch_means.reserve(batches);
+  Vector6d sum = Vector6d::Zero(), batch_sum = Vector6d::Zero();
+  size_t in_batch = 0;
+  for (const StaticSegment& s : segments) {
+    for (size_t k = s.first_sample; k < s.end_sample && k < run.samples.size(); ++k) {
+      const ImuSample& sample = run.samples[k];
+      const Eigen::Matrix3d C_n_b = nav::EulerToDcm(sample.ref_rpy_rad).transpose();
+      Vector6d r;
+      r << sample.gyro_rad_s - C_n_b * earth_rate_n, sample.acc_mps2 - C_n_b * specific_force_n;
+      sum += r;
+      if (per_batch == 0 || batch_means.size() == batches) continue;
+      batch_sum += r;
+      if (++in_batch == per_batch) {
+        batch_means.push_back(batch_sum / static_cast<double>(per_batch));
+        batch_sum.setZero();
+        in_batch = 0;
+      }
+    }
+  }
+  Vector6d batch_se = Vector6d::Zero();
+  if (batch_means.size() == batches) {
+    Vector6d grand = Vector6d::Zero();
+    for (const Vector6d& m : batch_means) grand += m;
+    grand /= static_cast<double>(batches);
+    for (const Vector6d& m : batch_means) batch_se += (m - grand).cwiseAbs2();
+    batch_se = (batch_se / (static_cast<double>(batches) * static_cast<double>(batches - 1))).cwiseSqrt();
+  }
+
+  const EffectFamily* gyro_turn_on_bias = FindEffectFamily("gyro_turn_on_bias");
+  const EffectFamily* acc_turn_on_bias = FindEffectFamily("acc_turn_on_bias");
+  if (gyro_turn_on_bias == nullptr || acc_turn_on_bias == nullptr) {
+    return absl::InternalError("the effect catalogue has no turn-on bias families");
+  }
   StaticConstants out;
   out.static_s = static_s;
   for (int i = 0; i < kSensorAxisCount; ++i) {
     StaticConstant& c = out.axes[static_cast<size_t>(i)];
-    c.sensor = i < 3 ? Sensor::kGyro : Sensor::kAccelerometer;
-    c.axis = i % 3;
-    const SensorTriadModel& triad = c.sensor == Sensor::kGyro ? a_priori.gyro : a_priori.acc;
+    const bool gyro = i < 3;
+    c.term = EffectTerm{gyro ? gyro_turn_on_bias : acc_turn_on_bias, i % 3, i % 3};
+    const SensorTriadModel& triad = gyro ? a_priori.gyro : a_priori.acc;
     c.bias = sum[i] / static_cast<double>(count);
-    c.std_error = std::max(std::sqrt(MeanVariance(triad.white_noise_density[c.axis],
-                                                  triad.bias[static_cast<size_t>(c.axis)], static_s)),
+    const GaussMarkov& drift = triad.bias[static_cast<size_t>(c.term.axis)];
+    c.std_error = std::max(std::sqrt(MeanVariance(triad.white_noise_density[c.term.axis], drift, static_s)),
                            batch_se[i]);
-    c.drift_sigma = triad.bias[static_cast<size_t>(c.axis)].sigma;
+    c.drift_sigma = drift.sigma;
     c.dominant = std::abs(c.bias) > options.drift_sigmas * c.drift_sigma &&
                  std::abs(c.bias) > options.standard_errors * c.std_error;
   }
   return out;
 }
 
-void RemoveDominantConstants(const StaticConstants& constants, BenchRun& run) {
+std::vector<ParameterEstimate> RemoveDominantConstants(BenchRun& run, const std::vector<StaticSegment>& segments,
+                                                       const ErrorModel& a_priori,
+                                                       const DominantConstantOptions& options,
+                                                       std::vector<std::string>& notes) {
+  const auto constants = MeasureStaticConstants(run, segments, a_priori, options);
+  if (!constants.ok() || !constants->AnyDominant()) return {};
   Eigen::Vector3d gyro = Eigen::Vector3d::Zero(), acc = Eigen::Vector3d::Zero();
-  for (const StaticConstant& c : constants.axes) {
-    if (c.dominant) (c.sensor == Sensor::kGyro ? gyro : acc)[c.axis] = c.bias;
+  std::vector<ParameterEstimate> removed;
+  std::string list;
+  for (const StaticConstant& c : constants->axes) {
+    if (!c.dominant) continue;
+    (c.term.family->sensor == Sensor::kGyro ? gyro : acc)[c.term.axis] = c.bias;
+    ParameterEstimate p;
+    p.name = c.term.Name();
+    p.value = c.bias;
+    p.std_error = c.std_error;
+    p.method = "STATIC";
+    p.unit = std::string(c.term.family->unit);
+    p.a_priori = 0.0;
+    removed.push_back(std::move(p));
+    absl::StrAppend(&list, list.empty() ? "" : ", ",
+                    absl::StrFormat("%s %.3g ± %.2g %s (%.0f a-priori drift σ)", c.term.Name(), c.bias, c.std_error,
+                                    c.term.family->unit, std::abs(c.bias) / c.drift_sigma));
   }
   for (ImuSample& s : run.samples) {
     s.gyro_rad_s -= gyro;
     s.acc_mps2 -= acc;
   }
-}
-
-std::vector<ParameterEstimate> DominantConstantEstimates(const StaticConstants& constants) {
-  std::vector<ParameterEstimate> out;
-  for (const StaticConstant& c : constants.axes) {
-    if (!c.dominant) continue;
-    ParameterEstimate p;
-    p.name = c.TermName();
-    p.value = c.bias;
-    p.std_error = c.std_error;
-    p.method = "STATIC";
-    p.unit = c.Unit();
-    p.a_priori = 0.0;
-    out.push_back(std::move(p));
-  }
-  return out;
+  notes.push_back(absl::StrFormat(
+      "constant biases far beyond the a-priori model, measured over %.0f s of static segments against the reference "
+      "and removed from the samples before identification: %s",
+      constants->static_s, list));
+  return removed;
 }
 
 }  // namespace insdiag::engine::ident

@@ -59,16 +59,11 @@ struct DominantConstantOptions {
 
 // One sensor axis' measured constant bias.
 struct StaticConstant {
-  Sensor sensor = Sensor::kGyro;
-  int axis = 0;
-  double bias = 0.0;          // rad/s | m/s²
-  double std_error = 0.0;     // rad/s | m/s²
+  EffectTerm term;            // the catalogue's turn-on bias of the axis, as it is reported
+  double bias = 0.0;          // in term.family->unit (rad/s | m/s²)
+  double std_error = 0.0;
   double drift_sigma = 0.0;   // the a-priori drift σ it is weighed against
   bool dominant = false;
-
-  // The catalogue term it is reported as: "gyro_turn_on_bias.x".
-  std::string TermName() const;
-  std::string Unit() const;
 };
 
 struct StaticConstants {
@@ -87,10 +82,13 @@ absl::StatusOr<StaticConstants> MeasureStaticConstants(const BenchRun& run,
                                                        const ErrorModel& a_priori,
                                                        const DominantConstantOptions& options = {});
 
-// Subtracts the dominant constants from every sample of `run`.
-void RemoveDominantConstants(const StaticConstants& constants, BenchRun& run);
-
-// The dominant constants as identified parameters (method "STATIC").
-std::vector<ParameterEstimate> DominantConstantEstimates(const StaticConstants& constants);
+// Measures the constants on `segments`, subtracts the dominant ones from
+// every sample of `run` and says so in `notes`. Returns them as identified
+// parameters (method "STATIC", a-priori 0); empty when none is dominant or
+// the run has no static segment.
+std::vector<ParameterEstimate> RemoveDominantConstants(BenchRun& run, const std::vector<StaticSegment>& segments,
+                                                       const ErrorModel& a_priori,
+                                                       const DominantConstantOptions& options,
+                                                       std::vector<std::string>& notes);
 
 }  // namespace insdiag::engine::ident
