@@ -6,7 +6,9 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <set>
 
+#include "absl/strings/str_format.h"
 #include "insdiag/engine/nav/rotation.h"
 #include "insdiag/engine/nav/wgs84.h"
 #include "insdiag/engine/stats/distributions.h"
@@ -44,6 +46,10 @@ Eigen::MatrixXd Select(const Eigen::MatrixXd& m, const std::vector<Eigen::Index>
   return out;
 }
 
+// The first-order attitude model's relative error ψ/2 at which it stops
+// describing the filter at all: the dropped term half the kept one (ψ = 1 rad).
+constexpr double kLinearModelBreakdown = 0.5;
+
 // Eigenvalues below this share of the largest count as zero information.
 constexpr double kRankTolerance = 1e-10;
 
@@ -61,6 +67,17 @@ double PseudoInverseStatistic(const Eigen::VectorXd& s, const Eigen::MatrixXd& I
     ++*rank;
   }
   return lm;
+}
+
+// The filter's peak attitude error under the estimate β̂ of a term's columns:
+// |A_ψ β̂| bounded by Σ |β̂_k| max|A_ψ,k| (exact for one column).
+double ImpliedPeakAttitudeError(const Eigen::VectorXd& beta, const Eigen::VectorXd& peak_sensitivity,
+                                const std::vector<Eigen::Index>& columns) {
+  double rad = 0.0;
+  for (size_t k = 0; k < columns.size(); ++k) {
+    rad += std::abs(beta[static_cast<Eigen::Index>(k)]) * peak_sensitivity[columns[k]];
+  }
+  return rad;
 }
 
 double Percentile(std::vector<double> v, double q) {
@@ -175,6 +192,7 @@ RankedEffects RankMissingEffects(const ScoreTestObserver& scan, const ForwardPas
     const TermColumns* columns;
   };
   std::vector<Scored> scored;
+  std::set<std::string> outside_linear_range;
   for (const TermColumns& t : terms) {
     Scored sc;
     sc.columns = &t;
@@ -215,6 +233,22 @@ RankedEffects RankMissingEffects(const ScoreTestObserver& scan, const ForwardPas
     }
     c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
     c.predicted_delta_bic = -c.statistic + c.dof * log_n;
+    const double attitude_error_rad = ImpliedPeakAttitudeError(sc.beta, scan.peak_attitude_sensitivity(), t.columns);
+    const double linearisation_error = 0.5 * attitude_error_rad;  // relative, of β̂
+    if (linearisation_error > kLinearModelBreakdown) {
+      c.identifiable = false;
+      c.note = absl::StrFormat(
+          "far outside the linear range: the estimate would put the filter %.2g rad off in attitude, where the "
+          "first-order error model is %.0f %% wrong; not a finding (a larger error elsewhere in the model is the "
+          "likelier cause)",
+          attitude_error_rad, 100.0 * linearisation_error);
+      outside_linear_range.insert(c.name);
+    } else if (linearisation_error > c.std_error / std::abs(c.estimate)) {
+      c.note = absl::StrFormat(
+          "beyond the linear range: the estimate would put the filter %.2g rad off in attitude; its error is "
+          "the first-order model's (about %.0f %%) more than its standard error (%.0f %%): add it to measure it",
+          attitude_error_rad, 100.0 * linearisation_error, 100.0 * c.std_error / std::abs(c.estimate));
+    }
     scored.push_back(std::move(sc));
   }
 
@@ -286,7 +320,7 @@ RankedEffects RankMissingEffects(const ScoreTestObserver& scan, const ForwardPas
   std::vector<std::string> family_order;
   for (const TermColumns& t : terms) {
     std::string why;
-    if (!Excites(excitation, t.term, options.excitation, g, &why)) continue;
+    if (!Excites(excitation, t.term, options.excitation, g, &why) || outside_linear_range.count(t.term.Name())) continue;
     const std::string name(t.term.family->name);
     if (!family_columns.count(name)) family_order.push_back(name);
     auto& cols = family_columns[name];

@@ -19,6 +19,7 @@ ScoreTestObserver::ScoreTestObserver(const StateLayout& layout, const EpochRun& 
   sensitivity_.setZero(layout.size(), p);
   score_.setZero(p);
   information_.setZero(p, p);
+  peak_attitude_sensitivity_.setZero(p);
   segment_score_.assign(kChannelCount, Eigen::MatrixXd::Zero(p, 0));
   X_.setZero(p);
   for (const CandidateColumn& c : columns_) run_columns_.push_back(run.ConstantColumn(c.term, c.parameter));
@@ -30,6 +31,9 @@ void ScoreTestObserver::OnPrediction(int, const EpochInterval& epoch, const Inte
   for (size_t i = 0; i < run_columns_.size(); ++i) {
     sensitivity_.col(static_cast<Eigen::Index>(i)).head<9>() += epoch.constants.col(run_columns_[i]);
   }
+  // After prediction, before the updates correct it: the largest the error gets.
+  peak_attitude_sensitivity_ = peak_attitude_sensitivity_.cwiseMax(
+      sensitivity_.middleRows<3>(layout_.attitude()).colwise().norm().transpose());
   ++epoch_;
   const int segment = epoch_ / segment_epochs_;
   if (segment >= segment_score_.front().cols()) {

@@ -14,6 +14,16 @@
 // axes it needs, tilts that change the specific force it needs, temperature
 // change — and its information is non-singular; otherwise it is reported as
 // not identifiable with this profile, never as absent.
+//
+// Nor is a term whose one-step estimate is far outside the filter's linear
+// range. Under the estimate the filter's attitude error peaks at
+// ψ = |β̂| · max|A_ψ| (score_test.h); the first-order attitude model drops
+// [ψ×]²/2, a relative error of ψ/2 in the innovations' mean and so in β̂.
+// Beyond ψ/2 = 1/2 (ψ = 1 rad) the linear model no longer describes the
+// filter and the estimate is an artefact: the term is reported as far outside
+// the linear range, not ranked as a finding. Where ψ/2 only exceeds the
+// estimate's relative standard error SE/|β̂|, the term stays a finding and
+// its note says that the linearisation, not the noise, limits the estimate.
 #pragma once
 
 #include <string>

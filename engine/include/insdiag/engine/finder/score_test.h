@@ -17,6 +17,12 @@
 // without the effect and equals the likelihood ratio 2Δℓ of adding it; the
 // one-step estimate β̂ = 𝓘⁻¹ s is its maximum-likelihood estimate with
 // covariance 𝓘⁻¹.
+//
+// The quadratic is exact only while the filter's linearisation holds. Under
+// the alternative the filter's attitude error is A_ψ β (the attitude rows of
+// A), and the error model is first order in it (C̃ = (I − [ψ×]) C,
+// model/state_layout.h), so the peak over the run of each column's attitude
+// sensitivity is kept to say how far an estimate would move the filter.
 #pragma once
 
 #include <vector>
@@ -51,6 +57,8 @@ class ScoreTestObserver final : public FilterObserver {
   // s restricted to one channel and segment: score_by_segment()[channel](column, segment).
   const std::vector<Eigen::MatrixXd>& score_by_segment() const { return segment_score_; }
   int segment_epochs() const { return segment_epochs_; }
+  // Per column: max over epochs of |A_ψ column| [rad per unit of the parameter].
+  const Eigen::VectorXd& peak_attitude_sensitivity() const { return peak_attitude_sensitivity_; }
 
  private:
   const StateLayout& layout_;
@@ -61,6 +69,7 @@ class ScoreTestObserver final : public FilterObserver {
   Eigen::MatrixXd sensitivity_;  // n × p, A
   Eigen::VectorXd score_;
   Eigen::MatrixXd information_;
+  Eigen::VectorXd peak_attitude_sensitivity_;
   std::vector<Eigen::MatrixXd> segment_score_;  // per channel: p × segments
   Eigen::RowVectorXd X_;
 };
