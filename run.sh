@@ -31,6 +31,8 @@ insdiag is starting:
   gRPC   localhost:$grpc_port   (health checking and reflection on)
   REST   http://localhost:$http_port/v1/runs   (health: http://localhost:$http_port/healthz)
   data   $data_dir
+  token  on a new database, an admin token is written to $data_dir/admin-token:
+         export INSDIAG_TOKEN=\$(cat $data_dir/admin-token)
   upload $build_dir/clients/insdiag upload RUN.csv --server localhost:$grpc_port
 Stop with Ctrl-C.
 EOM

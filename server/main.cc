@@ -5,6 +5,7 @@
 #include <signal.h>
 
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -33,6 +34,10 @@ std::string DefaultDataDir() {
   return env != nullptr && *env != '\0' ? env : ".insdiag";
 }
 
+bool IsLoopback(const std::string& address) {
+  return address == "localhost" || address == "::1" || address.rfind("127.", 0) == 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -42,12 +47,15 @@ int main(int argc, char** argv) {
   std::string migrations_dir;
   insdiag::server::InsdiagServer::Options options;
   app.add_option("--data-dir", data_dir,
-                 "Directory of the embedded PostgreSQL cluster (default $INSDIAG_DATA_DIR, else ./.insdiag)");
+                 "Directory of the embedded PostgreSQL cluster and of the first admin token "
+                 "(default $INSDIAG_DATA_DIR, else ./.insdiag)");
   app.add_option("--grpc-port", options.grpc_port, "gRPC port (0: any free port)")->capture_default_str();
   app.add_option("--http-port", options.http_port, "REST/JSON port (0: any free port)")->capture_default_str();
   app.add_option("--database-url", database_url,
                  "Use this PostgreSQL (libpq URL) instead of the embedded one")->envname("INSDIAG_DATABASE_URL");
-  app.add_option("--bind", options.bind_address, "Address to listen on")->capture_default_str();
+  app.add_option("--bind", options.bind_address,
+                 "Address to listen on (loopback by default; elsewhere, tokens cross the network in clear)")
+      ->capture_default_str();
   app.add_option("--migrations-dir", migrations_dir,
                  "Apply migrations from this directory instead of those built in");
   options.web_dir = DefaultWebDir();
@@ -109,8 +117,18 @@ int main(int argc, char** argv) {
               << applied->already_applied << " before)\n";
   }
 
+  options.first_admin_token_file = std::filesystem::absolute(std::filesystem::path(data_dir) / "admin-token");
   auto server = insdiag::server::InsdiagServer::Start(**pool, options);
   if (!server.ok()) return Fail(server.status());
+  if ((*server)->wrote_first_admin_token()) {
+    std::cerr << "insdiagd: first start: an admin token is in " << options.first_admin_token_file.string()
+              << " (readable by this user only); make tokens for people and scripts with "
+                 "'insdiag tokens create', then keep that file safe or delete it\n";
+  }
+  if (!IsLoopback(options.bind_address)) {
+    std::cerr << "insdiagd: WARNING: listening on " << options.bind_address
+              << " without TLS: bearer tokens and bench data cross the network in clear text\n";
+  }
   std::cout << "insdiagd: listening grpc=" << options.bind_address << ":" << (*server)->grpc_port()
             << " http=" << options.bind_address << ":" << (*server)->http_port() << " database="
             << (postgres ? "embedded:" + postgres->cluster_dir().string() : std::string("external"))

@@ -13,6 +13,12 @@
 
 namespace insdiag::cli {
 
+void ServerFlags::Declare(OptionSink& options) {
+  options.Option("--server", &address, "Server gRPC address host:port (default localhost:50051)", "INSDIAG_SERVER");
+  options.Option("--token", &token, "Bearer token (insdiag tokens create; the first admin token is in the server's "
+                 "data directory, admin-token)", "INSDIAG_TOKEN");
+}
+
 int RequestFailed(std::ostream& err, const std::string& verb, const std::string& what, const absl::Status& status) {
   err << "insdiag " << verb << ": " << what << ": " << absl::StatusCodeToString(status.code()) << ": "
       << status.message() << "\n";

@@ -6,14 +6,25 @@
 #include <google/protobuf/message.h>
 #include <google/protobuf/timestamp.pb.h>
 
+#include <memory>
 #include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
 
+#include "insdiag/client/run_client.h"
 #include "insdiag/v1/knowledge.pb.h"
+#include "verb.h"
 
 namespace insdiag::cli {
+
+// --server and --token, as every verb that talks to the server takes them.
+struct ServerFlags {
+  std::string address = client::kDefaultServerAddress;
+  std::string token;
+  void Declare(OptionSink& options);
+  std::shared_ptr<grpc::Channel> Connect() const { return client::Connect(address, token); }
+};
 
 // "insdiag VERB: WHAT: CODE: message" on `err`; returns kExitRefused.
 int RequestFailed(std::ostream& err, const std::string& verb, const std::string& what, const absl::Status& status);

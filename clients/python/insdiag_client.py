@@ -2,7 +2,10 @@
 """A small insdiag client in Python over gRPC (Debian's python3-grpcio):
 upload a bench-run file, have the server analyse it, diagnose the unit.
 
-    /usr/bin/python3 clients/python/insdiag_client.py RUN.csv --server localhost:50051 [--json]
+    /usr/bin/python3 clients/python/insdiag_client.py RUN.csv --server localhost:50051 --token TOKEN [--json]
+
+The token (an OPERATOR's at least) comes from --token or $INSDIAG_TOKEN and
+travels as `authorization: Bearer <token>` on every call.
 
 The stubs are generated from proto/ at start (protoc with grpc_python_plugin)
 into --stubs-dir (default: a temporary directory); nothing generated is
@@ -20,7 +23,7 @@ import uuid
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 PROTO_DIR = os.path.normpath(os.path.join(HERE, "..", "..", "proto"))
-PROTOS = ["insdiag/v1/runs.proto", "insdiag/v1/analyses.proto", "insdiag/v1/knowledge.proto",
+PROTOS = ["insdiag/v1/access.proto", "insdiag/v1/runs.proto", "insdiag/v1/analyses.proto", "insdiag/v1/knowledge.proto",
           "google/api/annotations.proto", "google/api/http.proto", "google/rpc/status.proto"]
 COLUMNS = ["t", "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z", "ref_roll", "ref_pitch", "ref_yaw"]
 DATASHEET = {"gyro_arw": "gyro_arw_rad_rts", "gyro_bias_sigma": "gyro_bias_sigma_rad_s",
@@ -88,10 +91,46 @@ def upload(stub, pb, metadata, rows, order):
     return stub.UploadRun(messages())
 
 
+def bearer_token_interceptor(grpc, token):
+    """A client interceptor adding `authorization: Bearer <token>` to every call
+    (gRPC's own call credentials are withheld from channels without TLS)."""
+    import collections
+
+    class Details(collections.namedtuple("Details", ("method", "timeout", "metadata", "credentials",
+                                                     "wait_for_ready", "compression")),
+                  grpc.ClientCallDetails):
+        pass
+
+    class Interceptor(grpc.UnaryUnaryClientInterceptor, grpc.UnaryStreamClientInterceptor,
+                      grpc.StreamUnaryClientInterceptor, grpc.StreamStreamClientInterceptor):
+        def _with_token(self, details):
+            metadata = list(details.metadata or [])
+            if token:
+                metadata.append(("authorization", "Bearer " + token))
+            return Details(details.method, details.timeout, metadata, details.credentials,
+                           getattr(details, "wait_for_ready", None), getattr(details, "compression", None))
+
+        def intercept_unary_unary(self, continuation, details, request):
+            return continuation(self._with_token(details), request)
+
+        def intercept_unary_stream(self, continuation, details, request):
+            return continuation(self._with_token(details), request)
+
+        def intercept_stream_unary(self, continuation, details, requests):
+            return continuation(self._with_token(details), requests)
+
+        def intercept_stream_stream(self, continuation, details, requests):
+            return continuation(self._with_token(details), requests)
+
+    return Interceptor()
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("run", help="bench-run file")
     parser.add_argument("--server", default=os.environ.get("INSDIAG_SERVER", "localhost:50051"))
+    parser.add_argument("--token", default=os.environ.get("INSDIAG_TOKEN", ""),
+                        help="bearer token (default $INSDIAG_TOKEN)")
     parser.add_argument("--json", action="store_true", help="print the diagnosis as JSON")
     parser.add_argument("--stubs-dir", help="where to generate the gRPC stubs (default: a temporary directory)")
     args = parser.parse_args()
@@ -105,7 +144,7 @@ def main():
     knowledge_pb = importlib.import_module("insdiag.v1.knowledge_pb2")
     knowledge_grpc = importlib.import_module("insdiag.v1.knowledge_pb2_grpc")
 
-    channel = grpc.insecure_channel(args.server)
+    channel = grpc.intercept_channel(grpc.insecure_channel(args.server), bearer_token_interceptor(grpc, args.token))
     try:
         metadata, rows, order = read_run(args.run, runs_pb)
         run = upload(runs_grpc.RunServiceStub(channel), runs_pb, metadata, rows, order)

@@ -338,10 +338,25 @@ absl::Status RunStore::Delete(const std::string& run_id) {
   if (auto status = CheckRunId(run_id); !status.ok()) return status;
   auto db = pool_.Acquire();
   if (!db.ok()) return db.status();
-  auto deleted = (*db)->Exec("DELETE FROM runs WHERE run_id = $1::uuid", {Param::Text(run_id)});
-  if (!deleted.ok()) return deleted.status();
-  if (deleted->AffectedRows() == 0) return absl::NotFoundError(absl::StrCat("runs/", run_id, " does not exist"));
-  return absl::OkStatus();
+  return (*db)->InTransaction([&]() -> absl::Status {
+    // A diagnosis that lands between the check and the delete is refused by
+    // the foreign keys (migrations/0004_access.sql): the check gives the message.
+    auto run = (*db)->Exec("SELECT 1 FROM runs WHERE run_id = $1::uuid FOR UPDATE", {Param::Text(run_id)});
+    if (!run.ok()) return run.status();
+    if (run->rows() == 0) return absl::NotFoundError(absl::StrCat("runs/", run_id, " does not exist"));
+    auto history = (*db)->Exec(
+        "SELECT (SELECT count(*) FROM diagnoses d JOIN analyses a USING (analysis_id) WHERE a.run_id = $1::uuid), "
+        "(SELECT count(*) FROM failure_records f JOIN analyses a USING (analysis_id) WHERE a.run_id = $1::uuid)",
+        {Param::Text(run_id)});
+    if (!history.ok()) return history.status();
+    const std::string diagnoses = history->String(0, 0), records = history->String(0, 1);
+    if (diagnoses != "0" || records != "0") {
+      return absl::FailedPreconditionError(absl::StrCat(
+          "runs/", run_id, " is not deleted: ", diagnoses, " diagnoses and ", records,
+          " failure records rest on its analyses, and the failure history is kept"));
+    }
+    return (*db)->Exec("DELETE FROM runs WHERE run_id = $1::uuid", {Param::Text(run_id)}).status();
+  });
 }
 
 absl::Status RunStore::ReadSamples(const std::string& run_id, std::size_t batch_samples,

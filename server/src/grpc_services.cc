@@ -1,94 +1,128 @@
 #include "insdiag/server/grpc_services.h"
 
+#include <absl/strings/str_cat.h>
+
 #include "insdiag/server/status_mapping.h"
 
 namespace insdiag::server {
 namespace {
 
-template <typename Response>
-grpc::Status Respond(absl::StatusOr<Response> result, Response* response) {
-  if (!result.ok()) return ToGrpcStatus(result.status());
-  *response = std::move(*result);
-  return grpc::Status::OK;
-}
+constexpr char kRunService[] = "insdiag.v1.RunService";
+constexpr char kAnalysisService[] = "insdiag.v1.AnalysisService";
+constexpr char kKnowledgeService[] = "insdiag.v1.KnowledgeService";
+constexpr char kFleetService[] = "insdiag.v1.FleetService";
+constexpr char kAccessService[] = "insdiag.v1.AccessService";
+
+std::string MethodName(const char* service, const char* method) { return absl::StrCat(service, ".", method); }
 
 }  // namespace
 
 grpc::Status RunServiceGrpc::UploadRun(grpc::ServerContext* context,
                                        grpc::ServerReader<v1::UploadRunRequest>* reader, v1::Run* response) {
+  const std::string method = MethodName(kRunService, "UploadRun");
+  auto caller = guard_.Admit(*context, method);
+  if (!caller.ok()) return ToGrpcStatus(caller.status());
   auto upload = runs_.StartUpload();
   v1::UploadRunRequest message;
-  while (reader->Read(&message)) {
-    if (auto status = upload.Accept(message); !status.ok()) return ToGrpcStatus(status);
-  }
+  absl::Status status;
+  while (status.ok() && reader->Read(&message)) status = upload.Accept(message);
   // Read() also ends when the client cancels or the connection drops: such
   // a stream is not finished and must store nothing.
-  if (context->IsCancelled()) {
-    return grpc::Status(grpc::StatusCode::CANCELLED, "the upload was cancelled; nothing was stored");
-  }
-  return Respond(upload.Finish(), response);
+  if (status.ok() && context->IsCancelled()) status = absl::CancelledError("the upload was cancelled; nothing was stored");
+  absl::StatusOr<v1::Run> run = status.ok() ? upload.Finish() : absl::StatusOr<v1::Run>(status);
+  if (run.ok()) *response = std::move(*run);
+  guard_.Audit(*context, method, *caller, nullptr, run.ok() ? response : nullptr, run.status());
+  return run.ok() ? grpc::Status::OK : ToGrpcStatus(run.status());
 }
 
-grpc::Status RunServiceGrpc::GetRun(grpc::ServerContext*, const v1::GetRunRequest* request, v1::Run* response) {
-  return Respond(runs_.GetRun(*request), response);
+grpc::Status RunServiceGrpc::GetRun(grpc::ServerContext* context, const v1::GetRunRequest* request, v1::Run* response) {
+  return guard_.Unary(*context, MethodName(kRunService, "GetRun"), *request, response,
+                      [&](const v1::Caller&) { return runs_.GetRun(*request); });
 }
 
-grpc::Status RunServiceGrpc::ListRuns(grpc::ServerContext*, const v1::ListRunsRequest* request,
+grpc::Status RunServiceGrpc::ListRuns(grpc::ServerContext* context, const v1::ListRunsRequest* request,
                                       v1::ListRunsResponse* response) {
-  return Respond(runs_.ListRuns(*request), response);
+  return guard_.Unary(*context, MethodName(kRunService, "ListRuns"), *request, response,
+                      [&](const v1::Caller&) { return runs_.ListRuns(*request); });
 }
 
-grpc::Status RunServiceGrpc::DeleteRun(grpc::ServerContext*, const v1::DeleteRunRequest* request,
-                                       google::protobuf::Empty*) {
-  return ToGrpcStatus(runs_.DeleteRun(*request));
+grpc::Status RunServiceGrpc::DeleteRun(grpc::ServerContext* context, const v1::DeleteRunRequest* request,
+                                       google::protobuf::Empty* response) {
+  return guard_.Unary(*context, MethodName(kRunService, "DeleteRun"), *request, response,
+                      [&](const v1::Caller&) -> absl::StatusOr<google::protobuf::Empty> {
+                        if (auto status = runs_.DeleteRun(*request); !status.ok()) return status;
+                        return google::protobuf::Empty();
+                      });
 }
 
 grpc::Status RunServiceGrpc::ReadRunSamples(grpc::ServerContext* context, const v1::ReadRunSamplesRequest* request,
                                             grpc::ServerWriter<v1::SampleChunk>* writer) {
+  if (auto caller = guard_.Admit(*context, MethodName(kRunService, "ReadRunSamples")); !caller.ok()) {
+    return ToGrpcStatus(caller.status());
+  }
   const absl::Status status =
       runs_.ReadRunSamples(*request, [&](const v1::SampleChunk& chunk) { return writer->Write(chunk); });
   if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "the client went away");
   return ToGrpcStatus(status);
 }
 
-// Defines a unary adapter: `Class::Name` delegating to `target.Name(*request)`.
-#define INSDIAG_DELEGATE(Class, target, Name, Request, Response)                                         \
-  grpc::Status Class::Name(grpc::ServerContext*, const v1::Request* request, v1::Response* response) { \
-    return Respond(target.Name(*request), response);                                                  \
+// Defines a unary adapter: `Class::Name` of `service` delegating to
+// `target.Name(*request)` behind the access guard.
+#define INSDIAG_DELEGATE(Class, service, target, Name, Request, Response)                                       \
+  grpc::Status Class::Name(grpc::ServerContext* context, const v1::Request* request, v1::Response* response) { \
+    return guard_.Unary(*context, MethodName(service, #Name), *request, response,                              \
+                        [&](const v1::Caller&) { return target.Name(*request); });                              \
+  }
+// As INSDIAG_DELEGATE, passing the caller on: `target.Name(*request, caller)`.
+#define INSDIAG_DELEGATE_WITH_CALLER(Class, service, target, Name, Request, Response)                            \
+  grpc::Status Class::Name(grpc::ServerContext* context, const v1::Request* request, v1::Response* response) { \
+    return guard_.Unary(*context, MethodName(service, #Name), *request, response,                              \
+                        [&](const v1::Caller& caller) { return target.Name(*request, caller); });               \
   }
 
-INSDIAG_DELEGATE(AnalysisServiceGrpc, analyses_, CreateAnalysis, CreateAnalysisRequest, Analysis)
-INSDIAG_DELEGATE(AnalysisServiceGrpc, analyses_, GetAnalysis, GetAnalysisRequest, Analysis)
-INSDIAG_DELEGATE(AnalysisServiceGrpc, analyses_, ListAnalyses, ListAnalysesRequest, ListAnalysesResponse)
-INSDIAG_DELEGATE(AnalysisServiceGrpc, analyses_, CancelAnalysis, CancelAnalysisRequest, Analysis)
-INSDIAG_DELEGATE(AnalysisServiceGrpc, analyses_, ReadDisplaySeries, ReadDisplaySeriesRequest, DisplaySeries)
-INSDIAG_DELEGATE(KnowledgeServiceGrpc, knowledge_, GetUnitType, GetUnitTypeRequest, UnitType)
-INSDIAG_DELEGATE(KnowledgeServiceGrpc, knowledge_, ListUnitTypes, ListUnitTypesRequest, ListUnitTypesResponse)
-INSDIAG_DELEGATE(KnowledgeServiceGrpc, knowledge_, GetUnit, GetUnitRequest, Unit)
-INSDIAG_DELEGATE(KnowledgeServiceGrpc, knowledge_, ListUnits, ListUnitsRequest, ListUnitsResponse)
-INSDIAG_DELEGATE(KnowledgeServiceGrpc, knowledge_, ListModules, ListModulesRequest, ListModulesResponse)
-INSDIAG_DELEGATE(KnowledgeServiceGrpc, knowledge_, ListFailureModes, ListFailureModesRequest, ListFailureModesResponse)
-INSDIAG_DELEGATE(KnowledgeServiceGrpc, knowledge_, GetFailureMode, GetFailureModeRequest, FailureMode)
-INSDIAG_DELEGATE(KnowledgeServiceGrpc, knowledge_, CreateFailureRecord, CreateFailureRecordRequest, FailureRecord)
-INSDIAG_DELEGATE(KnowledgeServiceGrpc, knowledge_, ListFailureRecords, ListFailureRecordsRequest,
+INSDIAG_DELEGATE(AnalysisServiceGrpc, kAnalysisService, analyses_, CreateAnalysis, CreateAnalysisRequest, Analysis)
+INSDIAG_DELEGATE(AnalysisServiceGrpc, kAnalysisService, analyses_, GetAnalysis, GetAnalysisRequest, Analysis)
+INSDIAG_DELEGATE(AnalysisServiceGrpc, kAnalysisService, analyses_, ListAnalyses, ListAnalysesRequest, ListAnalysesResponse)
+INSDIAG_DELEGATE(AnalysisServiceGrpc, kAnalysisService, analyses_, CancelAnalysis, CancelAnalysisRequest, Analysis)
+INSDIAG_DELEGATE(AnalysisServiceGrpc, kAnalysisService, analyses_, ReadDisplaySeries, ReadDisplaySeriesRequest, DisplaySeries)
+INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, GetUnitType, GetUnitTypeRequest, UnitType)
+INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, ListUnitTypes, ListUnitTypesRequest, ListUnitTypesResponse)
+INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, GetUnit, GetUnitRequest, Unit)
+INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, ListUnits, ListUnitsRequest, ListUnitsResponse)
+INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, ListModules, ListModulesRequest, ListModulesResponse)
+INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, ListFailureModes, ListFailureModesRequest, ListFailureModesResponse)
+INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, GetFailureMode, GetFailureModeRequest, FailureMode)
+INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, CreateFailureRecord, CreateFailureRecordRequest, FailureRecord)
+INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, ListFailureRecords, ListFailureRecordsRequest,
                  ListFailureRecordsResponse)
-INSDIAG_DELEGATE(KnowledgeServiceGrpc, knowledge_, CreateDiagnosis, CreateDiagnosisRequest, Diagnosis)
-INSDIAG_DELEGATE(KnowledgeServiceGrpc, knowledge_, GetDiagnosis, GetDiagnosisRequest, Diagnosis)
-INSDIAG_DELEGATE(KnowledgeServiceGrpc, knowledge_, ListDiagnoses, ListDiagnosesRequest, ListDiagnosesResponse)
-INSDIAG_DELEGATE(KnowledgeServiceGrpc, knowledge_, ResolveDiagnosis, ResolveDiagnosisRequest, Diagnosis)
-INSDIAG_DELEGATE(FleetServiceGrpc, fleet_, GetFleetStatistics, GetFleetStatisticsRequest, FleetStatistics)
-INSDIAG_DELEGATE(FleetServiceGrpc, fleet_, ListFailureCounts, ListFailureCountsRequest, ListFailureCountsResponse)
-INSDIAG_DELEGATE(FleetServiceGrpc, fleet_, GetFailurePareto, GetFailureParetoRequest, FailurePareto)
-INSDIAG_DELEGATE(FleetServiceGrpc, fleet_, GetWeibullFit, GetWeibullFitRequest, WeibullFit)
-INSDIAG_DELEGATE(FleetServiceGrpc, fleet_, ListParameterTrends, ListParameterTrendsRequest,
+INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, CreateDiagnosis, CreateDiagnosisRequest, Diagnosis)
+INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, GetDiagnosis, GetDiagnosisRequest, Diagnosis)
+INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, ListDiagnoses, ListDiagnosesRequest, ListDiagnosesResponse)
+INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, ResolveDiagnosis, ResolveDiagnosisRequest, Diagnosis)
+INSDIAG_DELEGATE(FleetServiceGrpc, kFleetService, fleet_, GetFleetStatistics, GetFleetStatisticsRequest, FleetStatistics)
+INSDIAG_DELEGATE(FleetServiceGrpc, kFleetService, fleet_, ListFailureCounts, ListFailureCountsRequest, ListFailureCountsResponse)
+INSDIAG_DELEGATE(FleetServiceGrpc, kFleetService, fleet_, GetFailurePareto, GetFailureParetoRequest, FailurePareto)
+INSDIAG_DELEGATE(FleetServiceGrpc, kFleetService, fleet_, GetWeibullFit, GetWeibullFitRequest, WeibullFit)
+INSDIAG_DELEGATE(FleetServiceGrpc, kFleetService, fleet_, ListParameterTrends, ListParameterTrendsRequest,
                  ListParameterTrendsResponse)
-INSDIAG_DELEGATE(FleetServiceGrpc, fleet_, GetParameterTrend, GetParameterTrendRequest, ParameterTrend)
-INSDIAG_DELEGATE(FleetServiceGrpc, fleet_, RankUnits, RankUnitsRequest, RankUnitsResponse)
+INSDIAG_DELEGATE(FleetServiceGrpc, kFleetService, fleet_, GetParameterTrend, GetParameterTrendRequest, ParameterTrend)
+INSDIAG_DELEGATE(FleetServiceGrpc, kFleetService, fleet_, RankUnits, RankUnitsRequest, RankUnitsResponse)
+
+INSDIAG_DELEGATE_WITH_CALLER(AccessServiceGrpc, kAccessService, access_, GetCaller, GetCallerRequest, Caller)
+INSDIAG_DELEGATE_WITH_CALLER(AccessServiceGrpc, kAccessService, access_, CreateToken, CreateTokenRequest, CreatedToken)
+INSDIAG_DELEGATE_WITH_CALLER(AccessServiceGrpc, kAccessService, access_, ListTokens, ListTokensRequest, ListTokensResponse)
+INSDIAG_DELEGATE_WITH_CALLER(AccessServiceGrpc, kAccessService, access_, RevokeToken, RevokeTokenRequest, Token)
+INSDIAG_DELEGATE_WITH_CALLER(AccessServiceGrpc, kAccessService, access_, ListAuditEvents, ListAuditEventsRequest,
+                             ListAuditEventsResponse)
 
 #undef INSDIAG_DELEGATE
+#undef INSDIAG_DELEGATE_WITH_CALLER
 
 grpc::Status AnalysisServiceGrpc::WatchAnalysis(grpc::ServerContext* context, const v1::WatchAnalysisRequest* request,
                                                 grpc::ServerWriter<v1::Analysis>* writer) {
+  if (auto caller = guard_.Admit(*context, MethodName(kAnalysisService, "WatchAnalysis")); !caller.ok()) {
+    return ToGrpcStatus(caller.status());
+  }
   const absl::Status status = analyses_.WatchAnalysis(
       *request, [&](const v1::Analysis& analysis) { return writer->Write(analysis); },
       [context] { return context->IsCancelled(); });
@@ -99,6 +133,9 @@ grpc::Status AnalysisServiceGrpc::WatchAnalysis(grpc::ServerContext* context, co
 grpc::Status AnalysisServiceGrpc::ReadResidualSeries(grpc::ServerContext* context,
                                                      const v1::ReadResidualSeriesRequest* request,
                                                      grpc::ServerWriter<v1::ResidualSeriesChunk>* writer) {
+  if (auto caller = guard_.Admit(*context, MethodName(kAnalysisService, "ReadResidualSeries")); !caller.ok()) {
+    return ToGrpcStatus(caller.status());
+  }
   const absl::Status status = analyses_.ReadResidualSeries(
       *request, [&](const v1::ResidualSeriesChunk& chunk) { return writer->Write(chunk); });
   if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "the client went away");

@@ -4,8 +4,10 @@
 
 namespace insdiag::server {
 
-InProcessCall::InProcessCall(grpc::GenericStub& stub, const std::string& method)
-    : call_(stub.PrepareCall(&context_, method, &queue_)) {
+InProcessCall::InProcessCall(grpc::GenericStub& stub, const std::string& method, const CallMetadata& metadata) {
+  // Metadata must be on the context before the call is prepared.
+  for (const auto& [key, value] : metadata) context_.AddMetadata(key, value);
+  call_ = stub.PrepareCall(&context_, method, &queue_);
   if (call_) {
     call_->StartCall(this);
     started_ = Await();

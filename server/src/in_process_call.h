@@ -10,13 +10,18 @@
 
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace insdiag::server {
+
+// Request metadata: the caller's credentials and address (access_guard.h).
+using CallMetadata = std::vector<std::pair<std::string, std::string>>;
 
 class InProcessCall {
  public:
   // `method` as on the wire: "/insdiag.v1.RunService/GetRun".
-  InProcessCall(grpc::GenericStub& stub, const std::string& method);
+  InProcessCall(grpc::GenericStub& stub, const std::string& method, const CallMetadata& metadata);
   ~InProcessCall();
   InProcessCall(const InProcessCall&) = delete;
   InProcessCall& operator=(const InProcessCall&) = delete;

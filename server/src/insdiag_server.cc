@@ -14,6 +14,7 @@
 #include "insdiag/api/unit_types.h"
 #include "insdiag/kb/diagnosis.h"
 #include "insdiag/kb/run_store.h"
+#include "insdiag/server/access_guard.h"
 #include "insdiag/server/analysis_workers.h"
 #include "insdiag/server/grpc_services.h"
 #include "insdiag/server/rest_gateway.h"
@@ -31,10 +32,15 @@ namespace insdiag::server {
 // What the gRPC server serves, and the analysis workers.
 struct InsdiagServer::Services {
   Services(kb::ConnectionPool& pool, const Options& options)
-      : store(pool), runs(store, RunService::Options{options.max_upload_samples}), runs_grpc(runs),
-        analysis_store(pool), analyses(analysis_store, AnalysisService::Options{options.watch_poll}),
-        analyses_grpc(analyses), knowledge_store(pool), knowledge(knowledge_store), knowledge_grpc(knowledge),
-        fleet_store(pool), fleet_grpc(fleet_store), workers(pool, options.workers) {}
+      : access_store(pool), guard(access_store), access(access_store), access_grpc(access, guard), store(pool),
+        runs(store, RunService::Options{options.max_upload_samples}), runs_grpc(runs, guard), analysis_store(pool),
+        analyses(analysis_store, AnalysisService::Options{options.watch_poll}), analyses_grpc(analyses, guard),
+        knowledge_store(pool), knowledge(knowledge_store), knowledge_grpc(knowledge, guard), fleet_store(pool),
+        fleet_grpc(fleet_store, guard), workers(pool, options.workers) {}
+  kb::AccessStore access_store;
+  AccessGuard guard;
+  AccessService access;
+  AccessServiceGrpc access_grpc;
   kb::RunStore store;
   RunService runs;
   RunServiceGrpc runs_grpc;
@@ -61,6 +67,16 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
     if (auto seeded = server->services_->knowledge_store.Seed(unit_types, catalogues); !seeded.ok()) return seeded;
   }
 
+  const std::vector<std::string> service_names = {"insdiag.v1.RunService", "insdiag.v1.AnalysisService",
+                                                   "insdiag.v1.KnowledgeService", "insdiag.v1.FleetService",
+                                                   "insdiag.v1.AccessService"};
+  if (auto guarded = AccessGuard::CheckEveryMethodHasARule(service_names); !guarded.ok()) return guarded;
+  if (!options.first_admin_token_file.empty()) {
+    auto made = server->services_->access_store.CreateFirstAdminToken(options.first_admin_token_file);
+    if (!made.ok()) return made.status();
+    server->wrote_first_admin_token_ = *made;
+  }
+
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
@@ -70,14 +86,14 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
   builder.RegisterService(&server->services_->analyses_grpc);
   builder.RegisterService(&server->services_->knowledge_grpc);
   builder.RegisterService(&server->services_->fleet_grpc);
+  builder.RegisterService(&server->services_->access_grpc);
   server->grpc_ = builder.BuildAndStart();
   if (!server->grpc_ || server->grpc_port_ == 0) {
     return absl::UnavailableError(absl::StrCat("cannot serve gRPC on ", options.bind_address, ":", options.grpc_port));
   }
 
-  auto gateway = RestGateway::Create(
-      server->grpc_->InProcessChannel(grpc::ChannelArguments()),
-      {"insdiag.v1.RunService", "insdiag.v1.AnalysisService", "insdiag.v1.KnowledgeService", "insdiag.v1.FleetService"});
+  auto gateway = RestGateway::Create(server->grpc_->InProcessChannel(grpc::ChannelArguments()), service_names,
+                                     server->services_->guard.gateway_key());
   if (!gateway.ok()) return gateway.status();
   server->gateway_ = std::move(*gateway);
   server->http_ = std::make_unique<httplib::Server>();

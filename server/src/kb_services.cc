@@ -268,4 +268,41 @@ absl::StatusOr<v1::Diagnosis> KnowledgeService::ResolveDiagnosis(const v1::Resol
   return store_.ResolveDiagnosis(request);
 }
 
+absl::StatusOr<v1::Caller> AccessService::GetCaller(const v1::GetCallerRequest&, const v1::Caller& caller) {
+  return caller;
+}
+
+absl::StatusOr<v1::CreatedToken> AccessService::CreateToken(const v1::CreateTokenRequest& request,
+                                                            const v1::Caller& caller) {
+  return store_.CreateToken(request.token(), caller.token());
+}
+
+absl::StatusOr<v1::ListTokensResponse> AccessService::ListTokens(const v1::ListTokensRequest& request,
+                                                                 const v1::Caller&) {
+  if (auto status = CheckPageSize(request.page_size()); !status.ok()) return status;
+  auto page = store_.ListTokens({.page_size = request.page_size(), .page_token = request.page_token()});
+  if (!page.ok()) return page.status();
+  v1::ListTokensResponse response;
+  for (auto& token : page->first) *response.add_tokens() = std::move(token);
+  response.set_next_page_token(page->second);
+  return response;
+}
+
+absl::StatusOr<v1::Token> AccessService::RevokeToken(const v1::RevokeTokenRequest& request, const v1::Caller&) {
+  return store_.RevokeToken(request.name());
+}
+
+absl::StatusOr<v1::ListAuditEventsResponse> AccessService::ListAuditEvents(const v1::ListAuditEventsRequest& request,
+                                                                           const v1::Caller&) {
+  if (auto status = CheckPageSize(request.page_size()); !status.ok()) return status;
+  auto page = store_.ListAuditEvents({.page = {.page_size = request.page_size(), .page_token = request.page_token()},
+                                      .resource = request.resource(),
+                                      .token = request.token()});
+  if (!page.ok()) return page.status();
+  v1::ListAuditEventsResponse response;
+  for (auto& event : page->first) *response.add_audit_events() = std::move(event);
+  response.set_next_page_token(page->second);
+  return response;
+}
+
 }  // namespace insdiag::server

@@ -16,6 +16,7 @@
 #include "insdiag/api/json.h"
 #include "insdiag/api/run_codec.h"
 #include "insdiag/benchrun/bench_run_csv.h"
+#include "insdiag/server/access_guard.h"
 #include "insdiag/server/status_mapping.h"
 #include "insdiag/v1/runs.pb.h"
 
@@ -35,6 +36,10 @@ constexpr char kUploadMethod[] = "insdiag.v1.RunService.UploadRun";
 void SendStatus(httplib::Response& response, const grpc::Status& status, const std::string& method = "") {
   const HttpError error = ToHttpError(status, method);
   response.status = error.http_status;
+  // RFC 6750 §3: a 401 names the scheme the client should use.
+  if (status.error_code() == grpc::StatusCode::UNAUTHENTICATED) {
+    response.set_header("WWW-Authenticate", R"(Bearer realm="insdiag")");
+  }
   response.set_content(error.json_body, kJson);
 }
 
@@ -191,8 +196,9 @@ std::string Param(const httplib::Request& request, const char* json_name, const 
 }  // namespace
 
 absl::StatusOr<std::unique_ptr<RestGateway>> RestGateway::Create(std::shared_ptr<grpc::Channel> channel,
-                                                                 const std::vector<std::string>& services) {
-  std::unique_ptr<RestGateway> gateway(new RestGateway(std::move(channel)));
+                                                                 const std::vector<std::string>& services,
+                                                                 std::string gateway_key) {
+  std::unique_ptr<RestGateway> gateway(new RestGateway(std::move(channel), std::move(gateway_key)));
   const auto* pool = google::protobuf::DescriptorPool::generated_pool();
   for (const auto& service_name : services) {
     const auto* service = pool->FindServiceByName(service_name);
@@ -228,6 +234,16 @@ absl::StatusOr<std::unique_ptr<RestGateway>> RestGateway::Create(std::shared_ptr
   return gateway;
 }
 
+CallMetadata RestGateway::MetadataOf(const httplib::Request& request) const {
+  CallMetadata metadata;
+  if (request.has_header("Authorization")) metadata.emplace_back("authorization", request.get_header_value("Authorization"));
+  const bool v6 = absl::StrContains(request.remote_addr, ':');
+  metadata.emplace_back(kPeerMetadata, absl::StrCat(v6 ? "ipv6:[" : "ipv4:", request.remote_addr, v6 ? "]:" : ":",
+                                                    request.remote_port));
+  metadata.emplace_back(kGatewayKeyMetadata, gateway_key_);
+  return metadata;
+}
+
 void RestGateway::Register(httplib::Server& http) {
   const auto handler = [this](const httplib::Request& request, httplib::Response& response) {
     Handle(request, response);
@@ -243,7 +259,7 @@ void RestGateway::Handle(const httplib::Request& request, httplib::Response& res
   if (request.method == "GET" && request.path == "/healthz") return Health(response);
   static const auto download = *PathTemplate::Parse("/v1/{name=runs/*}:download");
   if (request.method == "GET") {
-    if (auto bindings = download.Match(request.path)) return Download(bindings->at("name"), response);
+    if (auto bindings = download.Match(request.path)) return Download(bindings->at("name"), request, response);
   }
   for (const auto& route : routes_) {
     if (route.http_method != request.method) continue;
@@ -263,7 +279,7 @@ void RestGateway::Dispatch(const Route& route, const std::map<std::string, std::
   if (auto status = BuildRequest(route.body, bindings, request, *message); !status.ok()) {
     return SendStatus(response, status);
   }
-  auto call = std::make_shared<InProcessCall>(stub_, route.grpc_path);
+  auto call = std::make_shared<InProcessCall>(stub_, route.grpc_path, MetadataOf(request));
   call->Write(message->SerializeAsString());
   call->WritesDone();
   std::string bytes;
@@ -305,7 +321,7 @@ void RestGateway::Dispatch(const Route& route, const std::map<std::string, std::
 
 void RestGateway::Upload(const Route& route, const httplib::Request& request, httplib::Response& response) {
   const std::string type = MediaType(request);
-  InProcessCall call(stub_, route.grpc_path);
+  InProcessCall call(stub_, route.grpc_path, MetadataOf(request));
   if (type == "text/csv") {
     const std::string source = request.has_param("filename") ? request.get_param_value("filename") : "body";
     auto run = benchrun::ParseBenchRun(request.body, source);
@@ -340,12 +356,13 @@ void RestGateway::Upload(const Route& route, const httplib::Request& request, ht
   SendJson(response, run);
 }
 
-void RestGateway::Download(const std::string& run_name, httplib::Response& response) {
+void RestGateway::Download(const std::string& run_name, const httplib::Request& request, httplib::Response& response) {
+  const CallMetadata metadata = MetadataOf(request);
   engine::BenchRun run;
   {
     v1::GetRunRequest get;
     get.set_name(run_name);
-    InProcessCall call(stub_, "/insdiag.v1.RunService/GetRun");
+    InProcessCall call(stub_, "/insdiag.v1.RunService/GetRun", metadata);
     call.Write(get.SerializeAsString());
     call.WritesDone();
     std::string bytes;
@@ -358,7 +375,7 @@ void RestGateway::Download(const std::string& run_name, httplib::Response& respo
   }
   v1::ReadRunSamplesRequest read;
   read.set_name(run_name);
-  InProcessCall call(stub_, "/insdiag.v1.RunService/ReadRunSamples");
+  InProcessCall call(stub_, "/insdiag.v1.RunService/ReadRunSamples", metadata);
   call.Write(read.SerializeAsString());
   call.WritesDone();
   std::string bytes;
@@ -376,7 +393,7 @@ void RestGateway::Health(httplib::Response& response) {
   // grpc.health.v1.Health/Check with an empty request (the whole server).
   // Its response is HealthCheckResponse{status = 1 (SERVING)}, on the wire
   // the two bytes 08 01; Debian ships no C++ code generated from health.proto.
-  InProcessCall call(stub_, "/grpc.health.v1.Health/Check");
+  InProcessCall call(stub_, "/grpc.health.v1.Health/Check", {});
   call.Write("");
   call.WritesDone();
   std::string bytes;

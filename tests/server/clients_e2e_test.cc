@@ -6,6 +6,7 @@
 #include <signal.h>
 
 #include <filesystem>
+#include <fstream>
 #include <regex>
 #include <thread>
 
@@ -29,7 +30,8 @@ class ClientsTest : public DatabaseTest {
     if (IsSkipped() || HasFatalFailure()) return;
     dir_ = MakeTempDir("insdiag-clients");
     std::filesystem::create_directories(dir_ / "server");
-    auto server = Subprocess::Start({INSDIAGD_PATH, "--database-url", database_url(), "--grpc-port", "0",
+    auto server = Subprocess::Start({INSDIAGD_PATH, "--database-url", database_url(), "--data-dir",
+                                     (dir_ / "server" / "data").string(), "--grpc-port", "0",
                                      "--http-port", "0", "--bind", "127.0.0.1", "--workers", "1",
                                      "--fleet-refresh-seconds", "0"},
                                     dir_ / "server");
@@ -43,6 +45,9 @@ class ClientsTest : public DatabaseTest {
       std::this_thread::sleep_for(25ms);
     }
     ASSERT_FALSE(address_.empty()) << server_->Stderr();
+    // insdiagd's first start on this database wrote an admin token into its data directory.
+    std::ifstream(dir_ / "server" / "data" / "admin-token") >> token_;
+    ASSERT_FALSE(token_.empty()) << server_->Stderr();
     auto simulated = RunToCompletion({INSDIAG_CLI_PATH, "simulate", (dir_ / "run.csv").string(), "--profile", "static",
                                       "--rate", "10", "--seed", "5", "--serial", "INS-CLI-1"},
                                      dir_, 60s);
@@ -59,10 +64,11 @@ class ClientsTest : public DatabaseTest {
   std::filesystem::path dir_;
   std::unique_ptr<Subprocess> server_;
   std::string address_;
+  std::string token_;
 };
 
 TEST_F(ClientsTest, InsdiagDiagnosePrintsTheDiagnosisJsonOfTheContract) {
-  auto done = RunToCompletion({INSDIAG_CLI_PATH, "diagnose", (dir_ / "run.csv").string(), "--server", address_, "--json"},
+  auto done = RunToCompletion({INSDIAG_CLI_PATH, "diagnose", (dir_ / "run.csv").string(), "--server", address_, "--token", token_, "--json"},
                               dir_, 120s);
   ASSERT_TRUE(done.ok());
   EXPECT_EQ(done->exit_status, 0) << done->stderr_text;
@@ -83,7 +89,7 @@ TEST_F(ClientsTest, InsdiagDiagnosePrintsTheDiagnosisJsonOfTheContract) {
 
 TEST_F(ClientsTest, PythonClientUploadsAnalysesAndDiagnoses) {
   auto done = RunToCompletion({"/usr/bin/python3", INSDIAG_SOURCE_DIR "/clients/python/insdiag_client.py",
-                               (dir_ / "run.csv").string(), "--server", address_, "--json", "--stubs-dir",
+                               (dir_ / "run.csv").string(), "--server", address_, "--token", token_, "--json", "--stubs-dir",
                                (dir_ / "stubs").string()},
                               dir_, 180s);
   ASSERT_TRUE(done.ok());
@@ -91,6 +97,51 @@ TEST_F(ClientsTest, PythonClientUploadsAnalysesAndDiagnoses) {
   EXPECT_THAT(done->stdout_text, HasSubstr("\"candidates\""));
   EXPECT_THAT(done->stdout_text, HasSubstr("\"module\": \"healthy\""));
   EXPECT_THAT(done->stderr_text, HasSubstr("uploaded runs/"));
+}
+
+// `insdiag tokens`: an admin makes a viewer's token; the viewer reads but may
+// not upload; the refusal is in the audit trail; a revoked token is refused.
+TEST_F(ClientsTest, TokensVerbMakesARoleTokenThatReadsIsRefusedAboveItsRoleAndIsRevoked) {
+  const auto insdiag = [&](std::vector<std::string> args, const std::string& token) {
+    args.insert(args.begin(), INSDIAG_CLI_PATH);
+    for (const std::string& a : {std::string("--server"), address_, std::string("--token"), token}) args.push_back(a);
+    auto done = RunToCompletion(args, dir_, 60s);
+    EXPECT_TRUE(done.ok());
+    return done.ok() ? *done : Completed{};
+  };
+  auto created = insdiag({"tokens", "create", "--name", "line 2 viewer", "--role", "viewer", "--expires-days", "30"},
+                         token_);
+  ASSERT_EQ(created.exit_status, 0) << created.stderr_text;
+  std::smatch made;
+  ASSERT_TRUE(std::regex_match(created.stdout_text, made,
+                               std::regex(R"((tokens/[0-9a-f-]{36})\n(insdiag_[A-Za-z0-9_-]{43})\n)")))
+      << created.stdout_text;
+  const std::string name = made[1].str(), viewer = made[2].str();
+
+  auto listed = insdiag({"tokens", "list"}, token_);
+  EXPECT_EQ(listed.exit_status, 0) << listed.stderr_text;
+  EXPECT_THAT(listed.stdout_text, HasSubstr("line 2 viewer"));
+  EXPECT_THAT(listed.stdout_text, HasSubstr("viewer"));
+  EXPECT_THAT(listed.stdout_text, ::testing::Not(HasSubstr(viewer))) << "a secret is shown only once";
+
+  auto reads = insdiag({"fleet", "stats"}, viewer);
+  EXPECT_EQ(reads.exit_status, 0) << reads.stderr_text;
+  auto uploads = insdiag({"upload", (dir_ / "run.csv").string()}, viewer);
+  EXPECT_EQ(uploads.exit_status, 1);
+  EXPECT_THAT(uploads.stderr_text, HasSubstr("PERMISSION_DENIED"));
+  auto lists_tokens = insdiag({"tokens", "list"}, viewer);
+  EXPECT_EQ(lists_tokens.exit_status, 1);
+
+  auto audit = insdiag({"tokens", "audit", "--of", name}, token_);
+  EXPECT_EQ(audit.exit_status, 0) << audit.stderr_text;
+  EXPECT_THAT(audit.stdout_text, HasSubstr("insdiag.v1.RunService.UploadRun"));
+  EXPECT_THAT(audit.stdout_text, HasSubstr("PERMISSION_DENIED"));
+
+  auto revoked = insdiag({"tokens", "revoke", name}, token_);
+  EXPECT_EQ(revoked.exit_status, 0) << revoked.stderr_text;
+  auto after = insdiag({"fleet", "stats"}, viewer);
+  EXPECT_EQ(after.exit_status, 1);
+  EXPECT_THAT(after.stderr_text, HasSubstr("revoked"));
 }
 
 // The server verbs of `insdiag` over a fleet written by `insdiag-fleet`
@@ -112,6 +163,8 @@ TEST_F(ClientsTest, ServerVerbsReadAndResolveAGeneratedFleet) {
     args.insert(args.begin(), INSDIAG_CLI_PATH);
     args.push_back("--server");
     args.push_back(address_);
+    args.push_back("--token");
+    args.push_back(token_);
     auto done = RunToCompletion(args, dir_, 60s);
     EXPECT_TRUE(done.ok());
     return done.ok() ? *done : Completed{};

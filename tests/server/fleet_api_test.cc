@@ -24,6 +24,7 @@
 #include "insdiag/kb/fleet_generator.h"
 #include "insdiag/server/insdiag_server.h"
 #include "insdiag/v1/fleet.grpc.pb.h"
+#include "server_fixture.h"
 #include "support/database_fixture.h"
 
 // Last: httplib.h pulls in <resolv.h>, whose `_res` macro breaks Eigen.
@@ -109,7 +110,8 @@ class FleetApiTest : public ::testing::Test {
   void SetUp() override {
     if (!AdminDatabaseUrl()) GTEST_SKIP() << "INSDIAG_TEST_DATABASE_URL is not set: run under scripts/with-throwaway-pg.sh";
     ASSERT_EQ(setup_error_, nullptr) << *setup_error_;
-    channel_ = client::Connect("127.0.0.1:" + std::to_string(server_->grpc_port()));
+    viewer_token_ = MakeToken(*pool_, v1::VIEWER);
+    channel_ = client::Connect("127.0.0.1:" + std::to_string(server_->grpc_port()), viewer_token_);
     fleet_stub_ = v1::FleetService::NewStub(channel_);
   }
 
@@ -148,6 +150,7 @@ class FleetApiTest : public ::testing::Test {
   static inline kb::GeneratedFleet* fleet_ = nullptr;
   static inline server::InsdiagServer* server_ = nullptr;
   static inline std::string* setup_error_ = nullptr;
+  std::string viewer_token_;  // the fleet's statistics are reads: a viewer may make them
   std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<v1::FleetService::Stub> fleet_stub_;
 };
@@ -263,6 +266,7 @@ TEST_F(FleetApiTest, WeibullPerRoleCountsEveryPartsLifeAndAnswersOverRest) {
     EXPECT_EQ(fit.confidence(), 0.90);
   }
   httplib::Client http("127.0.0.1", server_->http_port());
+  http.set_bearer_token_auth(viewer_token_.c_str());
   auto got = http.Get("/v1/fleet/weibull?moduleRole=gyro.x&unitType=unitTypes/INS-2000");
   ASSERT_TRUE(got);
   ASSERT_EQ(got->status, 200) << got->body;

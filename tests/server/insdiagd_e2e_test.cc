@@ -47,7 +47,7 @@ std::optional<Ports> AwaitListening(Subprocess& server, std::chrono::seconds tim
 // grpc.health.v1.Health/Check for the whole server; true when SERVING
 // (response bytes 08 01: no C++ code is generated from health.proto here).
 bool GrpcHealthy(int port) {
-  grpc::GenericStub stub(client::Connect("127.0.0.1:" + std::to_string(port)));
+  grpc::GenericStub stub(client::Connect("127.0.0.1:" + std::to_string(port), /*token=*/""));
   grpc::ClientContext context;
   context.set_deadline(std::chrono::system_clock::now() + 5s);
   grpc::Slice empty(std::string{});
@@ -97,7 +97,7 @@ std::string ReflectionListing(int port) {
     std::string bytes_;
     std::promise<std::string> done_;
   };
-  grpc::GenericStub stub(client::Connect("127.0.0.1:" + std::to_string(port)));
+  grpc::GenericStub stub(client::Connect("127.0.0.1:" + std::to_string(port), /*token=*/""));
   grpc::ClientContext context;
   context.set_deadline(std::chrono::system_clock::now() + 5s);
   Listing listing;
@@ -147,11 +147,26 @@ TEST_F(InsdiagdTest, ServesHealthAcceptsCliUploadAndStopsWithPostgresOnSigterm) 
   ASSERT_TRUE(health);
   EXPECT_EQ(health->status, 200);
 
+  // The first start wrote an admin token only its user can read, and said where.
+  const auto token_file = dir_ / "data" / "admin-token";
+  ASSERT_TRUE(std::filesystem::exists(token_file)) << server.Stderr();
+  EXPECT_EQ(std::filesystem::status(token_file).permissions() & std::filesystem::perms::all,
+            std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
+  EXPECT_THAT(server.Stderr(), HasSubstr(token_file.string()));
+  std::string admin_token;
+  std::ifstream(token_file) >> admin_token;
+  http.set_bearer_token_auth(admin_token.c_str());
+
   const auto file = dir_ / "run.csv";
   ASSERT_TRUE(benchrun::WriteBenchRunFile(SyntheticStaticRun(180'000, 50.0, 11), file).ok());
+  const std::string grpc_address = "127.0.0.1:" + std::to_string(ports->grpc);
+  auto anonymous = RunToCompletion({INSDIAG_CLI_PATH, "upload", file.string(), "--server", grpc_address}, dir_, 60s);
+  ASSERT_TRUE(anonymous.ok());
+  EXPECT_EQ(anonymous->exit_status, 1);
+  EXPECT_THAT(anonymous->stderr_text, HasSubstr("UNAUTHENTICATED"));
   const auto started = std::chrono::steady_clock::now();
-  auto upload = RunToCompletion({INSDIAG_CLI_PATH, "upload", file.string(), "--server",
-                                 "127.0.0.1:" + std::to_string(ports->grpc)},
+  auto upload = RunToCompletion({INSDIAG_CLI_PATH, "upload", file.string(), "--server", grpc_address, "--token",
+                                 admin_token},
                                 dir_, 60s);
   const auto took = std::chrono::steady_clock::now() - started;
   ASSERT_TRUE(upload.ok()) << upload.status();

@@ -4,6 +4,16 @@
 
 namespace insdiag::testing {
 
+std::string MakeToken(kb::ConnectionPool& pool, v1::Role role, const std::string& display_name) {
+  kb::AccessStore store(pool);
+  v1::Token token;
+  token.set_display_name(display_name.empty() ? "test " + v1::Role_Name(role) : display_name);
+  token.set_role(role);
+  auto created = store.CreateToken(token, "test fixture");
+  EXPECT_TRUE(created.ok()) << created.status();
+  return created.ok() ? created->secret() : "";
+}
+
 void ServerTest::SetUp() {
   DatabaseTest::SetUp();
   if (IsSkipped() || HasFatalFailure()) return;
@@ -14,11 +24,13 @@ void ServerTest::SetUp() {
   auto started = server::InsdiagServer::Start(pool(), options);
   ASSERT_TRUE(started.ok()) << started.status();
   server_ = std::move(*started);
-  channel_ = client::Connect("127.0.0.1:" + std::to_string(server_->grpc_port()));
+  admin_token_ = MakeToken(pool(), v1::ADMIN);
+  channel_ = client::Connect("127.0.0.1:" + std::to_string(server_->grpc_port()), admin_token_);
   runs_ = v1::RunService::NewStub(channel_);
   http_ = std::make_unique<httplib::Client>("127.0.0.1", server_->http_port());
   http_->set_read_timeout(std::chrono::seconds(60));
   http_->set_write_timeout(std::chrono::seconds(60));
+  http_->set_bearer_token_auth(admin_token_.c_str());
 }
 
 void ServerTest::TearDown() {

@@ -7,6 +7,7 @@
 
 #include "insdiag/client/run_client.h"
 #include "insdiag/v1/analyses.grpc.pb.h"
+#include "insdiag/kb/access_store.h"
 #include "insdiag/server/insdiag_server.h"
 #include "support/database_fixture.h"
 
@@ -14,6 +15,9 @@
 #include <httplib.h>
 
 namespace insdiag::testing {
+
+// A token of `role` made directly in the database; its secret.
+std::string MakeToken(kb::ConnectionPool& pool, v1::Role role, const std::string& display_name = "");
 
 class ServerTest : public DatabaseTest {
  protected:
@@ -26,6 +30,9 @@ class ServerTest : public DatabaseTest {
 
   // Count of stored runs, through the API.
   int StoredRunCount();
+
+  // The fixture's clients act as ADMIN with this secret.
+  std::string admin_token_;
 
   std::unique_ptr<server::InsdiagServer> server_;
   std::shared_ptr<grpc::Channel> channel_;

@@ -21,7 +21,7 @@ class AnalysesVerb final : public Verb {
     options.Option("--page-size", &page_size_, "Analyses per page (default 50, at most 1000)");
     options.Option("--page-token", &page_token_, "The next page, as printed after the previous one");
     options.Flag("--json", &json_, "Print insdiag.v1.ListAnalysesResponse as JSON");
-    options.Option("--server", &server_, "Server gRPC address host:port (default localhost:50051)", "INSDIAG_SERVER");
+    server_.Declare(options);
   }
 
   int Run(std::ostream& out, std::ostream& err) override {
@@ -32,7 +32,7 @@ class AnalysesVerb final : public Verb {
     request.set_page_token(page_token_);
     request.set_run(ResourceName("runs", run_));
     request.set_unit(ResourceName("units", unit_));
-    auto stub = v1::AnalysisService::NewStub(client::Connect(server_));
+    auto stub = v1::AnalysisService::NewStub(server_.Connect());
     auto response = client::CallUnary<v1::ListAnalysesResponse>(
         [&](grpc::ClientContext* c, v1::ListAnalysesResponse* r) { return stub->ListAnalyses(c, request, r); });
     if (!response.ok()) return RequestFailed(err, Name(), "list analyses", response.status());
@@ -48,7 +48,7 @@ class AnalysesVerb final : public Verb {
 
  private:
   std::string run_, unit_, page_size_, page_token_;
-  std::string server_ = client::kDefaultServerAddress;
+  ServerFlags server_;
   bool json_ = false;
 };
 

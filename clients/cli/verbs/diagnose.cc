@@ -25,8 +25,7 @@ class DiagnoseVerb final : public Verb {
 
   void DeclareOptions(OptionSink& options) override {
     options.Positional("RUN.csv", &file_, "Bench-run file (shared/spec/bench-run-format.md)");
-    options.Option("--server", &server_, "Server gRPC address host:port (default localhost:50051)",
-                   "INSDIAG_SERVER");
+    server_.Declare(options);
     options.Flag("--json", &json_, "Print the diagnosis as JSON (insdiag.v1.Diagnosis)");
     options.Repeated("--add", &add_, "Put a catalogue effect into the model (term or family); repeatable");
     options.Flag("--no-discover", &no_discover_,
@@ -45,7 +44,7 @@ class DiagnoseVerb final : public Verb {
           << status.message() << "\n";
       return kExitRefused;
     };
-    auto channel = client::Connect(server_);
+    auto channel = server_.Connect();
     auto runs = v1::RunService::NewStub(channel);
     client::UploadOptions upload;
     upload.request_id = client::NewRequestId();
@@ -110,7 +109,7 @@ class DiagnoseVerb final : public Verb {
 
  private:
   std::string file_;
-  std::string server_ = client::kDefaultServerAddress;
+  ServerFlags server_;
   bool json_ = false;
   bool no_discover_ = false;
   std::vector<std::string> add_;

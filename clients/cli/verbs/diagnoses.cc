@@ -38,13 +38,13 @@ class DiagnosesVerb final : public Verb {
     options.Option("--repair-action", &repair_action_, "resolve: e.g. \"module replaced\"");
     options.Option("--notes", &notes_, "resolve: free text for the failure record");
     options.Flag("--json", &json_, "Print the response as JSON");
-    options.Option("--server", &server_, "Server gRPC address host:port (default localhost:50051)", "INSDIAG_SERVER");
+    server_.Declare(options);
   }
 
   int Run(std::ostream& out, std::ostream& err) override {
     const std::string action = arguments_.empty() ? "list" : arguments_.front();
     const std::size_t operands = arguments_.empty() ? 0 : arguments_.size() - 1;
-    stub_ = v1::KnowledgeService::NewStub(client::Connect(server_));
+    stub_ = v1::KnowledgeService::NewStub(server_.Connect());
     if (action == "list" && operands == 0) return List(out, err);
     if (action == "get" && operands == 1) return Get(arguments_[1], out, err);
     if (action == "create" && operands == 1) return Create(arguments_[1], out, err);
@@ -130,7 +130,7 @@ class DiagnosesVerb final : public Verb {
   std::vector<std::string> arguments_;
   std::string unit_, analysis_, page_size_, page_token_, module_, mode_, repair_action_, notes_;
   bool confirmed_ = false, rejected_ = false, json_ = false;
-  std::string server_ = client::kDefaultServerAddress;
+  ServerFlags server_;
   std::unique_ptr<v1::KnowledgeService::Stub> stub_;
 };
 

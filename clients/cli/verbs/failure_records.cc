@@ -45,7 +45,7 @@ class FailureRecordsVerb final : public Verb {
     options.Option("--repair-action", &repair_action_, "create: e.g. \"module replaced\"");
     options.Option("--notes", &notes_, "create: free text");
     options.Flag("--json", &json_, "Print the response as JSON");
-    options.Option("--server", &server_, "Server gRPC address host:port (default localhost:50051)", "INSDIAG_SERVER");
+    server_.Declare(options);
   }
 
   int Run(std::ostream& out, std::ostream& err) override {
@@ -53,7 +53,7 @@ class FailureRecordsVerb final : public Verb {
     if (arguments_.size() > 1 || (action != "list" && action != "create")) {
       return UsageError(err, Name(), "expected: list | create");
     }
-    stub_ = v1::KnowledgeService::NewStub(client::Connect(server_));
+    stub_ = v1::KnowledgeService::NewStub(server_.Connect());
     return action == "list" ? List(out, err) : Create(out, err);
   }
 
@@ -113,7 +113,7 @@ class FailureRecordsVerb final : public Verb {
   std::vector<std::string> arguments_;
   std::string unit_, module_, mode_, page_size_, page_token_, hours_, analysis_, repair_action_, notes_;
   bool confirmed_ = false, no_fault_found_ = false, censored_ = false, json_ = false;
-  std::string server_ = client::kDefaultServerAddress;
+  ServerFlags server_;
   std::unique_ptr<v1::KnowledgeService::Stub> stub_;
 };
 

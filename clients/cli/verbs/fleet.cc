@@ -41,7 +41,7 @@ class FleetVerb final : public Verb {
     options.Option("--page-size", &page_size_, "trends, rank: entries per page (default 50, at most 1000)");
     options.Option("--page-token", &page_token_, "trends, rank: the next page");
     options.Flag("--json", &json_, "Print the response as JSON (insdiag.v1 fleet messages)");
-    options.Option("--server", &server_, "Server gRPC address host:port (default localhost:50051)", "INSDIAG_SERVER");
+    server_.Declare(options);
   }
 
   int Run(std::ostream& out, std::ostream& err) override {
@@ -51,7 +51,7 @@ class FleetVerb final : public Verb {
     if (auto s = ParseInt(page_size_, "--page-size", &page_size_value_); !s.ok()) {
       return UsageError(err, Name(), std::string(s.message()));
     }
-    stub_ = v1::FleetService::NewStub(client::Connect(server_));
+    stub_ = v1::FleetService::NewStub(server_.Connect());
     if (query_ == "stats") return Stats(out, err);
     if (query_ == "counts") return Counts(out, err);
     if (query_ == "pareto") return Pareto(out, err);
@@ -224,7 +224,7 @@ class FleetVerb final : public Verb {
   double confidence_value_ = 0;
   int page_size_value_ = 0;
   bool json_ = false;
-  std::string server_ = client::kDefaultServerAddress;
+  ServerFlags server_;
   std::unique_ptr<v1::FleetService::Stub> stub_;
 };
 

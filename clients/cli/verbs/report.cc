@@ -70,13 +70,13 @@ class ReportVerb final : public Verb {
   void DeclareOptions(OptionSink& options) override {
     options.Positional("ANALYSIS", &analysis_, "analyses/{id} or the id");
     options.Flag("--json", &json_, "Print the report as JSON (insdiag.v1.AnalysisReport)");
-    options.Option("--server", &server_, "Server gRPC address host:port (default localhost:50051)", "INSDIAG_SERVER");
+    server_.Declare(options);
   }
 
   int Run(std::ostream& out, std::ostream& err) override {
     v1::GetAnalysisRequest request;
     request.set_name(ResourceName("analyses", analysis_));
-    auto stub = v1::AnalysisService::NewStub(client::Connect(server_));
+    auto stub = v1::AnalysisService::NewStub(server_.Connect());
     auto analysis = client::CallUnary<v1::Analysis>(
         [&](grpc::ClientContext* c, v1::Analysis* r) { return stub->GetAnalysis(c, request, r); });
     if (!analysis.ok()) return RequestFailed(err, Name(), "get analysis", analysis.status());
@@ -93,7 +93,7 @@ class ReportVerb final : public Verb {
 
  private:
   std::string analysis_;
-  std::string server_ = client::kDefaultServerAddress;
+  ServerFlags server_;
   bool json_ = false;
 };
 

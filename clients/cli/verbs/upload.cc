@@ -4,6 +4,7 @@
 
 #include "insdiag/benchrun/bench_run_csv.h"
 #include "insdiag/client/run_client.h"
+#include "server_output.h"
 #include "verb.h"
 
 namespace insdiag::cli {
@@ -16,8 +17,7 @@ class UploadVerb final : public Verb {
 
   void DeclareOptions(OptionSink& options) override {
     options.Positional("RUN.csv", &file_, "Bench-run file (shared/spec/bench-run-format.md)");
-    options.Option("--server", &server_, "Server gRPC address host:port (default localhost:50051)",
-                   "INSDIAG_SERVER");
+    server_.Declare(options);
     options.Option("--request-id", &request_id_,
                    "Idempotency key; uploading again with the same key returns the same run "
                    "(default: a new random key)");
@@ -31,12 +31,12 @@ class UploadVerb final : public Verb {
       err << run.status().message() << "\n";
       return kExitRefused;
     }
-    auto stub = v1::RunService::NewStub(client::Connect(server_));
+    auto stub = v1::RunService::NewStub(server_.Connect());
     client::UploadOptions options;
     options.request_id = request_id_.empty() ? client::NewRequestId() : request_id_;
     auto stored = client::UploadRun(*stub, *run, options);
     if (!stored.ok()) {
-      err << "insdiag upload: " << server_ << ": " << absl::StatusCodeToString(stored.status().code()) << ": "
+      err << "insdiag upload: " << server_.address << ": " << absl::StatusCodeToString(stored.status().code()) << ": "
           << stored.status().message() << "\n";
       return kExitRefused;
     }
@@ -46,7 +46,7 @@ class UploadVerb final : public Verb {
 
  private:
   std::string file_;
-  std::string server_ = client::kDefaultServerAddress;
+  ServerFlags server_;
   std::string request_id_;
 };
 

@@ -4,6 +4,9 @@
 
 #include <cstdlib>
 #include <random>
+#include <vector>
+
+#include <grpcpp/support/client_interceptor.h>
 
 namespace insdiag::client {
 
@@ -12,11 +15,50 @@ std::string DefaultServerAddress() {
   return env != nullptr && *env != '\0' ? env : kDefaultServerAddress;
 }
 
-std::shared_ptr<grpc::Channel> Connect(const std::string& address) {
+std::string DefaultToken() {
+  const char* env = std::getenv("INSDIAG_TOKEN");
+  return env != nullptr ? env : "";
+}
+
+namespace {
+
+// Adds the bearer token to every call's metadata. (gRPC's own call
+// credentials are withheld from channels without TLS.)
+class BearerToken final : public grpc::experimental::Interceptor {
+ public:
+  explicit BearerToken(std::string header) : header_(std::move(header)) {}
+  void Intercept(grpc::experimental::InterceptorBatchMethods* methods) override {
+    if (methods->QueryInterceptionHookPoint(grpc::experimental::InterceptionHookPoints::PRE_SEND_INITIAL_METADATA)) {
+      methods->GetSendInitialMetadata()->insert({"authorization", header_});
+    }
+    methods->Proceed();
+  }
+
+ private:
+  std::string header_;
+};
+
+class BearerTokenFactory final : public grpc::experimental::ClientInterceptorFactoryInterface {
+ public:
+  explicit BearerTokenFactory(std::string token) : header_("Bearer " + std::move(token)) {}
+  grpc::experimental::Interceptor* CreateClientInterceptor(grpc::experimental::ClientRpcInfo*) override {
+    return new BearerToken(header_);
+  }
+
+ private:
+  std::string header_;
+};
+
+}  // namespace
+
+std::shared_ptr<grpc::Channel> Connect(const std::string& address, const std::string& token) {
   grpc::ChannelArguments arguments;
   // ReadRunSamples chunks of up to 50,000 samples are ~5 MB.
   arguments.SetMaxReceiveMessageSize(64 << 20);
-  return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), arguments);
+  std::vector<std::unique_ptr<grpc::experimental::ClientInterceptorFactoryInterface>> interceptors;
+  if (!token.empty()) interceptors.push_back(std::make_unique<BearerTokenFactory>(token));
+  return grpc::experimental::CreateCustomChannelWithInterceptors(address, grpc::InsecureChannelCredentials(),
+                                                                 arguments, std::move(interceptors));
 }
 
 std::string NewRequestId() {

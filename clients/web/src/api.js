@@ -23,6 +23,40 @@ export class ApiError extends Error {
   }
 }
 
+// The bearer token lives in this browser tab's session only (issue: never in
+// localStorage, where it would outlive the tab and reach every later visitor).
+const TOKEN_KEY = 'insdiag.token';
+
+export const session = {
+  get token() {
+    return sessionStorage.getItem(TOKEN_KEY) || '';
+  },
+  set token(value) {
+    if (value) sessionStorage.setItem(TOKEN_KEY, value);
+    else sessionStorage.removeItem(TOKEN_KEY);
+  },
+  /**
+   * Set by the page: asks the user for a token (the server said 401 with
+   * `reason`) and resolves once a new one is in `session.token`.
+   */
+  askForToken: null,
+};
+
+function authorization() {
+  return session.token ? { Authorization: `Bearer ${session.token}` } : {};
+}
+
+/** Runs `send()` (a fetch-like promise of a Response); on 401 asks for a token and sends once more. */
+async function withToken(send) {
+  let response = await send();
+  if (response.status === 401 && session.askForToken) {
+    const error = await errorFrom(response);
+    await session.askForToken(error.message);
+    response = await send();
+  }
+  return response;
+}
+
 async function errorFrom(response) {
   let body = null;
   try {
@@ -44,7 +78,7 @@ async function call(method, path, { body, query, contentType } = {}) {
     init.body = typeof body === 'string' || body instanceof Blob ? body : JSON.stringify(body);
     init.headers['Content-Type'] = contentType || 'application/json';
   }
-  const response = await fetch(url, init);
+  const response = await withToken(() => fetch(url, { ...init, headers: { ...init.headers, ...authorization() } }));
   if (!response.ok) throw await errorFrom(response);
   const text = await response.text();
   return text ? JSON.parse(text) : {};
@@ -52,7 +86,9 @@ async function call(method, path, { body, query, contentType } = {}) {
 
 /** Calls `onMessage` with each line of a newline-delimited JSON answer. */
 async function stream(path, onMessage, signal) {
-  const response = await fetch(new URL(path, window.location.origin), { signal });
+  const response = await withToken(() =>
+    fetch(new URL(path, window.location.origin), { signal, headers: authorization() }),
+  );
   if (!response.ok) throw await errorFrom(response);
   const reader = response.body.getReader();
   const decoder = new TextDecoder();
@@ -96,13 +132,16 @@ export async function listAll(listPage, field, limit) {
  * Uploads a bench-run file as text/csv; `onProgress(fraction)` as it is sent
  * (XMLHttpRequest, because fetch tells nothing of an upload's progress).
  */
-function uploadRun(file, onProgress = () => {}) {
+async function uploadRun(file, onProgress = () => {}) {
+  // A token first (a cheap read), so that a 401 never costs a whole upload.
+  await call('GET', '/v1/caller');
   const url = new URL('/v1/runs:upload', window.location.origin);
   url.searchParams.set('filename', file.name);
   return new Promise((resolve, reject) => {
     const request = new XMLHttpRequest();
     request.open('POST', url);
     request.setRequestHeader('Content-Type', 'text/csv');
+    for (const [name, value] of Object.entries(authorization())) request.setRequestHeader(name, value);
     request.upload.addEventListener('progress', (event) => {
       if (event.lengthComputable) onProgress(event.loaded / event.total);
     });
@@ -121,7 +160,21 @@ function uploadRun(file, onProgress = () => {}) {
   });
 }
 
+/** Saves the run as a bench-run CSV file (a plain link would carry no token). */
+async function downloadRun(name) {
+  const url = new URL(`/v1/${name}:download`, window.location.origin);
+  const response = await withToken(() => fetch(url, { headers: authorization() }));
+  if (!response.ok) throw await errorFrom(response);
+  const link = document.createElement('a');
+  link.href = URL.createObjectURL(await response.blob());
+  link.download = `${name.split('/')[1]}.csv`;
+  link.click();
+  setTimeout(() => URL.revokeObjectURL(link.href), 60_000);
+}
+
 export const api = {
+  getCaller: () => call('GET', '/v1/caller'),
+  downloadRun,
   listRuns: (pageToken) => call('GET', '/v1/runs', { query: { pageSize: 200, pageToken } }),
   getRun: (name) => call('GET', `/v1/${name}`),
   deleteRun: (name) => call('DELETE', `/v1/${name}`),

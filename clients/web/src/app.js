@@ -5,7 +5,7 @@
 //   #/runs/{run}        a run and its analyses
 //   #/analyses/{a}      an analysis: the model loop (analysis.js)
 //   #/fleet             fleet statistics (fleet.js)
-import { api, ApiError, listAll, num } from './api.js';
+import { api, ApiError, listAll, num, session } from './api.js';
 import { h, fmt, fmtSeconds, fmtTime, empty, section, table } from './dom.js';
 import { navigate, startAnalysis, errorCard } from './nav.js';
 import { showAnalysis } from './analysis.js';
@@ -175,13 +175,19 @@ async function showRun(view, name) {
       h('div.row', { style: 'margin-top:10px' },
         h('button', { onclick: () => startAnalysis(name, [], []) }, 'Analyse with the base model'),
         h('button.secondary', { onclick: () => startAnalysis(name, [], [], true) }, 'Discover missing effects'),
-        h('a', { href: `/v1/${name}:download` }, 'Download CSV'),
+        h('button.secondary', { onclick: () => api.downloadRun(name).catch((error) => window.alert(error.message)) },
+          'Download CSV'),
         h('span.grow'),
         h('button.danger', {
           onclick: async () => {
             if (!window.confirm(`Delete ${name} and its analyses?`)) return;
-            await api.deleteRun(name);
-            navigate('#/');
+            try {
+              await api.deleteRun(name);
+              navigate('#/');
+            } catch (error) {
+              // Not an administrator, or a diagnosis rests on the run: the server says which.
+              window.alert(error.message);
+            }
           },
         }, 'Delete'))),
     section('Analyses', analyses.analyses.length
@@ -201,5 +207,42 @@ function analysisTable(analyses) {
   }));
 }
 
+// --- who is signed in --------------------------------------------------------
+
+const signIn = document.getElementById('sign-in');
+let pendingSignIn = null;
+
+/** Shows the sign-in dialog; resolves when the user has given a token. */
+session.askForToken = (reason) => {
+  if (!pendingSignIn) {
+    pendingSignIn = new Promise((resolve) => {
+      document.getElementById('sign-in-reason').textContent = session.token ? reason : '';
+      const input = document.getElementById('token-input');
+      input.value = '';
+      signIn.addEventListener('close', () => {
+        session.token = input.value.trim();
+        pendingSignIn = null;
+        resolve();
+        showCaller();
+      }, { once: true });
+      signIn.showModal();
+    });
+  }
+  return pendingSignIn;
+};
+
+async function showCaller() {
+  const place = document.getElementById('caller');
+  if (!session.token) return place.replaceChildren();
+  try {
+    const caller = await api.getCaller();
+    place.replaceChildren(`${caller.displayName} (${caller.role.toLowerCase()}) `,
+      h('a', { href: '#/', onclick: () => { session.token = ''; place.replaceChildren(); } }, 'sign out'));
+  } catch {
+    place.replaceChildren();
+  }
+}
+
 window.addEventListener('hashchange', route);
 route();
+showCaller();

@@ -39,6 +39,7 @@ let browser;
 let page;
 let runCsv;
 let baseAnalysisUrl;
+let adminToken;
 const foreignRequests = []; // anything the page asked of another origin
 const firstStates = new Map(); // analysis name → its state in the page's first GET of it
 const watched = new Set(); // analyses whose :watch stream the page opened
@@ -54,7 +55,7 @@ function urlOf(name) {
 
 async function startServer() {
   const child = spawn(env('INSDIAGD'), [
-    '--database-url', urlOf(database), '--grpc-port', '0', '--http-port', '0', '--bind', '127.0.0.1',
+    '--database-url', urlOf(database), '--data-dir', path.join(workDir, 'data'), '--grpc-port', '0', '--http-port', '0', '--bind', '127.0.0.1',
     '--workers', '1', '--fleet-refresh-seconds', '0', '--web-dir', env('INSDIAG_WEB_DIR'),
   ], { cwd: workDir, stdio: ['ignore', 'pipe', 'pipe'] });
   child.stdout.on('data', (d) => { serverLog += d; });
@@ -93,6 +94,8 @@ before(async () => {
 
   ({ child: server, port: baseUrl } = await startServer());
   baseUrl = `http://127.0.0.1:${baseUrl}`;
+  // insdiagd's first start on this database wrote an admin token into its data directory.
+  adminToken = readFileSync(path.join(workDir, 'data', 'admin-token'), 'utf8').trim();
   browser = await chromium.launch({
     executablePath: process.env.INSDIAG_CHROMIUM || '/usr/bin/chromium',
     headless: true,
@@ -137,6 +140,11 @@ after(async () => {
 test('the page is served by insdiagd with its charting library, nothing from elsewhere', { skip: skipReason }, async () => {
   const response = await page.goto(`${baseUrl}/`);
   assert.equal(response.status(), 200);
+  // Nothing of the server's data without a token: the page asks for one.
+  await page.locator('dialog#sign-in').waitFor();
+  await page.fill('#token-input', adminToken);
+  await page.click('#sign-in-button');
+  await page.getByText('administrator (first start) (admin)').waitFor();
   await page.getByRole('heading', { name: 'Runs', exact: true }).waitFor();
   await page.getByText('No runs yet').waitFor();
   const library = await page.request.get(`${baseUrl}/vendor/uPlot.esm.js`);

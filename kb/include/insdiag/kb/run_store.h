@@ -65,7 +65,8 @@ class RunStore {
   // Newest first, keyset-paginated.
   absl::StatusOr<RunPage> List(const RunQuery& query);
 
-  // NOT_FOUND when there is no such run.
+  // NOT_FOUND when there is no such run; FAILED_PRECONDITION when a
+  // diagnosis or a failure record rests on one of its analyses.
   absl::Status Delete(const std::string& run_id);
 
   // Calls `consume` with consecutive batches of about `batch_samples` samples

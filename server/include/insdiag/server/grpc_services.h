@@ -1,10 +1,13 @@
 // The gRPC face: thin adapters from the generated service bases onto the
-// transport-free services, with every error mapped by ToGrpcStatus.
+// transport-free services. Every method passes the access guard
+// (access_guard.h) and maps its errors by ToGrpcStatus.
 #pragma once
 
 #include "insdiag/kb/fleet_store.h"
+#include "insdiag/server/access_guard.h"
 #include "insdiag/server/kb_services.h"
 #include "insdiag/server/run_service.h"
+#include "insdiag/v1/access.grpc.pb.h"
 #include "insdiag/v1/analyses.grpc.pb.h"
 #include "insdiag/v1/fleet.grpc.pb.h"
 #include "insdiag/v1/knowledge.grpc.pb.h"
@@ -14,7 +17,7 @@ namespace insdiag::server {
 
 class RunServiceGrpc final : public v1::RunService::Service {
  public:
-  explicit RunServiceGrpc(RunService& runs) : runs_(runs) {}
+  RunServiceGrpc(RunService& runs, AccessGuard& guard) : runs_(runs), guard_(guard) {}
 
   grpc::Status UploadRun(grpc::ServerContext* context, grpc::ServerReader<v1::UploadRunRequest>* reader,
                          v1::Run* response) override;
@@ -29,6 +32,7 @@ class RunServiceGrpc final : public v1::RunService::Service {
 
  private:
   RunService& runs_;
+  AccessGuard& guard_;
 };
 
 // Declares a unary method `Name(Request) → Response` of a gRPC service base.
@@ -37,7 +41,7 @@ class RunServiceGrpc final : public v1::RunService::Service {
 
 class AnalysisServiceGrpc final : public v1::AnalysisService::Service {
  public:
-  explicit AnalysisServiceGrpc(AnalysisService& analyses) : analyses_(analyses) {}
+  AnalysisServiceGrpc(AnalysisService& analyses, AccessGuard& guard) : analyses_(analyses), guard_(guard) {}
   INSDIAG_UNARY(CreateAnalysis, CreateAnalysisRequest, Analysis);
   INSDIAG_UNARY(GetAnalysis, GetAnalysisRequest, Analysis);
   INSDIAG_UNARY(ListAnalyses, ListAnalysesRequest, ListAnalysesResponse);
@@ -50,11 +54,12 @@ class AnalysisServiceGrpc final : public v1::AnalysisService::Service {
 
  private:
   AnalysisService& analyses_;
+  AccessGuard& guard_;
 };
 
 class KnowledgeServiceGrpc final : public v1::KnowledgeService::Service {
  public:
-  explicit KnowledgeServiceGrpc(KnowledgeService& knowledge) : knowledge_(knowledge) {}
+  KnowledgeServiceGrpc(KnowledgeService& knowledge, AccessGuard& guard) : knowledge_(knowledge), guard_(guard) {}
   INSDIAG_UNARY(GetUnitType, GetUnitTypeRequest, UnitType);
   INSDIAG_UNARY(ListUnitTypes, ListUnitTypesRequest, ListUnitTypesResponse);
   INSDIAG_UNARY(GetUnit, GetUnitRequest, Unit);
@@ -71,11 +76,12 @@ class KnowledgeServiceGrpc final : public v1::KnowledgeService::Service {
 
  private:
   KnowledgeService& knowledge_;
+  AccessGuard& guard_;
 };
 
 class FleetServiceGrpc final : public v1::FleetService::Service {
  public:
-  explicit FleetServiceGrpc(kb::FleetStore& fleet) : fleet_(fleet) {}
+  FleetServiceGrpc(kb::FleetStore& fleet, AccessGuard& guard) : fleet_(fleet), guard_(guard) {}
   INSDIAG_UNARY(GetFleetStatistics, GetFleetStatisticsRequest, FleetStatistics);
   INSDIAG_UNARY(ListFailureCounts, ListFailureCountsRequest, ListFailureCountsResponse);
   INSDIAG_UNARY(GetFailurePareto, GetFailureParetoRequest, FailurePareto);
@@ -86,6 +92,21 @@ class FleetServiceGrpc final : public v1::FleetService::Service {
 
  private:
   kb::FleetStore& fleet_;
+  AccessGuard& guard_;
+};
+
+class AccessServiceGrpc final : public v1::AccessService::Service {
+ public:
+  AccessServiceGrpc(AccessService& access, AccessGuard& guard) : access_(access), guard_(guard) {}
+  INSDIAG_UNARY(GetCaller, GetCallerRequest, Caller);
+  INSDIAG_UNARY(CreateToken, CreateTokenRequest, CreatedToken);
+  INSDIAG_UNARY(ListTokens, ListTokensRequest, ListTokensResponse);
+  INSDIAG_UNARY(RevokeToken, RevokeTokenRequest, Token);
+  INSDIAG_UNARY(ListAuditEvents, ListAuditEventsRequest, ListAuditEventsResponse);
+
+ private:
+  AccessService& access_;
+  AccessGuard& guard_;
 };
 
 #undef INSDIAG_UNARY

@@ -5,6 +5,7 @@
 
 #include <absl/status/statusor.h>
 
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <thread>
@@ -28,7 +29,8 @@ class RunServiceGrpc;
 class InsdiagServer {
  public:
   struct Options {
-    std::string bind_address = "0.0.0.0";
+    // Loopback unless told otherwise: without TLS, tokens cross the network in clear.
+    std::string bind_address = "127.0.0.1";
     int grpc_port = 50051;  // 0: any free port (see grpc_port())
     int http_port = 8080;   // 0: any free port (see http_port())
     std::size_t max_upload_samples = 20'000'000;
@@ -39,6 +41,9 @@ class InsdiagServer {
     bool seed_knowledge_base = true;
     // The page's files (web_page.h); empty: no page.
     std::string web_dir;
+    // On a database without any token, an ADMIN token is made and its secret
+    // written here (mode 0600); empty: none is made.
+    std::filesystem::path first_admin_token_file;
   };
 
   // `pool` must outlive the server. UNAVAILABLE when a port cannot be bound.
@@ -47,6 +52,8 @@ class InsdiagServer {
 
   int grpc_port() const { return grpc_port_; }
   int http_port() const { return http_port_; }
+  // Whether this start made the first ADMIN token (Options::first_admin_token_file).
+  bool wrote_first_admin_token() const { return wrote_first_admin_token_; }
   // Whether GET / serves the page (Options::web_dir holds index.html).
   bool serves_page() const { return serves_page_; }
 
@@ -65,6 +72,7 @@ class InsdiagServer {
   int grpc_port_ = 0;
   int http_port_ = 0;
   bool serves_page_ = false;
+  bool wrote_first_admin_token_ = false;
   std::once_flag shutdown_once_;
 };
 

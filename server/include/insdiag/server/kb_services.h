@@ -1,5 +1,5 @@
-// The methods of insdiag.v1.AnalysisService, KnowledgeService and
-// FleetService, once, independent of transport: requests in, responses or
+// The methods of insdiag.v1.AnalysisService, KnowledgeService,
+// FleetService and AccessService, once, independent of transport: requests in, responses or
 // absl::Status out, over the knowledge base's stores. The gRPC face adapts
 // them (grpc_services.h); REST reaches them through gRPC (rest_gateway.h).
 #pragma once
@@ -11,9 +11,11 @@
 #include <chrono>
 #include <functional>
 
+#include "insdiag/kb/access_store.h"
 #include "insdiag/kb/analysis_store.h"
 #include "insdiag/kb/fleet_store.h"
 #include "insdiag/kb/knowledge_store.h"
+#include "insdiag/v1/access.pb.h"
 #include "insdiag/v1/analyses.pb.h"
 #include "insdiag/v1/fleet.pb.h"
 #include "insdiag/v1/knowledge.pb.h"
@@ -67,6 +69,23 @@ class KnowledgeService {
 
  private:
   kb::KnowledgeStore& store_;
+};
+
+// Tokens and the audit trail. The caller comes from the access guard
+// (access_guard.h), which has already checked the method's role.
+class AccessService {
+ public:
+  explicit AccessService(kb::AccessStore& store) : store_(store) {}
+
+  absl::StatusOr<v1::Caller> GetCaller(const v1::GetCallerRequest& request, const v1::Caller& caller);
+  absl::StatusOr<v1::CreatedToken> CreateToken(const v1::CreateTokenRequest& request, const v1::Caller& caller);
+  absl::StatusOr<v1::ListTokensResponse> ListTokens(const v1::ListTokensRequest& request, const v1::Caller& caller);
+  absl::StatusOr<v1::Token> RevokeToken(const v1::RevokeTokenRequest& request, const v1::Caller& caller);
+  absl::StatusOr<v1::ListAuditEventsResponse> ListAuditEvents(const v1::ListAuditEventsRequest& request,
+                                                              const v1::Caller& caller);
+
+ private:
+  kb::AccessStore& store_;
 };
 
 }  // namespace insdiag::server

@@ -11,7 +11,9 @@
 //                                  (one UploadRunRequest per line)
 //   GET  /v1/runs/{run}:download   the run as a bench-run CSV file
 //   GET  /healthz                  the gRPC health service's verdict
-// Server-streaming methods answer with newline-delimited JSON.
+// Server-streaming methods answer with newline-delimited JSON. Every call
+// carries the Authorization header and the client's address to the services'
+// access guard (access_guard.h); only /healthz and the page need none.
 #pragma once
 
 #include <absl/status/statusor.h>
@@ -40,8 +42,11 @@ class RestGateway {
  public:
   // `services`: full names, e.g. "insdiag.v1.RunService". INVALID_ARGUMENT
   // for an unknown service or a malformed http rule.
+  // `gateway_key`: what the access guard believes the client's address
+  // beside (access_guard.h).
   static absl::StatusOr<std::unique_ptr<RestGateway>> Create(std::shared_ptr<grpc::Channel> channel,
-                                                             const std::vector<std::string>& services);
+                                                             const std::vector<std::string>& services,
+                                                             std::string gateway_key);
 
   // Installs the handlers; the gateway must outlive `http`'s serving.
   void Register(httplib::Server& http);
@@ -55,15 +60,19 @@ class RestGateway {
     std::string grpc_path;  // "/insdiag.v1.RunService/GetRun"
   };
 
-  explicit RestGateway(std::shared_ptr<grpc::Channel> channel) : stub_(std::move(channel)) {}
+  RestGateway(std::shared_ptr<grpc::Channel> channel, std::string gateway_key)
+      : stub_(std::move(channel)), gateway_key_(std::move(gateway_key)) {}
+  // The caller's credentials and address, for the services' access guard.
+  std::vector<std::pair<std::string, std::string>> MetadataOf(const httplib::Request& request) const;
   void Handle(const httplib::Request& request, httplib::Response& response);
   void Dispatch(const Route& route, const std::map<std::string, std::string>& bindings,
                 const httplib::Request& request, httplib::Response& response);
   void Upload(const Route& route, const httplib::Request& request, httplib::Response& response);
-  void Download(const std::string& run_name, httplib::Response& response);
+  void Download(const std::string& run_name, const httplib::Request& request, httplib::Response& response);
   void Health(httplib::Response& response);
 
   grpc::GenericStub stub_;
+  std::string gateway_key_;
   std::vector<Route> routes_;  // custom-verb routes first
 };
 

@@ -21,8 +21,12 @@ inline constexpr char kDefaultServerAddress[] = "localhost:50051";
 // $INSDIAG_SERVER, else localhost:50051.
 std::string DefaultServerAddress();
 
-// An insecure channel to `address` (host:port).
-std::shared_ptr<grpc::Channel> Connect(const std::string& address);
+// $INSDIAG_TOKEN, else "".
+std::string DefaultToken();
+
+// A channel to `address` (host:port) whose every call carries
+// `authorization: Bearer <token>` (none when `token` is empty).
+std::shared_ptr<grpc::Channel> Connect(const std::string& address, const std::string& token);
 
 // A fresh random request id (UUID version 4).
 std::string NewRequestId();
