@@ -56,6 +56,8 @@ int main(int argc, char** argv) {
   app.add_option("--bind", options.bind_address,
                  "Address to listen on (loopback by default; elsewhere, tokens cross the network in clear)")
       ->capture_default_str();
+  app.add_option("--tls-cert", options.tls_cert_file, "PEM certificate chain: serve gRPC and HTTPS over TLS");
+  app.add_option("--tls-key", options.tls_key_file, "PEM private key of --tls-cert");
   app.add_option("--migrations-dir", migrations_dir,
                  "Apply migrations from this directory instead of those built in");
   options.web_dir = DefaultWebDir();
@@ -125,16 +127,17 @@ int main(int argc, char** argv) {
               << " (readable by this user only); make tokens for people and scripts with "
                  "'insdiag tokens create', then keep that file safe or delete it\n";
   }
-  if (!IsLoopback(options.bind_address)) {
+  if (!IsLoopback(options.bind_address) && options.tls_cert_file.empty()) {
     std::cerr << "insdiagd: WARNING: listening on " << options.bind_address
               << " without TLS: bearer tokens and bench data cross the network in clear text\n";
   }
   std::cout << "insdiagd: listening grpc=" << options.bind_address << ":" << (*server)->grpc_port()
             << " http=" << options.bind_address << ":" << (*server)->http_port() << " database="
             << (postgres ? "embedded:" + postgres->cluster_dir().string() : std::string("external"))
-            << " workers=" << workers << std::endl;
+            << " workers=" << workers << " tls=" << (options.tls_cert_file.empty() ? "off" : "on") << std::endl;
+  const char* scheme = options.tls_cert_file.empty() ? "http" : "https";
   if ((*server)->serves_page()) {
-    std::cerr << "insdiagd: the page is at http://localhost:" << (*server)->http_port() << "/ (from "
+    std::cerr << "insdiagd: the page is at " << scheme << "://localhost:" << (*server)->http_port() << "/ (from "
               << options.web_dir << ")\n";
   } else {
     std::cerr << "insdiagd: no page in '" << options.web_dir

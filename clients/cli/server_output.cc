@@ -7,6 +7,10 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <sstream>
 
 #include "insdiag/api/json.h"
 #include "verb.h"
@@ -17,6 +21,22 @@ void ServerFlags::Declare(OptionSink& options) {
   options.Option("--server", &address, "Server gRPC address host:port (default localhost:50051)", "INSDIAG_SERVER");
   options.Option("--token", &token, "Bearer token (insdiag tokens create; the first admin token is in the server's "
                  "data directory, admin-token)", "INSDIAG_TOKEN");
+  options.Option("--ca-file", &ca_file, "PEM certificates to verify a TLS server against (default: plaintext)",
+                 "INSDIAG_CA_FILE");
+}
+
+std::shared_ptr<grpc::Channel> ServerFlags::Connect() const {
+  std::string ca_pem;
+  if (!ca_file.empty()) {
+    std::ifstream in(ca_file, std::ios::binary);
+    std::ostringstream text;
+    if (!in || !(text << in.rdbuf()) || text.str().find("-----BEGIN CERTIFICATE-----") == std::string::npos) {
+      std::cerr << "insdiag: --ca-file " << ca_file << ": cannot read PEM certificates from it\n";
+      std::exit(kExitUsage);
+    }
+    ca_pem = text.str();
+  }
+  return client::Connect(address, token, ca_pem);
 }
 
 int RequestFailed(std::ostream& err, const std::string& verb, const std::string& what, const absl::Status& status) {

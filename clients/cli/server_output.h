@@ -18,12 +18,16 @@
 
 namespace insdiag::cli {
 
-// --server and --token, as every verb that talks to the server takes them.
+// --server, --token and --ca-file, as every verb that talks to the server
+// takes them.
 struct ServerFlags {
   std::string address = client::kDefaultServerAddress;
   std::string token;
+  std::string ca_file;
   void Declare(OptionSink& options);
-  std::shared_ptr<grpc::Channel> Connect() const { return client::Connect(address, token); }
+  // An unreadable --ca-file ends the program with the usage status: nothing
+  // may go to the server in clear when the user asked for TLS.
+  std::shared_ptr<grpc::Channel> Connect() const;
 };
 
 // "insdiag VERB: WHAT: CODE: message" on `err`; returns kExitRefused.

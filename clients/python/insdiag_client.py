@@ -131,6 +131,8 @@ def main():
     parser.add_argument("--server", default=os.environ.get("INSDIAG_SERVER", "localhost:50051"))
     parser.add_argument("--token", default=os.environ.get("INSDIAG_TOKEN", ""),
                         help="bearer token (default $INSDIAG_TOKEN)")
+    parser.add_argument("--ca-file", default=os.environ.get("INSDIAG_CA_FILE", ""),
+                        help="PEM certificates to verify a TLS server against (default: plaintext)")
     parser.add_argument("--json", action="store_true", help="print the diagnosis as JSON")
     parser.add_argument("--stubs-dir", help="where to generate the gRPC stubs (default: a temporary directory)")
     args = parser.parse_args()
@@ -144,7 +146,16 @@ def main():
     knowledge_pb = importlib.import_module("insdiag.v1.knowledge_pb2")
     knowledge_grpc = importlib.import_module("insdiag.v1.knowledge_pb2_grpc")
 
-    channel = grpc.intercept_channel(grpc.insecure_channel(args.server), bearer_token_interceptor(grpc, args.token))
+    if args.ca_file:
+        try:
+            with open(args.ca_file, "rb") as f:
+                transport = grpc.secure_channel(args.server, grpc.ssl_channel_credentials(root_certificates=f.read()))
+        except OSError as error:
+            print("insdiag_client: --ca-file %s: %s" % (args.ca_file, error), file=sys.stderr)
+            return 2
+    else:
+        transport = grpc.insecure_channel(args.server)
+    channel = grpc.intercept_channel(transport, bearer_token_interceptor(grpc, args.token))
     try:
         metadata, rows, order = read_run(args.run, runs_pb)
         run = upload(runs_grpc.RunServiceStub(channel), runs_pb, metadata, rows, order)

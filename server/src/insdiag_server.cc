@@ -10,6 +10,8 @@
 #include <grpcpp/health_check_service_interface.h>
 
 #include <chrono>
+#include <fstream>
+#include <sstream>
 
 #include "insdiag/api/unit_types.h"
 #include "insdiag/kb/diagnosis.h"
@@ -57,6 +59,33 @@ struct InsdiagServer::Services {
 
 InsdiagServer::InsdiagServer() = default;
 
+namespace {
+
+absl::StatusOr<std::string> ReadPemFile(const std::string& path, const char* flag) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  if (!in || !(text << in.rdbuf())) return absl::InvalidArgumentError(absl::StrCat(flag, " ", path, ": cannot read"));
+  if (!absl::StrContains(text.str(), "-----BEGIN ")) {
+    return absl::InvalidArgumentError(absl::StrCat(flag, " ", path, ": not a PEM file"));
+  }
+  return text.str();
+}
+
+// The server's certificate chain and private key, both required.
+absl::StatusOr<grpc::SslServerCredentialsOptions::PemKeyCertPair> ReadKeyCertPair(
+    const InsdiagServer::Options& options) {
+  if (options.tls_cert_file.empty() || options.tls_key_file.empty()) {
+    return absl::InvalidArgumentError("TLS needs both --tls-cert and --tls-key");
+  }
+  auto cert = ReadPemFile(options.tls_cert_file, "--tls-cert");
+  if (!cert.ok()) return cert.status();
+  auto key = ReadPemFile(options.tls_key_file, "--tls-key");
+  if (!key.ok()) return key.status();
+  return grpc::SslServerCredentialsOptions::PemKeyCertPair{*key, *cert};
+}
+
+}  // namespace
+
 absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::ConnectionPool& pool, Options options) {
   std::unique_ptr<InsdiagServer> server(new InsdiagServer());
   server->services_ = std::make_unique<Services>(pool, options);
@@ -80,8 +109,17 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
-  builder.AddListeningPort(absl::StrCat(options.bind_address, ":", options.grpc_port),
-                           grpc::InsecureServerCredentials(), &server->grpc_port_);
+  const bool tls = !options.tls_cert_file.empty() || !options.tls_key_file.empty();
+  std::shared_ptr<grpc::ServerCredentials> credentials = grpc::InsecureServerCredentials();
+  if (tls) {
+    auto pair = ReadKeyCertPair(options);
+    if (!pair.ok()) return pair.status();
+    grpc::SslServerCredentialsOptions ssl;
+    ssl.pem_key_cert_pairs.push_back(*pair);
+    credentials = grpc::SslServerCredentials(ssl);
+  }
+  builder.AddListeningPort(absl::StrCat(options.bind_address, ":", options.grpc_port), credentials,
+                           &server->grpc_port_);
   builder.RegisterService(&server->services_->runs_grpc);
   builder.RegisterService(&server->services_->analyses_grpc);
   builder.RegisterService(&server->services_->knowledge_grpc);
@@ -96,7 +134,16 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
                                      server->services_->guard.gateway_key());
   if (!gateway.ok()) return gateway.status();
   server->gateway_ = std::move(*gateway);
-  server->http_ = std::make_unique<httplib::Server>();
+  if (tls) {
+    auto https = std::make_unique<httplib::SSLServer>(options.tls_cert_file.c_str(), options.tls_key_file.c_str());
+    if (!https->is_valid()) {
+      return absl::InvalidArgumentError(absl::StrCat("--tls-cert ", options.tls_cert_file, ", --tls-key ",
+                                                     options.tls_key_file, ": HTTPS cannot use them"));
+    }
+    server->http_ = std::move(https);
+  } else {
+    server->http_ = std::make_unique<httplib::Server>();
+  }
   // The page's files first: the gateway's routes take every path.
   server->serves_page_ = ServeWebPage(*server->http_, options.web_dir);
   server->gateway_->Register(*server->http_);

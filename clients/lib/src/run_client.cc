@@ -51,14 +51,21 @@ class BearerTokenFactory final : public grpc::experimental::ClientInterceptorFac
 
 }  // namespace
 
-std::shared_ptr<grpc::Channel> Connect(const std::string& address, const std::string& token) {
+std::shared_ptr<grpc::Channel> Connect(const std::string& address, const std::string& token,
+                                       const std::string& ca_pem) {
   grpc::ChannelArguments arguments;
   // ReadRunSamples chunks of up to 50,000 samples are ~5 MB.
   arguments.SetMaxReceiveMessageSize(64 << 20);
   std::vector<std::unique_ptr<grpc::experimental::ClientInterceptorFactoryInterface>> interceptors;
   if (!token.empty()) interceptors.push_back(std::make_unique<BearerTokenFactory>(token));
-  return grpc::experimental::CreateCustomChannelWithInterceptors(address, grpc::InsecureChannelCredentials(),
-                                                                 arguments, std::move(interceptors));
+  std::shared_ptr<grpc::ChannelCredentials> credentials = grpc::InsecureChannelCredentials();
+  if (!ca_pem.empty()) {
+    grpc::SslCredentialsOptions tls;
+    tls.pem_root_certs = ca_pem;
+    credentials = grpc::SslCredentials(tls);
+  }
+  return grpc::experimental::CreateCustomChannelWithInterceptors(address, credentials, arguments,
+                                                                 std::move(interceptors));
 }
 
 std::string NewRequestId() {

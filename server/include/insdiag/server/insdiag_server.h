@@ -1,6 +1,7 @@
 // The insdiag server: the gRPC services (with health checking and
 // reflection) on one port and their REST/JSON face on another, over a
-// PostgreSQL connection pool. Start() returns once both listen.
+// PostgreSQL connection pool, both over TLS when given a certificate.
+// Start() returns once both listen.
 #pragma once
 
 #include <absl/status/statusor.h>
@@ -44,6 +45,10 @@ class InsdiagServer {
     // On a database without any token, an ADMIN token is made and its secret
     // written here (mode 0600); empty: none is made.
     std::filesystem::path first_admin_token_file;
+    // PEM certificate chain and private key: both set, gRPC and HTTP serve
+    // TLS only; both empty, neither does.
+    std::string tls_cert_file;
+    std::string tls_key_file;
   };
 
   // `pool` must outlive the server. UNAVAILABLE when a port cannot be bound.

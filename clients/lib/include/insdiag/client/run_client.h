@@ -25,8 +25,11 @@ std::string DefaultServerAddress();
 std::string DefaultToken();
 
 // A channel to `address` (host:port) whose every call carries
-// `authorization: Bearer <token>` (none when `token` is empty).
-std::shared_ptr<grpc::Channel> Connect(const std::string& address, const std::string& token);
+// `authorization: Bearer <token>` (none when `token` is empty). With
+// `ca_pem` (PEM certificates) the channel is TLS and the server's certificate
+// must chain to them and name the address's host; without, plaintext.
+std::shared_ptr<grpc::Channel> Connect(const std::string& address, const std::string& token,
+                                       const std::string& ca_pem = "");
 
 // A fresh random request id (UUID version 4).
 std::string NewRequestId();
