@@ -8,12 +8,9 @@
 #include <absl/status/statusor.h>
 
 #include <cstddef>
-#include <memory>
-#include <optional>
 
-#include "insdiag/api/run_codec.h"
-#include "insdiag/benchrun/bench_run_validation.h"
 #include "insdiag/kb/run_store.h"
+#include "insdiag/server/upload_assembler.h"
 #include "insdiag/v1/runs.pb.h"
 
 namespace insdiag::server {
@@ -48,19 +45,10 @@ class RunService {
 
    private:
     friend class RunService;
-    explicit Upload(RunService& service);
-    absl::Status AcceptMetadata(const v1::RunMetadata& metadata);
-    absl::Status AcceptSamples(const v1::SampleChunk& chunk);
-    absl::Status AcceptDigest(const std::string& sha256);
+    explicit Upload(RunService& service) : service_(service), assembler_(service.options_.max_upload_samples) {}
 
     RunService& service_;
-    enum class Stage { kMetadata, kSamples, kComplete } stage_ = Stage::kMetadata;
-    v1::RunMetadata metadata_;
-    engine::BenchRun run_;
-    std::unique_ptr<benchrun::FieldPathLocator> locator_;
-    std::optional<benchrun::BenchRunValidator> validator_;
-    std::optional<api::SampleDigest> digest_;
-    std::string sha256_;
+    UploadAssembler assembler_;
   };
   Upload StartUpload() { return Upload(*this); }
 
