@@ -3,6 +3,7 @@ option(INSDIAG_BUILD_TESTS "Build the test suite" ON)
 option(INSDIAG_BUILD_BENCHMARKS "Build the Google Benchmark programs" ON)
 option(INSDIAG_WARNINGS_AS_ERRORS "Treat compiler warnings as errors (on in CI)" OFF)
 option(INSDIAG_SANITIZE "Build with AddressSanitizer and UndefinedBehaviorSanitizer" OFF)
+option(INSDIAG_FUZZ "Build the libFuzzer targets (tests/fuzz; clang), instrumenting every first-party library" OFF)
 
 find_program(INSDIAG_CCACHE ccache)
 if(INSDIAG_CCACHE)
@@ -20,7 +21,11 @@ target_compile_options(insdiag_warnings INTERFACE
 # insdiag::sanitizers — opt-in ASan/UBSan for debugging runs.
 add_library(insdiag_sanitizers INTERFACE)
 add_library(insdiag::sanitizers ALIAS insdiag_sanitizers)
-if(INSDIAG_SANITIZE)
+if(INSDIAG_FUZZ)
+  target_compile_options(insdiag_sanitizers INTERFACE -fsanitize=fuzzer-no-link,address,undefined
+                         -fno-sanitize-recover=undefined -fno-omit-frame-pointer -g)
+  target_link_options(insdiag_sanitizers INTERFACE -fsanitize=address,undefined)
+elseif(INSDIAG_SANITIZE)
   target_compile_options(insdiag_sanitizers INTERFACE -fsanitize=address,undefined -fno-omit-frame-pointer)
   target_link_options(insdiag_sanitizers INTERFACE -fsanitize=address,undefined)
 endif()

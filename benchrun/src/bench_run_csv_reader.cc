@@ -220,6 +220,15 @@ class Parser {
     seen_keys_.emplace_back(key, lines_.number());
 
     const std::string_view raw_value = line.substr(colon + 1);
+    // Lines end at "\n" or "\r\n"; a control character inside one (a lone
+    // carriage return) would not survive being written back.
+    const auto control = std::find_if(raw_value.begin(), raw_value.end(), [](char c) {
+      return (static_cast<unsigned char>(c) < 0x20 && c != '\t') || c == 0x7f;
+    });
+    if (control != raw_value.end()) {
+      return Refuse(line, &*control, key,
+                    absl::StrFormat("control character U+%04X in the value", static_cast<unsigned char>(*control)));
+    }
     const std::string_view value = Trim(raw_value);
     const char* const value_at = value.empty() ? raw_value.data() : value.data();
     const CsvLocator::Place value_place{lines_.number(), CharacterColumn(line, value_at)};

@@ -6,7 +6,9 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <string>
 #include <system_error>
+#include <type_traits>
 
 namespace insdiag::benchrun::internal {
 namespace {
@@ -18,6 +20,15 @@ NumberParse ParseWhole(std::string_view text, Real& value) {
   // from_chars refuses a leading '+', which spreadsheet exports sometimes write.
   if (text.size() > 1 && text.front() == '+' && text[1] != '-' && text[1] != '+') {
     text.remove_prefix(1);
+  }
+  // libstdc++ 12 parses a long double with strtold on the caller's buffer,
+  // which reads to a NUL past the view's end (found by the CSV fuzzer, an
+  // ASan heap overflow): long doubles get a terminated copy. Only metadata
+  // values are long double; samples parse as double in place.
+  std::string terminated;
+  if constexpr (std::is_same_v<Real, long double>) {
+    terminated.assign(text);
+    text = terminated;
   }
   const char* const end = text.data() + text.size();
   const auto [ptr, ec] = std::from_chars(text.data(), end, value);

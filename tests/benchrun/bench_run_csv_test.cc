@@ -258,6 +258,16 @@ TEST(ParseBenchRunRefuses, MetadataNumberThatIsNotANumber) {
   EXPECT_EQ(MessageOf(status), "run.csv:6:18: site_height_m: '12O.5' is not a number");
 }
 
+// A lone carriage return inside a value is not a line break of the format,
+// and would not survive being written back (found by the CSV fuzzer).
+TEST(ParseBenchRunRefuses, AControlCharacterInsideAMetadataValue) {
+  CsvText csv;
+  csv.metadata[2] = "# unit_type: INS\r2000";
+  const absl::Status status = ParseStatus(csv.Text());
+  EXPECT_TRUE(IsRefusalAt(status, At(3, 17, "unit_type"))) << status;
+  EXPECT_THAT(MessageOf(status), HasSubstr("control character U+000D"));
+}
+
 TEST(ParseBenchRunRefuses, MetadataNumberThatIsNanOrInfinite) {
   CsvText csv;
   csv.metadata.push_back("# gyro_arw: nan");
