@@ -15,7 +15,9 @@ fuzzers=("$@")
 build=${INSDIAG_FUZZ_BUILD_DIR:-$root/build-fuzz}
 
 if [[ ! -f $build/build.ninja ]]; then
+  # -O1, the usual optimisation for fuzzing; line tables for the sanitizers' reports.
   cmake -S "$root" -B "$build" -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DINSDIAG_FUZZ=ON \
+    -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" \
     -DINSDIAG_BUILD_TESTS=OFF -DINSDIAG_BUILD_BENCHMARKS=OFF >/dev/null
 fi
 cmake --build "$build" --target "${fuzzers[@]}" >/dev/null
