@@ -60,7 +60,9 @@ def start_server(data_dir):
             sys.exit(f"insdiagd exited with {proc.returncode}; see {log.name}")
         try:
             with socket.create_connection(("127.0.0.1", grpc), timeout=1):
-                return proc, f"127.0.0.1:{grpc}"
+                # The server's first start on its new database wrote an admin token.
+                with open(os.path.join(data_dir, "pg", "admin-token")) as f:
+                    return proc, (f"127.0.0.1:{grpc}", f.read().strip())
         except OSError:
             time.sleep(0.5)
     proc.kill()
@@ -98,8 +100,9 @@ def make_run(simulator, scenario, index, path):
 
 
 def diagnose(server, path):
-    done = subprocess.run([matrix.CLI, "diagnose", path, "--json", "--server", server], capture_output=True,
-                          text=True)
+    address, token = server
+    done = subprocess.run([matrix.CLI, "diagnose", path, "--json", "--server", address, "--token", token],
+                          capture_output=True, text=True)
     if done.returncode != 0:
         return None, done.stderr.strip()[-300:]
     return json.loads(done.stdout), None
