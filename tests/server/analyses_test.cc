@@ -337,7 +337,8 @@ TEST_F(WorkerKillTest, AJobWhoseWorkerWasKilledIsCompletedByAnotherProcess) {
   const auto dir = MakeTempDir("insdiag-kill");
   const auto start = [&](const std::string& tag) {
     std::filesystem::create_directories(dir / tag);
-    auto process = Subprocess::Start({INSDIAGD_PATH, "--database-url", database_url(), "--grpc-port", "0",
+    auto process = Subprocess::Start({INSDIAGD_PATH, "--database-url", database_url(), "--data-dir",
+                                      (dir / tag / "data").string(), "--grpc-port", "0",
                                       "--http-port", "0", "--bind", "127.0.0.1", "--workers", "1", "--lease-seconds",
                                       "2", "--fleet-refresh-seconds", "0"},
                                      dir / tag);

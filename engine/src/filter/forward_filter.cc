@@ -74,7 +74,7 @@ Eigen::MatrixXd InitialCovariance(const ErrorModel& model, const StateLayout& la
 }
 
 EpochFilter::EpochFilter(const ErrorModel& model, const StateLayout& layout, const EpochRun& run)
-    : model_(model), layout_(layout), run_(run), transitions_(model, layout, run), rows_(ObservationRows(layout)) {
+    : model_(model), run_(run), transitions_(model, layout, run), rows_(ObservationRows(layout)) {
   const int n = layout.size();
   x_ = Eigen::VectorXd::Zero(n);
   P_ = InitialCovariance(model, layout);

@@ -118,7 +118,6 @@ class EpochFilter {
 
  private:
   const ErrorModel& model_;
-  const StateLayout& layout_;
   const EpochRun& run_;
   ModelTransitions transitions_;
   std::array<ObservationRow, kChannelCount> rows_;
