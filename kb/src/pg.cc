@@ -92,6 +92,11 @@ absl::StatusOr<Result> Connection::Check(PGresult* raw, std::string_view sql) {
   const char* sqlstate = PQresultErrorField(raw, PG_DIAG_SQLSTATE);
   std::string message = absl::StrCat(FirstLine(PQresultErrorMessage(raw)), " [",
                                      FirstLine(sql.substr(0, 80)), "]");
+  // An error libpq made itself (no SQLSTATE) on a connection that is gone:
+  // "server closed the connection unexpectedly" while PostgreSQL restarts.
+  if ((sqlstate == nullptr || *sqlstate == '\0') && PQstatus(conn_.get()) != CONNECTION_OK) {
+    return absl::UnavailableError(std::move(message));
+  }
   return StatusFromSqlState(sqlstate ? sqlstate : "", std::move(message));
 }
 

@@ -4,8 +4,12 @@
 #include <gtest/gtest.h>
 #include <grpcpp/generic/generic_stub.h>
 #include <signal.h>
+#include <unistd.h>
 
+#include <atomic>
 #include <filesystem>
+#include <iostream>
+#include <map>
 #include <fstream>
 #include <future>
 #include <regex>
@@ -13,6 +17,7 @@
 
 #include "insdiag/benchrun/bench_run_csv.h"
 #include "insdiag/client/run_client.h"
+#include "insdiag/v1/runs.grpc.pb.h"
 #include "support/subprocess.h"
 #include "support/synthetic_run.h"
 
@@ -230,6 +235,73 @@ TEST_F(InsdiagdTest, RefusesToStartWhenAnAppliedMigrationChanged) {
   EXPECT_EQ(*exit_status, 1);
   EXPECT_THAT(server.Stderr(), HasSubstr("0001_runs.sql has changed"));
   EXPECT_FALSE(std::filesystem::exists(dir_ / "data" / "pg" / "postmaster.pid")) << "PostgreSQL left running";
+}
+
+// PostgreSQL restarted under a stream of uploads: requests in flight fail
+// cleanly (UNAVAILABLE, nothing stored), the server reconnects by itself,
+// and every upload it acknowledged is there afterwards.
+TEST_F(InsdiagdTest, APostgresRestartUnderLoadLosesNothingAcknowledgedAndTheServerReconnects) {
+  auto server = StartServer({"--workers", "0"});
+  const auto ports = AwaitListening(server, 60s);
+  ASSERT_TRUE(ports) << "insdiagd did not come up:\n" << server.Stderr();
+  std::string token;
+  std::ifstream(dir_ / "data" / "admin-token") >> token;
+  auto stub = v1::RunService::NewStub(client::Connect("127.0.0.1:" + std::to_string(ports->grpc), token));
+
+  std::atomic<bool> stop{false}, restarted{false};
+  std::vector<std::pair<std::string, std::int64_t>> acknowledged;  // run, samples
+  std::map<absl::StatusCode, int> refused;
+  std::map<absl::StatusCode, std::string> refusal;  // a message of each code
+  int acknowledged_after_restart = 0;
+  std::thread load([&] {
+    for (std::uint32_t seed = 1; !stop; ++seed) {
+      client::UploadOptions options;
+      options.request_id = client::NewRequestId();
+      options.deadline = 20s;
+      const bool after = restarted;
+      auto run = client::UploadRun(*stub, SyntheticStaticRun(500 + seed % 7, 50.0, seed), options);
+      if (run.ok()) {
+        acknowledged.emplace_back(run->name(), run->sample_count());
+        acknowledged_after_restart += after ? 1 : 0;
+      } else {
+        ++refused[run.status().code()];
+        refusal[run.status().code()] = std::string(run.status().message());
+      }
+    }
+  });
+  std::this_thread::sleep_for(2s);
+  std::vector<std::string> pg_ctl = {"/usr/lib/postgresql/15/bin/pg_ctl", "restart", "-w", "-t", "60", "-m", "fast",
+                                     "-D", (dir_ / "data" / "pg").string(), "-l",
+                                     (dir_ / "data" / "run" / "postgresql.log").string()};
+  if (::geteuid() == 0) pg_ctl.insert(pg_ctl.begin(), {"/usr/sbin/runuser", "-u", "postgres", "--"});
+  auto restart = RunToCompletion(pg_ctl, dir_, 90s);
+  restarted = true;
+  std::this_thread::sleep_for(3s);
+  stop = true;
+  load.join();
+  ASSERT_TRUE(restart.ok() && restart->exit_status == 0) << (restart.ok() ? restart->stderr_text : "");
+
+  EXPECT_FALSE(server.Wait(0ms).has_value()) << "insdiagd died with its database:\n" << server.Stderr();
+  EXPECT_GT(acknowledged_after_restart, 0) << "the server did not reconnect";
+  for (const auto& [code, count] : refused) {
+    EXPECT_EQ(code, absl::StatusCode::kUnavailable) << count << " uploads refused with " << absl::StatusCodeToString(code)
+                                                    << ", e.g. " << refusal[code];
+  }
+  for (const auto& [name, samples] : acknowledged) {
+    grpc::ClientContext context;
+    v1::GetRunRequest request;
+    request.set_name(name);
+    v1::Run stored;
+    const grpc::Status got = stub->GetRun(&context, request, &stored);
+    ASSERT_TRUE(got.ok()) << name << ": " << got.error_message();
+    EXPECT_EQ(stored.sample_count(), samples) << name;
+  }
+  int refused_total = 0;
+  for (const auto& [code, count] : refused) refused_total += count;
+  std::cout << "uploads acknowledged " << acknowledged.size() << " (after the restart " << acknowledged_after_restart
+            << "), refused " << refused_total << "\n";
+  server.Signal(SIGTERM);
+  server.Wait(60s);
 }
 
 }  // namespace
