@@ -13,11 +13,30 @@ build_dir=${INSDIAG_BUILD_DIR:-$root/build}
 data_dir=${INSDIAG_DATA_DIR:-$root/.insdiag}
 grpc_port=${INSDIAG_GRPC_PORT:-50051}
 http_port=${INSDIAG_HTTP_PORT:-8080}
+# The user's --data-dir, --grpc-port and --http-port replace these defaults
+# (given twice, insdiagd would refuse); every other argument goes through.
+user_data_dir=false
+rest=()
+while (($#)); do
+  case $1 in
+    --data-dir|--grpc-port|--http-port)
+      (($# >= 2)) || { echo "run.sh: $1 needs a value" >&2; exit 2; }
+      value=$2; flag=$1; shift 2 ;;
+    --data-dir=*|--grpc-port=*|--http-port=*)
+      value=${1#*=}; flag=${1%%=*}; shift ;;
+    *) rest+=("$1"); shift; continue ;;
+  esac
+  case $flag in
+    --data-dir) data_dir=$value; user_data_dir=true ;;
+    --grpc-port) grpc_port=$value ;;
+    --http-port) http_port=$value ;;
+  esac
+done
 
 # As root, the embedded PostgreSQL runs as `postgres`, which must be able to
 # enter every directory above the data directory (a checkout under /root is
 # not reachable): fall back to /var/lib/insdiag then.
-if [[ $(id -u) -eq 0 && -z "${INSDIAG_DATA_DIR:-}" ]]; then
+if [[ $(id -u) -eq 0 && -z "${INSDIAG_DATA_DIR:-}" ]] && ! $user_data_dir; then
   mkdir -p "$data_dir"
   if ! runuser -u postgres -- test -x "$data_dir"; then
     data_dir=/var/lib/insdiag
@@ -37,9 +56,5 @@ insdiag is starting:
 Stop with Ctrl-C.
 EOM
 
-# --- demo of the main job -------------------------------------------------
-# Once analyses exist (AnalysisService), this is where run.sh will upload a
-# demonstration run and have it diagnosed while the server runs.
-# ---------------------------------------------------------------------------
-
-exec "$build_dir/server/insdiagd" --data-dir "$data_dir" --grpc-port "$grpc_port" --http-port "$http_port" "$@"
+exec "$build_dir/server/insdiagd" --data-dir "$data_dir" --grpc-port "$grpc_port" --http-port "$http_port" \
+  "${rest[@]}"
