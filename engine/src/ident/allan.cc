@@ -618,9 +618,17 @@ double Solve(const FitData& data, const TermMask& on, const Bounds& bounds, int 
   options.parameter_tolerance = 1e-12;
   options.logging_type = ceres::SILENT;
   options.minimizer_progress_to_stdout = false;
+  const LogParameters start = a;
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
-  return 2.0 * summary.final_cost;
+  if (summary.IsSolutionUsable()) return 2.0 * summary.final_cost;
+  // A failed solve (a numerical failure, not a slow one) may leave anything
+  // in `a`: the fit stays at its start, with the cost of the start, so that
+  // model selection compares a cost with the parameters it belongs to.
+  a = start;
+  double cost = std::numeric_limits<double>::infinity();
+  problem.Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, nullptr);
+  return 2.0 * cost;
 }
 
 // Largest element (Eigen's maxCoeff trips GCC's -Wnull-dereference on dynamic vectors).
