@@ -81,6 +81,7 @@ absl::StatusOr<std::vector<v1::FailureMode>> LoadModes(Connection& db, const std
   std::vector<v1::FailureMode> modes;
   std::map<std::string, std::size_t> index;
   std::map<std::string, double> exposure;
+  std::map<std::string, v1::DiagnosisSettings> settings;
   for (int r = 0; r < rows->rows(); ++r) {
     v1::FailureMode m;
     m.set_name(absl::StrCat(kModePrefix, "/", rows->String(r, 0)));
@@ -94,12 +95,14 @@ absl::StatusOr<std::vector<v1::FailureMode>> LoadModes(Connection& db, const std
     m.set_weibull_scale_hours(internal::DoubleOr0(*rows, r, 7));
     m.set_confirmed_failures(internal::IntOr0(*rows, r, 8));
     if (!exposure.contains(type)) {
+      // Once per unit type: the fleet's hours, and its catalogue's settings (parsed from JSON).
       auto hours = FleetExposure(db, type);
       if (!hours.ok()) return hours.status();
       exposure[type] = *hours;
+      settings[type] = SettingsFor(type);
     }
     m.set_rate_per_million_hours(
-        1e6 * ModeRatePerHour(m, m.confirmed_failures(), exposure[type], SettingsFor(type)));
+        1e6 * ModeRatePerHour(m, m.confirmed_failures(), exposure[type], settings[type]));
     index[rows->String(r, 0)] = modes.size();
     modes.push_back(std::move(m));
   }
