@@ -139,7 +139,7 @@ constexpr char kRecordColumns[] =
     "SELECT r.record_id::text, u.serial, m.role, coalesce(r.failure_mode, ''), coalesce(r.analysis_id::text, ''), "
     "r.operating_hours, r.confirmed, r.repaired, r.censored, (extract(epoch FROM r.record_time) * 1000000)::bigint, "
     "r.no_fault_found, r.repair_action, (extract(epoch FROM r.detected_time) * 1000000)::bigint, "
-    "coalesce(r.diagnosis_id::text, ''), r.notes, r.record_time::text "
+    "coalesce(r.diagnosis_id::text, ''), r.notes, r.record_time::text, r.revision "
     "FROM failure_records r JOIN modules m USING (module_id) JOIN units u ON u.unit_id = r.unit_id ";
 
 v1::FailureRecord RecordFromRow(const Result& rows, int r) {
@@ -158,7 +158,29 @@ v1::FailureRecord RecordFromRow(const Result& rows, int r) {
   *f.mutable_detected_time() = internal::TimestampOfMicros(internal::IntOr0(rows, r, 12));
   if (!rows.String(r, 13).empty()) f.set_diagnosis(absl::StrCat("diagnoses/", rows.String(r, 13)));
   f.set_notes(rows.String(r, 14));
+  f.set_revision(static_cast<int>(internal::IntOr0(rows, r, 16)));
   return f;
+}
+
+// A record's facts, checked before any database work: its failure mode's id
+// ("" for none), or INVALID_ARGUMENT naming the field.
+absl::StatusOr<std::string> CheckedFacts(const v1::FailureRecord& facts) {
+  std::string mode_id;
+  if (!facts.failure_mode().empty()) {
+    auto id = internal::IdOf(facts.failure_mode(), kModePrefix, "failure_record.failure_mode");
+    if (!id.ok()) return id.status();
+    mode_id = *id;
+  }
+  if (facts.confirmed() && mode_id.empty()) {
+    return absl::InvalidArgumentError("failure_record.failure_mode: a confirmed failure names its failure mode");
+  }
+  if (facts.confirmed() && facts.no_fault_found()) {
+    return absl::InvalidArgumentError("failure_record.no_fault_found: a confirmed failure cannot be no-fault-found");
+  }
+  if (!(facts.operating_hours() >= 0)) {
+    return absl::InvalidArgumentError("failure_record.operating_hours: must be 0 or more");
+  }
+  return mode_id;
 }
 
 absl::StatusOr<v1::FailureRecord> GetRecord(Connection& db, const std::string& id) {
@@ -483,26 +505,14 @@ absl::StatusOr<v1::FailureRecord> KnowledgeStore::CreateFailureRecord(const v1::
   }
   const std::string serial = module.substr(6, slash - 6);
   const std::string role = module.substr(slash + 9);
-  std::string mode_id;
-  if (!record.failure_mode().empty()) {
-    auto id = internal::IdOf(record.failure_mode(), kModePrefix, "failure_record.failure_mode");
-    if (!id.ok()) return id.status();
-    mode_id = *id;
-  }
+  auto checked_mode = CheckedFacts(record);
+  if (!checked_mode.ok()) return checked_mode.status();
+  const std::string mode_id = *checked_mode;
   std::string analysis_id;
   if (!record.analysis().empty()) {
     auto id = internal::UuidOf(record.analysis(), "analyses", "failure_record.analysis");
     if (!id.ok()) return id.status();
     analysis_id = *id;
-  }
-  if (record.confirmed() && mode_id.empty()) {
-    return absl::InvalidArgumentError("failure_record.failure_mode: a confirmed failure names its failure mode");
-  }
-  if (record.confirmed() && record.no_fault_found()) {
-    return absl::InvalidArgumentError("failure_record.no_fault_found: a confirmed failure cannot be no-fault-found");
-  }
-  if (!(record.operating_hours() >= 0)) {
-    return absl::InvalidArgumentError("failure_record.operating_hours: must be 0 or more");
   }
   auto db = pool_.Acquire();
   if (!db.ok()) return db.status();
@@ -542,6 +552,104 @@ absl::StatusOr<v1::FailureRecord> KnowledgeStore::CreateFailureRecord(const v1::
   });
   if (!status.ok()) return status;
   return GetRecord(**db, id);
+}
+
+absl::StatusOr<v1::FailureRecord> KnowledgeStore::CorrectFailureRecord(const std::string& name,
+                                                                       const v1::FailureRecord& facts,
+                                                                       const std::string& reason) {
+  auto id = internal::UuidOf(name, "failureRecords", "name");
+  if (!id.ok()) return id.status();
+  if (reason.empty()) return absl::InvalidArgumentError("reason: required (why the record was wrong)");
+  auto checked_mode = CheckedFacts(facts);
+  if (!checked_mode.ok()) return checked_mode.status();
+  const std::string mode_id = *checked_mode;
+  auto db = pool_.Acquire();
+  if (!db.ok()) return db.status();
+  const absl::Status status = (*db)->InTransaction([&]() -> absl::Status {
+    auto current = (*db)->Exec(
+        "SELECT coalesce(r.failure_mode, ''), m.role, r.confirmed FROM failure_records r JOIN modules m "
+        "USING (module_id) WHERE r.record_id = $1::uuid FOR UPDATE OF r",
+        {Param::Text(*id)});
+    if (!current.ok()) return current.status();
+    if (current->rows() == 0) return absl::NotFoundError(absl::StrCat(name, " does not exist"));
+    const std::string old_mode = current->String(0, 0), role = current->String(0, 1);
+    const bool was_confirmed = current->Bool(0, 2);
+    if (!mode_id.empty()) {
+      auto mode = (*db)->Exec("SELECT module_role FROM failure_modes WHERE failure_mode = $1", {Param::Text(mode_id)});
+      if (!mode.ok()) return mode.status();
+      if (mode->rows() == 0) {
+        return absl::NotFoundError(absl::StrCat("failure_record.failure_mode: ", facts.failure_mode(), " does not exist"));
+      }
+      if (mode->String(0, 0) != role) {
+        return absl::InvalidArgumentError(absl::StrCat("failure_record.failure_mode: ", facts.failure_mode(),
+                                                       " is a failure of ", mode->String(0, 0), ", not of ", role));
+      }
+    }
+    auto kept = (*db)->Exec(
+        "INSERT INTO failure_record_revisions (record_id, revision, failure_mode, detected_time, operating_hours, "
+        "confirmed, no_fault_found, censored, repaired, repair_action, notes, record_time, reason) "
+        "SELECT record_id, revision, failure_mode, detected_time, operating_hours, confirmed, no_fault_found, "
+        "censored, repaired, repair_action, notes, record_time, $2 FROM failure_records WHERE record_id = $1::uuid",
+        {Param::Text(*id), Param::Text(reason)});
+    if (!kept.ok()) return kept.status();
+    auto updated = (*db)->Exec(
+        "UPDATE failure_records SET failure_mode = $2, operating_hours = $3, confirmed = $4, no_fault_found = $5, "
+        "censored = $6, repaired = $7, repair_action = $8, notes = $9, "
+        "detected_time = coalesce($10::timestamptz, detected_time), record_time = now(), revision = revision + 1 "
+        "WHERE record_id = $1::uuid",
+        {Param::Text(*id), Param::TextOrNull(mode_id), Param::Double(facts.operating_hours()),
+         Param::Text(facts.confirmed() ? "true" : "false"), Param::Text(facts.no_fault_found() ? "true" : "false"),
+         Param::Text(facts.censored() ? "true" : "false"), Param::Text(facts.repaired() ? "true" : "false"),
+         Param::Text(facts.repair_action()), Param::Text(facts.notes()),
+         facts.has_detected_time() ? Param::Text(internal::TimestampText(facts.detected_time())) : Param::Null()});
+    if (!updated.ok()) return updated.status();
+    // The signatures learn from confirmed cases: a mode the record leaves or joins is refined again.
+    if (was_confirmed && !old_mode.empty()) {
+      if (auto refined = RefineMode(**db, old_mode); !refined.ok()) return refined;
+    }
+    if (facts.confirmed() && mode_id != old_mode) return RefineMode(**db, mode_id);
+    return absl::OkStatus();
+  });
+  if (!status.ok()) return status;
+  return GetRecord(**db, *id);
+}
+
+absl::StatusOr<std::vector<v1::FailureRecordRevision>> KnowledgeStore::ListFailureRecordRevisions(
+    const std::string& name) {
+  auto id = internal::UuidOf(name, "failureRecords", "name");
+  if (!id.ok()) return id.status();
+  auto db = pool_.Acquire();
+  if (!db.ok()) return db.status();
+  auto current = GetRecord(**db, *id);
+  if (!current.ok()) return current.status();
+  auto rows = (*db)->Exec(
+      absl::StrCat("SELECT revision, coalesce(failure_mode, ''), operating_hours, confirmed, no_fault_found, censored, "
+                   "repaired, repair_action, notes, ", Micros("detected_time"), ", ", Micros("record_time"), ", ",
+                   Micros("superseded_time"), ", reason FROM failure_record_revisions WHERE record_id = $1::uuid "
+                   "ORDER BY revision"),
+      {Param::Text(*id)});
+  if (!rows.ok()) return rows.status();
+  std::vector<v1::FailureRecordRevision> revisions;
+  for (int r = 0; r < rows->rows(); ++r) {
+    v1::FailureRecordRevision& v = revisions.emplace_back();
+    v1::FailureRecord& f = *v.mutable_failure_record();
+    f = *current;  // name, module, analysis and diagnosis do not change
+    f.set_revision(static_cast<int>(internal::IntOr0(*rows, r, 0)));
+    f.clear_failure_mode();
+    if (!rows->String(r, 1).empty()) f.set_failure_mode(absl::StrCat(kModePrefix, "/", rows->String(r, 1)));
+    f.set_operating_hours(internal::DoubleOr0(*rows, r, 2));
+    f.set_confirmed(rows->Bool(r, 3));
+    f.set_no_fault_found(rows->Bool(r, 4));
+    f.set_censored(rows->Bool(r, 5));
+    f.set_repaired(rows->Bool(r, 6));
+    f.set_repair_action(rows->String(r, 7));
+    f.set_notes(rows->String(r, 8));
+    *f.mutable_detected_time() = internal::TimestampOfMicros(internal::IntOr0(*rows, r, 9));
+    *f.mutable_record_time() = internal::TimestampOfMicros(internal::IntOr0(*rows, r, 10));
+    *v.mutable_superseded_time() = internal::TimestampOfMicros(internal::IntOr0(*rows, r, 11));
+    v.set_reason(rows->String(r, 12));
+  }
+  return revisions;
 }
 
 absl::StatusOr<std::pair<std::vector<v1::FailureRecord>, std::string>> KnowledgeStore::ListFailureRecords(

@@ -93,6 +93,10 @@ INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, ListModule
 INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, ListFailureModes, ListFailureModesRequest, ListFailureModesResponse)
 INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, GetFailureMode, GetFailureModeRequest, FailureMode)
 INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, CreateFailureRecord, CreateFailureRecordRequest, FailureRecord)
+INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, CorrectFailureRecord, CorrectFailureRecordRequest,
+                 FailureRecord)
+INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, ListFailureRecordRevisions,
+                 ListFailureRecordRevisionsRequest, ListFailureRecordRevisionsResponse)
 INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, ListFailureRecords, ListFailureRecordsRequest,
                  ListFailureRecordsResponse)
 INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, CreateDiagnosis, CreateDiagnosisRequest, Diagnosis)

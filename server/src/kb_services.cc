@@ -225,6 +225,20 @@ absl::StatusOr<v1::FailureRecord> KnowledgeService::CreateFailureRecord(const v1
   return store_.CreateFailureRecord(request.failure_record());
 }
 
+absl::StatusOr<v1::FailureRecord> KnowledgeService::CorrectFailureRecord(
+    const v1::CorrectFailureRecordRequest& request) {
+  return store_.CorrectFailureRecord(request.name(), request.failure_record(), request.reason());
+}
+
+absl::StatusOr<v1::ListFailureRecordRevisionsResponse> KnowledgeService::ListFailureRecordRevisions(
+    const v1::ListFailureRecordRevisionsRequest& request) {
+  auto revisions = store_.ListFailureRecordRevisions(request.name());
+  if (!revisions.ok()) return revisions.status();
+  v1::ListFailureRecordRevisionsResponse response;
+  for (auto& revision : *revisions) *response.add_revisions() = std::move(revision);
+  return response;
+}
+
 absl::StatusOr<v1::ListFailureRecordsResponse> KnowledgeService::ListFailureRecords(
     const v1::ListFailureRecordsRequest& request) {
   if (auto s = CheckPageSize(request.page_size()); !s.ok()) return s;

@@ -162,5 +162,61 @@ TEST_F(KnowledgeStoreTest, RefusesMalformedRecordsNamingTheField) {
   EXPECT_TRUE(ok.ok()) << ok.status();
 }
 
+// A correction changes the record that every count reads, and keeps the
+// version it replaced with its reason: the FRACAS history is never lost.
+TEST_F(KnowledgeStoreTest, ACorrectedRecordKeepsItsReplacedVersionAndCountsAsCorrected) {
+  StoreAnalysis("INS-0006", testing::NominalReport());
+  v1::FailureRecord record;
+  record.set_module("units/INS-0006/modules/acc.x");
+  record.set_confirmed(true);
+  record.set_failure_mode("failureModes/acc-bias-shift.x");
+  record.set_operating_hours(1200.0);
+  auto created = knowledge_->CreateFailureRecord(record);
+  ASSERT_TRUE(created.ok()) << created.status();
+  EXPECT_EQ(created->revision(), 1);
+  auto confirmed_count = [&] {
+    auto mode = knowledge_->GetFailureMode("failureModes/acc-bias-shift.x");
+    EXPECT_TRUE(mode.ok()) << mode.status();
+    return mode.ok() ? mode->confirmed_failures() : -1;
+  };
+  EXPECT_EQ(confirmed_count(), 1);
+
+  // The bench found nothing after all.
+  v1::FailureRecord facts;
+  facts.set_no_fault_found(true);
+  facts.set_operating_hours(1250.0);
+  facts.set_notes("retest passed");
+  EXPECT_EQ(knowledge_->CorrectFailureRecord(created->name(), facts, "").status().code(),
+            absl::StatusCode::kInvalidArgument) << "a correction without a reason";
+  auto corrected = knowledge_->CorrectFailureRecord(created->name(), facts, "retest on bench 2 found no fault");
+  ASSERT_TRUE(corrected.ok()) << corrected.status();
+  EXPECT_EQ(corrected->revision(), 2);
+  EXPECT_FALSE(corrected->confirmed());
+  EXPECT_TRUE(corrected->no_fault_found());
+  EXPECT_EQ(corrected->module(), created->module());
+  EXPECT_EQ(confirmed_count(), 0) << "counts read the corrected record";
+
+  auto history = knowledge_->ListFailureRecordRevisions(created->name());
+  ASSERT_TRUE(history.ok()) << history.status();
+  ASSERT_EQ(history->size(), 1u);
+  const v1::FailureRecordRevision& was = history->front();
+  EXPECT_EQ(was.failure_record().revision(), 1);
+  EXPECT_TRUE(was.failure_record().confirmed());
+  EXPECT_EQ(was.failure_record().failure_mode(), "failureModes/acc-bias-shift.x");
+  EXPECT_EQ(was.failure_record().operating_hours(), 1200.0);
+  EXPECT_EQ(was.reason(), "retest on bench 2 found no fault");
+
+  // A mode of another module is refused and changes nothing.
+  facts.set_no_fault_found(false);
+  facts.set_confirmed(true);
+  facts.set_failure_mode("failureModes/dtg-bearing-wear.x");
+  EXPECT_EQ(knowledge_->CorrectFailureRecord(created->name(), facts, "wrong").status().code(),
+            absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(knowledge_->ListFailureRecordRevisions(created->name())->size(), 1u);
+  EXPECT_EQ(knowledge_->CorrectFailureRecord("failureRecords/00000000-0000-4000-8000-000000000000", facts, "x")
+                .status().code(),
+            absl::StatusCode::kNotFound);
+}
+
 }  // namespace
 }  // namespace insdiag::kb

@@ -135,7 +135,7 @@ TEST_F(AccessTest, EachRoleMayCallExactlyTheMethodsAtOrBelowIt) {
       {"CreateDiagnosis", v1::OPERATOR},   {"ResolveDiagnosis", v1::ENGINEER},
       {"CreateFailureRecord", v1::ENGINEER}, {"CreateToken", v1::ADMIN},
       {"ListTokens", v1::ADMIN},           {"RevokeToken", v1::ADMIN},
-      {"ListAuditEvents", v1::ENGINEER},
+      {"ListAuditEvents", v1::ENGINEER},   {"CorrectFailureRecord", v1::ENGINEER},
   };
   std::map<v1::Role, std::unique_ptr<grpc::GenericStub>> stubs;
   for (v1::Role role : {v1::VIEWER, v1::OPERATOR, v1::ENGINEER, v1::ADMIN}) {

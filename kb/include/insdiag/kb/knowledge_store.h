@@ -46,6 +46,12 @@ class KnowledgeStore {
 
   // INVALID_ARGUMENT naming the field for a malformed record; NOT_FOUND for
   // an unknown module, mode or analysis.
+  // The record takes `facts` (see CorrectFailureRecordRequest), and the
+  // version it replaces is kept with `reason`, in one transaction; confirmed
+  // modes it leaves or joins are refined again.
+  absl::StatusOr<v1::FailureRecord> CorrectFailureRecord(const std::string& name, const v1::FailureRecord& facts,
+                                                         const std::string& reason);
+  absl::StatusOr<std::vector<v1::FailureRecordRevision>> ListFailureRecordRevisions(const std::string& name);
   absl::StatusOr<v1::FailureRecord> CreateFailureRecord(const v1::FailureRecord& record);
   struct RecordQuery {
     PageQuery page;

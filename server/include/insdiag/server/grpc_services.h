@@ -68,6 +68,8 @@ class KnowledgeServiceGrpc final : public v1::KnowledgeService::Service {
   INSDIAG_UNARY(ListFailureModes, ListFailureModesRequest, ListFailureModesResponse);
   INSDIAG_UNARY(GetFailureMode, GetFailureModeRequest, FailureMode);
   INSDIAG_UNARY(CreateFailureRecord, CreateFailureRecordRequest, FailureRecord);
+  INSDIAG_UNARY(CorrectFailureRecord, CorrectFailureRecordRequest, FailureRecord);
+  INSDIAG_UNARY(ListFailureRecordRevisions, ListFailureRecordRevisionsRequest, ListFailureRecordRevisionsResponse);
   INSDIAG_UNARY(ListFailureRecords, ListFailureRecordsRequest, ListFailureRecordsResponse);
   INSDIAG_UNARY(CreateDiagnosis, CreateDiagnosisRequest, Diagnosis);
   INSDIAG_UNARY(GetDiagnosis, GetDiagnosisRequest, Diagnosis);

@@ -61,6 +61,9 @@ class KnowledgeService {
   absl::StatusOr<v1::ListFailureModesResponse> ListFailureModes(const v1::ListFailureModesRequest& request);
   absl::StatusOr<v1::FailureMode> GetFailureMode(const v1::GetFailureModeRequest& request);
   absl::StatusOr<v1::FailureRecord> CreateFailureRecord(const v1::CreateFailureRecordRequest& request);
+  absl::StatusOr<v1::FailureRecord> CorrectFailureRecord(const v1::CorrectFailureRecordRequest& request);
+  absl::StatusOr<v1::ListFailureRecordRevisionsResponse> ListFailureRecordRevisions(
+      const v1::ListFailureRecordRevisionsRequest& request);
   absl::StatusOr<v1::ListFailureRecordsResponse> ListFailureRecords(const v1::ListFailureRecordsRequest& request);
   absl::StatusOr<v1::Diagnosis> CreateDiagnosis(const v1::CreateDiagnosisRequest& request);
   absl::StatusOr<v1::Diagnosis> GetDiagnosis(const v1::GetDiagnosisRequest& request);
