@@ -12,8 +12,10 @@
 #include <fstream>
 #include <future>
 #include <map>
+#include <regex>
 #include <thread>
 
+#include "google/api/annotations.pb.h"
 #include "insdiag/api/json.h"
 #include "insdiag/client/unary.h"
 #include "insdiag/kb/pg.h"
@@ -160,6 +162,62 @@ TEST_F(AccessTest, EachRoleMayCallExactlyTheMethodsAtOrBelowIt) {
       }
     }
   }
+}
+
+// The same matrix over REST: every route of every method's google.api.http
+// rules (path variables filled with a well-formed name), called by every
+// role: 403 exactly below the method's least role, neither 401 nor 403 at
+// and above it.
+TEST_F(AccessTest, EachRoleMayCallExactlyTheRoutesAtOrBelowItOverRest) {
+  std::map<v1::Role, std::unique_ptr<httplib::Client>> clients;
+  std::map<v1::Role, std::string> tokens;
+  for (v1::Role role : {v1::VIEWER, v1::OPERATOR, v1::ENGINEER, v1::ADMIN}) {
+    tokens[role] = MakeToken(pool(), role);
+    clients[role] = std::make_unique<httplib::Client>("127.0.0.1", server_->http_port());
+    clients[role]->set_bearer_token_auth(tokens[role].c_str());
+    clients[role]->set_read_timeout(std::chrono::seconds(30));
+  }
+  const std::regex variable(R"(\{[^}=]+(=([^}]*))?\})");
+  int routes = 0;
+  for (const auto* method : EveryMethod()) {
+    if (!method->options().HasExtension(google::api::http)) continue;
+    const auto& rule = method->options().GetExtension(google::api::http);
+    std::string verb, path;
+    switch (rule.pattern_case()) {
+      case google::api::HttpRule::kGet: verb = "GET", path = rule.get(); break;
+      case google::api::HttpRule::kPost: verb = "POST", path = rule.post(); break;
+      case google::api::HttpRule::kDelete: verb = "DELETE", path = rule.delete_(); break;
+      default: FAIL() << method->full_name() << ": a verb this test does not know";
+    }
+    // {name=runs/*} → runs/<uuid>; {unit_type=unitTypes/*} → unitTypes/<uuid>.
+    std::string concrete;
+    std::sregex_iterator it(path.begin(), path.end(), variable), end;
+    std::size_t last = 0;
+    for (; it != end; ++it) {
+      concrete += path.substr(last, static_cast<std::size_t>(it->position()) - last);
+      std::string pattern = (*it)[2].matched ? (*it)[2].str() : "*";
+      pattern = std::regex_replace(pattern, std::regex(R"(\*+)"), "00000000-0000-4000-8000-000000000000");
+      concrete += pattern;
+      last = static_cast<std::size_t>(it->position() + it->length());
+    }
+    concrete += path.substr(last);
+    ++routes;
+    const v1::Role least = method->options().GetExtension(v1::access).role();
+    for (auto& [role, http] : clients) {
+      httplib::Result answer = verb == "GET"    ? http->Get(concrete.c_str())
+                               : verb == "POST" ? http->Post(concrete.c_str(), "{}", "application/json")
+                                                : http->Delete(concrete.c_str());
+      ASSERT_TRUE(answer) << verb << " " << concrete;
+      if (role < least) {
+        EXPECT_EQ(answer->status, 403) << verb << " " << concrete << " as " << v1::Role_Name(role) << ": "
+                                       << answer->body;
+      } else {
+        EXPECT_NE(answer->status, 403) << verb << " " << concrete << " as " << v1::Role_Name(role);
+        EXPECT_NE(answer->status, 401) << verb << " " << concrete << " as " << v1::Role_Name(role);
+      }
+    }
+  }
+  EXPECT_GE(routes, 35);
 }
 
 TEST_F(AccessTest, TokensAreCreatedListedRevokedAndExpireAndTheSecretIsStoredOnlyHashed) {
