@@ -181,12 +181,32 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
     return absl::UnavailableError(absl::StrCat("cannot serve HTTP on ", options.bind_address, ":", options.http_port));
   }
   server->http_thread_ = std::thread([http = server->http_.get()] { http->listen_after_bind(); });
+  // The health service answers for the database too: a load balancer must
+  // not send uploads to a server that can store nothing.
+  server->health_thread_ = std::thread([s = server.get(), &pool, poll = options.health_poll] {
+    auto* health = s->grpc_->GetHealthCheckService();
+    std::unique_lock lock(s->health_mutex_);
+    while (!s->stopping_) {
+      lock.unlock();
+      bool answers = false;
+      if (auto db = pool.Acquire(); db.ok()) answers = (*db)->Exec("SELECT 1").ok();
+      health->SetServingStatus(answers);
+      lock.lock();
+      s->health_wake_.wait_for(lock, poll, [s] { return s->stopping_; });
+    }
+  });
   server->services_->workers.Start();
   return server;
 }
 
 void InsdiagServer::Shutdown() {
   std::call_once(shutdown_once_, [this] {
+    {
+      std::lock_guard lock(health_mutex_);
+      stopping_ = true;
+    }
+    health_wake_.notify_all();
+    if (health_thread_.joinable()) health_thread_.join();
     // Workers first: they finish the analysis they run, then stop claiming.
     if (services_) services_->workers.Stop();
     // HTTP first: its handlers call into the gRPC server.

@@ -304,5 +304,39 @@ TEST_F(InsdiagdTest, APostgresRestartUnderLoadLosesNothingAcknowledgedAndTheServ
   server.Wait(60s);
 }
 
+// A server whose database is down says so in its health (gRPC and
+// /healthz), and says SERVING again once the database is back.
+TEST_F(InsdiagdTest, HealthSaysNotServingWhileTheDatabaseIsDown) {
+  auto server = StartServer({"--workers", "0"});
+  const auto ports = AwaitListening(server, 60s);
+  ASSERT_TRUE(ports) << "insdiagd did not come up:\n" << server.Stderr();
+  httplib::Client http("127.0.0.1", ports->http);
+  const auto health_becomes = [&](int status) {
+    for (int i = 0; i < 100; ++i) {
+      auto answer = http.Get("/healthz");
+      if (answer && answer->status == status) return true;
+      std::this_thread::sleep_for(100ms);
+    }
+    return false;
+  };
+  ASSERT_TRUE(health_becomes(200));
+  const auto pg_ctl = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), "/usr/lib/postgresql/15/bin/pg_ctl");
+    if (::geteuid() == 0) args.insert(args.begin(), {"/usr/sbin/runuser", "-u", "postgres", "--"});
+    auto done = RunToCompletion(args, dir_, 90s);
+    return done.ok() && done->exit_status == 0;
+  };
+  const std::string cluster = (dir_ / "data" / "pg").string(), run = (dir_ / "data" / "run").string();
+  ASSERT_TRUE(pg_ctl({"stop", "-w", "-m", "fast", "-D", cluster}));
+  EXPECT_TRUE(health_becomes(503)) << "the database is down and /healthz still says SERVING";
+  EXPECT_FALSE(GrpcHealthy(ports->grpc));
+  ASSERT_TRUE(pg_ctl({"start", "-w", "-D", cluster, "-l", run + "/postgresql.log", "-o",
+                      "-c listen_addresses='' -k '" + run + "' -p 5432"}));
+  EXPECT_TRUE(health_becomes(200)) << "the database is back and /healthz still says NOT_SERVING";
+  EXPECT_TRUE(GrpcHealthy(ports->grpc));
+  server.Signal(SIGTERM);
+  server.Wait(60s);
+}
+
 }  // namespace
 }  // namespace insdiag::testing

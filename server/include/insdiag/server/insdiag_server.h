@@ -6,7 +6,10 @@
 
 #include <absl/status/statusor.h>
 
+#include <chrono>
+#include <condition_variable>
 #include <filesystem>
+#include <mutex>
 #include <memory>
 #include <string>
 #include <thread>
@@ -49,6 +52,9 @@ class InsdiagServer {
     // TLS only; both empty, neither does.
     std::string tls_cert_file;
     std::string tls_key_file;
+    // How often the health service asks the database whether it answers:
+    // a server whose database is down says NOT_SERVING (gRPC health, /healthz).
+    std::chrono::milliseconds health_poll{1000};
   };
 
   // `pool` must outlive the server. UNAVAILABLE when a port cannot be bound.
@@ -74,6 +80,10 @@ class InsdiagServer {
   std::unique_ptr<RestGateway> gateway_;
   std::unique_ptr<httplib::Server> http_;
   std::thread http_thread_;
+  std::thread health_thread_;
+  std::mutex health_mutex_;
+  std::condition_variable health_wake_;
+  bool stopping_ = false;
   int grpc_port_ = 0;
   int http_port_ = 0;
   bool serves_page_ = false;
