@@ -5,7 +5,6 @@
 #include <absl/strings/str_cat.h>
 #include <absl/strings/str_replace.h>
 #include <fcntl.h>
-#include <openssl/evp.h>
 #include <openssl/rand.h>
 #include <unistd.h>
 
@@ -14,6 +13,7 @@
 #include <cstring>
 #include <tuple>
 
+#include "insdiag/api/run_codec.h"
 #include "store_util.h"
 
 namespace insdiag::kb {
@@ -24,13 +24,6 @@ using internal::TimestampOfMicros;
 
 constexpr char kSecretPrefix[] = "insdiag_";
 constexpr int kSecretBytes = 32;
-
-std::string Sha256(const std::string& text) {
-  std::array<unsigned char, EVP_MAX_MD_SIZE> digest{};
-  unsigned int length = 0;
-  EVP_Digest(text.data(), text.size(), digest.data(), &length, EVP_sha256(), nullptr);
-  return std::string(reinterpret_cast<const char*>(digest.data()), length);
-}
 
 absl::StatusOr<std::string> NewSecret() {
   std::array<unsigned char, kSecretBytes> bytes{};
@@ -93,7 +86,7 @@ absl::StatusOr<v1::Caller> AccessStore::Authenticate(const std::string& secret) 
   auto rows = (*db)->Exec(
       "SELECT token_id::text, display_name, role, revoke_time IS NOT NULL, "
       "expire_time IS NOT NULL AND expire_time <= now() FROM access_tokens WHERE secret_sha256 = $1",
-      {Param::Bytes(Sha256(secret))});
+      {Param::Bytes(api::Sha256(secret))});
   if (!rows.ok()) return rows.status();
   if (rows->rows() == 0) return absl::UnauthenticatedError("unknown bearer token");
   const std::string name = absl::StrCat("tokens/", rows->String(0, 0));
@@ -120,7 +113,7 @@ absl::StatusOr<v1::CreatedToken> AccessStore::CreateToken(const v1::Token& token
                    "SELECT $1, $2, $3, $4, $5::timestamptz WHERE $5::timestamptz IS NULL OR $5::timestamptz > now() "
                    "RETURNING *) ",
                    absl::StrReplaceAll(kTokenColumns, {{"access_tokens", "made"}})),
-      {Param::Text(token.display_name()), Param::Text(RoleName(token.role())), Param::Bytes(Sha256(*secret)),
+      {Param::Text(token.display_name()), Param::Text(RoleName(token.role())), Param::Bytes(api::Sha256(*secret)),
        Param::Text(creator),
        token.has_expire_time() ? Param::Text(internal::TimestampText(token.expire_time())) : Param::Null()});
   if (!rows.ok()) return rows.status();
@@ -185,7 +178,7 @@ absl::StatusOr<bool> AccessStore::CreateFirstAdminToken(const std::filesystem::p
     if (auto written = WriteOwnerOnlyFile(secret_file, *secret + "\n"); !written.ok()) return written;
     auto inserted = (*db)->Exec(
         "INSERT INTO access_tokens (display_name, role, secret_sha256, creator) VALUES ($1, 'ADMIN', $2, 'first start')",
-        {Param::Text("administrator (first start)"), Param::Bytes(Sha256(*secret))});
+        {Param::Text("administrator (first start)"), Param::Bytes(api::Sha256(*secret))});
     if (!inserted.ok()) return inserted.status();
     made = true;
     return absl::OkStatus();

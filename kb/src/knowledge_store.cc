@@ -162,6 +162,22 @@ v1::FailureRecord RecordFromRow(const Result& rows, int r) {
   return f;
 }
 
+// The failure mode `mode_id` (named `mode_name` by the caller, in `field`)
+// exists and is a failure of module role `role`; "" passes. NOT_FOUND or
+// INVALID_ARGUMENT naming the field otherwise.
+absl::Status CheckModeOfRole(Connection& db, const std::string& mode_id, const std::string& mode_name,
+                             const std::string& role, const std::string& field) {
+  if (mode_id.empty()) return absl::OkStatus();
+  auto mode = db.Exec("SELECT module_role FROM failure_modes WHERE failure_mode = $1", {Param::Text(mode_id)});
+  if (!mode.ok()) return mode.status();
+  if (mode->rows() == 0) return absl::NotFoundError(absl::StrCat(field, ": ", mode_name, " does not exist"));
+  if (mode->String(0, 0) != role) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(field, ": ", mode_name, " is a failure of ", mode->String(0, 0), ", not of ", role));
+  }
+  return absl::OkStatus();
+}
+
 // A record's facts, checked before any database work: its failure mode's id
 // ("" for none), or INVALID_ARGUMENT naming the field.
 absl::StatusOr<std::string> CheckedFacts(const v1::FailureRecord& facts) {
@@ -526,14 +542,9 @@ absl::StatusOr<v1::FailureRecord> KnowledgeStore::CreateFailureRecord(const v1::
     if (roles->rows() == 0) {
       return absl::InvalidArgumentError(absl::StrCat("failure_record.module: '", role, "' is not a module role"));
     }
-    if (!mode_id.empty()) {
-      auto mode = (*db)->Exec("SELECT module_role FROM failure_modes WHERE failure_mode = $1", {Param::Text(mode_id)});
-      if (!mode.ok()) return mode.status();
-      if (mode->rows() == 0) return absl::NotFoundError(absl::StrCat("failure_record.failure_mode: ", record.failure_mode(), " does not exist"));
-      if (mode->String(0, 0) != role) {
-        return absl::InvalidArgumentError(absl::StrCat("failure_record.failure_mode: ", record.failure_mode(),
-                                                       " is a failure of ", mode->String(0, 0), ", not of ", role));
-      }
+    if (auto fits = CheckModeOfRole(**db, mode_id, record.failure_mode(), role, "failure_record.failure_mode");
+        !fits.ok()) {
+      return fits;
     }
     auto unit_id = unit->Int(0, 0);
     if (!unit_id.ok()) return unit_id.status();
@@ -574,16 +585,9 @@ absl::StatusOr<v1::FailureRecord> KnowledgeStore::CorrectFailureRecord(const std
     if (current->rows() == 0) return absl::NotFoundError(absl::StrCat(name, " does not exist"));
     const std::string old_mode = current->String(0, 0), role = current->String(0, 1);
     const bool was_confirmed = current->Bool(0, 2);
-    if (!mode_id.empty()) {
-      auto mode = (*db)->Exec("SELECT module_role FROM failure_modes WHERE failure_mode = $1", {Param::Text(mode_id)});
-      if (!mode.ok()) return mode.status();
-      if (mode->rows() == 0) {
-        return absl::NotFoundError(absl::StrCat("failure_record.failure_mode: ", facts.failure_mode(), " does not exist"));
-      }
-      if (mode->String(0, 0) != role) {
-        return absl::InvalidArgumentError(absl::StrCat("failure_record.failure_mode: ", facts.failure_mode(),
-                                                       " is a failure of ", mode->String(0, 0), ", not of ", role));
-      }
+    if (auto fits = CheckModeOfRole(**db, mode_id, facts.failure_mode(), role, "failure_record.failure_mode");
+        !fits.ok()) {
+      return fits;
     }
     auto kept = (*db)->Exec(
         "INSERT INTO failure_record_revisions (record_id, revision, failure_mode, detected_time, operating_hours, "
@@ -867,14 +871,9 @@ absl::StatusOr<v1::Diagnosis> KnowledgeStore::ResolveDiagnosis(const v1::Resolve
     if (roles->rows() == 0) {
       return absl::InvalidArgumentError(absl::StrCat("module: '", request.module(), "' is not a module role"));
     }
-    if (!mode_id.empty()) {
-      auto mode = (*db)->Exec("SELECT module_role FROM failure_modes WHERE failure_mode = $1", {Param::Text(mode_id)});
-      if (!mode.ok()) return mode.status();
-      if (mode->rows() == 0) return absl::NotFoundError(absl::StrCat("failure_mode: ", request.failure_mode(), " does not exist"));
-      if (mode->String(0, 0) != request.module()) {
-        return absl::InvalidArgumentError(absl::StrCat("failure_mode: ", request.failure_mode(), " is a failure of ",
-                                                       mode->String(0, 0), ", not of ", request.module()));
-      }
+    if (auto fits = CheckModeOfRole(**db, mode_id, request.failure_mode(), request.module(), "failure_mode");
+        !fits.ok()) {
+      return fits;
     }
     auto module_id = CurrentModule(**db, *unit_id, request.module());
     if (!module_id.ok()) return module_id.status();

@@ -3,13 +3,14 @@
 #include <absl/strings/escaping.h>
 #include <absl/strings/numbers.h>
 #include <absl/strings/str_cat.h>
-#include <openssl/evp.h>
 
 #include <algorithm>
 #include <array>
 #include <fstream>
 #include <map>
 #include <sstream>
+
+#include "insdiag/api/run_codec.h"
 
 namespace insdiag::kb {
 namespace {
@@ -79,10 +80,7 @@ absl::StatusOr<std::vector<Migration>> LoadMigrationsFromDirectory(const std::fi
 }
 
 std::string MigrationChecksum(const Migration& migration) {
-  std::array<unsigned char, EVP_MAX_MD_SIZE> digest{};
-  unsigned int length = 0;
-  EVP_Digest(migration.sql.data(), migration.sql.size(), digest.data(), &length, EVP_sha256(), nullptr);
-  return absl::BytesToHexString(absl::string_view(reinterpret_cast<const char*>(digest.data()), length));
+  return absl::BytesToHexString(api::Sha256(migration.sql));
 }
 
 absl::StatusOr<MigrationReport> ApplyMigrations(Connection& connection,

@@ -4,9 +4,7 @@
 #include <absl/strings/str_cat.h>
 #include <google/protobuf/io/coded_stream.h>
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
-#include <openssl/evp.h>
 
-#include <array>
 
 #include "insdiag/server/status_mapping.h"
 
@@ -25,10 +23,7 @@ std::string UploadFingerprint(v1::RunMetadata metadata, const std::string& sampl
     metadata.SerializeToCodedStream(&coded);
   }
   bytes += sample_sha256;
-  std::array<unsigned char, EVP_MAX_MD_SIZE> digest{};
-  unsigned int length = 0;
-  EVP_Digest(bytes.data(), bytes.size(), digest.data(), &length, EVP_sha256(), nullptr);
-  return std::string(reinterpret_cast<const char*>(digest.data()), length);
+  return api::Sha256(bytes);
 }
 
 }  // namespace

@@ -66,6 +66,23 @@ HiddenBiases AddTurnOnBiases(std::mt19937_64& rng, sim::SimulatedUnit& unit) {
 // Over seeds, each axis' measured constant against the truth: the reported
 // standard errors are honest (|error| ≤ 3 SE) and every axis is dominant
 // against the unit's own drift.
+// The first hour of `unit` on a built-in profile at 50 Hz, without a
+// datasheet: enough for the biases, and keeps the tests short.
+BenchRun OneHourAt50Hz(const sim::SimulatedUnit& unit, const std::string& profile, std::uint64_t seed) {
+  sim::SimulationOptions o;
+  o.sample_rate_hz = 50.0;
+  o.seed = seed;
+  o.site = testing::TestSite();
+  o.write_datasheet = false;
+  auto sim = sim::Simulate(unit, testing::BuiltinProfileOrDie(profile), o);
+  EXPECT_TRUE(sim.ok()) << sim.status();
+  if (!sim.ok()) return {};
+  auto& samples = sim->run.samples;
+  samples.erase(std::find_if(samples.begin(), samples.end(), [](const ImuSample& s) { return s.t_s > 3600.0; }),
+                samples.end());
+  return std::move(sim->run);
+}
+
 TEST(StaticConstants, MeasuredBiasesHoldTheTruthWithinTheirErrors) {
   std::mt19937_64 rng(11);
   int within = 0, dominant = 0, total = 0;
@@ -112,18 +129,7 @@ TEST(StaticConstants, AMemsUnitsTurnOnBiasesAreRemovedAndTheRemainderFits) {
   std::mt19937_64 rng(12);
   sim::SimulatedUnit unit = MemsUnit();
   const HiddenBiases truth = AddTurnOnBiases(rng, unit);
-  sim::SimulationOptions o;
-  o.sample_rate_hz = 50.0;
-  o.seed = 41;
-  o.site = testing::TestSite();
-  o.write_datasheet = false;
-  auto sim = sim::Simulate(unit, testing::BuiltinProfileOrDie("static"), o);
-  ASSERT_TRUE(sim.ok()) << sim.status();
-  // One hour is enough, and keeps the test short.
-  auto& samples = sim->run.samples;
-  samples.erase(std::find_if(samples.begin(), samples.end(), [](const ImuSample& s) { return s.t_s > 3600.0; }),
-                samples.end());
-  auto analysis = Analyze(sim->run, {}, AnalysisOptions{});
+  auto analysis = Analyze(OneHourAt50Hz(unit, "static", 41), {}, AnalysisOptions{});
   ASSERT_TRUE(analysis.ok()) << analysis.status();
   const AnalysisReport& r = analysis->report;
   int removed = 0, named = 0;
@@ -157,17 +163,7 @@ TEST(StaticConstants, AMemsUnitOnATurningTableGetsNoScaleFactorFromFarOutsideThe
     std::mt19937_64 rng(20 + seed);
     sim::SimulatedUnit unit = MemsUnit();
     AddTurnOnBiases(rng, unit);
-    sim::SimulationOptions o;
-    o.sample_rate_hz = 50.0;
-    o.seed = 60 + seed;
-    o.site = testing::TestSite();
-    o.write_datasheet = false;
-    auto sim = sim::Simulate(unit, testing::BuiltinProfileOrDie("positions"), o);
-    ASSERT_TRUE(sim.ok()) << sim.status();
-    auto& samples = sim->run.samples;
-    samples.erase(std::find_if(samples.begin(), samples.end(), [](const ImuSample& s) { return s.t_s > 3600.0; }),
-                  samples.end());
-    auto analysis = Analyze(sim->run, {}, AnalysisOptions{});
+    auto analysis = Analyze(OneHourAt50Hz(unit, "positions", 60 + seed), {}, AnalysisOptions{});
     ASSERT_TRUE(analysis.ok()) << analysis.status();
     for (const EffectCandidate& c : analysis->report.effect_candidates) {
       if (c.family.find("scale_factor") == std::string::npos) continue;

@@ -13,6 +13,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "insdiag/engine/bench_run.h"
@@ -29,6 +30,9 @@ engine::BenchRunMetadata FromProto(const v1::RunMetadata& metadata);
 
 v1::Sample ToProto(const engine::ImuSample& sample);
 engine::ImuSample FromProto(const v1::Sample& sample);
+
+// SHA-256 of `bytes`: the 32 raw bytes of the digest.
+std::string Sha256(std::string_view bytes);
 
 // SHA-256 of samples as defined in runs.proto (UploadRunRequest.sha256):
 // per sample the IEEE-754 binary64 little-endian bytes of t, gyro xyz,
