@@ -17,6 +17,12 @@ simulator how often the first-ranked module is the right one.
                        independent one makes them instantaneous). Right: the
                        first module is `healthy`.
 
+On healthy runs it also estimates, by maximum likelihood over the pooled
+evidence terms, the share ε₀ of terms a healthy unit puts off nominal: the
+mixture (1 − ε₀) N(0, s_h² + s_m²) + ε₀ Cauchy(0, √(b² + s_m²)) of
+docs/DIAGNOSIS.md, with its 95 % profile-likelihood interval. The catalogue's
+`incidentalContamination` is that estimate.
+
 Usage:
   scripts/diagnosis_sweep.py [--runs N] [--scenarios a,b] [--simulators cpp,py] [--out results.json]
 The figures in docs/FAULT_SCENARIOS.md come from
@@ -26,6 +32,7 @@ The figures in docs/FAULT_SCENARIOS.md come from
 import argparse
 import importlib.util
 import json
+import math
 import os
 import random
 import socket
@@ -118,8 +125,40 @@ def modules(diagnosis):
 def judge(scenario, hidden, diagnosis):
     ranked = modules(diagnosis)
     first, probability = ranked[0] if ranked else (None, 0.0)
-    right = first == ("healthy" if scenario == "healthy" else f"gyro.{hidden['axis']}")
-    return dict(first=first, probability=probability, right=right, ranked=ranked[:4])
+    right_module = "healthy" if scenario == "healthy" else f"gyro.{hidden['axis']}"
+    return dict(first=first, probability=probability, right=first == right_module,
+                right_probability=dict(ranked).get(right_module, 0.0), ranked=ranked[:4],
+                evidence=diagnosis.get("evidence", []))
+
+
+def incidental_share(results):
+    """ML estimate and 95 % profile-likelihood interval of ε₀ over the healthy
+    runs' pooled evidence terms (None when there are none)."""
+    with open(os.path.join(matrix.ROOT, "data", "failure-modes", "INS-2000.json")) as f:
+        settings = json.load(f)["settings"]
+    broad = {"log_ratio": settings["broadLogRatio"], "tolerance": settings["broadTolerance"],
+             "z": settings["broadZ"]}
+    normal, cauchy = [], []
+    for r in results:
+        if r["scenario"] != "healthy" or "error" in r:
+            continue
+        for t in r["evidence"]:
+            x, sm, sh = t.get("value", 0.0), t.get("measurementSd", 0.0), t.get("healthySd", 0.0)
+            var = sh * sh + sm * sm
+            normal.append(-0.5 * (math.log(2 * math.pi * var) + x * x / var))
+            c = math.sqrt(broad[t.get("scale", "z")] ** 2 + sm * sm)
+            cauchy.append(-math.log(math.pi * c * (1 + (x / c) ** 2)))
+    if not normal:
+        return None
+
+    def loglik(eps):
+        return sum(math.log((1 - eps) * math.exp(n) + eps * math.exp(c)) for n, c in zip(normal, cauchy))
+
+    grid = [0.0] + [10 ** (k / 50) for k in range(-250, -25)]  # 1e-5 … 0.3
+    values = [loglik(e) for e in grid]
+    best = max(range(len(grid)), key=lambda i: values[i])
+    inside = [grid[i] for i in range(len(grid)) if 2 * (values[best] - values[i]) <= 3.84]
+    return dict(terms=len(normal), estimate=grid[best], low=min(inside), high=max(inside))
 
 
 def main():
@@ -152,8 +191,8 @@ def main():
     if args.out:
         with open(args.out, "w") as f:
             json.dump(results, f, indent=1)
-    print("| scenario | simulator | runs | first module right | its probability (median) |")
-    print("|---|---|---|---|---|")
+    print("| scenario | simulator | runs | first module right | its probability (median) | the right module's probability where it is not first |")
+    print("|---|---|---|---|---|---|")
     groups = {}
     for r in results:
         groups.setdefault((r["scenario"], r["simulator"]), []).append(r)
@@ -162,8 +201,13 @@ def main():
         p = sorted(r["probability"] for r in ok)
         median = f"{p[len(p) // 2]:.3f}" if p else "—"
         failed = len(rs) - len(ok)
+        missed = ", ".join(f"{r['right_probability']:.2f}" for r in ok if not r["right"]) or "—"
         print(f"| {scenario} | {simulator} | {len(ok)}{f' ({failed} failed)' if failed else ''} | "
-              f"{sum(r['right'] for r in ok)} | {median} |")
+              f"{sum(r['right'] for r in ok)} | {median} | {missed} |")
+    share = incidental_share(results)
+    if share:
+        print(f"\nhealthy units' share of evidence terms off nominal, ε₀: {share['estimate']:.2g} "
+              f"(95 % interval {share['low']:.2g} – {share['high']:.2g}, {share['terms']} terms)")
 
 
 if __name__ == "__main__":

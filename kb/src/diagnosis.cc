@@ -62,12 +62,22 @@ double HealthyLog(const EvidenceTerm& t) {
   return LogNormalPdf(t.x, 0.0, t.healthy_sd * t.healthy_sd + t.measurement_sd * t.measurement_sd);
 }
 
-// (1 − ε) healthy + ε broad: evidence off for a reason no hypothesis names.
-double RobustLog(const EvidenceTerm& t, const v1::DiagnosisSettings& s) {
-  const double eps = s.contamination();
+// (1 − ε) healthy + ε broad: evidence off, with probability ε, for a reason
+// the hypothesis does not name.
+double ContaminatedLog(const EvidenceTerm& t, double eps, const v1::DiagnosisSettings& s) {
+  if (eps <= 0.0) return HealthyLog(t);
   const double b = BroadScale(t.scale, s);
   return LogAddExp(std::log1p(-eps) + HealthyLog(t),
                    std::log(eps) + LogCauchyPdf(t.x, std::sqrt(b * b + t.measurement_sd * t.measurement_sd)));
+}
+
+// The sensor axis a term reads: "gyro_bias_gm.x.sigma" → "gyro.x"; a
+// misalignment "gyro_misalignment.xy" reads into its first (output) axis.
+std::string SensorAxisOf(const std::string& term_name) {
+  const auto underscore = term_name.find('_');
+  const auto dot = term_name.find('.');
+  if (underscore == std::string::npos || dot == std::string::npos || dot + 1 >= term_name.size()) return "";
+  return absl::StrCat(term_name.substr(0, underscore), ".", term_name.substr(dot + 1, 1));
 }
 
 std::vector<double> Signs(v1::Signature::Direction d) {
@@ -416,6 +426,15 @@ v1::Diagnosis Diagnose(const Evidence& evidence, std::span<const v1::FailureMode
                        const v1::DiagnosisSettings& settings, const PriorInputs& prior) {
   v1::Diagnosis out;
   for (const auto& note : evidence.notes) out.add_notes(note);
+  for (const auto& t : evidence.terms) {
+    v1::EvidenceItem* item = out.add_evidence();
+    item->set_name(t.name);
+    item->set_scale(ScaleName(t.scale));
+    item->set_value(t.x);
+    item->set_measurement_sd(t.measurement_sd);
+    item->set_healthy_sd(t.healthy_sd);
+    item->set_significant(t.significant);
+  }
 
   // Priors.
   std::vector<double> rates;
@@ -459,11 +478,12 @@ v1::Diagnosis Diagnose(const Evidence& evidence, std::span<const v1::FailureMode
                       ", and no identified parameter or effect candidate to say why")});
   } else {
     double healthy_ll = 0.0, unknown_ll = 0.0;
-    std::vector<double> robust;
+    std::vector<double> knock_on, incidental;  // per term: off as a fault's knock-on, off by chance
     for (const auto& t : evidence.terms) {
       healthy_ll += HealthyLog(t);
-      robust.push_back(RobustLog(t, settings));
-      unknown_ll += robust.back();
+      knock_on.push_back(ContaminatedLog(t, settings.contamination(), settings));
+      incidental.push_back(ContaminatedLog(t, settings.incidental_contamination(), settings));
+      unknown_ll += knock_on.back();
     }
     std::vector<std::string> healthy_lines = {absl::StrCat(evidence.terms.size(), " evidence terms; furthest from nominal:")};
     for (auto& l : LargestDeviations(evidence, 3)) healthy_lines.push_back(std::move(l));
@@ -474,14 +494,22 @@ v1::Diagnosis Diagnose(const Evidence& evidence, std::span<const v1::FailureMode
     for (std::size_t m = 0; m < modes.size(); ++m) {
       const auto& mode = modes[m];
       std::vector<bool> covered(evidence.terms.size(), false);
+      std::set<std::string> own_sensor_axes;  // the sensor axes the signature reads
       double ll = 0.0;
       for (const auto& term : mode.signature()) {
         const auto members = Members(term, evidence);
-        for (const auto* t : members) covered[static_cast<std::size_t>(t - evidence.terms.data())] = true;
+        for (const auto* t : members) {
+          covered[static_cast<std::size_t>(t - evidence.terms.data())] = true;
+          own_sensor_axes.insert(SensorAxisOf(t->name));
+        }
         if (!members.empty()) ll += LogSignatureTerm(term, members);
       }
+      // A fault moves other terms of its own sensor axes too; elsewhere a term
+      // is off only as often as on a healthy unit, so that a mode's odds
+      // against `healthy` do not fall with the number of terms it does not read.
       for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
-        if (!covered[i]) ll += robust[i];
+        if (covered[i]) continue;
+        ll += own_sensor_axes.contains(SensorAxisOf(evidence.terms[i].name)) ? knock_on[i] : incidental[i];
       }
       const double p = total_rate > 0 ? (1.0 - u) * p_any * rates[m] / total_rate : 0.0;
       add(mode.name(), mode.module_role(), p, ll, ModeEvidenceLines(mode, evidence));

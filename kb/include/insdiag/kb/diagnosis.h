@@ -17,7 +17,10 @@
 // Likelihood of the evidence under a hypothesis (products over terms):
 //   healthy  every term  N(x; 0, s_h² + s_m²)
 //   unknown  every term  (1 − ε) N(x; 0, s_h² + s_m²) + ε Cauchy(x; 0, √(b² + s_m²))
-//   mode m   its signature's terms as below; every other term as under `unknown`
+//   mode m   its signature's terms as below; a term on a sensor axis the
+//            signature reads ("gyro.x") as under `unknown` (a fault's knock-on
+//            effects), every other term (1 − ε₀) N + ε₀ Cauchy, ε₀ the share of
+//            terms healthy units put off nominal (`incidental_contamination`)
 // A signature term with expected change μ, spread s and direction d:
 //   single term or family of independent terms, per term j:
 //     q · avg_{sign ∈ d} N(x_j; sign·μ, s² + s_h,j² + s_m,j²) + (1 − q) N(x_j; 0, s_h,j² + s_m,j²)
