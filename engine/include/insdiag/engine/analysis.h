@@ -1,17 +1,26 @@
 // The engine's entry point: one bench run and an a-priori error model in, the
-// analysis report out (docs/ARCHITECTURE.md, engine pipeline):
+// analysis report out (docs/ARCHITECTURE.md, engine pipeline). Analyze runs
+// these stages in order, each with explicit inputs and outputs
+// (engine/src/analysis.cc, the stages in engine/src/analysis/):
 //
-//   screen raw samples for spikes → Allan deviation of the static segments
-//   → a-priori model → dominant constant biases removed → retargeting: [mechanisation → forward filter →
-//   smoother → correlation processing of the drifts → re-tuned model] until
-//   the parameters settle → final pass with the missing-effect scan →
-//   monitoring, fit metrics, ranked candidates
-//   → with `add_effects`: model B = A + effects, its pass, B against A
-//   → with `discover`: add the most significant effect, re-run, repeat
-//
-// The a-priori model comes, per parameter, from the run's datasheet metadata,
-// else from the caller's nominal model (the knowledge base's unit type), else
-// from the Allan fit of the run itself.
+//   1. screening: spikes found and repaired in the raw samples
+//   2. Allan deviation of the static segments
+//   3. a-priori model: the run's datasheet, else the caller's nominal model
+//      (the knowledge base's unit type), else the Allan fit; dominant
+//      constant biases removed; baseline effects added
+//   4. the run condensed to its update epochs (every later pass filters them)
+//   5. identification (analysis/identification.h): Allan noise, terms left at
+//      bounds re-tuned, then retargeting [forward filter → smoother →
+//      correlation processing of the drifts → re-tuned model] until the
+//      parameters settle, the drifts' final values by likelihood; on the
+//      first pass the a-priori model's misfit competes with its missing
+//      effects
+//   6. model A's final pass with the missing-effect scan (analysis/model_pass.h)
+//      and its structure tests and ranking (analysis/missing_effects.h):
+//      monitoring, fit metrics, ranked candidates, the report
+//   7. with `add_effects`: model B = A + effects, its pass, B compared with A;
+//      with `discover`: add the most significant effect, re-run, repeat
+//      (analysis/model_change.h)
 #pragma once
 
 #include <absl/status/statusor.h>

@@ -1,0 +1,330 @@
+#include "analysis/identification.h"
+
+#include <absl/strings/str_format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "insdiag/engine/ident/correlation.h"
+#include "insdiag/engine/ident/retarget.h"
+#include "insdiag/engine/stats/distributions.h"
+
+namespace insdiag::engine::pipeline {
+namespace {
+
+// The drift estimates' SEs made consistent with their likelihood ratio
+// against `reference` (ident::WidenErrorsToTheLikelihoodRatio), with a note
+// naming the drifts widened.
+void WidenErrorsOrSay(const EpochRun& epochs, const ErrorModel& reference, ident::DriftLikelihoodResult& ml,
+                      std::vector<std::string>& notes) {
+  auto widened = ident::WidenErrorsToTheLikelihoodRatio(epochs, reference, ml);
+  if (!widened.ok()) {
+    notes.push_back("the drift estimates' standard errors were not checked against their likelihood ratio: " +
+                    std::string(widened.status().message()));
+    return;
+  }
+  if (widened->empty()) return;
+  std::string names;
+  for (const std::string& n : *widened) names += (names.empty() ? "" : ", ") + n;
+  notes.push_back("standard errors widened to the likelihood ratio against the a-priori values (the curvature at "
+                  "the estimate understated how flat the likelihood stays along the σ–τ ridge): " + names);
+}
+
+// The likelihood-ratio statistic of the drift estimates against the model's
+// values (one degree of freedom per identified parameter, σ or τ).
+double DriftStatistic(const ident::DriftLikelihoodResult& ml) {
+  return 2.0 * (ml.log_likelihood_after - ml.log_likelihood_before);
+}
+
+// The likelihood's drift estimates (drift_likelihood.h) are reported; the
+// model takes them when they raise the innovations' log-likelihood beyond
+// the likelihood-ratio test of the model's values, χ²(m) at α for m
+// identified parameters
+// (Wilks, Ann. Math. Statist. 9(1), 1938) — as the correlation retargeting
+// keeps a model the data do not contradict. True when the model took them.
+// A model whose values are placeholders (an Allan-fit a-priori model: its τ
+// a bound of the static segments) has nothing the data must overturn: it
+// takes the estimates whatever the statistic.
+bool ApplyDriftLikelihood(const ident::DriftLikelihoodResult& ml, double alpha, bool placeholders, ErrorModel& base,
+                          std::vector<ParameterEstimate>& identified, std::vector<std::string>& notes) {
+  if (!ml.not_identifiable.empty()) {
+    std::string names;
+    for (const std::string& n : ml.not_identifiable) names += (names.empty() ? "" : ", ") + n;
+    notes.push_back("not identifiable with this run's motion (the innovations' likelihood is flat in them): " +
+                    names);
+  }
+  if (ml.identified.empty()) return false;
+  for (const ParameterEstimate& p : ml.identified) {
+    std::erase_if(identified, [&](const ParameterEstimate& q) { return q.name == p.name; });
+    identified.push_back(p);
+  }
+  const double statistic = DriftStatistic(ml);
+  const auto dof = static_cast<int>(ml.identified.size());
+  const bool rejects = statistic > stats::ChiSquareQuantile(1.0 - alpha, dof);
+  const bool takes = rejects || placeholders;
+  if (takes) base = ml.model;
+  std::string names;
+  for (const ParameterEstimate& p : ml.identified) names += (names.empty() ? "" : ", ") + p.name;
+  char buf[200];
+  std::snprintf(buf, sizeof buf, " (EM, %d iterations%s, %d filter passes): 2Δℓ = %.1f against χ²(%d) at %.2g — ",
+                ml.iterations, ml.converged ? "" : ", not converged", ml.filter_passes, statistic, dof, alpha);
+  notes.push_back("drift parameters identified by likelihood of the innovations: " +
+                  names + buf +
+                  (rejects        ? "the model takes the estimates"
+                   : placeholders ? "the model's values were the Allan fit's placeholders: it takes the estimates"
+                                  : "the data do not reject the model's values, kept"));
+  return takes;
+}
+
+
+// The Allan fit's noise terms in the model, and its estimates other than the
+// drifts' (those are identified on the whole run; the Allan Markov term of
+// the static segments only seeds an a-priori model).
+std::vector<ParameterEstimate> ApplyAllanNoise(const RunContext& c, const ident::AllanResult& allan, ErrorModel& base) {
+  std::vector<ParameterEstimate> identified =
+      ident::ApplyAllanNoise(allan, c.a_priori.model, base, c.options.monitor.family_wise_alpha);
+  for (const ParameterEstimate& p : ident::AllanParameterEstimates(allan, &c.a_priori.model)) {
+    const bool drift = p.name.find("_bias_gm.") != std::string::npos;
+    if (!drift && std::none_of(identified.begin(), identified.end(),
+                               [&](const ParameterEstimate& q) { return q.name == p.name; })) {
+      identified.push_back(p);
+    }
+  }
+  return identified;
+}
+
+// Terms the Allan fit left at bounds: nothing else re-tunes them (the ACF
+// retargeting needs a resolved drift, the Allan fit a resolved density), and
+// a bound over-predicts the innovations. Their common scale per group by
+// maximum likelihood (retarget.h).
+void RetuneUnresolvedNoise(const RunContext& c, const std::optional<ident::AllanResult>& allan, ErrorModel& base,
+                           std::vector<ParameterEstimate>& identified, std::vector<std::string>& notes) {
+  const ident::UnresolvedNoise unresolved =
+      c.a_priori.from_allan && allan.has_value() ? ident::UnresolvedAllanTerms(*allan) : ident::UnresolvedNoise{};
+  if (!c.options.retune_unresolved_noise || !unresolved.Any()) return;
+  Progress(c.options, 0.08, "maximum-likelihood noise scale");
+  auto scaled = ident::ScaleUnresolvedNoise(c.epochs, base, unresolved, c.options.noise_scale);
+  if (!scaled.ok()) {
+    notes.push_back("the noise terms set from Allan bounds were not re-tuned: " +
+                    std::string(scaled.status().message()));
+    return;
+  }
+  base = scaled->model;
+  for (const ident::NoiseScaleGroup& g : scaled->groups) {
+    std::string terms;
+    for (const std::string& t : g.terms) terms += (terms.empty() ? "" : ", ") + t;
+    const bool seeded = g.name.ends_with("seed");
+    notes.push_back("re-tuned by maximum likelihood of the innovations, " + g.name + " (" + terms +
+                    (seeded ? ", seeded by the Allan fit, not resolved by correlation processing): "
+                            : ", set from Allan bounds): ") +
+                    absl::StrFormat("× %.3g (SE of ln: %.2g)%s", g.scale, g.log_std_error,
+                                    g.at_limit ? ", at the search range's limit" : ""));
+  }
+  notes.push_back(absl::StrFormat("the innovations' log-likelihood rose by %.1f after %d filter passes",
+                                  scaled->log_likelihood_after - scaled->log_likelihood_before,
+                                  scaled->filter_passes));
+  for (const ParameterEstimate& p : scaled->identified) {
+    std::erase_if(identified, [&](const ParameterEstimate& q) { return q.name == p.name; });
+    identified.push_back(p);
+  }
+}
+
+// Where the retargeting loop stopped.
+struct Retargeted {
+  std::vector<DriftCorrelation> drifts;  // correlation processing of the last pass
+  bool faults_flagged = false;           // by the last pass's monitoring or onset scan
+  bool drifts_by_likelihood = false;     // the misfit was the drifts': their σ and τ are in the model
+  bool deferred = false;                 // the a-priori model's missing effects go first
+};
+
+// The a-priori model's misfit against its best missing effect: a drift whose
+// σ is far larger than the model's shows as effects that follow the table's
+// motion (a g-sensitivity, say). The two explanations compete by BIC
+// (Schwarz, Ann. Stat. 6(2), 1978): every drift's σ and τ by likelihood,
+// from the a-priori values and from starts a decade either side — a unit far
+// from its type's nominal model is the case this is for — against the best
+// candidate's predicted ΔBIC. Also when faults are flagged: a drift far wider
+// than the model's trips the monitor and the onset scan as a jump would, and
+// BIC decides which it is. True when the model took the drifts.
+bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass, const EffectCandidate& best,
+                                      ErrorModel& base, std::vector<ParameterEstimate>& identified,
+                                      std::vector<std::string>& notes) {
+  const AnalysisOptions& options = c.options;
+  ident::DriftSelection every_drift{};
+  every_drift.fill(true);
+  const double log_n = std::log(static_cast<double>(std::max(1, pass.forward.scalar_updates)));
+  auto ml = ident::IdentifyDriftsFromStarts(c.epochs, base, c.a_priori.model, every_drift, c.a_priori.drift_starts,
+                                            options.drift_likelihood);
+  if (ml.ok()) ml = ident::KeepDriftsWorthTheirParameters(c.epochs, base, *std::move(ml), log_n);
+  if (ml.ok()) WidenErrorsOrSay(c.epochs, c.a_priori.model, *ml, notes);
+  if (!ml.ok()) {
+    notes.push_back("the drifts were not identified against the candidates: " + std::string(ml.status().message()));
+    return false;
+  }
+  if (ml->identified.empty()) {
+    notes.push_back("no drift's σ and τ by likelihood are worth their parameters against the candidates");
+    return false;
+  }
+  const double drift_bic = -DriftStatistic(*ml) + static_cast<double>(ml->identified.size()) * log_n;
+  if (drift_bic < best.predicted_delta_bic &&
+      ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, c.a_priori.from_allan, base, identified, notes)) {
+    notes.push_back(absl::StrFormat("the a-priori model's misfit is the drifts' σ rather than a missing effect (ΔBIC "
+                                    "%.1f against the best candidate's %.1f): the model takes them and is scanned "
+                                    "again",
+                                    drift_bic, best.predicted_delta_bic));
+    return true;
+  }
+  // The drifts stay as the a-priori model has them, but what the likelihood
+  // measured of them is reported: a drift far from its nominal is evidence
+  // for the diagnosis whichever explanation wins.
+  for (const ParameterEstimate& p : ml->identified) {
+    std::erase_if(identified, [&](const ParameterEstimate& q) { return q.name == p.name; });
+    identified.push_back(p);
+  }
+  notes.push_back(absl::StrFormat("the drifts' σ and τ by likelihood (%zu parameters worth their cost) reach ΔBIC "
+                                  "%.1f against the best candidate's %.1f: the candidates stand, and the drift "
+                                  "estimates are reported beside the a-priori model's values",
+                                  ml->identified.size(), drift_bic, best.predicted_delta_bic));
+  return false;
+}
+
+// Retargeting: a pass, correlation processing of its smoothed drifts, a
+// re-tuned model, until the parameters settle. The first pass also scans for
+// missing effects: parameters identified under a model whose structure is
+// wrong soak up the missing effect (a drift widened to carry a scale-factor
+// error), so the retargeting waits until the structure is complete.
+absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std::vector<std::string>& notes) {
+  const AnalysisOptions& options = c.options;
+  Retargeted out;
+  for (int it = 0; it < options.max_retarget_iterations; ++it) {
+    Progress(options, 0.1 + 0.5 * it / options.max_retarget_iterations, "retargeting");
+    const bool first = it == 0;
+    auto pass = RunPass(c.run, c.epochs, id.model, c.spikes, options, /*with_scan=*/first);
+    if (!pass.ok()) return pass.status();
+    // An a-priori model from the Allan fit is not a specification to
+    // protect: its drift τ is a bound of the static segments (the longest τ
+    // analysed) or a guess from them, and its misfit shows as effects. Its
+    // drifts are re-tuned by the whole run before the scan.
+    const bool scan_a_priori = first && !c.a_priori.from_allan;
+    std::vector<std::string> found_notes;
+    out.drifts = ident::CorrelateDrifts(pass->forward, pass->smoothed, *pass->layout, options.correlation,
+                                        scan_a_priori ? &found_notes : nullptr);
+    // A bias step or ramp the onset scan finds counts too (Bonferroni over its terms).
+    out.faults_flagged = !pass->monitor.faults.empty() ||
+                         std::any_of(pass->onsets.begin(), pass->onsets.end(), [&](const OnsetFit& f) {
+                           return f.p_value * static_cast<double>(pass->onsets.size()) <
+                                  options.finder.family_wise_alpha;
+                         });
+    // The a-priori model's missing effects, the likelihood's structures
+    // among them: a walk is a missing effect as much as a constant term,
+    // and a drift σ re-tuned before it is tested takes the walk's slow
+    // variance (a wider or slower drift over the run), which the walk's
+    // nested test then cannot tell from it.
+    Findings found;
+    const EffectCandidate* best = nullptr;
+    if (scan_a_priori) {
+      found = FindMissingEffects(c.run, c.epochs, *pass, out.drifts, c.a_priori.model, c.spikes, options, &found_notes);
+      best = LowestBicSignificant(found.candidates, found.families, options);
+    }
+    if (best != nullptr) {
+      if (options.identify_drifts_by_likelihood &&
+          ChooseDriftsOverTheBestCandidate(c, *pass, *best, id.model, id.identified, notes)) {
+        out.drifts_by_likelihood = true;
+        continue;
+      }
+      notes.push_back("the a-priori model lacks significant effects: the drift and reference-noise parameters "
+                      "are not re-tuned on this model (they would absorb what the effects explain); they are "
+                      "identified when the analysis starts from a model with the effects (baseline effects)");
+      id.scanned = ScannedModel{std::move(*pass), std::move(found), std::move(found_notes)};
+      out.deferred = true;
+      return out;
+    }
+    ident::RetargetResult step = ident::RetargetDrifts(id.model, c.a_priori.model, out.drifts,
+                                                       options.settle_log_ratio, options.monitor.family_wise_alpha);
+    const bool reference_changed =
+        ident::MatchReferenceNoise(pass->forward, options.monitor.family_wise_alpha, step.model, &notes);
+    // Nothing significant: the report's scan when nothing below re-tunes
+    // the model (the unit's a-priori model fits), else a new one.
+    if (scan_a_priori) id.scanned = ScannedModel{std::move(*pass), std::move(found), std::move(found_notes)};
+    id.model = step.model;
+    // The correlation estimates replace the last ones, and the likelihood's
+    // of a drift that the re-tuned model now resolves.
+    std::erase_if(id.identified, [&](const ParameterEstimate& p) {
+      return p.method == "ACF" || std::any_of(step.identified.begin(), step.identified.end(),
+                                              [&](const ParameterEstimate& q) { return q.name == p.name; });
+    });
+    id.identified.insert(id.identified.end(), step.identified.begin(), step.identified.end());
+    if (step.settled && !reference_changed) break;
+    if (it + 1 == options.max_retarget_iterations) {
+      notes.push_back("the identified drift parameters had not settled after " +
+                      std::to_string(options.max_retarget_iterations) + " iterations");
+    }
+  }
+  return out;
+}
+
+// The drifts by the innovations' likelihood (drift_likelihood.h), one of two
+// sets. The drifts correlation processing left unresolved: their σ (τ held at
+// the model's value, which the run does not tell — unless it is an Allan-fit
+// placeholder, a bound or a guess from static segments shorter than the
+// drift's τ). The drifts it resolved: σ and τ, from its estimates (which the
+// retargeted model holds where the data rejected the a-priori values), a
+// start near the likelihood's ridge. Apart, because one EM over both sets
+// crawls: on an eight-hour run with a tripled gyro σ it had not converged
+// after 30 steps, that σ still 15 % short.
+absl::StatusOr<ident::DriftLikelihoodResult> IdentifyDriftSet(const RunContext& c, const ErrorModel& model,
+                                                              const Retargeted& retargeted, bool resolved_set) {
+  Progress(c.options, 0.6, "maximum-likelihood drift identification");
+  const ident::DriftSelection resolved = ResolvedDrifts(retargeted.drifts);
+  ident::DriftSelection selection{}, tau_too{};
+  for (size_t d = 0; d < selection.size(); ++d) {
+    // A run whose monitoring flags faults (a drift that jumped, say) is
+    // not re-tuned: a wider drift would hide the fault the diagnosis is for.
+    selection[d] = !retargeted.faults_flagged && resolved[d] == resolved_set;
+    tau_too[d] = selection[d] && (resolved_set || c.a_priori.from_allan);
+  }
+  if (c.a_priori.drift_starts.grid_tau_points > 0) {
+    return ident::IdentifyDriftsFromGrid(c.epochs, model, c.a_priori.model, selection, tau_too,
+                                         c.a_priori.drift_starts, c.options.drift_likelihood);
+  }
+  return ident::IdentifyDriftsByLikelihood(c.epochs, model, c.a_priori.model, selection, tau_too,
+                                           c.options.drift_likelihood);
+}
+
+// The drifts' final values, by likelihood: correlation processing of the
+// smoothed estimates gives the drifts' structure and a start, but the
+// smoother's shrinkage biases its σ and τ low together along the fit's ridge
+// (docs/IDENTIFICATION.md, coverage); the likelihood's estimates carry no
+// such bias and their intervals cover the truth. The unresolved set is done
+// already when the misfit's competition took it.
+void IdentifyFinalDrifts(const RunContext& c, const Retargeted& retargeted, Identification& id,
+                         std::vector<std::string>& notes) {
+  for (const bool resolved_set : {false, true}) {
+    if (!resolved_set && retargeted.drifts_by_likelihood) continue;
+    auto ml = IdentifyDriftSet(c, id.model, retargeted, resolved_set);
+    if (ml.ok()) WidenErrorsOrSay(c.epochs, c.a_priori.model, *ml, notes);
+    if (!ml.ok()) {
+      notes.push_back("the drifts were not identified by likelihood: " + std::string(ml.status().message()));
+    } else {
+      ApplyDriftLikelihood(*ml, c.options.monitor.family_wise_alpha, c.a_priori.from_allan, id.model, id.identified,
+                           notes);
+    }
+  }
+}
+
+}  // namespace
+
+absl::StatusOr<Identification> IdentifyModel(const RunContext& c, const std::optional<ident::AllanResult>& allan,
+                                             ErrorModel base, std::vector<std::string>& notes) {
+  Identification id;
+  if (allan.has_value()) id.identified = ApplyAllanNoise(c, *allan, base);
+  RetuneUnresolvedNoise(c, allan, base, id.identified, notes);
+  id.model = std::move(base);
+  auto retargeted = Retarget(c, id, notes);
+  if (!retargeted.ok()) return retargeted.status();
+  if (c.options.identify_drifts_by_likelihood && !retargeted->deferred) IdentifyFinalDrifts(c, *retargeted, id, notes);
+  return id;
+}
+
+}  // namespace insdiag::engine::pipeline

@@ -1,0 +1,75 @@
+// The missing-effect stage: what a scanned model pass lacks — constant terms
+// and families by the score test, bias steps and ramps by the onset scan,
+// random structures by the innovations' likelihood and by correlation
+// processing — ranked together, and the report of the pass.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "analysis/model_pass.h"
+#include "insdiag/engine/ident/correlation.h"
+#include "insdiag/engine/ident/drift_likelihood.h"
+
+namespace insdiag::engine::pipeline {
+
+// A random-structure effect proposed by correlation processing or by the
+// likelihood's structure tests.
+struct StructureProposal {
+  ModelEffect effect;
+  EffectCandidate candidate;
+  // Starting points its screen searched (the fit's profile grid): the
+  // Bonferroni factor of its p-value.
+  int searched_starts = 1;
+  // A walk or pair from the likelihood's tests: its statistic is a
+  // likelihood ratio already, and a model that takes it takes its
+  // parameters and the drift σ fitted with it, and reports them.
+  std::optional<ident::StructureEstimate> fitted;
+};
+
+// Everything a report says about model A's pass: fit, identification, candidates.
+struct Findings {
+  std::vector<EffectCandidate> candidates;
+  std::vector<EffectCandidate> families;
+  std::vector<StructureProposal> structures;
+  std::vector<DriftCorrelation> drifts;
+};
+
+// A model's pass scanned for missing effects, what the scan found and the
+// notes it wrote.
+struct ScannedModel {
+  ModelPass pass;
+  Findings found;
+  std::vector<std::string> notes;
+};
+
+// The missing effects of a scanned pass; `drifts`: correlation processing of
+// this pass's smoothed drifts.
+Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass,
+                            std::vector<DriftCorrelation> drifts, const ErrorModel& a_priori,
+                            const std::vector<SampleOutlier>& spikes, const AnalysisOptions& options,
+                            std::vector<std::string>* notes);
+// The same, correlating the pass's drifts first.
+Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass, const ErrorModel& a_priori,
+                            const std::vector<SampleOutlier>& spikes, const AnalysisOptions& options,
+                            std::vector<std::string>* notes);
+
+// The significant, identifiable candidate whose predicted ΔBIC is lowest,
+// among single terms and whole families; nullptr when none is significant.
+const EffectCandidate* LowestBicSignificant(const std::vector<EffectCandidate>& terms,
+                                            const std::vector<EffectCandidate>& families,
+                                            const AnalysisOptions& options);
+
+// The effect `--discover` adds next.
+const EffectCandidate* NextDiscovery(const Findings& found, const AnalysisOptions& options);
+
+// The drifts correlation processing resolved, in DriftSelection order.
+ident::DriftSelection ResolvedDrifts(const std::vector<DriftCorrelation>& drifts);
+
+// The report of one scanned pass.
+AnalysisReport ReportOf(const ModelPass& pass, const Findings& found, const BenchRun& run,
+                        const AnalysisOptions& options, const std::vector<ParameterEstimate>& identified,
+                        const std::vector<std::string>& notes);
+
+}  // namespace insdiag::engine::pipeline

@@ -1,0 +1,260 @@
+#include "analysis/model_change.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+namespace insdiag::engine::pipeline {
+
+// The identified parameters of a model that took structures of `found`:
+// what the likelihood identified with each (a walk's K or a pair's σ₂, τ₂
+// and period, and the drift σ fitted with it)
+// replaces the earlier estimate of the same name.
+std::vector<ParameterEstimate> WithTakenStructures(std::vector<ParameterEstimate> identified,
+                                                   const ErrorModel& model, const Findings& found) {
+  for (const StructureProposal& p : found.structures) {
+    if (!p.fitted.has_value() || model.FindEffect(p.effect.term) < 0) continue;
+    std::vector<ParameterEstimate> taken = p.fitted->parameters;
+    taken.push_back(p.fitted->drift_sigma);
+    for (const ParameterEstimate& e : taken) {
+      std::erase_if(identified, [&](const ParameterEstimate& q) { return q.name == e.name; });
+      identified.push_back(e);
+    }
+  }
+  return identified;
+}
+
+// Model `base` plus `selectors`, with priors from what model A's scan and
+// correlation processing found; anything not found gets the diffuse prior.
+absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& base,
+                                       const std::vector<std::string>& selectors, const ModelPass& a,
+                                       const Findings& found, const AnalysisOptions& options) {
+  ErrorModel model = base;
+  std::vector<std::string> fallback;
+  for (const std::string& selector : selectors) {
+    auto terms = ParseEffectSelector(selector);
+    if (!terms.ok()) return terms.status();
+    auto onset = ParseOnset(selector);
+    if (!onset.ok()) return onset.status();
+    for (const EffectTerm& term : *terms) {
+      if (model.FindEffect(term) >= 0) continue;
+      if (term.family->kind == EffectKind::kFault) {
+        // At the onset named, else at the scan's: prior wide against the scan's estimate.
+        const auto c = std::find_if(found.candidates.begin(), found.candidates.end(), [&](const EffectCandidate& x) {
+          return x.name == term.Name() && x.onset_s.has_value();
+        });
+        const std::optional<double> onset_s = onset->has_value() ? *onset
+                                              : c != found.candidates.end() ? c->onset_s
+                                                                            : std::nullopt;
+        if (c == found.candidates.end() || !onset_s.has_value()) {
+          fallback.push_back(onset_s.has_value() ? term.Name() + "@" + std::to_string(*onset_s) : term.Name());
+          continue;
+        }
+        ModelEffect e;
+        e.term = term;
+        e.onset_s = *onset_s;
+        e.prior_sigma[0] = options.estimated_prior_scale * std::max(std::abs(c->estimate), 3.0 * c->std_error);
+        model.effects.push_back(e);
+        continue;
+      }
+      auto structure = std::find_if(found.structures.begin(), found.structures.end(),
+                                    [&](const StructureProposal& p) { return p.effect.term == term; });
+      if (structure != found.structures.end()) {
+        model.effects.push_back(structure->effect);
+        if (structure->fitted.has_value()) {
+          ident::DriftOf(model, structure->fitted->drift).sigma = structure->fitted->drift_sigma.value;
+        }
+        continue;
+      }
+      // A constant the scan estimated: prior wide against its estimate.
+      bool placed = false;
+      if (term.family->kind == EffectKind::kConstant && a.scan != nullptr) {
+        ModelEffect e;
+        e.term = term;
+        const auto& cols = a.scan->columns();
+        const Eigen::MatrixXd& I = a.scan->information();
+        const Eigen::VectorXd& s = a.scan->score();
+        placed = true;
+        for (int p = 0; p < term.family->parameters_per_term; ++p) {
+          auto it = std::find_if(cols.begin(), cols.end(),
+                                 [&](const CandidateColumn& c) { return c.term == term && c.parameter == p; });
+          const auto i = static_cast<Eigen::Index>(it - cols.begin());
+          if (it == cols.end() || !(I(i, i) > 0.0)) {
+            placed = false;
+            break;
+          }
+          const double beta = s[i] / I(i, i);
+          const double se = 1.0 / std::sqrt(I(i, i));
+          e.prior_sigma[static_cast<size_t>(p)] = options.estimated_prior_scale * std::max(std::abs(beta), 3.0 * se);
+        }
+        if (placed) model.effects.push_back(e);
+      }
+      if (!placed) fallback.push_back(term.Name());
+    }
+  }
+  if (auto st = AddEffects(run, fallback, options.filter.update_interval_s, options.diffuse_prior_scale, model); !st.ok()) {
+    return st;
+  }
+  return model;
+}
+
+ModelComparison Compare(const ModelPass& a, const ModelPass& b, const AnalysisReport& ra, const AnalysisReport& rb,
+                        double predicted_lr) {
+  ModelComparison c;
+  c.baseline_effects = a.model.EffectNames();
+  for (const std::string& e : b.model.EffectNames()) {
+    if (std::find(c.baseline_effects.begin(), c.baseline_effects.end(), e) == c.baseline_effects.end()) {
+      c.added_effects.push_back(e);
+    }
+  }
+  for (size_t i = 0; i < ra.channels.size() && i < rb.channels.size(); ++i) {
+    c.channels.push_back({ra.channels[i].name, ra.channels[i], rb.channels[i]});
+  }
+  c.nis_mean_before = ra.nis_mean;
+  c.nis_mean_after = rb.nis_mean;
+  c.log_likelihood_before = ra.log_likelihood;
+  c.log_likelihood_after = rb.log_likelihood;
+  c.aic_before = ra.aic;
+  c.aic_after = rb.aic;
+  c.bic_before = ra.bic;
+  c.bic_after = rb.bic;
+  c.realized_lr = 2.0 * (rb.log_likelihood - ra.log_likelihood);
+  c.predicted_lr = predicted_lr;
+  return c;
+}
+
+// Whether `term_name` is one of the terms `selector` (a term or a family) stands for.
+bool SelectorCovers(const std::string& selector, const std::string& term_name) {
+  const auto terms = ParseEffectSelector(selector);
+  return terms.ok() &&
+         std::any_of(terms->begin(), terms->end(), [&](const EffectTerm& t) { return t.Name() == term_name; });
+}
+
+// Model A's score statistic for adding `added` jointly (the likelihood ratio it predicts).
+double PredictedLikelihoodRatio(const ModelPass& a, const std::vector<std::string>& added, const Findings& found) {
+  if (a.scan == nullptr) return 0.0;
+  std::vector<Eigen::Index> idx;
+  double structure_lr = 0.0;
+  for (const std::string& name : added) {
+    // A family stands for its terms.
+    for (size_t i = 0; i < a.scan->columns().size(); ++i) {
+      if (SelectorCovers(name, a.scan->columns()[i].term.Name())) idx.push_back(static_cast<Eigen::Index>(i));
+    }
+    for (const StructureProposal& p : found.structures) {
+      if (p.candidate.name == name) structure_lr += p.candidate.statistic;
+    }
+    // A fault: the onset scan's likelihood ratio at its onset.
+    for (const EffectCandidate& c : found.candidates) {
+      if (c.source == "GLR" && c.name == name.substr(0, name.find('@'))) structure_lr += c.statistic;
+    }
+  }
+  if (idx.empty()) return structure_lr;
+  const auto n = static_cast<Eigen::Index>(idx.size());
+  Eigen::VectorXd s(n);
+  Eigen::MatrixXd I(n, n);
+  for (Eigen::Index r = 0; r < n; ++r) {
+    s[r] = a.scan->score()[idx[static_cast<size_t>(r)]];
+    for (Eigen::Index c = 0; c < n; ++c) I(r, c) = a.scan->information()(idx[static_cast<size_t>(r)], idx[static_cast<size_t>(c)]);
+  }
+  return s.dot(I.completeOrthogonalDecomposition().solve(s)) + structure_lr;
+}
+
+namespace {
+
+// What one discovery step added and how the model fits after it. The step's
+// single value is the term's, or for a family its most significant term's
+// (largest |estimate| / SE): a family has no one magnitude.
+DiscoveryStep StepOf(int step, const EffectCandidate& top, const AnalysisReport& next_report) {
+  DiscoveryStep d;
+  d.step = step;
+  d.effect = top.name;
+  d.statistic = top.statistic;
+  d.p_value = top.p_value_holm;
+  d.unit = top.unit;
+  d.estimate = top.estimate;
+  d.std_error = top.std_error;
+  // The added terms' estimates in the model after the step (one for a
+  // term, one per axis or pair for a family).
+  double largest_z = -1.0;
+  for (const ParameterEstimate& e : next_report.identified) {
+    if (e.method != "FILTER" || !SelectorCovers(top.name, e.name)) continue;
+    d.estimates.push_back(e);
+    const double z = e.std_error > 0.0 ? std::abs(e.value) / e.std_error : 0.0;
+    if (e.name == top.name || z > largest_z) {
+      largest_z = e.name == top.name ? std::numeric_limits<double>::infinity() : z;
+      d.estimate = e.value;
+      d.std_error = e.std_error;
+    }
+  }
+  d.nis_mean = next_report.nis_mean;
+  d.log_likelihood = next_report.log_likelihood;
+  d.aic = next_report.aic;
+  d.bic = next_report.bic;
+  d.channels = next_report.channels;
+  return d;
+}
+
+}  // namespace
+
+absl::StatusOr<Analysis> Discover(const RunContext& c, ScannedModelA a) {
+  const AnalysisOptions& options = c.options;
+  // Model A stays whole for the comparison; `latest` holds the last step's pass.
+  std::optional<ModelPass> latest;
+  auto current = [&]() -> const ModelPass& { return latest.has_value() ? *latest : a.pass; };
+  Findings found = a.found;
+  AnalysisReport report = a.report;
+  std::vector<ParameterEstimate> identified = std::move(a.identified);
+  for (int step = 1; step <= options.max_discovery_steps; ++step) {
+    const EffectCandidate* top = NextDiscovery(found, options);
+    if (top == nullptr) break;
+    Progress(options, 0.7 + 0.3 * step / (options.max_discovery_steps + 1), "discovery: adding " + top->name);
+    auto extended = ExtendModel(c.run, current().model, {top->name}, current(), found, options);
+    if (!extended.ok()) return extended.status();
+    auto next = RunPass(c.run, c.epochs, *extended, c.spikes, options, /*with_scan=*/true);
+    if (!next.ok()) return next.status();
+    Findings next_found = FindMissingEffects(c.run, c.epochs, *next, c.a_priori.model, c.spikes, options, &a.notes);
+    identified = WithTakenStructures(std::move(identified), next->model, found);
+    AnalysisReport next_report = ReportOf(*next, next_found, c.run, options, identified, a.notes);
+    report.discovery.push_back(StepOf(step, *top, next_report));
+    next_report.discovery = report.discovery;
+    latest = std::move(*next);
+    found = std::move(next_found);
+    report = std::move(next_report);
+  }
+  if (!report.discovery.empty()) {
+    std::vector<std::string> added;
+    for (const DiscoveryStep& d : report.discovery) added.push_back(d.effect);
+    report.comparison = Compare(a.pass, current(), a.report, report, PredictedLikelihoodRatio(a.pass, added, a.found));
+  }
+  Analysis out;
+  out.report = std::move(report);
+  out.model = current().model;
+  out.base_report = std::move(a.report);
+  if (options.keep_series) FillSeries(current(), out.series);
+  return out;
+}
+
+absl::StatusOr<Analysis> AddAndCompare(const RunContext& c, const std::vector<std::string>& effects, ScannedModelA a) {
+  const AnalysisOptions& options = c.options;
+  Progress(options, 0.8, "model with the added effects");
+  auto extended = ExtendModel(c.run, a.pass.model, effects, a.pass, a.found, options);
+  if (!extended.ok()) return extended.status();
+  auto b = RunPass(c.run, c.epochs, *extended, c.spikes, options, /*with_scan=*/true);
+  if (!b.ok()) return b.status();
+  const Findings found_b = FindMissingEffects(c.run, c.epochs, *b, c.a_priori.model, c.spikes, options, &a.notes);
+  Analysis out;
+  out.report = ReportOf(*b, found_b, c.run, options, WithTakenStructures(a.identified, b->model, a.found), a.notes);
+  std::vector<std::string> added;
+  for (const std::string& e : b->model.EffectNames()) {
+    if (a.pass.model.FindEffect(*ParseEffectSelector(e)->begin()) < 0) added.push_back(e);
+  }
+  out.report.comparison =
+      Compare(a.pass, *b, a.report, out.report, PredictedLikelihoodRatio(a.pass, added, a.found));
+  out.model = b->model;
+  out.base_report = std::move(a.report);
+  if (options.keep_series) FillSeries(*b, out.series);
+  return out;
+}
+
+}  // namespace insdiag::engine::pipeline

@@ -1,0 +1,57 @@
+// The stages that change the model after model A's scan: the loop's
+// `--discover` (add the most significant missing effect, re-run, repeat) and
+// `--add` (model B = A + the effects named, compared with A), and what both
+// need — a model extended with priors from A's scan, and the comparison.
+#pragma once
+
+#include <absl/status/statusor.h>
+
+#include <string>
+#include <vector>
+
+#include "analysis/missing_effects.h"
+#include "analysis/model_pass.h"
+#include "analysis/run_context.h"
+
+namespace insdiag::engine::pipeline {
+
+// Model A: the identified model's pass, what its scan found and its report,
+// with the identified parameters and notes later models carry on.
+struct ScannedModelA {
+  const ModelPass& pass;
+  const Findings& found;
+  AnalysisReport report;
+  std::vector<ParameterEstimate> identified;
+  std::vector<std::string> notes;
+};
+
+// Walks the loop from model A; the analysis's report is the last model's,
+// with the path and the comparison against A.
+absl::StatusOr<Analysis> Discover(const RunContext& c, ScannedModelA a);
+
+// Model B = A + `effects`, its report compared with A's.
+absl::StatusOr<Analysis> AddAndCompare(const RunContext& c, const std::vector<std::string>& effects, ScannedModelA a);
+
+// The identified parameters of a model that took structures of `found`:
+// what the likelihood identified with each (a walk's K or a pair's σ₂, τ₂
+// and period, and the drift σ fitted with it) replaces the earlier estimate
+// of the same name.
+std::vector<ParameterEstimate> WithTakenStructures(std::vector<ParameterEstimate> identified,
+                                                   const ErrorModel& model, const Findings& found);
+
+// Model `base` plus `selectors`, with priors from what model A's scan and
+// correlation processing found; anything not found gets the diffuse prior.
+absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& base,
+                                       const std::vector<std::string>& selectors, const ModelPass& a,
+                                       const Findings& found, const AnalysisOptions& options);
+
+ModelComparison Compare(const ModelPass& a, const ModelPass& b, const AnalysisReport& ra, const AnalysisReport& rb,
+                        double predicted_lr);
+
+// Whether `term_name` is one of the terms `selector` (a term or a family) stands for.
+bool SelectorCovers(const std::string& selector, const std::string& term_name);
+
+// Model A's score statistic for adding `added` jointly (the likelihood ratio it predicts).
+double PredictedLikelihoodRatio(const ModelPass& a, const std::vector<std::string>& added, const Findings& found);
+
+}  // namespace insdiag::engine::pipeline

@@ -1,0 +1,149 @@
+#include "analysis/model_pass.h"
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+
+#include "insdiag/engine/ident/correlation.h"
+#include "insdiag/engine/ident/retarget.h"
+
+namespace insdiag::engine::pipeline {
+namespace {
+
+// Constant effects enter the filter as states with a diffuse prior N(0, Σ);
+// the filter's log-likelihood is then the marginal one, lower than the
+// likelihood at the parameters' maximum by the prior's weight. With the final
+// posterior N(x, P) of the constants and the data's information I = P⁻¹ − Σ⁻¹,
+// in Σ-whitened coordinates (Σ = LLᵀ, Ĩ = Lᵀ I L with eigenpairs λ_i, u_i,
+// g = Lᵀ P⁻¹ x):
+//   ℓ_max − ℓ_marginal = ½ Σ_i [ln(1 + λ_i) + (u_iᵀ g)² / (λ_i (1 + λ_i))]
+// over the directions the data inform (Harvey, Forecasting, Structural Time
+// Series Models and the Kalman Filter, 1989, §3.4: the diffuse likelihood).
+double ProfileCorrection(const ForwardPass& fw, const ErrorModel& model, const StateLayout& layout) {
+  std::vector<int> states;
+  std::vector<double> prior_sigma;
+  for (const SensorState& s : layout.sensor_states()) {
+    if (s.dynamics != StateDynamics::kConstant || s.effect < 0) continue;
+    states.push_back(s.index);
+    prior_sigma.push_back(model.effects[static_cast<size_t>(s.effect)].prior_sigma[static_cast<size_t>(s.parameter)]);
+  }
+  if (states.empty() || fw.epochs() == 0) return 0.0;
+  const auto m = static_cast<Eigen::Index>(states.size());
+  Eigen::MatrixXd P_full;
+  UnpackSymmetric(fw.P_filt.row(fw.epochs() - 1).data(), fw.state_size, P_full);
+  Eigen::MatrixXd P(m, m);
+  Eigen::VectorXd x(m), L(m);
+  for (Eigen::Index a = 0; a < m; ++a) {
+    x[a] = fw.x_filt(fw.epochs() - 1, states[static_cast<size_t>(a)]);
+    L[a] = prior_sigma[static_cast<size_t>(a)];
+    for (Eigen::Index b = 0; b < m; ++b) P(a, b) = P_full(states[static_cast<size_t>(a)], states[static_cast<size_t>(b)]);
+  }
+  const Eigen::LDLT<Eigen::MatrixXd> P_ldlt(P);
+  // Ĩ = L P⁻¹ L − 1 (Σ diagonal), g = L P⁻¹ x.
+  Eigen::MatrixXd I_tilde = L.asDiagonal() * P_ldlt.solve(Eigen::MatrixXd(L.asDiagonal()));
+  I_tilde.diagonal().array() -= 1.0;
+  const Eigen::VectorXd g = L.asDiagonal() * P_ldlt.solve(x);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (I_tilde + I_tilde.transpose()));
+  double correction = 0.0;
+  const double top = std::max(eig.eigenvalues().maxCoeff(), 0.0);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const double lambda = eig.eigenvalues()[i];
+    if (!(lambda > 1e-9 * top) || !(lambda > 0.0)) continue;
+    const double gi = eig.eigenvectors().col(i).dot(g);
+    correction += 0.5 * (std::log1p(lambda) + gi * gi / (lambda * (1.0 + lambda)));
+  }
+  return correction;
+}
+
+}  // namespace
+
+absl::StatusOr<ModelPass> RunPass(const BenchRun& run, const EpochRun& epochs, const ErrorModel& model,
+                                  const std::vector<SampleOutlier>& spikes, const AnalysisOptions& options,
+                                  bool with_scan) {
+  ModelPass pass;
+  pass.model = model;
+  pass.layout = std::make_unique<StateLayout>(pass.model);
+  const int segment_epochs =
+      std::max(1, static_cast<int>(std::lround(options.segment_s / options.filter.update_interval_s)));
+  if (with_scan) {
+    pass.scan = std::make_unique<ScoreTestObserver>(*pass.layout, epochs, AbsentConstantCandidates(pass.model), segment_epochs);
+  }
+  auto forward = RunForwardFilter(epochs, pass.model, pass.scan.get());
+  if (!forward.ok()) return forward.status();
+  pass.forward = *std::move(forward);
+  auto smoothed = RunSmoother(pass.forward, ident::DriftSmootherOptions(pass.model, *pass.layout, pass.forward,
+                                                                        options.correlation));
+  if (!smoothed.ok()) return smoothed.status();
+  pass.smoothed = *std::move(smoothed);
+  pass.monitor = Monitor(pass.forward, pass.smoothed, *pass.layout, spikes, options.monitor);
+  pass.log_likelihood = pass.forward.log_likelihood + ProfileCorrection(pass.forward, pass.model, *pass.layout);
+  if (with_scan) {
+    pass.segment_motion = SegmentMotion(run, pass.forward, segment_epochs);
+    pass.onsets = ScanOnsets(pass.forward, *pass.layout, epochs, AbsentFaultTerms(pass.model), options.onset_scan);
+  }
+  return pass;
+}
+
+void FillFit(const ModelPass& pass, const BenchRun& run, const AnalysisOptions& options, AnalysisReport& r) {
+  const MonitorResult& m = pass.monitor;
+  r.verdict = m.verdict;
+  r.model_effects = pass.model.EffectNames();
+  r.parameter_count = pass.model.ParameterCount();
+  r.channels = m.channels;
+  r.nis_mean = m.nis_mean;
+  r.nis_band_low = m.nis_band_low;
+  r.nis_band_high = m.nis_band_high;
+  r.log_likelihood = pass.log_likelihood;
+  r.scalar_updates = pass.forward.scalar_updates;
+  r.aic = 2.0 * r.parameter_count - 2.0 * r.log_likelihood;
+  r.bic = r.parameter_count * std::log(static_cast<double>(std::max(1, r.scalar_updates))) - 2.0 * r.log_likelihood;
+  r.gamma2 = m.gamma2;
+  r.eta2 = m.eta2;
+  r.faults = m.faults;
+  r.localisation = m.localisation;
+  r.discrepancies = m.discrepancies;
+  r.duration_s = run.DurationS();
+  r.samples = run.samples.size();
+  r.sample_rate_hz = 1.0 / run.NominalIntervalS();
+  r.update_interval_s = options.filter.update_interval_s;
+}
+
+std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass) {
+  std::vector<ParameterEstimate> out;
+  const int K = pass.forward.epochs();
+  if (K == 0) return out;
+  for (const SensorState& s : pass.layout->sensor_states()) {
+    if (s.dynamics != StateDynamics::kConstant || s.effect < 0) continue;
+    const ModelEffect& e = pass.model.effects[static_cast<size_t>(s.effect)];
+    ParameterEstimate p;
+    p.name = s.name;
+    p.value = pass.forward.x_filt(K - 1, s.index);
+    p.std_error = std::sqrt(pass.smoothed.variance(K - 1, s.index));
+    p.method = "FILTER";
+    p.unit = std::string(e.term.family->unit);
+    out.push_back(p);
+  }
+  return out;
+}
+void FillSeries(const ModelPass& pass, AnalysisSeries& series) {
+  const ForwardPass& fw = pass.forward;
+  const SmoothedPass& sm = pass.smoothed;
+  series.time_s = fw.epoch_time_s;
+  series.measured = fw.z;
+  series.residual = fw.innovation;
+  series.predicted = fw.z - fw.innovation;
+  series.sigma = fw.innovation_variance.cwiseSqrt();
+  series.window_ratio = pass.monitor.window_ratio;
+  const int m = pass.layout->sensor_count();
+  const int b = pass.layout->sensor_begin();
+  series.state_names.clear();
+  for (const SensorState& s : pass.layout->sensor_states()) series.state_names.push_back(s.name);
+  series.forward = fw.x_filt.middleCols(b, m);
+  series.smoothed = sm.x.middleCols(b, m);
+  series.smoothed_sigma = sm.variance.middleCols(b, m).cwiseSqrt();
+  series.backward = sm.backward_x.middleCols(b, m);
+  series.discrepancy = sm.discrepancy.middleCols(b, m);
+}
+
+}  // namespace insdiag::engine::pipeline

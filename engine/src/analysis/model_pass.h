@@ -1,0 +1,53 @@
+// One model's pass over the run — the filter, the smoother, the monitor and,
+// when asked, the missing-effect and onset scans — and what a report reads
+// from it.
+#pragma once
+
+#include <absl/status/statusor.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "insdiag/engine/analysis.h"
+#include "insdiag/engine/filter/epoch_run.h"
+#include "insdiag/engine/filter/forward_filter.h"
+#include "insdiag/engine/filter/smoother.h"
+#include "insdiag/engine/finder/onset_scan.h"
+#include "insdiag/engine/finder/score_test.h"
+#include "insdiag/engine/model/state_layout.h"
+#include "insdiag/engine/monitor/monitoring.h"
+
+namespace insdiag::engine::pipeline {
+
+// One run of a model through the filter, the smoother and the monitor — and,
+// when asked, the missing-effect scan.
+struct ModelPass {
+  ErrorModel model;
+  std::unique_ptr<StateLayout> layout;
+  ForwardPass forward;
+  SmoothedPass smoothed;
+  MonitorResult monitor;
+  std::unique_ptr<ScoreTestObserver> scan;
+  std::vector<OnsetFit> onsets;  // the fault terms' scan, with `scan`
+  std::vector<std::string> segment_motion;
+  // The innovations' log-likelihood with every added constant effect at its
+  // maximum-likelihood value (the profile likelihood), see ProfileCorrection.
+  double log_likelihood = 0.0;
+};
+
+absl::StatusOr<ModelPass> RunPass(const BenchRun& run, const EpochRun& epochs, const ErrorModel& model,
+                                  const std::vector<SampleOutlier>& spikes, const AnalysisOptions& options,
+                                  bool with_scan);
+
+// The report's fit of a pass: verdict, channels, NIS, likelihood, criteria.
+void FillFit(const ModelPass& pass, const BenchRun& run, const AnalysisOptions& options, AnalysisReport& r);
+
+// The added constant effects' estimates: the final filtered states (constants
+// keep their value, so the last epoch's estimate is the smoothed one).
+std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass);
+
+// Measured, predicted, residual, ±σ and the sensor states per epoch.
+void FillSeries(const ModelPass& pass, AnalysisSeries& series);
+
+}  // namespace insdiag::engine::pipeline

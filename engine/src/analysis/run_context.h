@@ -1,0 +1,40 @@
+// What the analysis's stages after condensing share (engine/src/analysis.cc):
+// the run as screened, its update epochs, the spikes repaired, the options
+// and the a-priori model the identification starts from.
+#pragma once
+
+#include <string_view>
+#include <vector>
+
+#include "insdiag/engine/analysis.h"
+#include "insdiag/engine/bench_run.h"
+#include "insdiag/engine/filter/epoch_run.h"
+#include "insdiag/engine/ident/drift_likelihood.h"
+#include "insdiag/engine/model/error_model.h"
+#include "insdiag/engine/monitor/sample_screening.h"
+
+namespace insdiag::engine::pipeline {
+
+// The a-priori model and where it came from.
+struct APriori {
+  ErrorModel model;
+  // From the run's own Allan fit: its drift τ is a bound or a guess of the
+  // static segments, a placeholder the whole run re-tunes.
+  bool from_allan = false;
+  // Where drift identification starts (a datasheet's drifts need no grid).
+  ident::DriftStartOptions drift_starts;
+};
+
+struct RunContext {
+  const BenchRun& run;
+  const EpochRun& epochs;
+  const std::vector<SampleOutlier>& spikes;
+  const AnalysisOptions& options;
+  const APriori& a_priori;
+};
+
+inline void Progress(const AnalysisOptions& o, double fraction, std::string_view stage) {
+  if (o.progress) o.progress(fraction, stage);
+}
+
+}  // namespace insdiag::engine::pipeline
