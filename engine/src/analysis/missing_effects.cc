@@ -9,6 +9,7 @@
 
 #include "insdiag/engine/finder/effect_finder.h"
 #include "insdiag/engine/finder/fault_findings.h"
+#include "insdiag/engine/numerics/parallel_map.h"
 #include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::engine::pipeline {
@@ -134,18 +135,30 @@ std::vector<StructureProposal> ConfirmStructures(const BenchRun& run, const Epoc
                                                  const std::vector<SampleOutlier>& spikes,
                                                  const AnalysisOptions& options) {
   const double log_n = std::log(static_cast<double>(std::max(1, a.forward.scalar_updates)));
-  for (StructureProposal& p : proposals) {
-    ErrorModel b = a.model;
-    if (p.fitted.has_value() || b.FindEffect(p.effect.term) >= 0) continue;
-    b.effects.push_back(p.effect);
-    auto pass = RunPass(run, epochs, b, spikes, options, /*with_scan=*/false);
+  const auto needs_pass = [&](const StructureProposal& p) {
+    return !p.fitted.has_value() && a.model.FindEffect(p.effect.term) < 0;
+  };
+  // Each proposal's pass is independent of the others'.
+  std::vector<absl::StatusOr<double>> log_likelihoods =
+      numerics::ParallelMap(proposals.size(), [&](std::size_t i) -> absl::StatusOr<double> {
+        if (!needs_pass(proposals[i])) return 0.0;
+        ErrorModel b = a.model;
+        b.effects.push_back(proposals[i].effect);
+        auto pass = RunPass(run, epochs, b, spikes, options, /*with_scan=*/false);
+        if (!pass.ok()) return pass.status();
+        return pass->log_likelihood;
+      });
+  for (std::size_t i = 0; i < proposals.size(); ++i) {
+    StructureProposal& p = proposals[i];
+    if (!needs_pass(p)) continue;
+    const absl::StatusOr<double>& pass = log_likelihoods[i];
     EffectCandidate& c = p.candidate;
     if (!pass.ok()) {
       c.identifiable = false;
       c.note += "; could not confirm: " + std::string(pass.status().message());
       continue;
     }
-    c.statistic = std::max(0.0, 2.0 * (pass->log_likelihood - a.log_likelihood));
+    c.statistic = std::max(0.0, 2.0 * (*pass - a.log_likelihood));
     c.p_value = ident::StructurePValue(c.statistic, c.dof, p.searched_starts);
     c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
     c.predicted_delta_bic = -c.statistic + c.dof * log_n;
@@ -220,9 +233,16 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
                                             "tests it"));
     }
   }
-  for (const Test& test : tests) {
+  // The two tests are independent fits: both at once, read in order.
+  auto fits = numerics::ParallelMap(std::size(tests), [&](std::size_t i) -> absl::StatusOr<ident::DriftLikelihoodResult> {
+    const Test& test = tests[i];
+    if (!test.enabled) return absl::CancelledError("off");
+    return test.fit(epochs, pass.model, a_priori, test.axes, screen_alpha, options.drift_likelihood);
+  });
+  for (std::size_t i = 0; i < std::size(tests); ++i) {
+    const Test& test = tests[i];
     if (!test.enabled) continue;
-    auto fitted = test.fit(epochs, pass.model, a_priori, test.axes, screen_alpha, options.drift_likelihood);
+    auto& fitted = fits[i];
     if (!fitted.ok()) {
       if (notes != nullptr) {
         notes->push_back(std::string("no likelihood test of ") + test.what + ": " +

@@ -1,5 +1,7 @@
 #include "insdiag/engine/ident/drift_likelihood.h"
 
+#include "insdiag/engine/numerics/parallel_map.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -13,6 +15,7 @@
 #include "insdiag/engine/filter/smoother.h"
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/model/state_layout.h"
+#include "insdiag/engine/numerics/parallel_map.h"
 #include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::engine::ident {
@@ -162,6 +165,23 @@ class Maximiser {
     return fw->log_likelihood;
   }
 
+  // ℓ at each of `probes`: independent passes, on every core.
+  absl::StatusOr<std::vector<double>> LogLikelihoods(const std::vector<Eigen::VectorXd>& probes) {
+    out_.filter_passes += static_cast<int>(probes.size());
+    const auto values = numerics::ParallelMap(probes.size(), [&](std::size_t i) -> absl::StatusOr<double> {
+      auto fw = RunForwardFilter(run_, ModelOf(probes[i]));
+      if (!fw.ok()) return fw.status();
+      return fw->log_likelihood;
+    });
+    std::vector<double> out;
+    out.reserve(values.size());
+    for (const absl::StatusOr<double>& v : values) {
+      if (!v.ok()) return v.status();
+      out.push_back(*v);
+    }
+    return out;
+  }
+
   // ℓ(θ) and the M-step's θ.
   struct Step {
     double log_likelihood;
@@ -276,15 +296,12 @@ class Maximiser {
   // Observed information in θ_j at θ (ℓ(θ) = l0): the second difference.
   absl::StatusOr<double> Information(const Eigen::VectorXd& theta, Eigen::Index j, double l0) {
     const double h = options_.curvature_step;
-    double shifted[2];
-    for (int side = 0; side < 2; ++side) {
-      Eigen::VectorXd probe = theta;
-      probe[j] += side == 0 ? h : -h;
-      auto l = LogLikelihood(ModelOf(probe));
-      if (!l.ok()) return l.status();
-      shifted[side] = *l;
-    }
-    return -(shifted[0] - 2.0 * l0 + shifted[1]) / (h * h);
+    std::vector<Eigen::VectorXd> probes(2, theta);
+    probes[0][j] += h;
+    probes[1][j] -= h;
+    auto shifted = LogLikelihoods(probes);
+    if (!shifted.ok()) return shifted.status();
+    return -((*shifted)[0] - 2.0 * l0 + (*shifted)[1]) / (h * h);
   }
 
   // Observed information of the block of parameters `at` at θ (ℓ(θ) = l0):
@@ -294,31 +311,37 @@ class Maximiser {
                                                    double l0) {
     const double h = options_.curvature_step;
     const auto r = static_cast<Eigen::Index>(at.size());
-    auto shifted = [&](Eigen::Index a, double da, Eigen::Index b, double db) -> absl::StatusOr<double> {
-      Eigen::VectorXd probe = theta;
-      probe[at[static_cast<size_t>(a)]] += da;
-      probe[at[static_cast<size_t>(b)]] += db;
-      return LogLikelihood(ModelOf(probe));
+    // The probes: each parameter up and down, then each pair up together and
+    // down together.
+    std::vector<Eigen::VectorXd> probes;
+    auto probe = [&](Eigen::Index a, double da, Eigen::Index b, double db) {
+      Eigen::VectorXd p = theta;
+      p[at[static_cast<size_t>(a)]] += da;
+      p[at[static_cast<size_t>(b)]] += db;
+      probes.push_back(std::move(p));
     };
-    Eigen::VectorXd up(r), down(r);
     for (Eigen::Index a = 0; a < r; ++a) {
-      auto u = shifted(a, h, a, 0.0);
-      if (!u.ok()) return u.status();
-      auto d = shifted(a, -h, a, 0.0);
-      if (!d.ok()) return d.status();
-      up[a] = *u;
-      down[a] = *d;
+      probe(a, h, a, 0.0);
+      probe(a, -h, a, 0.0);
     }
-    Eigen::MatrixXd information(r, r);
     for (Eigen::Index a = 0; a < r; ++a) {
-      information(a, a) = -(up[a] - 2.0 * l0 + down[a]) / (h * h);
       for (Eigen::Index b = a + 1; b < r; ++b) {
-        auto both_up = shifted(a, h, b, h);
-        if (!both_up.ok()) return both_up.status();
-        auto both_down = shifted(a, -h, b, -h);
-        if (!both_down.ok()) return both_down.status();
+        probe(a, h, b, h);
+        probe(a, -h, b, -h);
+      }
+    }
+    auto values = LogLikelihoods(probes);
+    if (!values.ok()) return values.status();
+    const std::vector<double>& l = *values;
+    const auto up = [&](Eigen::Index a) { return l[static_cast<size_t>(2 * a)]; };
+    const auto down = [&](Eigen::Index a) { return l[static_cast<size_t>(2 * a + 1)]; };
+    Eigen::MatrixXd information(r, r);
+    size_t pair = static_cast<size_t>(2 * r);
+    for (Eigen::Index a = 0; a < r; ++a) {
+      information(a, a) = -(up(a) - 2.0 * l0 + down(a)) / (h * h);
+      for (Eigen::Index b = a + 1; b < r; ++b, pair += 2) {
         information(a, b) = information(b, a) =
-            -(*both_up + *both_down - up[a] - down[a] - up[b] - down[b] + 2.0 * l0) / (2.0 * h * h);
+            -(l[pair] + l[pair + 1] - up(a) - down(a) - up(b) - down(b) + 2.0 * l0) / (2.0 * h * h);
       }
     }
     return information;

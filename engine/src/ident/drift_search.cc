@@ -4,6 +4,7 @@
 #include <optional>
 
 #include "insdiag/engine/ident/drift_likelihood.h"
+#include "insdiag/engine/numerics/parallel_map.h"
 #include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::engine::ident {
@@ -51,20 +52,29 @@ GridPoint GridStart(const EpochRun& run, const ErrorModel& model, const DriftSel
     if (!which[static_cast<size_t>(d)] || !(DriftOf(model, d).sigma > 0.0)) continue;
     const GaussMarkov specified = DriftOf(model, d);
     const bool with_tau = tau_too[static_cast<size_t>(d)];
-    GaussMarkov chosen = DriftOf(out.model, d);
+    std::vector<GaussMarkov> trials;
     for (int t = 0; t < (with_tau ? points : 1); ++t) {
       const double fraction = points > 1 ? static_cast<double>(t) / (points - 1) : 0.5;
       const double tau_s =
           with_tau ? range.shortest_s * std::pow(range.longest_s / range.shortest_s, fraction) : specified.tau_s;
       for (double factor : starts.grid_sigma_factors) {
         if (!with_tau && factor == 1.0) continue;  // the model's own point, already weighed
-        ErrorModel trial = out.model;
-        DriftOf(trial, d) = GaussMarkov{specified.sigma * factor, tau_s};
-        const double ll = LogLikelihoodOrWorst(run, trial, passes);
-        if (ll > best_ll) {
-          best_ll = ll;
-          chosen = DriftOf(trial, d);
-        }
+        trials.push_back(GaussMarkov{specified.sigma * factor, tau_s});
+      }
+    }
+    // The grid's points are independent passes; the best is taken in grid order.
+    const std::vector<double> ll = numerics::ParallelMap(trials.size(), [&](std::size_t i) {
+      ErrorModel trial = out.model;
+      DriftOf(trial, d) = trials[i];
+      int unused_passes = 0;
+      return LogLikelihoodOrWorst(run, trial, unused_passes);
+    });
+    passes += static_cast<int>(trials.size());
+    GaussMarkov chosen = DriftOf(out.model, d);
+    for (std::size_t i = 0; i < trials.size(); ++i) {
+      if (ll[i] > best_ll) {
+        best_ll = ll[i];
+        chosen = trials[i];
       }
     }
     DriftOf(out.model, d) = chosen;
@@ -92,10 +102,15 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
     start_models.push_back(std::move(start));
   }
   if (starts.grid_tau_points > 0) start_models.push_back(GridStart(run, model, which, which, starts, passes).model);
+  // EM from each start: independent runs, taken in the starts' order.
+  std::vector<absl::StatusOr<DriftLikelihoodResult>> from_starts =
+      numerics::ParallelMap(start_models.size(), [&](std::size_t i) {
+        return IdentifyDriftsByLikelihood(run, start_models[i], a_priori, which, which, options);
+      });
   std::vector<DriftLikelihoodResult> fits;
   std::optional<double> before;  // the likelihood of the model as given: the first start's
   for (size_t i = 0; i < start_models.size(); ++i) {
-    auto fit = IdentifyDriftsByLikelihood(run, start_models[i], a_priori, which, which, options);
+    auto& fit = from_starts[i];
     if (!fit.ok()) continue;
     if (i == 0) before = fit->log_likelihood_before;
     iterations += fit->iterations;
@@ -167,10 +182,22 @@ absl::StatusOr<std::vector<std::string>> WidenErrorsToTheLikelihoodRatio(const E
   std::vector<std::string> widened;
   if (fit.identified.empty()) return widened;
   const double at_fit = fit.log_likelihood_after;
-  for (int d = 0; d < kDriftCount; ++d) {
-    const GaussMarkov& estimate = DriftOf(fit.model, d);
+  const auto departs = [&](int d) {
     const GaussMarkov& before = DriftOf(reference, d);
-    if (estimate == before || !(before.sigma > 0.0) || !(before.tau_s > 0.0)) continue;
+    return DriftOf(fit.model, d) != before && before.sigma > 0.0 && before.tau_s > 0.0;
+  };
+  // ℓ with each departing drift back at its reference: independent passes.
+  const auto at_references = numerics::ParallelMap(kDriftCount, [&](std::size_t i) -> absl::StatusOr<double> {
+    const int d = static_cast<int>(i);
+    if (!departs(d)) return absl::CancelledError("at its reference");
+    ErrorModel without = fit.model;
+    DriftOf(without, d) = DriftOf(reference, d);
+    int passes = 0;
+    return LogLikelihoodOf(run, without, passes);
+  });
+  for (int d = 0; d < kDriftCount; ++d) {
+    const GaussMarkov& before = DriftOf(reference, d);
+    if (!departs(d)) continue;
     const std::string prefix = DriftName(d) + ".";
     double wald = 0.0;
     std::vector<ParameterEstimate*> estimates;
@@ -183,9 +210,8 @@ absl::StatusOr<std::vector<std::string>> WidenErrorsToTheLikelihoodRatio(const E
       estimates.push_back(&p);
     }
     if (estimates.empty()) continue;
-    ErrorModel without = fit.model;
-    DriftOf(without, d) = before;
-    const auto at_reference = LogLikelihoodOf(run, without, fit.filter_passes);
+    ++fit.filter_passes;
+    const auto& at_reference = at_references[static_cast<std::size_t>(d)];
     if (!at_reference.ok()) continue;
     // The floor is χ²'s median: below it neither statistic says the estimate
     // departs from the reference, and a test-based SE would only measure how
@@ -218,13 +244,21 @@ absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const Epoch
     }));
   };
   for (;;) {
+    // Each kept drift put back to the model's values: independent passes.
+    const auto without_each = numerics::ParallelMap(kDriftCount, [&](std::size_t i) -> absl::StatusOr<double> {
+      const int d = static_cast<int>(i);
+      if (DriftOf(kept, d) == DriftOf(model, d)) return absl::CancelledError("not kept");
+      ErrorModel without = kept;
+      DriftOf(without, d) = DriftOf(model, d);
+      int passes = 0;
+      return LogLikelihoodOf(run, without, passes);
+    });
     int least = -1;
     double least_margin = 0.0, least_ll = 0.0;
     for (int d = 0; d < kDriftCount; ++d) {
       if (DriftOf(kept, d) == DriftOf(model, d)) continue;
-      ErrorModel without = kept;
-      DriftOf(without, d) = DriftOf(model, d);
-      const auto ll = LogLikelihoodOf(run, without, fit.filter_passes);
+      ++fit.filter_passes;
+      const auto& ll = without_each[static_cast<std::size_t>(d)];
       // A drift the filter cannot run without is worth its parameters.
       if (!ll.ok()) continue;
       const double margin = 2.0 * (kept_ll - *ll) - parameters_of(d) * log_n;
