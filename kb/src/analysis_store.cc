@@ -263,6 +263,21 @@ absl::StatusOr<AnalysisPage> AnalysisStore::List(const AnalysisQuery& query) {
   return page;
 }
 
+absl::StatusOr<QueueStats> AnalysisStore::Queue() {
+  auto db = pool_.Acquire();
+  if (!db.ok()) return db.status();
+  auto rows = (*db)->Exec(
+      "SELECT count(*) FILTER (WHERE state = 'QUEUED'), count(*) FILTER (WHERE state = 'RUNNING'), "
+      "coalesce(extract(epoch FROM now() - min(create_time) FILTER (WHERE state = 'QUEUED')), 0)::float8 "
+      "FROM analyses WHERE state IN ('QUEUED', 'RUNNING')");
+  if (!rows.ok()) return rows.status();
+  QueueStats stats;
+  stats.queued = internal::IntOr0(*rows, 0, 0);
+  stats.running = internal::IntOr0(*rows, 0, 1);
+  stats.oldest_queued_age_s = internal::DoubleOr0(*rows, 0, 2);
+  return stats;
+}
+
 absl::StatusOr<std::optional<ClaimedJob>> AnalysisStore::Claim(const std::string& owner,
                                                                std::chrono::milliseconds lease) {
   auto db = pool_.Acquire();

@@ -50,4 +50,9 @@ ConnectionPool::Lease::~Lease() {
   if (connection_) pool_->Release(std::move(connection_));
 }
 
+ConnectionPool::Usage ConnectionPool::usage() {
+  std::lock_guard lock(mutex_);
+  return Usage{open_, idle_.size(), options_.max_connections};
+}
+
 }  // namespace insdiag::kb

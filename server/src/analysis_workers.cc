@@ -34,8 +34,8 @@ std::string HostName() {
 
 }  // namespace
 
-AnalysisWorkers::AnalysisWorkers(kb::ConnectionPool& pool, Options options)
-    : pool_(pool), options_(options), store_(pool),
+AnalysisWorkers::AnalysisWorkers(kb::ConnectionPool& pool, Options options, Metrics* metrics)
+    : pool_(pool), options_(options), metrics_(metrics), store_(pool),
       owner_prefix_(absl::StrCat(HostName(), ":", getpid())) {}
 
 AnalysisWorkers::~AnalysisWorkers() { Stop(); }
@@ -109,6 +109,13 @@ void AnalysisWorkers::Maintain() {
 }
 
 void AnalysisWorkers::RunJob(const kb::ClaimedJob& job, const std::string& owner) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::string_view outcome = RunJobOutcome(job, owner);
+  const std::chrono::duration<double> elapsed = std::chrono::steady_clock::now() - start;
+  if (metrics_ != nullptr) metrics_->CountAnalysis(outcome, elapsed.count());
+}
+
+std::string_view AnalysisWorkers::RunJobOutcome(const kb::ClaimedJob& job, const std::string& owner) {
   std::atomic<bool> cancelled{false};
   std::atomic<bool> lost{false};
   std::atomic<bool> done{false};
@@ -198,18 +205,20 @@ void AnalysisWorkers::RunJob(const kb::ClaimedJob& job, const std::string& owner
   finish_heartbeat();
   if (lost) {
     std::cerr << "insdiagd: " << owner << ": lost the lease of analyses/" << job.analysis_id << "; result dropped\n";
-    return;
+    return "lost";
   }
   if (cancelled) {
     (void)store_.MarkCancelled(job.analysis_id, owner);
-    return;
+    return "cancelled";
   }
   if (!status.ok()) {
     const bool retry = Retryable(status);
     std::cerr << "insdiagd: " << owner << ": analyses/" << job.analysis_id << " attempt " << job.attempt
               << (retry ? " failed (will retry): " : " failed: ") << status.message() << "\n";
     (void)store_.Fail(job.analysis_id, owner, status, retry);
+    return retry ? "retried" : "failed";
   }
+  return "succeeded";
 }
 
 }  // namespace insdiag::server

@@ -22,6 +22,7 @@
 #include "insdiag/server/rest_gateway.h"
 #include "insdiag/server/run_service.h"
 #include "insdiag/server/web_page.h"
+#include "insdiag/server/metrics.h"
 #include "insdiag/v1/analyses.grpc.pb.h"
 #include "insdiag/v1/fleet.grpc.pb.h"
 #include "insdiag/v1/knowledge.grpc.pb.h"
@@ -34,11 +35,28 @@ namespace insdiag::server {
 // What the gRPC server serves, and the analysis workers.
 struct InsdiagServer::Services {
   Services(kb::ConnectionPool& pool, const Options& options)
-      : access_store(pool), guard(access_store), access(access_store), access_grpc(access, guard), store(pool),
+      : connection_pool(pool), access_store(pool), guard(access_store), access(access_store), access_grpc(access, guard), store(pool),
         runs(store, RunService::Options{options.max_upload_samples}), runs_grpc(runs, guard), analysis_store(pool),
         analyses(analysis_store, AnalysisService::Options{options.watch_poll}), analyses_grpc(analyses, guard),
         knowledge_store(pool), knowledge(knowledge_store), knowledge_grpc(knowledge, guard), fleet_store(pool),
-        fleet_grpc(fleet_store, guard), workers(pool, options.workers) {}
+        fleet_grpc(fleet_store, guard), workers(pool, options.workers, &metrics) {}
+  // What GET /metrics answers: the counters, then the queue and the pool as they are.
+  std::string RenderMetrics() {
+    Metrics::Gauges gauges;
+    if (auto queue = analysis_store.Queue(); queue.ok()) {
+      gauges.queue_known = true;
+      gauges.queued = queue->queued;
+      gauges.running = queue->running;
+      gauges.oldest_queued_age_s = queue->oldest_queued_age_s;
+    }
+    const kb::ConnectionPool::Usage usage = connection_pool.usage();
+    gauges.pool_open = usage.open;
+    gauges.pool_idle = usage.idle;
+    gauges.pool_max = usage.max;
+    return metrics.Render(gauges);
+  }
+  kb::ConnectionPool& connection_pool;
+  Metrics metrics;  // before `workers`, which count into it
   kb::AccessStore access_store;
   AccessGuard guard;
   AccessService access;
@@ -120,6 +138,9 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
   }
   builder.AddListeningPort(absl::StrCat(options.bind_address, ":", options.grpc_port), credentials,
                            &server->grpc_port_);
+  std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> interceptors;
+  interceptors.push_back(MetricsInterceptorFactory(server->services_->metrics));
+  builder.experimental().SetInterceptorCreators(std::move(interceptors));
   builder.RegisterService(&server->services_->runs_grpc);
   builder.RegisterService(&server->services_->analyses_grpc);
   builder.RegisterService(&server->services_->knowledge_grpc);
@@ -134,6 +155,7 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
                                      server->services_->guard.gateway_key());
   if (!gateway.ok()) return gateway.status();
   server->gateway_ = std::move(*gateway);
+  server->gateway_->ServeMetrics([services = server->services_.get()] { return services->RenderMetrics(); });
   if (tls) {
     auto https = std::make_unique<httplib::SSLServer>(options.tls_cert_file.c_str(), options.tls_key_file.c_str());
     if (!https->is_valid()) {
@@ -157,7 +179,16 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
   // CPU for a few hundred kB of JSON or JavaScript, where gzip takes
   // milliseconds. Leaving br out of what the client accepts gets them gzip.
   // (The request is httplib's own non-const object, handed over as const.)
+  // Each request's duration for the metrics: httplib runs the pre-routing
+  // handler and the logger on the request's own thread.
+  static thread_local std::chrono::steady_clock::time_point request_start;
+  server->http_->set_logger([metrics = &server->services_->metrics](const httplib::Request& request,
+                                                                    const httplib::Response& response) {
+    const std::chrono::duration<double> elapsed = std::chrono::steady_clock::now() - request_start;
+    metrics->CountHttpRequest(request.method, response.status, elapsed.count());
+  });
   server->http_->set_pre_routing_handler([](const httplib::Request& request, httplib::Response&) {
+    request_start = std::chrono::steady_clock::now();
     auto& headers = const_cast<httplib::Request&>(request).headers;
     for (auto& [name, value] : headers) {
       if (!absl::EqualsIgnoreCase(name, "Accept-Encoding") || !absl::StrContains(value, "br")) continue;

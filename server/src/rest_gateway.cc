@@ -19,6 +19,7 @@
 #include "insdiag/benchrun/bench_run_csv.h"
 #include "insdiag/server/access_guard.h"
 #include "insdiag/server/status_mapping.h"
+#include "insdiag/v1/access.pb.h"
 #include "insdiag/v1/runs.pb.h"
 
 // Last: httplib.h pulls in <resolv.h>, whose `_res` macro breaks Eigen's headers.
@@ -136,6 +137,7 @@ void RestGateway::Register(httplib::Server& http) {
 
 void RestGateway::Handle(const httplib::Request& request, httplib::Response& response) {
   if (request.method == "GET" && request.path == "/healthz") return Health(response);
+  if (request.method == "GET" && request.path == "/metrics" && render_metrics_) return Metrics(request, response);
   static const auto download = *PathTemplate::Parse("/v1/{name=runs/*}:download");
   if (request.method == "GET") {
     if (auto bindings = download.Match(request.path)) return Download(bindings->at("name"), request, response);
@@ -233,6 +235,18 @@ void RestGateway::Upload(const Route& route, const httplib::Request& request, ht
   const grpc::Status status = call.Finish();
   if (!status.ok()) return SendStatus(response, status);
   SendJson(response, run);
+}
+
+void RestGateway::Metrics(const httplib::Request& request, httplib::Response& response) {
+  // The caller's token, checked as for any read: AccessService.GetCaller.
+  InProcessCall call(stub_, "/insdiag.v1.AccessService/GetCaller", MetadataOf(request));
+  call.Write(v1::GetCallerRequest().SerializeAsString());
+  call.WritesDone();
+  std::string bytes;
+  call.Read(&bytes);
+  if (const auto status = call.Finish(); !status.ok()) return SendStatus(response, status);
+  response.status = 200;
+  response.set_content(render_metrics_(), "text/plain; version=0.0.4; charset=utf-8");
 }
 
 void RestGateway::Download(const std::string& run_name, const httplib::Request& request, httplib::Response& response) {

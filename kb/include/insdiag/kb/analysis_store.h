@@ -64,6 +64,13 @@ struct ReapReport {
   int failed = 0;
 };
 
+// The job queue at one moment, for operations.
+struct QueueStats {
+  std::int64_t queued = 0;
+  std::int64_t running = 0;
+  double oldest_queued_age_s = 0.0;  // 0 when nothing waits
+};
+
 class AnalysisStore {
  public:
   explicit AnalysisStore(ConnectionPool& pool) : pool_(pool) {}
@@ -97,6 +104,9 @@ class AnalysisStore {
   absl::StatusOr<ReapReport> Reap();
 
   absl::StatusOr<v1::Analysis> Cancel(const std::string& analysis_id);
+
+  // How many jobs wait and run, and how long the oldest has waited.
+  absl::StatusOr<QueueStats> Queue();
 
   // The stored series, `chunk_points` points at a time, channel by channel
   // (only `channels` when not empty). FAILED_PRECONDITION before SUCCEEDED.

@@ -49,6 +49,12 @@ class ConnectionPool {
 
   const std::string& database_url() const { return options_.database_url; }
 
+  // Connections open (idle and leased), idle, and the most the pool opens.
+  struct Usage {
+    std::size_t open = 0, idle = 0, max = 0;
+  };
+  Usage usage();
+
  private:
   explicit ConnectionPool(Options options) : options_(std::move(options)) {}
   void Release(std::unique_ptr<Connection> connection);

@@ -19,11 +19,13 @@
 #include <condition_variable>
 #include <mutex>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
 #include "insdiag/kb/analysis_store.h"
 #include "insdiag/kb/connection_pool.h"
+#include "insdiag/server/metrics.h"
 
 namespace insdiag::server {
 
@@ -36,7 +38,8 @@ class AnalysisWorkers {
     std::chrono::milliseconds fleet_refresh{600'000};  // 0: never refresh the fleet views
   };
 
-  AnalysisWorkers(kb::ConnectionPool& pool, Options options);
+  // `metrics` (may be null) counts each job's outcome and duration.
+  AnalysisWorkers(kb::ConnectionPool& pool, Options options, Metrics* metrics = nullptr);
   ~AnalysisWorkers();  // Stop()
   void Start();
   // Stops claiming; waits for running analyses to finish.
@@ -49,10 +52,13 @@ class AnalysisWorkers {
   void Loop(int index);
   void Maintain();
   void RunJob(const kb::ClaimedJob& job, const std::string& owner);
+  // RunJob's outcome: "succeeded", "failed", "retried" (queued again), "cancelled" or "lost".
+  std::string_view RunJobOutcome(const kb::ClaimedJob& job, const std::string& owner);
   bool SleepFor(std::chrono::milliseconds duration);  // false when stopping
 
   kb::ConnectionPool& pool_;
   Options options_;
+  Metrics* metrics_;
   kb::AnalysisStore store_;
   std::string owner_prefix_;
   std::vector<std::thread> threads_;

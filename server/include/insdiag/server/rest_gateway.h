@@ -11,6 +11,8 @@
 //                                  (one UploadRunRequest per line)
 //   GET  /v1/runs/{run}:download   the run as a bench-run CSV file
 //   GET  /healthz                  the gRPC health service's verdict
+//   GET  /metrics                  the Prometheus text (metrics.h), to any
+//                                  valid token (AccessService.GetCaller's rule)
 // Server-streaming methods answer with newline-delimited JSON. Every call
 // carries the Authorization header and the client's address to the services'
 // access guard (access_guard.h); only /healthz and the page need none.
@@ -20,6 +22,7 @@
 #include <grpcpp/generic/generic_stub.h>
 #include <grpcpp/grpcpp.h>
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -51,6 +54,9 @@ class RestGateway {
   // Installs the handlers; the gateway must outlive `http`'s serving.
   void Register(httplib::Server& http);
 
+  // What GET /metrics answers; unset, 404.
+  void ServeMetrics(std::function<std::string()> render) { render_metrics_ = std::move(render); }
+
  private:
   struct Route {
     std::string http_method;
@@ -69,10 +75,12 @@ class RestGateway {
                 const httplib::Request& request, httplib::Response& response);
   void Upload(const Route& route, const httplib::Request& request, httplib::Response& response);
   void Download(const std::string& run_name, const httplib::Request& request, httplib::Response& response);
+  void Metrics(const httplib::Request& request, httplib::Response& response);
   void Health(httplib::Response& response);
 
   grpc::GenericStub stub_;
   std::string gateway_key_;
+  std::function<std::string()> render_metrics_;
   std::vector<Route> routes_;  // custom-verb routes first
 };
 
