@@ -18,6 +18,7 @@
 #include "insdiag/api/run_codec.h"
 #include "insdiag/benchrun/bench_run_csv.h"
 #include "insdiag/server/access_guard.h"
+#include "insdiag/server/openapi.h"
 #include "insdiag/server/status_mapping.h"
 #include "insdiag/v1/access.pb.h"
 #include "insdiag/v1/runs.pb.h"
@@ -80,6 +81,7 @@ absl::StatusOr<std::unique_ptr<RestGateway>> RestGateway::Create(std::shared_ptr
                                                                  std::string gateway_key) {
   std::unique_ptr<RestGateway> gateway(new RestGateway(std::move(channel), std::move(gateway_key)));
   const auto* pool = google::protobuf::DescriptorPool::generated_pool();
+  std::vector<OpenApiOperation> operations;
   for (const auto& service_name : services) {
     const auto* service = pool->FindServiceByName(service_name);
     if (service == nullptr) return absl::InvalidArgumentError(absl::StrCat("unknown service ", service_name));
@@ -105,9 +107,16 @@ absl::StatusOr<std::unique_ptr<RestGateway>> RestGateway::Create(std::shared_ptr
         if (!parsed.ok()) return parsed.status();
         gateway->routes_.push_back(Route{verb, std::move(*parsed), binding->body(), method,
                                          absl::StrCat("/", service->full_name(), "/", method->name())});
+        operations.push_back(OpenApiOperation{verb, path, binding->body(), method});
       }
     }
   }
+  gateway->openapi_json_ = OpenApiDocument(
+      operations,
+      {{"GET", "/v1/runs/{runsId}:download", "the run as a bench-run CSV file", "text/csv", true},
+       {"GET", "/healthz", "SERVING, or 503 while the database does not answer", "text/plain", false},
+       {"GET", "/metrics", "the Prometheus text (docs/API.md, Metrics)", "text/plain", true},
+       {"GET", "/v1/openapi.json", "this document", "application/json", true}});
   // "runs/x:download" must reach the :download route, not GetRun.
   std::stable_sort(gateway->routes_.begin(), gateway->routes_.end(),
                    [](const Route& a, const Route& b) { return a.path.has_verb() && !b.path.has_verb(); });
@@ -138,6 +147,11 @@ void RestGateway::Register(httplib::Server& http) {
 void RestGateway::Handle(const httplib::Request& request, httplib::Response& response) {
   if (request.method == "GET" && request.path == "/healthz") return Health(response);
   if (request.method == "GET" && request.path == "/metrics" && render_metrics_) return Metrics(request, response);
+  if (request.method == "GET" && request.path == "/v1/openapi.json") {
+    if (!AdmitAnyRole(request, response)) return;
+    response.status = 200;
+    return response.set_content(openapi_json_, "application/json");
+  }
   static const auto download = *PathTemplate::Parse("/v1/{name=runs/*}:download");
   if (request.method == "GET") {
     if (auto bindings = download.Match(request.path)) return Download(bindings->at("name"), request, response);
@@ -237,14 +251,21 @@ void RestGateway::Upload(const Route& route, const httplib::Request& request, ht
   SendJson(response, run);
 }
 
-void RestGateway::Metrics(const httplib::Request& request, httplib::Response& response) {
-  // The caller's token, checked as for any read: AccessService.GetCaller.
+bool RestGateway::AdmitAnyRole(const httplib::Request& request, httplib::Response& response) {
   InProcessCall call(stub_, "/insdiag.v1.AccessService/GetCaller", MetadataOf(request));
   call.Write(v1::GetCallerRequest().SerializeAsString());
   call.WritesDone();
   std::string bytes;
   call.Read(&bytes);
-  if (const auto status = call.Finish(); !status.ok()) return SendStatus(response, status);
+  if (const auto status = call.Finish(); !status.ok()) {
+    SendStatus(response, status);
+    return false;
+  }
+  return true;
+}
+
+void RestGateway::Metrics(const httplib::Request& request, httplib::Response& response) {
+  if (!AdmitAnyRole(request, response)) return;
   response.status = 200;
   response.set_content(render_metrics_(), "text/plain; version=0.0.4; charset=utf-8");
 }

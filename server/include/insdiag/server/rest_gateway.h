@@ -13,6 +13,8 @@
 //   GET  /healthz                  the gRPC health service's verdict
 //   GET  /metrics                  the Prometheus text (metrics.h), to any
 //                                  valid token (AccessService.GetCaller's rule)
+//   GET  /v1/openapi.json          this face as an OpenAPI document
+//                                  (openapi.h), to any valid token
 // Server-streaming methods answer with newline-delimited JSON. Every call
 // carries the Authorization header and the client's address to the services'
 // access guard (access_guard.h); only /healthz and the page need none.
@@ -76,11 +78,15 @@ class RestGateway {
   void Upload(const Route& route, const httplib::Request& request, httplib::Response& response);
   void Download(const std::string& run_name, const httplib::Request& request, httplib::Response& response);
   void Metrics(const httplib::Request& request, httplib::Response& response);
+  // Whether the request's token is valid (AccessService.GetCaller admits
+  // it); when not, the refusal is answered.
+  bool AdmitAnyRole(const httplib::Request& request, httplib::Response& response);
   void Health(httplib::Response& response);
 
   grpc::GenericStub stub_;
   std::string gateway_key_;
   std::function<std::string()> render_metrics_;
+  std::string openapi_json_;
   std::vector<Route> routes_;  // custom-verb routes first
 };
 
