@@ -49,7 +49,8 @@ absl::StatusOr<ErrorModel> APrioriModel(const BenchRun& run, const std::optional
                                         const ReferenceAccuracy& reference) {
   const Datasheet& d = run.metadata.datasheet;
   ErrorModel model = nominal.value_or(ErrorModel{});
-  model.reference = reference;
+  // A nominal model that states the bench reference's accuracy keeps it.
+  if (model.reference == ReferenceAccuracy{}) model.reference = reference;
   std::string missing;
   auto take = [&](const std::optional<double>& value, bool has_nominal, const char* key, auto&& assign) {
     if (value.has_value()) {
@@ -192,6 +193,25 @@ absl::StatusOr<pipeline::APriori> ChooseAPrioriModel(const BenchRun& run, const 
   return out;
 }
 
+// Model A as an earlier analysis identified it, with the baseline effects
+// `base` holds that it lacks. What this analysis measures again is left out
+// of the earlier estimates: the dominant constants removed from the run
+// (STATIC) and the filter's estimates of the model's constant effects
+// (FILTER, from model A's pass).
+pipeline::Identification IdentifiedEarlier(const IdentifiedModel& earlier, const ErrorModel& base,
+                                           std::vector<std::string>& notes) {
+  pipeline::Identification out;
+  out.model = earlier.model;
+  for (const ModelEffect& e : base.effects) {
+    if (out.model.FindEffect(e.term) < 0) out.model.effects.push_back(e);
+  }
+  for (const ParameterEstimate& p : earlier.identified) {
+    if (p.method != "STATIC" && p.method != "FILTER") out.identified.push_back(p);
+  }
+  notes.push_back("model A is the model an earlier analysis of this run identified: it was not identified again");
+  return out;
+}
+
 // Model A: the identified model's final pass with the missing-effect scan,
 // or the identification's scanned pass when it is of the same model.
 absl::StatusOr<pipeline::ScannedModel> ScanModelA(const pipeline::RunContext& c, pipeline::Identification& id,
@@ -243,7 +263,9 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
 
   pipeline::Identification identification;
   identification.model = std::move(base);
-  if (options.identify) {
+  if (request.identified_base.has_value()) {
+    identification = IdentifiedEarlier(*request.identified_base, identification.model, notes);
+  } else if (options.identify) {
     auto identified = pipeline::IdentifyModel(context, allan, identification.model, notes);
     if (!identified.ok()) return identified.status();
     identification = *std::move(identified);

@@ -42,6 +42,7 @@ v1::Analysis AnalysisFromRow(const Result& rows, int row) {
   *a.mutable_model() = std::move(*spec.mutable_model());
   if (spec.has_baseline()) *a.mutable_baseline() = std::move(*spec.mutable_baseline());
   a.set_discover(spec.discover());
+  a.set_base_analysis(spec.base_analysis());
   a.set_state(StateOf(rows.Get(row, 2)));
   a.mutable_progress()->set_fraction(internal::DoubleOr0(rows, row, 4));
   a.mutable_progress()->set_stage(rows.String(row, 5));

@@ -1,5 +1,7 @@
 #include "insdiag/api/report_codec.h"
 
+#include <absl/strings/str_cat.h>
+
 #include <cmath>
 #include <string_view>
 
@@ -28,6 +30,10 @@ v1::IdentifiedParameter::Method MethodOf(const std::string& method) {
   if (method == "ML") return v1::IdentifiedParameter::ML;
   if (method == "STATIC") return v1::IdentifiedParameter::STATIC;
   return v1::IdentifiedParameter::METHOD_UNSPECIFIED;
+}
+
+std::string MethodName(v1::IdentifiedParameter::Method method) {
+  return method == v1::IdentifiedParameter::METHOD_UNSPECIFIED ? "" : v1::IdentifiedParameter::Method_Name(method);
 }
 
 // JSON has no NaN or infinity: an unknown uncertainty is written as 0 and the
@@ -202,6 +208,31 @@ void Fill(const engine::DiscoveryStep& in, v1::DiscoveryStep* out) {
 }
 
 }  // namespace
+
+absl::StatusOr<engine::IdentifiedModel> IdentifiedModelOf(const v1::AnalysisReport& report) {
+  engine::IdentifiedModel out;
+  // Every effect states at least one parameter (engine/model/parameters.h), so
+  // the parameters alone give the effects back, in the model's order.
+  for (int i = 0; i < report.model().parameters_size(); ++i) {
+    const v1::ModelParameter& p = report.model().parameters(i);
+    if (auto set = engine::SetParameter(p.name(), p.value(), out.model); !set.ok()) {
+      return absl::InvalidArgumentError(
+          absl::StrCat("report.model.parameters[", i, "] (", p.name(), "): ", set.message()));
+    }
+  }
+  for (const v1::IdentifiedParameter& p : report.identified()) {
+    engine::ParameterEstimate e;
+    e.name = p.name();
+    e.value = p.value();
+    // 0 stands for "none" in the report (JSON has no NaN).
+    if (p.std_error() > 0.0) e.std_error = p.std_error();
+    e.method = MethodName(p.method());
+    e.unit = p.unit();
+    if (p.has_a_priori()) e.a_priori = p.a_priori();
+    out.identified.push_back(std::move(e));
+  }
+  return out;
+}
 
 v1::ErrorModel ToProto(const engine::ErrorModel& model) {
   v1::ErrorModel out;

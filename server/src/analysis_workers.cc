@@ -160,6 +160,13 @@ std::string_view AnalysisWorkers::RunJobOutcome(const kb::ClaimedJob& job, const
     request.add_effects.assign(asked.effects().begin(), asked.effects().end());
     request.baseline_effects.assign(job.spec.baseline().effects().begin(), job.spec.baseline().effects().end());
     request.discover = job.spec.discover();
+    if (!job.spec.base_analysis().empty()) {
+      auto base = store_.Get(job.spec.base_analysis().substr(std::string_view("analyses/").size()), true);
+      if (!base.ok()) return base.status();
+      auto identified = api::IdentifiedModelOf(base->report());
+      if (!identified.ok()) return identified.status();
+      request.identified_base = *std::move(identified);
+    }
     if (!run.metadata.unit_type.empty()) {
       kb::KnowledgeStore knowledge(pool_);
       auto unit_type = knowledge.GetUnitType(absl::StrCat("unitTypes/", run.metadata.unit_type));

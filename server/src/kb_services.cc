@@ -7,6 +7,8 @@
 #include <map>
 #include <thread>
 
+#include "insdiag/api/report_codec.h"
+#include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/server/display_series.h"
 
 namespace insdiag::server {
@@ -42,7 +44,45 @@ absl::StatusOr<v1::Analysis> AnalysisService::CreateAnalysis(const v1::CreateAna
   *spec.mutable_model() = request.analysis().model();
   if (request.analysis().has_baseline()) *spec.mutable_baseline() = request.analysis().baseline();
   spec.set_discover(request.analysis().discover());
+  if (!request.analysis().base_analysis().empty()) {
+    if (auto checked = CheckBaseAnalysis(request.analysis(), spec); !checked.ok()) return checked;
+  }
   return store_.Create(run.substr(prefix.size()), spec, request.request_id());
+}
+
+// An analysis that starts from an earlier one's identified model: the earlier
+// one succeeded on the same run, and the baseline is (within) its model.
+absl::Status AnalysisService::CheckBaseAnalysis(const v1::Analysis& asked, v1::AnalysisSpec& spec) {
+  auto id = AnalysisId(asked.base_analysis(), "analysis.base_analysis");
+  if (!id.ok()) return id.status();
+  auto base = store_.Get(*id, true);
+  if (!base.ok()) return base.status();
+  if (base->run() != asked.run()) {
+    return absl::InvalidArgumentError(absl::StrCat("analysis.base_analysis: ", asked.base_analysis(), " analysed ",
+                                                   base->run(), ", not ", asked.run()));
+  }
+  if (base->state() != v1::Analysis::SUCCEEDED) {
+    return absl::FailedPreconditionError(absl::StrCat("analysis.base_analysis: ", asked.base_analysis(),
+                                                      " has not succeeded: it has no identified model to start from"));
+  }
+  auto identified = api::IdentifiedModelOf(base->report());
+  if (!identified.ok()) return identified.status();
+  for (int i = 0; i < spec.baseline().effects_size(); ++i) {
+    const std::string& effect = spec.baseline().effects(i);
+    auto terms = engine::ParseEffectSelector(effect.substr(0, effect.find('@')));
+    const bool covered = terms.ok() && std::all_of(terms->begin(), terms->end(), [&](const engine::EffectTerm& t) {
+      return identified->model.FindEffect(t) >= 0;
+    });
+    if (!covered) {
+      return absl::InvalidArgumentError(absl::StrCat("analysis.baseline.effects[", i, "]: '", effect, "' is not in ",
+                                                     asked.base_analysis(), "'s model"));
+    }
+  }
+  if (spec.baseline().effects_size() == 0) {
+    *spec.mutable_baseline()->mutable_effects() = base->report().model().effects();
+  }
+  spec.set_base_analysis(asked.base_analysis());
+  return absl::OkStatus();
 }
 
 absl::StatusOr<v1::Analysis> AnalysisService::GetAnalysis(const v1::GetAnalysisRequest& request) {

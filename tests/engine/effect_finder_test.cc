@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "insdiag/api/report_codec.h"
 #include "insdiag/api/unit_types.h"
 #include "insdiag/engine/analysis.h"
 #include "insdiag/engine/model/effect_catalogue.h"
@@ -437,6 +438,48 @@ TEST(BaseReport, IsTheReportOfTheAnalysisWithoutTheAddedEffects) {
   for (size_t i = 0; i < a.identified.size(); ++i) EXPECT_EQ(a.identified[i].value, b.identified[i].value);
   // The request's own report is model B's, not A's.
   EXPECT_NE(added->report.log_likelihood, b.log_likelihood);
+}
+
+// Adding an effect to the model an earlier analysis identified, carried
+// through its report as the server and `insdiag analyze --base` carry it,
+// reports what the whole analysis with the effect added reports: model A's
+// identification is the same, so both passes are.
+TEST(IncrementalAdd, ReportsWhatTheWholeAnalysisReports) {
+  const auto sim = testing::SimulateOrDie(testing::NavigationGradeUnit(), testing::ShortTurnsProfile(300.0, 900.0),
+                                          kFindRate10Hz, 32);
+  AnalysisRequest request;
+  request.nominal = NominalModel();
+  auto alone = Analyze(sim.run, request, AnalysisOptions{});
+  ASSERT_TRUE(alone.ok()) << alone.status();
+  request.add_effects = {"gyro_scale_factor.z"};
+  auto whole = Analyze(sim.run, request, AnalysisOptions{});
+  ASSERT_TRUE(whole.ok()) << whole.status();
+
+  auto earlier = api::IdentifiedModelOf(api::ToProto(alone->report, alone->model));
+  ASSERT_TRUE(earlier.ok()) << earlier.status();
+  EXPECT_TRUE(earlier->model == alone->model) << "the report's model is not the model the analysis identified";
+  request.identified_base = *earlier;
+  auto incremental = Analyze(sim.run, request, AnalysisOptions{});
+  ASSERT_TRUE(incremental.ok()) << incremental.status();
+
+  const AnalysisReport& b = whole->report;
+  const AnalysisReport& b_again = incremental->report;
+  EXPECT_TRUE(incremental->model == whole->model);
+  EXPECT_EQ(b_again.log_likelihood, b.log_likelihood);
+  EXPECT_EQ(b_again.nis_mean, b.nis_mean);
+  ASSERT_TRUE(b_again.comparison.has_value() && b.comparison.has_value());
+  EXPECT_EQ(b_again.comparison->log_likelihood_before, b.comparison->log_likelihood_before);
+  EXPECT_EQ(b_again.comparison->predicted_lr, b.comparison->predicted_lr);
+  ASSERT_EQ(b_again.effect_candidates.size(), b.effect_candidates.size());
+  for (size_t i = 0; i < b.effect_candidates.size(); ++i) {
+    EXPECT_EQ(b_again.effect_candidates[i].name, b.effect_candidates[i].name);
+    EXPECT_EQ(b_again.effect_candidates[i].statistic, b.effect_candidates[i].statistic);
+  }
+  ASSERT_EQ(b_again.identified.size(), b.identified.size());
+  for (size_t i = 0; i < b.identified.size(); ++i) {
+    EXPECT_EQ(b_again.identified[i].name, b.identified[i].name);
+    EXPECT_EQ(b_again.identified[i].value, b.identified[i].value) << b.identified[i].name;
+  }
 }
 
 // The ranking lists every catalogue effect the model lacks, each once — the

@@ -282,6 +282,72 @@ TEST_F(AnalysesTest, DisplaySeriesIsTheStoredSeriesDecimatedToThePlotsWidth) {
   EXPECT_EQ(backward->status, 400);
 }
 
+// The page's Add: an analysis that starts from an earlier one's identified
+// model runs model A's and model B's passes only; model A is the earlier
+// analysis's to the bit.
+TEST_F(AnalysesTest, AnAddStartsFromTheEarlierAnalysisIdentifiedModel) {
+  const std::string run = Upload(SimulatedRun("INS-E2E-ADD", "static", 10.0));
+  const v1::Analysis a = Create(run);
+  const auto a_seen = Watch(a.name());
+  ASSERT_FALSE(a_seen.empty());
+  ASSERT_EQ(a_seen.back().state(), v1::Analysis::SUCCEEDED) << a_seen.back().error().message();
+  const v1::AnalysisReport& a_report = a_seen.back().report();
+
+  grpc::ClientContext context;
+  v1::CreateAnalysisRequest request;
+  request.mutable_analysis()->set_run(run);
+  request.mutable_analysis()->set_base_analysis(a.name());
+  request.mutable_analysis()->mutable_model()->add_effects("acc_scale_factor.z");
+  v1::Analysis b;
+  const grpc::Status status = analyses_->CreateAnalysis(&context, request, &b);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(b.base_analysis(), a.name());
+  EXPECT_THAT(std::vector<std::string>(b.baseline().effects().begin(), b.baseline().effects().end()),
+              ::testing::ElementsAreArray(a_report.model().effects()));
+  const auto b_seen = Watch(b.name());
+  ASSERT_FALSE(b_seen.empty());
+  ASSERT_EQ(b_seen.back().state(), v1::Analysis::SUCCEEDED) << b_seen.back().error().message();
+  const v1::AnalysisReport& b_report = b_seen.back().report();
+  EXPECT_THAT(b_report.notes(), ::testing::Contains(HasSubstr("not identified again")));
+  ASSERT_TRUE(b_report.has_comparison());
+  EXPECT_EQ(b_report.comparison().log_likelihood_before(), a_report.log_likelihood());
+  EXPECT_THAT(b_report.model().effects(), ::testing::Contains("acc_scale_factor.z"));
+
+  // Refused, naming the field: another run's analysis, one that has not
+  // succeeded, a baseline outside its model, a name that is no analysis's.
+  const std::string other_run = Upload(SimulatedRun("INS-E2E-ADD-2", "static", 10.0));
+  const v1::Analysis queued = Create(other_run);
+  const auto refusal = [&](const std::string& on_run, const std::string& base, const std::string& baseline) {
+    grpc::ClientContext c;
+    v1::CreateAnalysisRequest r;
+    r.mutable_analysis()->set_run(on_run);
+    r.mutable_analysis()->set_base_analysis(base);
+    if (!baseline.empty()) r.mutable_analysis()->mutable_baseline()->add_effects(baseline);
+    v1::Analysis ignored;
+    return analyses_->CreateAnalysis(&c, r, &ignored);
+  };
+  grpc::Status refused = refusal(other_run, a.name(), "");
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(refused.error_message(), HasSubstr("analysis.base_analysis"));
+  refused = refusal(other_run, queued.name(), "");
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << refused.error_message();
+  EXPECT_THAT(refused.error_message(), HasSubstr("has not succeeded"));
+  refused = refusal(run, a.name(), "gyro_scale_factor");
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(refused.error_message(), HasSubstr("analysis.baseline.effects[0]"));
+  refused = refusal(run, "runs/x", "");
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(refused.error_message(), HasSubstr("analysis.base_analysis"));
+  // Through REST, with the JSON name.
+  auto rest = http().Post("/v1/analyses",
+                          "{\"run\":\"" + run + "\",\"baseAnalysis\":\"" + a.name() +
+                              "\",\"model\":{\"effects\":[\"acc_scale_factor.y\"]}}",
+                          "application/json");
+  ASSERT_TRUE(rest);
+  EXPECT_EQ(rest->status, 200) << rest->body;
+  EXPECT_THAT(rest->body, HasSubstr("\"baseAnalysis\":\"" + a.name() + "\""));
+}
+
 TEST_F(AnalysesTest, AHealthyUnitsTopHypothesisIsHealthy) {
   const v1::Diagnosis d = DiagnoseRun(SimulatedRun("INS-E2E-2", "static", 10.0));
   ASSERT_GT(d.candidates_size(), 0);

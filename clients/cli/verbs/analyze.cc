@@ -1,8 +1,9 @@
-// insdiag analyze RUN.csv [--add EFFECT]... [--json] [--series OUT.csv]
+// insdiag analyze RUN.csv [--add EFFECT]... [--base REPORT.json] [--json] [--series OUT.csv]
 // Runs the engine locally on a bench-run file, no server needed.
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 #include <ostream>
 
 #include "insdiag/api/json.h"
@@ -31,6 +32,9 @@ class AnalyzeVerb final : public Verb {
     options.Repeated("--baseline", &baseline_,
                      "Start from a model with this effect (term or family) in it: identification and the "
                      "scan run on that model; repeatable");
+    options.Option("--base", &base_,
+                   "Start from the model an earlier analysis of the same run identified: its --json report. "
+                   "Identification is not run again, so --add costs two filter passes");
     options.Flag("--discover", &discover_,
                  "Walk the loop: add the most significant missing effect, re-run, repeat until nothing is "
                  "significant; print the path");
@@ -58,6 +62,14 @@ class AnalyzeVerb final : public Verb {
     if (discover_ && !add_.empty()) {
       err << "insdiag analyze: --discover chooses the effects itself; use --baseline to start from yours\n";
       return kExitUsage;
+    }
+    if (!base_.empty()) {
+      auto base = ReadIdentifiedModel(base_);
+      if (!base.ok()) {
+        err << "insdiag analyze: --base " << base_ << ": " << base.status().message() << "\n";
+        return kExitRefused;
+      }
+      request.identified_base = *std::move(base);
     }
     const std::string type = unit_type_.empty() ? run->metadata.unit_type : unit_type_;
     if (!type.empty()) {
@@ -125,6 +137,17 @@ class AnalyzeVerb final : public Verb {
  private:
   std::string file_;
   std::vector<std::string> add_;
+  // The identified model of an `insdiag analyze --json` report.
+  static absl::StatusOr<engine::IdentifiedModel> ReadIdentifiedModel(const std::string& path) {
+    std::ifstream file(path);
+    std::ostringstream text;
+    if (!file || !(text << file.rdbuf())) return absl::NotFoundError("cannot read the file");
+    v1::AnalysisReport report;
+    if (auto parsed = api::FromJson(text.str(), &report); !parsed.ok()) return parsed;
+    return api::IdentifiedModelOf(report);
+  }
+
+  std::string base_;
   std::vector<std::string> baseline_;
   bool discover_ = false;
   std::string acf_;

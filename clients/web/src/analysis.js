@@ -207,7 +207,7 @@ function loopSection(analysis, steps) {
     comparisonBlock(report.comparison),
     h('div.row', { style: 'margin-top:10px' },
       h('button.secondary#discover', {
-        onclick: () => startAnalysis(analysis.run, analysis.model.effects, analysis.model.effects, true),
+        onclick: () => startAnalysis(analysis.run, analysis.model.effects, analysis.model.effects, true, analysis.name),
       }, 'Discover: add effects until none is significant'),
       h('span.hint', 'runs the whole loop on the server and lists its path')));
 }
@@ -455,7 +455,7 @@ function addByName(analysis) {
       return;
     }
     try {
-      await startAnalysis(analysis.run, [...analysis.model.effects, name], analysis.model.effects);
+      await startAnalysis(analysis.run, [...analysis.model.effects, name], analysis.model.effects, false, analysis.name);
     } catch (error) {
       message.textContent = error.message;
     }
@@ -505,7 +505,8 @@ function candidatesSection(analysis, state, channelsView) {
         event.target.disabled = true;
         // A fault goes in at the onset the scan estimated.
         const added = c.onsetS !== undefined ? `${c.name}@${num(c.onsetS)}` : c.name;
-        await startAnalysis(analysis.run, [...analysis.model.effects, added], analysis.model.effects);
+        await startAnalysis(analysis.run, [...analysis.model.effects, added], analysis.model.effects, false,
+          analysis.name);
       },
     }, 'Add')));
     return row;

@@ -7,9 +7,15 @@ export function navigate(hash) {
   else window.location.hash = hash;
 }
 
-/** Queues an analysis of `run` with `effects` over the model `baseline` and opens it. */
-export async function startAnalysis(run, effects, baseline, discover = false) {
-  const analysis = await api.createAnalysis({ run, model: { effects }, baseline: { effects: baseline }, discover });
+/**
+ * Queues an analysis of `run` with `effects` over the model `baseline` and opens it.
+ * With `baseAnalysis` (an analysis of the same run that succeeded), model A is the
+ * model it identified, and the server does not identify it again.
+ */
+export async function startAnalysis(run, effects, baseline, discover = false, baseAnalysis = '') {
+  const request = { run, model: { effects }, baseline: { effects: baseline }, discover };
+  if (baseAnalysis) request.baseAnalysis = baseAnalysis;
+  const analysis = await api.createAnalysis(request);
   navigate(`#/${analysis.name}`);
   return analysis;
 }

@@ -41,6 +41,7 @@ let runCsv;
 let baseAnalysisUrl;
 let adminToken;
 const foreignRequests = []; // anything the page asked of another origin
+const createRequests = []; // the bodies of the analyses the page created
 const firstStates = new Map(); // analysis name → its state in the page's first GET of it
 const watched = new Set(); // analyses whose :watch stream the page opened
 
@@ -112,6 +113,11 @@ before(async () => {
   page.on('request', (request) => {
     const watch = new URL(request.url()).pathname.match(/^\/v1\/(analyses\/[^/:]+):watch$/);
     if (watch) watched.add(watch[1]);
+  });
+  page.on('request', (request) => {
+    if (request.method() === 'POST' && new URL(request.url()).pathname === '/v1/analyses') {
+      createRequests.push(JSON.parse(request.postData() || '{}'));
+    }
   });
   page.on('response', async (response) => {
     const get = new URL(response.url()).pathname.match(/^\/v1\/(analyses\/[^/:]+)$/);
@@ -246,6 +252,8 @@ test('the hidden effect is the top missing effect, and its Add button re-runs wi
  */
 async function expectLoopStep(fromUrl, shot) {
   await page.waitForURL((url) => url.toString() !== fromUrl && /#\/analyses\//.test(url.toString()));
+  // The Add starts from the analysis it was made on: its model is not identified again.
+  assert.equal(createRequests.at(-1)?.baseAnalysis, `analyses/${fromUrl.split('#/analyses/')[1]}`);
   await page.locator('#progress, #verdict').first().waitFor();
   if (await page.locator('#progress').count()) await screenshot(`${shot}-running`);
   await page.locator('#verdict').waitFor({ timeout: ANALYSIS_TIMEOUT_MS });

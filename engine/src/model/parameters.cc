@@ -18,6 +18,50 @@ struct BaseName {
 constexpr BaseName kTriads[] = {{&ErrorModel::gyro, "gyro", Sensor::kGyro},
                                 {&ErrorModel::acc, "acc", Sensor::kAccelerometer}};
 
+// The bench reference's accuracy: identification may widen it (retarget.h).
+struct ReferenceName {
+  double ReferenceAccuracy::*sigma;
+  const char* name;
+  const char* unit;
+};
+constexpr ReferenceName kReferences[] = {
+    {&ReferenceAccuracy::attitude_sigma_rad, "reference.attitude_sigma", "rad"},
+    {&ReferenceAccuracy::position_sigma_m, "reference.position_sigma", "m"},
+    {&ReferenceAccuracy::velocity_sigma_mps, "reference.velocity_sigma", "m/s"},
+};
+
+// Sets `field` ("" or "prior_sigma", "onset", "density", "sigma", "tau",
+// "period") of parameter `parameter` of effect `e`; false when the effect's
+// family has no such field.
+bool SetEffectField(const std::string& field, int parameter, double value, ModelEffect& e) {
+  switch (e.term.family->process) {
+    case RandomProcess::kNone:
+      if (field == "onset" && e.term.family->kind == EffectKind::kFault) {
+        e.onset_s = value;
+        return true;
+      }
+      if (!(field.empty() || field == "prior_sigma")) return false;
+      e.prior_sigma[static_cast<size_t>(parameter)] = std::abs(value);
+      return true;
+    case RandomProcess::kRandomWalk:
+      if (field != "density") return false;
+      e.random_walk_density = value;
+      return true;
+    case RandomProcess::kSecondOrderMarkov:
+      if (field == "sigma") {
+        e.second_order_sigma = value;
+      } else if (field == "tau" && value > 0.0) {
+        e.second_order_alpha_per_s = 1.0 / value;
+      } else if (field == "period" && value > 0.0) {
+        e.second_order_beta_rad_s = 2.0 * std::numbers::pi / value;
+      } else {
+        return false;
+      }
+      return true;
+  }
+  return false;
+}
+
 bool Split(const std::string& name, std::string* head, std::string* tail) {
   const size_t dot = name.rfind('.');
   if (dot == std::string::npos) return false;
@@ -46,6 +90,7 @@ std::vector<NamedParameter> ParametersOf(const ErrorModel& model) {
       out.push_back({p + "_quantization." + kAxes[i], t.quantization[i], b.sensor == Sensor::kGyro ? "rad" : "m/s"});
     }
   }
+  for (const ReferenceName& r : kReferences) out.push_back({r.name, model.reference.*(r.sigma), r.unit});
   for (const ModelEffect& e : model.effects) {
     const EffectFamily& f = *e.term.family;
     const std::string unit(f.unit);
@@ -55,6 +100,7 @@ std::vector<NamedParameter> ParametersOf(const ErrorModel& model) {
           // A constant effect in a model is a prior; its σ is what the model states.
           out.push_back({e.term.ParameterName(p) + ".prior_sigma", e.prior_sigma[static_cast<size_t>(p)], unit});
         }
+        if (f.kind == EffectKind::kFault) out.push_back({e.term.Name() + ".onset", e.onset_s, "s"});
         break;
       case RandomProcess::kRandomWalk:
         out.push_back({e.term.Name() + ".density", e.random_walk_density, unit});
@@ -105,10 +151,17 @@ absl::Status SetParameter(const std::string& name, double value, ErrorModel& mod
       }
     }
   }
-  // An effect: "<term>", "<term>.sin|cos", "<term>.prior_sigma", "<term>.density|sigma|tau|period".
+  for (const ReferenceName& r : kReferences) {
+    if (name != r.name) continue;
+    if (!(value > 0.0)) return absl::InvalidArgumentError("'" + name + "' must be positive");
+    model.reference.*(r.sigma) = value;
+    return absl::OkStatus();
+  }
+  // An effect: "<term>", "<term>.sin|cos", "<term>.prior_sigma", "<term>.onset",
+  // "<term>.density|sigma|tau|period".
   std::string term_name = name;
   std::string field;
-  for (const char* suffix : {".prior_sigma", ".density", ".sigma", ".tau", ".period"}) {
+  for (const char* suffix : {".prior_sigma", ".onset", ".density", ".sigma", ".tau", ".period"}) {
     const std::string s = suffix;
     if (term_name.size() > s.size() && term_name.compare(term_name.size() - s.size(), s.size(), s) == 0) {
       field = s.substr(1);
@@ -129,36 +182,18 @@ absl::Status SetParameter(const std::string& name, double value, ErrorModel& mod
     return absl::InvalidArgumentError("unknown model parameter '" + name + "'");
   }
   const EffectTerm term = terms->front();
-  int index = model.FindEffect(term);
-  if (index < 0) {
-    ModelEffect e;
-    e.term = term;
+  // Set on a copy: a refused parameter leaves the model as it was.
+  const int index = model.FindEffect(term);
+  ModelEffect e = index >= 0 ? model.effects[static_cast<size_t>(index)] : ModelEffect{.term = term};
+  if (!SetEffectField(field, parameter, value, e)) {
+    return absl::InvalidArgumentError("'" + name + "' is not a parameter of " + term.Name());
+  }
+  if (index >= 0) {
+    model.effects[static_cast<size_t>(index)] = e;
+  } else {
     model.effects.push_back(e);
-    index = static_cast<int>(model.effects.size()) - 1;
   }
-  ModelEffect& e = model.effects[static_cast<size_t>(index)];
-  switch (term.family->process) {
-    case RandomProcess::kNone:
-      if (!(field.empty() || field == "prior_sigma")) break;
-      e.prior_sigma[static_cast<size_t>(parameter)] = std::abs(value);
-      return absl::OkStatus();
-    case RandomProcess::kRandomWalk:
-      if (field != "density") break;
-      e.random_walk_density = value;
-      return absl::OkStatus();
-    case RandomProcess::kSecondOrderMarkov:
-      if (field == "sigma") {
-        e.second_order_sigma = value;
-      } else if (field == "tau" && value > 0.0) {
-        e.second_order_alpha_per_s = 1.0 / value;
-      } else if (field == "period" && value > 0.0) {
-        e.second_order_beta_rad_s = 2.0 * std::numbers::pi / value;
-      } else {
-        break;
-      }
-      return absl::OkStatus();
-  }
-  return absl::InvalidArgumentError("'" + name + "' is not a parameter of " + term.Name());
+  return absl::OkStatus();
 }
 
 }  // namespace insdiag::engine

@@ -9,7 +9,8 @@
 //      (the knowledge base's unit type), else the Allan fit; dominant
 //      constant biases removed; baseline effects added
 //   4. the run condensed to its update epochs (every later pass filters them)
-//   5. identification (analysis/identification.h): Allan noise, terms left at
+//   5. identification (analysis/identification.h), unless the request brings
+//      model A already identified: Allan noise, terms left at
 //      bounds re-tuned, then retargeting [forward filter → smoother →
 //      correlation processing of the drifts → re-tuned model] until the
 //      parameters settle, the drifts' final values by likelihood; on the
@@ -109,6 +110,14 @@ struct AnalysisOptions {
   absl::Status Validate() const;
 };
 
+// A model an earlier analysis of the same run identified, with what that
+// analysis reported of the identification (its report's model and
+// `identified`).
+struct IdentifiedModel {
+  ErrorModel model;
+  std::vector<ParameterEstimate> identified;
+};
+
 struct AnalysisRequest {
   // The unit type's nominal model from the knowledge base, if any.
   std::optional<ErrorModel> nominal;
@@ -118,6 +127,11 @@ struct AnalysisRequest {
   std::vector<std::string> add_effects;
   // Walk the loop from model A (ignores add_effects).
   bool discover = false;
+  // Model A as an earlier analysis of this run identified it (with the
+  // baseline effects in it): stage 5 is skipped and model A's pass starts
+  // from it, so that adding an effect costs model A's and model B's passes
+  // only. Unset: model A is identified here.
+  std::optional<IdentifiedModel> identified_base;
 };
 
 struct Analysis {

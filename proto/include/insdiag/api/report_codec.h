@@ -5,6 +5,7 @@
 
 #include <absl/status/statusor.h>
 
+#include "insdiag/engine/analysis.h"
 #include "insdiag/engine/model/error_model.h"
 #include "insdiag/engine/report.h"
 #include "insdiag/v1/analyses.pb.h"
@@ -13,6 +14,12 @@ namespace insdiag::api {
 
 v1::AnalysisReport ToProto(const engine::AnalysisReport& report, const engine::ErrorModel& model);
 v1::ErrorModel ToProto(const engine::ErrorModel& model);
+
+// The model a report was computed with, as that analysis identified it, and
+// the parameters it identified: what a later analysis of the same run starts
+// from instead of identifying again. Refuses a parameter the engine does not
+// know, naming it.
+absl::StatusOr<engine::IdentifiedModel> IdentifiedModelOf(const v1::AnalysisReport& report);
 
 // The series of one analysis as points, channel by channel and epoch by epoch.
 v1::ResidualSeriesChunk ToProto(const engine::AnalysisSeries& series);

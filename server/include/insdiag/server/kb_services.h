@@ -45,6 +45,8 @@ class AnalysisService {
   absl::StatusOr<v1::DisplaySeries> ReadDisplaySeries(const v1::ReadDisplaySeriesRequest& request);
 
  private:
+  absl::Status CheckBaseAnalysis(const v1::Analysis& asked, v1::AnalysisSpec& spec);
+
   kb::AnalysisStore& store_;
   Options options_;
 };

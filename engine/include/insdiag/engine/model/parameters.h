@@ -5,7 +5,11 @@
 //   acc_bias_gm.{x,y,z}.sigma [m/s²]     acc_bias_gm.{x,y,z}.tau [s]
 //   gyro_arw.{x,y,z} [rad/√s]            acc_vrw.{x,y,z} [m/s/√s]
 //   gyro_quantization.{x,y,z} [rad]      acc_quantization.{x,y,z} [m/s]
+//   reference.attitude_sigma [rad]       reference.position_sigma [m]
+//   reference.velocity_sigma [m/s]       the bench reference's accuracy
 //   <effect term>            constant effects: the parameter value (yaw harmonics: ….sin, ….cos)
+//   <effect term>.prior_sigma            the same, as the model states it: its prior σ
+//   <effect term>.onset [s]  faults (bias steps and ramps): the onset in run time
 //   <effect term>.density    bias_rw: K [unit/√s]
 //   <effect term>.sigma / .tau / .period   bias_second_order: σ, 1/α [s], 2π/β [s]
 #pragma once
@@ -25,7 +29,9 @@ struct NamedParameter {
   std::string unit;
 };
 
-// The base model's parameters and each effect's, in a stable order.
+// The base model's parameters, the reference's accuracy and each effect's, in
+// a stable order: setting them all on an empty model gives `model` back (a
+// second-order term's α and β to rounding, as they are stated as τ and period).
 std::vector<NamedParameter> ParametersOf(const ErrorModel& model);
 
 // The SI unit of a named parameter ("rad/s", "s", …), or "" when unknown.
