@@ -2,6 +2,7 @@
 // outputs are explicit; the stages live in engine/src/analysis/.
 #include "insdiag/engine/analysis.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <optional>
@@ -212,10 +213,23 @@ pipeline::Identification IdentifiedEarlier(const IdentifiedModel& earlier, const
   return out;
 }
 
+// Whether model B needs model A's structure tests: to take a walk or a
+// second-order pair with what the tests fitted, or to walk the loop. Model A
+// from an earlier analysis has them in that analysis's report otherwise.
+bool NeedsStructureTestsOfModelA(const AnalysisRequest& request) {
+  if (!request.identified_base.has_value() || request.discover) return true;
+  return std::any_of(request.add_effects.begin(), request.add_effects.end(), [](const std::string& selector) {
+    auto terms = ParseEffectSelector(selector.substr(0, selector.find('@')));
+    return !terms.ok() || std::any_of(terms->begin(), terms->end(), [](const EffectTerm& t) {
+      return t.family->kind == EffectKind::kRandom;
+    });
+  });
+}
+
 // Model A: the identified model's final pass with the missing-effect scan,
 // or the identification's scanned pass when it is of the same model.
-absl::StatusOr<pipeline::ScannedModel> ScanModelA(const pipeline::RunContext& c, pipeline::Identification& id,
-                                                  std::vector<std::string>& notes) {
+absl::StatusOr<pipeline::ScannedModel> ScanModelA(const pipeline::RunContext& c, const AnalysisRequest& request,
+                                                  pipeline::Identification& id, std::vector<std::string>& notes) {
   Progress(c.options, 0.65, "missing-effect scan");
   if (id.scanned.has_value() && id.scanned->pass.model == id.model) {
     notes.insert(notes.end(), id.scanned->notes.begin(), id.scanned->notes.end());
@@ -223,8 +237,15 @@ absl::StatusOr<pipeline::ScannedModel> ScanModelA(const pipeline::RunContext& c,
   }
   auto pass = pipeline::RunPass(c.run, c.epochs, id.model, c.spikes, c.options, /*with_scan=*/true);
   if (!pass.ok()) return pass.status();
+  AnalysisOptions scan_options = c.options;
+  if (!NeedsStructureTestsOfModelA(request)) {
+    scan_options.test_walks_by_likelihood = false;
+    scan_options.test_second_orders_by_likelihood = false;
+    notes.push_back("model A's likelihood tests of walks and second-order drifts were not run again: the earlier "
+                    "analysis's report has them");
+  }
   pipeline::ScannedModel a;
-  a.found = pipeline::FindMissingEffects(c.run, c.epochs, *pass, c.a_priori.model, c.spikes, c.options, &notes);
+  a.found = pipeline::FindMissingEffects(c.run, c.epochs, *pass, c.a_priori.model, c.spikes, scan_options, &notes);
   a.pass = *std::move(pass);
   return a;
 }
@@ -271,7 +292,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
     identification = *std::move(identified);
   }
 
-  auto a = ScanModelA(context, identification, notes);
+  auto a = ScanModelA(context, request, identification, notes);
   if (!a.ok()) return a.status();
   std::vector<ParameterEstimate> identified = std::move(identification.identified);
   identified.insert(identified.begin(), removed_constants.begin(), removed_constants.end());
