@@ -31,7 +31,8 @@ elseif(INSDIAG_SANITIZE)
 endif()
 
 # Fails the configure step when `target` links (directly or transitively through
-# first-party targets) any of `forbidden`: the engine must stay a pure library.
+# first-party targets) any of `forbidden`: the engine must stay a pure library,
+# the server must not carry the fleet generator.
 function(insdiag_forbid_links target)
   set(pending ${target})
   set(seen "")
@@ -43,7 +44,7 @@ function(insdiag_forbid_links target)
     list(APPEND seen ${current})
     foreach(forbidden IN LISTS ARGN)
       if(current MATCHES "${forbidden}")
-        message(FATAL_ERROR "${target} must not link ${current} (layering rule: engine links no libpq, gRPC or protobuf)")
+        message(FATAL_ERROR "${target} must not link ${current} (layering rule: see the layers in the root CMakeLists.txt)")
       endif()
     endforeach()
     if(TARGET ${current})

@@ -1,11 +1,11 @@
-#include "copy_text.h"
+#include "insdiag/kb/copy_text.h"
 
 #include <charconv>
 #include <cmath>
 
 #include "store_util.h"
 
-namespace insdiag::kb::internal {
+namespace insdiag::kb {
 namespace {
 
 constexpr char kHex[] = "0123456789abcdef";
@@ -15,17 +15,8 @@ void AppendHex(std::uint64_t value, int digits, std::string& out) {
   for (int i = digits - 1; i >= 0; --i) out.push_back(kHex[(value >> (4 * i)) & 0xfU]);
 }
 
-// Days since 1970-01-01 of a civil date and back (H. Hinnant, "chrono-
-// compatible low-level date algorithms", days_from_civil / civil_from_days).
-std::int64_t DaysFromCivil(int y, unsigned m, unsigned d) {
-  y -= m <= 2 ? 1 : 0;
-  const std::int64_t era = (y >= 0 ? y : y - 399) / 400;
-  const unsigned yoe = static_cast<unsigned>(y - era * 400);
-  const unsigned doy = (153 * (m > 2 ? m - 3 : m + 9) + 2) / 5 + d - 1;
-  const unsigned doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
-  return era * 146097 + static_cast<std::int64_t>(doe) - 719468;
-}
-
+// The civil date of a day count since 1970-01-01 (H. Hinnant, "chrono-
+// compatible low-level date algorithms", civil_from_days).
 void CivilFromDays(std::int64_t z, int& y, unsigned& m, unsigned& d) {
   z += 719468;
   const std::int64_t era = (z >= 0 ? z : z - 146096) / 146097;
@@ -93,19 +84,6 @@ std::string TimestampTextOfMicros(std::int64_t micros) {
   AppendDigits(rest % 1'000'000, 6, out);
   out += "+00";
   return out;
-}
-
-YearMonth YearMonthOf(std::int64_t micros) {
-  std::int64_t days = micros / kMicrosPerDay;
-  if (micros % kMicrosPerDay < 0) --days;
-  int y = 0;
-  unsigned m = 0, d = 0;
-  CivilFromDays(days, y, m, d);
-  return {y, static_cast<int>(m)};
-}
-
-std::int64_t MicrosOfMonthStart(YearMonth month) {
-  return DaysFromCivil(month.year, static_cast<unsigned>(month.month), 1) * kMicrosPerDay;
 }
 
 void CopyRow::Separate() {
@@ -178,11 +156,11 @@ CopyRow& CopyRow::Bytes(std::string_view bytes) {
   return *this;
 }
 
-CopyRow& CopyRow::TextArray(const std::vector<std::string>& values) { return Text(TextArrayLiteral(values)); }
+CopyRow& CopyRow::TextArray(const std::vector<std::string>& values) { return Text(internal::TextArrayLiteral(values)); }
 
 void CopyRow::End() {
   out_.push_back('\n');
   first_ = true;
 }
 
-}  // namespace insdiag::kb::internal
+}  // namespace insdiag::kb

@@ -113,7 +113,7 @@ absl::StatusOr<std::vector<v1::FailureMode>> LoadModes(Connection& db, const std
       "SELECT failure_mode, parameter, direction, scale, common, fraction, expert_change, expert_spread, change, "
       "spread, confirmed_cases FROM signature_terms WHERE failure_mode = ANY($1::text[]) "
       "ORDER BY failure_mode, position",
-      {Param::Text(internal::TextArrayLiteral(ids))});
+      {Param::TextArray(ids)});
   if (!terms.ok()) return terms.status();
   for (int r = 0; r < terms->rows(); ++r) {
     auto* s = modes[index[terms->String(r, 0)]].add_signature();
@@ -769,7 +769,7 @@ absl::StatusOr<v1::Diagnosis> KnowledgeStore::CreateDiagnosis(const std::string&
         {Param::Text(id), Param::Text(*analysis_id), Param::Text(unit_id), Param::Double(headline.fault_probability),
          Param::Text(top ? top->module() : ""), Param::Text(top ? top->failure_mode() : ""),
          Param::Double(top ? top->probability() : 0.0), Param::Bytes(body),
-         Param::Text(internal::TextArrayLiteral(notes)),
+         Param::TextArray(notes),
          Param::Int(internal::MicrosOf(diagnosis.create_time()))});
     if (!inserted.ok()) return inserted.status();
     int rank = 0;
@@ -779,7 +779,7 @@ absl::StatusOr<v1::Diagnosis> KnowledgeStore::CreateDiagnosis(const std::string&
           "INSERT INTO diagnosis_candidates (diagnosis_id, rank, module, failure_mode, probability, evidence) "
           "VALUES ($1::uuid, $2, $3, $4, $5, $6::text[])",
           {Param::Text(id), Param::Int(rank++), Param::Text(c.module()), Param::Text(c.failure_mode()),
-           Param::Double(c.probability()), Param::Text(internal::TextArrayLiteral(evidence))});
+           Param::Double(c.probability()), Param::TextArray(evidence)});
       if (!row.ok()) return row.status();
     }
     return absl::OkStatus();

@@ -6,6 +6,8 @@
 #include <charconv>
 #include <cstdlib>
 
+#include "store_util.h"
+
 namespace insdiag::kb {
 namespace {
 
@@ -37,6 +39,8 @@ Param Param::Double(double value) {
   const auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, value);
   return Text(std::string(buffer, end));
 }
+
+Param Param::TextArray(const std::vector<std::string>& values) { return Text(internal::TextArrayLiteral(values)); }
 
 std::string_view Result::Get(int row, int column) const {
   return {PQgetvalue(result_.get(), row, column),

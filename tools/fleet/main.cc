@@ -1,5 +1,5 @@
 // insdiag-fleet — writes a realistic fleet history into a knowledge base
-// (kb/fleet_generator.h, docs/FLEET.md): applies the built-in migrations,
+// (insdiag/kb/fleet_generator.h, docs/FLEET.md): applies the built-in migrations,
 // seeds the built-in unit types and failure modes, generates the fleet with
 // COPY in one transaction, analyses the tables and refreshes the fleet views.
 // Progress on standard error, a summary on standard output.

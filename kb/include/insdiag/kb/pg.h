@@ -37,6 +37,9 @@ class Param {
   static Param TextOrNull(std::string value) {
     return value.empty() ? Null() : Text(std::move(value));
   }
+  // A text[] value as its array literal ('{"a","b"}'); the statement casts
+  // it ($1::text[]).
+  static Param TextArray(const std::vector<std::string>& values);
 
   const std::optional<std::string>& value() const { return value_; }
   bool binary() const { return binary_; }

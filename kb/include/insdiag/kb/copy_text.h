@@ -1,6 +1,6 @@
 // Rows in PostgreSQL's COPY text format (tab-separated, newline-terminated,
-// backslash escapes, \N for NULL), appended to a buffer that
-// Connection::CopyIn sends. Only what the fleet generator writes.
+// backslash escapes, \N for NULL), appended to the buffer that
+// Connection::CopyIn (pg.h) sends: bulk loads without a statement per row.
 #pragma once
 
 #include <cstdint>
@@ -8,7 +8,7 @@
 #include <string_view>
 #include <vector>
 
-namespace insdiag::kb::internal {
+namespace insdiag::kb {
 
 // A UUID as two 64-bit halves, printed big-endian (PostgreSQL compares
 // UUIDs bytewise, so increasing halves sort as increasing UUIDs).
@@ -21,14 +21,6 @@ std::string UuidText(const Uuid& id);
 // UTC microseconds since the epoch as "YYYY-MM-DD HH:MM:SS.ffffff+00".
 std::string TimestampTextOfMicros(std::int64_t micros);
 
-// The UTC calendar month (year, month 1-12) of a time, and back.
-struct YearMonth {
-  int year = 1970;
-  int month = 1;
-};
-YearMonth YearMonthOf(std::int64_t micros);
-std::int64_t MicrosOfMonthStart(YearMonth month);
-
 // One COPY row at a time: fields separated by tabs, End() closes the row.
 class CopyRow {
  public:
@@ -36,9 +28,9 @@ class CopyRow {
   CopyRow& Null();
   CopyRow& Text(std::string_view text);  // escaped
   CopyRow& Int(std::int64_t value);
-  CopyRow& Double(double value);  // shortest round-trip text
+  CopyRow& Double(double value);  // shortest round-trip text; NULL when not finite
   CopyRow& Bool(bool value);
-  CopyRow& Time(std::int64_t micros);
+  CopyRow& Time(std::int64_t micros);  // timestamptz, UTC µs since the epoch
   CopyRow& Id(const Uuid& id);
   CopyRow& Bytes(std::string_view bytes);                // bytea, hex
   CopyRow& TextArray(const std::vector<std::string>& values);  // text[]
@@ -50,4 +42,4 @@ class CopyRow {
   bool first_ = true;
 };
 
-}  // namespace insdiag::kb::internal
+}  // namespace insdiag::kb

@@ -3,7 +3,9 @@
 // history, periodic bench tests with their analyses, failures, removals,
 // diagnoses — written straight into the knowledge base with COPY, for demos,
 // the fleet statistics and their benchmark. Deterministic: the same options
-// (seed and end time included) give the same fleet.
+// (seed and end time included) give the same fleet. Its own library,
+// insdiag::fleet_generator (kb/fleet_generator/), which uses insdiag::kb; the
+// production library does not contain it.
 //
 // Every physical value comes from the data files: the unit type's nominal
 // values and tolerances (data/unit-types), its failure modes' signatures and
