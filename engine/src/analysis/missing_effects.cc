@@ -233,16 +233,13 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
                                             "tests it"));
     }
   }
-  // The two tests are independent fits: both at once, read in order.
-  auto fits = numerics::ParallelMap(std::size(tests), [&](std::size_t i) -> absl::StatusOr<ident::DriftLikelihoodResult> {
-    const Test& test = tests[i];
-    if (!test.enabled) return absl::CancelledError("off");
-    return test.fit(epochs, pass.model, a_priori, test.axes, screen_alpha, options.drift_likelihood);
-  });
-  for (std::size_t i = 0; i < std::size(tests); ++i) {
-    const Test& test = tests[i];
+  // One test after the other: each spreads its own independent passes (its
+  // starts, the fits without each structure) over every core, and the walk
+  // test is much the cheaper, so running the two side by side would leave a
+  // core idle through most of the pairs' test.
+  for (const Test& test : tests) {
     if (!test.enabled) continue;
-    auto& fitted = fits[i];
+    auto fitted = test.fit(epochs, pass.model, a_priori, test.axes, screen_alpha, options.drift_likelihood);
     if (!fitted.ok()) {
       if (notes != nullptr) {
         notes->push_back(std::string("no likelihood test of ") + test.what + ": " +

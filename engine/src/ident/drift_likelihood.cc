@@ -1,7 +1,5 @@
 #include "insdiag/engine/ident/drift_likelihood.h"
 
-#include "insdiag/engine/numerics/parallel_map.h"
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -585,10 +583,13 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
   // (the drift at its a-priori σ, not wider: a widened drift took the slow
   // variance the structure would explain), one EM step; an axis keeps the
   // start whose step lets the magnitude grow most.
-  std::array<double, 6> best_growth;
-  best_growth.fill(0.0);
-  std::array<size_t, 6> best_start{};
-  for (size_t start = 0; start < kind.Starts(options); ++start) {
+  // The starts' steps are independent passes: on every core, read in order.
+  struct ScreenStep {
+    Eigen::VectorXd theta;
+    Maximiser::Step step;
+    int filter_passes = 0;
+  };
+  auto screened = numerics::ParallelMap(kind.Starts(options), [&](std::size_t start) -> absl::StatusOr<ScreenStep> {
     ErrorModel trial = model;
     std::vector<Parameter> parameters;
     for (int d : candidates) {
@@ -600,14 +601,26 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
       parameters.push_back({Kind::kSigma, d});
       for (Kind k : kinds) parameters.push_back({k, d});
     }
-    Maximiser screen(run, trial, parameters, options, out);
-    const Eigen::VectorXd theta = screen.Start();
-    auto step = screen.EmStep(theta);
+    DriftLikelihoodResult passes;
+    Maximiser screen(run, trial, parameters, options, passes);
+    ScreenStep out_step{screen.Start(), {}, 0};
+    auto step = screen.EmStep(out_step.theta);
     if (!step.ok()) return step.status();
-    if (start == 0) out.log_likelihood_before = step->log_likelihood;
+    out_step.step = *std::move(step);
+    out_step.filter_passes = passes.filter_passes;
+    return out_step;
+  });
+  std::array<double, 6> best_growth;
+  best_growth.fill(0.0);
+  std::array<size_t, 6> best_start{};
+  for (size_t start = 0; start < screened.size(); ++start) {
+    if (!screened[start].ok()) return screened[start].status();
+    const ScreenStep& s_step = *screened[start];
+    out.filter_passes += s_step.filter_passes;
+    if (start == 0) out.log_likelihood_before = s_step.step.log_likelihood;
     for (size_t c = 0; c < candidates.size(); ++c) {
       const auto magnitude = static_cast<Eigen::Index>(c) * per_axis + 1;
-      const double growth = step->next[magnitude] - theta[magnitude];
+      const double growth = s_step.step.next[magnitude] - s_step.theta[magnitude];
       const auto d = static_cast<size_t>(candidates[c]);
       if (growth > best_growth[d]) {
         best_growth[d] = growth;
@@ -643,23 +656,30 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
 
   std::vector<StructureEstimate> fits;
   auto significant = [&](const StructureEstimate& w) { return NestedPValue(w) < screen_alpha; };
-  for (int d : kept_axes) {
+  // ℓ̂₀ of each kept structure: the joint model without it, its drift σ
+  // re-fitted alone. EM for σ alone starts from the model's σ, not the joint
+  // fit's: from a σ the structure has relieved, EM crawls up and would stop
+  // below ℓ̂₀ (its steps fall under the tolerance long before it gets there),
+  // which inflates the statistic. The fits are independent: on every core.
+  auto without_each = numerics::ParallelMap(kept_axes.size(), [&](std::size_t c) {
+    const int d = kept_axes[c];
+    ErrorModel without = out.model;
+    without.effects.erase(without.effects.begin() + EffectOf(without, kind.Name(d)));
+    DriftOf(without, d).sigma = DriftOf(model, d).sigma;
+    DriftLikelihoodResult alone_result;
+    Maximiser alone(run, without, {Parameter{Kind::kSigma, d}}, options, alone_result);
+    absl::Status fitted = FitInto(alone, alone_result, nullptr).status();
+    return std::pair{fitted, alone_result};
+  });
+  for (size_t c = 0; c < kept_axes.size(); ++c) {
+    const auto& [fitted_alone, alone_result] = without_each[c];
+    if (!fitted_alone.ok()) return fitted_alone;
+    const int d = kept_axes[c];
     StructureEstimate w;
     w.drift = d;
     w.effect = kind.Name(d);
     w.dof = static_cast<int>(kinds.size());
     w.starts = static_cast<int>(kind.Starts(options));
-    // ℓ̂₀: the joint model without this structure, its drift σ re-fitted
-    // alone. EM for σ alone starts from the model's σ, not the joint fit's:
-    // from a σ the structure has relieved, EM crawls up and would stop below
-    // ℓ̂₀ (its steps fall under the tolerance long before it gets there),
-    // which inflates the statistic.
-    ErrorModel without = out.model;
-    without.effects.erase(without.effects.begin() + EffectOf(without, w.effect));
-    DriftOf(without, d).sigma = DriftOf(model, d).sigma;
-    DriftLikelihoodResult alone_result;
-    Maximiser alone(run, without, {Parameter{Kind::kSigma, d}}, options, alone_result);
-    if (auto fitted_alone = FitInto(alone, alone_result, nullptr); !fitted_alone.ok()) return fitted_alone.status();
     out.filter_passes += alone_result.filter_passes;
     w.log_likelihood_without = alone_result.log_likelihood_after;
     w.statistic = std::max(0.0, 2.0 * (out.log_likelihood_after - w.log_likelihood_without));
