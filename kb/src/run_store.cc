@@ -1,8 +1,6 @@
 #include "insdiag/kb/run_store.h"
 
-#include <absl/strings/escaping.h>
 #include <absl/strings/str_cat.h>
-#include <absl/strings/str_split.h>
 
 #include <algorithm>
 #include <array>
@@ -11,6 +9,8 @@
 #include <cstring>
 #include <map>
 #include <numbers>
+
+#include "store_util.h"
 
 namespace insdiag::kb {
 namespace {
@@ -245,20 +245,6 @@ absl::StatusOr<std::string> InsertRun(Connection& db, const engine::BenchRun& ru
   return run_id;
 }
 
-// Page tokens are opaque to clients: base64 of the last row's sort key.
-std::string EncodePageToken(const std::string& create_time, const std::string& run_id) {
-  return absl::WebSafeBase64Escape(absl::StrCat(create_time, "|", run_id));
-}
-
-absl::StatusOr<std::pair<std::string, std::string>> DecodePageToken(std::string_view token) {
-  std::string raw;
-  if (absl::WebSafeBase64Unescape(std::string(token), &raw)) {
-    std::vector<std::string> parts = absl::StrSplit(raw, '|');
-    if (parts.size() == 2 && CheckRunId(parts[1]).ok()) return std::make_pair(parts[0], parts[1]);
-  }
-  return absl::InvalidArgumentError("page_token is not one this server issued");
-}
-
 }  // namespace
 
 absl::StatusOr<StoredRun> RunStore::Create(const engine::BenchRun& run, const UploadIdentity& identity) {
@@ -306,8 +292,10 @@ absl::StatusOr<RunPage> RunStore::List(const RunQuery& query) {
   std::vector<Param> params = {Param::Int(page_size + 1), Param::TextOrNull(query.unit_serial)};
   std::string after = "true";
   if (!query.page_token.empty()) {
-    auto key = DecodePageToken(query.page_token);
+    // Page tokens are opaque to clients: the last row's sort key (store_util.h).
+    auto key = internal::DecodeToken(query.page_token);
     if (!key.ok()) return key.status();
+    if (!CheckRunId(key->second).ok()) return absl::InvalidArgumentError("page_token is not one this server issued");
     params.push_back(Param::Text(key->first));
     params.push_back(Param::Text(key->second));
     after = "(create_time, run_id) < ($3::timestamptz, $4::uuid)";
@@ -328,7 +316,7 @@ absl::StatusOr<RunPage> RunStore::List(const RunQuery& query) {
   }
   // One row more than asked for tells whether another page exists.
   if (rows->rows() > page_size) {
-    page.next_page_token = EncodePageToken(rows->String(shown - 1, 21), page.runs.back().id);
+    page.next_page_token = internal::EncodeToken(rows->String(shown - 1, 21), page.runs.back().id);
   }
   if (auto status = LoadExtraMetadata(**db, page.runs); !status.ok()) return status;
   return page;
