@@ -219,7 +219,7 @@ pipeline::Identification IdentifiedEarlier(const IdentifiedModel& earlier, const
 bool NeedsStructureTestsOfModelA(const AnalysisRequest& request) {
   if (!request.identified_base.has_value() || request.discover) return true;
   return std::any_of(request.add_effects.begin(), request.add_effects.end(), [](const std::string& selector) {
-    auto terms = ParseEffectSelector(selector.substr(0, selector.find('@')));
+    auto terms = ParseEffectSelector(selector);
     return !terms.ok() || std::any_of(terms->begin(), terms->end(), [](const EffectTerm& t) {
       return t.family->kind == EffectKind::kRandom;
     });

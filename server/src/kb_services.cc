@@ -69,7 +69,7 @@ absl::Status AnalysisService::CheckBaseAnalysis(const v1::Analysis& asked, v1::A
   if (!identified.ok()) return identified.status();
   for (int i = 0; i < spec.baseline().effects_size(); ++i) {
     const std::string& effect = spec.baseline().effects(i);
-    auto terms = engine::ParseEffectSelector(effect.substr(0, effect.find('@')));
+    auto terms = engine::ParseEffectSelector(effect);
     const bool covered = terms.ok() && std::all_of(terms->begin(), terms->end(), [&](const engine::EffectTerm& t) {
       return identified->model.FindEffect(t) >= 0;
     });
