@@ -7,12 +7,15 @@ Usage:
   benchsim.py --out RUN.csv [--preset nav] [--profile positions] [--rate-hz 50]
               [--duration 3600] [--seed 1] [--ramp-accel DEG_S2] [--jitter 1.0]
               [--fault NAME=VALUE[@ONSET_S]]... [--fault PARAM*FACTOR]...
-              [--datasheet yes|no] [--unit-type INS-2000|none] [--serial S]
+              [--set PARAM=VALUE]... [--datasheet yes|no] [--unit-type INS-2000|none]
+              [--serial S]
 Faults: gyro_bias_step.x=3e-6@1500.3, acc_bias_ramp.y=1e-7@900,
 gyro_turn_on_bias.z=1e-6, gyro_scale_factor.x=5e-5 (a family without an axis:
 every axis), gyro_bias_rw.y=1e-9 (rate random walk density), and
 multipliers of the preset's parameters: gyro_bias_gm.x.sigma*3,
-gyro_bias_gm.y.tau*0.1, gyro_arw.z*2. The truth goes to RUN.csv.truth.json.
+gyro_bias_gm.y.tau*0.1, gyro_arw.z*2. --set gives the unit another class than
+the preset's (gyro_bias_gm.x.sigma=4.8e-7, SI units): the datasheet states the
+values after --set and before --fault. The truth goes to RUN.csv.truth.json.
 """
 import argparse
 import json
@@ -64,6 +67,21 @@ PRESETS = {
 FAULT = re.compile(r"^(?P<name>[a-z_]+(\.[xyz])?(\.(sigma|tau))?)(=(?P<value>[^@]+)(@(?P<onset>.+))?|\*(?P<factor>.+))$")
 
 
+def set_parameters(specs, parameters):
+    """The preset's parameters with NAME=VALUE overrides applied."""
+    for spec in specs:
+        name, eq, value = spec.partition("=")
+        if not eq or name not in parameters:
+            raise ValueError(f"--set {spec}: expected PARAM=VALUE with a parameter of the preset "
+                             f"({', '.join(sorted(parameters))})")
+        try:
+            parameters[name] = float(value)
+        except ValueError:
+            raise ValueError(f"--set {spec}: '{value}' is not a number") from None
+        if not parameters[name] > 0:
+            raise ValueError(f"--set {spec}: must be positive")
+
+
 def parse_faults(specs, parameters):
     """Effects to inject, and the preset's parameters with multipliers applied."""
     effects = []
@@ -91,6 +109,7 @@ def simulate(config):
     latitude = config["latitude_deg"] * DEG
     gravity = kinematics.normal_gravity_mps2(latitude, config["height_m"])
     parameters = PRESETS[config["preset"]]()
+    set_parameters(config["set"], parameters)
     nominal_parameters = dict(parameters)
     effects = parse_faults(config["faults"], parameters)
     yaw, roll = profiles.build(config["profile"], duration_s, rng, config["ramp_accel_deg_s2"], config["jitter_s"])
@@ -174,6 +193,7 @@ def main(argv=None):
     p.add_argument("--ramp-accel", type=float, default=None, help="rate changes ramp at this deg/s² (default: steps)")
     p.add_argument("--jitter", type=float, default=1.0, help="holds lengthened by up to this many seconds (seeded)")
     p.add_argument("--fault", action="append", default=[])
+    p.add_argument("--set", action="append", default=[], help="a preset parameter's value, PARAM=VALUE (SI)")
     p.add_argument("--datasheet", default="yes", choices=["yes", "no"])
     p.add_argument("--unit-type", default="INS-2000")
     p.add_argument("--serial", default=None)
@@ -182,7 +202,7 @@ def main(argv=None):
     p.add_argument("--height-m", type=float, default=519.0)
     a = p.parse_args(argv)
     config = dict(out=a.out, preset=a.preset, profile=a.profile, rate_hz=a.rate_hz, duration_s=a.duration,
-                  seed=a.seed, ramp_accel_deg_s2=a.ramp_accel, jitter_s=a.jitter, faults=a.fault,
+                  seed=a.seed, ramp_accel_deg_s2=a.ramp_accel, jitter_s=a.jitter, faults=a.fault, set=a.set,
                   datasheet=a.datasheet, unit_type=a.unit_type, serial=a.serial or f"BSIM-{a.seed}",
                   latitude_deg=a.latitude_deg, longitude_deg=a.longitude_deg, height_m=a.height_m)
     try:

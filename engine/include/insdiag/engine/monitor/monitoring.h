@@ -10,7 +10,8 @@
 // A single β² above γ² happens by chance in 2.2% of updates, and the moving F
 // above η² in a fraction of windows, so fault intervals are only reported
 // where the statistics exceed their family-wise (1 − α) quantiles over the
-// run's updates (OUTLIER) or independent windows (GRADUAL); the counts against
+// run's updates (OUTLIER) or the tests the overlapping windows amount to
+// (GRADUAL, a scan statistic's count, monitoring.cc); the counts against
 // the seed's own tolerances are reported per channel beside them.
 //
 // Verdict: FAULTY when a gradual failure is found; OPERABLE when only outliers
