@@ -233,21 +233,15 @@ absl::StatusOr<AnalysisPage> AnalysisStore::List(const AnalysisQuery& query) {
   }
   std::vector<Param> params = {Param::Int(page_size + 1), Param::TextOrNull(query.run_id),
                                Param::TextOrNull(query.unit_serial)};
-  std::string after = "true";
-  if (!query.page_token.empty()) {
-    auto key = internal::DecodeToken(query.page_token);
-    if (!key.ok()) return key.status();
-    if (!internal::IsUuid(key->second)) return absl::InvalidArgumentError("page_token is not one this server issued");
-    params.push_back(Param::Text(key->first));
-    params.push_back(Param::Text(key->second));
-    after = "(a.create_time, a.analysis_id) < ($4::timestamptz, $5::uuid)";
-  }
+  auto after = internal::KeysetCondition(query.page_token, "a.create_time", "a.analysis_id",
+                                         internal::KeysetOrder::kNewestFirst, params);
+  if (!after.ok()) return after.status();
   auto db = pool_.Acquire();
   if (!db.ok()) return db.status();
   auto rows = (*db)->Exec(
       absl::StrCat(SelectAnalyses(query.include_reports),
-                   "WHERE ($2::uuid IS NULL OR a.run_id = $2::uuid) AND ($3::text IS NULL OR u.serial = $3) AND ", after,
-                   " ORDER BY a.create_time DESC, a.analysis_id DESC LIMIT $1"),
+                   "WHERE ($2::uuid IS NULL OR a.run_id = $2::uuid) AND ($3::text IS NULL OR u.serial = $3) AND ",
+                   *after, " ORDER BY a.create_time DESC, a.analysis_id DESC LIMIT $1"),
       params);
   if (!rows.ok()) return rows.status();
   AnalysisPage page;

@@ -221,15 +221,9 @@ absl::StatusOr<v1::ListParameterTrendsResponse> FleetStore::ListParameterTrends(
   const int size = internal::ClampPageSize(request.page_size());
   std::vector<Param> params = {Param::Int(size + 1), Param::TextOrNull(*type), Param::Text(request.parameter()),
                                Param::TextOrNull(serial)};
-  std::string after = "true";
-  if (!request.page_token().empty()) {
-    auto key = internal::DecodeToken(request.page_token());
-    if (!key.ok()) return key.status();
-    if (!internal::IsUuid(key->second)) return absl::InvalidArgumentError("page_token is not one this server issued");
-    params.push_back(Param::Text(key->first));
-    params.push_back(Param::Text(key->second));
-    after = "(a.create_time, a.analysis_id) > ($5::timestamptz, $6::uuid)";
-  }
+  auto after = internal::KeysetCondition(request.page_token(), "a.create_time", "a.analysis_id",
+                                         internal::KeysetOrder::kOldestFirst, params);
+  if (!after.ok()) return after.status();
   auto db = pool_.Acquire();
   if (!db.ok()) return db.status();
   auto rows = (*db)->Exec(
@@ -239,7 +233,7 @@ absl::StatusOr<v1::ListParameterTrendsResponse> FleetStore::ListParameterTrends(
                    "JOIN units u ON u.unit_id = a.unit_id "
                    "WHERE p.parameter_id = (SELECT parameter_id FROM parameter_names WHERE name = $3) "
                    "AND ($2::text IS NULL OR u.unit_type = $2) AND ($4::text IS NULL OR u.serial = $4) AND ",
-                   after, " ORDER BY a.create_time, a.analysis_id LIMIT $1"),
+                   *after, " ORDER BY a.create_time, a.analysis_id LIMIT $1"),
       params);
   if (!rows.ok()) return rows.status();
   v1::ListParameterTrendsResponse out;

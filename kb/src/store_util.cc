@@ -70,7 +70,23 @@ absl::StatusOr<std::pair<std::string, std::string>> DecodeToken(const std::strin
   return absl::InvalidArgumentError("page_token is not one this server issued");
 }
 
+absl::StatusOr<std::string> KeysetCondition(const std::string& page_token, const std::string& time_column,
+                                            const std::string& uuid_column, KeysetOrder order,
+                                            std::vector<Param>& params) {
+  if (page_token.empty()) return std::string("true");
+  auto key = DecodeToken(page_token);
+  if (!key.ok()) return key.status();
+  if (!IsUuid(key->second)) return absl::InvalidArgumentError("page_token is not one this server issued");
+  const std::size_t first = params.size() + 1;
+  params.push_back(Param::Text(key->first));
+  params.push_back(Param::Text(key->second));
+  return absl::StrCat("(", time_column, ", ", uuid_column, ") ", order == KeysetOrder::kNewestFirst ? "<" : ">",
+                      " ($", first, "::timestamptz, $", first + 1, "::uuid)");
+}
+
 int ClampPageSize(int page_size) { return std::clamp(page_size <= 0 ? 50 : page_size, 1, 1000); }
+
+std::string BoolText(bool b) { return b ? "true" : "false"; }
 
 std::int64_t IntOr0(const Result& rows, int row, int column) {
   if (rows.IsNull(row, column)) return 0;

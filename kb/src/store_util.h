@@ -8,6 +8,7 @@
 #include <string>
 #include <string_view>
 #include <utility>
+#include <vector>
 
 #include "insdiag/kb/pg.h"
 
@@ -30,7 +31,20 @@ std::int64_t MicrosOf(const google::protobuf::Timestamp& t);
 std::string EncodeToken(const std::string& a, const std::string& b);
 absl::StatusOr<std::pair<std::string, std::string>> DecodeToken(const std::string& token);
 
+// Keyset pagination of rows ordered by (a timestamptz column, a UUID column),
+// the token holding the last row's pair: "true" for the first page, else the
+// SQL condition for the rows after it, its two values appended to `params`
+// as the next two parameters. INVALID_ARGUMENT for a token this server did
+// not issue (a key that is not a UUID never reaches the SQL).
+enum class KeysetOrder { kNewestFirst, kOldestFirst };
+absl::StatusOr<std::string> KeysetCondition(const std::string& page_token, const std::string& time_column,
+                                            const std::string& uuid_column, KeysetOrder order,
+                                            std::vector<Param>& params);
+
 int ClampPageSize(int page_size);  // default 50, within [1, 1000]
+
+// A bool as the text of a query parameter ("true", "false").
+std::string BoolText(bool b);
 
 // Int column or 0.
 std::int64_t IntOr0(const Result& rows, int row, int column);

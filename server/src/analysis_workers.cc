@@ -10,8 +10,8 @@
 #include "insdiag/api/unit_types.h"
 #include "insdiag/engine/analysis.h"
 #include "insdiag/engine/model/parameters.h"
+#include "insdiag/kb/catalogue_store.h"
 #include "insdiag/kb/fleet_store.h"
-#include "insdiag/kb/knowledge_store.h"
 #include "insdiag/kb/run_store.h"
 
 namespace insdiag::server {
@@ -168,8 +168,8 @@ std::string_view AnalysisWorkers::RunJobOutcome(const kb::ClaimedJob& job, const
       request.identified_base = *std::move(identified);
     }
     if (!run.metadata.unit_type.empty()) {
-      kb::KnowledgeStore knowledge(pool_);
-      auto unit_type = knowledge.GetUnitType(absl::StrCat("unitTypes/", run.metadata.unit_type));
+      kb::CatalogueStore catalogue(pool_);
+      auto unit_type = catalogue.GetUnitType(absl::StrCat("unitTypes/", run.metadata.unit_type));
       if (unit_type.ok()) {
         auto nominal = api::BaseModelOf(*unit_type);
         if (nominal.ok()) request.nominal = std::move(*nominal);

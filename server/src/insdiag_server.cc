@@ -38,8 +38,9 @@ struct InsdiagServer::Services {
       : connection_pool(pool), access_store(pool), guard(access_store), access(access_store), access_grpc(access, guard), store(pool),
         runs(store, RunService::Options{options.max_upload_samples}), runs_grpc(runs, guard), analysis_store(pool),
         analyses(analysis_store, AnalysisService::Options{options.watch_poll}), analyses_grpc(analyses, guard),
-        knowledge_store(pool), knowledge(knowledge_store), knowledge_grpc(knowledge, guard), fleet_store(pool),
-        fleet_grpc(fleet_store, guard), workers(pool, options.workers, &metrics) {}
+        catalogue_store(pool), failure_record_store(pool), diagnosis_store(pool),
+        knowledge(catalogue_store, failure_record_store, diagnosis_store), knowledge_grpc(knowledge, guard),
+        fleet_store(pool), fleet_grpc(fleet_store, guard), workers(pool, options.workers, &metrics) {}
   // What GET /metrics answers: the counters, then the queue and the pool as they are.
   std::string RenderMetrics() {
     Metrics::Gauges gauges;
@@ -67,7 +68,9 @@ struct InsdiagServer::Services {
   kb::AnalysisStore analysis_store;
   AnalysisService analyses;
   AnalysisServiceGrpc analyses_grpc;
-  kb::KnowledgeStore knowledge_store;
+  kb::CatalogueStore catalogue_store;
+  kb::FailureRecordStore failure_record_store;
+  kb::DiagnosisStore diagnosis_store;
   KnowledgeService knowledge;
   KnowledgeServiceGrpc knowledge_grpc;
   kb::FleetStore fleet_store;
@@ -111,7 +114,7 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
     // The built-in unit types and failure modes, upserted idempotently.
     const auto unit_types = api::BuiltinUnitTypes();
     const auto catalogues = kb::BuiltinFailureModeCatalogues();
-    if (auto seeded = server->services_->knowledge_store.Seed(unit_types, catalogues); !seeded.ok()) return seeded;
+    if (auto seeded = server->services_->catalogue_store.Seed(unit_types, catalogues); !seeded.ok()) return seeded;
   }
 
   const std::vector<std::string> service_names = {"insdiag.v1.RunService", "insdiag.v1.AnalysisService",

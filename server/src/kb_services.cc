@@ -213,12 +213,12 @@ absl::StatusOr<v1::DisplaySeries> AnalysisService::ReadDisplaySeries(const v1::R
 }
 
 absl::StatusOr<v1::UnitType> KnowledgeService::GetUnitType(const v1::GetUnitTypeRequest& request) {
-  return store_.GetUnitType(request.name());
+  return catalogue_.GetUnitType(request.name());
 }
 
 absl::StatusOr<v1::ListUnitTypesResponse> KnowledgeService::ListUnitTypes(const v1::ListUnitTypesRequest& request) {
   if (auto s = CheckPageSize(request.page_size()); !s.ok()) return s;
-  auto types = store_.ListUnitTypes();
+  auto types = catalogue_.ListUnitTypes();
   if (!types.ok()) return types.status();
   v1::ListUnitTypesResponse response;
   for (auto& t : *types) *response.add_unit_types() = std::move(t);
@@ -226,12 +226,12 @@ absl::StatusOr<v1::ListUnitTypesResponse> KnowledgeService::ListUnitTypes(const 
 }
 
 absl::StatusOr<v1::Unit> KnowledgeService::GetUnit(const v1::GetUnitRequest& request) {
-  return store_.GetUnit(request.name());
+  return catalogue_.GetUnit(request.name());
 }
 
 absl::StatusOr<v1::ListUnitsResponse> KnowledgeService::ListUnits(const v1::ListUnitsRequest& request) {
   if (auto s = CheckPageSize(request.page_size()); !s.ok()) return s;
-  auto page = store_.ListUnits({request.page_size(), request.page_token()}, request.unit_type(), request.batch());
+  auto page = catalogue_.ListUnits({request.page_size(), request.page_token()}, request.unit_type(), request.batch());
   if (!page.ok()) return page.status();
   v1::ListUnitsResponse response;
   for (auto& u : page->first) *response.add_units() = std::move(u);
@@ -240,7 +240,7 @@ absl::StatusOr<v1::ListUnitsResponse> KnowledgeService::ListUnits(const v1::List
 }
 
 absl::StatusOr<v1::ListModulesResponse> KnowledgeService::ListModules(const v1::ListModulesRequest& request) {
-  auto modules = store_.ListModules(request.parent());
+  auto modules = catalogue_.ListModules(request.parent());
   if (!modules.ok()) return modules.status();
   v1::ListModulesResponse response;
   for (auto& m : *modules) *response.add_modules() = std::move(m);
@@ -250,7 +250,7 @@ absl::StatusOr<v1::ListModulesResponse> KnowledgeService::ListModules(const v1::
 absl::StatusOr<v1::ListFailureModesResponse> KnowledgeService::ListFailureModes(
     const v1::ListFailureModesRequest& request) {
   if (auto s = CheckPageSize(request.page_size()); !s.ok()) return s;
-  auto modes = store_.ListFailureModes(request.unit_type(), request.module_role());
+  auto modes = catalogue_.ListFailureModes(request.unit_type(), request.module_role());
   if (!modes.ok()) return modes.status();
   v1::ListFailureModesResponse response;
   for (auto& m : *modes) *response.add_failure_modes() = std::move(m);
@@ -258,21 +258,21 @@ absl::StatusOr<v1::ListFailureModesResponse> KnowledgeService::ListFailureModes(
 }
 
 absl::StatusOr<v1::FailureMode> KnowledgeService::GetFailureMode(const v1::GetFailureModeRequest& request) {
-  return store_.GetFailureMode(request.name());
+  return catalogue_.GetFailureMode(request.name());
 }
 
 absl::StatusOr<v1::FailureRecord> KnowledgeService::CreateFailureRecord(const v1::CreateFailureRecordRequest& request) {
-  return store_.CreateFailureRecord(request.failure_record());
+  return records_.Create(request.failure_record());
 }
 
 absl::StatusOr<v1::FailureRecord> KnowledgeService::CorrectFailureRecord(
     const v1::CorrectFailureRecordRequest& request) {
-  return store_.CorrectFailureRecord(request.name(), request.failure_record(), request.reason());
+  return records_.Correct(request.name(), request.failure_record(), request.reason());
 }
 
 absl::StatusOr<v1::ListFailureRecordRevisionsResponse> KnowledgeService::ListFailureRecordRevisions(
     const v1::ListFailureRecordRevisionsRequest& request) {
-  auto revisions = store_.ListFailureRecordRevisions(request.name());
+  auto revisions = records_.ListRevisions(request.name());
   if (!revisions.ok()) return revisions.status();
   v1::ListFailureRecordRevisionsResponse response;
   for (auto& revision : *revisions) *response.add_revisions() = std::move(revision);
@@ -282,12 +282,12 @@ absl::StatusOr<v1::ListFailureRecordRevisionsResponse> KnowledgeService::ListFai
 absl::StatusOr<v1::ListFailureRecordsResponse> KnowledgeService::ListFailureRecords(
     const v1::ListFailureRecordsRequest& request) {
   if (auto s = CheckPageSize(request.page_size()); !s.ok()) return s;
-  kb::KnowledgeStore::RecordQuery query;
+  kb::FailureRecordQuery query;
   query.page = {request.page_size(), request.page_token()};
   query.module = request.module();
   query.unit = request.unit();
   query.failure_mode = request.failure_mode();
-  auto page = store_.ListFailureRecords(query);
+  auto page = records_.List(query);
   if (!page.ok()) return page.status();
   v1::ListFailureRecordsResponse response;
   for (auto& r : page->first) *response.add_failure_records() = std::move(r);
@@ -297,20 +297,20 @@ absl::StatusOr<v1::ListFailureRecordsResponse> KnowledgeService::ListFailureReco
 
 absl::StatusOr<v1::Diagnosis> KnowledgeService::CreateDiagnosis(const v1::CreateDiagnosisRequest& request) {
   if (request.analysis().empty()) return absl::InvalidArgumentError("analysis: required (analyses/{analysis})");
-  return store_.CreateDiagnosis(request.analysis());
+  return diagnoses_.Create(request.analysis());
 }
 
 absl::StatusOr<v1::Diagnosis> KnowledgeService::GetDiagnosis(const v1::GetDiagnosisRequest& request) {
-  return store_.GetDiagnosis(request.name());
+  return diagnoses_.Get(request.name());
 }
 
 absl::StatusOr<v1::ListDiagnosesResponse> KnowledgeService::ListDiagnoses(const v1::ListDiagnosesRequest& request) {
   if (auto s = CheckPageSize(request.page_size()); !s.ok()) return s;
-  kb::KnowledgeStore::DiagnosisQuery query;
+  kb::DiagnosisQuery query;
   query.page = {request.page_size(), request.page_token()};
   query.analysis = request.analysis();
   query.unit = request.unit();
-  auto page = store_.ListDiagnoses(query);
+  auto page = diagnoses_.List(query);
   if (!page.ok()) return page.status();
   v1::ListDiagnosesResponse response;
   for (auto& d : page->first) *response.add_diagnoses() = std::move(d);
@@ -319,7 +319,7 @@ absl::StatusOr<v1::ListDiagnosesResponse> KnowledgeService::ListDiagnoses(const 
 }
 
 absl::StatusOr<v1::Diagnosis> KnowledgeService::ResolveDiagnosis(const v1::ResolveDiagnosisRequest& request) {
-  return store_.ResolveDiagnosis(request);
+  return diagnoses_.Resolve(request);
 }
 
 absl::StatusOr<v1::Caller> AccessService::GetCaller(const v1::GetCallerRequest&, const v1::Caller& caller) {

@@ -8,9 +8,9 @@
 #include <gtest/gtest.h>
 
 #include "insdiag/kb/analysis_store.h"
+#include "insdiag/kb/diagnosis_store.h"
 #include "insdiag/kb/fleet_generator.h"
 #include "insdiag/kb/fleet_store.h"
-#include "insdiag/kb/knowledge_store.h"
 #include "support/database_fixture.h"
 
 namespace insdiag::kb {
@@ -193,8 +193,8 @@ TEST_F(FleetGeneratorTest, GeneratedHistoryReadsBackThroughTheStoresAndEveryStat
   EXPECT_EQ(page->analyses.front().report().identified_size(), 18);
 
   // A new diagnosis of a generated analysis works like any other.
-  KnowledgeStore knowledge(pool());
-  auto diagnosis = knowledge.CreateDiagnosis(analysis->name());
+  DiagnosisStore diagnoses(pool());
+  auto diagnosis = diagnoses.Create(analysis->name());
   ASSERT_TRUE(diagnosis.ok()) << diagnosis.status();
   EXPECT_FALSE(diagnosis->candidates().empty());
 

@@ -139,5 +139,33 @@ TEST_F(JobQueueTest, RequestIdMakesCreationIdempotent) {
             absl::StatusCode::kNotFound);
 }
 
+// The queue lists newest first by (create time, id): page by page it is the
+// whole list in its order, and a token the server did not issue is refused.
+TEST_F(JobQueueTest, ListsAnalysesNewestFirstPageByPage) {
+  const std::string run = StoreRun();
+  AnalysisStore store(pool());
+  for (int i = 0; i < 5; ++i) ASSERT_TRUE(store.Create(run, v1::AnalysisSpec(), "").ok());
+  const auto names = [&](int page_size) {
+    std::vector<std::string> out;
+    AnalysisQuery query;
+    query.page_size = page_size;
+    query.run_id = run;
+    for (int pages = 0; pages < 10; ++pages) {
+      auto page = store.List(query);
+      EXPECT_TRUE(page.ok()) << page.status();
+      if (!page.ok()) break;
+      for (const auto& a : page->analyses) out.push_back(a.name());
+      if (page->next_page_token.empty()) break;
+      query.page_token = page->next_page_token;
+    }
+    return out;
+  };
+  EXPECT_EQ(names(50).size(), 5u);
+  EXPECT_EQ(names(2), names(50));
+  AnalysisQuery forged;
+  forged.page_token = "not a token";
+  EXPECT_EQ(store.List(forged).status().code(), absl::StatusCode::kInvalidArgument);
+}
+
 }  // namespace
 }  // namespace insdiag::kb

@@ -13,9 +13,10 @@
 #include "generator.h"
 #include "insdiag/api/json.h"
 #include "insdiag/api/unit_types.h"
+#include "insdiag/kb/catalogue_store.h"
 #include "insdiag/kb/diagnosis.h"
+#include "insdiag/kb/diagnosis_store.h"
 #include "insdiag/kb/fleet_store.h"
-#include "insdiag/kb/knowledge_store.h"
 
 namespace insdiag::kb {
 namespace {
@@ -46,9 +47,8 @@ absl::StatusOr<std::int64_t> TestInterval(const FleetGeneratorOptions& options, 
 // After the load: fresh planner statistics, and (as the options ask) the
 // failure modes' signatures refined from the generated cases and the fleet
 // views refreshed.
-absl::Status UpdateDerivedState(ConnectionPool& pool, Connection& db, KnowledgeStore& knowledge,
-                                const FleetGeneratorOptions& options, const std::string& unit_type,
-                                absl::FunctionRef<void(const std::string&)> progress) {
+absl::Status UpdateDerivedState(ConnectionPool& pool, Connection& db, const FleetGeneratorOptions& options,
+                                const std::string& unit_type, absl::FunctionRef<void(const std::string&)> progress) {
   const auto timed = [&](const std::string& what, absl::FunctionRef<absl::Status()> body) {
     const auto t0 = std::chrono::steady_clock::now();
     absl::Status s = body();
@@ -68,7 +68,8 @@ absl::Status UpdateDerivedState(ConnectionPool& pool, Connection& db, KnowledgeS
     return s;
   }
   if (options.refine_signatures) {
-    if (auto s = timed("refined the failure modes' signatures", [&] { return knowledge.RefineSignatures(unit_type); });
+    if (auto s = timed("refined the failure modes' signatures",
+                       [&] { return DiagnosisStore(pool).RefineSignatures(unit_type); });
         !s.ok()) {
       return s;
     }
@@ -118,8 +119,7 @@ absl::Status FleetGeneratorOptions::Validate() const {
 absl::StatusOr<GeneratedFleet> GenerateFleet(ConnectionPool& pool, const FleetGeneratorOptions& options,
                                              absl::FunctionRef<void(const std::string&)> progress) {
   if (auto s = options.Validate(); !s.ok()) return s;
-  KnowledgeStore knowledge(pool);
-  if (auto s = knowledge.Seed(api::BuiltinUnitTypes(), BuiltinFailureModeCatalogues()); !s.ok()) return s;
+  if (auto s = CatalogueStore(pool).Seed(api::BuiltinUnitTypes(), BuiltinFailureModeCatalogues()); !s.ok()) return s;
   auto db = pool.Acquire();
   if (!db.ok()) return db.status();
   auto roles = (*db)->Exec("SELECT role FROM module_roles ORDER BY role");
@@ -149,7 +149,7 @@ absl::StatusOr<GeneratedFleet> GenerateFleet(ConnectionPool& pool, const FleetGe
     return s;
   }
   generator::FillTruth(m, plan, out);
-  if (auto s = UpdateDerivedState(pool, **db, knowledge, options, m.unit_type.name(), progress); !s.ok()) return s;
+  if (auto s = UpdateDerivedState(pool, **db, options, m.unit_type.name(), progress); !s.ok()) return s;
   return out;
 }
 

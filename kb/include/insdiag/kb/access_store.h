@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "insdiag/kb/connection_pool.h"
-#include "insdiag/kb/knowledge_store.h"
+#include "insdiag/kb/page_query.h"
 #include "insdiag/v1/access.pb.h"
 
 namespace insdiag::kb {

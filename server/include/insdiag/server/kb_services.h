@@ -13,8 +13,10 @@
 
 #include "insdiag/kb/access_store.h"
 #include "insdiag/kb/analysis_store.h"
+#include "insdiag/kb/catalogue_store.h"
+#include "insdiag/kb/diagnosis_store.h"
+#include "insdiag/kb/failure_record_store.h"
 #include "insdiag/kb/fleet_store.h"
-#include "insdiag/kb/knowledge_store.h"
 #include "insdiag/v1/access.pb.h"
 #include "insdiag/v1/analyses.pb.h"
 #include "insdiag/v1/fleet.pb.h"
@@ -53,7 +55,8 @@ class AnalysisService {
 
 class KnowledgeService {
  public:
-  explicit KnowledgeService(kb::KnowledgeStore& store) : store_(store) {}
+  KnowledgeService(kb::CatalogueStore& catalogue, kb::FailureRecordStore& records, kb::DiagnosisStore& diagnoses)
+      : catalogue_(catalogue), records_(records), diagnoses_(diagnoses) {}
 
   absl::StatusOr<v1::UnitType> GetUnitType(const v1::GetUnitTypeRequest& request);
   absl::StatusOr<v1::ListUnitTypesResponse> ListUnitTypes(const v1::ListUnitTypesRequest& request);
@@ -73,7 +76,9 @@ class KnowledgeService {
   absl::StatusOr<v1::Diagnosis> ResolveDiagnosis(const v1::ResolveDiagnosisRequest& request);
 
  private:
-  kb::KnowledgeStore& store_;
+  kb::CatalogueStore& catalogue_;
+  kb::FailureRecordStore& records_;
+  kb::DiagnosisStore& diagnoses_;
 };
 
 // Tokens and the audit trail. The caller comes from the access guard

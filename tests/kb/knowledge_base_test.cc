@@ -1,13 +1,16 @@
 // The knowledge base on a real PostgreSQL: seeding, diagnosis of stored
 // analyses, resolution into failure records and its effect on later
 // diagnoses, fleet statistics over what was written.
-#include "insdiag/kb/knowledge_store.h"
-
+#include <absl/strings/escaping.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "evidence_reports.h"
 #include "insdiag/kb/analysis_store.h"
+#include "insdiag/kb/catalogue_store.h"
+#include "insdiag/kb/diagnosis.h"
+#include "insdiag/kb/diagnosis_store.h"
+#include "insdiag/kb/failure_record_store.h"
 #include "insdiag/kb/fleet_store.h"
 #include "insdiag/kb/run_store.h"
 #include "support/database_fixture.h"
@@ -18,16 +21,18 @@ namespace {
 
 using namespace std::chrono_literals;
 
-class KnowledgeStoreTest : public insdiag::testing::DatabaseTest {
+class KnowledgeBaseTest : public insdiag::testing::DatabaseTest {
  protected:
   void SetUp() override {
     DatabaseTest::SetUp();
     if (IsSkipped() || HasFatalFailure()) return;
-    knowledge_ = std::make_unique<KnowledgeStore>(pool());
+    catalogue_ = std::make_unique<CatalogueStore>(pool());
+    records_ = std::make_unique<FailureRecordStore>(pool());
+    diagnoses_ = std::make_unique<DiagnosisStore>(pool());
     const auto types = api::BuiltinUnitTypes();
     const auto catalogues = BuiltinFailureModeCatalogues();
-    ASSERT_TRUE(knowledge_->Seed(types, catalogues).ok());
-    ASSERT_TRUE(knowledge_->Seed(types, catalogues).ok()) << "seeding twice is harmless";
+    ASSERT_TRUE(catalogue_->Seed(types, catalogues).ok());
+    ASSERT_TRUE(catalogue_->Seed(types, catalogues).ok()) << "seeding twice is harmless";
   }
 
   // A SUCCEEDED analysis of unit `serial` with `report`.
@@ -61,34 +66,36 @@ class KnowledgeStoreTest : public insdiag::testing::DatabaseTest {
     return 0.0;
   }
 
-  std::unique_ptr<KnowledgeStore> knowledge_;
+  std::unique_ptr<CatalogueStore> catalogue_;
+  std::unique_ptr<FailureRecordStore> records_;
+  std::unique_ptr<DiagnosisStore> diagnoses_;
 };
 
-TEST_F(KnowledgeStoreTest, SeedsTheUnitTypeAndItsFailureModes) {
-  auto type = knowledge_->GetUnitType("unitTypes/INS-2000");
+TEST_F(KnowledgeBaseTest, SeedsTheUnitTypeAndItsFailureModes) {
+  auto type = catalogue_->GetUnitType("unitTypes/INS-2000");
   ASSERT_TRUE(type.ok()) << type.status();
   EXPECT_GT(type->nominal_size(), 50);
-  auto modes = knowledge_->ListFailureModes("unitTypes/INS-2000", "");
+  auto modes = catalogue_->ListFailureModes("unitTypes/INS-2000", "");
   ASSERT_TRUE(modes.ok());
   EXPECT_EQ(modes->size(), 38u);  // 11 per-axis modes × 3 axes + 5 unit-level modes
-  auto card = knowledge_->ListFailureModes("", "interface_card");
+  auto card = catalogue_->ListFailureModes("", "interface_card");
   EXPECT_EQ(card->size(), 2u);
-  EXPECT_EQ(knowledge_->GetFailureMode("failureModes/nope").status().code(), absl::StatusCode::kNotFound);
+  EXPECT_EQ(catalogue_->GetFailureMode("failureModes/nope").status().code(), absl::StatusCode::kNotFound);
 }
 
-TEST_F(KnowledgeStoreTest, ARunOfANewSerialRegistersTheUnitWithItsModules) {
+TEST_F(KnowledgeBaseTest, ARunOfANewSerialRegistersTheUnitWithItsModules) {
   StoreAnalysis("INS-0001", testing::NominalReport());
-  auto unit = knowledge_->GetUnit("units/INS-0001");
+  auto unit = catalogue_->GetUnit("units/INS-0001");
   ASSERT_TRUE(unit.ok()) << unit.status();
   EXPECT_EQ(unit->unit_type(), "unitTypes/INS-2000");
-  auto modules = knowledge_->ListModules("units/INS-0001");
+  auto modules = catalogue_->ListModules("units/INS-0001");
   ASSERT_TRUE(modules.ok());
   EXPECT_EQ(modules->size(), 10u);
 }
 
-TEST_F(KnowledgeStoreTest, ConfirmingADiagnosisWritesAFailureRecordAndRaisesLaterPosteriors) {
+TEST_F(KnowledgeBaseTest, ConfirmingADiagnosisWritesAFailureRecordAndRaisesLaterPosteriors) {
   const std::string first = StoreAnalysis("INS-0002", WornGyroX());
-  auto diagnosis = knowledge_->CreateDiagnosis(first);
+  auto diagnosis = diagnoses_->Create(first);
   ASSERT_TRUE(diagnosis.ok()) << diagnosis.status();
   EXPECT_EQ(diagnosis->candidates(0).module(), "gyro.x");
   const double before = P(*diagnosis, "failureModes/dtg-bearing-wear.x");
@@ -99,38 +106,38 @@ TEST_F(KnowledgeStoreTest, ConfirmingADiagnosisWritesAFailureRecordAndRaisesLate
   resolve.set_failure_mode("failureModes/dtg-bearing-wear.x");
   resolve.set_confirmed(true);
   resolve.set_repair_action("gyro replaced");
-  auto resolved = knowledge_->ResolveDiagnosis(resolve);
+  auto resolved = diagnoses_->Resolve(resolve);
   ASSERT_TRUE(resolved.ok()) << resolved.status();
   EXPECT_TRUE(resolved->confirmed());
   EXPECT_FALSE(resolved->failure_record().empty());
-  EXPECT_EQ(knowledge_->ResolveDiagnosis(resolve).status().code(), absl::StatusCode::kFailedPrecondition);
+  EXPECT_EQ(diagnoses_->Resolve(resolve).status().code(), absl::StatusCode::kFailedPrecondition);
 
-  KnowledgeStore::RecordQuery unit_records;
+  FailureRecordQuery unit_records;
   unit_records.unit = "units/INS-0002";
-  auto records = knowledge_->ListFailureRecords(unit_records);
+  auto records = records_->List(unit_records);
   ASSERT_TRUE(records.ok());
   ASSERT_EQ(records->first.size(), 1u);
   EXPECT_TRUE(records->first[0].confirmed());
   EXPECT_EQ(records->first[0].module(), "units/INS-0002/modules/gyro.x");
   EXPECT_EQ(records->first[0].analysis(), first);
-  auto mode = knowledge_->GetFailureMode("failureModes/dtg-bearing-wear.x");
+  auto mode = catalogue_->GetFailureMode("failureModes/dtg-bearing-wear.x");
   EXPECT_EQ(mode->confirmed_failures(), 1);
   EXPECT_EQ(mode->signature(0).confirmed_cases(), 1);
   EXPECT_NE(mode->signature(0).change(), mode->signature(0).expert_change());
 
   // Another unit with the same evidence: the mode is now more probable.
-  auto later = knowledge_->CreateDiagnosis(StoreAnalysis("INS-0003", WornGyroX()));
+  auto later = diagnoses_->Create(StoreAnalysis("INS-0003", WornGyroX()));
   ASSERT_TRUE(later.ok());
   EXPECT_GT(P(*later, "failureModes/dtg-bearing-wear.x"), before);
 
   // A rejection is a no-fault-found record and leaves the mode's count alone.
-  auto other = knowledge_->CreateDiagnosis(StoreAnalysis("INS-0004", WornGyroX()));
+  auto other = diagnoses_->Create(StoreAnalysis("INS-0004", WornGyroX()));
   resolve.set_name(other->name());
   resolve.set_confirmed(false);
-  auto rejected = knowledge_->ResolveDiagnosis(resolve);
+  auto rejected = diagnoses_->Resolve(resolve);
   ASSERT_TRUE(rejected.ok()) << rejected.status();
   EXPECT_FALSE(rejected->confirmed());
-  EXPECT_EQ(knowledge_->GetFailureMode("failureModes/dtg-bearing-wear.x")->confirmed_failures(), 1);
+  EXPECT_EQ(catalogue_->GetFailureMode("failureModes/dtg-bearing-wear.x")->confirmed_failures(), 1);
 
   FleetStore fleet(pool());
   auto stats = fleet.GetFleetStatistics({});
@@ -146,36 +153,36 @@ TEST_F(KnowledgeStoreTest, ConfirmingADiagnosisWritesAFailureRecordAndRaisesLate
   EXPECT_EQ(ranked->units_size(), 3);
 }
 
-TEST_F(KnowledgeStoreTest, RefusesMalformedRecordsNamingTheField) {
+TEST_F(KnowledgeBaseTest, RefusesMalformedRecordsNamingTheField) {
   StoreAnalysis("INS-0005", testing::NominalReport());
   v1::FailureRecord record;
   record.set_module("units/INS-0005/modules/gyro.x");
   record.set_confirmed(true);
-  EXPECT_THAT(knowledge_->CreateFailureRecord(record).status().message(),
+  EXPECT_THAT(records_->Create(record).status().message(),
               ::testing::HasSubstr("failure_record.failure_mode"));
   record.set_failure_mode("failureModes/acc-bias-shift.x");
-  EXPECT_THAT(knowledge_->CreateFailureRecord(record).status().message(), ::testing::HasSubstr("is a failure of acc.x"));
+  EXPECT_THAT(records_->Create(record).status().message(), ::testing::HasSubstr("is a failure of acc.x"));
   record.set_module("units/INS-0005/modules/wheel");
-  EXPECT_EQ(knowledge_->CreateFailureRecord(record).status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(records_->Create(record).status().code(), absl::StatusCode::kInvalidArgument);
   record.set_module("units/INS-0005/modules/acc.x");
-  auto ok = knowledge_->CreateFailureRecord(record);
+  auto ok = records_->Create(record);
   EXPECT_TRUE(ok.ok()) << ok.status();
 }
 
 // A correction changes the record that every count reads, and keeps the
 // version it replaced with its reason: the FRACAS history is never lost.
-TEST_F(KnowledgeStoreTest, ACorrectedRecordKeepsItsReplacedVersionAndCountsAsCorrected) {
+TEST_F(KnowledgeBaseTest, ACorrectedRecordKeepsItsReplacedVersionAndCountsAsCorrected) {
   StoreAnalysis("INS-0006", testing::NominalReport());
   v1::FailureRecord record;
   record.set_module("units/INS-0006/modules/acc.x");
   record.set_confirmed(true);
   record.set_failure_mode("failureModes/acc-bias-shift.x");
   record.set_operating_hours(1200.0);
-  auto created = knowledge_->CreateFailureRecord(record);
+  auto created = records_->Create(record);
   ASSERT_TRUE(created.ok()) << created.status();
   EXPECT_EQ(created->revision(), 1);
   auto confirmed_count = [&] {
-    auto mode = knowledge_->GetFailureMode("failureModes/acc-bias-shift.x");
+    auto mode = catalogue_->GetFailureMode("failureModes/acc-bias-shift.x");
     EXPECT_TRUE(mode.ok()) << mode.status();
     return mode.ok() ? mode->confirmed_failures() : -1;
   };
@@ -186,9 +193,9 @@ TEST_F(KnowledgeStoreTest, ACorrectedRecordKeepsItsReplacedVersionAndCountsAsCor
   facts.set_no_fault_found(true);
   facts.set_operating_hours(1250.0);
   facts.set_notes("retest passed");
-  EXPECT_EQ(knowledge_->CorrectFailureRecord(created->name(), facts, "").status().code(),
+  EXPECT_EQ(records_->Correct(created->name(), facts, "").status().code(),
             absl::StatusCode::kInvalidArgument) << "a correction without a reason";
-  auto corrected = knowledge_->CorrectFailureRecord(created->name(), facts, "retest on bench 2 found no fault");
+  auto corrected = records_->Correct(created->name(), facts, "retest on bench 2 found no fault");
   ASSERT_TRUE(corrected.ok()) << corrected.status();
   EXPECT_EQ(corrected->revision(), 2);
   EXPECT_FALSE(corrected->confirmed());
@@ -196,7 +203,7 @@ TEST_F(KnowledgeStoreTest, ACorrectedRecordKeepsItsReplacedVersionAndCountsAsCor
   EXPECT_EQ(corrected->module(), created->module());
   EXPECT_EQ(confirmed_count(), 0) << "counts read the corrected record";
 
-  auto history = knowledge_->ListFailureRecordRevisions(created->name());
+  auto history = records_->ListRevisions(created->name());
   ASSERT_TRUE(history.ok()) << history.status();
   ASSERT_EQ(history->size(), 1u);
   const v1::FailureRecordRevision& was = history->front();
@@ -210,12 +217,58 @@ TEST_F(KnowledgeStoreTest, ACorrectedRecordKeepsItsReplacedVersionAndCountsAsCor
   facts.set_no_fault_found(false);
   facts.set_confirmed(true);
   facts.set_failure_mode("failureModes/dtg-bearing-wear.x");
-  EXPECT_EQ(knowledge_->CorrectFailureRecord(created->name(), facts, "wrong").status().code(),
+  EXPECT_EQ(records_->Correct(created->name(), facts, "wrong").status().code(),
             absl::StatusCode::kInvalidArgument);
-  EXPECT_EQ(knowledge_->ListFailureRecordRevisions(created->name())->size(), 1u);
-  EXPECT_EQ(knowledge_->CorrectFailureRecord("failureRecords/00000000-0000-4000-8000-000000000000", facts, "x")
+  EXPECT_EQ(records_->ListRevisions(created->name())->size(), 1u);
+  EXPECT_EQ(records_->Correct("failureRecords/00000000-0000-4000-8000-000000000000", facts, "x")
                 .status().code(),
             absl::StatusCode::kNotFound);
+}
+
+// Records and diagnoses page newest first by (time, id): page by page they
+// are the whole list in its order, and a token the server did not issue is refused.
+TEST_F(KnowledgeBaseTest, ListsRecordsAndDiagnosesPageByPage) {
+  const std::string unit = "units/INS-0007";
+  std::vector<std::string> analyses;
+  for (int i = 0; i < 3; ++i) analyses.push_back(StoreAnalysis("INS-0007", testing::NominalReport()));
+  for (const auto& analysis : analyses) {
+    ASSERT_TRUE(diagnoses_->Create(analysis).ok());
+    v1::FailureRecord record;
+    record.set_module(unit + "/modules/acc.x");
+    record.set_analysis(analysis);
+    ASSERT_TRUE(records_->Create(record).ok());
+  }
+  // The names of every page of `list(query)`, `page_size` at a time.
+  const auto names = [](auto list, auto query, int page_size) {
+    std::vector<std::string> out;
+    query.page.page_size = page_size;
+    for (int pages = 0; pages < 10; ++pages) {
+      auto page = list(query);
+      EXPECT_TRUE(page.ok()) << page.status();
+      if (!page.ok()) break;
+      for (const auto& item : page->first) out.push_back(item.name());
+      if (page->second.empty()) break;
+      query.page.page_token = page->second;
+    }
+    return out;
+  };
+
+  FailureRecordQuery records;
+  records.unit = unit;
+  const auto list_records = [&](const FailureRecordQuery& q) { return records_->List(q); };
+  EXPECT_EQ(names(list_records, records, 50).size(), 3u);
+  EXPECT_EQ(names(list_records, records, 1), names(list_records, records, 50));
+
+  DiagnosisQuery diagnoses;
+  diagnoses.unit = unit;
+  const auto list_diagnoses = [&](const DiagnosisQuery& q) { return diagnoses_->List(q); };
+  EXPECT_EQ(names(list_diagnoses, diagnoses, 50).size(), 3u);
+  EXPECT_EQ(names(list_diagnoses, diagnoses, 1), names(list_diagnoses, diagnoses, 50));
+
+  records.page.page_token = absl::WebSafeBase64Escape("2024-01-01 00:00:00+00|not-a-uuid");
+  EXPECT_EQ(records_->List(records).status().code(), absl::StatusCode::kInvalidArgument);
+  diagnoses.page.page_token = "not a token";
+  EXPECT_EQ(diagnoses_->List(diagnoses).status().code(), absl::StatusCode::kInvalidArgument);
 }
 
 }  // namespace

@@ -1,0 +1,47 @@
+// The knowledge base's catalogue: unit types with their nominal values,
+// units and their modules, failure modes with their signatures
+// (migrations/0002_knowledge.sql), and seeding them from the built-in data.
+#pragma once
+
+#include <absl/status/status.h>
+#include <absl/status/statusor.h>
+
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "insdiag/kb/connection_pool.h"
+#include "insdiag/kb/page_query.h"
+#include "insdiag/v1/knowledge.pb.h"
+
+namespace insdiag::kb {
+
+class CatalogueStore {
+ public:
+  explicit CatalogueStore(ConnectionPool& pool) : pool_(pool) {}
+
+  // Upserts the unit types, their nominal values and their failure modes
+  // (expanded templates), idempotently and under an advisory lock: replicas
+  // starting together seed once. A mode's refined signature is kept unless
+  // the expert's values changed.
+  absl::Status Seed(std::span<const v1::UnitType> unit_types, std::span<const v1::FailureModeCatalogue> catalogues);
+
+  absl::StatusOr<v1::UnitType> GetUnitType(const std::string& name);  // unitTypes/{t}
+  absl::StatusOr<std::vector<v1::UnitType>> ListUnitTypes();
+  absl::StatusOr<v1::Unit> GetUnit(const std::string& name);  // units/{serial}
+  absl::StatusOr<std::pair<std::vector<v1::Unit>, std::string>> ListUnits(const PageQuery& page,
+                                                                          const std::string& unit_type,
+                                                                          const std::string& batch);
+  // Installation history, by role then installation.
+  absl::StatusOr<std::vector<v1::Module>> ListModules(const std::string& unit_name);
+
+  absl::StatusOr<v1::FailureMode> GetFailureMode(const std::string& name);
+  absl::StatusOr<std::vector<v1::FailureMode>> ListFailureModes(const std::string& unit_type,
+                                                                const std::string& module_role);
+
+ private:
+  ConnectionPool& pool_;
+};
+
+}  // namespace insdiag::kb

@@ -1,0 +1,48 @@
+// Failure records, the refusals database (FRACAS): what was found on a
+// unit's module, and every earlier version of a corrected record
+// (migrations/0002_knowledge.sql). A record that confirms a failure mode, or
+// stops confirming one, refines that mode's signature in the same
+// transaction.
+#pragma once
+
+#include <absl/status/statusor.h>
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "insdiag/kb/connection_pool.h"
+#include "insdiag/kb/page_query.h"
+#include "insdiag/v1/knowledge.pb.h"
+
+namespace insdiag::kb {
+
+// Records newest first; each filter applies when not empty.
+struct FailureRecordQuery {
+  PageQuery page;
+  std::string module;  // units/{u}/modules/{role}
+  std::string unit;    // units/{u}
+  std::string failure_mode;
+};
+
+class FailureRecordStore {
+ public:
+  explicit FailureRecordStore(ConnectionPool& pool) : pool_(pool) {}
+
+  // INVALID_ARGUMENT naming the field for a malformed record; NOT_FOUND for
+  // an unknown module, mode or analysis.
+  absl::StatusOr<v1::FailureRecord> Create(const v1::FailureRecord& record);
+  // The record takes `facts` (see CorrectFailureRecordRequest), and the
+  // version it replaces is kept with `reason`, in one transaction; confirmed
+  // modes it leaves or joins are refined again.
+  absl::StatusOr<v1::FailureRecord> Correct(const std::string& name, const v1::FailureRecord& facts,
+                                            const std::string& reason);
+  // The versions a record replaced, oldest first.
+  absl::StatusOr<std::vector<v1::FailureRecordRevision>> ListRevisions(const std::string& name);
+  absl::StatusOr<std::pair<std::vector<v1::FailureRecord>, std::string>> List(const FailureRecordQuery& query);
+
+ private:
+  ConnectionPool& pool_;
+};
+
+}  // namespace insdiag::kb

@@ -1,0 +1,120 @@
+#include "catalogue_rows.h"
+
+#include <absl/strings/match.h>
+#include <absl/strings/str_cat.h>
+
+#include <map>
+
+#include "insdiag/kb/diagnosis.h"
+#include "store_util.h"
+
+namespace insdiag::kb::internal {
+
+std::string UnitTypeId(const std::string& name) {
+  return absl::StartsWith(name, "unitTypes/") ? name.substr(10) : name;
+}
+
+absl::StatusOr<v1::UnitType> LoadUnitType(Connection& db, const std::string& id) {
+  auto rows = db.Exec("SELECT display_name, description FROM unit_types WHERE unit_type = $1", {Param::Text(id)});
+  if (!rows.ok()) return rows.status();
+  if (rows->rows() == 0) return absl::NotFoundError(absl::StrCat("unitTypes/", id, " does not exist"));
+  v1::UnitType t;
+  t.set_name(absl::StrCat("unitTypes/", id));
+  t.set_display_name(rows->String(0, 0));
+  t.set_description(rows->String(0, 1));
+  auto nominal = db.Exec(
+      "SELECT parameter, value, tolerance, unit FROM nominal_parameters WHERE unit_type = $1 ORDER BY position",
+      {Param::Text(id)});
+  if (!nominal.ok()) return nominal.status();
+  for (int r = 0; r < nominal->rows(); ++r) {
+    auto* p = t.add_nominal();
+    p->set_name(nominal->String(r, 0));
+    p->set_value(DoubleOr0(*nominal, r, 1));
+    p->set_tolerance(DoubleOr0(*nominal, r, 2));
+    p->set_unit(nominal->String(r, 3));
+  }
+  return t;
+}
+
+absl::StatusOr<double> FleetExposure(Connection& db, const std::string& unit_type_id) {
+  auto rows = db.Exec("SELECT coalesce(sum(operating_hours), 0) FROM units WHERE unit_type = $1",
+                      {Param::Text(unit_type_id)});
+  if (!rows.ok()) return rows.status();
+  return DoubleOr0(*rows, 0, 0);
+}
+
+v1::DiagnosisSettings SettingsFor(const std::string& unit_type_id) {
+  auto catalogue = BuiltinFailureModeCatalogue(unit_type_id);
+  if (catalogue.ok()) return catalogue->settings();
+  // A unit type without a catalogue has no modes; these settings only rank
+  // healthy against unknown. Take the first catalogue's constants.
+  auto all = BuiltinFailureModeCatalogues();
+  return all.empty() ? v1::DiagnosisSettings() : all.front().settings();
+}
+
+absl::StatusOr<std::vector<v1::FailureMode>> LoadModes(Connection& db, const std::string& unit_type_id,
+                                                       const std::string& role, const std::string& only_mode) {
+  auto rows = db.Exec(
+      "SELECT f.failure_mode, f.unit_type, f.module_role, f.display_name, f.description, f.expert_rate_per_hour, "
+      "f.weibull_shape, f.weibull_scale_hours, "
+      "(SELECT count(*) FROM failure_records r WHERE r.failure_mode = f.failure_mode AND r.confirmed) "
+      "FROM failure_modes f WHERE ($1::text IS NULL OR f.unit_type = $1) AND ($2::text IS NULL OR f.module_role = $2) "
+      "AND ($3::text IS NULL OR f.failure_mode = $3) ORDER BY f.unit_type, f.module_role, f.failure_mode",
+      {Param::TextOrNull(unit_type_id), Param::TextOrNull(role), Param::TextOrNull(only_mode)});
+  if (!rows.ok()) return rows.status();
+  std::vector<v1::FailureMode> modes;
+  std::map<std::string, std::size_t> index;
+  std::map<std::string, double> exposure;
+  std::map<std::string, v1::DiagnosisSettings> settings;
+  for (int r = 0; r < rows->rows(); ++r) {
+    v1::FailureMode m;
+    m.set_name(absl::StrCat(kModePrefix, "/", rows->String(r, 0)));
+    const std::string type = rows->String(r, 1);
+    m.set_unit_type(absl::StrCat(kUnitTypePrefix, "/", type));
+    m.set_module_role(rows->String(r, 2));
+    m.set_display_name(rows->String(r, 3));
+    m.set_description(rows->String(r, 4));
+    m.set_expert_rate_per_million_hours(DoubleOr0(*rows, r, 5) * 1e6);
+    m.set_weibull_shape(DoubleOr0(*rows, r, 6));
+    m.set_weibull_scale_hours(DoubleOr0(*rows, r, 7));
+    m.set_confirmed_failures(IntOr0(*rows, r, 8));
+    if (!exposure.contains(type)) {
+      // Once per unit type: the fleet's hours, and its catalogue's settings (parsed from JSON).
+      auto hours = FleetExposure(db, type);
+      if (!hours.ok()) return hours.status();
+      exposure[type] = *hours;
+      settings[type] = SettingsFor(type);
+    }
+    m.set_rate_per_million_hours(
+        1e6 * ModeRatePerHour(m, m.confirmed_failures(), exposure[type], settings[type]));
+    index[rows->String(r, 0)] = modes.size();
+    modes.push_back(std::move(m));
+  }
+  if (modes.empty()) return modes;
+  std::vector<std::string> ids;
+  for (const auto& [id, i] : index) ids.push_back(id);
+  auto terms = db.Exec(
+      "SELECT failure_mode, parameter, direction, scale, common, fraction, expert_change, expert_spread, change, "
+      "spread, confirmed_cases FROM signature_terms WHERE failure_mode = ANY($1::text[]) "
+      "ORDER BY failure_mode, position",
+      {Param::TextArray(ids)});
+  if (!terms.ok()) return terms.status();
+  for (int r = 0; r < terms->rows(); ++r) {
+    auto* s = modes[index[terms->String(r, 0)]].add_signature();
+    s->set_parameter(terms->String(r, 1));
+    v1::Signature::Direction d = v1::Signature::EITHER;
+    v1::Signature::Direction_Parse(terms->String(r, 2), &d);
+    s->set_direction(d);
+    s->set_scale(terms->String(r, 3));
+    s->set_common(terms->Bool(r, 4));
+    s->set_fraction(DoubleOr0(*terms, r, 5));
+    s->set_expert_change(DoubleOr0(*terms, r, 6));
+    s->set_expert_spread(DoubleOr0(*terms, r, 7));
+    s->set_change(DoubleOr0(*terms, r, 8));
+    s->set_spread(DoubleOr0(*terms, r, 9));
+    s->set_confirmed_cases(static_cast<int>(IntOr0(*terms, r, 10)));
+  }
+  return modes;
+}
+
+}  // namespace insdiag::kb::internal

@@ -1,0 +1,35 @@
+// Reading the catalogue's tables into messages: what the catalogue store
+// serves, and what diagnosing and refining signatures read alongside it.
+#pragma once
+
+#include <absl/status/statusor.h>
+
+#include <string>
+#include <vector>
+
+#include "insdiag/kb/pg.h"
+#include "insdiag/v1/knowledge.pb.h"
+
+namespace insdiag::kb::internal {
+
+inline constexpr char kUnitTypePrefix[] = "unitTypes";
+inline constexpr char kModePrefix[] = "failureModes";
+
+// unitTypes/{t} or a bare display name → {t}.
+std::string UnitTypeId(const std::string& name);
+
+// The unit type with its nominal values, in order; NOT_FOUND.
+absl::StatusOr<v1::UnitType> LoadUnitType(Connection& db, const std::string& id);
+
+// The fleet's operating hours of a unit type.
+absl::StatusOr<double> FleetExposure(Connection& db, const std::string& unit_type_id);
+
+// The diagnosis constants of the unit type's built-in catalogue.
+v1::DiagnosisSettings SettingsFor(const std::string& unit_type_id);
+
+// The failure modes with their signatures, confirmed counts and current
+// rates; each filter ("" for any) narrows: unit type, module role, one mode.
+absl::StatusOr<std::vector<v1::FailureMode>> LoadModes(Connection& db, const std::string& unit_type_id,
+                                                       const std::string& role, const std::string& only_mode);
+
+}  // namespace insdiag::kb::internal

@@ -1,0 +1,249 @@
+#include "insdiag/kb/diagnosis_store.h"
+
+#include <absl/strings/str_cat.h>
+
+#include <algorithm>
+
+#include "catalogue_rows.h"
+#include "failure_record_writes.h"
+#include "insdiag/kb/diagnosis.h"
+#include "report_rows.h"
+#include "signature_refinement.h"
+#include "store_util.h"
+
+namespace insdiag::kb {
+namespace {
+
+using internal::CheckModeOfRole;
+using internal::CheckModuleRole;
+using internal::CurrentModule;
+using internal::FleetExposure;
+using internal::InsertFailureRecord;
+using internal::kModePrefix;
+using internal::LoadModes;
+using internal::LoadReport;
+using internal::LoadUnitType;
+using internal::Micros;
+using internal::RefineModeSignature;
+using internal::SettingsFor;
+using internal::UnitTypeId;
+
+absl::StatusOr<v1::Diagnosis> LoadDiagnosis(Connection& db, const std::string& id) {
+  auto rows = db.Exec(
+      "SELECT d.body, coalesce(d.record_id::text, ''), coalesce(r.confirmed, false), coalesce(m.role, '') "
+      "FROM diagnoses d LEFT JOIN failure_records r ON r.record_id = d.record_id "
+      "LEFT JOIN modules m ON m.module_id = r.module_id WHERE d.diagnosis_id = $1::uuid",
+      {Param::Text(id)}, ResultFormat::kBinary);
+  if (!rows.ok()) return rows.status();
+  if (rows->rows() == 0) return absl::NotFoundError(absl::StrCat("diagnoses/", id, " does not exist"));
+  v1::Diagnosis d;
+  d.ParseFromString(std::string(rows->Get(0, 0)));
+  if (!rows->Get(0, 1).empty()) {
+    d.set_failure_record(absl::StrCat("failureRecords/", rows->String(0, 1)));
+    d.set_confirmed(rows->Get(0, 2) == std::string_view("\x01", 1));
+    d.set_resolved_module(rows->String(0, 3));
+  }
+  return d;
+}
+
+}  // namespace
+
+absl::StatusOr<v1::Diagnosis> DiagnosisStore::Create(const std::string& analysis_name) {
+  auto analysis_id = internal::UuidOf(analysis_name, "analyses", "analysis");
+  if (!analysis_id.ok()) return analysis_id.status();
+  auto db = pool_.Acquire();
+  if (!db.ok()) return db.status();
+  auto unit = (*db)->Exec(
+      "SELECT a.unit_id, u.serial, coalesce(u.unit_type, ''), coalesce(a.unit_hours, u.operating_hours), "
+      "coalesce((SELECT max(p.unit_hours) FROM analyses p WHERE p.unit_id = a.unit_id AND p.state = 'SUCCEEDED' "
+      "AND p.create_time < a.create_time), 0) "
+      "FROM analyses a JOIN units u ON u.unit_id = a.unit_id WHERE a.analysis_id = $1::uuid",
+      {Param::Text(*analysis_id)});
+  if (!unit.ok()) return unit.status();
+  if (unit->rows() == 0) return absl::NotFoundError(absl::StrCat(analysis_name, " does not exist"));
+  const std::string unit_id = unit->String(0, 0);
+  const std::string serial = unit->String(0, 1);
+  const std::string type_id = unit->String(0, 2);
+  if (type_id.empty()) {
+    return absl::FailedPreconditionError(absl::StrCat("units/", serial, " has no unit type (its runs name none): ",
+                                                      "there is no nominal model to diagnose against"));
+  }
+  auto report = LoadReport(**db, *analysis_id);
+  if (!report.ok()) return report.status();
+  auto unit_type = LoadUnitType(**db, type_id);
+  if (!unit_type.ok()) {
+    if (unit_type.status().code() == absl::StatusCode::kNotFound) {
+      return absl::FailedPreconditionError(absl::StrCat("units/", serial, " is of unit type '", type_id,
+                                                        "', which the knowledge base does not know"));
+    }
+    return unit_type.status();
+  }
+  auto modes = LoadModes(**db, type_id, "", "");
+  if (!modes.ok()) return modes.status();
+  auto fleet = FleetExposure(**db, type_id);
+  if (!fleet.ok()) return fleet.status();
+  const v1::DiagnosisSettings settings = SettingsFor(type_id);
+  PriorInputs prior;
+  const double hours = internal::DoubleOr0(*unit, 0, 3);
+  const double previous = internal::DoubleOr0(*unit, 0, 4);
+  prior.exposure_hours = std::max(hours - previous, 0.0);
+  prior.fleet_exposure_hours = *fleet;
+  for (const auto& m : *modes) prior.confirmed_failures[m.name()] = m.confirmed_failures();
+
+  v1::Diagnosis diagnosis = Diagnose(EvidenceFromReport(*report, *unit_type, settings), *modes, settings, prior);
+  diagnosis.set_analysis(analysis_name);
+  diagnosis.set_unit(absl::StrCat("units/", serial));
+  std::string id;
+  const absl::Status status = (*db)->InTransaction([&]() -> absl::Status {
+    auto made = (*db)->Exec("SELECT gen_random_uuid()::text, " + Micros("now()"));
+    if (!made.ok()) return made.status();
+    id = made->String(0, 0);
+    diagnosis.set_name(absl::StrCat("diagnoses/", id));
+    *diagnosis.mutable_create_time() = internal::TimestampOfMicros(internal::IntOr0(*made, 0, 1));
+    const DiagnosisHeadline headline = HeadlineOf(diagnosis);
+    const v1::Candidate* top = headline.top;
+    std::string body;
+    diagnosis.SerializeToString(&body);
+    std::vector<std::string> notes(diagnosis.notes().begin(), diagnosis.notes().end());
+    auto inserted = (*db)->Exec(
+        "INSERT INTO diagnoses (diagnosis_id, analysis_id, unit_id, fault_probability, top_module, top_failure_mode, "
+        "top_probability, body, notes, create_time) VALUES ($1::uuid, $2::uuid, $3, $4, $5, $6, $7, $8, $9::text[], "
+        "to_timestamp($10::double precision / 1000000))",
+        {Param::Text(id), Param::Text(*analysis_id), Param::Text(unit_id), Param::Double(headline.fault_probability),
+         Param::Text(top ? top->module() : ""), Param::Text(top ? top->failure_mode() : ""),
+         Param::Double(top ? top->probability() : 0.0), Param::Bytes(body),
+         Param::TextArray(notes),
+         Param::Int(internal::MicrosOf(diagnosis.create_time()))});
+    if (!inserted.ok()) return inserted.status();
+    int rank = 0;
+    for (const auto& c : diagnosis.candidates()) {
+      std::vector<std::string> evidence(c.evidence().begin(), c.evidence().end());
+      auto row = (*db)->Exec(
+          "INSERT INTO diagnosis_candidates (diagnosis_id, rank, module, failure_mode, probability, evidence) "
+          "VALUES ($1::uuid, $2, $3, $4, $5, $6::text[])",
+          {Param::Text(id), Param::Int(rank++), Param::Text(c.module()), Param::Text(c.failure_mode()),
+           Param::Double(c.probability()), Param::TextArray(evidence)});
+      if (!row.ok()) return row.status();
+    }
+    return absl::OkStatus();
+  });
+  if (!status.ok()) return status;
+  return diagnosis;
+}
+
+absl::StatusOr<v1::Diagnosis> DiagnosisStore::Get(const std::string& name) {
+  auto id = internal::UuidOf(name, "diagnoses", "name");
+  if (!id.ok()) return id.status();
+  auto db = pool_.Acquire();
+  if (!db.ok()) return db.status();
+  return LoadDiagnosis(**db, *id);
+}
+
+absl::StatusOr<std::pair<std::vector<v1::Diagnosis>, std::string>> DiagnosisStore::List(
+    const DiagnosisQuery& query) {
+  const int size = internal::ClampPageSize(query.page.page_size);
+  std::string analysis_id, serial;
+  if (!query.analysis.empty()) {
+    auto id = internal::UuidOf(query.analysis, "analyses", "analysis");
+    if (!id.ok()) return id.status();
+    analysis_id = *id;
+  }
+  if (!query.unit.empty()) {
+    auto s = internal::IdOf(query.unit, "units", "unit");
+    if (!s.ok()) return s.status();
+    serial = *s;
+  }
+  std::vector<Param> params = {Param::Int(size + 1), Param::TextOrNull(analysis_id), Param::TextOrNull(serial)};
+  auto after = internal::KeysetCondition(query.page.page_token, "d.create_time", "d.diagnosis_id",
+                                         internal::KeysetOrder::kNewestFirst, params);
+  if (!after.ok()) return after.status();
+  auto db = pool_.Acquire();
+  if (!db.ok()) return db.status();
+  auto rows = (*db)->Exec(
+      absl::StrCat("SELECT d.diagnosis_id::text, d.create_time::text FROM diagnoses d JOIN units u USING (unit_id) "
+                   "WHERE ($2::uuid IS NULL OR d.analysis_id = $2::uuid) AND ($3::text IS NULL OR u.serial = $3) AND ",
+                   *after, " ORDER BY d.create_time DESC, d.diagnosis_id DESC LIMIT $1"),
+      params);
+  if (!rows.ok()) return rows.status();
+  std::vector<v1::Diagnosis> out;
+  const int shown = std::min(rows->rows(), size);
+  for (int r = 0; r < shown; ++r) {
+    auto d = LoadDiagnosis(**db, rows->String(r, 0));
+    if (!d.ok()) return d.status();
+    out.push_back(std::move(*d));
+  }
+  std::string next;
+  if (rows->rows() > size) next = internal::EncodeToken(rows->String(shown - 1, 1), rows->String(shown - 1, 0));
+  return std::make_pair(std::move(out), next);
+}
+
+absl::StatusOr<v1::Diagnosis> DiagnosisStore::Resolve(const v1::ResolveDiagnosisRequest& request) {
+  auto id = internal::UuidOf(request.name(), "diagnoses", "name");
+  if (!id.ok()) return id.status();
+  if (request.module().empty()) {
+    return absl::InvalidArgumentError("module: the module found faulty (or suspected) is required");
+  }
+  std::string mode_id;
+  if (!request.failure_mode().empty()) {
+    auto m = internal::IdOf(request.failure_mode(), kModePrefix, "failure_mode");
+    if (!m.ok()) return m.status();
+    mode_id = *m;
+  }
+  if (request.confirmed() && mode_id.empty()) {
+    return absl::InvalidArgumentError("failure_mode: a confirmed diagnosis names the failure mode found");
+  }
+  auto db = pool_.Acquire();
+  if (!db.ok()) return db.status();
+  const absl::Status status = (*db)->InTransaction([&]() -> absl::Status {
+    auto row = (*db)->Exec(
+        "SELECT d.analysis_id::text, d.unit_id, d.record_id IS NOT NULL, coalesce(a.unit_hours, u.operating_hours) "
+        "FROM diagnoses d JOIN analyses a USING (analysis_id) JOIN units u ON u.unit_id = d.unit_id "
+        "WHERE d.diagnosis_id = $1::uuid FOR UPDATE OF d",
+        {Param::Text(*id)});
+    if (!row.ok()) return row.status();
+    if (row->rows() == 0) return absl::NotFoundError(absl::StrCat(request.name(), " does not exist"));
+    if (row->Bool(0, 2)) return absl::FailedPreconditionError(absl::StrCat(request.name(), " is already resolved"));
+    auto unit_id = row->Int(0, 1);
+    if (!unit_id.ok()) return unit_id.status();
+    if (auto known = CheckModuleRole(**db, request.module(), "module"); !known.ok()) return known;
+    if (auto fits = CheckModeOfRole(**db, mode_id, request.failure_mode(), request.module(), "failure_mode");
+        !fits.ok()) {
+      return fits;
+    }
+    auto module_id = CurrentModule(**db, *unit_id, request.module());
+    if (!module_id.ok()) return module_id.status();
+    v1::FailureRecord record;
+    record.set_operating_hours(internal::DoubleOr0(*row, 0, 3));
+    record.set_confirmed(request.confirmed());
+    record.set_no_fault_found(!request.confirmed());
+    record.set_repaired(request.confirmed() && !request.repair_action().empty());
+    record.set_repair_action(request.repair_action());
+    record.set_notes(request.notes());
+    auto written = InsertFailureRecord(**db, *module_id, *unit_id, record, mode_id, row->String(0, 0), *id);
+    if (!written.ok()) return written.status();
+    auto linked = (*db)->Exec("UPDATE diagnoses SET record_id = $2::uuid WHERE diagnosis_id = $1::uuid",
+                              {Param::Text(*id), Param::Text(*written)});
+    if (!linked.ok()) return linked.status();
+    if (request.confirmed()) return RefineModeSignature(**db, mode_id);
+    return absl::OkStatus();
+  });
+  if (!status.ok()) return status;
+  return LoadDiagnosis(**db, *id);
+}
+
+absl::Status DiagnosisStore::RefineSignatures(const std::string& unit_type) {
+  auto db = pool_.Acquire();
+  if (!db.ok()) return db.status();
+  auto modes = (*db)->Exec(
+      "SELECT DISTINCT r.failure_mode FROM failure_records r JOIN failure_modes f USING (failure_mode) "
+      "WHERE r.confirmed AND r.analysis_id IS NOT NULL AND ($1::text IS NULL OR f.unit_type = $1) ORDER BY 1",
+      {Param::TextOrNull(unit_type.empty() ? "" : UnitTypeId(unit_type))});
+  if (!modes.ok()) return modes.status();
+  for (int r = 0; r < modes->rows(); ++r) {
+    const std::string mode_id = modes->String(r, 0);
+    if (auto s = (*db)->InTransaction([&] { return RefineModeSignature(**db, mode_id); }); !s.ok()) return s;
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace insdiag::kb
