@@ -37,11 +37,14 @@ class ClientsTest : public DatabaseTest {
                                     dir_ / "server");
     ASSERT_TRUE(server.ok()) << server.status();
     server_ = std::make_unique<Subprocess>(std::move(*server));
-    const std::regex listening(R"(listening grpc=[^ ]*:(\d+))");
+    const std::regex listening(R"(listening grpc=[^ ]*:(\d+) http=[^ ]*:(\d+))");
     for (int i = 0; i < 400 && address_.empty(); ++i) {
       std::smatch match;
       const std::string out = server_->Stdout();
-      if (std::regex_search(out, match, listening)) address_ = "127.0.0.1:" + match[1].str();
+      if (std::regex_search(out, match, listening)) {
+        address_ = "127.0.0.1:" + match[1].str();
+        http_address_ = "http://127.0.0.1:" + match[2].str();
+      }
       std::this_thread::sleep_for(25ms);
     }
     ASSERT_FALSE(address_.empty()) << server_->Stderr();
@@ -64,6 +67,7 @@ class ClientsTest : public DatabaseTest {
   std::filesystem::path dir_;
   std::unique_ptr<Subprocess> server_;
   std::string address_;
+  std::string http_address_;
   std::string token_;
 };
 
@@ -249,6 +253,65 @@ TEST_F(ClientsTest, ServerVerbsReadAndResolveAGeneratedFleet) {
   EXPECT_EQ(created.exit_status, 0) << created.stderr_text;
   EXPECT_THAT(created.stdout_text, HasSubstr("failureRecords/"));
   EXPECT_EQ(insdiag({"failure-records", "create", "--module", "G5-00002/acc.x", "--confirmed"}).exit_status, 2);
+}
+
+// The first start's demonstration (run.sh calls scripts/load-demo.sh on a new
+// database): the page must open on the loop at work, so the simulated units
+// are analysed with their hidden effects found, the faulty one is FAULTY,
+// and the fleet views have a fleet.
+TEST_F(ClientsTest, TheDemonstrationShowsTheLoopAFaultyUnitTheRealRecordAndAFleet) {
+  auto loaded = RunToCompletion({INSDIAG_SOURCE_DIR "/scripts/load-demo.sh", "--grpc", address_, "--http",
+                                 http_address_, "--token", token_, "--database-url", database_url(), "--build-dir",
+                                 std::filesystem::path(INSDIAG_CLI_PATH).parent_path().parent_path().string(),
+                                 "--work-dir", dir_.string()},
+                                dir_, 240s);
+  ASSERT_TRUE(loaded.ok());
+  ASSERT_EQ(loaded->exit_status, 0) << loaded->stdout_text << loaded->stderr_text;
+
+  const auto insdiag = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), INSDIAG_CLI_PATH);
+    args.insert(args.end(), {"--server", address_, "--token", token_});
+    auto done = RunToCompletion(args, dir_, 60s);
+    EXPECT_TRUE(done.ok());
+    return done.ok() ? *done : Completed{};
+  };
+  const auto report_of = [&](const std::string& unit) {
+    v1::ListAnalysesResponse listed;
+    const auto parsed = api::FromJson(insdiag({"analyses", "--unit", unit, "--json"}).stdout_text, &listed);
+    EXPECT_TRUE(parsed.ok()) << parsed;
+    v1::AnalysisReport report;
+    if (listed.analyses().empty()) {
+      ADD_FAILURE() << unit << " has no analysis";
+      return report;
+    }
+    EXPECT_EQ(listed.analyses(0).state(), v1::Analysis::SUCCEEDED) << unit;
+    EXPECT_TRUE(api::FromJson(insdiag({"report", listed.analyses(0).name(), "--json"}).stdout_text, &report).ok());
+    return report;
+  };
+  const auto has_effect = [](const v1::AnalysisReport& report, const std::string& prefix) {
+    for (const std::string& e : report.model().effects()) {
+      if (e.rfind(prefix, 0) == 0) return true;
+    }
+    return false;
+  };
+
+  EXPECT_NE(report_of("DEMO-1").verdict(), v1::AnalysisReport::FAULTY);
+  const v1::AnalysisReport hidden_scale_factor = report_of("DEMO-2");
+  EXPECT_TRUE(has_effect(hidden_scale_factor, "gyro_scale_factor.z")) << hidden_scale_factor.model().DebugString();
+  const v1::AnalysisReport faulty = report_of("DEMO-3");
+  EXPECT_EQ(faulty.verdict(), v1::AnalysisReport::FAULTY);
+  EXPECT_TRUE(has_effect(faulty, "gyro_bias_step.x@")) << faulty.model().DebugString();
+  for (const char* unit : {"DEMO-1", "DEMO-2", "DEMO-3"}) {
+    v1::ListDiagnosesResponse diagnoses;
+    EXPECT_TRUE(api::FromJson(insdiag({"diagnoses", "--unit", unit, "--json"}).stdout_text, &diagnoses).ok());
+    EXPECT_EQ(diagnoses.diagnoses_size(), 1) << unit;
+  }
+  if (std::filesystem::exists(INSDIAG_SHARED_DIR "/data/real/rlg-static-psins.csv")) {
+    EXPECT_THAT(loaded->stdout_text, HasSubstr("the real record is runs/"));
+  }
+  v1::FleetStatistics statistics;
+  EXPECT_TRUE(api::FromJson(insdiag({"fleet", "stats", "--json"}).stdout_text, &statistics).ok());
+  EXPECT_GE(statistics.unit_count(), 40);  // the fleet, and the demonstration's units when counted
 }
 
 }  // namespace
