@@ -8,7 +8,7 @@ packages=(
   build-essential cmake ninja-build pkg-config ccache
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler grpc-proto
   libeigen3-dev libceres-dev libabsl-dev
-  libpq-dev postgresql libssl-dev openssl
+  libpq-dev postgresql libssl-dev openssl curl
   clang libclang-rt-14-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libcpp-httplib-dev libcli11-dev
