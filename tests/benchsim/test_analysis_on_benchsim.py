@@ -1,6 +1,7 @@
 """The engine on runs of the independent simulator: `insdiag analyze` on a
-healthy unit with instantaneous rate changes at 10 Hz, an accelerometer step
-and a gyro ramp (the short version of scripts/fault_matrix.py). Needs the
+healthy unit with instantaneous rate changes at 10 Hz, an accelerometer step,
+a gyro ramp, and gyro steps of a tactical unit on each axis (the short version
+of scripts/fault_matrix.py). Needs the
 CLI: INSDIAG_CLI, else build/clients/insdiag."""
 import json
 import os
@@ -61,6 +62,27 @@ class EngineOnIndependentRuns(unittest.TestCase):
         self.assertTrue(found)
         self.assertEqual(found[0]["name"], "gyro_bias_ramp.x")
         self.assertEqual(report["verdict"], "FAULTY")
+
+    def test_gyro_steps_of_a_tactical_unit_are_named_on_their_axis_with_their_onset(self):
+        # Another class than the INS-2000 the engine's defaults come from: a
+        # 0.1 °/h drift with τ 200 s, its datasheet in the file, no unit type.
+        deg_per_h = 3.141592653589793 / 180.0 / 3600.0
+        unit_class = [f"--set=gyro_bias_gm.{a}.{k}={v}" for a in "xyz"
+                      for k, v in (("sigma", 0.1 * deg_per_h), ("tau", 200.0))]
+        unit_class += [f"--set=gyro_arw.{a}={0.01 * 3.141592653589793 / 180.0 / 60.0}" for a in "xyz"]
+        for seed, axis, onset_s in ((31, "x", 1010.5), (32, "y", 1333.3), (33, "z", 1587.9)):
+            with self.subTest(axis=axis), tempfile.TemporaryDirectory() as d:
+                step = 5.0 * 0.1 * deg_per_h * (-1 if seed % 2 else 1)
+                report, _ = analyse(d, "--profile", "mixed", "--rate-hz", "10", "--seed", str(seed),
+                                    "--unit-type", "none", *unit_class,
+                                    "--fault", f"gyro_bias_step.{axis}={step}@{onset_s}")
+                found = significant(report)
+                self.assertTrue(found, f"nothing significant; verdict {report['verdict']}")
+                self.assertEqual(found[0]["name"], f"gyro_bias_step.{axis}")
+                onset_error_s = abs(found[0]["onsetS"] - onset_s)
+                self.assertTrue(onset_error_s < 60.0 or found[0]["onsetLowS"] <= onset_s <= found[0]["onsetHighS"],
+                                f"onset {found[0]['onsetS']} s, truth {onset_s} s")
+                self.assertEqual(report["verdict"], "FAULTY")
 
 
 if __name__ == "__main__":

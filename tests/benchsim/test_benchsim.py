@@ -1,4 +1,7 @@
 """Self-tests of the independent bench-run simulator against the physics."""
+import contextlib
+import io
+import json
 import math
 import os
 import sys
@@ -133,6 +136,27 @@ class Files(unittest.TestCase):
             g = np.linalg.norm(data[:10, 4:7], axis=1).mean()
             self.assertLess(abs(g - 9.808), 0.01)
             self.assertTrue(os.path.exists(a + ".truth.json"))
+
+    def test_set_gives_the_unit_another_class_and_its_datasheet_states_it(self):
+        with tempfile.TemporaryDirectory() as d:
+            sets = [f"--set=gyro_bias_gm.{a}.sigma=4.8e-7" for a in "xyz"]
+            out = self.run_sim(d, *sets, "--set=gyro_bias_gm.x.tau=200", "--fault", "gyro_bias_gm.y.sigma*3")
+            with open(out) as f:
+                metadata = dict(line[2:].split(": ", 1) for line in f.read().splitlines() if line.startswith("# "))
+            # The datasheet states the class (after --set), not the fault (--fault).
+            self.assertAlmostEqual(float(metadata["gyro_bias_sigma"]), 4.8e-7)
+            with open(out + ".truth.json") as f:
+                truth = json.load(f)["parameters"]
+            self.assertAlmostEqual(truth["gyro_bias_gm.y.sigma"], 3 * 4.8e-7)
+            self.assertEqual(truth["gyro_bias_gm.x.tau"], 200.0)
+
+    def test_a_bad_set_is_refused_naming_it(self):
+        for bad in ("gyro_bias_gm.w.sigma=1", "gyro_arw.x=abc", "gyro_arw.x=-1", "gyro_arw.x"):
+            with self.subTest(bad=bad), tempfile.TemporaryDirectory() as d:
+                with contextlib.redirect_stderr(io.StringIO()) as err:
+                    code = benchsim.main(["--out", os.path.join(d, "run.csv"), "--duration", "60", f"--set={bad}"])
+                self.assertEqual(code, 2)
+                self.assertIn(f"--set {bad}", err.getvalue())
 
 
 if __name__ == "__main__":
