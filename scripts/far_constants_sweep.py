@@ -36,12 +36,10 @@ spec = importlib.util.spec_from_file_location("fault_matrix", os.path.join(HERE,
 matrix = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(matrix)
 
-DEG = math.pi / 180.0
-MICRO_G = 9.80665e-6
+DEG = matrix.unit_classes.DEG
 DURATION_S = 3600.0
 # The independent simulator's `mems` preset, given to the project's simulator as parameters.
-MEMS = {"gyro_bias_gm.{a}.sigma": 10.0 * DEG / 3600, "gyro_bias_gm.{a}.tau": 100.0, "gyro_arw.{a}": 0.3 * DEG / 60,
-        "acc_bias_gm.{a}.sigma": 500 * MICRO_G, "acc_bias_gm.{a}.tau": 100.0, "acc_vrw.{a}": 100 * MICRO_G}
+MEMS = matrix.unit_classes.PRESETS["mems"]()
 PROFILES = {"cpp": ["static", "positions"], "py": ["static", "positions"]}
 
 
@@ -58,8 +56,7 @@ def simulate(simulator, biases, profile, rate_hz, seed, path):
         cmd = [matrix.CLI, "simulate", path, "--profile", profile, "--rate", f"{rate_hz:g}", "--seed", str(seed),
                "--no-datasheet"]
         for name, value in MEMS.items():
-            for a in "xyz":
-                cmd += ["--param", f"{name.format(a=a)}={value:.6g}"]
+            cmd += ["--param", f"{name}={value:.6g}"]
         for name, value in biases.items():
             cmd += ["--effect", f"{name}={value:.6g}"]
     else:

@@ -4,8 +4,9 @@ on two independent simulators, over seeds, axes, onsets, profiles and rates.
 
 Each scenario hides one fault (or none) in a unit of one class (--unit-class):
 `nav`, a navigation-grade unit of the INS-2000 type (its nominal model, per axis),
-or `tactical`, a unit with a gyro drift of 0.1 °/h and τ 200 s (the drift of the
-unit in issue 17's bias-step report) and no unit type. The datasheet in the file
+or one of the independent simulator's presets with no unit type, such as
+`tactical-0.1`, a gyro drift of 0.1 °/h and τ 200 s (the drift of the unit in
+issue 17's bias-step report). The datasheet in the file
 states the class, not the fault. Each run draws its axis and onset from the seed, and takes its
 rate (10, 50, 100 Hz) and table profile from the seed too, so that every
 scenario covers every rate and three profiles per simulator:
@@ -31,7 +32,7 @@ identified drift parameters are read, and per scenario the script prints:
 
 Usage:
   scripts/fault_matrix.py [--runs N] [--duration S] [--simulators cpp,py]
-                          [--scenarios a,b] [--unit-class nav|tactical]
+                          [--scenarios a,b] [--unit-class nav|tactical-0.1|…]
                           [--jobs J] [--out results.json]
 The figures in docs/FAULT_SCENARIOS.md come from
   scripts/fault_matrix.py --runs 9 --duration 3600 --jobs 2
@@ -49,6 +50,8 @@ import tempfile
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CLI = os.environ.get("INSDIAG_CLI", os.path.join(ROOT, "build", "clients", "insdiag"))
 BENCHSIM = os.path.join(ROOT, "tests", "benchsim", "benchsim.py")
+sys.path.insert(0, os.path.dirname(BENCHSIM))
+import unit_classes  # noqa: E402
 # The Debian interpreter, which has numpy and scipy (scripts/install-deps.sh).
 PYTHON = "/usr/bin/python3" if os.path.exists("/usr/bin/python3") else sys.executable
 UNIT_TYPE = os.path.join(ROOT, "data", "unit-types", "INS-2000.json")
@@ -58,40 +61,28 @@ PROFILES = {"cpp": ["rotations", "positions", "full"], "py": ["turns", "position
 AXES = "xyz"
 
 
-DEG = math.pi / 180.0
-MICRO_G = 9.80665e-6
-
-
 def nav_class():
     """INS-2000's nominal values by parameter name (SI)."""
     with open(UNIT_TYPE) as f:
         return {p["name"]: p["value"] for p in json.load(f)["nominal"]}
 
 
-def uniform_class(gyro_sigma, gyro_tau_s, gyro_arw, acc_sigma, acc_tau_s, acc_vrw):
-    values = {}
-    for a in AXES:
-        values.update({f"gyro_bias_gm.{a}.sigma": gyro_sigma, f"gyro_bias_gm.{a}.tau": gyro_tau_s,
-                       f"gyro_arw.{a}": gyro_arw, f"acc_bias_gm.{a}.sigma": acc_sigma,
-                       f"acc_bias_gm.{a}.tau": acc_tau_s, f"acc_vrw.{a}": acc_vrw})
-    return values
-
-
-# The unit's class: its parameters by name (SI), and the unit type the file names.
-UNIT_CLASSES = {
-    "nav": (nav_class, "INS-2000"),
-    # Drift 0.1 °/h with τ 200 s, ARW 0.01 °/√h; accelerometer 50 µg, τ 300 s, 20 µg/√Hz.
-    "tactical": (lambda: uniform_class(0.1 * DEG / 3600, 200.0, 0.01 * DEG / 60, 50 * MICRO_G, 300.0,
-                                       20 * MICRO_G), None),
-}
+# The unit's class: `nav` is INS-2000 (its whole nominal model, and the file
+# names the type); any other is one of the independent simulator's presets
+# (tests/benchsim/unit_classes.py), with no unit type.
+UNIT_CLASSES = ["nav"] + [name for name in unit_classes.PRESETS if name != "nav"]
+UNIT_CLASS = "nav"
 NOMINAL = nav_class()
 UNIT_TYPE_NAME = "INS-2000"
 
 
 def use_unit_class(name):
-    global NOMINAL, UNIT_TYPE_NAME
-    values, UNIT_TYPE_NAME = UNIT_CLASSES[name]
-    NOMINAL = values()
+    global UNIT_CLASS, NOMINAL, UNIT_TYPE_NAME
+    UNIT_CLASS = name
+    if name == "nav":
+        NOMINAL, UNIT_TYPE_NAME = nav_class(), "INS-2000"
+    else:
+        NOMINAL, UNIT_TYPE_NAME = unit_classes.PRESETS[name](), None
 
 
 def drift_sigma(sensor, axis):
@@ -193,7 +184,7 @@ def module_of(effect_or_parameter):
 def simulate(simulator, fault, rate_hz, profile, seed, duration_s, path):
     if simulator == "cpp":
         cmd = [CLI, "simulate", path, "--profile", profile, "--rate", f"{rate_hz:g}", "--seed", str(seed)]
-        if UNIT_TYPE_NAME != "INS-2000":
+        if UNIT_CLASS != "nav":
             cmd += ["--no-datasheet"] + [f"--param={n}={v:.9g}" for n, v in sorted(NOMINAL.items())]
         if fault["kind"] == "effect":
             onset = f"@{fault['onset_s']:.3f}" if "onset_s" in fault else ""
@@ -201,35 +192,29 @@ def simulate(simulator, fault, rate_hz, profile, seed, duration_s, path):
         elif fault["kind"] == "param":
             cmd += ["--param", f"{fault['name']}={fault['value']:.6g}"]
     else:
-        cmd = [PYTHON, BENCHSIM, "--out", path, "--preset", "nav", "--profile", profile, "--rate-hz",
+        cmd = [PYTHON, BENCHSIM, "--out", path, "--preset", UNIT_CLASS, "--profile", profile, "--rate-hz",
                f"{rate_hz:g}", "--duration", f"{duration_s:g}", "--seed", str(seed), "--datasheet", "yes",
                "--unit-type", UNIT_TYPE_NAME or "none"]
-        if UNIT_TYPE_NAME != "INS-2000":
-            cmd += [f"--set={n}={v:.9g}" for n, v in sorted(NOMINAL.items())]
         if fault["kind"] == "effect":
             onset = f"@{fault['onset_s']:.3f}" if "onset_s" in fault else ""
             cmd += ["--fault", f"{fault['name']}={fault['value']:.6g}{onset}"]
         elif fault["kind"] == "param":
             cmd += ["--fault", f"{fault['name']}*{fault['factor']:g}"]
     subprocess.run(cmd, check=True, capture_output=True, text=True)
-    if simulator == "cpp" and UNIT_TYPE_NAME != "INS-2000":
+    if simulator == "cpp" and UNIT_CLASS != "nav":
         state_unit_class(path)
 
 
 def state_unit_class(path):
     """The project's simulator states INS-2000: name no unit type, and write the
-    class's datasheet (the spec's metadata keys; the axes' mean, the σ's RMS)."""
-    mean = lambda key: sum(NOMINAL[f"{key}.{a}"] for a in AXES) / 3
-    rms = lambda key: math.sqrt(sum(NOMINAL[f"{key}.{a}.sigma"] ** 2 for a in AXES) / 3)
-    tau = lambda key: sum(NOMINAL[f"{key}.{a}.tau"] for a in AXES) / 3
-    datasheet = [f"# gyro_arw: {mean('gyro_arw'):.12g}\n", f"# gyro_bias_sigma: {rms('gyro_bias_gm'):.12g}\n",
-                 f"# gyro_bias_tau: {tau('gyro_bias_gm'):.12g}\n", f"# acc_vrw: {mean('acc_vrw'):.12g}\n",
-                 f"# acc_bias_sigma: {rms('acc_bias_gm'):.12g}\n", f"# acc_bias_tau: {tau('acc_bias_gm'):.12g}\n"]
+    class's datasheet instead."""
     with open(path) as f:
         lines = f.readlines()
-    header = [line for line in lines if line.startswith("#") and not line.startswith("# unit_type:")]
+    metadata = [line for line in lines if line.startswith("#")]
+    rows = lines[len(metadata):]
+    metadata = [line for line in metadata if not line.startswith("# unit_type:")]
     with open(path, "w") as f:
-        f.writelines(header + datasheet + lines[len([x for x in lines if x.startswith("#")]):])
+        f.writelines(metadata + [line + "\n" for line in unit_classes.datasheet_lines(NOMINAL)] + rows)
 
 
 def truncate(path, duration_s):
@@ -356,7 +341,7 @@ def main():
     parser.add_argument("--simulators", default="cpp,py")
     parser.add_argument("--scenarios", default=",".join(SCENARIOS))
     parser.add_argument("--jobs", type=int, default=os.cpu_count() or 2)
-    parser.add_argument("--unit-class", default="nav", choices=sorted(UNIT_CLASSES))
+    parser.add_argument("--unit-class", default="nav", choices=UNIT_CLASSES)
     parser.add_argument("--out", default=None)
     args = parser.parse_args()
     use_unit_class(args.unit_class)

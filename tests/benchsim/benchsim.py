@@ -30,39 +30,11 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import kinematics  # noqa: E402
 import profiles  # noqa: E402
 import sensors  # noqa: E402
+import unit_classes  # noqa: E402
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-AXES = "xyz"
-DEG = math.pi / 180.0
-MICRO_G = 9.80665e-6
-
-
-def nav_preset():
-    """The INS-2000 nominal values (data/unit-types/INS-2000.json)."""
-    with open(os.path.join(ROOT, "data", "unit-types", "INS-2000.json")) as f:
-        nominal = {p["name"]: p["value"] for p in json.load(f)["nominal"]}
-    preset = {}
-    for sensor, noise in (("gyro", "gyro_arw"), ("acc", "acc_vrw")):
-        for a in AXES:
-            preset[f"{sensor}_bias_gm.{a}.sigma"] = nominal[f"{sensor}_bias_gm.{a}.sigma"]
-            preset[f"{sensor}_bias_gm.{a}.tau"] = nominal[f"{sensor}_bias_gm.{a}.tau"]
-            preset[f"{noise}.{a}"] = nominal[f"{noise}.{a}"]
-    return preset
-
-
-def uniform_preset(gyro_sigma, gyro_tau, arw, acc_sigma, acc_tau, vrw):
-    p = {}
-    for a in AXES:
-        p.update({f"gyro_bias_gm.{a}.sigma": gyro_sigma, f"gyro_bias_gm.{a}.tau": gyro_tau, f"gyro_arw.{a}": arw,
-                  f"acc_bias_gm.{a}.sigma": acc_sigma, f"acc_bias_gm.{a}.tau": acc_tau, f"acc_vrw.{a}": vrw})
-    return p
-
-
-PRESETS = {
-    "nav": nav_preset,
-    "tactical": lambda: uniform_preset(1.0 * DEG / 3600, 300.0, 0.1 * DEG / 60, 1000 * MICRO_G, 300.0, 50 * MICRO_G),
-    "mems": lambda: uniform_preset(10.0 * DEG / 3600, 100.0, 0.3 * DEG / 60, 500 * MICRO_G, 100.0, 100 * MICRO_G),
-}
+AXES = unit_classes.AXES
+DEG = unit_classes.DEG
+PRESETS = unit_classes.PRESETS
 
 FAULT = re.compile(r"^(?P<name>[a-z_]+(\.[xyz])?(\.(sigma|tau))?)(=(?P<value>[^@]+)(@(?P<onset>.+))?|\*(?P<factor>.+))$")
 
@@ -169,12 +141,7 @@ def write_csv(config, datasheet, times, measured, ref_roll, ref_pitch, ref_yaw):
     lines += [f"# site_latitude_deg: {config['latitude_deg']}", f"# site_longitude_deg: {config['longitude_deg']}",
               f"# site_height_m: {config['height_m']}", "# bench: independent simulator (tests/benchsim)"]
     if config["datasheet"] == "yes":
-        mean = lambda key: float(np.mean([datasheet[f"{key}.{a}"] for a in AXES]))
-        rms = lambda key: float(np.sqrt(np.mean([datasheet[f"{key}.{a}.sigma"] ** 2 for a in AXES])))
-        lines += [f"# gyro_arw: {mean('gyro_arw'):.12g}", f"# gyro_bias_sigma: {rms('gyro_bias_gm'):.12g}",
-                  f"# gyro_bias_tau: {float(np.mean([datasheet[f'gyro_bias_gm.{a}.tau'] for a in AXES])):.12g}",
-                  f"# acc_vrw: {mean('acc_vrw'):.12g}", f"# acc_bias_sigma: {rms('acc_bias_gm'):.12g}",
-                  f"# acc_bias_tau: {float(np.mean([datasheet[f'acc_bias_gm.{a}.tau'] for a in AXES])):.12g}"]
+        lines += unit_classes.datasheet_lines(datasheet)
     lines.append("t,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,ref_roll,ref_pitch,ref_yaw")
     table = np.column_stack([times, measured["gyro"], measured["acc"], ref_roll, ref_pitch, ref_yaw])
     with open(config["out"], "w") as f:

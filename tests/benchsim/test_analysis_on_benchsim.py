@@ -15,6 +15,7 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 CLI = os.environ.get("INSDIAG_CLI", os.path.join(ROOT, "build", "clients", "insdiag"))
 sys.path.insert(0, HERE)
 import benchsim  # noqa: E402
+import unit_classes  # noqa: E402
 
 
 def analyse(directory, *args):
@@ -66,15 +67,12 @@ class EngineOnIndependentRuns(unittest.TestCase):
     def test_gyro_steps_of_a_tactical_unit_are_named_on_their_axis_with_their_onset(self):
         # Another class than the INS-2000 the engine's defaults come from: a
         # 0.1 °/h drift with τ 200 s, its datasheet in the file, no unit type.
-        deg_per_h = 3.141592653589793 / 180.0 / 3600.0
-        unit_class = [f"--set=gyro_bias_gm.{a}.{k}={v}" for a in "xyz"
-                      for k, v in (("sigma", 0.1 * deg_per_h), ("tau", 200.0))]
-        unit_class += [f"--set=gyro_arw.{a}={0.01 * 3.141592653589793 / 180.0 / 60.0}" for a in "xyz"]
+        sigma = unit_classes.PRESETS["tactical-0.1"]()["gyro_bias_gm.x.sigma"]
         for seed, axis, onset_s in ((31, "x", 1010.5), (32, "y", 1333.3), (33, "z", 1587.9)):
             with self.subTest(axis=axis), tempfile.TemporaryDirectory() as d:
-                step = 5.0 * 0.1 * deg_per_h * (-1 if seed % 2 else 1)
-                report, _ = analyse(d, "--profile", "mixed", "--rate-hz", "10", "--seed", str(seed),
-                                    "--unit-type", "none", *unit_class,
+                step = 5.0 * sigma * (-1 if seed % 2 else 1)
+                report, _ = analyse(d, "--preset", "tactical-0.1", "--profile", "mixed", "--rate-hz", "10",
+                                    "--seed", str(seed), "--unit-type", "none",
                                     "--fault", f"gyro_bias_step.{axis}={step}@{onset_s}")
                 found = significant(report)
                 self.assertTrue(found, f"nothing significant; verdict {report['verdict']}")
