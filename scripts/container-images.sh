@@ -89,5 +89,11 @@ else
 fi
 cp "$root/docker/insdiagd.Dockerfile" "$context/Dockerfile"
 started=$SECONDS
+previous=$(docker image inspect -f '{{.Id}}' "$image" 2>/dev/null) || previous=""
 quiet_build -t "$image" --build-arg RUNTIME_PACKAGES="${packages[*]}" "$context"
+# The image of the previous binaries, now untagged, goes (unless a container uses it).
+if [[ -n $previous && $previous != "$(docker image inspect -f '{{.Id}}' "$image")" &&
+      -z $(docker image inspect -f '{{join .RepoTags " "}}' "$previous" 2>/dev/null) ]]; then
+  docker rmi "$previous" >/dev/null 2>&1 || true
+fi
 say "$image ready in $((SECONDS - started)) s ($(docker image inspect -f '{{.Size}}' "$image" | awk '{printf "%.0f MB", $1/1e6}'))"
