@@ -11,8 +11,8 @@
 # their packages from bookworm-security at their own build.
 #
 # Usage: scripts/container-base-image.sh [--rebuild] [--image NAME] [--mirror URL]
-# Environment: INSDIAG_DEBIAN_MIRROR (http://deb.debian.org/debian; a
-#   snapshot.debian.org URL pins the packages), INSDIAG_BASE_IMAGE
+# Environment: INSDIAG_DEBIAN_MIRROR (http://deb.debian.org/debian; its
+#   debian-security beside it when the URL ends in /debian), INSDIAG_BASE_IMAGE
 #   (insdiag-base:bookworm). Needs debootstrap, docker and root (through sudo
 #   when not root) to make the image; checking the cached one needs neither.
 set -euo pipefail
