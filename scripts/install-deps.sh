@@ -1,7 +1,12 @@
 #!/usr/bin/env bash
 # Installs the Debian packages insdiag builds, tests and runs with, when missing,
 # and the page's npm packages (clients/web, from its package-lock.json).
-# Usage: scripts/install-deps.sh [--browser]   (--browser adds chromium for the page's end-to-end tests)
+# Usage: scripts/install-deps.sh [--browser] [--containers]
+#   --browser     adds chromium for the page's end-to-end tests
+#   --containers  adds what the container images and the `container` test
+#                 need: Debian's docker.io (engine and client), docker-compose
+#                 and debootstrap. The engine (dockerd) is not started here:
+#                 without a running engine the `container` test skips.
 set -euo pipefail
 
 packages=(
@@ -15,9 +20,14 @@ packages=(
   python3-grpcio python3-grpc-tools python3-numpy python3-scipy
   nodejs npm
 )
-if [[ "${1:-}" == "--browser" ]]; then
-  packages+=(chromium)
-fi
+containers=false
+for option in "$@"; do
+  case $option in
+    --browser) packages+=(chromium) ;;
+    --containers) containers=true; packages+=(docker.io docker-compose debootstrap) ;;
+    *) echo "install-deps.sh: unknown option '$option'" >&2; exit 2 ;;
+  esac
+done
 
 missing=()
 for p in "${packages[@]}"; do
@@ -28,6 +38,11 @@ done
 # nodejs/npm may come from outside Debian's packages on some images; accept them on PATH.
 if [[ " ${missing[*]} " == *" nodejs "* ]] && command -v node >/dev/null; then missing=("${missing[@]/nodejs}"); fi
 if [[ " ${missing[*]} " == *" npm "* ]] && command -v npm >/dev/null; then missing=("${missing[@]/npm}"); fi
+# Docker from elsewhere (docker-ce, the compose plugin) conflicts with Debian's docker.io: accept it.
+if $containers && command -v docker >/dev/null; then
+  missing=("${missing[@]/docker.io}")
+  if docker compose version >/dev/null 2>&1 || command -v docker-compose >/dev/null; then missing=("${missing[@]/docker-compose}"); fi
+fi
 read -r -a missing <<<"${missing[*]}"
 
 if ((${#missing[@]})); then
