@@ -213,19 +213,6 @@ pipeline::Identification IdentifiedEarlier(const IdentifiedModel& earlier, const
   return out;
 }
 
-// Whether model B needs model A's structure tests: to take a walk or a
-// second-order pair with what the tests fitted, or to walk the loop. Model A
-// from an earlier analysis has them in that analysis's report otherwise.
-bool NeedsStructureTestsOfModelA(const AnalysisRequest& request) {
-  if (!request.identified_base.has_value() || request.discover) return true;
-  return std::any_of(request.add_effects.begin(), request.add_effects.end(), [](const std::string& selector) {
-    auto terms = ParseEffectSelector(selector);
-    return !terms.ok() || std::any_of(terms->begin(), terms->end(), [](const EffectTerm& t) {
-      return t.family->kind == EffectKind::kRandom;
-    });
-  });
-}
-
 // Model A: the identified model's final pass with the missing-effect scan,
 // or the identification's scanned pass when it is of the same model.
 absl::StatusOr<pipeline::ScannedModel> ScanModelA(const pipeline::RunContext& c, const AnalysisRequest& request,
@@ -237,15 +224,15 @@ absl::StatusOr<pipeline::ScannedModel> ScanModelA(const pipeline::RunContext& c,
   }
   auto pass = pipeline::RunPass(c.run, c.epochs, id.model, c.spikes, c.options, /*with_scan=*/true);
   if (!pass.ok()) return pass.status();
-  AnalysisOptions scan_options = c.options;
-  if (!NeedsStructureTestsOfModelA(request)) {
-    scan_options.test_walks_by_likelihood = false;
-    scan_options.test_second_orders_by_likelihood = false;
-    notes.push_back("model A's likelihood tests of walks and second-order drifts were not run again: the earlier "
-                    "analysis's report has them");
+  // Model A from an earlier analysis: what its structure tests found nothing in stands.
+  pipeline::SettledStructures settled;
+  if (request.identified_base.has_value() && !c.options.retest_settled_structures) {
+    settled.candidates = request.identified_base->structure_outcomes;
+    notes.push_back("model A's likelihood tests of walks and second-order drifts ran again only where the earlier "
+                    "analysis found a structure or did not test one");
   }
   pipeline::ScannedModel a;
-  a.found = pipeline::FindMissingEffects(c.run, c.epochs, *pass, c.a_priori.model, c.spikes, scan_options, &notes);
+  a.found = pipeline::FindMissingEffects(c.run, c.epochs, *pass, c.a_priori.model, c.spikes, c.options, &notes, settled);
   a.pass = *std::move(pass);
   return a;
 }

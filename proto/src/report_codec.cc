@@ -3,6 +3,7 @@
 #include <absl/strings/str_cat.h>
 
 #include <cmath>
+#include <limits>
 #include <string_view>
 
 #include "insdiag/engine/filter/observation.h"
@@ -207,6 +208,38 @@ void Fill(const engine::DiscoveryStep& in, v1::DiscoveryStep* out) {
   for (const engine::ParameterEstimate& e : in.estimates) Fill(e, out->add_estimates());
 }
 
+// The inverse of Fill for a candidate: 0 in the report stands for a
+// standard error never computed (JSON has no infinity).
+engine::EffectCandidate CandidateOf(const v1::EffectCandidate& in) {
+  engine::EffectCandidate out;
+  out.name = in.name();
+  out.family = in.family();
+  out.source = in.source();
+  out.statistic = in.statistic();
+  out.dof = in.degrees_of_freedom();
+  out.p_value = in.p_value();
+  out.p_value_holm = in.p_value_holm();
+  out.estimate = in.estimate();
+  out.std_error = in.std_error() > 0.0 ? in.std_error() : std::numeric_limits<double>::infinity();
+  out.unit = in.unit();
+  out.identifiable = in.identifiable();
+  out.tested = !in.not_tested();
+  out.predicted_delta_aic = in.predicted_delta_aic();
+  out.predicted_delta_bic = in.predicted_delta_bic();
+  out.correlated_with.assign(in.correlated_with().begin(), in.correlated_with().end());
+  for (const v1::SegmentContribution& w : in.where()) {
+    out.where.push_back({w.channel(), w.start_s(), w.end_s(), w.motion(), w.share()});
+  }
+  out.note = in.note();
+  if (in.has_onset_s()) {
+    out.onset_s = in.onset_s();
+    out.onset_std_s = in.onset_std_s();
+    out.onset_low_s = in.onset_low_s();
+    out.onset_high_s = in.onset_high_s();
+  }
+  return out;
+}
+
 }  // namespace
 
 absl::StatusOr<engine::IdentifiedModel> IdentifiedModelOf(const v1::AnalysisReport& report) {
@@ -230,6 +263,9 @@ absl::StatusOr<engine::IdentifiedModel> IdentifiedModelOf(const v1::AnalysisRepo
     e.unit = p.unit();
     if (p.has_a_priori()) e.a_priori = p.a_priori();
     out.identified.push_back(std::move(e));
+  }
+  for (const v1::EffectCandidate& c : report.effect_candidates()) {
+    if (c.source() == "LIKELIHOOD") out.structure_outcomes.push_back(CandidateOf(c));
   }
   return out;
 }

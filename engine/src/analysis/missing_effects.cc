@@ -166,6 +166,19 @@ std::vector<StructureProposal> ConfirmStructures(const BenchRun& run, const Epoc
   return proposals;
 }
 
+constexpr std::string_view kMeasuredOn = "measured on ";
+
+// The outcome `settled` holds for structure `name`, if the likelihood's test
+// found nothing there: shrunk by the screen, or below `screen_alpha`.
+const EffectCandidate* SettledOutcome(const SettledStructures& settled, const std::string& name, double screen_alpha) {
+  for (const EffectCandidate& c : settled.candidates) {
+    if (c.name == name && c.source == "LIKELIHOOD" && c.tested && c.identifiable && !(c.p_value < screen_alpha)) {
+      return &c;
+    }
+  }
+  return nullptr;
+}
+
 // A random structure no test measured on this model, and why.
 EffectCandidate UntestedStructure(const EffectTerm& term, const std::string& why) {
   EffectCandidate c = StructureCandidate(term, "LIKELIHOOD");
@@ -200,6 +213,7 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
                                                             const std::vector<DriftCorrelation>& drifts,
                                                             bool constant_significant, double screen_alpha,
                                                             const AnalysisOptions& options,
+                                                            const SettledStructures& settled,
                                                             StructureOutcomes& outcomes,
                                                             std::vector<std::string>* notes) {
   std::vector<StructureProposal> out;
@@ -239,7 +253,20 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
   // core idle through most of the pairs' test.
   for (const Test& test : tests) {
     if (!test.enabled) continue;
-    auto fitted = test.fit(epochs, pass.model, a_priori, test.axes, screen_alpha, options.drift_likelihood);
+    ident::DriftSelection axes = test.axes;
+    for (int d = 0; d < 6; ++d) {
+      const EffectCandidate* was = SettledOutcome(settled, test.structure_name(d), screen_alpha);
+      if (was == nullptr || !axes[static_cast<size_t>(d)]) continue;
+      axes[static_cast<size_t>(d)] = false;
+      EffectCandidate c = *was;
+      // An outcome carried further keeps the first model it was measured on.
+      if (!settled.measured_on.empty() && !c.note.starts_with(kMeasuredOn)) {
+        c.note = std::string(kMeasuredOn) + settled.measured_on + ": " + c.note;
+      }
+      outcomes.insert_or_assign(c.name, c);
+    }
+    if (std::none_of(axes.begin(), axes.end(), [](bool axis) { return axis; })) continue;
+    auto fitted = test.fit(epochs, pass.model, a_priori, axes, screen_alpha, options.drift_likelihood);
     if (!fitted.ok()) {
       if (notes != nullptr) {
         notes->push_back(std::string("no likelihood test of ") + test.what + ": " +
@@ -367,7 +394,8 @@ std::vector<FaultFinding> FaultFindings(const ModelPass& pass, const Findings& f
 // `drifts`: correlation processing of this pass's smoothed drifts.
 Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass, std::vector<DriftCorrelation> drifts,
                             const ErrorModel& a_priori, const std::vector<SampleOutlier>& spikes,
-                            const AnalysisOptions& options, std::vector<std::string>* notes) {
+                            const AnalysisOptions& options, std::vector<std::string>* notes,
+                            const SettledStructures& settled) {
   Findings f;
   f.drifts = std::move(drifts);
   RankedEffects ranked = RankMissingEffects(*pass.scan, pass.forward, run, pass.segment_motion, options.finder);
@@ -383,7 +411,7 @@ Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const M
       });
   StructureOutcomes likelihood_outcomes, correlation_outcomes;
   std::vector<StructureProposal> proposals = LikelihoodStructureProposals(
-      epochs, pass, a_priori, f.drifts, constant_significant, screen_alpha, options, likelihood_outcomes, notes);
+      epochs, pass, a_priori, f.drifts, constant_significant, screen_alpha, options, settled, likelihood_outcomes, notes);
   for (StructureProposal& p : ProposeStructures(f.drifts, run.DurationS(), screen_alpha, correlation_outcomes)) {
     if (std::none_of(proposals.begin(), proposals.end(),
                      [&](const StructureProposal& o) { return o.effect.term == p.effect.term; })) {
@@ -425,10 +453,19 @@ Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const M
 
 Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass, const ErrorModel& a_priori,
                             const std::vector<SampleOutlier>& spikes, const AnalysisOptions& options,
-                            std::vector<std::string>* notes) {
+                            std::vector<std::string>* notes, const SettledStructures& settled) {
   return FindMissingEffects(run, epochs, pass,
                             ident::CorrelateDrifts(pass.forward, pass.smoothed, *pass.layout, options.correlation, notes),
-                            a_priori, spikes, options, notes);
+                            a_priori, spikes, options, notes, settled);
+}
+
+bool AddsOnlyDeterministicEffects(const std::vector<std::string>& selectors) {
+  return std::all_of(selectors.begin(), selectors.end(), [](const std::string& selector) {
+    auto terms = ParseEffectSelector(selector);
+    return terms.ok() && std::none_of(terms->begin(), terms->end(), [](const EffectTerm& t) {
+             return t.family->kind == EffectKind::kRandom;
+           });
+  });
 }
 
 // The significant, identifiable candidate whose predicted ΔBIC is lowest,

@@ -36,6 +36,22 @@ struct Findings {
   std::vector<DriftCorrelation> drifts;
 };
 
+// The outcomes of likelihood structure tests that a model need not run again:
+// a walk or pair that tests on `candidates`' model found nothing in (below
+// the screen's level, or shrunk by the screen's first step). They hold for a
+// model that only adds constant or fault effects to that one: an added
+// deterministic effect takes residual from a structure and gives it none.
+// `measured_on` says, in the report's note, which model they were measured
+// on (empty: this one, by an earlier analysis).
+struct SettledStructures {
+  std::vector<EffectCandidate> candidates;
+  std::string measured_on;
+};
+
+// Whether a model that adds `selectors` to one keeps that model's settled
+// structure outcomes: it adds no random structure.
+bool AddsOnlyDeterministicEffects(const std::vector<std::string>& selectors);
+
 // A model's pass scanned for missing effects, what the scan found and the
 // notes it wrote.
 struct ScannedModel {
@@ -45,15 +61,16 @@ struct ScannedModel {
 };
 
 // The missing effects of a scanned pass; `drifts`: correlation processing of
-// this pass's smoothed drifts.
+// this pass's smoothed drifts. The likelihood does not test again the
+// structures `settled` holds; the report takes their outcomes.
 Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass,
                             std::vector<DriftCorrelation> drifts, const ErrorModel& a_priori,
                             const std::vector<SampleOutlier>& spikes, const AnalysisOptions& options,
-                            std::vector<std::string>* notes);
+                            std::vector<std::string>* notes, const SettledStructures& settled = {});
 // The same, correlating the pass's drifts first.
 Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass, const ErrorModel& a_priori,
                             const std::vector<SampleOutlier>& spikes, const AnalysisOptions& options,
-                            std::vector<std::string>* notes);
+                            std::vector<std::string>* notes, const SettledStructures& settled = {});
 
 // The significant, identifiable candidate whose predicted ΔBIC is lowest,
 // among single terms and whole families; nullptr when none is significant.

@@ -213,7 +213,12 @@ absl::StatusOr<Analysis> Discover(const RunContext& c, ScannedModelA a) {
     if (!extended.ok()) return extended.status();
     auto next = RunPass(c.run, c.epochs, *extended, c.spikes, options, /*with_scan=*/true);
     if (!next.ok()) return next.status();
-    Findings next_found = FindMissingEffects(c.run, c.epochs, *next, c.a_priori.model, c.spikes, options, &a.notes);
+    const SettledStructures settled =
+        !options.retest_settled_structures && AddsOnlyDeterministicEffects({top->name})
+            ? SettledStructures{found.candidates, "the model before " + top->name + " was added"}
+            : SettledStructures{};
+    Findings next_found =
+        FindMissingEffects(c.run, c.epochs, *next, c.a_priori.model, c.spikes, options, &a.notes, settled);
     identified = WithTakenStructures(std::move(identified), next->model, found);
     AnalysisReport next_report = ReportOf(*next, next_found, c.run, options, identified, a.notes);
     report.discovery.push_back(StepOf(step, *top, next_report));
@@ -242,7 +247,11 @@ absl::StatusOr<Analysis> AddAndCompare(const RunContext& c, const std::vector<st
   if (!extended.ok()) return extended.status();
   auto b = RunPass(c.run, c.epochs, *extended, c.spikes, options, /*with_scan=*/true);
   if (!b.ok()) return b.status();
-  const Findings found_b = FindMissingEffects(c.run, c.epochs, *b, c.a_priori.model, c.spikes, options, &a.notes);
+  const SettledStructures settled = !options.retest_settled_structures && AddsOnlyDeterministicEffects(effects)
+                                        ? SettledStructures{a.found.candidates, "model A, without the added effects"}
+                                        : SettledStructures{};
+  const Findings found_b =
+      FindMissingEffects(c.run, c.epochs, *b, c.a_priori.model, c.spikes, options, &a.notes, settled);
   Analysis out;
   out.report = ReportOf(*b, found_b, c.run, options, WithTakenStructures(a.identified, b->model, a.found), a.notes);
   std::vector<std::string> added;

@@ -93,6 +93,12 @@ struct AnalysisOptions {
   // smoother flattens a poorly observable drift (a horizontal gyro's), and
   // its correlation function then cannot show the oscillation.
   bool test_second_orders_by_likelihood = true;
+  // A model that only adds constant or fault effects to one whose walk and
+  // pair tests found nothing on an axis takes those outcomes instead of
+  // testing again (model B of an Add, each step of the loop, model A from an
+  // earlier analysis): an added deterministic effect takes residual from a
+  // structure and gives it none. True: every model tests every axis again.
+  bool retest_settled_structures = false;
   ident::DriftLikelihoodOptions drift_likelihood;
   // Where the a-priori model's misfit competes with its missing effects, its
   // drifts are searched from these starts besides the a-priori values
@@ -112,10 +118,13 @@ struct AnalysisOptions {
 
 // A model an earlier analysis of the same run identified, with what that
 // analysis reported of the identification (its report's model and
-// `identified`).
+// `identified`) and of its likelihood tests of random structures (its
+// report's candidates from them: what it found nothing in is not tested
+// again).
 struct IdentifiedModel {
   ErrorModel model;
   std::vector<ParameterEstimate> identified;
+  std::vector<EffectCandidate> structure_outcomes;
 };
 
 struct AnalysisRequest {
