@@ -14,6 +14,7 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 
 #include "insdiag/kb/pg.h"
@@ -159,14 +160,12 @@ absl::StatusOr<std::unique_ptr<PostgresSupervisor>> PostgresSupervisor::Start(Op
   }
   // A cluster still running from a crashed server is adopted.
   if (!supervisor->Run("pg_ctl", {"status", "-D", cluster}).ok()) {
-    const std::string settings = absl::StrCat("-c listen_addresses='' -k '", run_text, "' -p ", kSocketPort);
-    if (auto status = supervisor->Run("pg_ctl", {"start", "-w", "-t", "60", "-D", cluster, "-l",
-                                                 (run_dir / "postgresql.log").string(), "-o", settings});
-        !status.ok()) {
-      return status;
-    }
+    if (auto status = supervisor->StartCluster(); !status.ok()) return status;
   }
   supervisor->running_ = true;
+  if (supervisor->options_.restart_check_interval.count() > 0) {
+    supervisor->watchdog_ = std::thread([s = supervisor.get()] { s->KeepClusterRunning(); });
+  }
 
   auto admin = kb::Connection::Open(absl::StrCat("host='", run_text, "' port=", kSocketPort, " user=postgres dbname=postgres"));
   if (!admin.ok()) return admin.status();
@@ -182,6 +181,39 @@ absl::StatusOr<std::unique_ptr<PostgresSupervisor>> PostgresSupervisor::Start(Op
   return supervisor;
 }
 
+absl::Status PostgresSupervisor::StartCluster() const {
+  const std::string settings = absl::StrCat("-c listen_addresses='' -k '", run_dir_.string(), "' -p ", kSocketPort);
+  return Run("pg_ctl", {"start", "-w", "-t", "60", "-D", cluster_dir_.string(), "-l",
+                        (run_dir_ / "postgresql.log").string(), "-o", settings});
+}
+
+void PostgresSupervisor::KeepClusterRunning() {
+  std::unique_lock lock(mutex_);
+  // Stopped at two checks in a row: a restart by hand (pg_ctl restart) is
+  // stopped for a moment only, and is not raced.
+  bool stopped_before = false;
+  while (!stopping_.wait_for(lock, options_.restart_check_interval, [this] { return !running_; })) {
+    const bool stopped = !Run("pg_ctl", {"status", "-D", cluster_dir_.string()}).ok();
+    const bool start_again = stopped && stopped_before;
+    stopped_before = stopped && !start_again;
+    if (!start_again) continue;
+    std::cerr << "insdiagd: the embedded PostgreSQL stopped (its log: " << (run_dir_ / "postgresql.log").string()
+              << "); starting it again\n";
+    if (auto started = StartCluster(); started.ok()) {
+      ++restarts_;
+      std::cerr << "insdiagd: the embedded PostgreSQL runs again\n";
+    } else {
+      std::cerr << "insdiagd: cannot start the embedded PostgreSQL again (next try in "
+                << options_.restart_check_interval.count() << " ms): " << started.message() << "\n";
+    }
+  }
+}
+
+int PostgresSupervisor::restarts() const {
+  std::lock_guard lock(mutex_);
+  return restarts_;
+}
+
 std::string PostgresSupervisor::database_url() const {
   // Quoted values: the data directory may contain spaces (single quotes are refused).
   return absl::StrCat("host='", run_dir_.string(), "' port=", kSocketPort, " user=postgres dbname='",
@@ -189,8 +221,13 @@ std::string PostgresSupervisor::database_url() const {
 }
 
 absl::Status PostgresSupervisor::Stop() {
-  if (!running_) return absl::OkStatus();
-  running_ = false;
+  {
+    std::lock_guard lock(mutex_);
+    if (!running_) return absl::OkStatus();
+    running_ = false;
+  }
+  stopping_.notify_all();
+  if (watchdog_.joinable()) watchdog_.join();
   return Run("pg_ctl", {"stop", "-w", "-t", "60", "-m", "fast", "-D", cluster_dir_.string()});
 }
 

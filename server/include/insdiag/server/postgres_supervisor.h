@@ -6,15 +6,23 @@
 //
 // As root, initdb and pg_ctl run as the `postgres` user (initdb refuses
 // root), which then owns both directories. A cluster left running by a
-// crashed server is adopted, and stopped when this supervisor stops.
+// crashed server is adopted, and stopped when this supervisor stops. A
+// cluster that stops while the supervisor runs (a crash, a shutdown for want
+// of disk space) is started again: the supervisor looks for it every
+// `restart_check_interval` and starts it when it finds it stopped twice in a
+// row; the server reconnects by itself.
 #pragma once
 
 #include <absl/status/status.h>
 #include <absl/status/statusor.h>
 
+#include <chrono>
+#include <condition_variable>
 #include <filesystem>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace insdiag::server {
@@ -26,6 +34,8 @@ class PostgresSupervisor {
     // PostgreSQL's bin directory; empty: the newest /usr/lib/postgresql/*/bin.
     std::filesystem::path bin_dir;
     std::string database = "insdiag";  // created when missing
+    // How often the supervisor checks that the cluster runs; zero: never.
+    std::chrono::milliseconds restart_check_interval = std::chrono::seconds(5);
   };
 
   // Initialises (if needed) and starts the cluster and creates the database.
@@ -45,15 +55,26 @@ class PostgresSupervisor {
   // pg_ctl stop -m fast; idempotent. Also run by the destructor.
   absl::Status Stop();
 
+  // How many times the cluster was found stopped and started again.
+  int restarts() const;
+
  private:
   explicit PostgresSupervisor(Options options);
   absl::Status Run(const std::string& tool, const std::vector<std::string>& args) const;
+  absl::Status StartCluster() const;
+  // The watchdog thread: starts the cluster again whenever it finds it stopped.
+  void KeepClusterRunning();
 
   Options options_;
   std::filesystem::path cluster_dir_;
   std::filesystem::path run_dir_;
   bool as_postgres_ = false;
+
+  mutable std::mutex mutex_;  // the cluster's state and the pg_ctl calls
+  std::condition_variable stopping_;
   bool running_ = false;
+  int restarts_ = 0;
+  std::thread watchdog_;
 };
 
 }  // namespace insdiag::server
