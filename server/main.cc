@@ -2,6 +2,7 @@
 //   embedded PostgreSQL (unless --database-url) → connection pool →
 //   migrations → gRPC + REST server → wait for SIGINT/SIGTERM → shut down.
 #include <CLI/CLI.hpp>
+#include <absl/strings/str_cat.h>
 #include <signal.h>
 
 #include <cstdlib>
@@ -15,11 +16,12 @@
 #include "insdiag/kb/migrations.h"
 #include "insdiag/server/insdiag_server.h"
 #include "insdiag/server/postgres_supervisor.h"
+#include "insdiag/server/server_log.h"
 
 namespace {
 
 int Fail(const absl::Status& status) {
-  std::cerr << "insdiagd: " << status.message() << "\n";
+  insdiag::server::Log(insdiag::server::LogLevel::kError, std::string(status.message()));
   return 1;
 }
 
@@ -41,6 +43,8 @@ bool IsLoopback(const std::string& address) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  using insdiag::server::Log;
+  using insdiag::server::LogLevel;
   CLI::App app{"insdiagd — diagnosis server for inertial navigation systems in bench tests"};
   std::string data_dir = DefaultDataDir();
   std::string database_url;
@@ -53,6 +57,11 @@ int main(int argc, char** argv) {
   app.add_option("--http-port", options.http_port, "REST/JSON port (0: any free port)")->capture_default_str();
   app.add_option("--database-url", database_url,
                  "Use this PostgreSQL (libpq URL) instead of the embedded one")->envname("INSDIAG_DATABASE_URL");
+  std::string read_url;
+  app.add_option("--read-database-url", read_url,
+                 "Read the fleet statistics and the listings from this PostgreSQL (libpq URL): a streaming replica "
+                 "of the database")
+      ->envname("INSDIAG_READ_DATABASE_URL");
   app.add_option("--bind", options.bind_address,
                  "Address to listen on (loopback by default; elsewhere, tokens cross the network in clear)")
       ->capture_default_str();
@@ -76,9 +85,17 @@ int main(int argc, char** argv) {
   app.add_option("--fleet-refresh-seconds", fleet_refresh_s,
                  "How often the fleet statistics' materialised views are refreshed (0: never)")
       ->capture_default_str();
+  std::string log_format = "text";
+  app.add_option("--log-format", log_format,
+                 "The log on stderr: text, or json (one object a line: time, level, message)")
+      ->check(CLI::IsMember({"text", "json"}))
+      ->envname("INSDIAG_LOG_FORMAT")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
+  insdiag::server::SetLogFormat(log_format == "json" ? insdiag::server::LogFormat::kJson
+                                                     : insdiag::server::LogFormat::kText);
   if (workers < 0 || lease_s <= 0 || fleet_refresh_s < 0) {
-    std::cerr << "insdiagd: --workers, --lease-seconds and --fleet-refresh-seconds must not be negative\n";
+    Log(LogLevel::kError, "--workers, --lease-seconds and --fleet-refresh-seconds must not be negative");
     return 2;
   }
   options.workers.workers = workers;
@@ -115,38 +132,46 @@ int main(int argc, char** argv) {
     auto applied = insdiag::kb::ApplyMigrations(
         **lease, migrations_dir.empty() ? insdiag::kb::EmbeddedMigrations() : std::span(from_dir));
     if (!applied.ok()) return Fail(applied.status());
-    std::cerr << "insdiagd: schema up to date (" << applied->applied << " migrations applied now, "
-              << applied->already_applied << " before)\n";
+    Log(LogLevel::kInfo, absl::StrCat("schema up to date (", applied->applied, " migrations applied now, ",
+                                      applied->already_applied, " before)"));
+  }
+
+  std::unique_ptr<insdiag::kb::ConnectionPool> read_pool;
+  if (!read_url.empty()) {
+    auto replica = insdiag::kb::ConnectionPool::Create({.database_url = read_url, .max_connections = 16});
+    if (!replica.ok()) return Fail(replica.status());
+    read_pool = std::move(*replica);
+    options.read_pool = read_pool.get();
   }
 
   options.first_admin_token_file = std::filesystem::absolute(std::filesystem::path(data_dir) / "admin-token");
   auto server = insdiag::server::InsdiagServer::Start(**pool, options);
   if (!server.ok()) return Fail(server.status());
   if ((*server)->wrote_first_admin_token()) {
-    std::cerr << "insdiagd: first start: an admin token is in " << options.first_admin_token_file.string()
-              << " (readable by this user only); make tokens for people and scripts with "
-                 "'insdiag tokens create', then keep that file safe or delete it\n";
+    Log(LogLevel::kInfo, absl::StrCat("first start: an admin token is in ", options.first_admin_token_file.string(),
+                                      " (readable by this user only); make tokens for people and scripts with "
+                                      "'insdiag tokens create', then keep that file safe or delete it"));
   }
   if (!IsLoopback(options.bind_address) && options.tls_cert_file.empty()) {
-    std::cerr << "insdiagd: WARNING: listening on " << options.bind_address
-              << " without TLS: bearer tokens and bench data cross the network in clear text\n";
+    Log(LogLevel::kWarning, absl::StrCat("listening on ", options.bind_address,
+                                         " without TLS: bearer tokens and bench data cross the network in clear text"));
   }
   std::cout << "insdiagd: listening grpc=" << options.bind_address << ":" << (*server)->grpc_port()
             << " http=" << options.bind_address << ":" << (*server)->http_port() << " database="
             << (postgres ? "embedded:" + postgres->cluster_dir().string() : std::string("external"))
-            << " workers=" << workers << " tls=" << (options.tls_cert_file.empty() ? "off" : "on") << std::endl;
+            << " reads=" << (read_pool ? "replica" : "primary") << " workers=" << workers << " tls=" << (options.tls_cert_file.empty() ? "off" : "on") << std::endl;
   const char* scheme = options.tls_cert_file.empty() ? "http" : "https";
   if ((*server)->serves_page()) {
-    std::cerr << "insdiagd: the page is at " << scheme << "://localhost:" << (*server)->http_port() << "/ (from "
-              << options.web_dir << ")\n";
+    Log(LogLevel::kInfo, absl::StrCat("the page is at ", scheme, "://localhost:", (*server)->http_port(), "/ (from ",
+                                      options.web_dir, ")"));
   } else {
-    std::cerr << "insdiagd: no page in '" << options.web_dir
-              << "' (scripts/install-deps.sh && scripts/build.sh build it); the REST API is served\n";
+    Log(LogLevel::kWarning, absl::StrCat("no page in '", options.web_dir,
+                                         "' (scripts/install-deps.sh && scripts/build.sh build it); the REST API is served"));
   }
 
   int signal_number = 0;
   sigwait(&stop_signals, &signal_number);
-  std::cerr << "insdiagd: " << (signal_number == SIGINT ? "SIGINT" : "SIGTERM") << ", shutting down\n";
+  Log(LogLevel::kInfo, absl::StrCat(signal_number == SIGINT ? "SIGINT" : "SIGTERM", ", shutting down"));
   (*server)->Shutdown();
   server->reset();
   pool->reset();

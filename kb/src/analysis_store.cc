@@ -236,7 +236,7 @@ absl::StatusOr<AnalysisPage> AnalysisStore::List(const AnalysisQuery& query) {
   auto after = internal::KeysetCondition(query.page_token, "a.create_time", "a.analysis_id",
                                          internal::KeysetOrder::kNewestFirst, params);
   if (!after.ok()) return after.status();
-  auto db = pool_.Acquire();
+  auto db = list_pool_.Acquire();
   if (!db.ok()) return db.status();
   auto rows = (*db)->Exec(
       absl::StrCat(SelectAnalyses(query.include_reports),

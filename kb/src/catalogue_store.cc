@@ -141,7 +141,7 @@ absl::StatusOr<v1::UnitType> CatalogueStore::GetUnitType(const std::string& name
 }
 
 absl::StatusOr<std::vector<v1::UnitType>> CatalogueStore::ListUnitTypes() {
-  auto db = pool_.Acquire();
+  auto db = list_pool_.Acquire();
   if (!db.ok()) return db.status();
   auto rows = (*db)->Exec("SELECT unit_type FROM unit_types ORDER BY unit_type");
   if (!rows.ok()) return rows.status();
@@ -175,7 +175,7 @@ absl::StatusOr<std::pair<std::vector<v1::Unit>, std::string>> CatalogueStore::Li
     if (!key.ok()) return key.status();
     after_serial = key->second;
   }
-  auto db = pool_.Acquire();
+  auto db = list_pool_.Acquire();
   if (!db.ok()) return db.status();
   auto rows = (*db)->Exec(
       absl::StrCat(kUnitColumns,
@@ -195,7 +195,7 @@ absl::StatusOr<std::pair<std::vector<v1::Unit>, std::string>> CatalogueStore::Li
 absl::StatusOr<std::vector<v1::Module>> CatalogueStore::ListModules(const std::string& unit_name) {
   auto serial = internal::IdOf(unit_name, "units", "parent");
   if (!serial.ok()) return serial.status();
-  auto db = pool_.Acquire();
+  auto db = list_pool_.Acquire();
   if (!db.ok()) return db.status();
   auto unit = (*db)->Exec("SELECT unit_id FROM units WHERE serial = $1", {Param::Text(*serial)});
   if (!unit.ok()) return unit.status();
@@ -236,7 +236,7 @@ absl::StatusOr<v1::FailureMode> CatalogueStore::GetFailureMode(const std::string
 
 absl::StatusOr<std::vector<v1::FailureMode>> CatalogueStore::ListFailureModes(const std::string& unit_type,
                                                                               const std::string& module_role) {
-  auto db = pool_.Acquire();
+  auto db = list_pool_.Acquire();
   if (!db.ok()) return db.status();
   return LoadModes(**db, unit_type.empty() ? "" : UnitTypeId(unit_type), module_role, "");
 }

@@ -157,7 +157,7 @@ absl::StatusOr<std::pair<std::vector<v1::Diagnosis>, std::string>> DiagnosisStor
   auto after = internal::KeysetCondition(query.page.page_token, "d.create_time", "d.diagnosis_id",
                                          internal::KeysetOrder::kNewestFirst, params);
   if (!after.ok()) return after.status();
-  auto db = pool_.Acquire();
+  auto db = list_pool_.Acquire();
   if (!db.ok()) return db.status();
   auto rows = (*db)->Exec(
       absl::StrCat("SELECT d.diagnosis_id::text, d.create_time::text FROM diagnoses d JOIN units u USING (unit_id) "

@@ -188,7 +188,7 @@ absl::StatusOr<std::vector<v1::FailureRecordRevision>> FailureRecordStore::ListR
     const std::string& name) {
   auto id = internal::UuidOf(name, "failureRecords", "name");
   if (!id.ok()) return id.status();
-  auto db = pool_.Acquire();
+  auto db = list_pool_.Acquire();
   if (!db.ok()) return db.status();
   auto current = GetRecord(**db, *id);
   if (!current.ok()) return current.status();
@@ -250,7 +250,7 @@ absl::StatusOr<std::pair<std::vector<v1::FailureRecord>, std::string>> FailureRe
   auto after = internal::KeysetCondition(query.page.page_token, "r.record_time", "r.record_id",
                                          internal::KeysetOrder::kNewestFirst, params);
   if (!after.ok()) return after.status();
-  auto db = pool_.Acquire();
+  auto db = list_pool_.Acquire();
   if (!db.ok()) return db.status();
   auto rows = (*db)->Exec(absl::StrCat(kRecordColumns,
                                        "WHERE ($2::text IS NULL OR u.serial = $2) AND ($3::text IS NULL OR m.role = $3) "

@@ -92,16 +92,21 @@ absl::StatusOr<Result> Connection::Check(PGresult* raw, std::string_view sql) {
   Result result(raw);
   const auto status = raw ? PQresultStatus(raw) : PGRES_FATAL_ERROR;
   if (status == PGRES_COMMAND_OK || status == PGRES_TUPLES_OK) return result;
-  if (!raw) return absl::UnavailableError(FirstLine(PQerrorMessage(conn_.get())));
+  if (!raw) {
+    lost_ = true;
+    return absl::UnavailableError(FirstLine(PQerrorMessage(conn_.get())));
+  }
   const char* sqlstate = PQresultErrorField(raw, PG_DIAG_SQLSTATE);
   std::string message = absl::StrCat(FirstLine(PQresultErrorMessage(raw)), " [",
                                      FirstLine(sql.substr(0, 80)), "]");
-  // An error libpq made itself (no SQLSTATE) on a connection that is gone:
-  // "server closed the connection unexpectedly" while PostgreSQL restarts.
-  if ((sqlstate == nullptr || *sqlstate == '\0') && PQstatus(conn_.get()) != CONNECTION_OK) {
+  // Every error of the server carries a SQLSTATE; one without is libpq's
+  // own, about the connection: "server closed the connection unexpectedly"
+  // while PostgreSQL restarts, before libpq marks the connection bad.
+  if (sqlstate == nullptr || *sqlstate == '\0') {
+    lost_ = true;
     return absl::UnavailableError(std::move(message));
   }
-  return StatusFromSqlState(sqlstate ? sqlstate : "", std::move(message));
+  return StatusFromSqlState(sqlstate, std::move(message));
 }
 
 absl::StatusOr<Result> Connection::Exec(std::string_view sql, const std::vector<Param>& params,
@@ -167,7 +172,7 @@ absl::Status Connection::InTransaction(absl::FunctionRef<absl::Status()> body) {
   return status;
 }
 
-bool Connection::healthy() const { return PQstatus(conn_.get()) == CONNECTION_OK; }
+bool Connection::healthy() const { return !lost_ && PQstatus(conn_.get()) == CONNECTION_OK; }
 
 std::int64_t AdvisoryLockKey(std::string_view name) {
   // FNV-1a: stable across builds and platforms, unlike std::hash.

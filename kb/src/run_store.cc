@@ -300,7 +300,7 @@ absl::StatusOr<RunPage> RunStore::List(const RunQuery& query) {
     params.push_back(Param::Text(key->second));
     after = "(create_time, run_id) < ($3::timestamptz, $4::uuid)";
   }
-  auto db = pool_.Acquire();
+  auto db = list_pool_.Acquire();
   if (!db.ok()) return db.status();
   auto rows = (*db)->Exec(absl::StrCat("SELECT ", kRunColumns,
                                        " FROM runs WHERE ($2::text IS NULL OR unit_serial = $2) AND ", after,

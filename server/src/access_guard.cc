@@ -6,8 +6,9 @@
 #include <google/protobuf/descriptor.h>
 #include <google/protobuf/message.h>
 
-#include <iostream>
 #include <random>
+
+#include "insdiag/server/server_log.h"
 
 namespace insdiag::server {
 namespace {
@@ -103,7 +104,7 @@ absl::StatusOr<v1::Caller> AccessGuard::Admit(const grpc::ServerContext& context
                                   .method = std::string(method), .resource = "", .peer = PeerOf(context),
                                   .outcome = admitted};
     if (auto recorded = store_.RecordAuditEvent(refused); !recorded.ok()) {
-      std::cerr << "insdiagd: audit event of a refused " << method << " not recorded: " << recorded.message() << "\n";
+      Log(LogLevel::kError, absl::StrCat("audit event of a refused ", method, " not recorded: ", recorded.message()));
     }
   }
   return admitted;
@@ -128,8 +129,8 @@ void AccessGuard::Audit(const grpc::ServerContext& context, absl::string_view me
   const kb::AuditedCall call{.caller = caller, .method = std::string(method), .resource = ResourceOf(request, response),
                              .peer = PeerOf(context), .outcome = outcome};
   if (auto recorded = store_.RecordAuditEvent(call); !recorded.ok()) {
-    std::cerr << "insdiagd: audit event of " << method << " on " << call.resource
-              << " not recorded: " << recorded.message() << "\n";
+    Log(LogLevel::kError,
+        absl::StrCat("audit event of ", method, " on ", call.resource, " not recorded: ", recorded.message()));
   }
 }
 

@@ -4,7 +4,6 @@
 #include <unistd.h>
 
 #include <exception>
-#include <iostream>
 
 #include "insdiag/api/report_codec.h"
 #include "insdiag/api/unit_types.h"
@@ -13,6 +12,7 @@
 #include "insdiag/kb/catalogue_store.h"
 #include "insdiag/kb/fleet_store.h"
 #include "insdiag/kb/run_store.h"
+#include "insdiag/server/server_log.h"
 
 namespace insdiag::server {
 namespace {
@@ -80,13 +80,13 @@ void AnalysisWorkers::Loop(int index) {
     if (std::chrono::steady_clock::now() - last_reap > options_.lease / 4) {
       last_reap = std::chrono::steady_clock::now();
       if (auto reaped = store_.Reap(); reaped.ok() && (reaped->requeued + reaped->failed) > 0) {
-        std::cerr << "insdiagd: " << owner << ": lease expired on " << reaped->requeued << " job(s) requeued, "
-                  << reaped->failed << " failed after their last attempt\n";
+        Log(LogLevel::kWarning, absl::StrCat(owner, ": lease expired on ", reaped->requeued, " job(s) requeued, ",
+                                             reaped->failed, " failed after their last attempt"));
       }
     }
     auto job = store_.Claim(owner, options_.lease);
     if (!job.ok()) {
-      std::cerr << "insdiagd: " << owner << ": cannot claim jobs: " << job.status().message() << "\n";
+      Log(LogLevel::kError, absl::StrCat(owner, ": cannot claim jobs: ", job.status().message()));
       if (!SleepFor(options_.poll * 4)) return;
       continue;
     }
@@ -103,7 +103,7 @@ void AnalysisWorkers::Maintain() {
   kb::FleetStore fleet(pool_);
   while (SleepFor(options_.fleet_refresh)) {
     if (auto refreshed = fleet.RefreshViews(); !refreshed.ok()) {
-      std::cerr << "insdiagd: fleet views not refreshed: " << refreshed.status().message() << "\n";
+      Log(LogLevel::kError, absl::StrCat("fleet views not refreshed: ", refreshed.status().message()));
     }
   }
 }
@@ -211,7 +211,7 @@ std::string_view AnalysisWorkers::RunJobOutcome(const kb::ClaimedJob& job, const
   }();
   finish_heartbeat();
   if (lost) {
-    std::cerr << "insdiagd: " << owner << ": lost the lease of analyses/" << job.analysis_id << "; result dropped\n";
+    Log(LogLevel::kWarning, absl::StrCat(owner, ": lost the lease of analyses/", job.analysis_id, "; result dropped"));
     return "lost";
   }
   if (cancelled) {
@@ -220,8 +220,9 @@ std::string_view AnalysisWorkers::RunJobOutcome(const kb::ClaimedJob& job, const
   }
   if (!status.ok()) {
     const bool retry = Retryable(status);
-    std::cerr << "insdiagd: " << owner << ": analyses/" << job.analysis_id << " attempt " << job.attempt
-              << (retry ? " failed (will retry): " : " failed: ") << status.message() << "\n";
+    Log(retry ? LogLevel::kWarning : LogLevel::kError,
+        absl::StrCat(owner, ": analyses/", job.analysis_id, " attempt ", job.attempt,
+                     retry ? " failed (will retry): " : " failed: ", status.message()));
     (void)store_.Fail(job.analysis_id, owner, status, retry);
     return retry ? "retried" : "failed";
   }

@@ -35,12 +35,13 @@ namespace insdiag::server {
 // What the gRPC server serves, and the analysis workers.
 struct InsdiagServer::Services {
   Services(kb::ConnectionPool& pool, const Options& options)
-      : connection_pool(pool), access_store(pool), guard(access_store), access(access_store), access_grpc(access, guard), store(pool),
-        runs(store, RunService::Options{options.max_upload_samples}), runs_grpc(runs, guard), analysis_store(pool),
+      : connection_pool(pool), access_store(pool), guard(access_store), access(access_store), access_grpc(access, guard), store(pool, options.read_pool),
+        runs(store, RunService::Options{options.max_upload_samples}), runs_grpc(runs, guard), analysis_store(pool, options.read_pool),
         analyses(analysis_store, AnalysisService::Options{options.watch_poll}), analyses_grpc(analyses, guard),
-        catalogue_store(pool), failure_record_store(pool), diagnosis_store(pool),
+        catalogue_store(pool, options.read_pool), failure_record_store(pool, options.read_pool),
+        diagnosis_store(pool, options.read_pool),
         knowledge(catalogue_store, failure_record_store, diagnosis_store), knowledge_grpc(knowledge, guard),
-        fleet_store(pool), fleet_grpc(fleet_store, guard), workers(pool, options.workers, &metrics) {}
+        fleet_store(options.read_pool != nullptr ? *options.read_pool : pool), fleet_grpc(fleet_store, guard), workers(pool, options.workers, &metrics) {}
   // What GET /metrics answers: the counters, then the queue and the pool as they are.
   std::string RenderMetrics() {
     Metrics::Gauges gauges;

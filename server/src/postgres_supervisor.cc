@@ -14,10 +14,10 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
-#include <iostream>
 #include <sstream>
 
 #include "insdiag/kb/pg.h"
+#include "insdiag/server/server_log.h"
 
 extern char** environ;
 
@@ -197,14 +197,14 @@ void PostgresSupervisor::KeepClusterRunning() {
     const bool start_again = stopped && stopped_before;
     stopped_before = stopped && !start_again;
     if (!start_again) continue;
-    std::cerr << "insdiagd: the embedded PostgreSQL stopped (its log: " << (run_dir_ / "postgresql.log").string()
-              << "); starting it again\n";
+    Log(LogLevel::kWarning, absl::StrCat("the embedded PostgreSQL stopped (its log: ",
+                                         (run_dir_ / "postgresql.log").string(), "); starting it again"));
     if (auto started = StartCluster(); started.ok()) {
       ++restarts_;
-      std::cerr << "insdiagd: the embedded PostgreSQL runs again\n";
+      Log(LogLevel::kInfo, "the embedded PostgreSQL runs again");
     } else {
-      std::cerr << "insdiagd: cannot start the embedded PostgreSQL again (next try in "
-                << options_.restart_check_interval.count() << " ms): " << started.message() << "\n";
+      Log(LogLevel::kError, absl::StrCat("cannot start the embedded PostgreSQL again (next try in ",
+                                         options_.restart_check_interval.count(), " ms): ", started.message()));
     }
   }
 }

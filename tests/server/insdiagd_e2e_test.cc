@@ -2,6 +2,8 @@
 // data directory, and the insdiag CLI uploading to it.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <google/protobuf/struct.pb.h>
+#include <google/protobuf/util/json_util.h>
 #include <grpcpp/generic/generic_stub.h>
 #include <signal.h>
 #include <unistd.h>
@@ -13,6 +15,7 @@
 #include <fstream>
 #include <future>
 #include <regex>
+#include <sstream>
 #include <thread>
 
 #include "insdiag/benchrun/bench_run_csv.h"
@@ -338,6 +341,30 @@ TEST_F(InsdiagdTest, HealthSaysNotServingWhileTheDatabaseIsDownAndTheSupervisorS
   server.Signal(SIGTERM);
   EXPECT_EQ(server.Wait(60s), 0);
   EXPECT_FALSE(pg_ctl({"status", "-D", cluster})) << "insdiagd stopped, and its PostgreSQL still runs";
+}
+
+// With --log-format json every line insdiagd writes to stderr is one JSON
+// object with its time, level and message, for a log collector: the first
+// start's token notice and the shutdown among them.
+TEST_F(InsdiagdTest, LogsOneJsonObjectALineOnRequest) {
+  auto server = StartServer({"--workers", "0", "--log-format", "json"});
+  const auto ports = AwaitListening(server, 60s);
+  ASSERT_TRUE(ports) << "insdiagd did not come up:\n" << server.Stderr();
+  server.Signal(SIGTERM);
+  ASSERT_EQ(server.Wait(60s), 0) << server.Stderr();
+  std::istringstream lines(server.Stderr());
+  std::vector<std::string> messages;
+  for (std::string line; std::getline(lines, line);) {
+    google::protobuf::Struct entry;
+    ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(line, &entry).ok()) << "not a JSON object: " << line;
+    const auto& fields = entry.fields();
+    ASSERT_TRUE(fields.contains("time") && fields.contains("level") && fields.contains("message")) << line;
+    EXPECT_THAT(fields.at("time").string_value(), ::testing::MatchesRegex(R"([0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9]{2}:[0-9]{2}:[0-9]{2}\.[0-9]{3}Z)"));
+    EXPECT_THAT(fields.at("level").string_value(), ::testing::AnyOf("info", "warning", "error"));
+    messages.push_back(fields.at("message").string_value());
+  }
+  EXPECT_THAT(messages, ::testing::Contains(HasSubstr("an admin token is in")));
+  EXPECT_THAT(messages, ::testing::Contains(HasSubstr("SIGTERM, shutting down")));
 }
 
 }  // namespace

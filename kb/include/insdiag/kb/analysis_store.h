@@ -73,7 +73,10 @@ struct QueueStats {
 
 class AnalysisStore {
  public:
-  explicit AnalysisStore(ConnectionPool& pool) : pool_(pool) {}
+  // `list_pool`: where the listings read (a streaming replica of the
+  // database, the server's --read-database-url); null: `pool`.
+  explicit AnalysisStore(ConnectionPool& pool, ConnectionPool* list_pool = nullptr)
+      : pool_(pool), list_pool_(list_pool != nullptr ? *list_pool : pool) {}
 
   // Queues an analysis of runs/{run_id}. With a request id already used for
   // the same run and spec: that analysis; for another: ALREADY_EXISTS.
@@ -115,6 +118,7 @@ class AnalysisStore {
 
  private:
   ConnectionPool& pool_;
+  ConnectionPool& list_pool_;
 };
 
 }  // namespace insdiag::kb

@@ -19,7 +19,10 @@ namespace insdiag::kb {
 
 class CatalogueStore {
  public:
-  explicit CatalogueStore(ConnectionPool& pool) : pool_(pool) {}
+  // `list_pool`: where the listings read (a streaming replica of the
+  // database, the server's --read-database-url); null: `pool`.
+  explicit CatalogueStore(ConnectionPool& pool, ConnectionPool* list_pool = nullptr)
+      : pool_(pool), list_pool_(list_pool != nullptr ? *list_pool : pool) {}
 
   // Upserts the unit types, their nominal values and their failure modes
   // (expanded templates), idempotently and under an advisory lock: replicas
@@ -42,6 +45,7 @@ class CatalogueStore {
 
  private:
   ConnectionPool& pool_;
+  ConnectionPool& list_pool_;
 };
 
 }  // namespace insdiag::kb

@@ -26,7 +26,10 @@ struct DiagnosisQuery {
 
 class DiagnosisStore {
  public:
-  explicit DiagnosisStore(ConnectionPool& pool) : pool_(pool) {}
+  // `list_pool`: where the listings read (a streaming replica of the
+  // database, the server's --read-database-url); null: `pool`.
+  explicit DiagnosisStore(ConnectionPool& pool, ConnectionPool* list_pool = nullptr)
+      : pool_(pool), list_pool_(list_pool != nullptr ? *list_pool : pool) {}
 
   // Diagnoses a SUCCEEDED analysis against its unit type's failure modes and
   // stores the result. FAILED_PRECONDITION when the analysis has not
@@ -46,6 +49,7 @@ class DiagnosisStore {
 
  private:
   ConnectionPool& pool_;
+  ConnectionPool& list_pool_;
 };
 
 }  // namespace insdiag::kb

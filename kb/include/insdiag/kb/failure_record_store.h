@@ -27,7 +27,10 @@ struct FailureRecordQuery {
 
 class FailureRecordStore {
  public:
-  explicit FailureRecordStore(ConnectionPool& pool) : pool_(pool) {}
+  // `list_pool`: where the listings read (a streaming replica of the
+  // database, the server's --read-database-url); null: `pool`.
+  explicit FailureRecordStore(ConnectionPool& pool, ConnectionPool* list_pool = nullptr)
+      : pool_(pool), list_pool_(list_pool != nullptr ? *list_pool : pool) {}
 
   // INVALID_ARGUMENT naming the field for a malformed record; NOT_FOUND for
   // an unknown module, mode or analysis.
@@ -43,6 +46,7 @@ class FailureRecordStore {
 
  private:
   ConnectionPool& pool_;
+  ConnectionPool& list_pool_;
 };
 
 }  // namespace insdiag::kb

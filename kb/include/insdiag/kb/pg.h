@@ -114,6 +114,9 @@ class Connection {
   explicit Connection(PGconn* conn) : conn_(conn) {}
   absl::StatusOr<Result> Check(PGresult* raw, std::string_view sql);
   std::unique_ptr<PGconn, Deleter> conn_;
+  // The connection failed under a statement (no SQLSTATE: libpq's own
+  // error), whatever libpq's status says yet: a pool does not reuse it.
+  bool lost_ = false;
 };
 
 // A stable 64-bit key for pg_advisory_lock derived from a name.

@@ -52,7 +52,10 @@ struct RunQuery {
 
 class RunStore {
  public:
-  explicit RunStore(ConnectionPool& pool) : pool_(pool) {}
+  // `list_pool`: where the listings read (a streaming replica of the
+  // database, the server's --read-database-url); null: `pool`.
+  explicit RunStore(ConnectionPool& pool, ConnectionPool* list_pool = nullptr)
+      : pool_(pool), list_pool_(list_pool != nullptr ? *list_pool : pool) {}
 
   // Stores the run and its samples in one transaction and registers the unit
   // when its serial is new. With a request id already used: the stored run
@@ -76,6 +79,7 @@ class RunStore {
 
  private:
   ConnectionPool& pool_;
+  ConnectionPool& list_pool_;
 };
 
 }  // namespace insdiag::kb

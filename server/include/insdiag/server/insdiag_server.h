@@ -55,9 +55,17 @@ class InsdiagServer {
     // How often the health service asks the database whether it answers:
     // a server whose database is down says NOT_SERVING (gRPC health, /healthz).
     std::chrono::milliseconds health_poll{1000};
+    // Where the fleet statistics and the listings (runs, analyses, units,
+    // modules, diagnoses, failure records, unit types, failure modes) are
+    // read: a PostgreSQL streaming replica of the database, for reads one
+    // server cannot carry. Null: the primary. Writes, single reads, tokens,
+    // the audit trail and job claims stay on the primary. A replica lags by
+    // its replay delay: a listing may miss a write of the last moment.
+    kb::ConnectionPool* read_pool = nullptr;
   };
 
-  // `pool` must outlive the server. UNAVAILABLE when a port cannot be bound.
+  // `pool` (and `read_pool`) must outlive the server. UNAVAILABLE when
+  // a port cannot be bound.
   static absl::StatusOr<std::unique_ptr<InsdiagServer>> Start(kb::ConnectionPool& pool, Options options);
   ~InsdiagServer();  // Shutdown()
 
