@@ -86,7 +86,7 @@ void PrintReport(const engine::AnalysisReport& r, std::ostream& out) {
     out << "\nidentified parameters:\n";
     for (const auto& p : r.identified) {
       out << "  " << p.name << " = " << Format("%.4g", p.value) << " ± " << Format("%.2g", p.std_error) << " "
-          << p.unit << " [" << p.method << "]";
+          << p.unit << " [" << (p.method.has_value() ? engine::MethodName(*p.method) : "") << "]";
       if (p.a_priori == p.a_priori) out << " (a priori " << Format("%.4g", p.a_priori) << ")";
       out << "\n";
     }

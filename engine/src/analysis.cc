@@ -207,7 +207,9 @@ pipeline::Identification IdentifiedEarlier(const IdentifiedModel& earlier, const
     if (out.model.FindEffect(e.term) < 0) out.model.effects.push_back(e);
   }
   for (const ParameterEstimate& p : earlier.identified) {
-    if (p.method != "STATIC" && p.method != "FILTER") out.identified.push_back(p);
+    if (p.method != EstimationMethod::kStaticMeans && p.method != EstimationMethod::kFilterState) {
+      out.identified.push_back(p);
+    }
   }
   notes.push_back("model A is the model an earlier analysis of this run identified: it was not identified again");
   return out;

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string_view>
 
 #include "insdiag/engine/filter/observation.h"
@@ -24,17 +25,16 @@ v1::AnalysisReport::Verdict VerdictOf(engine::Verdict v) {
   return v1::AnalysisReport::VERDICT_UNSPECIFIED;
 }
 
-v1::IdentifiedParameter::Method MethodOf(const std::string& method) {
-  if (method == "ACF") return v1::IdentifiedParameter::ACF;
-  if (method == "ALLAN") return v1::IdentifiedParameter::ALLAN;
-  if (method == "FILTER") return v1::IdentifiedParameter::FILTER;
-  if (method == "ML") return v1::IdentifiedParameter::ML;
-  if (method == "STATIC") return v1::IdentifiedParameter::STATIC;
-  return v1::IdentifiedParameter::METHOD_UNSPECIFIED;
+// The API's enum names the methods as the engine does (MethodName).
+v1::IdentifiedParameter::Method MethodOf(const std::optional<engine::EstimationMethod>& method) {
+  v1::IdentifiedParameter::Method out = v1::IdentifiedParameter::METHOD_UNSPECIFIED;
+  if (method.has_value()) v1::IdentifiedParameter::Method_Parse(std::string(engine::MethodName(*method)), &out);
+  return out;
 }
 
-std::string MethodName(v1::IdentifiedParameter::Method method) {
-  return method == v1::IdentifiedParameter::METHOD_UNSPECIFIED ? "" : v1::IdentifiedParameter::Method_Name(method);
+std::optional<engine::EstimationMethod> MethodOf(v1::IdentifiedParameter::Method method) {
+  if (method == v1::IdentifiedParameter::METHOD_UNSPECIFIED) return std::nullopt;
+  return engine::MethodNamed(v1::IdentifiedParameter::Method_Name(method));
 }
 
 // JSON has no NaN or infinity: an unknown uncertainty is written as 0 and the
@@ -259,7 +259,7 @@ absl::StatusOr<engine::IdentifiedModel> IdentifiedModelOf(const v1::AnalysisRepo
     e.value = p.value();
     // 0 stands for "none" in the report (JSON has no NaN).
     if (p.std_error() > 0.0) e.std_error = p.std_error();
-    e.method = MethodName(p.method());
+    e.method = MethodOf(p.method());
     e.unit = p.unit();
     if (p.has_a_priori()) e.a_priori = p.a_priori();
     out.identified.push_back(std::move(e));

@@ -586,7 +586,7 @@ TEST(AllanAnalysisTest, ParameterEstimatesAndAPrioriModel) {
   const std::vector<ParameterEstimate> estimates = AllanParameterEstimates(*r, &prior);
   std::map<std::string, ParameterEstimate> by_name;
   for (const ParameterEstimate& e : estimates) {
-    EXPECT_EQ(e.method, "ALLAN");
+    EXPECT_EQ(e.method, EstimationMethod::kAllan);
     EXPECT_TRUE(std::isfinite(e.std_error)) << e.name;
     by_name[e.name] = e;
   }

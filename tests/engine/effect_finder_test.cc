@@ -236,7 +236,7 @@ TEST_P(HiddenFamily, RankedFirstAndAddingItFitsTheRun) {
     if (truth.term.family->process == RandomProcess::kNone) {
       const std::string name = truth.term.ParameterName(p);
       for (const ParameterEstimate& e : rb.identified) {
-        if (e.method == "FILTER" && e.name == name) {
+        if (e.method == EstimationMethod::kFilterState && e.name == name) {
           value = e.value;
           se = e.std_error;
         }
@@ -341,7 +341,7 @@ TEST_P(HiddenBiasRandomWalk, FoundByLikelihoodAndAddingItFitsTheRun) {
   const auto k = std::find_if(rb.identified.begin(), rb.identified.end(),
                               [&](const ParameterEstimate& e) { return e.name == c.term + ".density"; });
   ASSERT_NE(k, rb.identified.end());
-  EXPECT_EQ(k->method, "ML");
+  EXPECT_EQ(k->method, EstimationMethod::kMaximumLikelihood);
   EXPECT_DOUBLE_EQ(k->value, walk->estimate);
   EXPECT_TRUE(Significant(rb, alpha).empty()) << Significant(rb, alpha).front();
 }

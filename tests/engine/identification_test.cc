@@ -432,11 +432,11 @@ TEST(AnalysisDriftCoverageTest, ReportedDriftIntervalsCoverTheTruthOverSeeds) {
     auto a = Analyze(s.run, request, options);
     ASSERT_TRUE(a.ok()) << a.status();
     if (std::none_of(a->report.identified.begin(), a->report.identified.end(),
-                     [](const ParameterEstimate& e) { return e.method == "ML"; })) {
+                     [](const ParameterEstimate& e) { return e.method == EstimationMethod::kMaximumLikelihood; })) {
       std::printf("seed %d: no drift identified by likelihood (%zu notes)\n", 500 + seed, a->report.notes.size());
     }
     for (const ParameterEstimate& e : a->report.identified) {
-      if (e.method != "ML" || e.name.find("_bias_gm.") == std::string::npos) continue;
+      if (e.method != EstimationMethod::kMaximumLikelihood || e.name.find("_bias_gm.") == std::string::npos) continue;
       const GaussMarkov& g = TrueDrift(unit, e.name);
       const double truth = e.name.ends_with(".sigma") ? g.sigma : g.tau_s;
       const bool in = e.ci95_low <= truth && truth <= e.ci95_high;
@@ -481,8 +481,8 @@ TEST(DriftLikelihoodTest, RecoversATripledGyroDriftSigmaWithinItsIntervalOverSee
     const sim::SimulatedRun s = testing::SimulateOrDie(unit, profile, kCoverageRateHz, 700 + seed);
     const auto epochs = CondenseRun(s.run, model, FilterOptions{}.update_interval_s);
     ASSERT_TRUE(epochs.ok()) << epochs.status();
-    auto ml = IdentifyDriftsByLikelihood(*epochs, model, model, DriftSelection{true, true, true, true, true, true},
-                                         DriftSelection{});
+    auto ml = IdentifyDriftsByLikelihood(*epochs, model, model, DriftSelection::Every(),
+                                         DriftSelection::None());
     ASSERT_TRUE(ml.ok()) << ml.status();
     EXPECT_GT(ml->log_likelihood_after, ml->log_likelihood_before);  // EM never lowers ℓ
     for (const ParameterEstimate& e : ml->identified) {
@@ -642,10 +642,11 @@ TEST(DatasheetIndependenceTest, ARunWithoutDatasheetReachesTheSameModel) {
         }
       }
       const double bound = 3.0 * std::hypot(e.std_error, other_se);
+      const std::string method(e.method.has_value() ? MethodName(*e.method) : "");
       std::printf("%-26s %-14s %.4g ± %.2g [%s], other %.4g ± %.2g\n", e.name.c_str(), label, e.value,
-                  e.std_error, e.method.c_str(), other_value, other_se);
+                  e.std_error, method.c_str(), other_value, other_se);
       EXPECT_LE(std::abs(other_value - e.value), bound)
-          << e.name << " identified " << label << ": " << e.value << " ± " << e.std_error << " [" << e.method
+          << e.name << " identified " << label << ": " << e.value << " ± " << e.std_error << " [" << method
           << "], the other analysis: " << other_value << " ± " << other_se;
     }
   }

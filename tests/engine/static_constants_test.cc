@@ -134,7 +134,7 @@ TEST(StaticConstants, AMemsUnitsTurnOnBiasesAreRemovedAndTheRemainderFits) {
   const AnalysisReport& r = analysis->report;
   int removed = 0, named = 0;
   for (const ParameterEstimate& p : r.identified) {
-    if (p.method != "STATIC") continue;
+    if (p.method != EstimationMethod::kStaticMeans) continue;
     ++removed;
     const int i = (p.name.starts_with("gyro") ? 0 : 3) + (p.name.back() - 'x');
     EXPECT_LE(std::abs(p.value - truth.values[static_cast<size_t>(i)]), 4.0 * p.std_error) << p.name;

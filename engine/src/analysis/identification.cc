@@ -151,8 +151,7 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
                                       ErrorModel& base, std::vector<ParameterEstimate>& identified,
                                       std::vector<std::string>& notes) {
   const AnalysisOptions& options = c.options;
-  ident::DriftSelection every_drift{};
-  every_drift.fill(true);
+  const DriftSelection every_drift = DriftSelection::Every();
   const double log_n = std::log(static_cast<double>(std::max(1, pass.forward.scalar_updates)));
   auto ml = ident::IdentifyDriftsFromStarts(c.epochs, base, c.a_priori.model, every_drift, c.a_priori.drift_starts,
                                             options.drift_likelihood);
@@ -251,7 +250,7 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std
     // The correlation estimates replace the last ones, and the likelihood's
     // of a drift that the re-tuned model now resolves.
     std::erase_if(id.identified, [&](const ParameterEstimate& p) {
-      return p.method == "ACF" || std::any_of(step.identified.begin(), step.identified.end(),
+      return p.method == EstimationMethod::kAutocorrelation || std::any_of(step.identified.begin(), step.identified.end(),
                                               [&](const ParameterEstimate& q) { return q.name == p.name; });
     });
     id.identified.insert(id.identified.end(), step.identified.begin(), step.identified.end());
@@ -276,13 +275,13 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std
 absl::StatusOr<ident::DriftLikelihoodResult> IdentifyDriftSet(const RunContext& c, const ErrorModel& model,
                                                               const Retargeted& retargeted, bool resolved_set) {
   Progress(c.options, 0.6, "maximum-likelihood drift identification");
-  const ident::DriftSelection resolved = ResolvedDrifts(retargeted.drifts);
-  ident::DriftSelection selection{}, tau_too{};
-  for (size_t d = 0; d < selection.size(); ++d) {
+  const DriftSelection resolved = ResolvedDrifts(retargeted.drifts);
+  DriftSelection selection, tau_too;
+  for (const DriftAxis d : DriftAxis::All()) {
     // A run whose monitoring flags faults (a drift that jumped, say) is
     // not re-tuned: a wider drift would hide the fault the diagnosis is for.
-    selection[d] = !retargeted.faults_flagged && resolved[d] == resolved_set;
-    tau_too[d] = selection[d] && (resolved_set || c.a_priori.from_allan);
+    selection.Set(d, !retargeted.faults_flagged && resolved.Contains(d) == resolved_set);
+    tau_too.Set(d, selection.Contains(d) && (resolved_set || c.a_priori.from_allan));
   }
   if (c.a_priori.drift_starts.grid_tau_points > 0) {
     return ident::IdentifyDriftsFromGrid(c.epochs, model, c.a_priori.model, selection, tau_too,

@@ -14,13 +14,14 @@
 
 namespace insdiag::engine::pipeline {
 
-// The drifts correlation processing resolved, in DriftSelection order.
-ident::DriftSelection ResolvedDrifts(const std::vector<DriftCorrelation>& drifts) {
-  ident::DriftSelection selection{};
-  for (int d = 0; d < 6; ++d) {
-    const std::string name = ident::DriftName(d);
-    selection[static_cast<size_t>(d)] = std::any_of(
-        drifts.begin(), drifts.end(), [&](const DriftCorrelation& c) { return c.state == name && c.analysis.resolved; });
+// The drifts correlation processing resolved.
+DriftSelection ResolvedDrifts(const std::vector<DriftCorrelation>& drifts) {
+  DriftSelection selection;
+  for (const DriftAxis d : DriftAxis::All()) {
+    const std::string name = DriftName(d);
+    selection.Set(d, std::any_of(drifts.begin(), drifts.end(), [&](const DriftCorrelation& c) {
+                    return c.state == name && c.analysis.resolved;
+                  }));
   }
   return selection;
 }
@@ -31,10 +32,6 @@ namespace {
 // propose, by effect name: each one's statistic below its screen, or why it
 // was not tested. The report lists every catalogue effect the model lacks.
 using StructureOutcomes = std::map<std::string, EffectCandidate>;
-
-// The drift of a sensor axis in DriftSelection order (gyro x, y, z, then accelerometer).
-int DriftIndex(Sensor sensor, int axis) { return (sensor == Sensor::kGyro ? 0 : 3) + axis; }
-int DriftIndex(const EffectTerm& term) { return DriftIndex(term.family->sensor, term.axis); }
 
 // A random structure's candidate from `source` ("STRUCTURE", "LIKELIHOOD")
 // with nothing measured yet: no statistic, no estimate (p = 1); its degrees
@@ -54,16 +51,16 @@ EffectCandidate StructureCandidate(const EffectTerm& term, const char* source) {
 // its magnitude: a walk (random walk; a second exponential longer than half
 // the run, dσ²/dt = 2σ₂²/τ₂), a second-order pair (exponential-cosine).
 std::optional<StructureProposal> StructureOfFit(const DriftCorrelation& d, const ident::FamilyFit& f, double run_s) {
-  const int drift = DriftIndex(d.sensor, d.axis);
+  const DriftAxis drift{d.sensor, d.axis};
   StructureProposal p;
   std::string effect;
   if (f.family == ident::CorrelationFamily::kRandomWalk) {
-    effect = ident::WalkName(drift);
+    effect = WalkName(drift);
     p.effect.random_walk_density = f.Parameter("density")->value;
     p.candidate.estimate = p.effect.random_walk_density;
     p.candidate.std_error = f.Parameter("density")->std_error;
   } else if (f.family == ident::CorrelationFamily::kExponentialCosine) {
-    effect = ident::SecondOrderName(drift);
+    effect = SecondOrderName(drift);
     p.effect.second_order_sigma = f.Parameter("sigma2")->value;
     p.effect.second_order_alpha_per_s = 1.0 / f.Parameter("tau2_s")->value;
     p.effect.second_order_beta_rad_s = 2.0 * std::numbers::pi / f.Parameter("period_s")->value;
@@ -71,7 +68,7 @@ std::optional<StructureProposal> StructureOfFit(const DriftCorrelation& d, const
     p.candidate.std_error = f.Parameter("sigma2")->std_error;
     p.searched_starts = 16;  // the profile grid of period × decay (correlation.cc)
   } else if (f.family == ident::CorrelationFamily::kTwoExponentials && f.Parameter("tau2_s")->value >= 0.5 * run_s) {
-    effect = ident::WalkName(drift);
+    effect = WalkName(drift);
     const double s2 = f.Parameter("sigma2")->value;
     const double t2 = f.Parameter("tau2_s")->value;
     p.effect.random_walk_density = s2 * std::sqrt(2.0 / t2);
@@ -217,28 +214,28 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
                                                             StructureOutcomes& outcomes,
                                                             std::vector<std::string>* notes) {
   std::vector<StructureProposal> out;
-  ident::DriftSelection every_axis;
-  every_axis.fill(true);
-  ident::DriftSelection unresolved = ResolvedDrifts(drifts);
-  for (bool& axis : unresolved) axis = !axis;
+  const DriftSelection every_axis = DriftSelection::Every();
+  DriftSelection unresolved;
+  const DriftSelection resolved = ResolvedDrifts(drifts);
+  for (const DriftAxis d : DriftAxis::All()) unresolved.Set(d, !resolved.Contains(d));
   const double log_n = std::log(static_cast<double>(std::max(1, pass.forward.scalar_updates)));
   struct Test {
     bool enabled;
     const char* what;
     decltype(&ident::IdentifyWalksByLikelihood) fit;
-    ident::DriftSelection axes;
-    decltype(&ident::WalkName) structure_name;
+    DriftSelection axes;
+    decltype(&WalkName) structure_name;
   };
   const Test tests[] = {
       {options.test_walks_by_likelihood, "bias random walks", &ident::IdentifyWalksByLikelihood, every_axis,
-       &ident::WalkName},
+       &WalkName},
       {options.test_second_orders_by_likelihood && !constant_significant, "second-order drifts",
-       &ident::IdentifySecondOrdersByLikelihood, unresolved, &ident::SecondOrderName},
+       &ident::IdentifySecondOrdersByLikelihood, unresolved, &SecondOrderName},
   };
   if (options.test_second_orders_by_likelihood && constant_significant) {
-    for (int d = 0; d < 6; ++d) {
-      if (!unresolved[static_cast<size_t>(d)]) continue;
-      auto terms = ParseEffectSelector(ident::SecondOrderName(d));
+    for (const DriftAxis d : DriftAxis::All()) {
+      if (!unresolved.Contains(d)) continue;
+      auto terms = ParseEffectSelector(SecondOrderName(d));
       if (!terms.ok()) continue;
       outcomes.insert_or_assign(
           terms->front().Name(),
@@ -253,11 +250,11 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
   // core idle through most of the pairs' test.
   for (const Test& test : tests) {
     if (!test.enabled) continue;
-    ident::DriftSelection axes = test.axes;
-    for (int d = 0; d < 6; ++d) {
+    DriftSelection axes = test.axes;
+    for (const DriftAxis d : DriftAxis::All()) {
       const EffectCandidate* was = SettledOutcome(settled, test.structure_name(d), screen_alpha);
-      if (was == nullptr || !axes[static_cast<size_t>(d)]) continue;
-      axes[static_cast<size_t>(d)] = false;
+      if (was == nullptr || !axes.Contains(d)) continue;
+      axes.Set(d, false);
       EffectCandidate c = *was;
       // An outcome carried further keeps the first model it was measured on.
       if (!settled.measured_on.empty() && !c.note.starts_with(kMeasuredOn)) {
@@ -265,7 +262,7 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
       }
       outcomes.insert_or_assign(c.name, c);
     }
-    if (std::none_of(axes.begin(), axes.end(), [](bool axis) { return axis; })) continue;
+    if (!axes.Any()) continue;
     auto fitted = test.fit(epochs, pass.model, a_priori, axes, screen_alpha, options.drift_likelihood);
     if (!fitted.ok()) {
       if (notes != nullptr) {
@@ -276,13 +273,13 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
     }
     // The axes the screen tried: a structure its first EM step shrank (not
     // among `structures`) is one this run does not tell from the axis' drift.
-    for (int d = 0; d < 6; ++d) {
+    for (const DriftAxis d : DriftAxis::All()) {
       const std::string name = test.structure_name(d);
       auto terms = ParseEffectSelector(name);
-      if (!fitted->screened[static_cast<size_t>(d)] || !terms.ok()) continue;
+      if (!fitted->screened.Contains(d) || !terms.ok()) continue;
       EffectCandidate c = StructureCandidate(terms->front(), "LIKELIHOOD");
       c.note = std::string("likelihood of the innovations: the first EM step from the structure hypothesis "
-                           "shrank it — this run does not tell it from a wider ") + ident::DriftName(d) + " drift";
+                           "shrank it — this run does not tell it from a wider ") + DriftName(d) + " drift";
       outcomes.insert_or_assign(name, c);
     }
     for (const ident::StructureEstimate& w : fitted->structures) {
@@ -329,7 +326,7 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
       char nested[96];
       std::snprintf(nested, sizeof nested, "2Δℓ = %.1f beyond the drift σ re-fitted alone", w.statistic);
       c.note = "likelihood of the innovations with " + parameters + " and the drift σ re-fitted (" +
-               ident::DriftName(w.drift) + ".sigma " + buf + " with it); " + nested;
+               DriftName(w.drift) + ".sigma " + buf + " with it); " + nested;
       out.push_back(std::move(p));
     }
   }
@@ -437,11 +434,11 @@ Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const M
       others.push_back(jt->second);
     } else {
       others.push_back(UntestedStructure(
-          term, ident::DriftOf(pass.model, DriftIndex(term)).sigma > 0.0
+          term, DriftOf(pass.model, DriftAxis::Of(term)).sigma > 0.0
                     ? "neither the likelihood's test (off, or failed: see the notes) nor correlation processing's "
-                      "(the " + ident::DriftName(DriftIndex(term)) + " drift unresolved, or its fit not converged) "
+                      "(the " + DriftName(DriftAxis::Of(term)) + " drift unresolved, or its fit not converged) "
                       "measured it"
-                    : "the model has no " + ident::DriftName(DriftIndex(term)) + " drift to test it beside"));
+                    : "the model has no " + DriftName(DriftAxis::Of(term)) + " drift to test it beside"));
     }
   }
   f.structures = ConfirmStructures(run, epochs, pass, std::move(proposals), spikes, options);

@@ -81,8 +81,8 @@ const EffectCandidate* LowestBicSignificant(const std::vector<EffectCandidate>& 
 // The effect `--discover` adds next.
 const EffectCandidate* NextDiscovery(const Findings& found, const AnalysisOptions& options);
 
-// The drifts correlation processing resolved, in DriftSelection order.
-ident::DriftSelection ResolvedDrifts(const std::vector<DriftCorrelation>& drifts);
+// The drifts correlation processing resolved.
+DriftSelection ResolvedDrifts(const std::vector<DriftCorrelation>& drifts);
 
 // The report of one scanned pass.
 AnalysisReport ReportOf(const ModelPass& pass, const Findings& found, const BenchRun& run,

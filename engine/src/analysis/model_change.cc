@@ -63,7 +63,7 @@ absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& ba
       if (structure != found.structures.end()) {
         model.effects.push_back(structure->effect);
         if (structure->fitted.has_value()) {
-          ident::DriftOf(model, structure->fitted->drift).sigma = structure->fitted->drift_sigma.value;
+          DriftOf(model, structure->fitted->drift).sigma = structure->fitted->drift_sigma.value;
         }
         continue;
       }
@@ -178,7 +178,7 @@ DiscoveryStep StepOf(int step, const EffectCandidate& top, const AnalysisReport&
   // term, one per axis or pair for a family).
   double largest_z = -1.0;
   for (const ParameterEstimate& e : next_report.identified) {
-    if (e.method != "FILTER" || !SelectorCovers(top.name, e.name)) continue;
+    if (e.method != EstimationMethod::kFilterState || !SelectorCovers(top.name, e.name)) continue;
     d.estimates.push_back(e);
     const double z = e.std_error > 0.0 ? std::abs(e.value) / e.std_error : 0.0;
     if (e.name == top.name || z > largest_z) {

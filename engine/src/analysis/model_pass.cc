@@ -120,7 +120,7 @@ std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass) {
     p.name = s.name;
     p.value = pass.forward.x_filt(K - 1, s.index);
     p.std_error = std::sqrt(pass.smoothed.variance(K - 1, s.index));
-    p.method = "FILTER";
+    p.method = EstimationMethod::kFilterState;
     p.unit = std::string(e.term.family->unit);
     out.push_back(p);
   }

@@ -5,13 +5,15 @@
 #include <cstdio>
 #include <limits>
 
+#include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::engine {
 namespace {
 
 std::string RawChannel(const EffectTerm& term) {
-  return std::string(term.family->sensor == Sensor::kGyro ? "gyro_" : "acc_") + "xyz"[term.axis];
+  return std::string(term.family->sensor == Sensor::kGyro ? "gyro_" : "acc_") +
+         AxisLabel(AxisSet::kSingle, term.axis, term.axis);
 }
 
 }  // namespace

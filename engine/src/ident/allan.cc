@@ -390,7 +390,7 @@ std::vector<ParameterEstimate> AllanParameterEstimates(const AllanResult& result
       e.name = name;
       e.value = t.value;
       e.std_error = t.std_error;
-      e.method = "ALLAN";
+      e.method = EstimationMethod::kAllan;
       e.unit = unit;
       if (auto it = prior.find(name); it != prior.end()) e.a_priori = it->second;
       out.push_back(e);

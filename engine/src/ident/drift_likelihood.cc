@@ -23,15 +23,15 @@ int EffectOf(const ErrorModel& m, const std::string& name) {
   auto terms = ParseEffectSelector(name);
   return terms.ok() ? m.FindEffect(terms->front()) : -1;
 }
-int WalkEffectOf(const ErrorModel& m, int drift) { return EffectOf(m, WalkName(drift)); }
-int PairEffectOf(const ErrorModel& m, int drift) { return EffectOf(m, SecondOrderName(drift)); }
+int WalkEffectOf(const ErrorModel& m, DriftAxis drift) { return EffectOf(m, WalkName(drift)); }
+int PairEffectOf(const ErrorModel& m, DriftAxis drift) { return EffectOf(m, SecondOrderName(drift)); }
 
 // One parameter of the likelihood: a drift's σ or τ, a walk's density K, or
 // a second-order pair's σ₂, α or β.
 enum class Kind { kSigma, kTau, kWalk, kPairSigma, kPairDecayRate, kPairFrequency };
 struct Parameter {
   Kind kind = Kind::kSigma;
-  int drift = 0;
+  DriftAxis drift;
 };
 bool IsPair(Kind k) { return k == Kind::kPairSigma || k == Kind::kPairDecayRate || k == Kind::kPairFrequency; }
 
@@ -74,7 +74,7 @@ std::string NameOf(const Parameter& p) {
 }
 
 const char* UnitOf(const Parameter& p) {
-  const bool gyro = p.drift < 3;
+  const bool gyro = p.drift.sensor == Sensor::kGyro;
   switch (p.kind) {
     case Kind::kSigma:
     case Kind::kPairSigma:
@@ -136,9 +136,9 @@ class Maximiser {
       : run_(run), model_(std::move(model)), layout_(model_), parameters_(std::move(parameters)), 
         options_(options), out_(out) {
     for (const Parameter& p : parameters_) {
-      if (p.kind == Kind::kTau) tau_free_[static_cast<size_t>(p.drift)] = true;
+      if (p.kind == Kind::kTau) tau_free_.Set(p.drift);
       if (p.kind == Kind::kPairSigma) {
-        pair_slot_[static_cast<size_t>(p.drift)] = static_cast<int>(smoother_.pair_states.size());
+        pair_slot_[static_cast<size_t>(p.drift.Index())] = static_cast<int>(smoother_.pair_states.size());
         smoother_.pair_states.push_back(layout_.EffectOffset(PairEffectOf(model_, p.drift)));
       }
     }
@@ -199,7 +199,7 @@ class Maximiser {
       const Parameter& p = parameters_[j];
       const auto i = static_cast<Eigen::Index>(j);
       if (IsPair(p.kind)) {
-        const int slot = pair_slot_[static_cast<size_t>(p.drift)];
+        const int slot = pair_slot_[static_cast<size_t>(p.drift.Index())];
         PairStep pair;
         if (!PairMStep(sm->x, smoother_.pair_states[static_cast<size_t>(slot)], sm->pair_moments[static_cast<size_t>(slot)],
                        dt, pair)) {
@@ -211,7 +211,8 @@ class Maximiser {
         continue;
       }
       const bool walk = p.kind == Kind::kWalk;
-      const int state = walk ? layout_.EffectOffset(WalkEffectOf(model_, p.drift)) : layout_.gyro_bias() + p.drift;
+      const int bias = p.drift.sensor == Sensor::kGyro ? layout_.gyro_bias() : layout_.acc_bias();
+      const int state = walk ? layout_.EffectOffset(WalkEffectOf(model_, p.drift)) : bias + p.drift.axis;
       double a_from = 0.0, a_to = 0.0, b = 0.0;
       for (int k = 0; k + 1 < K; ++k) {
         const double x0 = sm->x(k, state), x1 = sm->x(k + 1, state);
@@ -223,7 +224,7 @@ class Maximiser {
       if (walk) {
         const double k2 = (a_to - 2.0 * b + a_from) / ((K - 1) * dt);  // K̂²
         if (k2 > 0.0) step.next[i] = 0.5 * std::log(k2);
-      } else if (tau_free_[static_cast<size_t>(p.drift)]) {
+      } else if (tau_free_.Contains(p.drift)) {
         // σ and τ together: the AR(1) regression of the header, φ̂ = Σb / Σa,
         // q̂ = Σ E[(x_{k+1} − φ̂ x_k)²] / (n − 1), σ̂² = q̂ / (1 − φ̂²) (the
         // initial state's term, one of n, left out of the φ step).
@@ -356,9 +357,9 @@ class Maximiser {
   std::vector<Parameter> parameters_;
   const DriftLikelihoodOptions& options_;
   DriftLikelihoodResult& out_;
-  DriftSelection tau_free_{};  // drifts whose τ is a parameter too
+  DriftSelection tau_free_;  // drifts whose τ is a parameter too
   SmootherOptions smoother_;   // with the moments of each fitted pair
-  std::array<int, 6> pair_slot_{};  // per drift: its pair's index among smoother_.pair_states
+  std::array<int, DriftAxis::kCount> pair_slot_{};  // by DriftAxis::Index: its pair's index among smoother_.pair_states
   bool converged_ = false;
   int iterations_ = 0;
 };
@@ -371,7 +372,7 @@ absl::Status ValidateOptions(const DriftLikelihoodOptions& options) {
   return absl::OkStatus();
 }
 
-bool HasDrift(const ErrorModel& m, int drift) { return DriftOf(m, drift).sigma > 0.0 && DriftOf(m, drift).tau_s > 0.0; }
+bool HasDrift(const ErrorModel& m, DriftAxis drift) { return DriftOf(m, drift).sigma > 0.0 && DriftOf(m, drift).tau_s > 0.0; }
 
 // Maximises from the model's values into `out` (model, iterations,
 // convergence, ℓ at the estimate); `first_likelihood` gets ℓ at the start.
@@ -394,7 +395,7 @@ ParameterEstimate EstimateOf(const Parameter& p, double value, double log_se, co
   e.std_error = value * log_se;
   e.ci95_low = value * std::exp(-1.96 * log_se);
   e.ci95_high = value * std::exp(1.96 * log_se);
-  e.method = "ML";
+  e.method = EstimationMethod::kMaximumLikelihood;
   e.unit = UnitOf(p);
   if (p.kind == Kind::kSigma || p.kind == Kind::kTau) e.a_priori = ValueOf(a_priori, p);
   return e;
@@ -402,30 +403,11 @@ ParameterEstimate EstimateOf(const Parameter& p, double value, double log_se, co
 
 }  // namespace
 
-GaussMarkov& DriftOf(ErrorModel& m, int drift) {
-  return (drift < 3 ? m.gyro : m.acc).bias[static_cast<size_t>(drift % 3)];
-}
-const GaussMarkov& DriftOf(const ErrorModel& m, int drift) {
-  return (drift < 3 ? m.gyro : m.acc).bias[static_cast<size_t>(drift % 3)];
-}
-
-std::string DriftName(int drift) {
-  return std::string(drift < 3 ? "gyro_bias_gm." : "acc_bias_gm.") + "xyz"[drift % 3];
-}
-
 double StructurePValue(double statistic, int dof, int starts) {
   return std::min(1.0, stats::ChiSquareSurvival(statistic, dof) * static_cast<double>(starts));
 }
 
 double NestedPValue(const StructureEstimate& s) { return StructurePValue(s.statistic, s.dof, s.starts); }
-
-std::string SecondOrderName(int drift) {
-  return std::string(drift < 3 ? "gyro_bias_second_order." : "acc_bias_second_order.") + "xyz"[drift % 3];
-}
-
-std::string WalkName(int drift) {
-  return std::string(drift < 3 ? "gyro_bias_rw." : "acc_bias_rw.") + "xyz"[drift % 3];
-}
 
 absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const EpochRun& run, const ErrorModel& model,
                                                                  const ErrorModel& a_priori,
@@ -436,11 +418,11 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const EpochRun&
   DriftLikelihoodResult out;
   out.model = model;
   std::vector<Parameter> parameters;
-  for (int d = 0; d < 6; ++d) {
+  for (const DriftAxis d : DriftAxis::All()) {
     // A drift the model leaves out (σ = 0) has no state to identify.
-    if (!which[static_cast<size_t>(d)] || !HasDrift(model, d)) continue;
+    if (!which.Contains(d) || !HasDrift(model, d)) continue;
     parameters.push_back({Kind::kSigma, d});
-    if (tau_too[static_cast<size_t>(d)]) parameters.push_back({Kind::kTau, d});
+    if (tau_too.Contains(d)) parameters.push_back({Kind::kTau, d});
   }
   if (parameters.empty()) {
     out.converged = true;
@@ -502,7 +484,7 @@ namespace {
 // drift σ (the first is its magnitude) and its effect at a start.
 struct StructureKind {
   bool second_order = false;
-  std::string Name(int drift) const { return second_order ? SecondOrderName(drift) : WalkName(drift); }
+  std::string Name(DriftAxis drift) const { return second_order ? SecondOrderName(drift) : WalkName(drift); }
   std::vector<Kind> Kinds() const {
     if (second_order) return {Kind::kPairSigma, Kind::kPairDecayRate, Kind::kPairFrequency};
     return {Kind::kWalk};
@@ -514,7 +496,7 @@ struct StructureKind {
   // The effect at start `start` for a drift of a-priori σ and τ `specified`
   // (header: a walk at the drift's short-term level σ√(2/τ); a pair of the
   // drift's σ, its decay time the starting period).
-  absl::StatusOr<ModelEffect> At(int drift, size_t start, const GaussMarkov& specified,
+  absl::StatusOr<ModelEffect> At(DriftAxis drift, size_t start, const GaussMarkov& specified,
                                  const DriftLikelihoodOptions& o) const {
     auto terms = ParseEffectSelector(Name(drift));
     if (!terms.ok()) return terms.status();
@@ -535,7 +517,7 @@ struct StructureKind {
 // The report's parameters of a fitted structure from its estimates in θ
 // (value, SE of its log): a walk's K; a pair's σ₂, τ₂ = 1/α and period 2π/β
 // (ln τ₂ = −ln α: the same SE in the log).
-std::vector<ParameterEstimate> ReportedParameters(const StructureKind& kind, int drift,
+std::vector<ParameterEstimate> ReportedParameters(const StructureKind& kind, DriftAxis drift,
                                                   const std::vector<ParameterEstimate>& fitted) {
   if (!kind.second_order) return fitted;
   std::vector<ParameterEstimate> out{fitted[0]};
@@ -569,15 +551,15 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
   const std::vector<Kind> kinds = kind.Kinds();
   const auto per_axis = static_cast<Eigen::Index>(kinds.size()) + 1;  // the drift σ, then the structure's
 
-  std::vector<int> candidates;
-  for (int d = 0; d < 6; ++d) {
-    if (axes[static_cast<size_t>(d)] && HasDrift(model, d) && EffectOf(model, kind.Name(d)) < 0) {
+  std::vector<DriftAxis> candidates;
+  for (const DriftAxis d : DriftAxis::All()) {
+    if (axes.Contains(d) && HasDrift(model, d) && EffectOf(model, kind.Name(d)) < 0) {
       candidates.push_back(d);
-      out.screened[static_cast<size_t>(d)] = true;
+      out.screened.Set(d);
     }
   }
   if (candidates.empty()) return out;
-  auto specified = [&](int d) { return HasDrift(a_priori, d) ? DriftOf(a_priori, d) : DriftOf(model, d); };
+  auto specified = [&](DriftAxis d) { return HasDrift(a_priori, d) ? DriftOf(a_priori, d) : DriftOf(model, d); };
 
   // The screen: from each start, every candidate at the structure hypothesis
   // (the drift at its a-priori σ, not wider: a widened drift took the slow
@@ -592,7 +574,7 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
   auto screened = numerics::ParallelMap(kind.Starts(options), [&](std::size_t start) -> absl::StatusOr<ScreenStep> {
     ErrorModel trial = model;
     std::vector<Parameter> parameters;
-    for (int d : candidates) {
+    for (const DriftAxis d : candidates) {
       auto effect = kind.At(d, start, specified(d), options);
       if (!effect.ok()) return effect.status();
       GaussMarkov& drift = DriftOf(trial, d);
@@ -610,9 +592,10 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
     out_step.filter_passes = passes.filter_passes;
     return out_step;
   });
-  std::array<double, 6> best_growth;
+  // By DriftAxis::Index.
+  std::array<double, DriftAxis::kCount> best_growth;
   best_growth.fill(0.0);
-  std::array<size_t, 6> best_start{};
+  std::array<size_t, DriftAxis::kCount> best_start{};
   for (size_t start = 0; start < screened.size(); ++start) {
     if (!screened[start].ok()) return screened[start].status();
     const ScreenStep& s_step = *screened[start];
@@ -621,24 +604,24 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
     for (size_t c = 0; c < candidates.size(); ++c) {
       const auto magnitude = static_cast<Eigen::Index>(c) * per_axis + 1;
       const double growth = s_step.step.next[magnitude] - s_step.theta[magnitude];
-      const auto d = static_cast<size_t>(candidates[c]);
+      const auto d = static_cast<size_t>(candidates[c].Index());
       if (growth > best_growth[d]) {
         best_growth[d] = growth;
         best_start[d] = start;
       }
     }
   }
-  std::vector<int> kept_axes;
-  for (int d : candidates) {
-    if (best_growth[static_cast<size_t>(d)] > 0.0) kept_axes.push_back(d);
+  std::vector<DriftAxis> kept_axes;
+  for (const DriftAxis d : candidates) {
+    if (best_growth[static_cast<size_t>(d.Index())] > 0.0) kept_axes.push_back(d);
   }
   if (kept_axes.empty()) return out;
 
   // The kept structures with their drifts, jointly, each from its best start.
   ErrorModel joint = model;
   std::vector<Parameter> kept;
-  for (int d : kept_axes) {
-    auto effect = kind.At(d, best_start[static_cast<size_t>(d)], specified(d), options);
+  for (const DriftAxis d : kept_axes) {
+    auto effect = kind.At(d, best_start[static_cast<size_t>(d.Index())], specified(d), options);
     if (!effect.ok()) return effect.status();
     joint.effects.push_back(*effect);
     kept.push_back({Kind::kSigma, d});
@@ -662,7 +645,7 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
   // below ℓ̂₀ (its steps fall under the tolerance long before it gets there),
   // which inflates the statistic. The fits are independent: on every core.
   auto without_each = numerics::ParallelMap(kept_axes.size(), [&](std::size_t c) {
-    const int d = kept_axes[c];
+    const DriftAxis d = kept_axes[c];
     ErrorModel without = out.model;
     without.effects.erase(without.effects.begin() + EffectOf(without, kind.Name(d)));
     DriftOf(without, d).sigma = DriftOf(model, d).sigma;
@@ -674,7 +657,7 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
   for (size_t c = 0; c < kept_axes.size(); ++c) {
     const auto& [fitted_alone, alone_result] = without_each[c];
     if (!fitted_alone.ok()) return fitted_alone;
-    const int d = kept_axes[c];
+    const DriftAxis d = kept_axes[c];
     StructureEstimate w;
     w.drift = d;
     w.effect = kind.Name(d);

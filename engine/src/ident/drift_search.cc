@@ -48,10 +48,10 @@ GridPoint GridStart(const EpochRun& run, const ErrorModel& model, const DriftSel
   GridPoint out{model, LogLikelihoodOrWorst(run, model, passes)};
   double best_ll = out.model_log_likelihood;
   const int points = std::max(1, starts.grid_tau_points);
-  for (int d = 0; d < kDriftCount; ++d) {
-    if (!which[static_cast<size_t>(d)] || !(DriftOf(model, d).sigma > 0.0)) continue;
+  for (const DriftAxis d : DriftAxis::All()) {
+    if (!which.Contains(d) || !(DriftOf(model, d).sigma > 0.0)) continue;
     const GaussMarkov specified = DriftOf(model, d);
-    const bool with_tau = tau_too[static_cast<size_t>(d)];
+    const bool with_tau = tau_too.Contains(d);
     std::vector<GaussMarkov> trials;
     for (int t = 0; t < (with_tau ? points : 1); ++t) {
       const double fraction = points > 1 ? static_cast<double>(t) / (points - 1) : 0.5;
@@ -94,8 +94,8 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
   std::vector<ErrorModel> start_models = {model};
   for (double factor : starts.tau_factors) {
     ErrorModel start = model;
-    for (int d = 0; d < kDriftCount; ++d) {
-      if (!which[static_cast<size_t>(d)]) continue;
+    for (const DriftAxis d : DriftAxis::All()) {
+      if (!which.Contains(d)) continue;
       GaussMarkov& drift = DriftOf(start, d);
       drift.tau_s = std::clamp(drift.tau_s * factor, range.shortest_s, range.longest_s);
     }
@@ -127,8 +127,8 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
   ErrorModel combined = best->model;
   double combined_ll = best->log_likelihood_after;
   bool changed = false;
-  for (int d = 0; d < kDriftCount; ++d) {
-    if (!which[static_cast<size_t>(d)]) continue;
+  for (const DriftAxis d : DriftAxis::All()) {
+    if (!which.Contains(d)) continue;
     for (const DriftLikelihoodResult& other : fits) {
       if (&other == &*best || DriftOf(other.model, d) == DriftOf(combined, d)) continue;
       ErrorModel trial = combined;
@@ -163,7 +163,7 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromGrid(const EpochRun& run
                                                              const DriftSelection& tau_too,
                                                              const DriftStartOptions& starts,
                                                              const DriftLikelihoodOptions& options) {
-  if (std::none_of(which.begin(), which.end(), [](bool b) { return b; })) {
+  if (!which.Any()) {
     return IdentifyDriftsByLikelihood(run, model, a_priori, which, tau_too, options);
   }
   int passes = 0;
@@ -182,20 +182,20 @@ absl::StatusOr<std::vector<std::string>> WidenErrorsToTheLikelihoodRatio(const E
   std::vector<std::string> widened;
   if (fit.identified.empty()) return widened;
   const double at_fit = fit.log_likelihood_after;
-  const auto departs = [&](int d) {
+  const auto departs = [&](DriftAxis d) {
     const GaussMarkov& before = DriftOf(reference, d);
     return DriftOf(fit.model, d) != before && before.sigma > 0.0 && before.tau_s > 0.0;
   };
   // ℓ with each departing drift back at its reference: independent passes.
-  const auto at_references = numerics::ParallelMap(kDriftCount, [&](std::size_t i) -> absl::StatusOr<double> {
-    const int d = static_cast<int>(i);
+  const auto at_references = numerics::ParallelMap(DriftAxis::kCount, [&](std::size_t i) -> absl::StatusOr<double> {
+    const DriftAxis d = DriftAxis::FromIndex(static_cast<int>(i));
     if (!departs(d)) return absl::CancelledError("at its reference");
     ErrorModel without = fit.model;
     DriftOf(without, d) = DriftOf(reference, d);
     int passes = 0;
     return LogLikelihoodOf(run, without, passes);
   });
-  for (int d = 0; d < kDriftCount; ++d) {
+  for (const DriftAxis d : DriftAxis::All()) {
     const GaussMarkov& before = DriftOf(reference, d);
     if (!departs(d)) continue;
     const std::string prefix = DriftName(d) + ".";
@@ -211,7 +211,7 @@ absl::StatusOr<std::vector<std::string>> WidenErrorsToTheLikelihoodRatio(const E
     }
     if (estimates.empty()) continue;
     ++fit.filter_passes;
-    const auto& at_reference = at_references[static_cast<std::size_t>(d)];
+    const auto& at_reference = at_references[static_cast<std::size_t>(d.Index())];
     if (!at_reference.ok()) continue;
     // The floor is χ²'s median: below it neither statistic says the estimate
     // departs from the reference, and a test-based SE would only measure how
@@ -237,7 +237,7 @@ absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const Epoch
   if (!before.ok()) return before.status();
   ErrorModel kept = fit.model;
   double kept_ll = fit.log_likelihood_after;
-  auto parameters_of = [&](int d) {
+  auto parameters_of = [&](DriftAxis d) {
     const std::string prefix = DriftName(d) + ".";
     return static_cast<int>(std::count_if(fit.identified.begin(), fit.identified.end(), [&](const ParameterEstimate& p) {
       return p.name.rfind(prefix, 0) == 0;
@@ -245,35 +245,35 @@ absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const Epoch
   };
   for (;;) {
     // Each kept drift put back to the model's values: independent passes.
-    const auto without_each = numerics::ParallelMap(kDriftCount, [&](std::size_t i) -> absl::StatusOr<double> {
-      const int d = static_cast<int>(i);
+    const auto without_each = numerics::ParallelMap(DriftAxis::kCount, [&](std::size_t i) -> absl::StatusOr<double> {
+      const DriftAxis d = DriftAxis::FromIndex(static_cast<int>(i));
       if (DriftOf(kept, d) == DriftOf(model, d)) return absl::CancelledError("not kept");
       ErrorModel without = kept;
       DriftOf(without, d) = DriftOf(model, d);
       int passes = 0;
       return LogLikelihoodOf(run, without, passes);
     });
-    int least = -1;
+    std::optional<DriftAxis> least;
     double least_margin = 0.0, least_ll = 0.0;
-    for (int d = 0; d < kDriftCount; ++d) {
+    for (const DriftAxis d : DriftAxis::All()) {
       if (DriftOf(kept, d) == DriftOf(model, d)) continue;
       ++fit.filter_passes;
-      const auto& ll = without_each[static_cast<std::size_t>(d)];
+      const auto& ll = without_each[static_cast<std::size_t>(d.Index())];
       // A drift the filter cannot run without is worth its parameters.
       if (!ll.ok()) continue;
       const double margin = 2.0 * (kept_ll - *ll) - parameters_of(d) * log_n;
-      if (least < 0 || margin < least_margin) {
+      if (!least.has_value() || margin < least_margin) {
         least = d;
         least_margin = margin;
         least_ll = *ll;
       }
     }
-    if (least < 0 || least_margin > 0.0) break;
-    DriftOf(kept, least) = DriftOf(model, least);
+    if (!least.has_value() || least_margin > 0.0) break;
+    DriftOf(kept, *least) = DriftOf(model, *least);
     kept_ll = least_ll;
   }
   std::erase_if(fit.identified, [&](const ParameterEstimate& p) {
-    for (int d = 0; d < kDriftCount; ++d) {
+    for (const DriftAxis d : DriftAxis::All()) {
       if (DriftOf(kept, d) != DriftOf(model, d) && p.name.rfind(DriftName(d) + ".", 0) == 0) return false;
     }
     return true;

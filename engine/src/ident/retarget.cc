@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/numerics/parallel_map.h"
 #include "insdiag/engine/stats/distributions.h"
 
@@ -99,7 +100,7 @@ RetargetResult RetargetDrifts(const ErrorModel& current, const ErrorModel& a_pri
       p.std_error = estimate->std_error;
       p.ci95_low = estimate->ci95_low;
       p.ci95_high = estimate->ci95_high;
-      p.method = "ACF";
+      p.method = EstimationMethod::kAutocorrelation;
       p.unit = unit;
       p.a_priori = prior_value;
       r.identified.push_back(p);
@@ -132,7 +133,7 @@ std::vector<ParameterEstimate> ApplyAllanNoise(const AllanResult& allan, const E
     const SensorTriadModel& prior = ch.sensor == Sensor::kGyro ? a_priori.gyro : a_priori.acc;
     const AllanTermEstimate& n = ch.fit[AllanParameter::kWhiteDensity];
     const AllanTermEstimate& q = ch.fit[AllanParameter::kQuantization];
-    const std::string axis(1, "xyz"[ch.axis]);
+    const std::string axis = AxisLabel(AxisSet::kSingle, ch.axis, ch.axis);
     if (n.included && n.value > 0.0 && std::isfinite(n.std_error) &&
         rejects(n.value, n.std_error, prior.white_noise_density[ch.axis])) {
       triad.white_noise_density[ch.axis] = n.value;
@@ -140,7 +141,7 @@ std::vector<ParameterEstimate> ApplyAllanNoise(const AllanResult& allan, const E
       p.name = std::string(ch.sensor == Sensor::kGyro ? "gyro_arw." : "acc_vrw.") + axis;
       p.value = n.value;
       p.std_error = n.std_error;
-      p.method = "ALLAN";
+      p.method = EstimationMethod::kAllan;
       p.unit = ch.sensor == Sensor::kGyro ? "rad/sqrt(s)" : "m/s/sqrt(s)";
       p.a_priori = prior.white_noise_density[ch.axis];
       used.push_back(p);
@@ -259,7 +260,9 @@ absl::StatusOr<NoiseScaleResult> ScaleUnresolvedNoise(const EpochRun& run, const
       double* v = drift ? &triad.bias[a].sigma : &triad.white_noise_density[static_cast<Eigen::Index>(a)];
       // A zero term has no scale to find.
       if (!(*v > 0.0)) continue;
-      g.terms.push_back({v, *v, std::string(prefix) + "xyz"[a] + (drift ? ".sigma" : ""), unit});
+      const int axis = static_cast<int>(a);
+      g.terms.push_back({v, *v, std::string(prefix) + AxisLabel(AxisSet::kSingle, axis, axis) + (drift ? ".sigma" : ""),
+                         unit});
     }
     if (!g.terms.empty()) groups.push_back(std::move(g));
   };
@@ -354,7 +357,7 @@ absl::StatusOr<NoiseScaleResult> ScaleUnresolvedNoise(const EpochRun& run, const
       p.std_error = p.value * r.log_std_error;
       p.ci95_low = p.value * std::exp(-1.96 * r.log_std_error);
       p.ci95_high = p.value * std::exp(1.96 * r.log_std_error);
-      p.method = "ML";
+      p.method = EstimationMethod::kMaximumLikelihood;
       p.unit = t.unit;
       p.a_priori = t.bound;
       out.identified.push_back(p);

@@ -125,7 +125,7 @@ std::vector<ParameterEstimate> RemoveDominantConstants(BenchRun& run, const std:
     p.name = c.term.Name();
     p.value = c.bias;
     p.std_error = c.std_error;
-    p.method = "STATIC";
+    p.method = EstimationMethod::kStaticMeans;
     p.unit = std::string(c.term.family->unit);
     p.a_priori = 0.0;
     removed.push_back(std::move(p));

@@ -2,16 +2,33 @@
 #pragma once
 
 #include <limits>
+#include <optional>
 #include <string>
+#include <string_view>
 
 namespace insdiag::engine {
+
+// How a parameter was estimated.
+enum class EstimationMethod {
+  kAutocorrelation,    // a fit of the smoothed estimates' autocorrelation (correlation processing)
+  kAllan,              // the Allan variance of the static segments
+  kFilterState,        // a state of the filter, its smoothed value at the end
+  kMaximumLikelihood,  // the innovations' likelihood
+  kStaticMeans,        // the static segments' means against the reference
+};
+
+// The method's name in reports and on the API: "ACF", "ALLAN", "FILTER",
+// "ML", "STATIC".
+std::string_view MethodName(EstimationMethod method);
+// The method of a name MethodName gives; nullopt for any other text.
+std::optional<EstimationMethod> MethodNamed(std::string_view name);
 
 // An identified parameter of the error model.
 struct ParameterEstimate {
   std::string name;  // "gyro_bias_gm.x.sigma", "gyro_arw.x", "gyro_scale_factor.z", …
   double value = 0.0;
   double std_error = std::numeric_limits<double>::quiet_NaN();
-  std::string method;  // "ACF", "ALLAN", "FILTER", "ML" (innovation likelihood) or "STATIC" (static means)
+  std::optional<EstimationMethod> method;  // none: not stated (an estimate read from elsewhere)
   std::string unit;
   double a_priori = std::numeric_limits<double>::quiet_NaN();  // the model's value before identification
   // 95% interval (NaN when the estimator gives none beyond ± 1.96 σ).

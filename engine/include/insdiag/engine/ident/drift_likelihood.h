@@ -81,21 +81,11 @@
 
 #include "insdiag/engine/bench_run.h"
 #include "insdiag/engine/filter/forward_filter.h"
+#include "insdiag/engine/model/drift_axis.h"
 #include "insdiag/engine/model/error_model.h"
 #include "insdiag/engine/parameter_estimate.h"
 
 namespace insdiag::engine::ident {
-
-// The base drifts: gyro x, y, z, then accelerometer x, y, z.
-inline constexpr int kDriftCount = 6;
-// Which base drifts to identify, in that order.
-using DriftSelection = std::array<bool, kDriftCount>;
-
-// The state name of base drift d in that order ("gyro_bias_gm.x", …, "acc_bias_gm.z").
-std::string DriftName(int drift);
-// Its Gauss–Markov parameters in a model.
-GaussMarkov& DriftOf(ErrorModel& model, int drift);
-const GaussMarkov& DriftOf(const ErrorModel& model, int drift);
 
 struct DriftLikelihoodOptions {
   // EM steps at most (each a forward and a smoother pass).
@@ -119,7 +109,7 @@ struct DriftLikelihoodOptions {
 // A random structure fitted with its axis' drift σ: a bias random walk or a
 // second-order Markov pair.
 struct StructureEstimate {
-  int drift = 0;                   // axis, in DriftSelection order
+  DriftAxis drift;
   std::string effect;              // "gyro_bias_rw.z", "gyro_bias_second_order.y"
   ModelEffect fitted;              // the effect with its identified parameters
   // Method "ML": K (<effect>.density) of a walk; σ₂, τ₂ = 1/α and the period
@@ -146,7 +136,7 @@ struct DriftLikelihoodResult {
   // Structure tests: the axes the screen tried (selected, with a drift, and
   // no such structure in the model); those not in `structures` its first EM
   // step shrank.
-  DriftSelection screened{};
+  DriftSelection screened;
   // Selected drifts whose likelihood is flat in σ (the run cannot tell it);
   // the model keeps their values.
   std::vector<std::string> not_identifiable;
@@ -279,10 +269,5 @@ absl::StatusOr<DriftLikelihoodResult> IdentifySecondOrdersByLikelihood(const Epo
 // structure's own and every error stays unknown: conditioning on the σ
 // would understate them.
 Eigen::MatrixXd StructureCovariance(const Eigen::MatrixXd& information);
-
-// The walk effect of axis `drift` ("gyro_bias_rw.x", …, "acc_bias_rw.z").
-std::string WalkName(int drift);
-// The second-order effect of axis `drift` ("gyro_bias_second_order.x", …).
-std::string SecondOrderName(int drift);
 
 }  // namespace insdiag::engine::ident

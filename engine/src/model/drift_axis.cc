@@ -1,0 +1,34 @@
+#include "insdiag/engine/model/drift_axis.h"
+
+#include <string_view>
+
+namespace insdiag::engine {
+namespace {
+
+std::string_view SensorPrefix(Sensor sensor) { return sensor == Sensor::kGyro ? "gyro" : "acc"; }
+
+// The catalogue's term of family `<sensor>_<suffix>` on the drift's axis, by name.
+std::string TermName(DriftAxis drift, std::string_view suffix) {
+  const std::string family = std::string(SensorPrefix(drift.sensor)) + "_" + std::string(suffix);
+  return EffectTerm{FindEffectFamily(family), drift.axis, drift.axis}.Name();
+}
+
+}  // namespace
+
+std::string DriftName(DriftAxis drift) {
+  return std::string(SensorPrefix(drift.sensor)) + "_bias_gm." + AxisLabel(AxisSet::kSingle, drift.axis, drift.axis);
+}
+
+std::string WalkName(DriftAxis drift) { return TermName(drift, "bias_rw"); }
+
+std::string SecondOrderName(DriftAxis drift) { return TermName(drift, "bias_second_order"); }
+
+GaussMarkov& DriftOf(ErrorModel& model, DriftAxis drift) {
+  return (drift.sensor == Sensor::kGyro ? model.gyro : model.acc).bias[static_cast<size_t>(drift.axis)];
+}
+
+const GaussMarkov& DriftOf(const ErrorModel& model, DriftAxis drift) {
+  return (drift.sensor == Sensor::kGyro ? model.gyro : model.acc).bias[static_cast<size_t>(drift.axis)];
+}
+
+}  // namespace insdiag::engine

@@ -1,0 +1,33 @@
+#include "insdiag/engine/parameter_estimate.h"
+
+#include <array>
+#include <utility>
+
+namespace insdiag::engine {
+namespace {
+
+constexpr std::array<std::pair<EstimationMethod, std::string_view>, 5> kNames = {{
+    {EstimationMethod::kAutocorrelation, "ACF"},
+    {EstimationMethod::kAllan, "ALLAN"},
+    {EstimationMethod::kFilterState, "FILTER"},
+    {EstimationMethod::kMaximumLikelihood, "ML"},
+    {EstimationMethod::kStaticMeans, "STATIC"},
+}};
+
+}  // namespace
+
+std::string_view MethodName(EstimationMethod method) {
+  for (const auto& [m, name] : kNames) {
+    if (m == method) return name;
+  }
+  return "";
+}
+
+std::optional<EstimationMethod> MethodNamed(std::string_view name) {
+  for (const auto& [m, text] : kNames) {
+    if (text == name) return m;
+  }
+  return std::nullopt;
+}
+
+}  // namespace insdiag::engine
