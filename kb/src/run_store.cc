@@ -10,6 +10,7 @@
 #include <map>
 #include <numbers>
 
+#include "insdiag/api/json.h"
 #include "store_util.h"
 
 namespace insdiag::kb {
@@ -71,26 +72,11 @@ absl::Status UnpackSamples(std::string_view bytes, bool has_temperature,
   return absl::OkStatus();
 }
 
-std::string JsonString(std::string_view text) {
-  std::string out = "\"";
-  for (const char c : text) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      out += absl::StrCat("\\u00", absl::Hex(static_cast<unsigned char>(c), absl::kZeroPad2));
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
-
 std::string ExtraMetadataJson(const engine::BenchRunMetadata& metadata) {
   std::string out = "[";
   for (const auto& [key, value] : metadata.extra) {
     if (out.size() > 1) out += ',';
-    absl::StrAppend(&out, "[", JsonString(key), ",", JsonString(value), "]");
+    absl::StrAppend(&out, "[", api::JsonString(key), ",", api::JsonString(value), "]");
   }
   return out + "]";
 }

@@ -1,7 +1,6 @@
 #include "insdiag/server/server_log.h"
 
 #include <absl/strings/str_cat.h>
-#include <absl/strings/str_format.h>
 #include <absl/time/clock.h>
 #include <absl/time/time.h>
 
@@ -9,6 +8,8 @@
 #include <cstdio>
 #include <mutex>
 #include <string>
+
+#include "insdiag/api/json.h"
 
 namespace insdiag::server {
 namespace {
@@ -28,39 +29,6 @@ std::string_view LevelName(LogLevel level) {
   return "info";
 }
 
-// A JSON string's contents (RFC 8259 §7): quote, backslash and control
-// characters escaped; UTF-8 passes as it is.
-std::string JsonEscaped(std::string_view text) {
-  std::string out;
-  out.reserve(text.size());
-  for (const char c : text) {
-    switch (c) {
-      case '"':
-        out += "\\\"";
-        break;
-      case '\\':
-        out += "\\\\";
-        break;
-      case '\n':
-        out += "\\n";
-        break;
-      case '\r':
-        out += "\\r";
-        break;
-      case '\t':
-        out += "\\t";
-        break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          out += absl::StrFormat("\\u%04x", static_cast<unsigned char>(c));
-        } else {
-          out += c;
-        }
-    }
-  }
-  return out;
-}
-
 }  // namespace
 
 void SetLogFormat(LogFormat f) { format.store(f); }
@@ -69,8 +37,8 @@ void Log(LogLevel level, std::string_view message) {
   std::string line;
   if (format.load() == LogFormat::kJson) {
     line = absl::StrCat("{\"time\":\"", absl::FormatTime("%Y-%m-%dT%H:%M:%E3SZ", absl::Now(), absl::UTCTimeZone()),
-                        "\",\"level\":\"", std::string(LevelName(level)), "\",\"message\":\"", JsonEscaped(message),
-                        "\"}\n");
+                        "\",\"level\":\"", std::string(LevelName(level)), "\",\"message\":", api::JsonString(message),
+                        "}\n");
   } else {
     line = absl::StrCat("insdiagd: ", level == LogLevel::kWarning ? "WARNING: " : "", std::string(message), "\n");
   }

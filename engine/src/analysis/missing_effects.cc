@@ -17,11 +17,8 @@ namespace insdiag::engine::pipeline {
 // The drifts correlation processing resolved.
 DriftSelection ResolvedDrifts(const std::vector<DriftCorrelation>& drifts) {
   DriftSelection selection;
-  for (const DriftAxis d : DriftAxis::All()) {
-    const std::string name = DriftName(d);
-    selection.Set(d, std::any_of(drifts.begin(), drifts.end(), [&](const DriftCorrelation& c) {
-                    return c.state == name && c.analysis.resolved;
-                  }));
+  for (const DriftCorrelation& c : drifts) {
+    if (c.analysis.resolved) selection.Set(DriftAxis{c.sensor, c.axis});
   }
   return selection;
 }

@@ -20,4 +20,9 @@ absl::StatusOr<std::string> ToJson(const google::protobuf::Message& message, boo
 // INVALID_ARGUMENT naming what did not parse.
 absl::Status FromJson(std::string_view json, google::protobuf::Message* message);
 
+// `text` as a JSON string, quotes included: the quote, the backslash and
+// control characters escaped (RFC 8259 §7); UTF-8 passes as it is. For
+// JSON written outside a message (stored metadata, log lines).
+std::string JsonString(std::string_view text);
+
 }  // namespace insdiag::api
