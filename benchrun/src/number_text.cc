@@ -1,5 +1,7 @@
 #include "number_text.h"
 
+#include "insdiag/benchrun/site_angles.h"
+
 #include <absl/strings/str_format.h>
 
 #include <charconv>
@@ -101,3 +103,13 @@ double DegreesFromRadians(double radians) {
 }
 
 }  // namespace insdiag::benchrun::internal
+
+namespace insdiag::benchrun {
+
+std::optional<double> SiteAngleRadians(std::string_view degrees_text) {
+  double radians = 0.0;
+  if (internal::ParseDegreesAsRadians(degrees_text, radians) != internal::NumberParse::kOk) return std::nullopt;
+  return radians;
+}
+
+}  // namespace insdiag::benchrun
