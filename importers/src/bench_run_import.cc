@@ -89,6 +89,9 @@ absl::Status SettleTime(const ImportRecipe& recipe, const RecordLocator& where, 
   const double origin = samples.front().t_s - nominal;
   for (auto& s : samples) s.t_s -= origin;
   metadata.extra.emplace_back("time_origin_s", absl::StrFormat("%.17g", origin));
+  if (records.first_gps_week.has_value()) {
+    metadata.extra.emplace_back("time_origin_gps_week", absl::StrFormat("%.17g", *records.first_gps_week));
+  }
   return absl::OkStatus();
 }
 

@@ -51,7 +51,8 @@ void RecordDecoder::Append(std::span<const double> values, std::int64_t origin, 
       case ColumnTarget::kTemp: sample.temp_degc = v; break;
     }
   }
-  sample.t_s += week * kSecondsPerGpsWeek;
+  if (!into.first_gps_week.has_value()) into.first_gps_week = week;
+  sample.t_s += (week - *into.first_gps_week) * kSecondsPerGpsWeek;
   for (int body = 0; body < 3; ++body) {
     sample.gyro_rad_s[body] = recipe_.axis_sign[body] * gyro_sensor[recipe_.axis_source[body]];
     sample.acc_mps2[body] = recipe_.axis_sign[body] * acc_sensor[recipe_.axis_source[body]];

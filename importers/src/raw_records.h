@@ -5,6 +5,7 @@
 #include <absl/status/statusor.h>
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -16,12 +17,15 @@ namespace insdiag::importers::internal {
 
 struct DecodedRecords {
   // gyro/acc hold a rate or an increment, as the columns' units say; t is
-  // the raw time (+ GPS weeks) when a column holds it, else 0.
+  // the raw time when a column holds it, else 0. With a GPS week column, t
+  // counts from the start of the first record's week: seconds of a week keep
+  // their precision, seconds since 1980 (10⁹ s) would not.
   std::vector<engine::ImuSample> samples;
   std::vector<double> table_yaw_rad;  // one per sample when a column holds it
   // Where each sample came from: the 1-based line of a text log, or the
   // 0-based record index of a binary one.
   std::vector<std::int64_t> origin;
+  std::optional<double> first_gps_week;
 };
 
 // Turns one record's values (one per recipe column, skipped ones ignored)

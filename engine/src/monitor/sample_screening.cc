@@ -55,10 +55,31 @@ std::vector<std::array<double, 6>> ReferenceMeasurements(const BenchRun& run) {
 // Departures used to estimate the channel's robust σ.
 constexpr long kScaleSampleCount = 20000;
 
+double QuantileOf(std::vector<double>& v, double p) {
+  auto at = v.begin() + static_cast<std::ptrdiff_t>(p * static_cast<double>(v.size() - 1));
+  std::nth_element(v.begin(), at, v.end());
+  return *at;
+}
+
 double MedianOf(std::vector<double>& v) {
   auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
   std::nth_element(v.begin(), mid, v.end());
   return *mid;
+}
+
+// Quantiles of |d| for Gaussian d of standard deviation 1: Φ⁻¹(0.75) and Φ⁻¹(0.95).
+constexpr double kHalfNormalMedian = 0.6744897501960817;
+constexpr double kHalfNormalQuantile90 = 1.6448536269514722;
+
+// The channel's robust σ from |departures|. 1.4826·MAD (= MAD / Φ⁻¹(0.75))
+// collapses on coarsely quantised samples, where more than half of the
+// departures sit at zero, or within the timing jitter of zero once increments
+// are divided by measured intervals; every quantum step would then be a
+// "spike". The 90th percentile / Φ⁻¹(0.95) estimates the same σ for Gaussian
+// noise and stays at the quantisation level there; the larger is taken.
+double RobustSigma(std::vector<double>& magnitude) {
+  const double from_median = MedianOf(magnitude) / kHalfNormalMedian;
+  return std::max(from_median, QuantileOf(magnitude, 0.9) / kHalfNormalQuantile90);
 }
 
 }  // namespace
@@ -88,7 +109,7 @@ std::vector<SampleOutlier> ScreenAndRepairSpikes(BenchRun& run, const ScreeningO
   for (int c = 0; c < 6; ++c) {
     magnitude.clear();
     for (long k = w; k < n - w; k += stride) magnitude.push_back(std::abs(departure_at(c, k)));
-    double sigma = 1.4826 * MedianOf(magnitude);
+    double sigma = RobustSigma(magnitude);
     if (sigma <= 0.0) {
       // Coarsely quantised, mostly constant data: the smallest non-zero departure
       // is one quantum, the least a spike must exceed many times over.

@@ -10,7 +10,10 @@
 // taken for a spike. A sample is a spike when |r_k − med_k| > threshold · σ,
 // where med_k is the median of the 2w+1 departures around k and
 // σ = 1.4826 · median |r − med| over the channel (a robust standard deviation;
-// Hampel, J. Amer. Stat. Assoc. 69, 1974 — the "Hampel identifier").
+// Hampel, J. Amer. Stat. Assoc. 69, 1974 — the "Hampel identifier"), or, when
+// larger, the 90th percentile of |r − med| / 1.6449, the same σ for Gaussian
+// noise: on coarsely quantised samples most departures are zero (or timing
+// jitter), the median collapses, and every quantum step would be a spike.
 #pragma once
 
 #include <string_view>

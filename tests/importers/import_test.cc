@@ -1,0 +1,275 @@
+// insdiag::importers: raw logs to bench runs. Values are checked against
+// closed forms (units, axis maps, levelling on exact static samples), the
+// NovAtel CRC against an independent implementation, refusals against the
+// line and field they must name, and the real RLG record (data/real) against
+// its independently converted copy and its published alignment.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <numbers>
+#include <random>
+#include <string>
+
+#include "../../importers/src/raw_records.h"
+#include "insdiag/benchrun/bench_run_csv.h"
+#include "insdiag/engine/nav/rotation.h"
+#include "insdiag/engine/nav/wgs84.h"
+#include "insdiag/importers/bench_run_import.h"
+#include "insdiag/importers/import_recipe.h"
+
+#include <absl/strings/str_format.h>
+
+namespace insdiag::importers {
+namespace {
+
+using ::testing::HasSubstr;
+
+constexpr double kPi = std::numbers::pi;
+constexpr double kRadPerDeg = kPi / 180.0;
+constexpr double kLatitudeDeg = 55.5672;
+
+ImportSettings Settings(std::initializer_list<std::pair<std::string, std::string>> pairs) {
+  ImportSettings s;
+  s.Set("unit_serial", "T-1", {"test", 0, 0, "unit_serial"});
+  s.Set("site_latitude_deg", std::to_string(kLatitudeDeg), {"test", 0, 0, "site"});
+  s.Set("site_longitude_deg", "38.15", {"test", 0, 0, "site"});
+  s.Set("site_height_m", "125", {"test", 0, 0, "site"});
+  for (const auto& [k, v] : pairs) s.Set(k, v, {"test", 0, 0, k});
+  return s;
+}
+
+// What a unit at rest with attitude `rpy` measures: f^b = C_n^b·[0,0,−γ],
+// ω^b = C_n^b·ω_ie^n (rotation.h, wgs84.h).
+struct StaticTruth {
+  Eigen::Vector3d force_mps2, rate_rad_s;
+};
+StaticTruth AtRest(const Eigen::Vector3d& rpy) {
+  const Eigen::Matrix3d C_n_b = engine::nav::EulerToDcm(rpy).transpose();
+  const double lat = kLatitudeDeg * kRadPerDeg;
+  const double gamma = engine::wgs84::NormalGravityMps2(lat, 125.0);
+  return {C_n_b * Eigen::Vector3d(0, 0, -gamma), C_n_b * engine::wgs84::EarthRateNed(lat)};
+}
+
+TEST(ImportUnits, ScaleRatesIncrementsAndCountsToSi) {
+  auto deg_h = ParseUnit(ColumnTarget::kGyroX, "deg/h", 9.8);
+  ASSERT_TRUE(deg_h.ok());
+  EXPECT_DOUBLE_EQ(deg_h->to_si, kPi / 180.0 / 3600.0);
+  EXPECT_FALSE(deg_h->increment);
+  auto counts = ParseUnit(ColumnTarget::kGyroZ, "0.1*arcsec", 9.8);
+  ASSERT_TRUE(counts.ok());
+  EXPECT_DOUBLE_EQ(counts->to_si, 0.1 * kPi / 180.0 / 3600.0);
+  EXPECT_TRUE(counts->increment);
+  auto micro_g_s = ParseUnit(ColumnTarget::kAccX, "125*ug.s", 9.780327);
+  ASSERT_TRUE(micro_g_s.ok());
+  EXPECT_DOUBLE_EQ(micro_g_s->to_si, 125e-6 * 9.780327);
+  auto wrong = ParseUnit(ColumnTarget::kAccX, "deg/s", 9.8);
+  ASSERT_FALSE(wrong.ok());
+  EXPECT_THAT(wrong.status().message(), HasSubstr("m/s2, g, mg, m/s, ft/s, ug.s"));
+}
+
+// A static text log in deg/h and g, ms time, sensor axes turned, levelled
+// and gyro-compassed: the attitude comes back to the closed form's precision
+// over random attitudes.
+TEST(ImportText, LevelsAndGyroCompassesAStaticLogInAnyUnitsAndAxes) {
+  std::mt19937_64 rng(20261126);
+  std::uniform_real_distribution<double> tilt(-0.5, 0.5), heading(-kPi + 1e-3, kPi - 1e-3);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Eigen::Vector3d rpy(tilt(rng), tilt(rng), heading(rng));
+    const StaticTruth truth = AtRest(rpy);
+    // The log's sensor axes: sensor x = body y, sensor y = −body x, sensor z = body z.
+    const auto sensor = [](const Eigen::Vector3d& b) { return Eigen::Vector3d(b.y(), -b.x(), b.z()); };
+    const Eigen::Vector3d w = sensor(truth.rate_rad_s) / (kRadPerDeg / 3600.0);
+    const Eigen::Vector3d f = sensor(truth.force_mps2) / 9.80665;
+    std::string log = "time_ms;wx;wy;wz;fx;fy;fz\n";
+    for (int k = 1; k <= 200; ++k) {
+      log += absl::StrFormat("%d;%.17g;%.17g;%.17g;%.17g;%.17g;%.17g\n", 10 * k, w.x(), w.y(), w.z(), f.x(), f.y(), f.z());
+    }
+    auto run = ImportBenchRun(log, "static.txt",
+                              Settings({{"columns", "t,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z"},
+                                        {"units", "gyro=deg/h,acc=g,t=ms"},
+                                        {"delimiters", ";"},
+                                        {"skip_lines", "1"},
+                                        {"axes", "x=-y,y=x,z=z"}}));
+    ASSERT_TRUE(run.ok()) << run.status();
+    ASSERT_EQ(run->samples.size(), 200u);
+    EXPECT_NEAR(run->samples[0].t_s, 0.01, 1e-15);
+    EXPECT_NEAR((run->samples[7].gyro_rad_s - truth.rate_rad_s).norm(), 0.0, 1e-18);
+    EXPECT_NEAR((run->samples[7].acc_mps2 - truth.force_mps2).norm(), 0.0, 1e-12);
+    const Eigen::Vector3d got = run->samples.back().ref_rpy_rad;
+    EXPECT_NEAR(got.x(), rpy.x(), 1e-12);
+    EXPECT_NEAR(got.y(), rpy.y(), 1e-12);
+    EXPECT_NEAR(std::remainder(got.z() - rpy.z(), 2 * kPi), 0.0, 1e-9) << "trial " << trial;
+  }
+}
+
+// Increments per sample become the mean rate over their own interval, and a
+// table-yaw column turns the yaw from its first value.
+TEST(ImportText, DividesIncrementsByTheirIntervalAndTurnsYawWithTheTable) {
+  const StaticTruth truth = AtRest({0.0, 0.0, 0.0});
+  std::string log;
+  const double t[] = {100.0, 100.01, 100.03, 100.04};  // one interval twice as long
+  for (int k = 0; k < 4; ++k) {
+    const double dt = k == 0 ? 0.01 : t[k] - t[k - 1];
+    const Eigen::Vector3d dtheta = truth.rate_rad_s * dt, dv = truth.force_mps2 * dt;
+    log += absl::StrFormat("%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%g\n", t[k], dtheta.x(), dtheta.y(), dtheta.z(),
+                           dv.x(), dv.y(), dv.z(), 30.0 * k);
+  }
+  auto run = ImportBenchRun(log, "inc.csv",
+                            Settings({{"columns", "t,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,table_yaw"},
+                                      {"units", "gyro=rad,acc=m/s,table_yaw=deg"},
+                                      {"attitude", "constant"},
+                                      {"ref_yaw_deg", "170"}}));
+  ASSERT_TRUE(run.ok()) << run.status();
+  for (const auto& s : run->samples) {
+    EXPECT_NEAR((s.gyro_rad_s - truth.rate_rad_s).norm(), 0.0, 1e-15);
+    EXPECT_NEAR((s.acc_mps2 - truth.force_mps2).norm(), 0.0, 1e-9);
+  }
+  EXPECT_NEAR(run->samples[0].t_s, 0.01, 1e-12);
+  EXPECT_NEAR(run->samples[2].t_s, 0.04, 1e-12);
+  EXPECT_EQ(*run->metadata.Extra("time_origin_s"), "99.989999999999995");
+  // 170° + 90° wraps to −100°.
+  EXPECT_NEAR(run->samples[3].ref_rpy_rad.z(), -100.0 * kRadPerDeg, 1e-12);
+}
+
+TEST(ImportBinary, ReadsLittleEndianRecordsWithHeaderAndLeadBytes) {
+  const StaticTruth truth = AtRest({0.1, -0.2, 1.0});
+  constexpr double kGyroCountRad = 1e-9, kAccCountMps = 1e-6;
+  constexpr double kDt = 0.005;
+  std::string bytes(16, '\x7f');  // a file header
+  for (int k = 0; k < 400; ++k) {
+    bytes += std::string(2, '\0');  // a record's sync bytes
+    const float t = static_cast<float>((k + 1) * kDt);
+    bytes.append(reinterpret_cast<const char*>(&t), 4);
+    for (int i = 0; i < 3; ++i) {
+      const std::int32_t count = static_cast<std::int32_t>(std::lround(truth.rate_rad_s[i] * kDt / kGyroCountRad));
+      bytes.append(reinterpret_cast<const char*>(&count), 4);
+    }
+    for (int i = 0; i < 3; ++i) {
+      const std::int32_t count = static_cast<std::int32_t>(std::lround(truth.force_mps2[i] * kDt / kAccCountMps));
+      bytes.append(reinterpret_cast<const char*>(&count), 4);
+    }
+  }
+  ImportSettings s = Settings({{"log_format", "binary"},
+                               {"binary_type", "i32"},
+                               {"columns", "t:f32,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z"},
+                               {"units", "gyro=1e-9*rad,acc=1e-6*m/s"},
+                               {"interval_s", "0.005"},
+                               {"header_bytes", "16"},
+                               {"record_lead_bytes", "2"}});
+  auto run = ImportBenchRun(bytes, "log.bin", s);
+  ASSERT_TRUE(run.ok()) << run.status();
+  ASSERT_EQ(run->samples.size(), 400u);
+  // One count of quantisation over one interval, and float32 time.
+  EXPECT_NEAR((run->samples[200].gyro_rad_s - truth.rate_rad_s).norm(), 0.0, 2 * kGyroCountRad / kDt);
+  EXPECT_NEAR((run->samples[200].acc_mps2 - truth.force_mps2).norm(), 0.0, 2e-3);
+  EXPECT_NEAR(run->samples.front().ref_rpy_rad.x(), 0.1, 1e-3);
+
+  auto cut = ImportBenchRun(bytes.substr(0, bytes.size() - 5), "log.bin", s);
+  ASSERT_FALSE(cut.ok());
+  EXPECT_EQ(cut.status().message(),
+            "log.bin: record 399 (byte 11986): is cut short: 25 bytes after the last whole 30-byte record");
+}
+
+// The CRC of NovAtel's ASCII logs, against zlib's CRC-32 turned into
+// NovAtel's (initial 0, no final complement): for this body Python's
+// `zlib.crc32(body, 0xffffffff) ^ 0xffffffff` is 0x2d2a4cff.
+TEST(ImportNovatel, Crc32MatchesAnIndependentImplementation) {
+  EXPECT_EQ(internal::NovatelCrc32("RAWIMUSA,1815,407772.000;1815,407771.985103333,00000077,63811,-6290,6253,7,-31,14"),
+            0x2d2a4cffu);
+}
+
+struct Refused {
+  std::string log;
+  std::vector<std::pair<std::string, std::string>> settings;
+  std::string message;
+};
+
+TEST(ImportRefusals, NameTheLineAndFieldOrTheSetting) {
+  const std::string good = "0.01,0,0,0,0,0,-9.81\n";
+  const std::string columns = "t,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z";
+  const std::vector<Refused> cases = {
+      {good + "0.02,0,abc,0,0,0,-9.81\n", {{"columns", columns}}, "log.csv:2:8: gyro_y: 'abc' is not a finite number"},
+      {good + "0.02,0,0,0,0,-9.81\n", {{"columns", columns}}, "log.csv:2:1: record: has 6 fields where the column map names 7"},
+      {good + "0.01,0,0,0,0,0,-9.81\n", {{"columns", columns}}, "log.csv:2: t: 0.01 does not follow 0.01: t must increase"},
+      {good, {{"columns", columns}, {"axes", "x=y,y=x,z=z"}}, "test: axes: turns a right-handed frame into a left-handed one"},
+      {good, {{"columns", "t,gyro_x,gyro_y,acc_x,acc_y,acc_z"}}, "test: columns: no column is gyro_z"},
+      {good, {{"columns", columns}, {"colums", "x"}}, "test: colums: is not a setting of an import"},
+      {good, {{"columns", columns}, {"units", "gyro=deg/s,acc_z=m/s"}}, "the acc columns mix rates and increments"},
+      {good, {{"columns", columns}, {"units", "gyro=furlong"}}, "'furlong' is not a unit of gyro_x"},
+      {good + "0.02,0,0,0,0,0,-9.81\n0.03,0.5,0,0,0,0,-9.81\n", {{"columns", columns}},
+       "settings: level_window_s: the unit turns at a mean"},
+      {"0.01,0,0,0,0,0,-1.0\n", {{"columns", columns}, {"attitude", "constant"}}, "log.csv:1: acc_x: "},
+      {"%RAWIMUSA,1815,407772.000;1815,407771.985103333,00000077,63811,-6290,6253,7,-31,14*2d2a4cfe\n",
+       {{"columns", "-,-,-,gps_week,t,-,acc_z,-acc_y,acc_x,gyro_z,-gyro_y,gyro_x"},
+        {"line_prefix", "%RAWIMUSA,"},
+        {"checksum", "novatel-crc32"},
+        {"delimiters", ",;"}},
+       "log.csv:1:1: record: CRC 2d2a4cfe does not match the record's (2d2a4cff): the line is corrupt"},
+  };
+  for (const Refused& c : cases) {
+    ImportSettings s = Settings({});
+    for (const auto& [k, v] : c.settings) s.Set(k, v, {"test", 0, 0, k});
+    auto run = ImportBenchRun(c.log, "log.csv", s);
+    ASSERT_FALSE(run.ok()) << c.message;
+    EXPECT_THAT(std::string(run.status().message()), HasSubstr(c.message));
+  }
+}
+
+TEST(ImportRefusals, AskForWhatThePresetCannotKnow) {
+  ImportSettings s;
+  s.Set("preset", "novatel-rawimusa", {"command line", 0, 0, "--preset"});
+  const std::filesystem::path log = std::filesystem::temp_directory_path() / "insdiag_import_rawimusa.txt";
+  {
+    std::FILE* f = std::fopen(log.c_str(), "w");
+    std::fputs("%RAWIMUSA,1815,407772.000;1815,407771.985103333,00000077,63811,-6290,6253,7,-31,14*2d2a4cff\n", f);
+    std::fclose(f);
+  }
+  auto run = ImportBenchRunFile(log, s);
+  ASSERT_FALSE(run.ok());
+  EXPECT_THAT(std::string(run.status().message()), HasSubstr("units: is required: the counts' scales depend on the IMU"));
+  s.Set("units", "gyro=1e-9*rad,acc=1e-6*m/s", {"command line", 0, 0, "--units"});
+  run = ImportBenchRunFile(log, s);
+  ASSERT_FALSE(run.ok());
+  EXPECT_THAT(std::string(run.status().message()), HasSubstr("settings: unit_serial: is missing"));
+  std::filesystem::remove(log);
+}
+
+// The real ring-laser-gyro record, rebuilt in the PSINS layout: the preset
+// reads the site and scales from its header, and the levelled, gyro-compassed
+// attitude is the one its converted copy states (shared/data/real/README.md:
+// roll 0.358°, pitch 0.927°, heading 88.59°).
+TEST(ImportPsins, TheRealRecordImportsWithItsPublishedAlignment) {
+  ImportSettings s;
+  s.Set("preset", "psins-imu", {"command line", 0, 0, "--preset"});
+  s.Set("unit_serial", "PSINS-RLG-2014", {"command line", 0, 0, "--serial"});
+  auto run = ImportBenchRunFile(INSDIAG_SOURCE_DIR "/data/real/rlg-static-psins.imu", s);
+  ASSERT_TRUE(run.ok()) << run.status();
+  ASSERT_EQ(run->samples.size(), 184718u);
+  EXPECT_NEAR(run->DurationS(), 1847.18, 1e-9);
+  const Eigen::Vector3d rpy_deg = run->samples.front().ref_rpy_rad / kRadPerDeg;
+  EXPECT_NEAR(rpy_deg.x(), 0.358, 5e-4);
+  EXPECT_NEAR(rpy_deg.y(), 0.927, 5e-4);
+  EXPECT_NEAR(rpy_deg.z(), 88.59, 5e-3);
+  EXPECT_NEAR(run->metadata.site.latitude_rad / kRadPerDeg, 34.246048, 1e-12);
+
+  const std::filesystem::path converted = INSDIAG_SHARED_DIR "/data/real/rlg-static-psins.csv";
+  if (!std::filesystem::exists(converted)) GTEST_SKIP() << converted << " is absent: the comparison is skipped";
+  auto reference = benchrun::ReadBenchRunFile(converted);
+  ASSERT_TRUE(reference.ok()) << reference.status();
+  ASSERT_EQ(reference->samples.size(), run->samples.size());
+  double worst_gyro = 0.0, worst_acc = 0.0;
+  for (std::size_t k = 0; k < run->samples.size(); ++k) {
+    worst_gyro = std::max(worst_gyro, (run->samples[k].gyro_rad_s - reference->samples[k].gyro_rad_s).lpNorm<Eigen::Infinity>());
+    worst_acc = std::max(worst_acc, (run->samples[k].acc_mps2 - reference->samples[k].acc_mps2).lpNorm<Eigen::Infinity>());
+  }
+  // The converted copy holds ten significant digits.
+  EXPECT_LT(worst_gyro, 1e-11);
+  EXPECT_LT(worst_acc, 1e-8);
+}
+
+}  // namespace
+}  // namespace insdiag::importers
