@@ -5,8 +5,8 @@
 #   DEMO-2  a unit with a hidden gyro z scale-factor error (100 ppm), which
 #           the analysis's loop finds and adds;
 #   DEMO-3  a faulty unit: gyro x's bias steps by 0.6 °/h mid-run;
-#   the real ring-laser-gyro record of shared/data/real (when the checkout
-#           sits beside shared/), analysed without a unit type;
+#   the real ring-laser-gyro record of data/real, imported from its PSINS
+#           layout with `insdiag import --upload` and analysed;
 #   a generated fleet of 40 units with their history, for the fleet views.
 # Each simulated unit is uploaded and diagnosed (`insdiag diagnose`: the
 # server walks the loop); the real record is uploaded and analysed.
@@ -55,15 +55,13 @@ simulate_and_diagnose DEMO-1 --profile rotations --rate 20 --seed 11
 simulate_and_diagnose DEMO-2 --profile rotations --rate 20 --seed 12 --effect gyro_scale_factor.z=1e-4
 simulate_and_diagnose DEMO-3 --profile positions --rate 20 --seed 13 --effect gyro_bias_step.x=3e-6@1500
 
-real=$root/../shared/data/real/rlg-static-psins.csv
-if [[ -f $real ]]; then
-  run=$("$cli" upload "$real" --request-id demo-real-record)
-  say "the real record is $run; analysing it"
-  curl -sS --fail-with-body -H "Authorization: Bearer $token" -H 'Content-Type: application/json' \
-    -d "{\"run\": \"$run\"}" "$http/v1/analyses" >/dev/null
-else
-  say "no real record at $real (the checkout does not sit beside shared/): skipped"
-fi
+# The real record, imported from the PSINS toolbox's layout as a bench's
+# log would be (docs/IMPORT.md).
+run=$("$cli" import "$root/data/real/rlg-static-psins.imu" --preset psins-imu --serial PSINS-RLG-2014 \
+  --unit-type RLG-IMU --upload --request-id demo-real-record)
+say "the real record is $run; analysing it"
+curl -sS --fail-with-body -H "Authorization: Bearer $token" -H 'Content-Type: application/json' \
+  -d "{\"run\": \"$run\"}" "$http/v1/analyses" >/dev/null
 
 say "generating a fleet of 40 units with their history"
 "$fleet_tool" --database-url "$database_url" --units 40 --seed 1 --serial-prefix DEMO-FLEET \

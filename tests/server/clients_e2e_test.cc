@@ -306,9 +306,8 @@ TEST_F(ClientsTest, TheDemonstrationShowsTheLoopAFaultyUnitTheRealRecordAndAFlee
     EXPECT_TRUE(api::FromJson(insdiag({"diagnoses", "--unit", unit, "--json"}).stdout_text, &diagnoses).ok());
     EXPECT_EQ(diagnoses.diagnoses_size(), 1) << unit;
   }
-  if (std::filesystem::exists(INSDIAG_SHARED_DIR "/data/real/rlg-static-psins.csv")) {
-    EXPECT_THAT(loaded->stdout_text, HasSubstr("the real record is runs/"));
-  }
+  // The real record, imported from its PSINS layout and uploaded.
+  EXPECT_THAT(loaded->stdout_text, HasSubstr("the real record is runs/"));
   v1::FleetStatistics statistics;
   EXPECT_TRUE(api::FromJson(insdiag({"fleet", "stats", "--json"}).stdout_text, &statistics).ok());
   EXPECT_GE(statistics.unit_count(), 40);  // the fleet, and the demonstration's units when counted
