@@ -22,6 +22,10 @@ double BenchRun::NominalIntervalS() const {
   return *mid;
 }
 
+bool BenchRun::StartsSegment(size_t k) const {
+  return std::binary_search(segment_starts.begin(), segment_starts.end(), k);
+}
+
 double BenchRun::DurationS() const {
   if (samples.empty()) return 0.0;
   // The first sample covers (t0 − Δt, t0]: a run of N samples lasts N·Δt.

@@ -1,5 +1,7 @@
 #include "insdiag/engine/parameter_estimate.h"
 
+#include <cmath>
+
 #include <array>
 #include <utility>
 
@@ -28,6 +30,11 @@ std::optional<EstimationMethod> MethodNamed(std::string_view name) {
     if (text == name) return m;
   }
   return std::nullopt;
+}
+
+bool ObservableByRun(const ParameterEstimate& p) {
+  if (!(p.prior_std > 0.0) || !std::isfinite(p.std_error)) return true;
+  return p.std_error < kObservableStdFraction * p.prior_std;
 }
 
 }  // namespace insdiag::engine

@@ -498,8 +498,16 @@ AnalysisReport ReportOf(const ModelPass& pass, const Findings& found, const Benc
   r.family_candidates = found.families;
   r.correlation = found.drifts;
   r.identified = identified;
-  for (const ParameterEstimate& e : ConstantEffectEstimates(pass)) r.identified.push_back(e);
+  std::string unobservable;
+  for (const ParameterEstimate& e : ConstantEffectEstimates(pass)) {
+    r.identified.push_back(e);
+    if (!ObservableByRun(e)) unobservable += (unobservable.empty() ? "" : ", ") + e.name;
+  }
   r.notes = notes;
+  if (!unobservable.empty()) {
+    r.notes.push_back("not observable from this run (the standard error stays above half the prior's): " +
+                      unobservable + "; a test that moves the unit through more positions or turns tells them");
+  }
   return r;
 }
 

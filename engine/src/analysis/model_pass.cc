@@ -122,6 +122,7 @@ std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass) {
     p.std_error = std::sqrt(pass.smoothed.variance(K - 1, s.index));
     p.method = EstimationMethod::kFilterState;
     p.unit = std::string(e.term.family->unit);
+    p.prior_std = e.prior_sigma[static_cast<size_t>(s.parameter)];
     out.push_back(p);
   }
   return out;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <utility>
 
 #include "insdiag/engine/filter/forward_filter.h"
 #include "insdiag/engine/filter/model_transitions.h"
@@ -243,17 +244,32 @@ absl::StatusOr<EpochRun> CondenseRun(const BenchRun& run, const ErrorModel& pilo
   // The pilot's filter, stepped epoch by epoch beside the mechanisation.
   EpochFilter pilot_filter(pilot, layout, out);
 
+  // The mechanisation starts at a segment's first sample, at rest at the
+  // site in the reference attitude; that sample's increment is not used
+  // (for the run's first segment it precedes the start; for a later one it
+  // covers the unrecorded move).
   nav::NavState ins;
-  ins.q_b_n = Eigen::Quaterniond(nav::EulerToDcm(run.samples[0].ref_rpy_rad));
-  ins.latitude_rad = site.latitude_rad;
-  ins.longitude_rad = site.longitude_rad;
-  ins.height_m = site.height_m;
+  Eigen::Quaterniond q_ref_previous;
+  bool segment_starts = false;
+  const auto start_segment = [&](size_t k) {
+    ins = nav::NavState{};
+    ins.q_b_n = Eigen::Quaterniond(nav::EulerToDcm(run.samples[k].ref_rpy_rad));
+    ins.latitude_rad = site.latitude_rad;
+    ins.longitude_rad = site.longitude_rad;
+    ins.height_m = site.height_m;
+    q_ref_previous = ins.q_b_n;
+    condenser.Reset(run.samples[k].t_s);
+  };
   nav::ReferenceMotion motion(run);
   const double temperature0 = run.samples[0].temp_degc;
-  Eigen::Quaterniond q_ref_previous(nav::EulerToDcm(run.samples[0].ref_rpy_rad));
-  condenser.Reset(run.samples[0].t_s);
+  start_segment(0);
 
   for (size_t k = 1; k < samples; ++k) {
+    if (run.StartsSegment(k)) {
+      start_segment(k);
+      segment_starts = true;
+      continue;
+    }
     const ImuSample& s = run.samples[k];
     const double t_prev = run.samples[k - 1].t_s;
     const double dt = s.t_s - t_prev;
@@ -274,10 +290,11 @@ absl::StatusOr<EpochRun> CondenseRun(const BenchRun& run, const ErrorModel& pilo
     inputs.yaw_rad = MidAngle(run.samples[k - 1].ref_rpy_rad.z(), s.ref_rpy_rad.z());
     condenser.AddSample(*disc, t_prev, nav::Midway(q_ref_previous, q_ref).toRotationMatrix(), inputs);
     q_ref_previous = q_ref;
-    if (condenser.samples() < samples_per_epoch && k + 1 < samples) continue;
+    if (condenser.samples() < samples_per_epoch && k + 1 < samples && !run.StartsSegment(k + 1)) continue;
 
     EpochInterval& e = out.epochs.emplace_back();
     condenser.Finish(e);
+    e.starts_segment = std::exchange(segment_starts, false);
     e.time_s = s.t_s;
     e.sample = static_cast<int>(k);
     e.z = Observe(ins, site);

@@ -5,6 +5,8 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
+#include "insdiag/engine/filter/forward_filter.h"
+
 namespace insdiag::engine {
 namespace {
 
@@ -110,6 +112,8 @@ ModelTransitions::ModelTransitions(const ErrorModel& model, const StateLayout& l
     white_var_[3 + a] = model.acc.white_noise_density[a] * model.acc.white_noise_density[a];
   }
   quantisation_var_ = model.acc.quantization.cwiseAbs2();
+  initial_navigation_covariance_ =
+      InitialCovariance(model, layout).topLeftCorner<StateLayout::kNavigationSize, StateLayout::kNavigationSize>();
 }
 
 void ModelTransitions::PrepareGrid(int samples, double dt, const GramMatrix& gram, double interval_s) {
@@ -165,6 +169,13 @@ const IntervalTransition& ModelTransitions::Build(const EpochInterval& e) {
     t_.Qns.middleCols(src.state, src.size).noalias() = mu * w.v.leftCols(src.size);
     const Eigen::Matrix<double, 9, kCouplingMoments> nu = mu * w.L;
     Qnn.noalias() += nu * nu.transpose();
+  }
+  if (e.starts_segment) {
+    // A new segment: its navigation errors start again at the interval's
+    // start with the reference's accuracy, independent of the past, and
+    // reach the epoch through the interval's own transition.
+    Qnn.noalias() += e.A * initial_navigation_covariance_ * e.A.transpose();
+    t_.A.setZero();
   }
   t_.Qnn = 0.5 * (Qnn + Qnn.transpose());
   return t_;

@@ -61,10 +61,23 @@ struct ImuSample {
   double temp_degc = 0.0;  // meaningful only when the run has temperature
 };
 
+// A test of several segments (docs/MULTI_POSITION.md): files recorded one
+// after another with unrecorded moves between them, for example six static
+// positions and three turns. Each segment starts from its own reference
+// attitude at the site, at rest: the analysis aligns every segment anew and
+// shares the sensor errors across them. The samples stay in time order and
+// the segments follow one another without a gap, as the joined run holds
+// them; the unrecorded move between two segments takes no time in the model.
 struct BenchRun {
   BenchRunMetadata metadata;
   bool has_temperature = false;
   std::vector<ImuSample> samples;
+  // The first sample of each segment after the first, increasing; empty for
+  // a run of one segment.
+  std::vector<size_t> segment_starts;
+
+  // Whether sample k is the first of a segment after the first.
+  bool StartsSegment(size_t k) const;
 
   // Nominal sample interval: the median of t[k] − t[k−1]; 0 for < 2 samples.
   double NominalIntervalS() const;

@@ -34,6 +34,20 @@ struct ParameterEstimate {
   // 95% interval (NaN when the estimator gives none beyond ± 1.96 σ).
   double ci95_low = std::numeric_limits<double>::quiet_NaN();
   double ci95_high = std::numeric_limits<double>::quiet_NaN();
+  // A filter state's prior standard deviation (NaN for other methods): what
+  // the model knew of the parameter before this run.
+  double prior_std = std::numeric_limits<double>::quiet_NaN();
 };
+
+// A filter-estimated parameter is observable from the run when the run's
+// data cut its standard deviation to below this fraction of the prior's:
+// otherwise its estimate is mostly the prior, whatever the run held (a scale
+// factor of an axis that never saw a force, a bias inseparable from a scale
+// factor on an axis that saw one force only).
+inline constexpr double kObservableStdFraction = 0.5;
+
+// False only for a filter estimate whose standard error stays above
+// kObservableStdFraction of its prior's; true when there is no prior to judge by.
+bool ObservableByRun(const ParameterEstimate& p);
 
 }  // namespace insdiag::engine

@@ -85,6 +85,11 @@ struct EpochInterval {
   std::array<double, 6> z{};                              // observations (observation.h) at the epoch
   Eigen::Matrix<double, 9, 1> feedback = Eigen::Matrix<double, 9, 1>::Zero();  // u_k
   Eigen::Matrix3d C_b_n = Eigen::Matrix3d::Identity();    // reference attitude at the epoch
+  // The interval is the first of a segment after the first (bench_run.h):
+  // the mechanisation started again at its start, from the segment's
+  // reference, and the navigation errors start again from the reference's
+  // accuracy, independent of everything before (ModelTransitions::Build).
+  bool starts_segment = false;
 };
 
 struct EpochRun {

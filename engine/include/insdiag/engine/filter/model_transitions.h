@@ -86,6 +86,7 @@ class ModelTransitions {
   SensorBlocks D_, Qs_;
   Eigen::Matrix<double, kSensorAxisCount, 1> white_var_;  // N² per sensor axis
   Eigen::Vector3d quantisation_var_;                      // Q² per accelerometer axis
+  Matrix9d initial_navigation_covariance_;                // of a segment's start (forward_filter.h)
   IntervalTransition t_;
 };
 
