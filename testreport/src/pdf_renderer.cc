@@ -113,7 +113,8 @@ class Layout {
   explicit Layout(PdfDocument& pdf) : pdf_(pdf) { NewPage(); }
 
   void Title(const Document& d);
-  void Heading(const std::string& title);
+  // `keep_with` points of what follows stay on the heading's page.
+  void Heading(const std::string& title, double keep_with);
   void Add(const Paragraph& p) { TextLines(p.text, kBodySize, false, kInk, kMargin, kContentWidth), y_ += 4; }
   void Add(const Callout& c);
   void Add(const Fields& f);
@@ -157,8 +158,8 @@ void Layout::Title(const Document& d) {
   y_ += 4;
 }
 
-void Layout::Heading(const std::string& title) {
-  Ensure(80);  // a heading stays with the start of its section
+void Layout::Heading(const std::string& title, double keep_with) {
+  Ensure(34 + keep_with);  // a heading stays with the start of its section
   y_ += 10;
   Line(kMargin, 13, true, title, kInk);
   y_ += 17;
@@ -313,7 +314,9 @@ std::string RenderPdf(const Document& document) {
   Layout layout(pdf);
   layout.Title(document);
   for (const Section& section : document.sections) {
-    layout.Heading(section.title);
+    // A plot is kept whole with its heading; other blocks by a few lines.
+    const bool plot_first = !section.blocks.empty() && std::holds_alternative<Plot>(section.blocks.front());
+    layout.Heading(section.title, plot_first ? kPlotHeight + 10 : 50);
     for (const Block& block : section.blocks) {
       std::visit([&layout](const auto& b) { layout.Add(b); }, block);
     }

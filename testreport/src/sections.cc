@@ -7,7 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
+#include <optional>
 
 #include "insdiag/engine/finder/effect_finder.h"
 
@@ -19,6 +19,12 @@ using google::protobuf::util::TimeUtil;
 // The two-sided 95 % quantile of the normal distribution: the interval
 // printed beside each identified value is value ± kInterval95Z · SE.
 constexpr double kInterval95Z = 1.959963984540054;
+
+// The diagnosis's table lists the most probable modules and any other above
+// 1 %: a filed document names the suspects, not every module with its
+// evidence (the API's diagnosis keeps them all).
+constexpr int kAlwaysListedModules = 3;
+constexpr double kListedProbability = 0.01;
 
 std::string Percent(double fraction) { return absl::StrFormat("%.1f %%", 100.0 * fraction); }
 
@@ -32,6 +38,21 @@ std::string WithUnit(const std::string& value, const std::string& unit) {
 
 std::string EffectList(const v1::ErrorModel& model) {
   return model.effects().empty() ? "none (the base model)" : absl::StrJoin(model.effects(), ", ");
+}
+
+const v1::NominalParameter* NominalOf(const std::optional<v1::UnitType>& unit_type, const std::string& name) {
+  if (!unit_type) return nullptr;
+  for (const auto& p : unit_type->nominal()) {
+    if (p.name() == name) return &p;
+  }
+  return nullptr;
+}
+
+// Whether an identified value is within the unit type's tolerance of its
+// nominal value; nullopt where the unit type gives no tolerance for it.
+std::optional<bool> WithinTolerance(const v1::IdentifiedParameter& p, const v1::NominalParameter* n) {
+  if (n == nullptr || n->tolerance() <= 0) return std::nullopt;
+  return std::abs(p.value() - n->value()) <= n->tolerance();
 }
 
 Tone ToneOf(v1::AnalysisReport::Verdict verdict) {
@@ -84,6 +105,13 @@ Section VerdictSection(const TestReportInput& input) {
   for (const auto& l : r.localisation()) {
     f.items.push_back({"Failure localised to", absl::StrCat(l.state(), " at ", Num(l.time_s()), " s (", l.method(),
                                                             ", p = ", Num(l.p_value()), ")")});
+  }
+  std::vector<std::string> outside;
+  for (const auto& p : r.identified()) {
+    if (WithinTolerance(p, NominalOf(input.unit_type, p.name())) == false) outside.push_back(p.name());
+  }
+  if (input.unit_type) {
+    f.items.push_back({"Outside the unit type's tolerance", outside.empty() ? "none" : absl::StrJoin(outside, ", ")});
   }
   if (input.diagnosis && !input.diagnosis->candidates().empty()) {
     const auto& top = input.diagnosis->candidates(0);
@@ -159,15 +187,10 @@ Section TolerancesSection(const v1::AnalysisReport& r) {
 }
 
 Section ParametersSection(const v1::AnalysisReport& r, const std::optional<v1::UnitType>& unit_type) {
-  std::map<std::string, const v1::NominalParameter*> nominal;
-  if (unit_type) {
-    for (const auto& p : unit_type->nominal()) nominal[p.name()] = &p;
-  }
   Section s{"Identified parameters against nominal", {}};
   Table t{{"parameter", "value", "95 % interval", "nominal", "tolerance", "unit", "method", "against nominal"}, {}, {}, ""};
   for (const auto& p : r.identified()) {
-    const auto it = nominal.find(p.name());
-    const v1::NominalParameter* n = it == nominal.end() ? nullptr : it->second;
+    const v1::NominalParameter* n = NominalOf(unit_type, p.name());
     std::string interval = "—";
     if (p.std_error() > 0) {
       interval = absl::StrCat("[", Num(p.value() - kInterval95Z * p.std_error()), ", ",
@@ -179,16 +202,11 @@ Section ParametersSection(const v1::AnalysisReport& r, const std::optional<v1::U
     } else if (p.has_a_priori()) {
       reference = absl::StrCat(Num(p.a_priori()), " (a priori)");
     }
-    std::string verdict = "no tolerance";
-    Tone tone = Tone::kNeutral;
-    if (n != nullptr && n->tolerance() > 0) {
-      const bool within = std::abs(p.value() - n->value()) <= n->tolerance();
-      verdict = within ? "within tolerance" : "outside tolerance";
-      tone = within ? Tone::kNeutral : Tone::kBad;
-    }
+    const std::optional<bool> within = WithinTolerance(p, n);
     t.rows.push_back({p.name(), Num(p.value()), interval, reference, n != nullptr ? Num(n->tolerance()) : "—", p.unit(),
-                      v1::IdentifiedParameter::Method_Name(p.method()), verdict});
-    t.row_tones.push_back(tone);
+                      v1::IdentifiedParameter::Method_Name(p.method()),
+                      !within ? "no tolerance" : *within ? "within tolerance" : "outside tolerance"});
+    t.row_tones.push_back(within == false ? Tone::kBad : Tone::kNeutral);
   }
   t.caption = absl::StrCat(
       "95 % interval: value ± ", Num(kInterval95Z), " standard errors. Nominal values and tolerances: ",
@@ -260,9 +278,19 @@ Section DiagnosisSection(const std::optional<v1::Diagnosis>& diagnosis) {
   }
   s.blocks.push_back(std::move(f));
   Table t{{"module", "failure mode", "probability", "evidence"}, {}, {}, "The unit's modules, most probable first."};
-  for (const auto& c : d.candidates()) {
+  int left_out = 0;
+  for (int i = 0; i < d.candidates_size(); ++i) {
+    const auto& c = d.candidates(i);
+    if (i >= kAlwaysListedModules && c.probability() < kListedProbability) {
+      ++left_out;
+      continue;
+    }
     t.rows.push_back({c.module(), c.failure_mode().empty() ? "—" : c.failure_mode(), Percent(c.probability()),
                       c.evidence().empty() ? "—" : absl::StrJoin(c.evidence(), "; ")});
+  }
+  if (left_out > 0) {
+    absl::StrAppend(&t.caption, " ", left_out, " less probable module", left_out == 1 ? " is" : "s are",
+                    " left out, each below ", Percent(kListedProbability), ".");
   }
   s.blocks.push_back(std::move(t));
   for (const auto& note : d.notes()) s.blocks.push_back(Paragraph{absl::StrCat("Note: ", note)});
