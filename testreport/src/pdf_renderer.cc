@@ -33,24 +33,20 @@ constexpr PdfColor kMuted{0.38, 0.38, 0.38};
 constexpr PdfColor kRule{0.75, 0.75, 0.75};
 constexpr PdfColor kHeaderFill{0.92, 0.92, 0.92};
 
-PdfColor Tint(Tone tone) {
-  switch (tone) {
-    case Tone::kGood: return {0.89, 0.95, 0.9};
-    case Tone::kWarning: return {1.0, 0.95, 0.83};
-    case Tone::kBad: return {0.98, 0.88, 0.87};
-    case Tone::kNeutral: break;
-  }
-  return {0.95, 0.95, 0.95};
-}
+// A tone's pale background and its strong mark (the callout's bar and headline).
+struct ToneColors {
+  PdfColor tint;
+  PdfColor strong;
+};
 
-PdfColor Strong(Tone tone) {
+ToneColors ColorsOf(Tone tone) {
   switch (tone) {
-    case Tone::kGood: return {0.16, 0.5, 0.23};
-    case Tone::kWarning: return {0.69, 0.49, 0.0};
-    case Tone::kBad: return {0.7, 0.15, 0.12};
+    case Tone::kGood: return {{0.89, 0.95, 0.9}, {0.16, 0.5, 0.23}};
+    case Tone::kWarning: return {{1.0, 0.95, 0.83}, {0.69, 0.49, 0.0}};
+    case Tone::kBad: return {{0.98, 0.88, 0.87}, {0.7, 0.15, 0.12}};
     case Tone::kNeutral: break;
   }
-  return kMuted;
+  return {{0.95, 0.95, 0.95}, kMuted};
 }
 
 PdfFont FontOf(bool bold) { return bold ? PdfFont::kHelveticaBold : PdfFont::kHelvetica; }
@@ -171,10 +167,10 @@ void Layout::Add(const Callout& c) {
   const auto detail = Wrap(c.detail, 9.5, false, kContentWidth - 24);
   const double height = 14 + 20 + static_cast<double>(detail.size()) * 12.5 + 6;
   Ensure(height);
-  page_->FillRect(kMargin, kPageHeight - (y_ + height), kContentWidth, height, Tint(c.tone));
-  page_->FillRect(kMargin, kPageHeight - (y_ + height), 5, height, Strong(c.tone));
+  page_->FillRect(kMargin, kPageHeight - (y_ + height), kContentWidth, height, ColorsOf(c.tone).tint);
+  page_->FillRect(kMargin, kPageHeight - (y_ + height), 5, height, ColorsOf(c.tone).strong);
   y_ += 8;
-  Line(kMargin + 14, 16, true, c.headline, Strong(c.tone));
+  Line(kMargin + 14, 16, true, c.headline, ColorsOf(c.tone).strong);
   y_ += 24;
   for (const auto& line : detail) {
     Line(kMargin + 14, 9.5, false, line, kInk);
@@ -241,7 +237,7 @@ void Layout::TableRow(const std::vector<std::string>& cells, const std::vector<d
   }
   const double height = static_cast<double>(lines) * kTableLeading + 2 * kCellPad;
   if (header || tone != Tone::kNeutral) {
-    page_->FillRect(kMargin, kPageHeight - (y_ + height), kContentWidth, height, header ? kHeaderFill : Tint(tone));
+    page_->FillRect(kMargin, kPageHeight - (y_ + height), kContentWidth, height, header ? kHeaderFill : ColorsOf(tone).tint);
   }
   double x = kMargin;
   for (std::size_t c = 0; c < widths.size(); ++c) {

@@ -8,15 +8,13 @@
 #include <signal.h>
 
 #include <filesystem>
-#include <fstream>
 #include <regex>
-#include <sstream>
-#include <thread>
 
 #include "insdiag/api/json.h"
 #include "insdiag/v1/analyses.pb.h"
 #include "insdiag/v1/knowledge.pb.h"
 #include "support/database_fixture.h"
+#include "support/insdiagd_process.h"
 #include "support/pdf_check.h"
 #include "support/subprocess.h"
 
@@ -34,39 +32,18 @@ using ::testing::StartsWith;
 // loop finds on a rotations profile (the demonstration's DEMO-2).
 constexpr char kHiddenEffect[] = "gyro_scale_factor.z";
 
-std::string ReadFile(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
-}
-
 class TestReportTest : public DatabaseTest {
  protected:
   void SetUp() override {
     DatabaseTest::SetUp();
     if (IsSkipped() || HasFatalFailure()) return;
     dir_ = MakeTempDir("insdiag-test-report");
-    std::filesystem::create_directories(dir_ / "server");
-    auto server = Subprocess::Start({INSDIAGD_PATH, "--database-url", database_url(), "--data-dir",
-                                     (dir_ / "server" / "data").string(), "--grpc-port", "0", "--http-port", "0",
-                                     "--bind", "127.0.0.1", "--workers", "1", "--fleet-refresh-seconds", "0"},
-                                    dir_ / "server");
+    auto server = StartInsdiagd(INSDIAGD_PATH, database_url(), dir_);
     ASSERT_TRUE(server.ok()) << server.status();
-    server_ = std::make_unique<Subprocess>(std::move(*server));
-    const std::regex listening(R"(listening grpc=[^ ]*:(\d+) http=[^ ]*:(\d+))");
-    for (int i = 0; i < 400 && address_.empty(); ++i) {
-      std::smatch match;
-      const std::string out = server_->Stdout();
-      if (std::regex_search(out, match, listening)) {
-        address_ = "127.0.0.1:" + match[1].str();
-        http_port_ = std::stoi(match[2].str());
-      }
-      std::this_thread::sleep_for(25ms);
-    }
-    ASSERT_FALSE(address_.empty()) << server_->Stderr();
-    std::ifstream(dir_ / "server" / "data" / "admin-token") >> token_;
-    ASSERT_FALSE(token_.empty()) << server_->Stderr();
+    server_ = std::move(server->process);
+    address_ = server->grpc_address;
+    http_port_ = server->http_port;
+    token_ = server->admin_token;
   }
   void TearDown() override {
     if (server_) {
@@ -180,6 +157,22 @@ TEST_F(TestReportTest, TheRestRouteAnswersTheDocumentToAViewerAndRefusesWithoutA
   auto missing = http.Get("/v1/analyses/00000000-0000-0000-0000-000000000000:testReport", viewer);
   ASSERT_TRUE(missing);
   EXPECT_EQ(missing->status, 404);
+
+  // An analysis just queued (its run takes the one worker seconds) has no report yet.
+  const httplib::Headers admin = {{"Authorization", "Bearer " + token_}};
+  auto analysed = http.Get("/v1/" + diagnosis.analysis(), admin);
+  ASSERT_TRUE(analysed && analysed->status == 200);
+  v1::Analysis done;
+  ASSERT_TRUE(api::FromJson(analysed->body, &done).ok());
+  auto queued = http.Post("/v1/analyses", admin, "{\"run\": \"" + done.run() + "\"}", "application/json");
+  ASSERT_TRUE(queued && queued->status == 200) << (queued ? queued->body : "no answer");
+  v1::Analysis again;
+  ASSERT_TRUE(api::FromJson(queued->body, &again).ok());
+  auto early = http.Get("/v1/" + again.name() + ":testReport", viewer);
+  ASSERT_TRUE(early);
+  EXPECT_EQ(early->status, 400);
+  EXPECT_THAT(early->body, HasSubstr("FAILED_PRECONDITION"));
+  EXPECT_THAT(early->body, HasSubstr("only a SUCCEEDED analysis has a test report"));
 }
 
 }  // namespace

@@ -16,13 +16,6 @@ namespace {
 
 using namespace std::chrono_literals;
 
-std::string ReadFile(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
-}
-
 // The share of dark pixels of a binary PGM (P5, 8 bits), as pdftoppm -gray writes it.
 absl::StatusOr<double> InkFraction(const std::string& pgm) {
   std::istringstream in(pgm);
