@@ -62,7 +62,9 @@ Axis MakeAxis(const std::vector<double>& values, bool log) {
   axis.log = log;
   if (!std::isfinite(lo)) return axis;  // nothing to show: the default [0, 1]
   if (log) {
-    axis.lo = std::floor(lo), axis.hi = std::max(std::ceil(hi), axis.lo + 1.0);
+    // A value a rounding error off a decade (τ = 0.09999… s) keeps that decade as the axis's end.
+    constexpr double kDecadeSlack = 1e-6;
+    axis.lo = std::floor(lo + kDecadeSlack), axis.hi = std::max(std::ceil(hi - kDecadeSlack), axis.lo + 1.0);
     const double step = std::ceil((axis.hi - axis.lo) / (kTargetTicks + 1));
     for (double t = axis.lo; t <= axis.hi + 1e-9; t += step) axis.ticks.push_back(t);
     return axis;
