@@ -15,7 +15,7 @@ packages=(
   libeigen3-dev libceres-dev libabsl-dev
   libpq-dev postgresql libssl-dev openssl curl
   clang libclang-rt-14-dev
-  libgtest-dev libgmock-dev libbenchmark-dev
+  libgtest-dev libgmock-dev libbenchmark-dev poppler-utils
   libcpp-httplib-dev libcli11-dev
   python3-grpcio python3-grpc-tools python3-numpy python3-scipy
   nodejs npm

@@ -122,6 +122,12 @@ INSDIAG_DELEGATE_WITH_CALLER(AccessServiceGrpc, kAccessService, access_, ListAud
 #undef INSDIAG_DELEGATE
 #undef INSDIAG_DELEGATE_WITH_CALLER
 
+grpc::Status AnalysisServiceGrpc::GetTestReport(grpc::ServerContext* context, const v1::GetTestReportRequest* request,
+                                                google::api::HttpBody* response) {
+  return guard_.Unary(*context, MethodName(kAnalysisService, "GetTestReport"), *request, response,
+                      [&](const v1::Caller&) { return test_reports_.GetTestReport(*request); });
+}
+
 grpc::Status AnalysisServiceGrpc::WatchAnalysis(grpc::ServerContext* context, const v1::WatchAnalysisRequest* request,
                                                 grpc::ServerWriter<v1::Analysis>* writer) {
   if (auto caller = guard_.Admit(*context, MethodName(kAnalysisService, "WatchAnalysis")); !caller.ok()) {

@@ -37,10 +37,11 @@ struct InsdiagServer::Services {
   Services(kb::ConnectionPool& pool, const Options& options)
       : connection_pool(pool), access_store(pool), guard(access_store), access(access_store), access_grpc(access, guard), store(pool, options.read_pool),
         runs(store, RunService::Options{options.max_upload_samples}), runs_grpc(runs, guard), analysis_store(pool, options.read_pool),
-        analyses(analysis_store, AnalysisService::Options{options.watch_poll}), analyses_grpc(analyses, guard),
+        analyses(analysis_store, AnalysisService::Options{options.watch_poll}),
         catalogue_store(pool, options.read_pool), failure_record_store(pool, options.read_pool),
         diagnosis_store(pool, options.read_pool),
         knowledge(catalogue_store, failure_record_store, diagnosis_store), knowledge_grpc(knowledge, guard),
+        test_reports(analyses, runs, knowledge, TestReportService::Options{}), analyses_grpc(analyses, test_reports, guard),
         fleet_store(options.read_pool != nullptr ? *options.read_pool : pool), fleet_grpc(fleet_store, guard), workers(pool, options.workers, &metrics) {}
   // What GET /metrics answers: the counters, then the queue and the pool as they are.
   std::string RenderMetrics() {
@@ -68,12 +69,13 @@ struct InsdiagServer::Services {
   RunServiceGrpc runs_grpc;
   kb::AnalysisStore analysis_store;
   AnalysisService analyses;
-  AnalysisServiceGrpc analyses_grpc;
   kb::CatalogueStore catalogue_store;
   kb::FailureRecordStore failure_record_store;
   kb::DiagnosisStore diagnosis_store;
   KnowledgeService knowledge;
   KnowledgeServiceGrpc knowledge_grpc;
+  TestReportService test_reports;  // reads through runs, analyses and knowledge
+  AnalysisServiceGrpc analyses_grpc;
   kb::FleetStore fleet_store;
   FleetServiceGrpc fleet_grpc;
   AnalysisWorkers workers;

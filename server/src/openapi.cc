@@ -186,9 +186,16 @@ Value OperationOf(const OpenApiOperation& op, Schemas& schemas) {
   if (!parameters.empty()) (*operation.mutable_fields())["parameters"] = List(std::move(parameters));
   const bool streams = method->server_streaming();
   Struct responses;
-  (*responses.mutable_fields())["200"] =
-      Answer(streams ? "one JSON object a line, as the responses arrive" : "the response",
-             streams ? "application/x-ndjson" : "application/json", schemas.Of(method->output_type()));
+  if (method->output_type()->full_name() == "google.api.HttpBody") {
+    // The body is the document itself; its Content-Type says which kind.
+    (*responses.mutable_fields())["200"] =
+        Answer("the document, under its own media type", "*/*",
+               Object(Fields({{"type", Text("string")}, {"format", Text("binary")}})));
+  } else {
+    (*responses.mutable_fields())["200"] =
+        Answer(streams ? "one JSON object a line, as the responses arrive" : "the response",
+               streams ? "application/x-ndjson" : "application/json", schemas.Of(method->output_type()));
+  }
   (*responses.mutable_fields())["default"] = ErrorResponse();
   (*operation.mutable_fields())["responses"] = Object(std::move(responses));
   return Object(std::move(operation));

@@ -50,6 +50,18 @@ void SendStatus(httplib::Response& response, const absl::Status& status) {
   SendStatus(response, ToGrpcStatus(status));
 }
 
+// A google.api.HttpBody answer is the body itself, under its own media type
+// (the transcoding rule for documents that are not JSON: the test report).
+constexpr char kHttpBody[] = "google.api.HttpBody";
+
+void SendHttpBody(httplib::Response& response, const Message& message) {
+  const auto* type = message.GetDescriptor();
+  const auto* reflection = message.GetReflection();
+  response.status = 200;
+  response.set_content(reflection->GetString(message, type->FindFieldByName("data")),
+                       reflection->GetString(message, type->FindFieldByName("content_type")));
+}
+
 void SendJson(httplib::Response& response, const Message& message) {
   auto json = api::ToJson(message);
   if (!json.ok()) return SendStatus(response, json.status());
@@ -184,6 +196,7 @@ void RestGateway::Dispatch(const Route& route, const std::map<std::string, std::
   if (!route.method->server_streaming()) {
     const grpc::Status status = call->Finish();
     if (!status.ok()) return SendStatus(response, status, route.method->full_name());
+    if (route.method->output_type()->full_name() == kHttpBody) return SendHttpBody(response, *first);
     return SendJson(response, *first);
   }
   // Newline-delimited JSON, streamed as the responses arrive. An error after

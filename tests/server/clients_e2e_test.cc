@@ -6,15 +6,14 @@
 #include <signal.h>
 
 #include <filesystem>
-#include <fstream>
 #include <regex>
-#include <thread>
 
 #include "insdiag/api/json.h"
 #include "insdiag/v1/analyses.pb.h"
 #include "insdiag/v1/fleet.pb.h"
 #include "insdiag/v1/knowledge.pb.h"
 #include "support/database_fixture.h"
+#include "support/insdiagd_process.h"
 #include "support/subprocess.h"
 
 namespace insdiag::testing {
@@ -29,28 +28,12 @@ class ClientsTest : public DatabaseTest {
     DatabaseTest::SetUp();
     if (IsSkipped() || HasFatalFailure()) return;
     dir_ = MakeTempDir("insdiag-clients");
-    std::filesystem::create_directories(dir_ / "server");
-    auto server = Subprocess::Start({INSDIAGD_PATH, "--database-url", database_url(), "--data-dir",
-                                     (dir_ / "server" / "data").string(), "--grpc-port", "0",
-                                     "--http-port", "0", "--bind", "127.0.0.1", "--workers", "1",
-                                     "--fleet-refresh-seconds", "0"},
-                                    dir_ / "server");
+    auto server = StartInsdiagd(INSDIAGD_PATH, database_url(), dir_);
     ASSERT_TRUE(server.ok()) << server.status();
-    server_ = std::make_unique<Subprocess>(std::move(*server));
-    const std::regex listening(R"(listening grpc=[^ ]*:(\d+) http=[^ ]*:(\d+))");
-    for (int i = 0; i < 400 && address_.empty(); ++i) {
-      std::smatch match;
-      const std::string out = server_->Stdout();
-      if (std::regex_search(out, match, listening)) {
-        address_ = "127.0.0.1:" + match[1].str();
-        http_address_ = "http://127.0.0.1:" + match[2].str();
-      }
-      std::this_thread::sleep_for(25ms);
-    }
-    ASSERT_FALSE(address_.empty()) << server_->Stderr();
-    // insdiagd's first start on this database wrote an admin token into its data directory.
-    std::ifstream(dir_ / "server" / "data" / "admin-token") >> token_;
-    ASSERT_FALSE(token_.empty()) << server_->Stderr();
+    server_ = std::move(server->process);
+    address_ = server->grpc_address;
+    http_address_ = "http://127.0.0.1:" + std::to_string(server->http_port);
+    token_ = server->admin_token;  // written by insdiagd's first start on this database
     auto simulated = RunToCompletion({INSDIAG_CLI_PATH, "simulate", (dir_ / "run.csv").string(), "--profile", "static",
                                       "--rate", "10", "--seed", "5", "--serial", "INS-CLI-1"},
                                      dir_, 60s);

@@ -17,16 +17,13 @@
 extern char** environ;
 
 namespace insdiag::testing {
-namespace {
 
 std::string ReadFile(const std::filesystem::path& path) {
-  std::ifstream in(path);
+  std::ifstream in(path, std::ios::binary);
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();
 }
-
-}  // namespace
 
 absl::StatusOr<Subprocess> Subprocess::Start(const std::vector<std::string>& argv,
                                              const std::filesystem::path& output_dir,

@@ -53,6 +53,9 @@ absl::StatusOr<Completed> RunToCompletion(const std::vector<std::string>& argv,
                                           std::chrono::milliseconds timeout,
                                           const std::vector<std::string>& extra_env = {});
 
+// The whole file, byte for byte; empty when it cannot be read.
+std::string ReadFile(const std::filesystem::path& path);
+
 // A fresh directory under the system temp dir, readable by other users (an
 // embedded PostgreSQL runs as `postgres` when the tests run as root).
 std::filesystem::path MakeTempDir(const std::string& prefix);

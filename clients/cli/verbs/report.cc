@@ -1,7 +1,10 @@
-// insdiag report ANALYSIS [--json] [--server ADDR]
+// insdiag report ANALYSIS [--json | --format text|html|pdf [-o FILE] [--diagnosis NAME]] [--server ADDR]
 // Prints the report of a SUCCEEDED analysis (analyses/{id} or the id): the
 // verdict, the fit per channel, identified parameters, the most significant
-// missing effects, where the model fails.
+// missing effects, where the model fails. --format html|pdf writes the test
+// report instead, the self-contained document the server sets
+// (AnalysisService.GetTestReport), to FILE or standard output.
+#include <fstream>
 #include <ostream>
 
 #include "insdiag/client/unary.h"
@@ -65,15 +68,35 @@ void PrintReportText(const v1::Analysis& analysis, std::ostream& out) {
 class ReportVerb final : public Verb {
  public:
   std::string Name() const override { return "report"; }
-  std::string Summary() const override { return "Print the report of an analysis on the server"; }
+  std::string Summary() const override { return "Print the report of an analysis, or write its test report (HTML, PDF)"; }
 
   void DeclareOptions(OptionSink& options) override {
     options.Positional("ANALYSIS", &analysis_, "analyses/{id} or the id");
     options.Flag("--json", &json_, "Print the report as JSON (insdiag.v1.AnalysisReport)");
+    options.Option("--format", &format_,
+                   "text (the default), or the test report to file: html (self-contained) or pdf");
+    options.Option("-o,--output", &output_, "Write the html or pdf test report to FILE (default: standard output)");
+    options.Option("--diagnosis", &diagnosis_,
+                   "The diagnosis the test report shows (diagnoses/{id}; default: the analysis's newest)");
     server_.Declare(options);
   }
 
   int Run(std::ostream& out, std::ostream& err) override {
+    if (format_ != "text" && format_ != "html" && format_ != "pdf") {
+      err << "insdiag report: --format is text, html or pdf, not '" << format_ << "'\n";
+      return kExitUsage;
+    }
+    if (format_ == "text" && (!output_.empty() || !diagnosis_.empty())) {
+      err << "insdiag report: --output and --diagnosis go with --format html or pdf\n";
+      return kExitUsage;
+    }
+    if (format_ != "text") {
+      if (json_) {
+        err << "insdiag report: --json prints the report's JSON; it does not go with --format " << format_ << "\n";
+        return kExitUsage;
+      }
+      return WriteTestReport(out, err);
+    }
     v1::GetAnalysisRequest request;
     request.set_name(ResourceName("analyses", analysis_));
     auto stub = v1::AnalysisService::NewStub(server_.Connect());
@@ -92,9 +115,36 @@ class ReportVerb final : public Verb {
   }
 
  private:
+  int WriteTestReport(std::ostream& out, std::ostream& err) {
+    v1::GetTestReportRequest request;
+    request.set_name(ResourceName("analyses", analysis_));
+    request.set_format(format_);
+    if (!diagnosis_.empty()) request.set_diagnosis(ResourceName("diagnoses", diagnosis_));
+    auto stub = v1::AnalysisService::NewStub(server_.Connect());
+    auto document = client::CallUnary<google::api::HttpBody>(
+        [&](grpc::ClientContext* c, google::api::HttpBody* r) { return stub->GetTestReport(c, request, r); });
+    if (!document.ok()) return RequestFailed(err, Name(), "get the test report", document.status());
+    if (output_.empty()) {
+      out.write(document->data().data(), static_cast<std::streamsize>(document->data().size()));
+      return kExitOk;
+    }
+    std::ofstream file(output_, std::ios::binary);
+    file.write(document->data().data(), static_cast<std::streamsize>(document->data().size()));
+    file.close();
+    if (!file) {
+      err << "insdiag report: cannot write " << output_ << "\n";
+      return kExitRefused;
+    }
+    out << output_ << "\n";
+    return kExitOk;
+  }
+
   std::string analysis_;
   ServerFlags server_;
   bool json_ = false;
+  std::string format_ = "text";
+  std::string output_;
+  std::string diagnosis_;
 };
 
 }  // namespace

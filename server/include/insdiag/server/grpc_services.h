@@ -7,6 +7,7 @@
 #include "insdiag/server/access_guard.h"
 #include "insdiag/server/kb_services.h"
 #include "insdiag/server/run_service.h"
+#include "insdiag/server/test_report_service.h"
 #include "insdiag/v1/access.grpc.pb.h"
 #include "insdiag/v1/analyses.grpc.pb.h"
 #include "insdiag/v1/fleet.grpc.pb.h"
@@ -41,7 +42,8 @@ class RunServiceGrpc final : public v1::RunService::Service {
 
 class AnalysisServiceGrpc final : public v1::AnalysisService::Service {
  public:
-  AnalysisServiceGrpc(AnalysisService& analyses, AccessGuard& guard) : analyses_(analyses), guard_(guard) {}
+  AnalysisServiceGrpc(AnalysisService& analyses, TestReportService& test_reports, AccessGuard& guard)
+      : analyses_(analyses), test_reports_(test_reports), guard_(guard) {}
   INSDIAG_UNARY(CreateAnalysis, CreateAnalysisRequest, Analysis);
   INSDIAG_UNARY(GetAnalysis, GetAnalysisRequest, Analysis);
   INSDIAG_UNARY(ListAnalyses, ListAnalysesRequest, ListAnalysesResponse);
@@ -51,9 +53,12 @@ class AnalysisServiceGrpc final : public v1::AnalysisService::Service {
                              grpc::ServerWriter<v1::Analysis>* writer) override;
   grpc::Status ReadResidualSeries(grpc::ServerContext* context, const v1::ReadResidualSeriesRequest* request,
                                   grpc::ServerWriter<v1::ResidualSeriesChunk>* writer) override;
+  grpc::Status GetTestReport(grpc::ServerContext* context, const v1::GetTestReportRequest* request,
+                             google::api::HttpBody* response) override;
 
  private:
   AnalysisService& analyses_;
+  TestReportService& test_reports_;
   AccessGuard& guard_;
 };
 

@@ -6,7 +6,8 @@
 // with one parameter per wildcard, named after the collection before it
 // ("/v1/runs/{runsId}"); GET and DELETE take the request's other scalar
 // fields as query parameters; a body rule names the request's schema. A
-// server-streaming method answers newline-delimited JSON. Schemas follow
+// server-streaming method answers newline-delimited JSON; one that returns
+// google.api.HttpBody answers with a document of its own media type. Schemas follow
 // protobuf's JSON mapping (int64 as strings, enums by name, Timestamp as
 // RFC 3339).
 #pragma once

@@ -15,7 +15,9 @@
 //                                  valid token (AccessService.GetCaller's rule)
 //   GET  /v1/openapi.json          this face as an OpenAPI document
 //                                  (openapi.h), to any valid token
-// Server-streaming methods answer with newline-delimited JSON. Every call
+// Server-streaming methods answer with newline-delimited JSON; a method that
+// returns google.api.HttpBody answers with its data under its content type
+// (GET /v1/analyses/{analysis}:testReport: HTML or PDF). Every call
 // carries the Authorization header and the client's address to the services'
 // access guard (access_guard.h); only /healthz and the page need none.
 #pragma once
