@@ -16,23 +16,6 @@
 namespace insdiag::engine {
 namespace {
 
-// RMS over the run of every constant term's regressor, per parameter.
-std::array<double, 2> RegressorRms(const BenchRun& run, const EffectTerm& term) {
-  std::array<double, 2> sum = {0.0, 0.0};
-  double values[2];
-  const double t0 = run.samples.front().temp_degc;
-  for (const ImuSample& s : run.samples) {
-    RegressorInputs in;
-    in.gyro_rad_s = s.gyro_rad_s;
-    in.acc_mps2 = s.acc_mps2;
-    in.temperature_delta_degc = run.has_temperature ? s.temp_degc - t0 : 0.0;
-    in.yaw_rad = s.ref_rpy_rad.z();
-    EvaluateRegressor(term, in, values);
-    for (int p = 0; p < term.family->parameters_per_term; ++p) sum[static_cast<size_t>(p)] += values[p] * values[p];
-  }
-  const double n = static_cast<double>(run.samples.size());
-  return {std::sqrt(sum[0] / n), std::sqrt(sum[1] / n)};
-}
 
 }  // namespace
 
@@ -127,7 +110,7 @@ absl::Status AddEffects(const BenchRun& run, const std::vector<std::string>& sel
       }
       switch (term.family->process) {
         case RandomProcess::kNone: {
-          const auto rms = RegressorRms(run, term);
+          const auto rms = pipeline::RegressorRms(run, term);
           for (int p = 0; p < term.family->parameters_per_term; ++p) {
             // An effect the run cannot excite keeps a prior on the scale of the drift itself.
             const double r = rms[static_cast<size_t>(p)];

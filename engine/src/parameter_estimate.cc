@@ -33,6 +33,8 @@ std::optional<EstimationMethod> MethodNamed(std::string_view name) {
 }
 
 bool ObservableByRun(const ParameterEstimate& p) {
+  if (std::abs(p.max_correlation) > kSeparableCorrelation) return false;
+  if (std::isinf(p.prior_std)) return false;  // the test never excited it
   if (!(p.prior_std > 0.0) || !std::isfinite(p.std_error)) return true;
   return p.std_error < kObservableStdFraction * p.prior_std;
 }

@@ -74,6 +74,7 @@ std::string VerdictReason(const v1::AnalysisReport& r) {
     if (f.kind() == v1::FaultInterval::OUTLIER) ++outliers;
   }
   std::vector<std::string> parts;
+  if (gradual + abrupt == 0 && outliers == 0) parts.emplace_back("no fault interval on any channel");
   if (gradual + abrupt > 0) {
     parts.push_back(absl::StrCat("the model fails: ", gradual, " gradual and ", abrupt, " abrupt fault interval",
                                  gradual + abrupt == 1 ? "" : "s"));
@@ -82,7 +83,6 @@ std::string VerdictReason(const v1::AnalysisReport& r) {
   const bool nis_in = r.nis_mean() >= r.nis_band_low() && r.nis_mean() <= r.nis_band_high();
   parts.push_back(absl::StrCat("mean NIS ", Num(r.nis_mean()), nis_in ? " inside" : " outside", " its χ² band [",
                                Num(r.nis_band_low()), ", ", Num(r.nis_band_high()), "]"));
-  if (gradual + abrupt == 0 && outliers == 0) parts.insert(parts.begin(), "no fault interval on any channel");
   return absl::StrCat(absl::StrJoin(parts, "; "), ".");
 }
 

@@ -45,8 +45,9 @@ TEST(PdfWriter, CrossReferenceOffsetsPointAtTheirObjects) {
   EXPECT_THAT(file, HasSubstr("/Title (A title \\(with parentheses\\))"));
 
   // The check itself fails on a file whose offsets are off by one byte.
-  std::string shifted = file;
-  shifted.insert(shifted.find("1 0 obj"), " ");
+  const std::size_t first_object = file.find("1 0 obj");
+  ASSERT_NE(first_object, std::string::npos);
+  const std::string shifted = file.substr(0, first_object) + " " + file.substr(first_object);
   EXPECT_FALSE(testing::CheckPdfStructure(shifted).ok());
 }
 

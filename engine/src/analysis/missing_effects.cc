@@ -1,5 +1,7 @@
 #include "analysis/missing_effects.h"
 
+#include <absl/strings/str_format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -499,14 +501,19 @@ AnalysisReport ReportOf(const ModelPass& pass, const Findings& found, const Benc
   r.correlation = found.drifts;
   r.identified = identified;
   std::string unobservable;
-  for (const ParameterEstimate& e : ConstantEffectEstimates(pass)) {
+  for (const ParameterEstimate& e : ConstantEffectEstimates(pass, run)) {
     r.identified.push_back(e);
-    if (!ObservableByRun(e)) unobservable += (unobservable.empty() ? "" : ", ") + e.name;
+    if (ObservableByRun(e)) continue;
+    unobservable += (unobservable.empty() ? "" : ", ") + e.name;
+    if (std::abs(e.max_correlation) > kSeparableCorrelation) {
+      unobservable += absl::StrFormat(" (only with %s: correlation %+.3f)", e.correlated_with, e.max_correlation);
+    }
   }
   r.notes = notes;
   if (!unobservable.empty()) {
-    r.notes.push_back("not observable from this run (the standard error stays above half the prior's): " +
-                      unobservable + "; a test that moves the unit through more positions or turns tells them");
+    r.notes.push_back("not observable from this run (inseparable from another state, or a standard error above "
+                      "half the prior's): " + unobservable +
+                      "; a test that moves the unit through more positions or turns tells them");
   }
   return r;
 }

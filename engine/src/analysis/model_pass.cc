@@ -4,9 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "insdiag/engine/ident/correlation.h"
 #include "insdiag/engine/ident/retarget.h"
+#include "insdiag/engine/monitor/sample_screening.h"
 
 namespace insdiag::engine::pipeline {
 namespace {
@@ -109,10 +111,42 @@ void FillFit(const ModelPass& pass, const BenchRun& run, const AnalysisOptions& 
   r.update_interval_s = options.filter.update_interval_s;
 }
 
-std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass) {
+std::array<double, 2> RegressorRms(const BenchRun& run, const EffectTerm& term,
+                                   const std::vector<std::array<double, 6>>* reference_inputs) {
+  std::array<double, 2> sum = {0.0, 0.0};
+  double values[2];
+  const double t0 = run.samples.front().temp_degc;
+  double n = 0.0;
+  for (size_t k = 0; k < run.samples.size(); ++k) {
+    if (run.StartsSegment(k)) continue;
+    const ImuSample& s = run.samples[k];
+    RegressorInputs in;
+    if (reference_inputs != nullptr) {
+      const auto& r = (*reference_inputs)[k];
+      in.gyro_rad_s = {r[0], r[1], r[2]};
+      in.acc_mps2 = {r[3], r[4], r[5]};
+    } else {
+      in.gyro_rad_s = s.gyro_rad_s;
+      in.acc_mps2 = s.acc_mps2;
+    }
+    in.temperature_delta_degc = run.has_temperature ? s.temp_degc - t0 : 0.0;
+    in.yaw_rad = s.ref_rpy_rad.z();
+    EvaluateRegressor(term, in, values);
+    for (int p = 0; p < term.family->parameters_per_term; ++p) sum[static_cast<size_t>(p)] += values[p] * values[p];
+    n += 1.0;
+  }
+  if (n == 0.0) return {0.0, 0.0};
+  return {std::sqrt(sum[0] / n), std::sqrt(sum[1] / n)};
+}
+
+std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass, const BenchRun& run) {
   std::vector<ParameterEstimate> out;
   const int K = pass.forward.epochs();
   if (K == 0) return out;
+  std::vector<std::array<double, 6>> reference;  // computed when the model has a constant effect
+  // A constant's filtered covariance at the end is its smoothed one.
+  Eigen::MatrixXd P;
+  UnpackSymmetric(pass.forward.P_filt.row(K - 1).data(), pass.forward.state_size, P);
   for (const SensorState& s : pass.layout->sensor_states()) {
     if (s.dynamics != StateDynamics::kConstant || s.effect < 0) continue;
     const ModelEffect& e = pass.model.effects[static_cast<size_t>(s.effect)];
@@ -122,7 +156,25 @@ std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass) {
     p.std_error = std::sqrt(pass.smoothed.variance(K - 1, s.index));
     p.method = EstimationMethod::kFilterState;
     p.unit = std::string(e.term.family->unit);
-    p.prior_std = e.prior_sigma[static_cast<size_t>(s.parameter)];
+    if (reference.empty()) reference = ReferenceMeasurements(run);
+    const auto measured_rms = RegressorRms(run, e.term);
+    const auto reference_rms = RegressorRms(run, e.term, &reference);
+    const auto k = static_cast<size_t>(s.parameter);
+    // prior σ = scale / measured RMS (AddEffects): the same scale over what the table excited.
+    const double scale = measured_rms[k] > 0.0 ? e.prior_sigma[k] * measured_rms[k] : e.prior_sigma[k];
+    p.prior_std = reference_rms[k] > 0.0 ? scale / reference_rms[k] : std::numeric_limits<double>::infinity();
+    p.max_correlation = 0.0;
+    for (const SensorState& other : pass.layout->sensor_states()) {
+      // Among the constants: a slow drift state shares a constant's
+      // signal over any run shorter than its correlation time, whatever the table did.
+      if (other.dynamics != StateDynamics::kConstant || other.index == s.index) continue;
+      if (!(P(s.index, s.index) > 0.0) || !(P(other.index, other.index) > 0.0)) continue;
+      const double rho = P(s.index, other.index) / std::sqrt(P(s.index, s.index) * P(other.index, other.index));
+      if (std::abs(rho) > std::abs(p.max_correlation)) {
+        p.max_correlation = rho;
+        p.correlated_with = other.name;
+      }
+    }
     out.push_back(p);
   }
   return out;

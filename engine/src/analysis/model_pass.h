@@ -5,6 +5,7 @@
 
 #include <absl/status/statusor.h>
 
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
@@ -45,7 +46,19 @@ void FillFit(const ModelPass& pass, const BenchRun& run, const AnalysisOptions& 
 
 // The added constant effects' estimates: the final filtered states (constants
 // keep their value, so the last epoch's estimate is the smoothed one).
-std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass);
+// RMS over the run of a constant term's regressor, per parameter, on the
+// measured inputs (what the filter's columns use), or, given them, on what a
+// perfect unit would have measured on the table (ReferenceMeasurements): what
+// the test excited. A run's segment starts are left out (their samples
+// cover unrecorded moves).
+std::array<double, 2> RegressorRms(const BenchRun& run, const EffectTerm& term,
+                                   const std::vector<std::array<double, 6>>* reference_inputs = nullptr);
+
+// The constant effects' estimates at the end of the pass, each with its
+// observability (parameter_estimate.h): the prior it is judged against is the
+// model's diffuse prior rescaled to what the table excited, so that an axis
+// excited only by its own noise is not observable.
+std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass, const BenchRun& run);
 
 // Measured, predicted, residual, ±σ and the sensor states per epoch.
 void FillSeries(const ModelPass& pass, AnalysisSeries& series);

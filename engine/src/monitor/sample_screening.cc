@@ -24,33 +24,6 @@ double& Channel(ImuSample& s, int c) { return c < 3 ? s.gyro_rad_s[c] : s.acc_mp
 // error: smooth drifts and noise, against which a spike stands out even where
 // the raw signal bends faster than a median can follow (the corners of a
 // rate profile sampled at 10 Hz).
-std::vector<std::array<double, 6>> ReferenceMeasurements(const BenchRun& run) {
-  const auto& samples = run.samples;
-  std::vector<std::array<double, 6>> expected(samples.size());
-  const auto& site = run.metadata.site;
-  const Eigen::Vector3d w_ie_n = wgs84::EarthRateNed(site.latitude_rad);
-  const Eigen::Vector3d minus_g_n = -nav::GravityNed(site.latitude_rad, site.height_m);
-  nav::ReferenceMotion motion(run);
-  for (size_t k = 1; k < samples.size(); ++k) {
-    const Eigen::Matrix3d C0 = nav::EulerToDcm(samples[k - 1].ref_rpy_rad);
-    const Eigen::Matrix3d C1 = nav::EulerToDcm(samples[k].ref_rpy_rad);
-    const double dt = samples[k].t_s - samples[k - 1].t_s;
-    // The body rate's integral is the interval's rotation vector less its
-    // coning, and the mean rotation of gravity is the constant-rate one with
-    // the motion's shape added (nav/table_motion.h): a rate that steps inside
-    // a sample, or one axis stopping as the other starts, is not a spike.
-    const nav::IntervalCompensation shape = motion.Compensation(k);
-    const Eigen::Vector3d dtheta =
-        nav::QuaternionToRotationVector(Eigen::Quaterniond(C0.transpose() * C1)) - shape.coning_rad;
-    const Eigen::Vector3d rate = dtheta / dt + C0.transpose() * w_ie_n;
-    const Eigen::Matrix3d mean_rotation =
-        (nav::MeanBodyRotation(dtheta).inverse() + shape.velocity_map_correction).inverse();
-    const Eigen::Vector3d force = mean_rotation * (C0.transpose() * minus_g_n);
-    expected[k] = {rate.x(), rate.y(), rate.z(), force.x(), force.y(), force.z()};
-  }
-  if (samples.size() > 1) expected[0] = expected[1];
-  return expected;
-}
 
 // Departures used to estimate the channel's robust σ.
 constexpr long kScaleSampleCount = 20000;
@@ -83,6 +56,34 @@ double RobustSigma(std::vector<double>& magnitude) {
 }
 
 }  // namespace
+
+std::vector<std::array<double, 6>> ReferenceMeasurements(const BenchRun& run) {
+  const auto& samples = run.samples;
+  std::vector<std::array<double, 6>> expected(samples.size());
+  const auto& site = run.metadata.site;
+  const Eigen::Vector3d w_ie_n = wgs84::EarthRateNed(site.latitude_rad);
+  const Eigen::Vector3d minus_g_n = -nav::GravityNed(site.latitude_rad, site.height_m);
+  nav::ReferenceMotion motion(run);
+  for (size_t k = 1; k < samples.size(); ++k) {
+    const Eigen::Matrix3d C0 = nav::EulerToDcm(samples[k - 1].ref_rpy_rad);
+    const Eigen::Matrix3d C1 = nav::EulerToDcm(samples[k].ref_rpy_rad);
+    const double dt = samples[k].t_s - samples[k - 1].t_s;
+    // The body rate's integral is the interval's rotation vector less its
+    // coning, and the mean rotation of gravity is the constant-rate one with
+    // the motion's shape added (nav/table_motion.h): a rate that steps inside
+    // a sample, or one axis stopping as the other starts, is not a spike.
+    const nav::IntervalCompensation shape = motion.Compensation(k);
+    const Eigen::Vector3d dtheta =
+        nav::QuaternionToRotationVector(Eigen::Quaterniond(C0.transpose() * C1)) - shape.coning_rad;
+    const Eigen::Vector3d rate = dtheta / dt + C0.transpose() * w_ie_n;
+    const Eigen::Matrix3d mean_rotation =
+        (nav::MeanBodyRotation(dtheta).inverse() + shape.velocity_map_correction).inverse();
+    const Eigen::Vector3d force = mean_rotation * (C0.transpose() * minus_g_n);
+    expected[k] = {rate.x(), rate.y(), rate.z(), force.x(), force.y(), force.z()};
+  }
+  if (samples.size() > 1) expected[0] = expected[1];
+  return expected;
+}
 
 std::vector<SampleOutlier> ScreenAndRepairSpikes(BenchRun& run, const ScreeningOptions& options) {
   std::vector<SampleOutlier> outliers;

@@ -34,20 +34,31 @@ struct ParameterEstimate {
   // 95% interval (NaN when the estimator gives none beyond ± 1.96 σ).
   double ci95_low = std::numeric_limits<double>::quiet_NaN();
   double ci95_high = std::numeric_limits<double>::quiet_NaN();
-  // A filter state's prior standard deviation (NaN for other methods): what
-  // the model knew of the parameter before this run.
+  // A filter state's diffuse prior standard deviation on the excitation the
+  // table gave (infinite where it gave none; NaN for other methods): what the
+  // run is judged against (ObservableByRun).
   double prior_std = std::numeric_limits<double>::quiet_NaN();
+  // A constant filter state's largest posterior correlation with another
+  // constant state, and that state's name: ±1 means the run tells only a combination
+  // of the two (NaN and empty for other methods).
+  double max_correlation = std::numeric_limits<double>::quiet_NaN();
+  std::string correlated_with;
 };
 
 // A filter-estimated parameter is observable from the run when the run's
-// data cut its standard deviation to below this fraction of the prior's:
-// otherwise its estimate is mostly the prior, whatever the run held (a scale
-// factor of an axis that never saw a force, a bias inseparable from a scale
-// factor on an axis that saw one force only).
+// data cut its standard deviation to below this fraction of the prior's, and
+// the run tells it apart from every other constant: its posterior
+// correlation with each stays within ±kSeparableCorrelation. Otherwise its
+// estimate is mostly the prior, or only a combination with another state is
+// known (a scale factor of an axis that saw one force only is inseparable
+// from that axis's bias: s·f + b with f constant). The degree of
+// observability as the ratio of posterior to prior standard deviation, and
+// separability by correlation: Ham & Brown, IEEE Trans. AES 19(2), 1983.
 inline constexpr double kObservableStdFraction = 0.5;
+inline constexpr double kSeparableCorrelation = 0.99;
 
-// False only for a filter estimate whose standard error stays above
-// kObservableStdFraction of its prior's; true when there is no prior to judge by.
+// False for a filter estimate that fails either test above; true when there
+// is nothing to judge by (other methods).
 bool ObservableByRun(const ParameterEstimate& p);
 
 }  // namespace insdiag::engine

@@ -16,6 +16,7 @@
 // jitter), the median collapses, and every quantum step would be a spike.
 #pragma once
 
+#include <array>
 #include <string_view>
 #include <vector>
 
@@ -40,6 +41,12 @@ struct SampleOutlier {
   double value = 0.0;        // as recorded
   double replacement = 0.0;  // the neighbours' median used instead
 };
+
+// What a perfect unit would have measured over each sample's interval given
+// the table's reference attitude at the site: the body rate (with Earth's)
+// and the specific force, gyro x, y, z then accelerometer x, y, z; sample 0
+// takes sample 1's.
+std::vector<std::array<double, 6>> ReferenceMeasurements(const BenchRun& run);
 
 // Finds spikes and replaces them in `run` (in place).
 std::vector<SampleOutlier> ScreenAndRepairSpikes(BenchRun& run, const ScreeningOptions& options);
