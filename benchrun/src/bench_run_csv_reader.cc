@@ -1,6 +1,7 @@
 #include <absl/strings/str_format.h>
 
 #include <algorithm>
+#include <limits>
 #include <array>
 #include <cerrno>
 #include <cstdint>
@@ -171,6 +172,7 @@ class Parser {
       return Refusal(locator_.At(lines_.number() + 1, 0, "header"), "missing header row");
     }
     if (absl::Status status = ReadHeader(*header); !status.ok()) return status;
+    if (absl::Status status = TakeSegmentStarts(); !status.ok()) return status;
     absl::StatusOr<BenchRunValidator> validator =
         BenchRunValidator::Create(run_.metadata, run_.has_temperature, locator_);
     if (!validator.ok()) return validator.status();
@@ -183,6 +185,27 @@ class Parser {
   absl::Status Refuse(std::string_view line, const char* at, std::string_view field,
                       std::string_view detail) const {
     return Refusal(locator_.At(lines_.number(), CharacterColumn(line, at), field), detail);
+  }
+
+  // Version 2's `segment_starts` (a free key to the metadata rules) becomes
+  // the run's segments; in version 1 it is refused, not kept as free text.
+  absl::Status TakeSegmentStarts() {
+    auto& extra = run_.metadata.extra;
+    for (std::size_t i = 0; i < extra.size(); ++i) {
+      if (extra[i].first != kSegmentStartsKey) continue;
+      const InputLocation where = locator_.OfMetadata(MetadataField::kExtra, i);
+      if (run_.metadata.format != kFormatV2) {
+        return Refusal(where, absl::StrFormat("segments need format '%s'", kFormatV2));
+      }
+      auto starts = ParseSegmentStarts(extra[i].second);
+      if (!starts.ok()) return Refusal(where, std::string(starts.status().message()));
+      run_.metadata.segment_starts = *std::move(starts);
+      const std::string detail = CheckSegmentStarts(run_.metadata, std::numeric_limits<std::size_t>::max());
+      if (!detail.empty()) return Refusal(where, detail);
+      extra.erase(extra.begin() + static_cast<std::ptrdiff_t>(i));
+      return absl::OkStatus();
+    }
+    return absl::OkStatus();
   }
 
   // Reads `# key: value` lines up to the first other non-blank line, the header.

@@ -50,8 +50,8 @@ std::string FormatBenchRun(const engine::BenchRun& run) {
   std::string out;
   out.reserve(1024 + run.samples.size() * 12 * kSampleFieldCount);
 
-  // This writer writes version 1, whatever the value says.
-  AppendMetadata(out, MetadataField::kFormat, kFormatV1);
+  // Version 1, or 2 for a run of segments, whatever the value says.
+  AppendMetadata(out, MetadataField::kFormat, FormatOf(run));
   AppendMetadata(out, MetadataField::kUnitSerial, metadata.unit_serial);
   if (!metadata.unit_type.empty())
     AppendMetadata(out, MetadataField::kUnitType, metadata.unit_type);
@@ -66,6 +66,7 @@ std::string FormatBenchRun(const engine::BenchRun& run) {
   AppendOptionalNumber(out, MetadataField::kAccVrw, sheet.acc_vrw_mps_rts);
   AppendOptionalNumber(out, MetadataField::kAccBiasSigma, sheet.acc_bias_sigma_mps2);
   AppendOptionalNumber(out, MetadataField::kAccBiasTau, sheet.acc_bias_tau_s);
+  if (!run.metadata.segment_starts.empty()) AppendMetadataLine(out, kSegmentStartsKey, SegmentStartsText(run.metadata.segment_starts));
   for (const auto& [key, value] : metadata.extra) AppendMetadataLine(out, key, value);
 
   const char* separator = "";

@@ -4,6 +4,7 @@
 #include <absl/strings/str_format.h>
 
 #include <algorithm>
+#include <limits>
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -172,8 +173,8 @@ bool IsMetadataKey(std::string_view key) {
 
 std::string CheckFormat(std::string_view format) {
   if (format.empty()) return "is missing";
-  if (format == kFormatV1) return {};
-  return absl::StrFormat("unknown format '%s', expected '%s'", format, kFormatV1);
+  if (format == kFormatV1 || format == kFormatV2) return {};
+  return absl::StrFormat("unknown format '%s', expected '%s' or '%s'", format, kFormatV1, kFormatV2);
 }
 
 }  // namespace internal
@@ -246,9 +247,16 @@ InputLocation FieldPathLocator::OfSampleList() const {
 absl::StatusOr<BenchRunValidator> BenchRunValidator::Create(
     const engine::BenchRunMetadata& metadata, bool has_temperature, const InputLocator& locator) {
   if (absl::Status status = CheckMetadata(metadata, locator); !status.ok()) return status;
+  if (std::string detail = CheckSegmentStarts(metadata, std::numeric_limits<std::size_t>::max()); !detail.empty()) {
+    InputLocation where = locator.OfMetadata(MetadataField::kFormat, 0);
+    where.field = kSegmentStartsKey;
+    return Refusal(where, detail);
+  }
   const double gravity =
       engine::wgs84::NormalGravityMps2(metadata.site.latitude_rad, metadata.site.height_m);
-  return BenchRunValidator(gravity, has_temperature, locator);
+  BenchRunValidator validator(gravity, has_temperature, locator);
+  validator.segment_starts_ = metadata.segment_starts;
+  return validator;
 }
 
 void BenchRunValidator::Reserve(std::size_t sample_count) {
@@ -320,6 +328,12 @@ absl::Status BenchRunValidator::CheckGravityWindow() const {
 
 absl::Status BenchRunValidator::Finish() {
   if (sample_count_ == 0) return Refusal(locator_->OfSampleList(), "the run has no samples");
+  if (!segment_starts_.empty() && segment_starts_.back() >= sample_count_) {
+    InputLocation where = locator_->OfSampleList();
+    where.field = kSegmentStartsKey;
+    return Refusal(where, absl::StrFormat("segment start %d is past the last sample (%d samples)",
+                                          segment_starts_.back(), sample_count_));
+  }
   if (!window_checked_) {
     window_checked_ = true;
     if (absl::Status status = CheckGravityWindow(); !status.ok()) return status;
@@ -341,6 +355,53 @@ absl::Status BenchRunValidator::Finish() {
     }
   }
   return absl::OkStatus();
+}
+
+std::string_view FormatOf(const engine::BenchRun& run) { return run.metadata.segment_starts.empty() ? kFormatV1 : kFormatV2; }
+
+std::string CheckSegmentStarts(const engine::BenchRunMetadata& metadata, std::size_t sample_count) {
+  if (metadata.segment_starts.empty()) return {};
+  if (metadata.format != kFormatV2) {
+    return absl::StrFormat("segments need format '%s' (this run says '%s')", kFormatV2, metadata.format);
+  }
+  std::size_t previous = 0;
+  for (const std::size_t start : metadata.segment_starts) {
+    if (start <= previous || start >= sample_count) {
+      return absl::StrFormat("%d is not after %d and before the sample count %d: starts increase within the run",
+                             start, previous, sample_count);
+    }
+    previous = start;
+  }
+  return {};
+}
+
+absl::StatusOr<std::vector<std::size_t>> ParseSegmentStarts(std::string_view text) {
+  std::vector<std::size_t> starts;
+  std::size_t begin = 0;
+  while (begin <= text.size()) {
+    std::size_t end = text.find(',', begin);
+    if (end == std::string_view::npos) end = text.size();
+    std::string_view item = text.substr(begin, end - begin);
+    while (!item.empty() && item.front() == ' ') item.remove_prefix(1);
+    while (!item.empty() && item.back() == ' ') item.remove_suffix(1);
+    std::size_t value = 0;
+    const auto [ptr, ec] = std::from_chars(item.data(), item.data() + item.size(), value);
+    if (item.empty() || ec != std::errc() || ptr != item.data() + item.size()) {
+      return absl::InvalidArgumentError(absl::StrFormat("'%s' is not a sample index", item));
+    }
+    starts.push_back(value);
+    begin = end + 1;
+  }
+  return starts;
+}
+
+std::string SegmentStartsText(const std::vector<std::size_t>& starts) {
+  std::string text;
+  for (const std::size_t s : starts) {
+    if (!text.empty()) text.push_back(',');
+    text.append(std::to_string(s));
+  }
+  return text;
 }
 
 absl::Status ValidateBenchRun(const engine::BenchRun& run, std::string_view source_name) {

@@ -23,7 +23,7 @@ double BenchRun::NominalIntervalS() const {
 }
 
 bool BenchRun::StartsSegment(size_t k) const {
-  return std::binary_search(segment_starts.begin(), segment_starts.end(), k);
+  return std::binary_search(metadata.segment_starts.begin(), metadata.segment_starts.end(), k);
 }
 
 double BenchRun::DurationS() const {

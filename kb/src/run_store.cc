@@ -10,6 +10,7 @@
 #include <map>
 #include <numbers>
 
+#include "insdiag/benchrun/bench_run_validation.h"
 #include "insdiag/api/json.h"
 #include "store_util.h"
 
@@ -72,12 +73,19 @@ absl::Status UnpackSamples(std::string_view bytes, bool has_temperature,
   return absl::OkStatus();
 }
 
+// The free metadata, and a multi-position test's segment starts as the
+// bench-run file holds them (`segment_starts`, format 2): stored as one more
+// pair, read back into the typed field by LoadExtraMetadata.
 std::string ExtraMetadataJson(const engine::BenchRunMetadata& metadata) {
   std::string out = "[";
-  for (const auto& [key, value] : metadata.extra) {
+  const auto append = [&out](std::string_view key, std::string_view value) {
     if (out.size() > 1) out += ',';
     absl::StrAppend(&out, "[", api::JsonString(key), ",", api::JsonString(value), "]");
+  };
+  if (!metadata.segment_starts.empty()) {
+    append(benchrun::kSegmentStartsKey, benchrun::SegmentStartsText(metadata.segment_starts));
   }
+  for (const auto& [key, value] : metadata.extra) append(key, value);
   return out + "]";
 }
 
@@ -157,7 +165,14 @@ absl::Status LoadExtraMetadata(Connection& db, std::vector<StoredRun>& runs) {
       {Param::Text(ids)});
   if (!rows.ok()) return rows.status();
   for (int row = 0; row < rows->rows(); ++row) {
-    by_id[rows->String(row, 0)]->metadata.extra.emplace_back(rows->String(row, 1), rows->String(row, 2));
+    engine::BenchRunMetadata& metadata = by_id[rows->String(row, 0)]->metadata;
+    if (rows->String(row, 1) == benchrun::kSegmentStartsKey) {
+      auto starts = benchrun::ParseSegmentStarts(rows->String(row, 2));
+      if (!starts.ok()) return absl::DataLossError("a stored run's segment starts: " + std::string(starts.status().message()));
+      metadata.segment_starts = *std::move(starts);
+      continue;
+    }
+    metadata.extra.emplace_back(rows->String(row, 1), rows->String(row, 2));
   }
   return absl::OkStatus();
 }

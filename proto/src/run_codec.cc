@@ -70,6 +70,7 @@ v1::RunMetadata ToProto(const engine::BenchRunMetadata& metadata, bool has_tempe
     entry->set_value(value);
   }
   out.set_has_temperature(has_temperature);
+  for (const std::size_t start : metadata.segment_starts) out.add_segment_starts(start);
   return out;
 }
 
@@ -85,6 +86,7 @@ engine::BenchRunMetadata FromProto(const v1::RunMetadata& metadata) {
     if ((metadata.datasheet().*field.has)()) out.datasheet.*field.value = (metadata.datasheet().*field.get)();
   }
   for (const auto& entry : metadata.extra()) out.extra.emplace_back(entry.key(), entry.value());
+  out.segment_starts.assign(metadata.segment_starts().begin(), metadata.segment_starts().end());
   return out;
 }
 

@@ -697,3 +697,54 @@ TEST(WriteBenchRunFile, RefusesAnInvalidRunAndWritesNothing) {
 
 }  // namespace
 }  // namespace insdiag::benchrun
+
+namespace insdiag::benchrun {
+namespace {
+
+// Format 2 (docs/MULTI_POSITION.md): a multi-position test's segment starts
+// in `segment_starts`; they survive writing and reading, and a file that
+// cannot hold them is refused at the key's line.
+TEST(ParseBenchRunSegments, Format2CarriesSegmentStartsThroughWritingAndReading) {
+  engine::BenchRun run = testing::StaticRun();
+  run.metadata.format = std::string(kFormatV2);
+  run.metadata.segment_starts = {50, 120};
+  const std::string text = FormatBenchRun(run);
+  EXPECT_NE(text.find("# format: insdiag-bench-run/2\n"), std::string::npos);
+  EXPECT_NE(text.find("# segment_starts: 50,120\n"), std::string::npos);
+  auto read = ParseBenchRun(text, "test.csv");
+  ASSERT_TRUE(read.ok()) << read.status();
+  EXPECT_EQ(read->metadata.segment_starts, (std::vector<std::size_t>{50, 120}));
+  EXPECT_TRUE(read->metadata.extra.empty());
+  EXPECT_TRUE(read->StartsSegment(120));
+  EXPECT_FALSE(read->StartsSegment(119));
+  // A run of one segment is still written as version 1.
+  EXPECT_EQ(FormatBenchRun(testing::StaticRun()).rfind("# format: insdiag-bench-run/1\n", 0), 0u);
+}
+
+TEST(ParseBenchRunSegments, RefusesSegmentsOutsideFormat2OrOutsideTheRun) {
+  testing::CsvText v1;
+  v1.metadata.push_back("# segment_starts: 50");
+  auto refused = ParseBenchRun(v1.Text(), "v1.csv");
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.status().message(), "v1.csv:7:3: segment_starts: segments need format 'insdiag-bench-run/2'");
+
+  testing::CsvText v2;
+  v2.metadata[0] = "# format: insdiag-bench-run/2";
+  v2.metadata.push_back("# segment_starts: 50,40");
+  refused = ParseBenchRun(v2.Text(), "v2.csv");
+  ASSERT_FALSE(refused.ok());
+  EXPECT_THAT(std::string(refused.status().message()), ::testing::HasSubstr("v2.csv:7:3: segment_starts: 40 is not after 50"));
+
+  v2.metadata.back() = "# segment_starts: 500";
+  refused = ParseBenchRun(v2.Text(), "v2.csv");
+  ASSERT_FALSE(refused.ok());
+  EXPECT_THAT(std::string(refused.status().message()), ::testing::HasSubstr("segment start 500 is past the last sample"));
+
+  v2.metadata.back() = "# segment_starts: 5x";
+  refused = ParseBenchRun(v2.Text(), "v2.csv");
+  ASSERT_FALSE(refused.ok());
+  EXPECT_THAT(std::string(refused.status().message()), ::testing::HasSubstr("'5x' is not a sample index"));
+}
+
+}  // namespace
+}  // namespace insdiag::benchrun

@@ -82,7 +82,7 @@ BenchRun RecordedFilesJoined(const BenchRun& run) {
         continue;
       }
     }
-    if (after_move) joined.segment_starts.push_back(joined.samples.size());
+    if (after_move) joined.metadata.segment_starts.push_back(joined.samples.size());
     after_move = false;
     ImuSample sample = s[k];
     sample.t_s = static_cast<double>(joined.samples.size() + 1) * dt;
@@ -137,7 +137,7 @@ TEST(MultiPosition, TheJoinedFilesRecoverTheCalibrationAndOneFileAloneCannot) {
     const sim::SimulatedUnit unit = UnitWithCalibrationErrors(seed, truth);
     const sim::SimulatedRun simulated = SimulateOrDie(unit, SixPositionsAndThreeTurns(), kRateHz, seed);
     const BenchRun joined = RecordedFilesJoined(simulated.run);
-    ASSERT_EQ(joined.segment_starts.size(), 8u) << "six positions and three turns are nine files";
+    ASSERT_EQ(joined.metadata.segment_starts.size(), 8u) << "six positions and three turns are nine files";
     AnalysisOptions options;
     options.identify = false;
     options.remove_dominant_constants = false;  // every constant estimated by the joint filter
@@ -153,8 +153,8 @@ TEST(MultiPosition, TheJoinedFilesRecoverTheCalibrationAndOneFileAloneCannot) {
 
     // The first file alone: level, still, one attitude.
     BenchRun first = joined;
-    first.samples.resize(joined.segment_starts.front());
-    first.segment_starts.clear();
+    first.samples.resize(joined.metadata.segment_starts.front());
+    first.metadata.segment_starts.clear();
     auto alone = Analyze(first, WithCalibrationEffects(), options);
     ASSERT_TRUE(alone.ok()) << alone.status();
     for (const char* name : {"acc_scale_factor.x", "acc_scale_factor.y", "acc_scale_factor.z", "acc_turn_on_bias.z"}) {

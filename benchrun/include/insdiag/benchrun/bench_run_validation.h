@@ -39,6 +39,23 @@
 namespace insdiag::benchrun {
 
 inline constexpr std::string_view kFormatV1 = "insdiag-bench-run/1";
+// Version 2: version 1 and the metadata key `segment_starts`, the first
+// sample of each segment after the first of a multi-position test
+// (docs/MULTI_POSITION.md). A run of one segment is written as version 1.
+inline constexpr std::string_view kFormatV2 = "insdiag-bench-run/2";
+inline constexpr std::string_view kSegmentStartsKey = "segment_starts";
+
+// The format a run is written in: version 2 when it has segments.
+std::string_view FormatOf(const engine::BenchRun& run);
+
+// Checks a run's segment starts against its sample count and format:
+// increasing, each within (0, sample count), and only in version 2. An empty
+// string when they hold, else what is wrong. BenchRunValidator applies it.
+std::string CheckSegmentStarts(const engine::BenchRunMetadata& metadata, std::size_t sample_count);
+
+// Parses `segment_starts` ("3000,6000,9100"), or says why not.
+absl::StatusOr<std::vector<std::size_t>> ParseSegmentStarts(std::string_view text);
+std::string SegmentStartsText(const std::vector<std::size_t>& starts);
 
 // Limits of the rules above, part of the format contract.
 inline constexpr double kMaxGyroRateRadS = 35.0;
@@ -187,6 +204,7 @@ class BenchRunValidator {
   const InputLocator* locator_;
 
   std::size_t sample_count_ = 0;
+  std::vector<std::size_t> segment_starts_;  // checked against the sample count by Finish
   double first_t_s_ = 0.0;
   double previous_t_s_ = 0.0;
 

@@ -45,6 +45,9 @@ struct BenchRunMetadata {
   std::string unit_type;    // optional, e.g. "INS-2000"
   Site site;
   Datasheet datasheet;
+  // A multi-position test (BenchRun): the first sample of each segment after
+  // the first, increasing; empty for a run of one segment.
+  std::vector<size_t> segment_starts;
   // Every other `# key: value` line in file order (bench, operator,
   // started_at, notes and unknown keys), kept as free metadata.
   std::vector<std::pair<std::string, std::string>> extra;
@@ -72,10 +75,6 @@ struct BenchRun {
   BenchRunMetadata metadata;
   bool has_temperature = false;
   std::vector<ImuSample> samples;
-  // The first sample of each segment after the first, increasing; empty for
-  // a run of one segment.
-  std::vector<size_t> segment_starts;
-
   // Whether sample k is the first of a segment after the first.
   bool StartsSegment(size_t k) const;
 
