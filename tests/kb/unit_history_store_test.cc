@@ -8,19 +8,16 @@
 #include <random>
 
 #include "evidence_reports.h"
-#include "insdiag/kb/analysis_store.h"
 #include "insdiag/kb/catalogue_store.h"
 #include "insdiag/kb/diagnosis_store.h"
-#include "insdiag/kb/run_store.h"
 #include "insdiag/kb/unit_history.h"
 #include "insdiag/kb/unit_history_store.h"
 #include "support/database_fixture.h"
-#include "support/synthetic_run.h"
+#include "support/stored_history.h"
 
 namespace insdiag::kb {
 namespace {
 
-using namespace std::chrono_literals;
 using ::testing::HasSubstr;
 
 constexpr char kSigma[] = "gyro_bias_gm.x.sigma";
@@ -36,34 +33,12 @@ class UnitHistoryStoreTest : public insdiag::testing::DatabaseTest {
     ASSERT_TRUE(catalogue.Seed(api::BuiltinUnitTypes(), BuiltinFailureModeCatalogues()).ok());
   }
 
-  // A run of `serial` tested `days` after 2026-01-05 and a SUCCEEDED
-  // analysis of it with `report`; the analysis's name.
   std::string StoreRunAndAnalysis(const std::string& serial, double days, const v1::AnalysisReport& report,
                                   std::string* run_id = nullptr) {
-    RunStore runs(pool());
-    engine::BenchRun run = insdiag::testing::SyntheticStaticRun(20, 10.0, 3);
-    run.metadata.unit_serial = serial;
-    run.metadata.unit_type = "INS-2000";
-    auto stored = runs.Create(run, {.sha256 = "x", .request_id = "", .request_fingerprint = ""});
-    EXPECT_TRUE(stored.ok()) << stored.status();
-    auto db = pool().Acquire();
-    EXPECT_TRUE(db.ok());
-    EXPECT_TRUE((*db)->Exec("UPDATE runs SET test_time = timestamptz '2026-01-05 08:00+00' + $2::double precision * "
-                            "interval '1 day' WHERE run_id = $1::uuid",
-                            {Param::Text(stored->id), Param::Double(days)})
-                    .ok());
-    if (run_id != nullptr) *run_id = stored->id;
-    return AnalyseRun(stored->id, report);
+    return insdiag::testing::StoreAnalysedRun(pool(), serial, days, report, run_id);
   }
-
   std::string AnalyseRun(const std::string& run_id, const v1::AnalysisReport& report) {
-    AnalysisStore analyses(pool());
-    auto a = analyses.Create(run_id, v1::AnalysisSpec(), "");
-    EXPECT_TRUE(a.ok()) << a.status();
-    auto job = analyses.Claim("t", 30s);
-    EXPECT_TRUE(job.ok() && job->has_value());
-    EXPECT_TRUE(analyses.Complete((*job)->analysis_id, "t", report, nullptr).ok());
-    return a->name();
+    return insdiag::testing::AnalyseStoredRun(pool(), run_id, report);
   }
 
   // The nominal report with σ of gyro x at `sigma_factor` × nominal (±12 %)
