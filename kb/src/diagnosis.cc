@@ -160,6 +160,21 @@ const v1::Signature* TrendReader(const v1::FailureMode& mode, const EvidenceTerm
   return nullptr;
 }
 
+// The unit's own significant trends in parameters the mode's signature
+// reads: their log-likelihood, each marked `covered`, with its line.
+double LogTrendTerms(const v1::FailureMode& mode, const Evidence& evidence, const v1::DiagnosisSettings& settings,
+                     std::vector<bool>& covered, std::vector<std::string>& lines) {
+  double ll = 0.0;
+  for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
+    const v1::Signature* reader = TrendReader(mode, evidence.terms[i]);
+    if (reader == nullptr) continue;
+    covered[i] = true;
+    ll += LogTrendTerm(*reader, evidence.terms[i], settings);
+    lines.push_back(absl::StrCat(evidence.terms[i].line, ", as a developing ", reader->parameter(), " shift predicts"));
+  }
+  return ll;
+}
+
 std::string Format(double v) { return absl::StrFormat("%.3g", v); }
 
 std::string SignedFormat(double v) { return absl::StrFormat("%+.2g", v); }
@@ -530,16 +545,8 @@ v1::Diagnosis Diagnose(const Evidence& evidence, std::span<const v1::FailureMode
         }
         if (!members.empty()) ll += LogSignatureTerm(term, members);
       }
-      // The unit's own significant trends in parameters the signature reads.
       std::vector<std::string> trend_lines;
-      for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
-        const v1::Signature* reader = TrendReader(mode, evidence.terms[i]);
-        if (reader == nullptr) continue;
-        covered[i] = true;
-        ll += LogTrendTerm(*reader, evidence.terms[i], settings);
-        trend_lines.push_back(absl::StrCat(evidence.terms[i].line, ", as a developing ", reader->parameter(),
-                                           " shift predicts"));
-      }
+      ll += LogTrendTerms(mode, evidence, settings, covered, trend_lines);
       // A fault moves other terms of its own sensor axes too; elsewhere a term
       // is off only as often as on a healthy unit, so that a mode's odds
       // against `healthy` do not fall with the number of terms it does not read.
