@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/stats/distributions.h"
@@ -13,6 +14,9 @@ namespace insdiag::kb {
 namespace {
 
 namespace stats = engine::stats;
+
+// Residuals this many units in the last place of the largest value are rounding.
+constexpr double kRoundingUlps = 64.0;
 
 bool KnownError(double se) { return std::isfinite(se) && se > 0.0; }
 
@@ -108,9 +112,14 @@ v1::UnitTrendFit FitTrend(std::span<const HistoryPoint> points, const HistoryOpt
     if (fit.excess_scatter()) fit.set_birge_ratio(std::max(1.0, std::sqrt(chi_square / dof)));
     se *= fit.birge_ratio();
   } else {
-    // Equal weights: the residuals alone tell the points' scatter.
+    // Equal weights: the residuals alone tell the points' scatter — but not
+    // below the values' rounding, or a parameter reported at one value in
+    // every run would show a "trend" of rounding error with no error at all.
+    double largest = 0.0;
+    for (const auto& p : points) largest = std::max(largest, std::abs(p.value));
+    const double rounding = kRoundingUlps * std::numeric_limits<double>::epsilon() * largest;
     fit.set_scatter_p_value(1.0);
-    se *= std::sqrt(chi_square / dof);
+    se *= std::max(std::sqrt(chi_square / dof), rounding);
   }
   fit.set_slope_std_error_per_day(se);
   const bool student = !weighted || fit.excess_scatter();

@@ -127,6 +127,12 @@ TEST(UnitHistoryStatisticsTest, WithoutStandardErrorsTheTrendIsOrdinaryLeastSqua
   const double se = std::sqrt(0.04 / 3.0 / 10.0);
   EXPECT_NEAR(fit.slope_std_error_per_day(), se, 1e-12);
   EXPECT_NEAR(fit.p_value(), StudentClosedForm(0.05 / se, 3), 1e-12);
+  // One value in every run, without SEs: no trend, whatever the rounding.
+  const v1::UnitTrendFit constant = FitTrend(Points({0, 3.3, 7.1, 9.9}, {4.84813681109536e-08, 4.84813681109536e-08,
+                                                                        4.84813681109536e-08, 4.84813681109536e-08},
+                                                    0.0),
+                                             HistoryOptions());
+  EXPECT_GT(constant.p_value(), 0.01);
   EXPECT_FALSE(FitTrend(Points({0, 1}, {1, 2}, 0.1), HistoryOptions()).fitted());
   EXPECT_FALSE(FitTrend(Points({3, 3, 3}, {1, 2, 3}, 0.1), HistoryOptions()).fitted());
 }
