@@ -1,8 +1,12 @@
 // GetUnitHistory through the real API: an in-process server over a fresh
 // database holding a unit's analyses over several weeks; a real gRPC stub,
-// a real HTTP client with a viewer's token, and the real insdiag CLI.
+// a real HTTP client with a viewer's token, and the real insdiag CLI; and
+// runs simulated, uploaded and analysed by the server's own worker.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+
+#include <absl/strings/ascii.h>
+#include <absl/strings/str_format.h>
 
 #include "insdiag/api/json.h"
 #include "insdiag/v1/knowledge.grpc.pb.h"
@@ -116,6 +120,70 @@ TEST_F(UnitHistoryApiTest, TheCliPrintsATablePerParameterAndTheJson) {
   ASSERT_TRUE(unknown.ok());
   EXPECT_EQ(unknown->exit_status, 1);
   EXPECT_THAT(unknown->stderr_text, HasSubstr("NOT_FOUND"));
+}
+
+// The whole chain on the engine's own numbers: four one-hour static runs of
+// one unit simulated with gyro x's angle random walk growing from run to
+// run, uploaded, analysed by the server's worker and diagnosed.
+TEST_F(UnitHistoryApiTest, RunsAnalysedByTheServerGiveTheHistoryOfWhatTheEngineIdentified) {
+  const auto dir = MakeTempDir("insdiag-history-engine");
+  const std::string address = "127.0.0.1:" + std::to_string(server_->grpc_port());
+  const double arw = kb::testing::Nominal("gyro_arw.x");
+  const std::vector<double> factors = {1.0, 1.15, 1.3, 1.45};
+  auto analyses = v1::AnalysisService::NewStub(channel());
+  std::string last;
+  for (std::size_t i = 0; i < factors.size(); ++i) {
+    const std::string csv = (dir / ("run" + std::to_string(i) + ".csv")).string();
+    auto simulated = RunToCompletion({INSDIAG_CLI_PATH, "simulate", "--profile", "static", "--rate", "10", "--seed",
+                                      std::to_string(3 + i), "--serial", "INS-ENGINE-1", "--param",
+                                      absl::StrFormat("gyro_arw.x=%.9g", factors[i] * arw), csv},
+                                     dir, 60s);
+    ASSERT_TRUE(simulated.ok() && simulated->exit_status == 0) << (simulated.ok() ? simulated->stderr_text : "");
+    auto uploaded = RunToCompletion({INSDIAG_CLI_PATH, "upload", csv, "--server", address, "--token", admin_token_},
+                                    dir, 60s);
+    ASSERT_TRUE(uploaded.ok() && uploaded->exit_status == 0) << (uploaded.ok() ? uploaded->stderr_text : "");
+    grpc::ClientContext create_context;
+    v1::CreateAnalysisRequest create;
+    create.mutable_analysis()->set_run(std::string(absl::StripAsciiWhitespace(uploaded->stdout_text)));
+    v1::Analysis analysis;
+    ASSERT_TRUE(analyses->CreateAnalysis(&create_context, create, &analysis).ok());
+    grpc::ClientContext watch_context;
+    watch_context.set_deadline(std::chrono::system_clock::now() + 240s);
+    v1::WatchAnalysisRequest watch;
+    watch.set_name(analysis.name());
+    auto reader = analyses->WatchAnalysis(&watch_context, watch);
+    while (reader->Read(&analysis)) {
+    }
+    ASSERT_TRUE(reader->Finish().ok());
+    ASSERT_EQ(analysis.state(), v1::Analysis::SUCCEEDED) << analysis.error().message();
+    last = analysis.name();
+  }
+  auto knowledge = v1::KnowledgeService::NewStub(channel());
+  grpc::ClientContext context;
+  v1::GetUnitHistoryRequest request;
+  request.set_unit("units/INS-ENGINE-1");
+  request.add_parameters("gyro_arw.x");
+  v1::UnitHistory history;
+  ASSERT_TRUE(knowledge->GetUnitHistory(&context, request, &history).ok());
+  ASSERT_EQ(history.parameters_size(), 1);
+  const v1::UnitParameterHistory& p = history.parameters(0);
+  ASSERT_EQ(p.points_size(), 4);
+  for (int i = 0; i < 4; ++i) {
+    // Each run's identified value within 4 SE of what was simulated.
+    EXPECT_NEAR(p.points(i).value(), factors[i] * arw, 4.0 * p.points(i).std_error()) << i;
+  }
+  EXPECT_GT(p.statistics().trend().slope_per_day(), 0.0);
+  EXPECT_LT(p.statistics().trend().p_value(), 1e-3);
+
+  grpc::ClientContext diagnose_context;
+  v1::CreateDiagnosisRequest diagnose;
+  diagnose.set_analysis(last);
+  v1::Diagnosis diagnosis;
+  ASSERT_TRUE(knowledge->CreateDiagnosis(&diagnose_context, diagnose, &diagnosis).ok());
+  EXPECT_THAT(diagnosis.notes(), ::testing::Contains(HasSubstr("significant trends in gyro_arw.x")));
+  bool counted = false;
+  for (const auto& e : diagnosis.evidence()) counted = counted || e.name() == "gyro_arw.x.trend";
+  EXPECT_TRUE(counted) << diagnosis.DebugString();
 }
 
 }  // namespace
