@@ -91,7 +91,9 @@ bool IsFamily(const std::string& parameter) { return absl::EndsWith(parameter, "
 std::vector<const EvidenceTerm*> Members(const v1::Signature& term, const Evidence& evidence) {
   std::vector<const EvidenceTerm*> out;
   for (const auto& t : evidence.terms) {
-    if (SignatureCovers(term.parameter(), t.name) && ScaleName(t.scale) == term.scale()) out.push_back(&t);
+    if (t.trend_of.empty() && SignatureCovers(term.parameter(), t.name) && ScaleName(t.scale) == term.scale()) {
+      out.push_back(&t);
+    }
   }
   return out;
 }
@@ -132,6 +134,45 @@ double LogSignatureTerm(const v1::Signature& term, const std::vector<const Evide
     sum += q < 1.0 ? LogAddExp(std::log(q) + moved, std::log1p(-q) + HealthyLog(*t)) : moved;
   }
   return sum;
+}
+
+// A significant trend of a parameter the signature term reads: a fault
+// developing over the unit's runs moves it in the term's direction, its
+// standard score z ~ N(±μ_T, s_T² + s_h²) (DiagnosisSettings.trend_z_*).
+double LogTrendTerm(const v1::Signature& term, const EvidenceTerm& t, const v1::DiagnosisSettings& settings) {
+  const auto signs = Signs(term.direction());
+  const double var = settings.trend_z_spread() * settings.trend_z_spread() + t.healthy_sd * t.healthy_sd;
+  double total = -INFINITY;
+  for (double sign : signs) {
+    total = LogAddExp(total, -std::log(static_cast<double>(signs.size())) +
+                                 LogNormalPdf(t.x, sign * settings.trend_z_change(), var));
+  }
+  return total;
+}
+
+// The signature term of `mode` that reads the parameter trend term `t` is
+// the trend of, or nullptr.
+const v1::Signature* TrendReader(const v1::FailureMode& mode, const EvidenceTerm& t) {
+  if (t.trend_of.empty()) return nullptr;
+  for (const auto& term : mode.signature()) {
+    if (SignatureCovers(term.parameter(), t.trend_of)) return &term;
+  }
+  return nullptr;
+}
+
+// The unit's own significant trends in parameters the mode's signature
+// reads: their log-likelihood, each marked `covered`, with its line.
+double LogTrendTerms(const v1::FailureMode& mode, const Evidence& evidence, const v1::DiagnosisSettings& settings,
+                     std::vector<bool>& covered, std::vector<std::string>& lines) {
+  double ll = 0.0;
+  for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
+    const v1::Signature* reader = TrendReader(mode, evidence.terms[i]);
+    if (reader == nullptr) continue;
+    covered[i] = true;
+    ll += LogTrendTerm(*reader, evidence.terms[i], settings);
+    lines.push_back(absl::StrCat(evidence.terms[i].line, ", as a developing ", reader->parameter(), " shift predicts"));
+  }
+  return ll;
 }
 
 std::string Format(double v) { return absl::StrFormat("%.3g", v); }
@@ -504,6 +545,8 @@ v1::Diagnosis Diagnose(const Evidence& evidence, std::span<const v1::FailureMode
         }
         if (!members.empty()) ll += LogSignatureTerm(term, members);
       }
+      std::vector<std::string> trend_lines;
+      ll += LogTrendTerms(mode, evidence, settings, covered, trend_lines);
       // A fault moves other terms of its own sensor axes too; elsewhere a term
       // is off only as often as on a healthy unit, so that a mode's odds
       // against `healthy` do not fall with the number of terms it does not read.
@@ -512,7 +555,9 @@ v1::Diagnosis Diagnose(const Evidence& evidence, std::span<const v1::FailureMode
         ll += own_sensor_axes.contains(SensorAxisOf(evidence.terms[i].name)) ? knock_on[i] : incidental[i];
       }
       const double p = total_rate > 0 ? (1.0 - u) * p_any * rates[m] / total_rate : 0.0;
-      add(mode.name(), mode.module_role(), p, ll, ModeEvidenceLines(mode, evidence));
+      std::vector<std::string> lines = ModeEvidenceLines(mode, evidence);
+      for (auto& line : trend_lines) lines.push_back(std::move(line));
+      add(mode.name(), mode.module_role(), p, ll, std::move(lines));
     }
   }
 

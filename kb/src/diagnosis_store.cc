@@ -1,12 +1,15 @@
 #include "insdiag/kb/diagnosis_store.h"
 
 #include <absl/strings/str_cat.h>
+#include <absl/strings/str_join.h>
 
 #include <algorithm>
 
 #include "catalogue_rows.h"
 #include "failure_record_writes.h"
+#include "history_rows.h"
 #include "insdiag/kb/diagnosis.h"
+#include "insdiag/kb/unit_history.h"
 #include "report_rows.h"
 #include "signature_refinement.h"
 #include "store_util.h"
@@ -44,6 +47,29 @@ absl::StatusOr<v1::Diagnosis> LoadDiagnosis(Connection& db, const std::string& i
     d.set_resolved_module(rows->String(0, 3));
   }
   return d;
+}
+
+// The unit's own significant trends, over its runs up to this analysis's
+// (this analysis standing for its run), as evidence (kb/unit_history.h).
+absl::Status AddHistoryEvidence(Connection& db, const std::string& unit_id, const std::string& analysis_id,
+                                const v1::DiagnosisSettings& settings, Evidence& evidence) {
+  internal::HistoryScope scope;
+  scope.unit_id = unit_id;
+  scope.until_analysis_id = analysis_id;
+  auto history = internal::LoadParameterHistories(db, scope, HistoryOptions());
+  if (!history.ok()) return history.status();
+  std::vector<EvidenceTerm> trends = TrendEvidence(*history, settings);
+  int runs = 0;
+  for (const auto& p : *history) runs = std::max(runs, p.statistics().count());
+  if (runs < 3) return absl::OkStatus();  // no trend to test yet
+  std::vector<std::string> names;
+  for (const auto& t : trends) names.push_back(t.trend_of);
+  evidence.notes.push_back(
+      trends.empty() ? absl::StrCat("the unit's history (", runs, " runs): no parameter trends significantly")
+                     : absl::StrCat("the unit's history (", runs, " runs): significant trends in ",
+                                    absl::StrJoin(names, ", ")));
+  for (auto& t : trends) evidence.terms.push_back(std::move(t));
+  return absl::OkStatus();
 }
 
 }  // namespace
@@ -90,7 +116,9 @@ absl::StatusOr<v1::Diagnosis> DiagnosisStore::Create(const std::string& analysis
   prior.fleet_exposure_hours = *fleet;
   for (const auto& m : *modes) prior.confirmed_failures[m.name()] = m.confirmed_failures();
 
-  v1::Diagnosis diagnosis = Diagnose(EvidenceFromReport(*report, *unit_type, settings), *modes, settings, prior);
+  Evidence observed = EvidenceFromReport(*report, *unit_type, settings);
+  if (auto added = AddHistoryEvidence(**db, unit_id, *analysis_id, settings, observed); !added.ok()) return added;
+  v1::Diagnosis diagnosis = Diagnose(observed, *modes, settings, prior);
   diagnosis.set_analysis(analysis_name);
   diagnosis.set_unit(absl::StrCat("units/", serial));
   std::string id;

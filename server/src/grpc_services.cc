@@ -90,6 +90,7 @@ INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, ListUnitTy
 INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, GetUnit, GetUnitRequest, Unit)
 INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, ListUnits, ListUnitsRequest, ListUnitsResponse)
 INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, ListModules, ListModulesRequest, ListModulesResponse)
+INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, GetUnitHistory, GetUnitHistoryRequest, UnitHistory)
 INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, ListFailureModes, ListFailureModesRequest, ListFailureModesResponse)
 INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, GetFailureMode, GetFailureModeRequest, FailureMode)
 INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, CreateFailureRecord, CreateFailureRecordRequest, FailureRecord)

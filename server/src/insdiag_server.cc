@@ -39,8 +39,8 @@ struct InsdiagServer::Services {
         runs(store, RunService::Options{options.max_upload_samples}), runs_grpc(runs, guard), analysis_store(pool, options.read_pool),
         analyses(analysis_store, AnalysisService::Options{options.watch_poll}),
         catalogue_store(pool, options.read_pool), failure_record_store(pool, options.read_pool),
-        diagnosis_store(pool, options.read_pool),
-        knowledge(catalogue_store, failure_record_store, diagnosis_store), knowledge_grpc(knowledge, guard),
+        diagnosis_store(pool, options.read_pool), unit_history_store(pool, options.read_pool),
+        knowledge(catalogue_store, failure_record_store, diagnosis_store, unit_history_store), knowledge_grpc(knowledge, guard),
         test_reports(analyses, runs, knowledge, TestReportService::Options{}), analyses_grpc(analyses, test_reports, guard),
         fleet_store(options.read_pool != nullptr ? *options.read_pool : pool), fleet_grpc(fleet_store, guard), workers(pool, options.workers, &metrics) {}
   // What GET /metrics answers: the counters, then the queue and the pool as they are.
@@ -72,6 +72,7 @@ struct InsdiagServer::Services {
   kb::CatalogueStore catalogue_store;
   kb::FailureRecordStore failure_record_store;
   kb::DiagnosisStore diagnosis_store;
+  kb::UnitHistoryStore unit_history_store;
   KnowledgeService knowledge;
   KnowledgeServiceGrpc knowledge_grpc;
   TestReportService test_reports;  // reads through runs, analyses and knowledge

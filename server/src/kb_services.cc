@@ -225,6 +225,10 @@ absl::StatusOr<v1::ListUnitTypesResponse> KnowledgeService::ListUnitTypes(const 
   return response;
 }
 
+absl::StatusOr<v1::UnitHistory> KnowledgeService::GetUnitHistory(const v1::GetUnitHistoryRequest& request) {
+  return history_.Get(request);
+}
+
 absl::StatusOr<v1::Unit> KnowledgeService::GetUnit(const v1::GetUnitRequest& request) {
   return catalogue_.GetUnit(request.name());
 }

@@ -71,7 +71,7 @@ function header(analysis) {
         : h(`span.badge.${analysis.state}#state`, analysis.state)),
     h('p.muted',
       'Run ', h('a', { href: `#/runs/${runId}` }, runId.slice(0, 8)),
-      analysis.unit ? ` · ${analysis.unit}` : '',
+      analysis.unit ? [' · ', h('a#analysis-unit', { href: `#/${analysis.unit}/history`, title: 'the unit\'s history' }, analysis.unit)] : '',
       ' · model: ', h('strong#model-effects', analysis.model.effects.length ? analysis.model.effects.join(', ') : 'base model'),
       analysis.discover ? ' · discover' : '',
       ` · created ${fmtTime(analysis.createTime)}`));

@@ -172,6 +172,19 @@ async function downloadRun(name) {
   setTimeout(() => URL.revokeObjectURL(link.href), 60_000);
 }
 
+/** A unit's history with every run (the server pages the runs; the statistics come whole on each page). */
+async function unitHistory(unit) {
+  let history = null;
+  let pageToken = '';
+  do {
+    const page = await call('GET', `/v1/${unit}/history`, { query: { pageSize: 1000, pageToken } });
+    if (history) history.runs.push(...page.runs);
+    else history = page;
+    pageToken = page.nextPageToken;
+  } while (pageToken);
+  return history;
+}
+
 export const api = {
   getCaller: () => call('GET', '/v1/caller'),
   downloadRun,
@@ -192,6 +205,8 @@ export const api = {
   createDiagnosis: (analysis) => call('POST', '/v1/diagnoses', { body: { analysis } }),
   listDiagnoses: (analysis) => call('GET', '/v1/diagnoses', { query: { analysis, pageSize: 50 } }),
   resolveDiagnosis: (name, resolution) => call('POST', `/v1/${name}:resolve`, { body: resolution }),
+
+  unitHistory,
 
   listUnitTypes: () => call('GET', '/v1/unitTypes'),
   listFailureRecords: (pageToken) => call('GET', '/v1/failureRecords', { query: { pageSize: 1000, pageToken } }),

@@ -4,12 +4,14 @@
 //   #/                  runs
 //   #/runs/{run}        a run and its analyses
 //   #/analyses/{a}      an analysis: the model loop (analysis.js)
+//   #/units/{unit}/history  a unit's runs, analyses and parameters over time (history.js)
 //   #/fleet             fleet statistics (fleet.js)
 import { api, ApiError, listAll, num, session } from './api.js';
 import { h, fmt, fmtSeconds, fmtTime, empty, section, table } from './dom.js';
 import { navigate, startAnalysis, errorCard } from './nav.js';
 import { showAnalysis } from './analysis.js';
 import { showFleet } from './fleet.js';
+import { showHistory } from './history.js';
 
 const main = document.getElementById('main');
 let leaveView = null; // stops the current view's streams and timers
@@ -31,6 +33,7 @@ async function route() {
     let match;
     if ((match = path.match(/^\/analyses\/([^/]+)$/))) await showAnalysis(view, `analyses/${match[1]}`, leaving);
     else if ((match = path.match(/^\/runs\/([^/]+)$/))) await showRun(view, `runs/${match[1]}`);
+    else if ((match = path.match(/^\/units\/([^/]+)\/history$/))) await showHistory(view, `units/${match[1]}`);
     else if (path.startsWith('/fleet')) await showFleet(view);
     else await showRuns(view);
   } catch (error) {
@@ -59,7 +62,7 @@ async function fillRunList(listing) {
         const id = run.name.split('/')[1];
         return h('tr.clickable', { dataset: { run: run.name }, onclick: () => navigate(`#/runs/${id}`) },
           h('td', h('a', { href: `#/runs/${id}` }, id.slice(0, 8))),
-          h('td', run.metadata.unitSerial),
+          h('td', unitLink(run.metadata.unitSerial)),
           h('td', run.metadata.unitType || '—'),
           h('td.num', Number(run.sampleCount).toLocaleString()),
           h('td.num', fmtSeconds(run.durationS)),
@@ -169,12 +172,13 @@ async function showRun(view, name) {
     h('h1', `Run ${name.split('/')[1]}`),
     section('Run',
       table(['Unit', 'Type', 'Samples', 'Rate', 'Duration', 'Temperature', 'Uploaded'], [h('tr',
-        h('td', meta.unitSerial), h('td', meta.unitType || '—'), h('td.num', Number(run.sampleCount).toLocaleString()),
+        h('td', unitLink(meta.unitSerial)), h('td', meta.unitType || '—'), h('td.num', Number(run.sampleCount).toLocaleString()),
         h('td.num', `${fmt(1 / num(run.nominalIntervalS))} Hz`), h('td.num', fmtSeconds(run.durationS)),
         h('td', meta.hasTemperature ? 'yes' : 'no'), h('td', fmtTime(run.createTime)))]),
       h('div.row', { style: 'margin-top:10px' },
         h('button', { onclick: () => startAnalysis(name, [], []) }, 'Analyse with the base model'),
         h('button.secondary', { onclick: () => startAnalysis(name, [], [], true) }, 'Discover missing effects'),
+        h('button.secondary#unit-history', { onclick: () => navigate(historyHash(meta.unitSerial)) }, 'Unit history'),
         h('button.secondary', { onclick: () => api.downloadRun(name).catch((error) => window.alert(error.message)) },
           'Download CSV'),
         h('span.grow'),
@@ -194,6 +198,15 @@ async function showRun(view, name) {
       ? analysisTable(analyses.analyses)
       : empty('No analysis of this run yet.')),
   );
+}
+
+function historyHash(serial) {
+  return `#/units/${encodeURIComponent(serial)}/history`;
+}
+
+/** The unit's serial, linking to its history (a click on it does not open the row's run). */
+function unitLink(serial) {
+  return h('a.unit-link', { href: historyHash(serial), onclick: (event) => event.stopPropagation() }, serial);
 }
 
 function analysisTable(analyses) {

@@ -3,7 +3,8 @@
 //   - a refused file shows the line and column the server names;
 //   - a simulated run with a hidden effect: upload, the top missing effect,
 //     Add, the re-run's progress, and the step table with the error falling;
-//   - zooming a residual plot asks the server for finer data.
+//   - zooming a residual plot asks the server for finer data;
+//   - a unit's history: a plot per parameter with its trend, reachable from the unit's run.
 // Screenshots go to $INSDIAG_ARTIFACTS_DIR (build/test-artifacts/web).
 //
 // CTest runs this (label e2e) under scripts/with-throwaway-pg.sh with
@@ -45,8 +46,8 @@ const createRequests = []; // the bodies of the analyses the page created
 const firstStates = new Map(); // analysis name → its state in the page's first GET of it
 const watched = new Set(); // analyses whose :watch stream the page opened
 
-function psql(sql) {
-  execFileSync('psql', [databaseUrl, '-v', 'ON_ERROR_STOP=1', '-qc', sql], { stdio: 'pipe' });
+function psql(sql, url = databaseUrl) {
+  execFileSync('psql', [url, '-v', 'ON_ERROR_STOP=1', '-qc', sql], { stdio: 'pipe' });
 }
 
 /** The throwaway cluster's URL with another database name (a libpq URL: its host may be empty). */
@@ -276,3 +277,78 @@ async function expectLoopStep(fromUrl, shot) {
   await screenshot(shot);
   assert.deepEqual(foreignRequests, []);
 }
+
+/**
+ * A unit's history written into the test's database as the fleet generator
+ * writes one (runs without samples, succeeded analyses with their identified
+ * parameters): gyro x's drift σ grows by a quarter of nominal a week over five
+ * weekly runs, its turn-on bias scatters without a trend.
+ */
+const HISTORY_SERIAL = 'INS-HIST-1';
+const DRIFTING = 'gyro_bias_gm.x.sigma';
+const STABLE = 'gyro_turn_on_bias.x';
+
+function seedHistory() {
+  const sigmaNominal = 4.84813681109536e-08;
+  const bias = [1.0e-6, 1.1e-6, 0.95e-6, 1.05e-6, 0.98e-6];
+  const runs = bias.map((b, i) => {
+    const sigma = sigmaNominal * (1 + 0.25 * i);
+    return `WITH r AS (INSERT INTO runs (unit_id, format, unit_serial, unit_type, site_latitude_deg, site_longitude_deg,
+        site_height_m, has_temperature, sample_count, nominal_interval_s, duration_s, first_t, sha256, test_time)
+      SELECT unit_id, 'insdiag-bench-run/1', '${HISTORY_SERIAL}', 'INS-2000', 55.7, 37.6, 150, false, 0, 0.1, 3600, 0, 'seed',
+        timestamptz '2026-01-05 08:00+00' + interval '${7 * i} days' FROM units WHERE serial = '${HISTORY_SERIAL}'
+      RETURNING run_id, unit_id),
+    a AS (INSERT INTO analyses (run_id, unit_id, state, verdict, end_time)
+      SELECT run_id, unit_id, 'SUCCEEDED', 'GOOD', now() FROM r RETURNING analysis_id)
+    INSERT INTO identified_parameters (analysis_id, parameter_id, value, std_error, method)
+      SELECT a.analysis_id, n.parameter_id, v.value, v.se, 'ACF' FROM a,
+        (VALUES ('${DRIFTING}', ${sigma}::float8, ${0.05 * sigma}::float8), ('${STABLE}', ${b}::float8, 1e-7::float8))
+          AS v(name, value, se) JOIN parameter_names n USING (name);`;
+  });
+  psql(`INSERT INTO units (serial, unit_type) VALUES ('${HISTORY_SERIAL}', 'INS-2000');
+    INSERT INTO parameter_names (name) VALUES ('${DRIFTING}'), ('${STABLE}') ON CONFLICT DO NOTHING;
+    ${runs.join('\n')}`, urlOf(database));
+}
+
+test('a unit\'s history: from its run to a plot per parameter with the trend, the drifting one significant', {
+  skip: skipReason,
+}, async () => {
+  seedHistory();
+  // Signed in, whether or not the first test ran (node --test-name-pattern).
+  await page.goto(`${baseUrl}/`);
+  await page.evaluate((token) => sessionStorage.setItem('insdiag.token', token), adminToken);
+  await page.goto(`${baseUrl}/#/`);
+  await page.reload();
+  // The runs list links each unit to its history; so does a run's page.
+  const row = page.locator('#run-list tr', { hasText: HISTORY_SERIAL }).first();
+  await row.waitFor();
+  await row.locator('td').first().click();
+  await page.waitForURL(/#\/runs\//);
+  await page.locator('#unit-history').click();
+  await page.waitForURL(new RegExp(`#/units/${HISTORY_SERIAL}/history$`));
+  await page.locator('#history-summary').getByText('5 runs, 5 with a succeeded analysis').waitFor();
+  assert.equal(await page.locator('#history-runs tbody tr').count(), 5);
+
+  const drifting = page.locator(`#history-statistics tr[data-parameter="${DRIFTING}"]`);
+  const stable = page.locator(`#history-statistics tr[data-parameter="${STABLE}"]`);
+  await drifting.waitFor();
+  assert.ok(Number(await drifting.getAttribute('data-trend-p')) < 1e-6, 'σ growing a quarter of nominal a week is a trend');
+  assert.ok(Number(await stable.getAttribute('data-trend-p')) > 0.01, 'the scattering bias is not');
+  assert.match(await stable.innerText(), /\d/); // its repeatability is shown
+
+  // A plot per parameter: the values with their SE bars and the trend line.
+  for (const name of [DRIFTING, STABLE]) {
+    await page.locator(`.history-plot[data-parameter="${name}"] canvas`).first().waitFor();
+  }
+  assert.equal(await page.locator('#history-plots .history-plot').count(), 2);
+  await page.getByText(/trend .* per day, p [=<] /).first().waitFor();
+  await screenshot('unit-history');
+
+  // Each analysis opens from the history, and links back to it.
+  await page.locator('#history-runs tbody tr.clickable').first().click();
+  await page.waitForURL(/#\/analyses\//);
+  await page.locator('#analysis-unit').click();
+  await page.waitForURL(new RegExp(`#/units/${HISTORY_SERIAL}/history$`));
+  await page.locator('#history-plots .history-plot').first().waitFor();
+  assert.deepEqual(foreignRequests, []);
+});

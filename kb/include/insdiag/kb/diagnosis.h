@@ -71,6 +71,9 @@ struct EvidenceTerm {
   bool significant = false;     // effect candidates: Holm-adjusted p below the level
   double tolerance_units = 0.0; // (v − v₀)/T, for the lines
   std::string line;             // human-readable
+  // A trend term (unit_history.h): the parameter whose slope over the unit's
+  // own runs x is the standard score of. Empty for every other term.
+  std::string trend_of;
 };
 
 struct Evidence {

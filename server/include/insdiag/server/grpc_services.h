@@ -70,6 +70,7 @@ class KnowledgeServiceGrpc final : public v1::KnowledgeService::Service {
   INSDIAG_UNARY(GetUnit, GetUnitRequest, Unit);
   INSDIAG_UNARY(ListUnits, ListUnitsRequest, ListUnitsResponse);
   INSDIAG_UNARY(ListModules, ListModulesRequest, ListModulesResponse);
+  INSDIAG_UNARY(GetUnitHistory, GetUnitHistoryRequest, UnitHistory);
   INSDIAG_UNARY(ListFailureModes, ListFailureModesRequest, ListFailureModesResponse);
   INSDIAG_UNARY(GetFailureMode, GetFailureModeRequest, FailureMode);
   INSDIAG_UNARY(CreateFailureRecord, CreateFailureRecordRequest, FailureRecord);

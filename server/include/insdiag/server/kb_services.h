@@ -17,6 +17,7 @@
 #include "insdiag/kb/diagnosis_store.h"
 #include "insdiag/kb/failure_record_store.h"
 #include "insdiag/kb/fleet_store.h"
+#include "insdiag/kb/unit_history_store.h"
 #include "insdiag/v1/access.pb.h"
 #include "insdiag/v1/analyses.pb.h"
 #include "insdiag/v1/fleet.pb.h"
@@ -55,14 +56,16 @@ class AnalysisService {
 
 class KnowledgeService {
  public:
-  KnowledgeService(kb::CatalogueStore& catalogue, kb::FailureRecordStore& records, kb::DiagnosisStore& diagnoses)
-      : catalogue_(catalogue), records_(records), diagnoses_(diagnoses) {}
+  KnowledgeService(kb::CatalogueStore& catalogue, kb::FailureRecordStore& records, kb::DiagnosisStore& diagnoses,
+                   kb::UnitHistoryStore& history)
+      : catalogue_(catalogue), records_(records), diagnoses_(diagnoses), history_(history) {}
 
   absl::StatusOr<v1::UnitType> GetUnitType(const v1::GetUnitTypeRequest& request);
   absl::StatusOr<v1::ListUnitTypesResponse> ListUnitTypes(const v1::ListUnitTypesRequest& request);
   absl::StatusOr<v1::Unit> GetUnit(const v1::GetUnitRequest& request);
   absl::StatusOr<v1::ListUnitsResponse> ListUnits(const v1::ListUnitsRequest& request);
   absl::StatusOr<v1::ListModulesResponse> ListModules(const v1::ListModulesRequest& request);
+  absl::StatusOr<v1::UnitHistory> GetUnitHistory(const v1::GetUnitHistoryRequest& request);
   absl::StatusOr<v1::ListFailureModesResponse> ListFailureModes(const v1::ListFailureModesRequest& request);
   absl::StatusOr<v1::FailureMode> GetFailureMode(const v1::GetFailureModeRequest& request);
   absl::StatusOr<v1::FailureRecord> CreateFailureRecord(const v1::CreateFailureRecordRequest& request);
@@ -79,6 +82,7 @@ class KnowledgeService {
   kb::CatalogueStore& catalogue_;
   kb::FailureRecordStore& records_;
   kb::DiagnosisStore& diagnoses_;
+  kb::UnitHistoryStore& history_;
 };
 
 // Tokens and the audit trail. The caller comes from the access guard

@@ -1,0 +1,109 @@
+#include "insdiag/kb/unit_history_store.h"
+
+#include <absl/strings/str_cat.h>
+
+#include <algorithm>
+#include <map>
+
+#include "history_rows.h"
+#include "store_util.h"
+
+namespace insdiag::kb {
+namespace {
+
+using internal::kRunTestTime;
+using internal::Micros;
+
+constexpr double kDefaultConfidence = 0.95;
+
+// The page of runs, oldest first, each with its succeeded analyses.
+absl::Status LoadRuns(Connection& db, const std::string& unit_id, const v1::GetUnitHistoryRequest& request,
+                      v1::UnitHistory& out) {
+  const int size = internal::ClampPageSize(request.page_size());
+  std::vector<Param> params = {Param::Text(unit_id), Param::Int(size + 1)};
+  auto after = internal::KeysetCondition(request.page_token(), kRunTestTime, "r.run_id",
+                                         internal::KeysetOrder::kOldestFirst, params);
+  if (!after.ok()) return after.status();
+  auto runs = db.Exec(absl::StrCat("SELECT r.run_id::text, ", Micros(kRunTestTime), ", ", kRunTestTime,
+                                   "::text, r.duration_s FROM runs r WHERE r.unit_id = $1 AND ", *after,
+                                   " ORDER BY ", kRunTestTime, ", r.run_id LIMIT $2"),
+                      params);
+  if (!runs.ok()) return runs.status();
+  const int shown = std::min(runs->rows(), size);
+  std::vector<std::string> ids;
+  std::map<std::string, v1::HistoryRun*> by_id;
+  for (int r = 0; r < shown; ++r) {
+    v1::HistoryRun* run = out.add_runs();
+    ids.push_back(runs->String(r, 0));
+    run->set_run(absl::StrCat("runs/", ids.back()));
+    *run->mutable_test_time() = internal::TimestampOfMicros(internal::IntOr0(*runs, r, 1));
+    run->set_duration_s(internal::DoubleOr0(*runs, r, 3));
+    by_id[ids.back()] = run;
+  }
+  if (runs->rows() > size) out.set_next_page_token(internal::EncodeToken(runs->String(shown - 1, 2), ids.back()));
+  if (ids.empty()) return absl::OkStatus();
+  // `counted`: ordered as history_rows.cc picks the run's analysis.
+  auto analyses = db.Exec(
+      absl::StrCat("SELECT a.run_id::text, a.analysis_id::text, ", Micros("a.create_time"),
+                   ", coalesce(a.verdict, ''), coalesce(a.unit_hours, 0), "
+                   "(SELECT count(*) FROM identified_parameters p WHERE p.analysis_id = a.analysis_id), "
+                   "row_number() OVER (PARTITION BY a.run_id ORDER BY a.end_time DESC NULLS LAST, "
+                   "a.create_time DESC, a.analysis_id DESC) = 1 "
+                   "FROM analyses a WHERE a.run_id = ANY($1::uuid[]) AND a.state = 'SUCCEEDED' "
+                   "ORDER BY a.create_time, a.analysis_id"),
+      {Param::TextArray(ids)});
+  if (!analyses.ok()) return analyses.status();
+  for (int r = 0; r < analyses->rows(); ++r) {
+    v1::HistoryAnalysis* a = by_id[analyses->String(r, 0)]->add_analyses();
+    a->set_analysis(absl::StrCat("analyses/", analyses->String(r, 1)));
+    *a->mutable_create_time() = internal::TimestampOfMicros(internal::IntOr0(*analyses, r, 2));
+    v1::AnalysisReport::Verdict verdict = v1::AnalysisReport::VERDICT_UNSPECIFIED;
+    v1::AnalysisReport::Verdict_Parse(analyses->String(r, 3), &verdict);
+    a->set_verdict(verdict);
+    a->set_unit_hours(internal::DoubleOr0(*analyses, r, 4));
+    a->set_identified_count(static_cast<int>(internal::IntOr0(*analyses, r, 5)));
+    a->set_counted(analyses->Bool(r, 6));
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::StatusOr<v1::UnitHistory> UnitHistoryStore::Get(const v1::GetUnitHistoryRequest& request) {
+  auto serial = internal::IdOf(request.unit(), "units", "unit");
+  if (!serial.ok()) return serial.status();
+  HistoryOptions options;
+  options.confidence = request.confidence() == 0.0 ? kDefaultConfidence : request.confidence();
+  if (!options.Validate()) return absl::InvalidArgumentError("confidence: must lie strictly between 0 and 1");
+  auto db = pool_.Acquire();
+  if (!db.ok()) return db.status();
+  auto unit = (*db)->Exec(
+      "SELECT u.unit_id, coalesce(u.unit_type, ''), "
+      "(SELECT count(*) FROM runs r WHERE r.unit_id = u.unit_id), "
+      "(SELECT count(DISTINCT a.run_id) FROM analyses a WHERE a.unit_id = u.unit_id AND a.state = 'SUCCEEDED') "
+      "FROM units u WHERE u.serial = $1",
+      {Param::Text(*serial)});
+  if (!unit.ok()) return unit.status();
+  if (unit->rows() == 0) return absl::NotFoundError(absl::StrCat(request.unit(), " does not exist"));
+  v1::UnitHistory out;
+  out.set_unit(absl::StrCat("units/", *serial));
+  if (!unit->String(0, 1).empty()) out.set_unit_type(absl::StrCat("unitTypes/", unit->String(0, 1)));
+  out.set_run_count(static_cast<int>(internal::IntOr0(*unit, 0, 2)));
+  out.set_analysed_run_count(static_cast<int>(internal::IntOr0(*unit, 0, 3)));
+  out.set_confidence(options.confidence);
+  if (auto status = LoadRuns(**db, unit->String(0, 0), request, out); !status.ok()) return status;
+  internal::HistoryScope scope;
+  scope.unit_id = unit->String(0, 0);
+  scope.only_parameters.assign(request.parameters().begin(), request.parameters().end());
+  auto parameters = internal::LoadParameterHistories(**db, scope, options);
+  if (!parameters.ok()) return parameters.status();
+  for (auto& p : *parameters) *out.add_parameters() = std::move(p);
+  if (out.analysed_run_count() < 2) {
+    out.add_notes("fewer than two runs with a succeeded analysis: no repeatability yet");
+  } else if (out.analysed_run_count() < 3) {
+    out.add_notes("fewer than three runs with a succeeded analysis: no trend yet");
+  }
+  return out;
+}
+
+}  // namespace insdiag::kb
