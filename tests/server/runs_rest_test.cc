@@ -8,6 +8,7 @@
 #include "insdiag/api/json.h"
 #include "insdiag/api/run_codec.h"
 #include "insdiag/benchrun/bench_run_csv.h"
+#include "insdiag/client/run_client.h"
 #include "server_fixture.h"
 #include "support/synthetic_run.h"
 
@@ -28,6 +29,27 @@ class RunsRestTest : public ServerTest {
     return run;
   }
 };
+
+// A multi-position test (format 2) keeps its segments through a CSV upload,
+// the store, GetRun and the download; and through a gRPC upload.
+TEST_F(RunsRestTest, SegmentedTestRoundTripsOverRestAndGrpc) {
+  auto run = SyntheticStaticRun(3'000, 50.0, 6);
+  run.metadata.format = std::string(benchrun::kFormatV2);
+  run.metadata.segment_starts = {1'000, 2'000};
+  const v1::Run stored = PostCsv(benchrun::FormatBenchRun(run), "?requestId=rest-segments");
+  EXPECT_THAT(stored.metadata().segment_starts(), ::testing::ElementsAre(1'000, 2'000));
+  EXPECT_EQ(stored.metadata().format(), "insdiag-bench-run/2");
+  auto download = http().Get(("/v1/" + stored.name() + ":download").c_str());
+  ASSERT_TRUE(download);
+  auto back = benchrun::ParseBenchRun(download->body, "download");
+  ASSERT_TRUE(back.ok()) << back.status();
+  EXPECT_EQ(back->metadata.segment_starts, run.metadata.segment_starts);
+  EXPECT_EQ(back->metadata.extra, run.metadata.extra);
+
+  auto over_grpc = client::UploadRun(runs(), run, client::UploadOptions{.request_id = "grpc-segments"});
+  ASSERT_TRUE(over_grpc.ok()) << over_grpc.status();
+  EXPECT_THAT(over_grpc->metadata().segment_starts(), ::testing::ElementsAre(1'000, 2'000));
+}
 
 TEST_F(RunsRestTest, CsvUploadRoundTrips) {
   const auto run = SyntheticStaticRun(30'000, 50.0, 5);
