@@ -24,6 +24,7 @@ import uuid
 HERE = os.path.dirname(os.path.abspath(__file__))
 PROTO_DIR = os.path.normpath(os.path.join(HERE, "..", "..", "proto"))
 PROTOS = ["insdiag/v1/access.proto", "insdiag/v1/runs.proto", "insdiag/v1/analyses.proto", "insdiag/v1/knowledge.proto",
+          "insdiag/v1/history.proto",
           "google/api/annotations.proto", "google/api/http.proto", "google/api/httpbody.proto", "google/rpc/status.proto"]
 COLUMNS = ["t", "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z", "ref_roll", "ref_pitch", "ref_yaw"]
 DATASHEET = {"gyro_arw": "gyro_arw_rad_rts", "gyro_bias_sigma": "gyro_bias_sigma_rad_s",

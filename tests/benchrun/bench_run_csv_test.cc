@@ -319,7 +319,7 @@ TEST(ParseBenchRunRefuses, DuplicateColumn) {
 
 TEST(ParseBenchRunRefuses, UnknownFormat) {
   for (const char* format :
-       {"insdiag-bench-run/2", "insdiag-bench-run/1.0", "INSDIAG-BENCH-RUN/1"}) {
+       {"insdiag-bench-run/3", "insdiag-bench-run/1.0", "INSDIAG-BENCH-RUN/1"}) {
     CsvText csv;
     csv.metadata[0] = std::string("# format: ") + format;
     const absl::Status status = ParseStatus(csv.Text());
@@ -330,7 +330,7 @@ TEST(ParseBenchRunRefuses, UnknownFormat) {
 
 TEST(ParseBenchRunRefuses, UnknownFormatBeforeLaterErrors) {
   CsvText csv;
-  csv.metadata[0] = "# format: insdiag-bench-run/2";
+  csv.metadata[0] = "# format: insdiag-bench-run/3";
   csv.metadata.push_back("# this line is not metadata of version 1");
   EXPECT_TRUE(IsRefusalAt(ParseStatus(csv.Text()), At(1, 11, "format")));
 }

@@ -126,7 +126,7 @@ TEST(ValidateBenchRun, RefusesMissingOrUnknownFormat) {
   engine::BenchRun run = StaticRun();
   run.metadata.format = "";
   EXPECT_TRUE(IsRefusalAt(Validate(run), Field("metadata.format")));
-  run.metadata.format = "insdiag-bench-run/2";
+  run.metadata.format = "insdiag-bench-run/3";
   EXPECT_TRUE(IsRefusalAt(Validate(run), Field("metadata.format")));
 }
 
