@@ -1,6 +1,7 @@
 #include "insdiag/kb/run_store.h"
 
 #include <absl/strings/str_cat.h>
+#include <absl/time/time.h>
 
 #include <algorithm>
 #include <array>
@@ -87,6 +88,18 @@ std::string ExtraMetadataJson(const engine::BenchRunMetadata& metadata) {
   }
   for (const auto& [key, value] : metadata.extra) append(key, value);
   return out + "]";
+}
+
+// When the run was tested: its `started_at` (ISO 8601 / RFC 3339) when that
+// parses, so that a unit's history orders and spaces runs by when they were
+// recorded; empty (NULL: the upload time stands in) for free text.
+std::string TestTimeText(const engine::BenchRunMetadata& metadata) {
+  const std::optional<std::string> started = metadata.Extra("started_at");
+  if (!started.has_value()) return {};
+  absl::Time time;
+  std::string error;
+  if (!absl::ParseTime(absl::RFC3339_full, *started, &time, &error)) return {};
+  return absl::FormatTime(absl::RFC3339_full, time, absl::UTCTimeZone());
 }
 
 // Rejects what PostgreSQL's uuid input would reject, so that a malformed
@@ -215,9 +228,9 @@ absl::StatusOr<std::string> InsertRun(Connection& db, const engine::BenchRun& ru
       "INSERT INTO runs (unit_id, format, unit_serial, unit_type, site_latitude_deg, "
       "site_longitude_deg, site_height_m, gyro_arw_rad_rts, gyro_bias_sigma_rad_s, gyro_bias_tau_s, "
       "acc_vrw_mps_rts, acc_bias_sigma_mps2, acc_bias_tau_s, extra_metadata, has_temperature, "
-      "sample_count, nominal_interval_s, duration_s, first_t, sha256, request_id, request_fingerprint) "
+      "sample_count, nominal_interval_s, duration_s, first_t, sha256, request_id, request_fingerprint, test_time) "
       "VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14::jsonb, $15, $16, $17, $18, "
-      "$19, $20, $21, $22) RETURNING run_id::text",
+      "$19, $20, $21, $22, $23::timestamptz) RETURNING run_id::text",
       {Param::Text(unit->String(0, 0)), Param::Text(meta.format), Param::Text(meta.unit_serial),
        Param::TextOrNull(meta.unit_type), Param::Double(meta.site.latitude_rad * kDegPerRad),
        Param::Double(meta.site.longitude_rad * kDegPerRad), Param::Double(meta.site.height_m),
@@ -228,7 +241,7 @@ absl::StatusOr<std::string> InsertRun(Connection& db, const engine::BenchRun& ru
        Param::Int(static_cast<std::int64_t>(run.samples.size())), Param::Double(run.NominalIntervalS()),
        Param::Double(run.DurationS()), Param::Double(run.samples.empty() ? 0.0 : run.samples.front().t_s),
        Param::Text(identity.sha256), Param::TextOrNull(identity.request_id),
-       Param::TextOrNull(identity.request_fingerprint)});
+       Param::TextOrNull(identity.request_fingerprint), Param::TextOrNull(TestTimeText(meta))});
   if (!inserted.ok()) return inserted.status();
   const std::string run_id = inserted->String(0, 0);
 

@@ -5,6 +5,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <sstream>
+
 #include <absl/strings/ascii.h>
 #include <absl/strings/str_format.h>
 
@@ -139,6 +142,16 @@ TEST_F(UnitHistoryApiTest, RunsAnalysedByTheServerGiveTheHistoryOfWhatTheEngineI
                                       absl::StrFormat("gyro_arw.x=%.9g", factors[i] * arw), csv},
                                      dir, 60s);
     ASSERT_TRUE(simulated.ok() && simulated->exit_status == 0) << (simulated.ok() ? simulated->stderr_text : "");
+    // Tested two months apart: the history spaces the runs by their started_at.
+    {
+      std::ifstream in(csv);
+      std::stringstream text;
+      text << in.rdbuf();
+      std::string body = text.str();
+      const std::size_t after_format = body.find('\n') + 1;
+      body.insert(after_format, absl::StrFormat("# started_at: 2026-0%d-01T08:00:00Z\n", 1 + 2 * i));
+      std::ofstream(csv, std::ios::trunc) << body;
+    }
     auto uploaded = RunToCompletion({INSDIAG_CLI_PATH, "upload", csv, "--server", address, "--token", admin_token_},
                                     dir, 60s);
     ASSERT_TRUE(uploaded.ok() && uploaded->exit_status == 0) << (uploaded.ok() ? uploaded->stderr_text : "");
