@@ -17,6 +17,8 @@ std::string MakeToken(kb::ConnectionPool& pool, v1::Role role, const std::string
 void ServerTest::SetUp() {
   DatabaseTest::SetUp();
   if (IsSkipped() || HasFatalFailure()) return;
+  BeforeServerStarts();
+  if (HasFatalFailure()) return;
   server::InsdiagServer::Options options;
   options.bind_address = "127.0.0.1";
   options.grpc_port = 0;

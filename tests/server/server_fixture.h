@@ -23,6 +23,9 @@ class ServerTest : public DatabaseTest {
  protected:
   void SetUp() override;
   void TearDown() override;
+  // Runs on the fresh database before the server, and so its analysis
+  // workers, start: for stores written directly, which a worker would race.
+  virtual void BeforeServerStarts() {}
 
   v1::RunService::Stub& runs() { return *runs_; }
   httplib::Client& http() { return *http_; }

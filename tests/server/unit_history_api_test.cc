@@ -32,6 +32,12 @@ class UnitHistoryApiTest : public ServerTest {
   void SetUp() override {
     ServerTest::SetUp();
     if (IsSkipped() || HasFatalFailure()) return;
+    viewer_token_ = MakeToken(pool(), v1::VIEWER);
+  }
+
+  // Stored before the server's workers exist, which would otherwise race the
+  // store for the analyses' jobs.
+  void BeforeServerStarts() override {
     // σ of gyro x growing by a fifth of nominal a week, each measured to ±5 %.
     for (int i = 0; i < kRuns; ++i) {
       v1::AnalysisReport report = kb::testing::NominalReport();
@@ -40,7 +46,6 @@ class UnitHistoryApiTest : public ServerTest {
       sigma->set_std_error(0.05 * sigma->value());
       StoreAnalysedRun(pool(), "INS-API-1", 7.0 * i, report);
     }
-    viewer_token_ = MakeToken(pool(), v1::VIEWER);
   }
 
   std::string viewer_token_;

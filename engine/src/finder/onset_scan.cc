@@ -128,7 +128,8 @@ OnsetFit FitTerm(const EffectTerm& term, const PairSums& sums, const EpochRun& r
   auto pair = [&](int theta) -> const AxisPair& {
     return sums[static_cast<size_t>(theta)][static_cast<size_t>(axis)];
   };
-  std::vector<double> T(static_cast<size_t>(last - first + 1), 0.0);
+  // A run too short for both sides of any onset has no candidate (last < first).
+  std::vector<double> T(static_cast<size_t>(std::max(0, last - first + 1)), 0.0);
   fit.identifiable = last >= first;
   for (int theta = first; theta <= last; ++theta) {
     const Eigen::Vector2d v = direction(theta);
