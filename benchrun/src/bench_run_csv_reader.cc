@@ -89,7 +89,7 @@ class CsvLocator final : public InputLocator {
   explicit CsvLocator(std::string_view source) : source_(source) { header_column_of_.fill(-1); }
 
   InputLocation OfSample(std::size_t sample_index, SampleField field) const override {
-    const int line_number = first_data_line_ + static_cast<int>(sample_index);
+    const int line_number = first_data_line_ + static_cast<int>(sample_index - first_sample_);
     InputLocation location{
         .source = source_, .line = line_number, .field = std::string(ColumnName(field))};
     LineReader lines(data_, first_data_line_);
@@ -143,9 +143,12 @@ class CsvLocator final : public InputLocator {
   bool HasColumn(SampleField field) const {
     return header_column_of_[static_cast<std::size_t>(field)] >= 0;
   }
-  void SetData(std::string_view data, int first_data_line) {
+  // The rows' text from line `first_data_line` on, whose first row holds
+  // sample `first_sample` (not 0 when rows are read as they arrive).
+  void SetData(std::string_view data, int first_data_line, std::size_t first_sample = 0) {
     data_ = data;
     first_data_line_ = first_data_line;
+    first_sample_ = first_sample;
   }
 
  private:
@@ -155,6 +158,7 @@ class CsvLocator final : public InputLocator {
   std::array<int, kSampleFieldCount> header_column_of_{};
   std::string_view data_;
   int first_data_line_ = 0;
+  std::size_t first_sample_ = 0;
 };
 
 class Parser {
@@ -164,7 +168,9 @@ class Parser {
                1),
         locator_(source_name) {}
 
-  absl::StatusOr<engine::BenchRun> Parse() {
+  // The metadata and header; the rows follow in the text (Parse) or arrive
+  // later (ReadArrivedRow).
+  absl::Status ParseHead() {
     std::optional<std::string_view> header;
     if (absl::Status status = ReadMetadata(header); !status.ok()) return status;
     if (absl::Status status = CheckRequiredKeys(header.has_value()); !status.ok()) return status;
@@ -176,8 +182,28 @@ class Parser {
     absl::StatusOr<BenchRunValidator> validator =
         BenchRunValidator::Create(run_.metadata, run_.has_temperature, locator_);
     if (!validator.ok()) return validator.status();
-    if (absl::Status status = ReadRows(*validator); !status.ok()) return status;
-    if (absl::Status status = validator->Finish(); !status.ok()) return status;
+    validator_.emplace(*std::move(validator));
+    return absl::OkStatus();
+  }
+
+  // One row, line `line_number` of the text, after ParseHead.
+  absl::Status ReadArrivedRow(std::string_view line, int line_number) {
+    lines_ = LineReader(line, line_number);
+    std::string_view row;
+    lines_.Next(row);
+    locator_.SetData(line, line_number, validator_->sample_count());
+    engine::ImuSample& sample = run_.samples.emplace_back();
+    if (absl::Status status = ReadRow(row, sample); !status.ok()) return status;
+    return validator_->Add(sample);
+  }
+
+  absl::Status FinishArrived() { return validator_->Finish(); }
+  engine::BenchRun& run() { return run_; }
+
+  absl::StatusOr<engine::BenchRun> Parse() {
+    if (absl::Status status = ParseHead(); !status.ok()) return status;
+    if (absl::Status status = ReadRows(*validator_); !status.ok()) return status;
+    if (absl::Status status = validator_->Finish(); !status.ok()) return status;
     return std::move(run_);
   }
 
@@ -425,6 +451,7 @@ class Parser {
   LineReader lines_;
   CsvLocator locator_;
   engine::BenchRun run_;
+  std::optional<BenchRunValidator> validator_;  // once the head is read
   std::vector<std::pair<std::string_view, int>> seen_keys_;  // metadata key, line
   std::vector<std::string_view> column_names_;               // header, in order
   std::vector<std::optional<SampleField>>
@@ -432,6 +459,54 @@ class Parser {
 };
 
 }  // namespace
+
+struct BenchRunLineStream::Reader {
+  Reader(std::string_view head, std::string_view source) : parser(head, source) {}
+  Parser parser;
+};
+
+BenchRunLineStream::BenchRunLineStream(std::string source_name) : source_(std::move(source_name)) {}
+BenchRunLineStream::~BenchRunLineStream() = default;
+
+absl::Status BenchRunLineStream::AddLine(std::string_view line) {
+  ++line_number_;
+  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  if (reader_ != nullptr) {
+    if (IsBlank(line)) return absl::OkStatus();  // the end may follow; rows after it are still checked
+    return reader_->parser.ReadArrivedRow(line, line_number_);
+  }
+  head_.append(line);
+  head_.push_back('\n');
+  const std::string_view text = line_number_ == 1 && line.starts_with(kUtf8ByteOrderMark)
+                                    ? line.substr(kUtf8ByteOrderMark.size())
+                                    : line;
+  if (IsBlank(text) || text.starts_with('#')) return absl::OkStatus();
+  // The header: the head is complete, and read once.
+  reader_ = std::make_unique<Reader>(head_, source_);
+  if (absl::Status status = reader_->parser.ParseHead(); !status.ok()) {
+    reader_.reset();
+    return status;
+  }
+  return absl::OkStatus();
+}
+
+const engine::BenchRun& BenchRunLineStream::run() const {
+  static const engine::BenchRun kNone;
+  return reader_ != nullptr ? reader_->parser.run() : kNone;
+}
+
+std::vector<engine::ImuSample> BenchRunLineStream::TakeSamples() {
+  if (reader_ == nullptr) return {};
+  std::vector<engine::ImuSample> taken;
+  taken.swap(reader_->parser.run().samples);
+  return taken;
+}
+
+absl::Status BenchRunLineStream::Finish() {
+  // Without a header the whole text is the head: its refusal is the reader's.
+  if (reader_ == nullptr) return ParseBenchRun(head_, source_).status();
+  return reader_->parser.FinishArrived();
+}
 
 absl::StatusOr<engine::BenchRun> ParseBenchRun(std::string_view text,
                                                std::string_view source_name) {

@@ -11,9 +11,8 @@
 #include "insdiag/engine/model/parameters.h"
 
 namespace insdiag::api {
-namespace {
 
-v1::AnalysisReport::Verdict VerdictOf(engine::Verdict v) {
+v1::AnalysisReport::Verdict ToProto(engine::Verdict v) {
   switch (v) {
     case engine::Verdict::kGood:
       return v1::AnalysisReport::GOOD;
@@ -24,6 +23,20 @@ v1::AnalysisReport::Verdict VerdictOf(engine::Verdict v) {
   }
   return v1::AnalysisReport::VERDICT_UNSPECIFIED;
 }
+
+v1::FaultInterval ToProto(const engine::FaultInterval& f) {
+  v1::FaultInterval out;
+  out.set_channel(f.channel);
+  out.set_start_s(f.start_s);
+  out.set_end_s(f.end_s);
+  out.set_kind(f.kind == engine::FaultKind::kOutlier  ? v1::FaultInterval::OUTLIER
+               : f.kind == engine::FaultKind::kAbrupt ? v1::FaultInterval::ABRUPT
+                                                      : v1::FaultInterval::GRADUAL);
+  out.set_peak_statistic(std::isfinite(f.peak_statistic) ? f.peak_statistic : 0.0);
+  return out;
+}
+
+namespace {
 
 // The API's enum names the methods as the engine does (MethodName).
 v1::IdentifiedParameter::Method MethodOf(const std::optional<engine::EstimationMethod>& method) {
@@ -284,23 +297,14 @@ v1::ErrorModel ToProto(const engine::ErrorModel& model) {
 
 v1::AnalysisReport ToProto(const engine::AnalysisReport& r, const engine::ErrorModel& model) {
   v1::AnalysisReport out;
-  out.set_verdict(VerdictOf(r.verdict));
+  out.set_verdict(ToProto(r.verdict));
   *out.mutable_model() = ToProto(model);
   for (const engine::ChannelFit& c : r.channels) Fill(c, out.add_channels());
   out.set_nis_mean(r.nis_mean);
   out.set_log_likelihood(r.log_likelihood);
   out.set_aic(r.aic);
   out.set_bic(r.bic);
-  for (const engine::FaultInterval& f : r.faults) {
-    v1::FaultInterval* fi = out.add_fault_intervals();
-    fi->set_channel(f.channel);
-    fi->set_start_s(f.start_s);
-    fi->set_end_s(f.end_s);
-    fi->set_kind(f.kind == engine::FaultKind::kOutlier  ? v1::FaultInterval::OUTLIER
-                 : f.kind == engine::FaultKind::kAbrupt ? v1::FaultInterval::ABRUPT
-                                                        : v1::FaultInterval::GRADUAL);
-    fi->set_peak_statistic(Finite(f.peak_statistic));
-  }
+  for (const engine::FaultInterval& f : r.faults) *out.add_fault_intervals() = ToProto(f);
   for (const auto& c : r.effect_candidates) Fill(c, out.add_effect_candidates());
   for (const auto& c : r.family_candidates) Fill(c, out.add_family_candidates());
   for (const engine::ParameterEstimate& p : r.identified) Fill(p, out.add_identified());

@@ -6,13 +6,12 @@
 #include <exception>
 
 #include "insdiag/api/report_codec.h"
-#include "insdiag/api/unit_types.h"
 #include "insdiag/engine/analysis.h"
 #include "insdiag/engine/model/parameters.h"
-#include "insdiag/kb/catalogue_store.h"
 #include "insdiag/kb/fleet_store.h"
 #include "insdiag/kb/run_store.h"
 #include "insdiag/server/server_log.h"
+#include "insdiag/server/unit_type_models.h"
 
 namespace insdiag::server {
 namespace {
@@ -167,17 +166,9 @@ std::string_view AnalysisWorkers::RunJobOutcome(const kb::ClaimedJob& job, const
       if (!identified.ok()) return identified.status();
       request.identified_base = *std::move(identified);
     }
-    if (!run.metadata.unit_type.empty()) {
-      kb::CatalogueStore catalogue(pool_);
-      auto unit_type = catalogue.GetUnitType(absl::StrCat("unitTypes/", run.metadata.unit_type));
-      if (unit_type.ok()) {
-        auto nominal = api::BaseModelOf(*unit_type);
-        if (nominal.ok()) request.nominal = std::move(*nominal);
-      } else if (unit_type.status().code() != absl::StatusCode::kNotFound &&
-                 unit_type.status().code() != absl::StatusCode::kInvalidArgument) {
-        return unit_type.status();
-      }
-    }
+    auto nominal = NominalModelOfUnitType(pool_, run.metadata.unit_type);
+    if (!nominal.ok()) return nominal.status();
+    request.nominal = *std::move(nominal);
     if (asked.parameters_size() > 0) {
       if (!request.nominal) request.nominal = engine::ErrorModel{};
       for (const auto& p : asked.parameters()) {

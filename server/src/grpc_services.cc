@@ -12,6 +12,7 @@ constexpr char kAnalysisService[] = "insdiag.v1.AnalysisService";
 constexpr char kKnowledgeService[] = "insdiag.v1.KnowledgeService";
 constexpr char kFleetService[] = "insdiag.v1.FleetService";
 constexpr char kAccessService[] = "insdiag.v1.AccessService";
+constexpr char kLiveRunService[] = "insdiag.v1.LiveRunService";
 
 std::string MethodName(const char* service, const char* method) { return absl::StrCat(service, ".", method); }
 
@@ -62,6 +63,40 @@ grpc::Status RunServiceGrpc::ReadRunSamples(grpc::ServerContext* context, const 
   }
   const absl::Status status =
       runs_.ReadRunSamples(*request, [&](const v1::SampleChunk& chunk) { return writer->Write(chunk); });
+  if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "the client went away");
+  return ToGrpcStatus(status);
+}
+
+grpc::Status LiveRunServiceGrpc::MonitorRun(grpc::ServerContext* context,
+                                            grpc::ServerReaderWriter<v1::LiveRun, v1::MonitorRunRequest>* stream) {
+  const std::string method = MethodName(kLiveRunService, "MonitorRun");
+  auto caller = guard_.Admit(*context, method);
+  if (!caller.ok()) return ToGrpcStatus(caller.status());
+  v1::LiveRun last;
+  const absl::Status status = live_.MonitorRun([&](v1::MonitorRunRequest& request) { return stream->Read(&request); },
+                                               [&](const v1::LiveRun& state) { return stream->Write(state); },
+                                               [&] { return context->IsCancelled(); }, last);
+  // The write the audit records is the stored run.
+  v1::Run stored;
+  stored.set_name(last.run());
+  guard_.Audit(*context, method, *caller, nullptr, status.ok() ? &stored : nullptr, status);
+  return ToGrpcStatus(status);
+}
+
+grpc::Status LiveRunServiceGrpc::ListLiveRuns(grpc::ServerContext* context, const v1::ListLiveRunsRequest* request,
+                                              v1::ListLiveRunsResponse* response) {
+  return guard_.Unary(*context, MethodName(kLiveRunService, "ListLiveRuns"), *request, response,
+                      [&](const v1::Caller&) { return live_.ListLiveRuns(*request); });
+}
+
+grpc::Status LiveRunServiceGrpc::WatchLiveRun(grpc::ServerContext* context, const v1::WatchLiveRunRequest* request,
+                                              grpc::ServerWriter<v1::LiveRun>* writer) {
+  if (auto caller = guard_.Admit(*context, MethodName(kLiveRunService, "WatchLiveRun")); !caller.ok()) {
+    return ToGrpcStatus(caller.status());
+  }
+  const absl::Status status = live_.WatchLiveRun(
+      *request, [&](const v1::LiveRun& state) { return writer->Write(state); },
+      [context] { return context->IsCancelled(); });
   if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "the client went away");
   return ToGrpcStatus(status);
 }

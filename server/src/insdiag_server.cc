@@ -42,7 +42,8 @@ struct InsdiagServer::Services {
         diagnosis_store(pool, options.read_pool), unit_history_store(pool, options.read_pool),
         knowledge(catalogue_store, failure_record_store, diagnosis_store, unit_history_store), knowledge_grpc(knowledge, guard),
         test_reports(analyses, runs, knowledge, TestReportService::Options{}), analyses_grpc(analyses, test_reports, guard),
-        fleet_store(options.read_pool != nullptr ? *options.read_pool : pool), fleet_grpc(fleet_store, guard), workers(pool, options.workers, &metrics) {}
+        fleet_store(options.read_pool != nullptr ? *options.read_pool : pool), fleet_grpc(fleet_store, guard),
+        live(runs, analyses, pool, LiveRunService::Options{}), live_grpc(live, guard), workers(pool, options.workers, &metrics) {}
   // What GET /metrics answers: the counters, then the queue and the pool as they are.
   std::string RenderMetrics() {
     Metrics::Gauges gauges;
@@ -79,6 +80,8 @@ struct InsdiagServer::Services {
   AnalysisServiceGrpc analyses_grpc;
   kb::FleetStore fleet_store;
   FleetServiceGrpc fleet_grpc;
+  LiveRunService live;
+  LiveRunServiceGrpc live_grpc;
   AnalysisWorkers workers;
 };
 
@@ -123,7 +126,7 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
 
   const std::vector<std::string> service_names = {"insdiag.v1.RunService", "insdiag.v1.AnalysisService",
                                                    "insdiag.v1.KnowledgeService", "insdiag.v1.FleetService",
-                                                   "insdiag.v1.AccessService"};
+                                                   "insdiag.v1.AccessService", "insdiag.v1.LiveRunService"};
   if (auto guarded = AccessGuard::CheckEveryMethodHasARule(service_names); !guarded.ok()) return guarded;
   if (!options.first_admin_token_file.empty()) {
     auto made = server->services_->access_store.CreateFirstAdminToken(options.first_admin_token_file);
@@ -153,6 +156,7 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
   builder.RegisterService(&server->services_->knowledge_grpc);
   builder.RegisterService(&server->services_->fleet_grpc);
   builder.RegisterService(&server->services_->access_grpc);
+  builder.RegisterService(&server->services_->live_grpc);
   server->grpc_ = builder.BuildAndStart();
   if (!server->grpc_ || server->grpc_port_ == 0) {
     return absl::UnavailableError(absl::StrCat("cannot serve gRPC on ", options.bind_address, ":", options.grpc_port));

@@ -25,12 +25,14 @@ HealthyInnovations DrawHealthyInnovations(int epochs, const StateLayout& layout,
   HealthyInnovations out;
   ForwardPass& fw = out.forward;
   fw.epoch_time_s.resize(static_cast<size_t>(epochs));
+  fw.epoch_start_s.resize(static_cast<size_t>(epochs));
   fw.z.resize(epochs, kChannelCount);
   fw.innovation.resize(epochs, kChannelCount);
   fw.innovation_variance.resize(epochs, kChannelCount);
   std::normal_distribution<double> standard;
   for (int k = 0; k < epochs; ++k) {
     fw.epoch_time_s[static_cast<size_t>(k)] = k + 1.0;
+    fw.epoch_start_s[static_cast<size_t>(k)] = k;
     for (int c = 0; c < kChannelCount; ++c) {
       const double variance = std::pow(10.0, -c);  // the channels' units differ
       fw.innovation_variance(k, c) = variance;

@@ -1,6 +1,7 @@
 #include "insdiag/engine/filter/epoch_run.h"
 
 #include <cmath>
+#include <memory>
 #include <numbers>
 #include <utility>
 
@@ -215,43 +216,44 @@ double EpochRun::BytesPerEpoch() const {
   return static_cast<double>(sizeof(EpochInterval)) + 8.0 * static_cast<double>(e.constants.size());
 }
 
-absl::StatusOr<EpochRun> CondenseRun(const BenchRun& run, const ErrorModel& pilot, double update_interval_s) {
-  if (!(update_interval_s > 0.0)) return absl::InvalidArgumentError("update interval must be positive");
-  if (run.samples.size() < 2) return absl::InvalidArgumentError("a bench run needs at least two samples");
-  if (auto st = ValidateErrorModel(pilot); !st.ok()) return st;
+// Everything the condensation carries from one sample to the next.
+struct RunCondenser::State {
+  State(const BenchRun& run_in, const ErrorModel& pilot_in, double update_interval_s, double nominal_interval_s,
+        FilterObserver* observer_in)
+      : run(run_in),
+        pilot(pilot_in),
+        layout(pilot),
+        out(Header(run_in, update_interval_s, nominal_interval_s)),
+        F(NavigationErrorMatrix(run_in.metadata.site, layout)),
+        nominal(DiscretiseNavigation(F, nominal_interval_s)),
+        irregular(nominal),
+        condenser(nominal, out.samples_per_epoch, static_cast<int>(out.constant_columns.size()),
+                  GroupByTerm(out.constant_columns)),
+        pilot_filter(pilot, layout, out),
+        motion(run_in),
+        observer(observer_in),
+        temperature0(run_in.samples[0].temp_degc) {
+    const auto per_epoch = static_cast<size_t>(out.samples_per_epoch);
+    out.epochs.reserve((run.samples.size() + per_epoch - 1) / per_epoch);
+    StartSegment(0);
+  }
 
-  EpochRun out;
-  out.site = run.metadata.site;
-  out.update_interval_s = update_interval_s;
-  out.sample_interval_s = run.NominalIntervalS();
-  out.samples = run.samples.size();
-  out.duration_s = run.DurationS();
-  out.constant_columns = AllConstantParameters();
-  const double dt_nominal = out.sample_interval_s;
-  const int samples_per_epoch = std::max(1, static_cast<int>(std::lround(update_interval_s / dt_nominal)));
-  out.samples_per_epoch = samples_per_epoch;
-  const Site& site = run.metadata.site;
-
-  const StateLayout layout(pilot);
-  const Matrix9d F = NavigationErrorMatrix(site, layout);
-  const NavigationDiscretisation nominal = DiscretiseNavigation(F, dt_nominal);
-  NavigationDiscretisation irregular = nominal;
-  IntervalCondenser condenser(nominal, samples_per_epoch, static_cast<int>(out.constant_columns.size()),
-                              GroupByTerm(out.constant_columns));
-  const size_t samples = run.samples.size();
-  out.epochs.reserve((samples - 1 + static_cast<size_t>(samples_per_epoch) - 1) / static_cast<size_t>(samples_per_epoch));
-
-  // The pilot's filter, stepped epoch by epoch beside the mechanisation.
-  EpochFilter pilot_filter(pilot, layout, out);
+  static EpochRun Header(const BenchRun& run, double update_interval_s, double nominal_interval_s) {
+    EpochRun out;
+    out.site = run.metadata.site;
+    out.update_interval_s = update_interval_s;
+    out.sample_interval_s = nominal_interval_s;
+    out.constant_columns = AllConstantParameters();
+    out.samples_per_epoch = std::max(1, static_cast<int>(std::lround(update_interval_s / nominal_interval_s)));
+    return out;
+  }
 
   // The mechanisation starts at a segment's first sample, at rest at the
   // site in the reference attitude; that sample's increment is not used
   // (for the run's first segment it precedes the start; for a later one it
   // covers the unrecorded move).
-  nav::NavState ins;
-  Eigen::Quaterniond q_ref_previous;
-  bool segment_starts = false;
-  const auto start_segment = [&](size_t k) {
+  void StartSegment(size_t k) {
+    const Site& site = run.metadata.site;
     ins = nav::NavState{};
     ins.q_b_n = Eigen::Quaterniond(nav::EulerToDcm(run.samples[k].ref_rpy_rad));
     ins.latitude_rad = site.latitude_rad;
@@ -259,17 +261,18 @@ absl::StatusOr<EpochRun> CondenseRun(const BenchRun& run, const ErrorModel& pilo
     ins.height_m = site.height_m;
     q_ref_previous = ins.q_b_n;
     condenser.Reset(run.samples[k].t_s);
-  };
-  nav::ReferenceMotion motion(run);
-  const double temperature0 = run.samples[0].temp_degc;
-  start_segment(0);
+  }
 
-  for (size_t k = 1; k < samples; ++k) {
+  // Sample k's interval into the current epoch; closes the epoch when it is
+  // full, the run ends (`run_complete` and k is last) or a segment starts next.
+  void Condense(size_t k, bool run_complete) {
     if (run.StartsSegment(k)) {
-      start_segment(k);
+      StartSegment(k);
       segment_starts = true;
-      continue;
+      return;
     }
+    const Site& site = run.metadata.site;
+    const double dt_nominal = out.sample_interval_s;
     const ImuSample& s = run.samples[k];
     const double t_prev = run.samples[k - 1].t_s;
     const double dt = s.t_s - t_prev;
@@ -290,7 +293,8 @@ absl::StatusOr<EpochRun> CondenseRun(const BenchRun& run, const ErrorModel& pilo
     inputs.yaw_rad = MidAngle(run.samples[k - 1].ref_rpy_rad.z(), s.ref_rpy_rad.z());
     condenser.AddSample(*disc, t_prev, nav::Midway(q_ref_previous, q_ref).toRotationMatrix(), inputs);
     q_ref_previous = q_ref;
-    if (condenser.samples() < samples_per_epoch && k + 1 < samples && !run.StartsSegment(k + 1)) continue;
+    const bool last = run_complete && k + 1 == run.samples.size();
+    if (condenser.samples() < out.samples_per_epoch && !last && !run.StartsSegment(k + 1)) return;
 
     EpochInterval& e = out.epochs.emplace_back();
     condenser.Finish(e);
@@ -299,13 +303,76 @@ absl::StatusOr<EpochRun> CondenseRun(const BenchRun& run, const ErrorModel& pilo
     e.sample = static_cast<int>(k);
     e.z = Observe(ins, site);
     e.C_b_n = q_ref.toRotationMatrix();
-    pilot_filter.Step(out.size() - 1, nullptr, nullptr);
+    pilot_filter.Step(out.size() - 1, nullptr, observer);
     e.feedback = pilot_filter.navigation_estimate();
     pilot_filter.ApplyFeedback(e.feedback);
     FeedBackNavigation(site, e.feedback, ins);
     condenser.Reset(s.t_s);
   }
-  return out;
+
+  const BenchRun& run;
+  const ErrorModel pilot;
+  const StateLayout layout;
+  EpochRun out;
+  const Matrix9d F;
+  const NavigationDiscretisation nominal;
+  NavigationDiscretisation irregular;
+  IntervalCondenser condenser;
+  EpochFilter pilot_filter;  // stepped epoch by epoch beside the mechanisation
+  nav::ReferenceMotion motion;
+  FilterObserver* observer;
+  const double temperature0;
+  nav::NavState ins;
+  Eigen::Quaterniond q_ref_previous;
+  bool segment_starts = false;
+  size_t next_sample = 1;
+};
+
+absl::StatusOr<std::unique_ptr<RunCondenser>> RunCondenser::Create(const BenchRun& run, const ErrorModel& pilot,
+                                                                   double update_interval_s,
+                                                                   double nominal_interval_s,
+                                                                   FilterObserver* pilot_observer) {
+  if (!(update_interval_s > 0.0)) return absl::InvalidArgumentError("update interval must be positive");
+  if (!(nominal_interval_s > 0.0)) return absl::InvalidArgumentError("nominal sample interval must be positive");
+  if (run.samples.size() < 2) return absl::InvalidArgumentError("a bench run needs at least two samples");
+  if (auto st = ValidateErrorModel(pilot); !st.ok()) return st;
+  return std::unique_ptr<RunCondenser>(new RunCondenser(
+      std::make_unique<State>(run, pilot, update_interval_s, nominal_interval_s, pilot_observer)));
+}
+
+RunCondenser::RunCondenser(std::unique_ptr<State> state) : state_(std::move(state)) {}
+RunCondenser::~RunCondenser() = default;
+
+int RunCondenser::CondenseUpTo(size_t end, bool run_complete) {
+  const int before = state_->out.size();
+  for (; state_->next_sample < end; ++state_->next_sample) state_->Condense(state_->next_sample, run_complete);
+  return state_->out.size() - before;
+}
+
+int RunCondenser::Advance() {
+  // The motion compensation of interval k reads the reference at k + 1 and k + 2.
+  const size_t arrived = state_->run.samples.size();
+  return CondenseUpTo(arrived > 2 ? arrived - 2 : 0, false);
+}
+
+int RunCondenser::Finish() {
+  const int epochs = CondenseUpTo(state_->run.samples.size(), true);
+  EpochRun& out = state_->out;
+  const BenchRun& run = state_->run;
+  out.samples = run.samples.size();
+  out.duration_s = run.samples.back().t_s - run.samples.front().t_s + out.sample_interval_s;
+  return epochs;
+}
+
+const EpochRun& RunCondenser::condensed() const { return state_->out; }
+
+EpochRun RunCondenser::TakeCondensed() { return std::move(state_->out); }
+
+absl::StatusOr<EpochRun> CondenseRun(const BenchRun& run, const ErrorModel& pilot, double update_interval_s) {
+  auto condenser = RunCondenser::Create(run, pilot, update_interval_s, run.NominalIntervalS());
+  if (!condenser.ok()) return condenser.status();
+  (*condenser)->Finish();
+  return (*condenser)->TakeCondensed();
 }
 
 }  // namespace insdiag::engine

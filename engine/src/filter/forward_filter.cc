@@ -145,9 +145,11 @@ absl::StatusOr<ForwardPass> RunForwardFilter(const EpochRun& run, const ErrorMod
   out.state_size = n;
   const auto K = static_cast<Eigen::Index>(run.epochs.size());
   out.epoch_time_s.reserve(run.epochs.size());
+  out.epoch_start_s.reserve(run.epochs.size());
   out.epoch_sample.reserve(run.epochs.size());
   for (const EpochInterval& e : run.epochs) {
     out.epoch_time_s.push_back(e.time_s);
+    out.epoch_start_s.push_back(e.start_s);
     out.epoch_sample.push_back(e.sample);
   }
   out.z.resize(K, kChannelCount);

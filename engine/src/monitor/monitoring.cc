@@ -4,7 +4,9 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <tuple>
 
+#include "insdiag/engine/monitor/innovation_tests.h"
 #include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::engine {
@@ -27,6 +29,26 @@ void AddInterval(std::vector<FaultInterval>& faults, const std::string& channel,
 }
 
 }  // namespace
+
+void SortFaultIntervals(std::vector<FaultInterval>& faults) {
+  std::stable_sort(faults.begin(), faults.end(),
+                   [](const FaultInterval& a, const FaultInterval& b) { return a.start_s < b.start_s; });
+}
+
+std::pair<double, double> MeanNisBand(int updates, double family_wise_alpha) {
+  if (updates <= 0) return {0.0, 0.0};
+  // The NIS is one of the verdict's three families of tests (InnovationTests).
+  const double alpha = family_wise_alpha / 3.0;
+  // Mean of `updates` χ²(1) values: N·mean ~ χ²(N).
+  return {stats::ChiSquareQuantile(alpha / 2.0, updates) / updates,
+          stats::ChiSquareQuantile(1.0 - alpha / 2.0, updates) / updates};
+}
+
+Verdict VerdictOf(bool gradual_failure, bool any_interval, bool nis_outside_band) {
+  if (gradual_failure) return Verdict::kFaulty;
+  if (any_interval || nis_outside_band) return Verdict::kOperable;
+  return Verdict::kGood;
+}
 
 const char* VerdictName(Verdict v) {
   switch (v) {
@@ -52,55 +74,27 @@ const char* FaultKindName(FaultKind k) {
   return "GRADUAL";
 }
 
-namespace {
-
-// The (1 − p) quantile of χ²_ν/ν, for the effective ν of a window.
-double GradualThreshold(double p, double effective_dof) {
-  return stats::ChiSquareQuantile(1.0 - p, effective_dof) / effective_dof;
-}
-
-// How many tests a window of W updates moved over K updates counts as, for a
-// family-wise level `alpha` of its maximum. Neighbouring windows overlap, so
-// there are fewer than K − W + 1 tests, but far more than the K/W disjoint
-// ones: the standardised moving sum has correlation 1 − |d|/W at lag d, and
-// for such a process P(max > u) ≈ (K/W)·u²·(1 − Φ(u)) (Pickands, Trans. AMS
-// 145, 1969; Leadbetter, Lindgren & Rootzén, Extremes, 1983, §12.2). The
-// count (K/W)·u², with u the per-test level's normal quantile, is solved by
-// fixed point. Checked by simulation of χ²₁ sequences (K 600–20000, W
-// 10–100): family-wise rate 0.3–0.6 α where K/W disjoint windows gave 5–9 α.
-double ScanTestCount(int K, int W, double alpha) {
-  const double disjoint = std::max(1.0, static_cast<double>(K) / W);
-  const double positions = std::max(1.0, static_cast<double>(K - W + 1));
-  double count = disjoint;
-  for (int i = 0; i < 20; ++i) {
-    const double u = stats::NormalQuantile(1.0 - alpha / count);
-    count = std::clamp(disjoint * u * u, disjoint, positions);
-  }
-  return count;
-}
-
-}  // namespace
-
 MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const StateLayout& layout,
                       const std::vector<SampleOutlier>& spikes, const MonitorOptions& options) {
   MonitorResult out;
   const int K = fw.epochs();
-  // The verdict rests on three families of tests (outliers, gradual failures,
-  // the mean NIS); Bonferroni's split keeps a healthy unit GOOD with
-  // probability ≥ 1 − family_wise_alpha.
-  const double alpha = options.family_wise_alpha / 3.0;
-  out.gamma2 = 1.0 + 3.0 * std::numbers::sqrt2;
   const double epoch_interval = K > 1 ? (fw.epoch_time_s.back() - fw.epoch_time_s.front()) / (K - 1) : 1.0;
-  const int W = std::clamp(static_cast<int>(std::lround(options.window_s / epoch_interval)), 2, std::max(2, K));
-  out.window_updates = W;
-  out.eta2 = 1.0 + 3.0 * std::sqrt(2.0 / W);  // a + 3√(2b), a = 1, b = 1/W
-  // Family-wise thresholds (Bonferroni over the run's updates, or over the
-  // tests the moving window amounts to).
-  const double outlier_threshold = stats::ChiSquareQuantile(1.0 - alpha / (kChannelCount * std::max(K, 1)), 1.0);
-  const double window_alpha = alpha / (kChannelCount * ScanTestCount(K, W, alpha / kChannelCount));
-  const double gradual_threshold = stats::ChiSquareQuantile(1.0 - window_alpha, W) / W;
+  InnovationTests tests(K, epoch_interval, options);
+  out.gamma2 = tests.gamma2();
+  out.eta2 = tests.eta2();
+  out.window_updates = tests.window_updates();
+  out.window_ratio.resize(K, kChannelCount);
+  InnovationTests::PerChannel nu, S;
+  for (int k = 0; k < K; ++k) {
+    for (int c = 0; c < kChannelCount; ++c) {
+      nu[static_cast<size_t>(c)] = fw.innovation(k, c);
+      S[static_cast<size_t>(c)] = fw.innovation_variance(k, c);
+    }
+    tests.Add(fw.epoch_start_s[static_cast<size_t>(k)], fw.epoch_time_s[static_cast<size_t>(k)], nu, S);
+    for (int c = 0; c < kChannelCount; ++c) out.window_ratio(k, c) = tests.window_ratio()[static_cast<size_t>(c)];
+  }
+  out.faults = tests.faults();
 
-  out.window_ratio = Eigen::MatrixXd::Constant(K, kChannelCount, std::numeric_limits<double>::quiet_NaN());
   std::vector<double> normalised(static_cast<size_t>(K));
   double nis_total = 0.0;
   for (int c = 0; c < kChannelCount; ++c) {
@@ -109,56 +103,23 @@ MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const State
     fit.unit = std::string(kChannelUnits[static_cast<size_t>(c)]);
     fit.count = K;
     double nu2 = 0.0, nis = 0.0, z_mean = 0.0;
-    int over_gamma = 0, windows = 0, over_eta = 0;
-    double window_nu2 = 0.0, window_s = 0.0, window_s2 = 0.0;
     for (int k = 0; k < K; ++k) z_mean += fw.z(k, c) / K;
     double z_spread = 0.0;
     for (int k = 0; k < K; ++k) {
-      const double nu = fw.innovation(k, c);
-      const double S = fw.innovation_variance(k, c);
-      const double beta2 = nu * nu / S;
-      nu2 += nu * nu;
-      nis += beta2;
+      const double innovation = fw.innovation(k, c);
+      const double variance = fw.innovation_variance(k, c);
+      nu2 += innovation * innovation;
+      nis += innovation * innovation / variance;
       z_spread += (fw.z(k, c) - z_mean) * (fw.z(k, c) - z_mean);
-      normalised[static_cast<size_t>(k)] = nu / std::sqrt(S);
-      if (beta2 > out.gamma2) ++over_gamma;
-      const double t_prev = k > 0 ? fw.epoch_time_s[static_cast<size_t>(k - 1)] : fw.epoch_time_s[0] - epoch_interval;
-      if (beta2 > outlier_threshold) {
-        AddInterval(out.faults, fit.name, t_prev, fw.epoch_time_s[static_cast<size_t>(k)], FaultKind::kOutlier, beta2,
-                    epoch_interval);
-      }
-      window_nu2 += nu * nu;
-      window_s += S;
-      window_s2 += S * S;
-      if (k >= W) {
-        const double S_old = fw.innovation_variance(k - W, c);
-        window_nu2 -= fw.innovation(k - W, c) * fw.innovation(k - W, c);
-        window_s -= S_old;
-        window_s2 -= S_old * S_old;
-      }
-      if (k >= W - 1) {
-        const double F = window_nu2 / window_s;
-        out.window_ratio(k, c) = F;
-        ++windows;
-        if (F > out.eta2) ++over_eta;
-        // F = Σν²/ΣS weighs each β² by its S: where S changes within the
-        // window (the filter's start-up) it is a weighted sum of χ²₁ with
-        // ν = (ΣS)²/ΣS² ≤ W effective degrees of freedom (Satterthwaite,
-        // Biometrics Bull. 2(6), 1946), and its quantile is higher than
-        // χ²_W/W's; checked only past the cheaper W-dof threshold.
-        if (F > gradual_threshold &&
-            F > GradualThreshold(window_alpha, window_s * window_s / window_s2)) {
-          AddInterval(out.faults, fit.name, fw.epoch_time_s[static_cast<size_t>(k - W + 1)] - epoch_interval,
-                      fw.epoch_time_s[static_cast<size_t>(k)], FaultKind::kGradual, F, epoch_interval);
-        }
-      }
+      normalised[static_cast<size_t>(k)] = innovation / std::sqrt(variance);
     }
     fit.rms = K > 0 ? std::sqrt(nu2 / K) : 0.0;
     fit.fit_percent = z_spread > 0.0 ? 100.0 * (1.0 - std::sqrt(nu2 / z_spread)) : 0.0;
     fit.nis_mean = K > 0 ? nis / K : 0.0;
     fit.whiteness_p_value = stats::LjungBoxPValue(normalised, std::min(options.whiteness_lags, K / 5));
-    fit.fraction_over_gamma2 = K > 0 ? static_cast<double>(over_gamma) / K : 0.0;
-    fit.fraction_over_eta2 = windows > 0 ? static_cast<double>(over_eta) / windows : 0.0;
+    fit.fraction_over_gamma2 = K > 0 ? static_cast<double>(tests.over_gamma2(c)) / K : 0.0;
+    fit.fraction_over_eta2 =
+        tests.windows() > 0 ? static_cast<double>(tests.over_eta2(c)) / tests.windows() : 0.0;
     nis_total += nis;
     out.channels.push_back(std::move(fit));
   }
@@ -166,14 +127,11 @@ MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const State
     AddInterval(out.faults, std::string(kSensorChannelNames[s.sensor_channel]), s.time_s, s.time_s,
                 FaultKind::kOutlier, s.robust_z, 0.0);
   }
-  std::sort(out.faults.begin(), out.faults.end(),
-            [](const FaultInterval& a, const FaultInterval& b) { return a.start_s < b.start_s; });
+  SortFaultIntervals(out.faults);
 
   const int updates = fw.scalar_updates;
   out.nis_mean = updates > 0 ? nis_total / updates : 0.0;
-  // Mean of `updates` χ²(1) values: N·mean ~ χ²(N).
-  out.nis_band_low = updates > 0 ? stats::ChiSquareQuantile(alpha / 2.0, updates) / updates : 0.0;
-  out.nis_band_high = updates > 0 ? stats::ChiSquareQuantile(1.0 - alpha / 2.0, updates) / updates : 0.0;
+  std::tie(out.nis_band_low, out.nis_band_high) = MeanNisBand(updates, options.family_wise_alpha);
 
   // The seed's forward/backward discrepancy: sensor states whose estimates from
   // past and future data disagree beyond chance.
@@ -213,13 +171,7 @@ MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const State
   const bool gradual = std::any_of(out.faults.begin(), out.faults.end(),
                                    [](const FaultInterval& f) { return f.kind == FaultKind::kGradual; });
   const bool nis_off = out.nis_mean < out.nis_band_low || out.nis_mean > out.nis_band_high;
-  if (gradual) {
-    out.verdict = Verdict::kFaulty;
-  } else if (!out.faults.empty() || nis_off) {
-    out.verdict = Verdict::kOperable;
-  } else {
-    out.verdict = Verdict::kGood;
-  }
+  out.verdict = VerdictOf(gradual, !out.faults.empty(), nis_off);
   return out;
 }
 

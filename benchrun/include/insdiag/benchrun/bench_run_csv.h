@@ -33,8 +33,10 @@
 #include <absl/status/statusor.h>
 
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "insdiag/benchrun/bench_run_validation.h"  // InputLocation, LocationOf, ValidateBenchRun
 #include "insdiag/engine/bench_run.h"
@@ -43,6 +45,34 @@ namespace insdiag::benchrun {
 
 // Parses a whole bench-run CSV text. `source_name` names the input in errors.
 absl::StatusOr<engine::BenchRun> ParseBenchRun(std::string_view text, std::string_view source_name);
+
+// A bench-run text read as it is written (a test being recorded): the
+// metadata and header first, then rows, each refused or accepted as its line
+// arrives, by ParseBenchRun's rules; Finish applies the rules of the whole
+// run. Blank lines among the rows are passed over.
+class BenchRunLineStream {
+ public:
+  explicit BenchRunLineStream(std::string source_name);
+  ~BenchRunLineStream();
+
+  // The next line, without its line break.
+  absl::Status AddLine(std::string_view line);
+  // The header has been read: run()'s metadata and has_temperature hold.
+  bool started() const { return reader_ != nullptr; }
+  // The metadata, and the samples not taken yet.
+  const engine::BenchRun& run() const;
+  // The samples accepted since the last call.
+  std::vector<engine::ImuSample> TakeSamples();
+  // The text has ended.
+  absl::Status Finish();
+
+ private:
+  struct Reader;
+  std::string source_;
+  std::string head_;  // the metadata and header lines, which the reader's names point into
+  int line_number_ = 0;
+  std::unique_ptr<Reader> reader_;
+};
 
 // Reads and parses a file; errors name the file's path.
 absl::StatusOr<engine::BenchRun> ReadBenchRunFile(const std::filesystem::path& path);

@@ -14,6 +14,8 @@ namespace insdiag::api {
 
 v1::AnalysisReport ToProto(const engine::AnalysisReport& report, const engine::ErrorModel& model);
 v1::ErrorModel ToProto(const engine::ErrorModel& model);
+v1::AnalysisReport::Verdict ToProto(engine::Verdict verdict);
+v1::FaultInterval ToProto(const engine::FaultInterval& interval);  // a non-finite statistic as 0
 
 // The model a report was computed with, as that analysis identified it, and
 // the parameters it identified: what a later analysis of the same run starts

@@ -6,12 +6,14 @@
 #include "insdiag/kb/fleet_store.h"
 #include "insdiag/server/access_guard.h"
 #include "insdiag/server/kb_services.h"
+#include "insdiag/server/live_run_service.h"
 #include "insdiag/server/run_service.h"
 #include "insdiag/server/test_report_service.h"
 #include "insdiag/v1/access.grpc.pb.h"
 #include "insdiag/v1/analyses.grpc.pb.h"
 #include "insdiag/v1/fleet.grpc.pb.h"
 #include "insdiag/v1/knowledge.grpc.pb.h"
+#include "insdiag/v1/live.grpc.pb.h"
 #include "insdiag/v1/runs.grpc.pb.h"
 
 namespace insdiag::server {
@@ -33,6 +35,22 @@ class RunServiceGrpc final : public v1::RunService::Service {
 
  private:
   RunService& runs_;
+  AccessGuard& guard_;
+};
+
+class LiveRunServiceGrpc final : public v1::LiveRunService::Service {
+ public:
+  LiveRunServiceGrpc(LiveRunService& live, AccessGuard& guard) : live_(live), guard_(guard) {}
+
+  grpc::Status MonitorRun(grpc::ServerContext* context,
+                          grpc::ServerReaderWriter<v1::LiveRun, v1::MonitorRunRequest>* stream) override;
+  grpc::Status ListLiveRuns(grpc::ServerContext* context, const v1::ListLiveRunsRequest* request,
+                            v1::ListLiveRunsResponse* response) override;
+  grpc::Status WatchLiveRun(grpc::ServerContext* context, const v1::WatchLiveRunRequest* request,
+                            grpc::ServerWriter<v1::LiveRun>* writer) override;
+
+ private:
+  LiveRunService& live_;
   AccessGuard& guard_;
 };
 

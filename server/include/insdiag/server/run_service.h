@@ -42,6 +42,8 @@ class RunService {
     // Checks completeness, validity and the digest, then stores the run in
     // one transaction.
     absl::StatusOr<v1::Run> Finish();
+    // UploadAssembler::received.
+    const engine::BenchRun& received() const { return assembler_.received(); }
 
    private:
     friend class RunService;

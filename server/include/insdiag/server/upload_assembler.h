@@ -38,6 +38,10 @@ class UploadAssembler {
   // whole is invalid.
   absl::StatusOr<AssembledUpload> Finish();
 
+  // The run as received so far: the metadata and the samples accepted. Its
+  // samples grow with each chunk; Finish moves it out.
+  const engine::BenchRun& received() const { return run_; }
+
  private:
   absl::Status AcceptMetadata(const v1::RunMetadata& metadata);
   absl::Status AcceptSamples(const v1::SampleChunk& chunk);

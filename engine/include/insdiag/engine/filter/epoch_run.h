@@ -47,6 +47,7 @@
 #include <absl/status/statusor.h>
 
 #include <array>
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
@@ -113,6 +114,44 @@ struct EpochRun {
 // Condenses `run` with `pilot` correcting the mechanisation. Needs at least
 // two samples and a valid model (σ ≥ 0, τ > 0 where σ > 0).
 absl::StatusOr<EpochRun> CondenseRun(const BenchRun& run, const ErrorModel& pilot, double update_interval_s);
+
+class FilterObserver;
+
+// The condensation of a run whose samples may still be arriving (a test
+// being recorded): CondenseRun is this over a complete run. Advance condenses
+// every sample whose interval's motion compensation has the samples it reads
+// (the two after it, nav/table_motion.h), so that each epoch comes out exactly
+// as CondenseRun makes it from the whole run; Finish condenses the rest once
+// the run is complete. The pilot's filter, stepped at each epoch, is the
+// model's own forward pass (forward_filter.h): `pilot_observer` sees its
+// updates as they happen.
+class RunCondenser {
+ public:
+  // `run` must hold at least two samples and outlive the condenser; its
+  // samples may be appended to between calls, its metadata must not change.
+  // `nominal_interval_s`: the run's nominal Δt (BenchRun::NominalIntervalS
+  // of the complete run, or of the samples so far while it arrives).
+  static absl::StatusOr<std::unique_ptr<RunCondenser>> Create(const BenchRun& run, const ErrorModel& pilot,
+                                                              double update_interval_s, double nominal_interval_s,
+                                                              FilterObserver* pilot_observer = nullptr);
+  ~RunCondenser();
+
+  // Condenses what the samples so far allow; returns the epochs completed by this call.
+  int Advance();
+  // The run is complete: condenses its remaining samples (the last epoch may be short).
+  int Finish();
+
+  const EpochRun& condensed() const;
+  // The condensed run, once finished; the condenser is spent.
+  EpochRun TakeCondensed();
+
+ private:
+  struct State;
+  explicit RunCondenser(std::unique_ptr<State> state);
+  int CondenseUpTo(size_t end, bool run_complete);
+
+  std::unique_ptr<State> state_;
+};
 
 // A packed symmetric 9×9 (upper triangle, row by row) unpacked, and back.
 Matrix9d Unpack9(const PackedSymmetric9d& packed);

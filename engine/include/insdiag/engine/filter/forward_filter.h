@@ -79,6 +79,7 @@ struct ForwardPass {
   int state_size = 0;
   // Epoch k: the update at time epoch_time_s[k] (k = 0 … K−1).
   std::vector<double> epoch_time_s;
+  std::vector<double> epoch_start_s;  // the start of the epoch's update interval
   std::vector<int> epoch_sample;  // index of the run's sample at each epoch
   Eigen::MatrixXd z;                    // K × 6 observations
   Eigen::MatrixXd innovation;           // K × 6 ν

@@ -26,6 +26,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -102,6 +103,14 @@ struct MonitorResult {
 
 MonitorResult Monitor(const ForwardPass& forward, const SmoothedPass& smoothed, const StateLayout& layout,
                       const std::vector<SampleOutlier>& spikes, const MonitorOptions& options);
+
+// The two-sided band of the mean NIS of `updates` scalar updates at the
+// verdict's share of the family-wise level.
+std::pair<double, double> MeanNisBand(int updates, double family_wise_alpha);
+// The verdict rule (above).
+Verdict VerdictOf(bool gradual_failure, bool any_interval, bool nis_outside_band);
+// In time order of their starts; intervals that start together keep their order.
+void SortFaultIntervals(std::vector<FaultInterval>& faults);
 
 const char* VerdictName(Verdict v);
 const char* FaultKindName(FaultKind k);

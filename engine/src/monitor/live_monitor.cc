@@ -1,0 +1,96 @@
+#include "insdiag/engine/monitor/live_monitor.h"
+
+#include <algorithm>
+#include <cmath>
+#include <tuple>
+#include <vector>
+
+namespace insdiag::engine {
+
+absl::Status LiveMonitorOptions::Validate() const {
+  if (!(update_interval_s > 0.0)) return absl::InvalidArgumentError("update interval must be positive");
+  if (!(planned_duration_s > 0.0)) return absl::InvalidArgumentError("the planned duration must be positive");
+  if (nominal_interval_samples < 1) return absl::InvalidArgumentError("nominal_interval_samples must be ≥ 1");
+  return absl::OkStatus();
+}
+
+absl::StatusOr<std::unique_ptr<LiveMonitor>> LiveMonitor::Create(const BenchRun& run, const ErrorModel& model,
+                                                                  const LiveMonitorOptions& options) {
+  if (auto st = options.Validate(); !st.ok()) return st;
+  if (auto st = ValidateErrorModel(model); !st.ok()) return st;
+  return std::unique_ptr<LiveMonitor>(new LiveMonitor(run, model, options));
+}
+
+LiveMonitor::LiveMonitor(const BenchRun& run, const ErrorModel& model, const LiveMonitorOptions& options)
+    : run_(run), model_(model), options_(options) {}
+
+absl::Status LiveMonitor::StartCondensing() {
+  const auto intervals = std::min(run_.samples.size() - 1, static_cast<size_t>(options_.nominal_interval_samples));
+  std::vector<double> dt(intervals);
+  for (size_t k = 0; k < intervals; ++k) dt[k] = run_.samples[k + 1].t_s - run_.samples[k].t_s;
+  std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(intervals / 2), dt.end());
+  const double nominal_interval_s = dt[intervals / 2];
+  auto condenser = RunCondenser::Create(run_, model_, options_.update_interval_s, nominal_interval_s, this);
+  if (!condenser.ok()) return condenser.status();
+  condenser_ = *std::move(condenser);
+  const double epoch_interval_s = condenser_->condensed().samples_per_epoch * nominal_interval_s;
+  planned_epochs_ = std::max(1, static_cast<int>(std::ceil(options_.planned_duration_s / epoch_interval_s - 1e-9)));
+  tests_.emplace(planned_epochs_, epoch_interval_s, options_.monitor);
+  return absl::OkStatus();
+}
+
+absl::StatusOr<int> LiveMonitor::Advance() {
+  if (condenser_ == nullptr) {
+    if (run_.samples.size() <= static_cast<size_t>(options_.nominal_interval_samples)) return 0;
+    if (auto st = StartCondensing(); !st.ok()) return st;
+  }
+  return condenser_->Advance();
+}
+
+absl::StatusOr<int> LiveMonitor::Finish() {
+  if (condenser_ == nullptr) {
+    if (run_.samples.size() < 2) return absl::InvalidArgumentError("a bench run needs at least two samples");
+    if (auto st = StartCondensing(); !st.ok()) return st;
+  }
+  return condenser_->Finish();
+}
+
+void LiveMonitor::OnPrediction(int /*index*/, const EpochInterval& epoch, const IntervalTransition& /*transition*/) {
+  epoch_start_s_ = epoch.start_s;
+  epoch_time_s_ = epoch.time_s;
+}
+
+void LiveMonitor::OnScalarUpdate(int channel, const ObservationRow& /*h*/, const Eigen::VectorXd& /*gain*/,
+                                 double innovation, double innovation_variance) {
+  innovation_[static_cast<size_t>(channel)] = innovation;
+  innovation_variance_[static_cast<size_t>(channel)] = innovation_variance;
+  nis_sum_ += innovation * innovation / innovation_variance;
+  ++updates_;
+  // The channels are processed in order; the last closes the epoch.
+  if (channel == kChannelCount - 1) tests_->Add(epoch_start_s_, epoch_time_s_, innovation_, innovation_variance_);
+}
+
+LiveStatus LiveMonitor::Status() const {
+  LiveStatus out;
+  out.samples = run_.samples.size();
+  out.planned_epochs = planned_epochs_;
+  if (!tests_) return out;
+  const InnovationTests& tests = *tests_;
+  out.epochs = tests.epochs();
+  out.time_s = epoch_time_s_;
+  out.beta2 = tests.beta2();
+  out.window_ratio = tests.window_ratio();
+  out.faults = tests.faults();
+  SortFaultIntervals(out.faults);
+  out.nis_mean = updates_ > 0 ? nis_sum_ / updates_ : 0.0;
+  std::tie(out.nis_band_low, out.nis_band_high) = MeanNisBand(updates_, options_.monitor.family_wise_alpha);
+  out.gamma2 = tests.gamma2();
+  out.eta2 = tests.eta2();
+  out.outlier_threshold = tests.outlier_threshold();
+  out.gradual_threshold = tests.gradual_threshold();
+  const bool nis_off = updates_ > 0 && (out.nis_mean < out.nis_band_low || out.nis_mean > out.nis_band_high);
+  out.verdict = VerdictOf(tests.gradual_found(), !out.faults.empty(), nis_off);
+  return out;
+}
+
+}  // namespace insdiag::engine
