@@ -137,11 +137,16 @@ absl::Status LiveRunService::MonitorRun(absl::FunctionRef<bool(v1::MonitorRunReq
     auto epochs = live.Advance();
     if (!epochs.ok()) {
       status = epochs.status();
-    } else if (*epochs > 0) {
+      continue;
+    }
+    if (*epochs > 0) {
       Fill(live.Status(), state);
       Publish(*session, state, false);
-      if (client_listens) client_listens = send(state);
+    } else {
+      state.set_sample_count(run.samples.size());
     }
+    // Every chunk is answered: the client paces itself by the answers.
+    if (client_listens) client_listens = send(state);
   }
   // Read() also ends when the client cancels or the connection drops: such
   // a test is not finished and stores nothing.

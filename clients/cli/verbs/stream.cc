@@ -20,6 +20,8 @@
 #include <atomic>
 #include <cerrno>
 #include <chrono>
+#include <condition_variable>
+#include <limits>
 #include <cmath>
 #include <cstring>
 #include <mutex>
@@ -259,14 +261,24 @@ class StreamVerb final : public Verb {
     request.clear_planned_duration_s();
 
     LivePrinter printer(out, json_);
-    v1::LiveRun last;
+    // The server answers every chunk; a few chunks in flight keep a source
+    // read faster than real time (a file) from running ahead of the monitor,
+    // so that --stop-when-faulty stops near the failure.
+    std::mutex pace;
+    std::condition_variable answered;
+    long chunks_sent = 0, answers_read = -1;  // the first answer precedes any chunk
     std::thread answers([&] {
       v1::LiveRun live;
       while (call->Read(&live)) {
         printer.Print(live);
         if (stop_when_faulty_ && live.verdict() == v1::AnalysisReport::FAULTY) stop = true;
-        last = live;
+        std::lock_guard lock(pace);
+        ++answers_read;
+        answered.notify_all();
       }
+      std::lock_guard lock(pace);
+      answers_read = std::numeric_limits<long>::max();  // the call has ended
+      answered.notify_all();
     });
 
     api::SampleDigest digest(text.run().has_temperature);
@@ -275,10 +287,16 @@ class StreamVerb final : public Verb {
     bool writing = true;
     const auto flush = [&] {
       if (chunk.samples_size() == 0 || !writing) return;
+      {
+        std::unique_lock lock(pace);
+        answered.wait(lock, [&] { return chunks_sent - answers_read < kChunksInFlight; });
+      }
       *request.mutable_upload()->mutable_samples() = chunk;
       writing = call->Write(request);
       chunk.Clear();
       sent_at = Clock::now();
+      std::lock_guard lock(pace);
+      ++chunks_sent;
     };
     absl::Status refused;
     while (writing && !stop.load() && lines.Next(line, stop)) {
@@ -287,8 +305,12 @@ class StreamVerb final : public Verb {
         digest.Add(sample);
         *chunk.add_samples() = api::ToProto(sample);
       }
-      // Small chunks keep the monitor close behind the bench.
-      if (chunk.samples_size() >= kChunkSamples || Clock::now() - sent_at > kChunkAge) flush();
+      // Chunks of one update interval keep the monitor an epoch behind the
+      // bench, however fast the source is read.
+      const int n = chunk.samples_size();
+      if (n > 0 && (chunk.samples(n - 1).t() - chunk.samples(0).t() >= kChunkRunTimeS || Clock::now() - sent_at > kChunkAge)) {
+        flush();
+      }
     }
     if (refused.ok() && !stop.load()) refused = text.Finish();
     if (!refused.ok()) {
@@ -312,7 +334,8 @@ class StreamVerb final : public Verb {
     return kExitOk;
   }
 
-  static constexpr int kChunkSamples = 2000;
+  static constexpr double kChunkRunTimeS = 1.0;  // the server monitor's update interval
+  static constexpr long kChunksInFlight = 4;
   static constexpr std::chrono::milliseconds kChunkAge{200};
 
   std::vector<std::string> source_;

@@ -5,6 +5,8 @@
 #include <tuple>
 #include <vector>
 
+#include "insdiag/engine/model/state_layout.h"
+
 namespace insdiag::engine {
 
 absl::Status LiveMonitorOptions::Validate() const {
@@ -36,6 +38,7 @@ absl::Status LiveMonitor::StartCondensing() {
   const double epoch_interval_s = condenser_->condensed().samples_per_epoch * nominal_interval_s;
   planned_epochs_ = std::max(1, static_cast<int>(std::ceil(options_.planned_duration_s / epoch_interval_s - 1e-9)));
   tests_.emplace(planned_epochs_, epoch_interval_s, options_.monitor);
+  steps_.emplace(StateLayout(model_).size(), planned_epochs_, epoch_interval_s, options_.steps);
   return absl::OkStatus();
 }
 
@@ -55,19 +58,24 @@ absl::StatusOr<int> LiveMonitor::Finish() {
   return condenser_->Finish();
 }
 
-void LiveMonitor::OnPrediction(int /*index*/, const EpochInterval& epoch, const IntervalTransition& /*transition*/) {
+void LiveMonitor::OnPrediction(int /*index*/, const EpochInterval& epoch, const IntervalTransition& transition) {
+  steps_->OnPrediction(epoch, transition);
   epoch_start_s_ = epoch.start_s;
   epoch_time_s_ = epoch.time_s;
 }
 
-void LiveMonitor::OnScalarUpdate(int channel, const ObservationRow& /*h*/, const Eigen::VectorXd& /*gain*/,
+void LiveMonitor::OnScalarUpdate(int channel, const ObservationRow& h, const Eigen::VectorXd& gain,
                                  double innovation, double innovation_variance) {
+  steps_->OnScalarUpdate(h, gain, innovation, innovation_variance);
   innovation_[static_cast<size_t>(channel)] = innovation;
   innovation_variance_[static_cast<size_t>(channel)] = innovation_variance;
   nis_sum_ += innovation * innovation / innovation_variance;
   ++updates_;
   // The channels are processed in order; the last closes the epoch.
-  if (channel == kChannelCount - 1) tests_->Add(epoch_start_s_, epoch_time_s_, innovation_, innovation_variance_);
+  if (channel == kChannelCount - 1) {
+    tests_->Add(epoch_start_s_, epoch_time_s_, innovation_, innovation_variance_);
+    steps_->CloseEpoch(epoch_time_s_);
+  }
 }
 
 LiveStatus LiveMonitor::Status() const {
@@ -81,6 +89,7 @@ LiveStatus LiveMonitor::Status() const {
   out.beta2 = tests.beta2();
   out.window_ratio = tests.window_ratio();
   out.faults = tests.faults();
+  out.faults.insert(out.faults.end(), steps_->steps().begin(), steps_->steps().end());
   SortFaultIntervals(out.faults);
   out.nis_mean = updates_ > 0 ? nis_sum_ / updates_ : 0.0;
   std::tie(out.nis_band_low, out.nis_band_high) = MeanNisBand(updates_, options_.monitor.family_wise_alpha);
@@ -88,8 +97,10 @@ LiveStatus LiveMonitor::Status() const {
   out.eta2 = tests.eta2();
   out.outlier_threshold = tests.outlier_threshold();
   out.gradual_threshold = tests.gradual_threshold();
+  out.step_statistic = steps_->largest_statistic();
+  out.step_threshold = steps_->threshold();
   const bool nis_off = updates_ > 0 && (out.nis_mean < out.nis_band_low || out.nis_mean > out.nis_band_high);
-  out.verdict = VerdictOf(tests.gradual_found(), !out.faults.empty(), nis_off);
+  out.verdict = VerdictOf(tests.gradual_found() || !steps_->steps().empty(), !out.faults.empty(), nis_off);
   return out;
 }
 

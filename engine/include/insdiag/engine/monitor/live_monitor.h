@@ -6,7 +6,9 @@
 // (monitor/innovation_tests.h) as soon as the epoch closes. The family-wise
 // thresholds count the planned test's epochs, so the intervals found live
 // are the ones Monitor finds in the same model's forward pass of the
-// completed run when the run lasted as planned.
+// completed run when the run lasted as planned. Beside them, bias steps are
+// scanned for as they happen (monitor/live_step_scan.h): ABRUPT intervals,
+// which the analysis of the stored run reports from its own whole-run scan.
 //
 // An epoch closes when the two samples after it have arrived (the table's
 // motion within a sample is reconstructed from the reference attitudes on
@@ -30,12 +32,14 @@
 #include "insdiag/engine/filter/forward_filter.h"
 #include "insdiag/engine/model/error_model.h"
 #include "insdiag/engine/monitor/innovation_tests.h"
+#include "insdiag/engine/monitor/live_step_scan.h"
 #include "insdiag/engine/monitor/monitoring.h"
 
 namespace insdiag::engine {
 
 struct LiveMonitorOptions {
   MonitorOptions monitor;
+  LiveStepScanOptions steps;
   double update_interval_s = FilterOptions{}.update_interval_s;
   // The test's planned length: the family-wise thresholds count its epochs.
   double planned_duration_s = 3600.0;
@@ -57,6 +61,7 @@ struct LiveStatus {
   double nis_band_low = 0.0, nis_band_high = 0.0;
   double gamma2 = 0.0, eta2 = 0.0;
   double outlier_threshold = 0.0, gradual_threshold = 0.0;  // family-wise, on β² and F
+  double step_statistic = 0.0, step_threshold = 0.0;         // the step scan's largest T now, and its threshold
   int planned_epochs = 0;
   Verdict verdict = Verdict::kGood;
 };
@@ -90,6 +95,7 @@ class LiveMonitor final : private FilterObserver {
   const LiveMonitorOptions options_;
   std::unique_ptr<RunCondenser> condenser_;
   std::optional<InnovationTests> tests_;
+  std::optional<LiveStepScan> steps_;
   int planned_epochs_ = 0;
   double epoch_start_s_ = 0.0, epoch_time_s_ = 0.0;
   InnovationTests::PerChannel innovation_{}, innovation_variance_{};
