@@ -96,7 +96,8 @@ grpc::Status LiveRunServiceGrpc::WatchLiveRun(grpc::ServerContext* context, cons
   }
   const absl::Status status = live_.WatchLiveRun(
       *request, [&](const v1::LiveRun& state) { return writer->Write(state); },
-      [context] { return context->IsCancelled(); });
+      [this, context] { return context->IsCancelled() || stopping_.load(); });
+  if (stopping_.load()) return grpc::Status(grpc::StatusCode::UNAVAILABLE, "the server is stopping; watch again");
   if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "the client went away");
   return ToGrpcStatus(status);
 }
@@ -171,7 +172,8 @@ grpc::Status AnalysisServiceGrpc::WatchAnalysis(grpc::ServerContext* context, co
   }
   const absl::Status status = analyses_.WatchAnalysis(
       *request, [&](const v1::Analysis& analysis) { return writer->Write(analysis); },
-      [context] { return context->IsCancelled(); });
+      [this, context] { return context->IsCancelled() || stopping_.load(); });
+  if (stopping_.load()) return grpc::Status(grpc::StatusCode::UNAVAILABLE, "the server is stopping; watch again");
   if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "the client went away");
   return ToGrpcStatus(status);
 }

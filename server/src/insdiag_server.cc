@@ -9,6 +9,7 @@
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
 
+#include <atomic>
 #include <chrono>
 #include <fstream>
 #include <sstream>
@@ -41,9 +42,9 @@ struct InsdiagServer::Services {
         catalogue_store(pool, options.read_pool), failure_record_store(pool, options.read_pool),
         diagnosis_store(pool, options.read_pool), unit_history_store(pool, options.read_pool),
         knowledge(catalogue_store, failure_record_store, diagnosis_store, unit_history_store), knowledge_grpc(knowledge, guard),
-        test_reports(analyses, runs, knowledge, TestReportService::Options{}), analyses_grpc(analyses, test_reports, guard),
+        test_reports(analyses, runs, knowledge, TestReportService::Options{}), analyses_grpc(analyses, test_reports, guard, stopping),
         fleet_store(options.read_pool != nullptr ? *options.read_pool : pool), fleet_grpc(fleet_store, guard),
-        live(runs, analyses, pool, LiveRunService::Options{}), live_grpc(live, guard), workers(pool, options.workers, &metrics) {}
+        live(runs, analyses, pool, LiveRunService::Options{}), live_grpc(live, guard, stopping), workers(pool, options.workers, &metrics) {}
   // What GET /metrics answers: the counters, then the queue and the pool as they are.
   std::string RenderMetrics() {
     Metrics::Gauges gauges;
@@ -60,6 +61,7 @@ struct InsdiagServer::Services {
     return metrics.Render(gauges);
   }
   kb::ConnectionPool& connection_pool;
+  std::atomic<bool> stopping{false};  // ends the watching streams (grpc_services.h); before the services
   Metrics metrics;  // before `workers`, which count into it
   kb::AccessStore access_store;
   AccessGuard guard;
@@ -250,7 +252,11 @@ void InsdiagServer::Shutdown() {
     health_wake_.notify_all();
     if (health_thread_.joinable()) health_thread_.join();
     // Workers first: they finish the analysis they run, then stop claiming.
-    if (services_) services_->workers.Stop();
+    // The watches end, or they would wait for what no worker will finish.
+    if (services_) {
+      services_->stopping = true;
+      services_->workers.Stop();
+    }
     // HTTP first: its handlers call into the gRPC server.
     if (http_) {
       // stop() only stops a server that already listens: give the listening

@@ -201,6 +201,48 @@ TEST_F(InsdiagdTest, ServesHealthAcceptsCliUploadAndStopsWithPostgresOnSigterm) 
   EXPECT_FALSE(ProcessAlive(postmaster)) << "PostgreSQL outlived the server";
 }
 
+// A page left open on a queued analysis holds a watch that no worker will
+// end once the server stops: SIGTERM must end the watch, not wait for it.
+TEST_F(InsdiagdTest, StopsOnSigtermWhileAWatchWaitsOnAnAnalysisNoWorkerWillRun) {
+  auto server = StartServer({"--workers", "0"});
+  const auto ports = AwaitListening(server, 60s);
+  ASSERT_TRUE(ports) << "insdiagd did not come up:\n" << server.Stderr();
+  std::string admin_token;
+  std::ifstream(dir_ / "data" / "admin-token") >> admin_token;
+  const auto file = dir_ / "run.csv";
+  ASSERT_TRUE(benchrun::WriteBenchRunFile(SyntheticStaticRun(6'000, 10.0, 3), file).ok());
+  auto upload = RunToCompletion({INSDIAG_CLI_PATH, "upload", file.string(), "--server",
+                                 "127.0.0.1:" + std::to_string(ports->grpc), "--token", admin_token},
+                                dir_, 60s);
+  ASSERT_TRUE(upload.ok() && upload->exit_status == 0);
+  httplib::Client http("127.0.0.1", ports->http);
+  http.set_bearer_token_auth(admin_token.c_str());
+  const std::string run = upload->stdout_text.substr(0, upload->stdout_text.find('\n'));
+  auto queued = http.Post("/v1/analyses", "{\"run\": \"" + run + "\"}", "application/json");
+  ASSERT_TRUE(queued && queued->status == 200) << (queued ? queued->body : "no answer");
+  std::smatch analysis;
+  ASSERT_TRUE(std::regex_search(queued->body, analysis, std::regex(R"(analyses/[0-9a-f-]{36})")));
+
+  std::string watched;
+  std::thread watcher([&, name = analysis.str()] {
+    httplib::Client watch("127.0.0.1", ports->http);
+    watch.set_bearer_token_auth(admin_token.c_str());
+    watch.set_read_timeout(60, 0);
+    watch.Get(("/v1/" + name + ":watch").c_str(), [&](const char* data, size_t length) {
+      watched.append(data, length);
+      return true;
+    });
+  });
+  std::this_thread::sleep_for(1s);  // the watch is open and has its first message
+  server.Signal(SIGTERM);
+  const auto exit_status = server.Wait(30s);
+  watcher.join();
+  ASSERT_TRUE(exit_status) << "insdiagd did not stop on SIGTERM while a watch was open";
+  EXPECT_EQ(*exit_status, 0) << server.Stderr();
+  EXPECT_THAT(watched, HasSubstr("QUEUED"));
+  EXPECT_THAT(watched, HasSubstr("the server is stopping; watch again"));
+}
+
 TEST_F(InsdiagdTest, CliRefusesABadFileNamingLineAndColumnAndMisuseWithStatus2) {
   const auto file = dir_ / "bad.csv";
   std::string csv = benchrun::FormatBenchRun(SyntheticStaticRun(100, 50.0, 1));

@@ -208,6 +208,9 @@ export const api = {
 
   unitHistory,
 
+  listLiveRuns: () => call('GET', '/v1/liveRuns'),
+  watchLiveRun: (name, onMessage, signal) => stream(`/v1/${name}:watch`, onMessage, signal),
+
   listUnitTypes: () => call('GET', '/v1/unitTypes'),
   listFailureRecords: (pageToken) => call('GET', '/v1/failureRecords', { query: { pageSize: 1000, pageToken } }),
   fleetStatistics: () => call('GET', '/v1/fleetStatistics'),

@@ -5,6 +5,8 @@
 //   #/runs/{run}        a run and its analyses
 //   #/analyses/{a}      an analysis: the model loop (analysis.js)
 //   #/units/{unit}/history  a unit's runs, analyses and parameters over time (history.js)
+//   #/live              tests being recorded (live.js)
+//   #/liveRuns/{id}     one of them, watched as it happens (live.js)
 //   #/fleet             fleet statistics (fleet.js)
 import { api, ApiError, listAll, num, session } from './api.js';
 import { h, fmt, fmtSeconds, fmtTime, empty, section, table } from './dom.js';
@@ -12,6 +14,7 @@ import { navigate, startAnalysis, errorCard } from './nav.js';
 import { showAnalysis } from './analysis.js';
 import { showFleet } from './fleet.js';
 import { showHistory } from './history.js';
+import { showLiveRuns, showLiveRun } from './live.js';
 
 const main = document.getElementById('main');
 let leaveView = null; // stops the current view's streams and timers
@@ -23,7 +26,8 @@ async function route() {
   const path = (window.location.hash || '#/').slice(1);
   for (const link of document.querySelectorAll('header nav a')) {
     const nav = link.dataset.nav;
-    link.classList.toggle('active', nav === 'fleet' ? path.startsWith('/fleet') : !path.startsWith('/fleet'));
+    const section = path.startsWith('/fleet') ? 'fleet' : path.startsWith('/live') ? 'live' : 'runs';
+    link.classList.toggle('active', nav === section);
   }
   // The view is in the page from the start: plots take their width from it,
   // and a running analysis shows its progress while the view waits.
@@ -34,6 +38,8 @@ async function route() {
     if ((match = path.match(/^\/analyses\/([^/]+)$/))) await showAnalysis(view, `analyses/${match[1]}`, leaving);
     else if ((match = path.match(/^\/runs\/([^/]+)$/))) await showRun(view, `runs/${match[1]}`);
     else if ((match = path.match(/^\/units\/([^/]+)\/history$/))) await showHistory(view, `units/${match[1]}`);
+    else if ((match = path.match(/^\/liveRuns\/([^/]+)$/))) await showLiveRun(view, `liveRuns/${match[1]}`, leaving);
+    else if (path.startsWith('/live')) await showLiveRuns(view, leaving);
     else if (path.startsWith('/fleet')) await showFleet(view);
     else await showRuns(view);
   } catch (error) {

@@ -352,3 +352,62 @@ test('a unit\'s history: from its run to a plot per parameter with the trend, th
   await page.locator('#history-plots .history-plot').first().waitFor();
   assert.deepEqual(foreignRequests, []);
 });
+
+test('a test streamed live shows on the Live page with its step as it happens, then links to its analysis', {
+  skip: skipReason, timeout: 5 * 60_000,
+}, async () => {
+  // The independent simulator's unit (not the engine's code): an accelerometer
+  // step of five drift σ at 400.3 s of a 700-s test at 10 Hz.
+  const liveCsv = path.join(workDir, 'live.csv');
+  execFileSync('/usr/bin/python3', [path.join(env('INSDIAG_SOURCE_DIR'), 'tests', 'benchsim', 'benchsim.py'),
+    '--out', liveCsv, '--preset', 'nav', '--profile', 'positions', '--rate-hz', '10', '--duration', '700',
+    '--seed', '11', '--fault', 'acc_bias_step.y=1.471e-3@400.3', '--serial', 'INS-LIVE-1'], { stdio: 'pipe' });
+  const grpc = serverLog.match(/listening grpc=(\S+)/)[1];
+  const port = 20000 + (process.pid % 20000);
+  const streamer = spawn(env('INSDIAG_CLI'), ['stream', '--listen', String(port), '--planned-duration', '700',
+    '--server', grpc], { cwd: workDir, env: { ...process.env, INSDIAG_TOKEN: adminToken }, stdio: ['ignore', 'pipe', 'pipe'] });
+  let streamerLog = '';
+  streamer.stdout.on('data', (d) => { streamerLog += d; });
+  streamer.stderr.on('data', (d) => { streamerLog += d; });
+  const exited = new Promise((resolve) => streamer.once('exit', resolve));
+
+  // The bench: the file in 40 parts, a quarter of a second apart.
+  const net = await import('node:net');
+  let socket = null;
+  for (let attempt = 0; attempt < 100 && !socket; attempt += 1) {
+    socket = await new Promise((resolve) => {
+      const s = net.connect(port, '127.0.0.1', () => resolve(s));
+      s.once('error', () => resolve(null));
+    });
+    if (!socket) await new Promise((r) => setTimeout(r, 100));
+  }
+  assert.ok(socket, `insdiag stream does not listen:\n${streamerLog}`);
+  const text = readFileSync(liveCsv);
+  const feeding = (async () => {
+    for (let part = 0; part < 40; part += 1) {
+      socket.write(text.subarray(Math.floor(text.length * part / 40), Math.floor(text.length * (part + 1) / 40)));
+      await new Promise((r) => setTimeout(r, 250));
+    }
+    socket.end();
+  })();
+
+  await page.goto(`${baseUrl}/#/live`);
+  const row = page.locator('#live-runs tbody tr', { hasText: 'INS-LIVE-1' });
+  await row.waitFor({ timeout: 30_000 });
+  await row.click();
+  await page.waitForURL(/#\/liveRuns\//);
+  await page.locator('#live-chart canvas').first().waitFor({ timeout: 30_000 });
+  await page.locator('#live-fault-table tbody tr').first().waitFor({ timeout: 60_000 });
+  await screenshot('live-test');
+  await feeding;
+  assert.equal(await exited, 0, streamerLog);
+  await page.locator('#live-analysis-link').waitFor({ timeout: 30_000 });
+  assert.equal(await page.locator('#live-state').innerText(), 'STORED');
+  assert.equal(await page.locator('#live-verdict').innerText(), 'FAULTY');
+  // The step's interval is among those shown, starting within a minute of the onset.
+  const starts = await page.locator('#live-fault-table tbody tr td:nth-child(3)').allInnerTexts();
+  assert.ok(starts.some((s) => Number(s) >= 400.3 - 60 && Number(s) <= 400.3 + 60), `interval starts: ${starts}`);
+  await page.locator('#live-analysis-link').click();
+  await page.waitForURL(/#\/analyses\//);
+  assert.deepEqual(foreignRequests, []);
+});

@@ -66,19 +66,27 @@ void LiveStepScan::CloseEpoch(double time_s) {
       if (T > largest_) largest_ = T, best = c;
     }
   }
-  if (best < 0 || largest_ <= threshold_) return;
-  const std::string channel(kSensorChannelNames[best % kSensorAxisCount]);
-  const double onset_s = onset_s_[static_cast<size_t>(best / kSensorAxisCount)];
-  for (auto it = steps_.rbegin(); it != steps_.rend(); ++it) {
-    if (it->channel != channel) continue;
-    if (onset_s <= it->end_s + epoch_interval_s_) {
-      it->end_s = time_s;
-      it->peak_statistic = std::max(it->peak_statistic, largest_);
-      return;
-    }
-    break;
+  if (best < 0 || largest_ <= threshold_) {
+    detecting_ = false;
+    return;
   }
-  steps_.push_back({channel, onset_s, time_s, FaultKind::kAbrupt, largest_});
+  const std::string_view channel = kSensorChannelNames[best % kSensorAxisCount];
+  const double onset_s = onset_s_[static_cast<size_t>(best / kSensorAxisCount)];
+  // While a detection goes on, the evidence grows and may point to another
+  // axis or onset than its first epoch did: the one step found is the best
+  // explanation now (its peak the largest T seen).
+  if (detecting_) {
+    FaultInterval& current = steps_.back();
+    if (largest_ >= current.peak_statistic) {
+      current.channel = std::string(channel);
+      current.start_s = onset_s;
+    }
+    current.end_s = time_s;
+    current.peak_statistic = std::max(current.peak_statistic, largest_);
+    return;
+  }
+  detecting_ = true;
+  steps_.push_back({std::string(channel), onset_s, time_s, FaultKind::kAbrupt, largest_});
 }
 
 }  // namespace insdiag::engine

@@ -1,7 +1,12 @@
 // The gRPC face: thin adapters from the generated service bases onto the
 // transport-free services. Every method passes the access guard
-// (access_guard.h) and maps its errors by ToGrpcStatus.
+// (access_guard.h) and maps its errors by ToGrpcStatus. The watching
+// streams end when their client goes or when `stopping` is set (the server
+// is shutting down: a watch would otherwise hold the shutdown until what it
+// watches ends).
 #pragma once
+
+#include <atomic>
 
 #include "insdiag/kb/fleet_store.h"
 #include "insdiag/server/access_guard.h"
@@ -40,7 +45,8 @@ class RunServiceGrpc final : public v1::RunService::Service {
 
 class LiveRunServiceGrpc final : public v1::LiveRunService::Service {
  public:
-  LiveRunServiceGrpc(LiveRunService& live, AccessGuard& guard) : live_(live), guard_(guard) {}
+  LiveRunServiceGrpc(LiveRunService& live, AccessGuard& guard, const std::atomic<bool>& stopping)
+      : live_(live), guard_(guard), stopping_(stopping) {}
 
   grpc::Status MonitorRun(grpc::ServerContext* context,
                           grpc::ServerReaderWriter<v1::LiveRun, v1::MonitorRunRequest>* stream) override;
@@ -52,6 +58,7 @@ class LiveRunServiceGrpc final : public v1::LiveRunService::Service {
  private:
   LiveRunService& live_;
   AccessGuard& guard_;
+  const std::atomic<bool>& stopping_;
 };
 
 // Declares a unary method `Name(Request) → Response` of a gRPC service base.
@@ -60,8 +67,9 @@ class LiveRunServiceGrpc final : public v1::LiveRunService::Service {
 
 class AnalysisServiceGrpc final : public v1::AnalysisService::Service {
  public:
-  AnalysisServiceGrpc(AnalysisService& analyses, TestReportService& test_reports, AccessGuard& guard)
-      : analyses_(analyses), test_reports_(test_reports), guard_(guard) {}
+  AnalysisServiceGrpc(AnalysisService& analyses, TestReportService& test_reports, AccessGuard& guard,
+                      const std::atomic<bool>& stopping)
+      : analyses_(analyses), test_reports_(test_reports), guard_(guard), stopping_(stopping) {}
   INSDIAG_UNARY(CreateAnalysis, CreateAnalysisRequest, Analysis);
   INSDIAG_UNARY(GetAnalysis, GetAnalysisRequest, Analysis);
   INSDIAG_UNARY(ListAnalyses, ListAnalysesRequest, ListAnalysesResponse);
@@ -78,6 +86,7 @@ class AnalysisServiceGrpc final : public v1::AnalysisService::Service {
   AnalysisService& analyses_;
   TestReportService& test_reports_;
   AccessGuard& guard_;
+  const std::atomic<bool>& stopping_;
 };
 
 class KnowledgeServiceGrpc final : public v1::KnowledgeService::Service {

@@ -47,7 +47,10 @@ class LiveStepScan {
   void CloseEpoch(double time_s);
 
   // Steps found so far: ABRUPT intervals on the sensor channel ("gyro_x" …)
-  // from the onset to the last epoch that still shows it.
+  // from the onset to the last epoch that still shows it. One interval per
+  // run of epochs over the threshold, named by the (onset, axis) of the
+  // largest T in it: what a step is attributed to may change while the
+  // evidence grows.
   const std::vector<FaultInterval>& steps() const { return steps_; }
   double threshold() const { return threshold_; }
   double largest_statistic() const { return largest_; }  // this epoch's max T
@@ -64,6 +67,7 @@ class LiveStepScan {
   Eigen::RowVectorXd X_;
   std::vector<double> onset_s_;  // per slot
   double largest_ = 0.0;
+  bool detecting_ = false;  // the last epoch was over the threshold
   std::vector<FaultInterval> steps_;
 };
 
