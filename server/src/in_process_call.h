@@ -31,6 +31,10 @@ class InProcessCall {
   void WritesDone();
   // False at the end of the responses.
   bool Read(std::string* message);
+  // The client no longer wants the responses (an HTTP client that went
+  // away): the server's method sees the call cancelled, and a write it
+  // waits on returns, so that Finish does not wait for it.
+  void Cancel() { context_.TryCancel(); }
   grpc::Status Finish();
 
  private:

@@ -217,6 +217,7 @@ void RestGateway::Dispatch(const Route& route, const std::map<std::string, std::
           next->ParseFromString(next_bytes);
           open = write(*next);
         }
+        if (!open) call->Cancel();
         const grpc::Status status = call->Finish();
         if (open && !status.ok()) {
           const std::string line = ToHttpError(status, method->full_name()).json_body + "\n";

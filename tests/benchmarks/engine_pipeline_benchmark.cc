@@ -15,6 +15,7 @@
 #include "insdiag/engine/finder/onset_scan.h"
 #include "insdiag/engine/finder/score_test.h"
 #include "insdiag/engine/model/state_layout.h"
+#include "insdiag/engine/monitor/live_monitor.h"
 #include "insdiag/engine/sim/simulator.h"
 
 namespace insdiag::engine {
@@ -72,6 +73,34 @@ void BM_CondenseRun(benchmark::State& state) {
   state.counters["stored_bytes_per_epoch"] = bytes_per_epoch;
 }
 BENCHMARK(BM_CondenseRun)->Unit(benchmark::kMillisecond);
+
+// A test monitored while it is recorded (monitor/live_monitor.h): the same
+// hour arriving in one-second chunks, condensed, filtered, tested and
+// scanned for steps as it comes. Beside BM_CondenseRun (the same sweep over
+// a complete run), its cost is the live monitor's own: the innovation tests
+// and the step scan's window of onsets.
+void BM_LiveMonitor(benchmark::State& state) {
+  const BenchRun& source = HourRun("rotations").run;
+  const size_t samples = std::min<size_t>(source.samples.size(), 360000);
+  const ErrorModel m = NavigationGradeBaseModel();
+  LiveMonitorOptions options;
+  options.planned_duration_s = 3600.0;
+  for (auto _ : state) {
+    BenchRun growing;
+    growing.metadata = source.metadata;
+    growing.samples.reserve(samples);
+    auto live = LiveMonitor::Create(growing, m, options);
+    for (size_t next = 0; next < samples; next += 100) {
+      growing.samples.insert(growing.samples.end(), source.samples.begin() + static_cast<long>(next),
+                             source.samples.begin() + static_cast<long>(std::min(samples, next + 100)));
+      benchmark::DoNotOptimize((*live)->Advance());
+    }
+    benchmark::DoNotOptimize((*live)->Finish());
+  }
+  state.counters["samples_per_s"] =
+      benchmark::Counter(static_cast<double>(samples), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_LiveMonitor)->Unit(benchmark::kMillisecond);
 
 // One model's filter pass over the condensed run: what every identification
 // step, structure test and model comparison costs. With state.range(0) = 1

@@ -74,7 +74,25 @@ function header(analysis) {
       analysis.unit ? [' · ', h('a#analysis-unit', { href: `#/${analysis.unit}/history`, title: 'the unit\'s history' }, analysis.unit)] : '',
       ' · model: ', h('strong#model-effects', analysis.model.effects.length ? analysis.model.effects.join(', ') : 'base model'),
       analysis.discover ? ' · discover' : '',
-      ` · created ${fmtTime(analysis.createTime)}`));
+      ` · created ${fmtTime(analysis.createTime)}`),
+    analysis.state === 'SUCCEEDED'
+      ? h('div.row#test-report',
+        h('span.muted', 'Test report for the quality department: '),
+        h('button.secondary#test-report-pdf', { onclick: () => openTestReport(analysis.name, 'pdf') }, 'PDF'),
+        h('button.secondary#test-report-html', { onclick: () => openTestReport(analysis.name, 'html') }, 'HTML'))
+      : null);
+}
+
+/** Opens the analysis's test report in a new tab (docs/TEST_REPORT.md). */
+function openTestReport(name, format) {
+  // Opened at once, filled when the document arrives: a tab opened later is a pop-up the browser blocks.
+  const tab = window.open('', '_blank');
+  api.testReport(name, format)
+    .then((blob) => { tab.location.href = URL.createObjectURL(blob); })
+    .catch((error) => {
+      tab?.close();
+      window.alert(error.message);
+    });
 }
 
 function progressCard(analysis) {

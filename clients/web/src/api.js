@@ -172,6 +172,15 @@ async function downloadRun(name) {
   setTimeout(() => URL.revokeObjectURL(link.href), 60_000);
 }
 
+/** An analysis's test report, HTML or PDF, as a blob (a plain link would carry no token). */
+async function testReport(name, format) {
+  const url = new URL(`/v1/${name}:testReport`, window.location.origin);
+  url.searchParams.set('format', format);
+  const response = await withToken(() => fetch(url, { headers: authorization() }));
+  if (!response.ok) throw await errorFrom(response);
+  return response.blob();
+}
+
 /** A unit's history with every run (the server pages the runs; the statistics come whole on each page). */
 async function unitHistory(unit) {
   let history = null;
@@ -207,6 +216,7 @@ export const api = {
   resolveDiagnosis: (name, resolution) => call('POST', `/v1/${name}:resolve`, { body: resolution }),
 
   unitHistory,
+  testReport,
 
   listLiveRuns: () => call('GET', '/v1/liveRuns'),
   watchLiveRun: (name, onMessage, signal) => stream(`/v1/${name}:watch`, onMessage, signal),

@@ -411,3 +411,21 @@ test('a test streamed live shows on the Live page with its step as it happens, t
   await page.waitForURL(/#\/analyses\//);
   assert.deepEqual(foreignRequests, []);
 });
+
+test('an analysis opens its test report, HTML and PDF, from the page with the session token', {
+  skip: skipReason, timeout: 2 * 60_000,
+}, async () => {
+  assert.ok(baseAnalysisUrl, 'the upload test ran first');
+  await page.goto(baseAnalysisUrl);
+  await page.locator('#test-report-html').waitFor();
+  const [html] = await Promise.all([page.waitForEvent('popup'), page.click('#test-report-html')]);
+  await html.waitForURL(/^blob:/, { timeout: 60_000 });
+  await html.getByText('INS-WEB-1').first().waitFor({ timeout: 30_000 });
+  await html.close();
+  const pdfResponse = page.waitForResponse((r) => /:testReport\?format=pdf$/.test(r.url()));
+  const [pdf] = await Promise.all([page.waitForEvent('popup'), page.click('#test-report-pdf')]);
+  const answered = await pdfResponse;
+  assert.equal(answered.status(), 200);
+  assert.equal(answered.headers()['content-type'], 'application/pdf');
+  await pdf.close();
+});

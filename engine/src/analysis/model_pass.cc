@@ -144,6 +144,13 @@ std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass, co
   const int K = pass.forward.epochs();
   if (K == 0) return out;
   std::vector<std::array<double, 6>> reference;  // computed when the model has a constant effect
+  // Per effect (its parameters share one sweep over the samples): the
+  // regressor's RMS over the measured and over the reference inputs.
+  struct EffectRms {
+    int effect = -1;
+    std::array<double, 2> measured{}, reference{};
+  };
+  EffectRms rms;
   // A constant's filtered covariance at the end is its smoothed one.
   Eigen::MatrixXd P;
   UnpackSymmetric(pass.forward.P_filt.row(K - 1).data(), pass.forward.state_size, P);
@@ -157,8 +164,9 @@ std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass, co
     p.method = EstimationMethod::kFilterState;
     p.unit = std::string(e.term.family->unit);
     if (reference.empty()) reference = ReferenceMeasurements(run);
-    const auto measured_rms = RegressorRms(run, e.term);
-    const auto reference_rms = RegressorRms(run, e.term, &reference);
+    if (rms.effect != s.effect) rms = {s.effect, RegressorRms(run, e.term), RegressorRms(run, e.term, &reference)};
+    const auto& measured_rms = rms.measured;
+    const auto& reference_rms = rms.reference;
     const auto k = static_cast<size_t>(s.parameter);
     // prior σ = scale / measured RMS (AddEffects): the same scale over what the table excited.
     const double scale = measured_rms[k] > 0.0 ? e.prior_sigma[k] * measured_rms[k] : e.prior_sigma[k];
