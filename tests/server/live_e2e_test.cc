@@ -291,5 +291,29 @@ TEST_F(LiveTest, AFailingTestStoppedEarlyKeepsWhatWasRecordedAndTheRoleIsChecked
   EXPECT_THAT(audit->body, HasSubstr(run.name()));
 }
 
+TEST_F(LiveTest, AFileStillBeingWrittenIsFollowedUntilItHasBeenIdle) {
+  // The DAQ has written the first half when the operator starts the stream;
+  // the rest comes a second later; then the file stays as it is.
+  const std::string text = ReadFile(dir_ / "run.csv");
+  const std::filesystem::path growing = dir_ / "growing.csv";
+  const size_t half = text.find('\n', text.size() / 2) + 1;
+  { std::ofstream(growing, std::ios::binary) << text.substr(0, half); }
+  auto stream = Subprocess::Start(Cli({"stream", growing.string(), "--follow", "--idle-timeout", "2",
+                                       "--planned-duration", "900"}),
+                                  dir_, {"INSDIAG_TOKEN=" + token_});
+  ASSERT_TRUE(stream.ok()) << stream.status();
+  std::this_thread::sleep_for(1s);
+  { std::ofstream(growing, std::ios::binary | std::ios::app) << text.substr(half); }
+  const auto exit_status = stream->Wait(60s);
+  ASSERT_EQ(exit_status, std::optional<int>(0)) << stream->Stderr();
+  const std::vector<std::string> lines = Lines(stream->Stdout());
+  ASSERT_GE(lines.size(), 2u);
+  const std::string stored_line = lines[lines.size() - 2];
+  ASSERT_THAT(stored_line, ::testing::StartsWith("stored runs/")) << stream->Stdout();
+  v1::Run run;
+  GetJson("/v1/" + stored_line.substr(std::string("stored ").size()), run);
+  EXPECT_EQ(run.sample_count(), 10u * 900u);
+}
+
 }  // namespace
 }  // namespace insdiag::testing
