@@ -53,6 +53,12 @@ bool ApplyDriftLikelihood(const ident::DriftLikelihoodResult& ml, double alpha, 
     for (const std::string& n : ml.not_identifiable) names += (names.empty() ? "" : ", ") + n;
     notes.push_back("not identifiable with this run's motion (the innovations' likelihood is flat in them): " +
                     names);
+    // An earlier estimate of them (the common re-tune of an Allan fit's
+    // placeholders) held everything else fixed: its standard error says
+    // nothing of what the run cannot tell, so it is not reported.
+    std::erase_if(identified, [&](const ParameterEstimate& q) {
+      return std::find(ml.not_identifiable.begin(), ml.not_identifiable.end(), q.name) != ml.not_identifiable.end();
+    });
   }
   if (ml.identified.empty()) return false;
   for (const ParameterEstimate& p : ml.identified) {
@@ -241,7 +247,14 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std
     }
     ident::RetargetResult step = ident::RetargetDrifts(id.model, c.a_priori.model, out.drifts,
                                                        options.settle_log_ratio, options.monitor.family_wise_alpha);
+    // An Allan-fit model's drifts are placeholders (a bound or a guess from
+    // the static segments): innovations beyond them are the drifts' misfit
+    // before they are noise of the bench's reference, and a reference noise
+    // raised to absorb them flattens the likelihood the drifts are then
+    // identified by. Such a model's reference is matched once its drifts
+    // have their likelihood values (MatchReferenceNoiseToTheIdentifiedModel).
     const bool reference_changed =
+        !c.a_priori.from_allan &&
         ident::MatchReferenceNoise(pass->forward, options.monitor.family_wise_alpha, step.model, &notes);
     // Nothing significant: the report's scan when nothing below re-tunes
     // the model (the unit's a-priori model fits), else a new one.
@@ -280,7 +293,10 @@ absl::StatusOr<ident::DriftLikelihoodResult> IdentifyDriftSet(const RunContext& 
   for (const DriftAxis d : DriftAxis::All()) {
     // A run whose monitoring flags faults (a drift that jumped, say) is
     // not re-tuned: a wider drift would hide the fault the diagnosis is for.
-    selection.Set(d, !retargeted.faults_flagged && resolved.Contains(d) == resolved_set);
+    // Unless the model is an Allan fit's placeholders: what they flag says
+    // how far they are from the unit, not that it failed.
+    const bool keep_for_faults = retargeted.faults_flagged && !c.a_priori.from_allan;
+    selection.Set(d, !keep_for_faults && resolved.Contains(d) == resolved_set);
     tau_too.Set(d, selection.Contains(d) && (resolved_set || c.a_priori.from_allan));
   }
   if (c.a_priori.drift_starts.grid_tau_points > 0) {
@@ -312,6 +328,16 @@ void IdentifyFinalDrifts(const RunContext& c, const Retargeted& retargeted, Iden
   }
 }
 
+// The reference noise of a model whose drifts were identified from
+// placeholders, against one pass of the identified model.
+absl::Status MatchReferenceNoiseToTheIdentifiedModel(const RunContext& c, Identification& id,
+                                                     std::vector<std::string>& notes) {
+  auto pass = RunForwardFilter(c.epochs, id.model);
+  if (!pass.ok()) return pass.status();
+  ident::MatchReferenceNoise(*pass, c.options.monitor.family_wise_alpha, id.model, &notes);
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 absl::StatusOr<Identification> IdentifyModel(const RunContext& c, const std::optional<ident::AllanResult>& allan,
@@ -323,6 +349,9 @@ absl::StatusOr<Identification> IdentifyModel(const RunContext& c, const std::opt
   auto retargeted = Retarget(c, id, notes);
   if (!retargeted.ok()) return retargeted.status();
   if (c.options.identify_drifts_by_likelihood && !retargeted->deferred) IdentifyFinalDrifts(c, *retargeted, id, notes);
+  if (c.a_priori.from_allan && !retargeted->deferred) {
+    if (auto matched = MatchReferenceNoiseToTheIdentifiedModel(c, id, notes); !matched.ok()) return matched;
+  }
   return id;
 }
 
