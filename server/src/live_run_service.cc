@@ -115,7 +115,7 @@ absl::Status LiveRunService::MonitorRun(absl::FunctionRef<bool(v1::MonitorRunReq
   if (!model.ok()) {
     return absl::FailedPreconditionError(
         absl::StrCat("live monitoring needs the unit's a-priori model (a datasheet in the metadata or a unit type "
-                     "the knowledge base knows): ",
+                     "the knowledge base knows); an upload of the run is analysed without one: ",
                      model.status().message()));
   }
   engine::LiveMonitorOptions options;
