@@ -11,7 +11,7 @@ std::optional<std::string> BenchRunMetadata::Extra(const std::string& key) const
   return std::nullopt;
 }
 
-double BenchRun::NominalIntervalS() const {
+double MedianSampleIntervalS(std::span<const ImuSample> samples) {
   if (samples.size() < 2) return 0.0;
   // The median is robust to the occasional late sample a logger produces.
   std::vector<double> dt;
@@ -21,6 +21,8 @@ double BenchRun::NominalIntervalS() const {
   std::nth_element(dt.begin(), mid, dt.end());
   return *mid;
 }
+
+double BenchRun::NominalIntervalS() const { return MedianSampleIntervalS(samples); }
 
 bool BenchRun::StartsSegment(size_t k) const {
   return std::binary_search(metadata.segment_starts.begin(), metadata.segment_starts.end(), k);

@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <span>
 #include <tuple>
-#include <vector>
 
 #include "insdiag/engine/model/state_layout.h"
 
@@ -27,11 +27,8 @@ LiveMonitor::LiveMonitor(const BenchRun& run, const ErrorModel& model, const Liv
     : run_(run), model_(model), options_(options) {}
 
 absl::Status LiveMonitor::StartCondensing() {
-  const auto intervals = std::min(run_.samples.size() - 1, static_cast<size_t>(options_.nominal_interval_samples));
-  std::vector<double> dt(intervals);
-  for (size_t k = 0; k < intervals; ++k) dt[k] = run_.samples[k + 1].t_s - run_.samples[k].t_s;
-  std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(intervals / 2), dt.end());
-  const double nominal_interval_s = dt[intervals / 2];
+  const auto first = std::min(run_.samples.size(), static_cast<size_t>(options_.nominal_interval_samples) + 1);
+  const double nominal_interval_s = MedianSampleIntervalS(std::span(run_.samples).first(first));
   auto condenser = RunCondenser::Create(run_, model_, options_.update_interval_s, nominal_interval_s, this);
   if (!condenser.ok()) return condenser.status();
   condenser_ = *std::move(condenser);

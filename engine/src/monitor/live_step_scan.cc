@@ -36,7 +36,7 @@ void LiveStepScan::OnPrediction(const EpochInterval& epoch, const IntervalTransi
   transition.PropagateRows(A_);
   const int active = std::min(epoch_ + 1, window_);
   for (int back = 0; back < active; ++back) {
-    const int s = ((epoch_ - back) % window_ + window_) % window_;
+    const int s = (epoch_ - back) % window_;  // back ≤ epoch_: never negative
     for (int a = 0; a < kSensorAxisCount; ++a) {
       A_.col(s * kSensorAxisCount + a).head<9>() +=
           FaultColumn(epoch, a, Regressor::kStep, onset_s_[static_cast<size_t>(s)]);
@@ -57,7 +57,7 @@ void LiveStepScan::CloseEpoch(double time_s) {
   int best = -1;
   const int active = std::min(epoch_ + 1, window_);
   for (int back = 0; back < active; ++back) {
-    const int s = ((epoch_ - back) % window_ + window_) % window_;
+    const int s = (epoch_ - back) % window_;  // back ≤ epoch_: never negative
     if (onset_s_[static_cast<size_t>(s)] - run_start_s_ < min_onset_s_) continue;
     for (int a = 0; a < kSensorAxisCount; ++a) {
       const int c = s * kSensorAxisCount + a;

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numbers>
 #include <tuple>
 
 #include "insdiag/engine/monitor/innovation_tests.h"
@@ -168,10 +167,8 @@ MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const State
     localised_until = f.end_s;
   }
 
-  const bool gradual = std::any_of(out.faults.begin(), out.faults.end(),
-                                   [](const FaultInterval& f) { return f.kind == FaultKind::kGradual; });
   const bool nis_off = out.nis_mean < out.nis_band_low || out.nis_mean > out.nis_band_high;
-  out.verdict = VerdictOf(gradual, !out.faults.empty(), nis_off);
+  out.verdict = VerdictOf(tests.gradual_found(), !out.faults.empty(), nis_off);
   return out;
 }
 

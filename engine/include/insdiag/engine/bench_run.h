@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 #include <optional>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -82,5 +83,8 @@ struct BenchRun {
   double NominalIntervalS() const;
   double DurationS() const;
 };
+
+// The median of t[k] − t[k−1] over `samples`; 0 for fewer than two.
+double MedianSampleIntervalS(std::span<const ImuSample> samples);
 
 }  // namespace insdiag::engine
