@@ -8,6 +8,8 @@
 #include <random>
 #include <vector>
 
+#include <google/protobuf/util/time_util.h>
+
 #include "insdiag/api/report_codec.h"
 #include "insdiag/engine/analysis.h"
 #include "insdiag/engine/monitor/live_monitor.h"
@@ -15,6 +17,8 @@
 
 namespace insdiag::server {
 namespace {
+
+using google::protobuf::util::TimeUtil;
 
 constexpr char kLiveRunPrefix[] = "liveRuns/";
 
@@ -25,13 +29,6 @@ std::string NewUuid() {
   const std::uint64_t low = (rng() & 0x3fffffffffffffffULL) | 0x8000000000000000ULL;
   return absl::StrFormat("%08x-%04x-%04x-%04x-%012x", high >> 32, (high >> 16) & 0xffff, high & 0xffff, low >> 48,
                          low & 0xffffffffffffULL);
-}
-
-void SetNow(google::protobuf::Timestamp* t) {
-  const auto since_epoch = std::chrono::system_clock::now().time_since_epoch();
-  const auto us = std::chrono::duration_cast<std::chrono::microseconds>(since_epoch).count();
-  t->set_seconds(us / 1'000'000);
-  t->set_nanos(static_cast<int>(us % 1'000'000) * 1000);
 }
 
 void Fill(const engine::LiveStatus& status, v1::LiveRun& out) {
@@ -56,7 +53,7 @@ void Fill(const engine::LiveStatus& status, v1::LiveRun& out) {
   out.set_eta2(status.eta2);
   out.set_outlier_threshold(status.outlier_threshold);
   out.set_gradual_threshold(status.gradual_threshold);
-  SetNow(out.mutable_update_time());
+  *out.mutable_update_time() = TimeUtil::GetCurrentTime();
 }
 
 }  // namespace
@@ -65,8 +62,8 @@ std::shared_ptr<LiveRunService::Session> LiveRunService::Open(v1::LiveRun& state
   auto session = std::make_shared<Session>();
   state.set_name(absl::StrCat(kLiveRunPrefix, NewUuid()));
   state.set_state(v1::LiveRun::RECORDING);
-  SetNow(state.mutable_start_time());
-  SetNow(state.mutable_update_time());
+  *state.mutable_start_time() = TimeUtil::GetCurrentTime();
+  *state.mutable_update_time() = TimeUtil::GetCurrentTime();
   session->state = state;
   std::lock_guard lock(mutex_);
   sessions_[state.name()] = session;
@@ -171,7 +168,7 @@ absl::Status LiveRunService::MonitorRun(absl::FunctionRef<bool(v1::MonitorRunReq
     state.mutable_error()->set_code(static_cast<int>(stored.status().code()));
     state.mutable_error()->set_message(std::string(stored.status().message()));
   }
-  SetNow(state.mutable_update_time());
+  *state.mutable_update_time() = TimeUtil::GetCurrentTime();
   Publish(*session, state, true);
   if (client_listens) send(state);
   last = state;
@@ -190,11 +187,8 @@ absl::StatusOr<v1::ListLiveRunsResponse> LiveRunService::ListLiveRuns(const v1::
     *response.add_live_runs() = session->state;
   }
   auto* runs = response.mutable_live_runs();
-  std::sort(runs->begin(), runs->end(), [](const v1::LiveRun& a, const v1::LiveRun& b) {
-    const auto& ta = a.start_time();
-    const auto& tb = b.start_time();
-    return ta.seconds() != tb.seconds() ? ta.seconds() > tb.seconds() : ta.nanos() > tb.nanos();
-  });
+  std::sort(runs->begin(), runs->end(),
+            [](const v1::LiveRun& a, const v1::LiveRun& b) { return b.start_time() < a.start_time(); });
   return response;
 }
 
