@@ -3,7 +3,6 @@
 // example client (clients/python, Debian's python3-grpcio).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <signal.h>
 
 #include <filesystem>
 #include <regex>
@@ -12,9 +11,7 @@
 #include "insdiag/v1/analyses.pb.h"
 #include "insdiag/v1/fleet.pb.h"
 #include "insdiag/v1/knowledge.pb.h"
-#include "support/database_fixture.h"
-#include "support/insdiagd_process.h"
-#include "support/subprocess.h"
+#include "support/insdiagd_fixture.h"
 
 namespace insdiag::testing {
 namespace {
@@ -22,36 +19,20 @@ namespace {
 using namespace std::chrono_literals;
 using ::testing::HasSubstr;
 
-class ClientsTest : public DatabaseTest {
+class ClientsTest : public ServerProcessTest {
  protected:
   void SetUp() override {
     DatabaseTest::SetUp();
     if (IsSkipped() || HasFatalFailure()) return;
-    dir_ = MakeTempDir("insdiag-clients");
-    auto server = StartInsdiagd(INSDIAGD_PATH, database_url(), dir_);
-    ASSERT_TRUE(server.ok()) << server.status();
-    server_ = std::move(server->process);
-    address_ = server->grpc_address;
-    http_address_ = "http://127.0.0.1:" + std::to_string(server->http_port);
-    token_ = server->admin_token;  // written by insdiagd's first start on this database
+    StartServer(INSDIAGD_PATH, "insdiag-clients");
+    if (HasFatalFailure()) return;
+    http_address_ = "http://127.0.0.1:" + std::to_string(http_port_);
     auto simulated = RunToCompletion({INSDIAG_CLI_PATH, "simulate", (dir_ / "run.csv").string(), "--profile", "static",
                                       "--rate", "10", "--seed", "5", "--serial", "INS-CLI-1"},
                                      dir_, 60s);
     ASSERT_TRUE(simulated.ok() && simulated->exit_status == 0) << simulated->stderr_text;
   }
-  void TearDown() override {
-    if (server_) {
-      server_->Signal(SIGTERM);
-      server_->Wait(20s);
-    }
-    server_.reset();
-    DatabaseTest::TearDown();
-  }
-  std::filesystem::path dir_;
-  std::unique_ptr<Subprocess> server_;
-  std::string address_;
   std::string http_address_;
-  std::string token_;
 };
 
 TEST_F(ClientsTest, InsdiagDiagnosePrintsTheDiagnosisJsonOfTheContract) {

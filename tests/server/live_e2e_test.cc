@@ -7,7 +7,6 @@
 #include <gtest/gtest.h>
 #include <arpa/inet.h>
 #include <netinet/in.h>
-#include <signal.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -24,9 +23,7 @@
 #include "insdiag/v1/analyses.pb.h"
 #include "insdiag/v1/live.pb.h"
 #include "insdiag/v1/runs.pb.h"
-#include "support/database_fixture.h"
-#include "support/insdiagd_process.h"
-#include "support/subprocess.h"
+#include "support/insdiagd_fixture.h"
 
 // Last: httplib.h pulls in <resolv.h>, whose `_res` macro breaks Eigen.
 #include <httplib.h>
@@ -79,18 +76,13 @@ std::vector<std::string> Lines(const std::string& text) {
   return out;
 }
 
-class LiveTest : public DatabaseTest {
+class LiveTest : public ServerProcessTest {
  protected:
   void SetUp() override {
     DatabaseTest::SetUp();
     if (IsSkipped() || HasFatalFailure()) return;
-    dir_ = MakeTempDir("insdiag-live");
-    auto server = StartInsdiagd(INSDIAGD_PATH, database_url(), dir_);
-    ASSERT_TRUE(server.ok()) << server.status();
-    server_ = std::move(server->process);
-    address_ = server->grpc_address;
-    http_port_ = server->http_port;
-    token_ = server->admin_token;
+    StartServer(INSDIAGD_PATH, "insdiag-live");
+    if (HasFatalFailure()) return;
     auto simulated = RunToCompletion({"/usr/bin/python3", INSDIAG_BENCHSIM, "--out", (dir_ / "run.csv").string(),
                                       "--preset", "nav", "--profile", "positions", "--rate-hz", "10", "--duration",
                                       "900", "--seed", "7", "--fault", kStepFault, "--serial", "LIVE-E2E"},
@@ -98,15 +90,6 @@ class LiveTest : public DatabaseTest {
     ASSERT_TRUE(simulated.ok() && simulated->exit_status == 0)
         << (simulated.ok() ? simulated->stderr_text : simulated.status().ToString());
   }
-  void TearDown() override {
-    if (server_) {
-      server_->Signal(SIGTERM);
-      server_->Wait(30s);
-    }
-    if (!dir_.empty()) std::filesystem::remove_all(dir_);
-    DatabaseTest::TearDown();
-  }
-
   std::vector<std::string> Cli(std::vector<std::string> args) const {
     args.insert(args.begin(), INSDIAG_CLI_PATH);
     for (const std::string& a : {std::string("--server"), address_}) args.push_back(a);
@@ -132,12 +115,6 @@ class LiveTest : public DatabaseTest {
     }
     return analysis;
   }
-
-  std::filesystem::path dir_;
-  std::unique_ptr<Subprocess> server_;
-  std::string address_;
-  int http_port_ = 0;
-  std::string token_;
 };
 
 TEST_F(LiveTest, AStreamedTestShowsItsStepLiveAndIsStoredAndAnalysedAsItsUploadIs) {

@@ -5,7 +5,6 @@
 // report, PDF and HTML, through the REST route with a viewer's token.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <signal.h>
 
 #include <filesystem>
 #include <regex>
@@ -13,8 +12,7 @@
 #include "insdiag/api/json.h"
 #include "insdiag/v1/analyses.pb.h"
 #include "insdiag/v1/knowledge.pb.h"
-#include "support/database_fixture.h"
-#include "support/insdiagd_process.h"
+#include "support/insdiagd_fixture.h"
 #include "support/pdf_check.h"
 #include "support/subprocess.h"
 
@@ -32,26 +30,12 @@ using ::testing::StartsWith;
 // loop finds on a rotations profile (the demonstration's DEMO-2).
 constexpr char kHiddenEffect[] = "gyro_scale_factor.z";
 
-class TestReportTest : public DatabaseTest {
+class TestReportTest : public ServerProcessTest {
  protected:
   void SetUp() override {
     DatabaseTest::SetUp();
     if (IsSkipped() || HasFatalFailure()) return;
-    dir_ = MakeTempDir("insdiag-test-report");
-    auto server = StartInsdiagd(INSDIAGD_PATH, database_url(), dir_);
-    ASSERT_TRUE(server.ok()) << server.status();
-    server_ = std::move(server->process);
-    address_ = server->grpc_address;
-    http_port_ = server->http_port;
-    token_ = server->admin_token;
-  }
-  void TearDown() override {
-    if (server_) {
-      server_->Signal(SIGTERM);
-      server_->Wait(30s);
-    }
-    if (!dir_.empty()) std::filesystem::remove_all(dir_);
-    DatabaseTest::TearDown();
+    StartServer(INSDIAGD_PATH, "insdiag-test-report");
   }
 
   Completed Insdiag(std::vector<std::string> args, std::chrono::seconds timeout = 60s) {
@@ -63,12 +47,6 @@ class TestReportTest : public DatabaseTest {
     EXPECT_TRUE(done.ok()) << done.status();
     return done.ok() ? *done : Completed{};
   }
-
-  std::filesystem::path dir_;
-  std::unique_ptr<Subprocess> server_;
-  std::string address_;
-  int http_port_ = 0;
-  std::string token_;
 };
 
 TEST_F(TestReportTest, ThePdfReportOfARunWithAHiddenEffectRendersAndShowsTheEffectAndTheVerdict) {
