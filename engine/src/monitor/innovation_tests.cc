@@ -60,18 +60,9 @@ InnovationTests::InnovationTests(int planned_epochs, double epoch_interval_s, co
 }
 
 void InnovationTests::AddInterval(int channel, double start_s, double end_s, FaultKind kind, double statistic) {
-  const std::string_view name = kChannelNames[static_cast<size_t>(channel)];
-  // Merges with the channel's last interval of the kind when they touch.
-  for (auto it = faults_.rbegin(); it != faults_.rend(); ++it) {
-    if (it->channel != name || it->kind != kind) continue;
-    if (start_s <= it->end_s + epoch_interval_s_) {
-      it->end_s = std::max(it->end_s, end_s);
-      it->peak_statistic = std::max(it->peak_statistic, statistic);
-      return;
-    }
-    break;
-  }
-  faults_.push_back({std::string(name), start_s, end_s, kind, statistic});
+  // Intervals an update apart are one.
+  AddFaultInterval(faults_, kChannelNames[static_cast<size_t>(channel)], start_s, end_s, kind, statistic,
+                   epoch_interval_s_);
   if (kind == FaultKind::kGradual) gradual_found_ = true;
 }
 

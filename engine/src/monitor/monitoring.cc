@@ -9,25 +9,19 @@
 #include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::engine {
-namespace {
-
-// Appends [start, end] to `faults`, merging with the previous interval of the
-// same channel and kind when they touch.
-void AddInterval(std::vector<FaultInterval>& faults, const std::string& channel, double start, double end,
-                 FaultKind kind, double statistic, double join_gap) {
+void AddFaultInterval(std::vector<FaultInterval>& faults, std::string_view channel, double start_s, double end_s,
+                      FaultKind kind, double statistic, double join_gap_s) {
   for (auto it = faults.rbegin(); it != faults.rend(); ++it) {
     if (it->channel != channel || it->kind != kind) continue;
-    if (start <= it->end_s + join_gap) {
-      it->end_s = std::max(it->end_s, end);
+    if (start_s <= it->end_s + join_gap_s) {
+      it->end_s = std::max(it->end_s, end_s);
       it->peak_statistic = std::max(it->peak_statistic, statistic);
       return;
     }
     break;
   }
-  faults.push_back({channel, start, end, kind, statistic});
+  faults.push_back({std::string(channel), start_s, end_s, kind, statistic});
 }
-
-}  // namespace
 
 void SortFaultIntervals(std::vector<FaultInterval>& faults) {
   std::stable_sort(faults.begin(), faults.end(),
@@ -123,8 +117,8 @@ MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const State
     out.channels.push_back(std::move(fit));
   }
   for (const SampleOutlier& s : spikes) {
-    AddInterval(out.faults, std::string(kSensorChannelNames[s.sensor_channel]), s.time_s, s.time_s,
-                FaultKind::kOutlier, s.robust_z, 0.0);
+    AddFaultInterval(out.faults, kSensorChannelNames[s.sensor_channel], s.time_s, s.time_s, FaultKind::kOutlier,
+                     s.robust_z, 0.0);
   }
   SortFaultIntervals(out.faults);
 

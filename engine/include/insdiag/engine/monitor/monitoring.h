@@ -26,6 +26,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -104,6 +105,10 @@ struct MonitorResult {
 MonitorResult Monitor(const ForwardPass& forward, const SmoothedPass& smoothed, const StateLayout& layout,
                       const std::vector<SampleOutlier>& spikes, const MonitorOptions& options);
 
+// Appends [start, end] on `channel` to `faults`, merged into the channel's
+// last interval of the kind when it starts within `join_gap_s` of its end.
+void AddFaultInterval(std::vector<FaultInterval>& faults, std::string_view channel, double start_s, double end_s,
+                      FaultKind kind, double statistic, double join_gap_s);
 // The two-sided band of the mean NIS of `updates` scalar updates at the
 // verdict's share of the family-wise level.
 std::pair<double, double> MeanNisBand(int updates, double family_wise_alpha);
