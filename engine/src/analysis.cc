@@ -232,7 +232,8 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
 
   Progress(options, 0.0, "screening samples");
   BenchRun run = input;
-  const std::vector<SampleOutlier> spikes = ScreenAndRepairSpikes(run, options.screening);
+  const std::vector<std::array<double, 6>> reference_measurements = ReferenceMeasurements(run);
+  const std::vector<SampleOutlier> spikes = ScreenAndRepairSpikes(run, reference_measurements, options.screening);
 
   Progress(options, 0.05, "Allan deviation");
   std::optional<ident::AllanResult> allan = AllanOfStaticSegments(run, options, notes);
@@ -252,7 +253,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   // The run condensed to its update epochs once: every pass below filters the epochs.
   auto epochs = CondenseRun(run, base, options.filter.update_interval_s);
   if (!epochs.ok()) return epochs.status();
-  const pipeline::RunContext context{run, *epochs, spikes, options, *a_priori};
+  const pipeline::RunContext context{run, *epochs, reference_measurements, spikes, options, *a_priori};
 
   pipeline::Identification identification;
   identification.model = std::move(base);
@@ -269,7 +270,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   std::vector<ParameterEstimate> identified = std::move(identification.identified);
   identified.insert(identified.begin(), removed_constants.begin(), removed_constants.end());
   pipeline::ScannedModelA model_a{a->pass, a->found,
-                                  pipeline::ReportOf(a->pass, a->found, run, options, identified, notes),
+                                  pipeline::ReportOf(context, a->pass, a->found, identified, notes),
                                   identified, notes};
 
   absl::StatusOr<Analysis> out;

@@ -2,6 +2,8 @@
 
 #include <absl/strings/str_cat.h>
 
+#include <atomic>
+
 #include "insdiag/server/status_mapping.h"
 
 namespace insdiag::server {
@@ -15,6 +17,22 @@ constexpr char kAccessService[] = "insdiag.v1.AccessService";
 constexpr char kLiveRunService[] = "insdiag.v1.LiveRunService";
 
 std::string MethodName(const char* service, const char* method) { return absl::StrCat(service, ".", method); }
+
+// A server-streaming method behind the access guard: `serve(write, stop)`
+// streams through `writer` until done or `stop()` holds. A client that went
+// away ends it CANCELLED and, for a watch (`stopping` given), a stopping
+// server UNAVAILABLE, whatever the service returned.
+template <typename Message, typename Serve>
+grpc::Status ServeStream(AccessGuard& guard, grpc::ServerContext& context, const std::string& method,
+                         grpc::ServerWriter<Message>& writer, const std::atomic<bool>* stopping, const Serve& serve) {
+  if (auto caller = guard.Admit(context, method); !caller.ok()) return ToGrpcStatus(caller.status());
+  const auto stopping_now = [stopping] { return stopping != nullptr && stopping->load(); };
+  const absl::Status status = serve([&](const Message& message) { return writer.Write(message); },
+                                    [&] { return context.IsCancelled() || stopping_now(); });
+  if (stopping_now()) return grpc::Status(grpc::StatusCode::UNAVAILABLE, "the server is stopping; watch again");
+  if (context.IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "the client went away");
+  return ToGrpcStatus(status);
+}
 
 }  // namespace
 
@@ -58,13 +76,8 @@ grpc::Status RunServiceGrpc::DeleteRun(grpc::ServerContext* context, const v1::D
 
 grpc::Status RunServiceGrpc::ReadRunSamples(grpc::ServerContext* context, const v1::ReadRunSamplesRequest* request,
                                             grpc::ServerWriter<v1::SampleChunk>* writer) {
-  if (auto caller = guard_.Admit(*context, MethodName(kRunService, "ReadRunSamples")); !caller.ok()) {
-    return ToGrpcStatus(caller.status());
-  }
-  const absl::Status status =
-      runs_.ReadRunSamples(*request, [&](const v1::SampleChunk& chunk) { return writer->Write(chunk); });
-  if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "the client went away");
-  return ToGrpcStatus(status);
+  return ServeStream(guard_, *context, MethodName(kRunService, "ReadRunSamples"), *writer, nullptr,
+                     [&](const auto& write, const auto&) { return runs_.ReadRunSamples(*request, write); });
 }
 
 grpc::Status LiveRunServiceGrpc::MonitorRun(grpc::ServerContext* context,
@@ -91,15 +104,8 @@ grpc::Status LiveRunServiceGrpc::ListLiveRuns(grpc::ServerContext* context, cons
 
 grpc::Status LiveRunServiceGrpc::WatchLiveRun(grpc::ServerContext* context, const v1::WatchLiveRunRequest* request,
                                               grpc::ServerWriter<v1::LiveRun>* writer) {
-  if (auto caller = guard_.Admit(*context, MethodName(kLiveRunService, "WatchLiveRun")); !caller.ok()) {
-    return ToGrpcStatus(caller.status());
-  }
-  const absl::Status status = live_.WatchLiveRun(
-      *request, [&](const v1::LiveRun& state) { return writer->Write(state); },
-      [this, context] { return context->IsCancelled() || stopping_.load(); });
-  if (stopping_.load()) return grpc::Status(grpc::StatusCode::UNAVAILABLE, "the server is stopping; watch again");
-  if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "the client went away");
-  return ToGrpcStatus(status);
+  return ServeStream(guard_, *context, MethodName(kLiveRunService, "WatchLiveRun"), *writer, &stopping_,
+                     [&](const auto& write, const auto& stop) { return live_.WatchLiveRun(*request, write, stop); });
 }
 
 // Defines a unary adapter: `Class::Name` of `service` delegating to
@@ -167,27 +173,15 @@ grpc::Status AnalysisServiceGrpc::GetTestReport(grpc::ServerContext* context, co
 
 grpc::Status AnalysisServiceGrpc::WatchAnalysis(grpc::ServerContext* context, const v1::WatchAnalysisRequest* request,
                                                 grpc::ServerWriter<v1::Analysis>* writer) {
-  if (auto caller = guard_.Admit(*context, MethodName(kAnalysisService, "WatchAnalysis")); !caller.ok()) {
-    return ToGrpcStatus(caller.status());
-  }
-  const absl::Status status = analyses_.WatchAnalysis(
-      *request, [&](const v1::Analysis& analysis) { return writer->Write(analysis); },
-      [this, context] { return context->IsCancelled() || stopping_.load(); });
-  if (stopping_.load()) return grpc::Status(grpc::StatusCode::UNAVAILABLE, "the server is stopping; watch again");
-  if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "the client went away");
-  return ToGrpcStatus(status);
+  return ServeStream(guard_, *context, MethodName(kAnalysisService, "WatchAnalysis"), *writer, &stopping_,
+                     [&](const auto& write, const auto& stop) { return analyses_.WatchAnalysis(*request, write, stop); });
 }
 
 grpc::Status AnalysisServiceGrpc::ReadResidualSeries(grpc::ServerContext* context,
                                                      const v1::ReadResidualSeriesRequest* request,
                                                      grpc::ServerWriter<v1::ResidualSeriesChunk>* writer) {
-  if (auto caller = guard_.Admit(*context, MethodName(kAnalysisService, "ReadResidualSeries")); !caller.ok()) {
-    return ToGrpcStatus(caller.status());
-  }
-  const absl::Status status = analyses_.ReadResidualSeries(
-      *request, [&](const v1::ResidualSeriesChunk& chunk) { return writer->Write(chunk); });
-  if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "the client went away");
-  return ToGrpcStatus(status);
+  return ServeStream(guard_, *context, MethodName(kAnalysisService, "ReadResidualSeries"), *writer, nullptr,
+                     [&](const auto& write, const auto&) { return analyses_.ReadResidualSeries(*request, write); });
 }
 
 }  // namespace insdiag::server

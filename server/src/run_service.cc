@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <array>
 
+#include <google/protobuf/util/time_util.h>
+
 #include "insdiag/server/status_mapping.h"
 
 namespace insdiag::server {
@@ -33,8 +35,7 @@ v1::Run ToProto(const kb::StoredRun& stored) {
   run.set_duration_s(stored.duration_s);
   run.set_first_t(stored.first_t_s);
   run.set_sha256(stored.sha256);
-  run.mutable_create_time()->set_seconds(stored.create_time_unix_us / 1'000'000);
-  run.mutable_create_time()->set_nanos(static_cast<int>(stored.create_time_unix_us % 1'000'000) * 1000);
+  *run.mutable_create_time() = google::protobuf::util::TimeUtil::MicrosecondsToTimestamp(stored.create_time_unix_us);
   return run;
 }
 

@@ -14,6 +14,7 @@
 #include "insdiag/engine/filter/smoother.h"
 #include "insdiag/engine/finder/onset_scan.h"
 #include "insdiag/engine/finder/score_test.h"
+#include "insdiag/engine/ident/retarget.h"
 #include "insdiag/engine/model/state_layout.h"
 #include "insdiag/engine/monitor/live_monitor.h"
 #include "insdiag/engine/sim/simulator.h"
@@ -132,19 +133,45 @@ BENCHMARK(BM_ForwardFilter)->ArgName("scan")->Arg(0)->Arg(1)->Unit(benchmark::kM
 // The bias step and ramp scan over every onset of every sensor axis (one
 // backward sweep over a stored filter pass): beside BM_ForwardFilter/scan:0,
 // the cost of a base pass.
+// One filter pass of the navigation-grade base model over the hour of `rotations`.
+struct BasePassOfTheHour {
+  BasePassOfTheHour() : hour(HourRun("rotations").run), model(NavigationGradeBaseModel()), layout(model) {
+    hour.samples.resize(std::min<size_t>(hour.samples.size(), 360000));
+    epochs = *CondenseRun(hour, model, FilterOptions{}.update_interval_s);
+    forward = *RunForwardFilter(epochs, model);
+  }
+  BenchRun hour;
+  const ErrorModel model;
+  const StateLayout layout;
+  EpochRun epochs;
+  ForwardPass forward;
+};
+
 void BM_OnsetScan(benchmark::State& state) {
-  BenchRun hour = HourRun("rotations").run;
-  hour.samples.resize(std::min<size_t>(hour.samples.size(), 360000));
-  const ErrorModel m = NavigationGradeBaseModel();
-  const StateLayout layout(m);
-  const auto epochs = CondenseRun(hour, m, FilterOptions{}.update_interval_s);
-  const auto fw = RunForwardFilter(*epochs, m);
-  const std::vector<EffectTerm> terms = AbsentFaultTerms(m);
-  for (auto _ : state) benchmark::DoNotOptimize(ScanOnsets(*fw, layout, *epochs, terms, OnsetScanOptions{}));
+  const BasePassOfTheHour base;
+  const std::vector<EffectTerm> terms = AbsentFaultTerms(base.model);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(ScanOnsets(base.forward, base.layout, base.epochs, terms, OnsetScanOptions{}));
+  }
   state.counters["fault_terms"] = static_cast<double>(terms.size());
-  state.counters["epochs"] = static_cast<double>(epochs->size());
+  state.counters["epochs"] = static_cast<double>(base.epochs.size());
 }
 BENCHMARK(BM_OnsetScan)->Unit(benchmark::kMillisecond);
+
+// Correlation processing of the six smoothed drifts of one pass (every
+// missing-effect scan runs it): the families' fits to the sample
+// autocovariance (INSDIAG_THREADS=1 times one core), against
+// BM_ForwardFilter/scan:0.
+void BM_CorrelateDrifts(benchmark::State& state) {
+  const BasePassOfTheHour base;
+  const ident::CorrelationOptions options;
+  const auto sm =
+      RunSmoother(base.forward, ident::DriftSmootherOptions(base.model, base.layout, base.forward, options));
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(ident::CorrelateDrifts(base.forward, *sm, base.layout, options, nullptr));
+  }
+}
+BENCHMARK(BM_CorrelateDrifts)->Unit(benchmark::kMillisecond);
 
 void BM_Smoother(benchmark::State& state) {
   BenchRun hour = HourRun("static").run;

@@ -490,18 +490,17 @@ const EffectCandidate* NextDiscovery(const Findings& found, const AnalysisOption
 }
 
 // The report of one scanned pass.
-AnalysisReport ReportOf(const ModelPass& pass, const Findings& found, const BenchRun& run,
-                        const AnalysisOptions& options, const std::vector<ParameterEstimate>& identified,
-                        const std::vector<std::string>& notes) {
+AnalysisReport ReportOf(const RunContext& c, const ModelPass& pass, const Findings& found,
+                        const std::vector<ParameterEstimate>& identified, const std::vector<std::string>& notes) {
   AnalysisReport r;
-  FillFit(pass, run, options, r);
-  ReportFaults(FaultFindings(pass, found, options), run.samples.back().t_s, r);
+  FillFit(pass, c.run, c.options, r);
+  ReportFaults(FaultFindings(pass, found, c.options), c.run.samples.back().t_s, r);
   r.effect_candidates = found.candidates;
   r.family_candidates = found.families;
   r.correlation = found.drifts;
   r.identified = identified;
   std::string unobservable;
-  for (const ParameterEstimate& e : ConstantEffectEstimates(pass, run)) {
+  for (const ParameterEstimate& e : ConstantEffectEstimates(pass, c.run, c.reference_measurements)) {
     r.identified.push_back(e);
     if (ObservableByRun(e)) continue;
     unobservable += (unobservable.empty() ? "" : ", ") + e.name;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "analysis/model_pass.h"
+#include "analysis/run_context.h"
 #include "insdiag/engine/ident/correlation.h"
 #include "insdiag/engine/ident/drift_likelihood.h"
 
@@ -85,8 +86,7 @@ const EffectCandidate* NextDiscovery(const Findings& found, const AnalysisOption
 DriftSelection ResolvedDrifts(const std::vector<DriftCorrelation>& drifts);
 
 // The report of one scanned pass.
-AnalysisReport ReportOf(const ModelPass& pass, const Findings& found, const BenchRun& run,
-                        const AnalysisOptions& options, const std::vector<ParameterEstimate>& identified,
-                        const std::vector<std::string>& notes);
+AnalysisReport ReportOf(const RunContext& c, const ModelPass& pass, const Findings& found,
+                        const std::vector<ParameterEstimate>& identified, const std::vector<std::string>& notes);
 
 }  // namespace insdiag::engine::pipeline

@@ -220,7 +220,7 @@ absl::StatusOr<Analysis> Discover(const RunContext& c, ScannedModelA a) {
     Findings next_found =
         FindMissingEffects(c.run, c.epochs, *next, c.a_priori.model, c.spikes, options, &a.notes, settled);
     identified = WithTakenStructures(std::move(identified), next->model, found);
-    AnalysisReport next_report = ReportOf(*next, next_found, c.run, options, identified, a.notes);
+    AnalysisReport next_report = ReportOf(c, *next, next_found, identified, a.notes);
     report.discovery.push_back(StepOf(step, *top, next_report));
     next_report.discovery = report.discovery;
     latest = std::move(*next);
@@ -253,7 +253,7 @@ absl::StatusOr<Analysis> AddAndCompare(const RunContext& c, const std::vector<st
   const Findings found_b =
       FindMissingEffects(c.run, c.epochs, *b, c.a_priori.model, c.spikes, options, &a.notes, settled);
   Analysis out;
-  out.report = ReportOf(*b, found_b, c.run, options, WithTakenStructures(a.identified, b->model, a.found), a.notes);
+  out.report = ReportOf(c, *b, found_b, WithTakenStructures(a.identified, b->model, a.found), a.notes);
   std::vector<std::string> added;
   for (const std::string& e : b->model.EffectNames()) {
     if (a.pass.model.FindEffect(*ParseEffectSelector(e)->begin()) < 0) added.push_back(e);

@@ -139,11 +139,11 @@ std::array<double, 2> RegressorRms(const BenchRun& run, const EffectTerm& term,
   return {std::sqrt(sum[0] / n), std::sqrt(sum[1] / n)};
 }
 
-std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass, const BenchRun& run) {
+std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass, const BenchRun& run,
+                                                       const std::vector<std::array<double, 6>>& reference_measurements) {
   std::vector<ParameterEstimate> out;
   const int K = pass.forward.epochs();
   if (K == 0) return out;
-  std::vector<std::array<double, 6>> reference;  // computed when the model has a constant effect
   // Per effect (its parameters share one sweep over the samples): the
   // regressor's RMS over the measured and over the reference inputs.
   struct EffectRms {
@@ -163,8 +163,9 @@ std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass, co
     p.std_error = std::sqrt(pass.smoothed.variance(K - 1, s.index));
     p.method = EstimationMethod::kFilterState;
     p.unit = std::string(e.term.family->unit);
-    if (reference.empty()) reference = ReferenceMeasurements(run);
-    if (rms.effect != s.effect) rms = {s.effect, RegressorRms(run, e.term), RegressorRms(run, e.term, &reference)};
+    if (rms.effect != s.effect) {
+      rms = {s.effect, RegressorRms(run, e.term), RegressorRms(run, e.term, &reference_measurements)};
+    }
     const auto& measured_rms = rms.measured;
     const auto& reference_rms = rms.reference;
     const auto k = static_cast<size_t>(s.parameter);

@@ -58,7 +58,9 @@ std::array<double, 2> RegressorRms(const BenchRun& run, const EffectTerm& term,
 // observability (parameter_estimate.h): the prior it is judged against is the
 // model's diffuse prior rescaled to what the table excited, so that an axis
 // excited only by its own noise is not observable.
-std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass, const BenchRun& run);
+// `reference_measurements`: ReferenceMeasurements(run).
+std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass, const BenchRun& run,
+                                                       const std::vector<std::array<double, 6>>& reference_measurements);
 
 // Measured, predicted, residual, ±σ and the sensor states per epoch.
 void FillSeries(const ModelPass& pass, AnalysisSeries& series);

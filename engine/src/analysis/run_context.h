@@ -1,8 +1,10 @@
 // What the analysis's stages after condensing share (engine/src/analysis.cc):
-// the run as screened, its update epochs, the spikes repaired, the options
-// and the a-priori model the identification starts from.
+// the run as screened, its update epochs, what a perfect unit would have
+// measured on it, the spikes repaired, the options and the a-priori model the
+// identification starts from.
 #pragma once
 
+#include <array>
 #include <string_view>
 #include <vector>
 
@@ -28,6 +30,9 @@ struct APriori {
 struct RunContext {
   const BenchRun& run;
   const EpochRun& epochs;
+  // ReferenceMeasurements(run): the table's motion alone fixes it, so the
+  // screening and every report share one computation.
+  const std::vector<std::array<double, 6>>& reference_measurements;
   const std::vector<SampleOutlier>& spikes;
   const AnalysisOptions& options;
   const APriori& a_priori;

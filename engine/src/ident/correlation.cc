@@ -20,17 +20,28 @@ struct SeriesCovariance {
   double walk_rate = 0.0;          // q per epoch
 };
 
-// E[R̂_j] for j in `lags` (see the header), exact for N samples.
-std::vector<double> ExpectedEstimator(const SeriesCovariance& K, int N, std::span<const int> lags) {
+// The prefix sums ExpectedEstimatorInto works in, kept by a caller that
+// evaluates it many times.
+struct EstimatorWorkspace {
+  std::vector<double> S, A;
+};
+
+// E[R̂_j] for j in `lags` (see the header), exact for N samples, into
+// out[0 … lags.size()).
+void ExpectedEstimatorInto(const SeriesCovariance& K, int N, std::span<const int> lags, EstimatorWorkspace& ws,
+                           double* out) {
   const auto n = static_cast<size_t>(N);
   // a_i for the stationary part via prefix sums S(m) = Σ_{d ≤ m} R(d).
-  std::vector<double> S(n);
+  std::vector<double>& S = ws.S;
+  S.resize(n);
   double run = 0.0;
   for (size_t d = 0; d < n; ++d) {
     run += K.stationary[d];
     S[d] = run;
   }
-  std::vector<double> A(n + 1, 0.0);  // A[m+1] = Σ_{i ≤ m} a_i
+  std::vector<double>& A = ws.A;  // A[m+1] = Σ_{i ≤ m} a_i
+  A.resize(n + 1);
+  A[0] = 0.0;
   const double q = K.walk_rate;
   for (size_t i = 0; i < n; ++i) {
     double a = (S[i] + S[n - 1 - i] - K.stationary[0]) / N;
@@ -41,16 +52,20 @@ std::vector<double> ExpectedEstimator(const SeriesCovariance& K, int N, std::spa
     A[i + 1] = A[i] + a;
   }
   const double b = A[n] / N;
-  std::vector<double> out;
-  out.reserve(lags.size());
-  for (int j : lags) {
-    const auto J = static_cast<size_t>(j);
+  for (size_t g = 0; g < lags.size(); ++g) {
+    const auto J = static_cast<size_t>(lags[g]);
     const double count = static_cast<double>(n - J);
     double diagonal = count * K.stationary[J];
     if (q != 0.0) diagonal += q * count * (count + 1.0) / 2.0;  // Σ_{i<N−j} q (i+1)
     const double a_sum = A[n - J] + (A[n] - A[J]);              // Σ a_i + Σ a_{i+j}
-    out.push_back((diagonal - a_sum + count * b) / N);
+    out[g] = (diagonal - a_sum + count * b) / N;
   }
+}
+
+std::vector<double> ExpectedEstimator(const SeriesCovariance& K, int N, std::span<const int> lags) {
+  EstimatorWorkspace ws;
+  std::vector<double> out(lags.size());
+  ExpectedEstimatorInto(K, N, lags, ws, out.data());
   return out;
 }
 
@@ -82,11 +97,11 @@ std::vector<FamilySpec> Families() {
 }
 
 // The series' covariance under a family with parameters θ (natural units) —
-// the drift's own covariance less the smoother's error covariance.
-SeriesCovariance CovarianceOf(CorrelationFamily f, const double* p, int N, double dt,
-                              std::span<const double> error_acf) {
-  SeriesCovariance K;
+// the drift's own covariance less the smoother's error covariance — into K.
+void CovarianceInto(CorrelationFamily f, const double* p, int N, double dt, std::span<const double> error_acf,
+                    SeriesCovariance& K) {
   K.stationary.assign(static_cast<size_t>(N), 0.0);
+  K.walk_rate = 0.0;
   // Exponentials and the cosine by recurrence over the lags (one exp per term).
   double first = 0.0, first_step = 0.0, second = 0.0, second_step = 0.0;
   double c = 1.0, sn = 0.0, c_step = 1.0, s_step = 0.0;
@@ -129,37 +144,51 @@ SeriesCovariance CovarianceOf(CorrelationFamily f, const double* p, int N, doubl
   }
   for (size_t d = 0; d < K.stationary.size() && d < error_acf.size(); ++d) K.stationary[d] -= error_acf[d];
   if (f == CorrelationFamily::kRandomWalk) K.walk_rate = p[2] * p[2] * dt;
+}
+
+SeriesCovariance CovarianceOf(CorrelationFamily f, const double* p, int N, double dt,
+                              std::span<const double> error_acf) {
+  SeriesCovariance K;
+  CovarianceInto(f, p, N, dt, error_acf, K);
   return K;
 }
 
 // Whitened residuals L⁻¹ (R̂ − E[R̂]) on the lag grid, plus the mean's term.
+// The solver moves the free logarithms; the others (a profile's shape) stay
+// at `log_params`.
 class WhitenedAcfResidual {
  public:
-  WhitenedAcfResidual(CorrelationFamily family, std::vector<int> lags, Eigen::VectorXd data, Eigen::MatrixXd L,
-                      int N, double dt, std::vector<double> error_acf, double mean)
+  WhitenedAcfResidual(CorrelationFamily family, std::vector<double> log_params, std::vector<int> free_index,
+                      std::vector<int> lags, Eigen::VectorXd data, Eigen::MatrixXd L, int N, double dt,
+                      std::vector<double> error_acf, double mean)
       : family_(family),
+        free_index_(std::move(free_index)),
         lags_(std::move(lags)),
         data_(std::move(data)),
         L_(std::move(L)),
         N_(N),
         dt_(dt),
         error_acf_(std::move(error_acf)),
-        mean_(mean) {}
+        mean_(mean),
+        log_params_(std::move(log_params)),
+        params_(log_params_.size()),
+        whitened_(static_cast<Eigen::Index>(lags_.size())) {}
 
   // residual = L⁻¹ ([R̂_grid; m] − [E[R̂_grid](θ); 0]) with C = L Lᵀ the covariance of
   // [R̂_grid; m] under the null; the mean's variance follows the family:
   // (m / σ_m(θ)) replaces the mean's row scale.  θ = exp(log θ).
-  bool operator()(double const* const* log_params, double* residual) const {
-    const size_t k = Families()[static_cast<size_t>(family_)].names.size();
-    std::vector<double> p(k);
-    for (size_t i = 0; i < k; ++i) p[i] = std::exp(log_params[0][i]);
-    const SeriesCovariance K = CovarianceOf(family_, p.data(), N_, dt_, error_acf_);
-    const std::vector<double> expected = ExpectedEstimator(K, N_, lags_);
+  bool operator()(double const* const* free_log_params, double* residual) const {
+    for (size_t i = 0; i < free_index_.size(); ++i) {
+      log_params_[static_cast<size_t>(free_index_[i])] = free_log_params[0][i];
+    }
+    for (size_t i = 0; i < params_.size(); ++i) params_[i] = std::exp(log_params_[i]);
+    CovarianceInto(family_, params_.data(), N_, dt_, error_acf_, covariance_);
+    const SeriesCovariance& K = covariance_;
     const auto G = static_cast<Eigen::Index>(lags_.size());
-    Eigen::VectorXd r(G);
-    for (Eigen::Index i = 0; i < G; ++i) r[i] = data_[i] - expected[static_cast<size_t>(i)];
-    const Eigen::VectorXd w = L_.triangularView<Eigen::Lower>().solve(r);
-    for (Eigen::Index i = 0; i < G; ++i) residual[i] = w[i];
+    ExpectedEstimatorInto(K, N_, lags_, workspace_, whitened_.data());
+    whitened_ = data_ - whitened_;
+    L_.triangularView<Eigen::Lower>().solveInPlace(whitened_);
+    for (Eigen::Index i = 0; i < G; ++i) residual[i] = whitened_[i];
     residual[G] = mean_ / std::sqrt(std::max(MeanVariance(K, N_), 1e-300));
     // Parameters far outside the data's range overflow: tell the solver the
     // step failed rather than hand it NaNs.
@@ -171,6 +200,7 @@ class WhitenedAcfResidual {
 
  private:
   CorrelationFamily family_;
+  std::vector<int> free_index_;
   std::vector<int> lags_;
   Eigen::VectorXd data_;
   Eigen::MatrixXd L_;
@@ -178,6 +208,13 @@ class WhitenedAcfResidual {
   double dt_;
   std::vector<double> error_acf_;
   double mean_;
+  // Scratch of every evaluation, kept to spare the allocations: the solver
+  // evaluates one cost function from one thread.
+  mutable std::vector<double> log_params_;
+  mutable std::vector<double> params_;
+  mutable SeriesCovariance covariance_;
+  mutable EstimatorWorkspace workspace_;
+  mutable Eigen::VectorXd whitened_;
 };
 
 }  // namespace
@@ -314,21 +351,27 @@ FamilyFit FitFamily(const Problem& pb, CorrelationFamily family, std::vector<dou
   const int k = static_cast<int>(spec.names.size());
   std::vector<double> theta(static_cast<size_t>(k));
   for (int i = 0; i < k; ++i) theta[static_cast<size_t>(i)] = std::log(std::max(start[static_cast<size_t>(i)], 1e-300));
+  // The solver sees the free logarithms only: a fixed one costs nothing to differentiate.
+  std::vector<int> free_index;
+  for (int i = 0; i < k; ++i) {
+    if (std::find(fixed.begin(), fixed.end(), i) == fixed.end()) free_index.push_back(i);
+  }
+  const auto free_count = static_cast<int>(free_index.size());
+  std::vector<double> free_theta;
+  for (int i : free_index) free_theta.push_back(theta[static_cast<size_t>(i)]);
 
   ceres::Problem problem;
-  auto* cost = new ceres::DynamicNumericDiffCostFunction<WhitenedAcfResidual, ceres::CENTRAL>(
-      new WhitenedAcfResidual(family, pb.lags, pb.data, pb.L, pb.N, pb.dt, pb.error_acf, pb.mean));
-  cost->AddParameterBlock(k);
+  auto* cost = new ceres::DynamicNumericDiffCostFunction<WhitenedAcfResidual, ceres::CENTRAL>(new WhitenedAcfResidual(
+      family, theta, free_index, pb.lags, pb.data, pb.L, pb.N, pb.dt, pb.error_acf, pb.mean));
+  cost->AddParameterBlock(free_count);
   cost->SetNumResiduals(static_cast<int>(pb.lags.size()) + 1);
-  problem.AddResidualBlock(cost, nullptr, theta.data());
-  if (!fixed.empty()) problem.SetManifold(theta.data(), new ceres::SubsetManifold(k, fixed));
+  problem.AddResidualBlock(cost, nullptr, free_theta.data());
   // Correlation times between a tenth of an epoch and a hundred runs.
-  for (int i = 0; i < k; ++i) {
-    const std::string& name = spec.names[static_cast<size_t>(i)];
-    if (std::find(fixed.begin(), fixed.end(), i) != fixed.end()) continue;
+  for (int c = 0; c < free_count; ++c) {
+    const std::string& name = spec.names[static_cast<size_t>(free_index[static_cast<size_t>(c)])];
     if (name.find("tau") != std::string::npos || name == "period_s") {
-      problem.SetParameterLowerBound(theta.data(), i, std::log(0.1 * pb.dt));
-      problem.SetParameterUpperBound(theta.data(), i, std::log(100.0 * pb.T));
+      problem.SetParameterLowerBound(free_theta.data(), c, std::log(0.1 * pb.dt));
+      problem.SetParameterUpperBound(free_theta.data(), c, std::log(100.0 * pb.T));
     }
   }
   ceres::Solver::Options so;
@@ -338,13 +381,16 @@ FamilyFit FitFamily(const Problem& pb, CorrelationFamily family, std::vector<dou
   so.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
+  for (int c = 0; c < free_count; ++c) {
+    theta[static_cast<size_t>(free_index[static_cast<size_t>(c)])] = free_theta[static_cast<size_t>(c)];
+  }
 
   FamilyFit fit;
   fit.family = family;
-  fit.parameter_count = k - static_cast<int>(fixed.size());
+  fit.parameter_count = free_count;
   fit.converged = summary.IsSolutionUsable();
   fit.chi2 = 2.0 * summary.final_cost;
-  // Jacobian at the solution (in the full logarithmic parameters).
+  // Covariance of the free logarithms from the Jacobian at the solution.
   Eigen::MatrixXd cov = Eigen::MatrixXd::Constant(k, k, std::numeric_limits<double>::quiet_NaN());
   {
     double cost_value = 0.0;
@@ -352,18 +398,12 @@ FamilyFit FitFamily(const Problem& pb, CorrelationFamily family, std::vector<dou
     ceres::CRSMatrix crs;
     ceres::Problem::EvaluateOptions eo;
     problem.Evaluate(eo, &cost_value, &residuals, nullptr, &crs);
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, k);
+    Eigen::MatrixXd Jf = Eigen::MatrixXd::Zero(crs.num_rows, free_count);
     for (int r = 0; r < crs.num_rows; ++r) {
       for (int idx = crs.rows[static_cast<size_t>(r)]; idx < crs.rows[static_cast<size_t>(r) + 1]; ++idx) {
-        J(r, crs.cols[static_cast<size_t>(idx)]) = crs.values[static_cast<size_t>(idx)];
+        Jf(r, crs.cols[static_cast<size_t>(idx)]) = crs.values[static_cast<size_t>(idx)];
       }
     }
-    std::vector<int> free_index;
-    for (int i = 0; i < k; ++i) {
-      if (std::find(fixed.begin(), fixed.end(), i) == fixed.end()) free_index.push_back(i);
-    }
-    Eigen::MatrixXd Jf(J.rows(), static_cast<Eigen::Index>(free_index.size()));
-    for (size_t c = 0; c < free_index.size(); ++c) Jf.col(static_cast<Eigen::Index>(c)) = J.col(free_index[c]);
     const Eigen::MatrixXd info = Jf.transpose() * Jf;
     const Eigen::JacobiSVD<Eigen::MatrixXd> svd(info);
     const auto& sv = svd.singularValues();
@@ -447,11 +487,13 @@ FamilyFit ProfiledAlternative(const Problem& pb, CorrelationFamily family, const
                               const std::vector<std::vector<double>>& grid_starts, const std::vector<int>& shape) {
   double best_chi2 = std::numeric_limits<double>::infinity();
   const std::vector<double>* best_start = nullptr;
+  FamilyFit best_on_grid;
   for (const auto& start : grid_starts) {
-    const FamilyFit f = FitFamily(pb, family, start, shape);
+    FamilyFit f = FitFamily(pb, family, start, shape);
     if (f.converged && f.chi2 < best_chi2) {
       best_chi2 = f.chi2;
       best_start = &start;
+      best_on_grid = std::move(f);
     }
   }
   FamilyFit out;
@@ -464,7 +506,7 @@ FamilyFit ProfiledAlternative(const Problem& pb, CorrelationFamily family, const
   const bool shape_fixed = !out.converged || out.chi2 > best_chi2 || left_family;
   if (shape_fixed) {
     // Keep the grid's point when the free fit wanders off.
-    out = FitFamily(pb, family, *best_start, shape);
+    out = std::move(best_on_grid);
     out.parameter_count += static_cast<int>(shape.size());
   }
   ErrorsUnderAlternative(pb, shape_fixed ? shape : std::vector<int>{}, out);

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <span>
-#include <tuple>
 
 #include "insdiag/engine/model/state_layout.h"
 
@@ -89,15 +88,17 @@ LiveStatus LiveMonitor::Status() const {
   out.faults.insert(out.faults.end(), steps_->steps().begin(), steps_->steps().end());
   SortFaultIntervals(out.faults);
   out.nis_mean = updates_ > 0 ? nis_sum_ / updates_ : 0.0;
-  std::tie(out.nis_band_low, out.nis_band_high) = MeanNisBand(updates_, options_.monitor.family_wise_alpha);
+  const MeanNisBand nis_band = MeanNisBandOf(updates_, options_.monitor.family_wise_alpha);
+  out.nis_band_low = nis_band.low;
+  out.nis_band_high = nis_band.high;
   out.gamma2 = tests.gamma2();
   out.eta2 = tests.eta2();
   out.outlier_threshold = tests.outlier_threshold();
   out.gradual_threshold = tests.gradual_threshold();
   out.step_statistic = steps_->largest_statistic();
   out.step_threshold = steps_->threshold();
-  const bool nis_off = updates_ > 0 && (out.nis_mean < out.nis_band_low || out.nis_mean > out.nis_band_high);
-  out.verdict = VerdictOf(tests.gradual_found() || !steps_->steps().empty(), !out.faults.empty(), nis_off);
+  out.verdict = VerdictOf(tests.gradual_found() || !steps_->steps().empty(), !out.faults.empty(),
+                          nis_band.Excludes(out.nis_mean));
   return out;
 }
 

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <tuple>
 
 #include "insdiag/engine/monitor/innovation_tests.h"
 #include "insdiag/engine/stats/distributions.h"
@@ -28,7 +27,7 @@ void SortFaultIntervals(std::vector<FaultInterval>& faults) {
                    [](const FaultInterval& a, const FaultInterval& b) { return a.start_s < b.start_s; });
 }
 
-std::pair<double, double> MeanNisBand(int updates, double family_wise_alpha) {
+MeanNisBand MeanNisBandOf(int updates, double family_wise_alpha) {
   if (updates <= 0) return {0.0, 0.0};
   // The NIS is one of the verdict's three families of tests (InnovationTests).
   const double alpha = family_wise_alpha / 3.0;
@@ -124,7 +123,9 @@ MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const State
 
   const int updates = fw.scalar_updates;
   out.nis_mean = updates > 0 ? nis_total / updates : 0.0;
-  std::tie(out.nis_band_low, out.nis_band_high) = MeanNisBand(updates, options.family_wise_alpha);
+  const MeanNisBand nis_band = MeanNisBandOf(updates, options.family_wise_alpha);
+  out.nis_band_low = nis_band.low;
+  out.nis_band_high = nis_band.high;
 
   // The seed's forward/backward discrepancy: sensor states whose estimates from
   // past and future data disagree beyond chance.
@@ -161,8 +162,7 @@ MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const State
     localised_until = f.end_s;
   }
 
-  const bool nis_off = out.nis_mean < out.nis_band_low || out.nis_mean > out.nis_band_high;
-  out.verdict = VerdictOf(tests.gradual_found(), !out.faults.empty(), nis_off);
+  out.verdict = VerdictOf(tests.gradual_found(), !out.faults.empty(), nis_band.Excludes(out.nis_mean));
   return out;
 }
 

@@ -64,9 +64,10 @@ std::vector<std::array<double, 6>> ReferenceMeasurements(const BenchRun& run) {
   const Eigen::Vector3d w_ie_n = wgs84::EarthRateNed(site.latitude_rad);
   const Eigen::Vector3d minus_g_n = -nav::GravityNed(site.latitude_rad, site.height_m);
   nav::ReferenceMotion motion(run);
+  Eigen::Matrix3d C1 = samples.empty() ? Eigen::Matrix3d::Identity() : nav::EulerToDcm(samples[0].ref_rpy_rad);
   for (size_t k = 1; k < samples.size(); ++k) {
-    const Eigen::Matrix3d C0 = nav::EulerToDcm(samples[k - 1].ref_rpy_rad);
-    const Eigen::Matrix3d C1 = nav::EulerToDcm(samples[k].ref_rpy_rad);
+    const Eigen::Matrix3d C0 = C1;
+    C1 = nav::EulerToDcm(samples[k].ref_rpy_rad);
     const double dt = samples[k].t_s - samples[k - 1].t_s;
     // The body rate's integral is the interval's rotation vector less its
     // coning, and the mean rotation of gravity is the constant-rate one with
@@ -86,11 +87,15 @@ std::vector<std::array<double, 6>> ReferenceMeasurements(const BenchRun& run) {
 }
 
 std::vector<SampleOutlier> ScreenAndRepairSpikes(BenchRun& run, const ScreeningOptions& options) {
+  return ScreenAndRepairSpikes(run, ReferenceMeasurements(run), options);
+}
+
+std::vector<SampleOutlier> ScreenAndRepairSpikes(BenchRun& run, const std::vector<std::array<double, 6>>& expected,
+                                                 const ScreeningOptions& options) {
   std::vector<SampleOutlier> outliers;
   const int w = options.half_window;
   const auto n = static_cast<long>(run.samples.size());
   if (n < 2 * w + 1) return outliers;
-  const std::vector<std::array<double, 6>> expected = ReferenceMeasurements(run);
   // The sample's departure from the reference motion.
   auto residual = [&](int c, long k) {
     const auto i = static_cast<size_t>(k);

@@ -110,8 +110,14 @@ MonitorResult Monitor(const ForwardPass& forward, const SmoothedPass& smoothed, 
 void AddFaultInterval(std::vector<FaultInterval>& faults, std::string_view channel, double start_s, double end_s,
                       FaultKind kind, double statistic, double join_gap_s);
 // The two-sided band of the mean NIS of `updates` scalar updates at the
-// verdict's share of the family-wise level.
-std::pair<double, double> MeanNisBand(int updates, double family_wise_alpha);
+// verdict's share of the family-wise level; without updates it is empty and
+// excludes nothing.
+struct MeanNisBand {
+  double low = 0.0;
+  double high = 0.0;
+  bool Excludes(double nis_mean) const { return high > 0.0 && (nis_mean < low || nis_mean > high); }
+};
+MeanNisBand MeanNisBandOf(int updates, double family_wise_alpha);
 // The verdict rule (above).
 Verdict VerdictOf(bool gradual_failure, bool any_interval, bool nis_outside_band);
 // In time order of their starts; intervals that start together keep their order.

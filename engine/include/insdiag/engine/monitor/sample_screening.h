@@ -48,7 +48,11 @@ struct SampleOutlier {
 // takes sample 1's.
 std::vector<std::array<double, 6>> ReferenceMeasurements(const BenchRun& run);
 
-// Finds spikes and replaces them in `run` (in place).
+// Finds spikes and replaces them in `run` (in place), against
+// `reference_measurements` = ReferenceMeasurements(run) when the caller has it.
+std::vector<SampleOutlier> ScreenAndRepairSpikes(BenchRun& run,
+                                                 const std::vector<std::array<double, 6>>& reference_measurements,
+                                                 const ScreeningOptions& options);
 std::vector<SampleOutlier> ScreenAndRepairSpikes(BenchRun& run, const ScreeningOptions& options);
 
 }  // namespace insdiag::engine
