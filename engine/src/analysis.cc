@@ -12,6 +12,7 @@
 #include "analysis/model_change.h"
 #include "analysis/model_pass.h"
 #include "analysis/run_context.h"
+#include "insdiag/engine/numerics/parallel_map.h"
 
 namespace insdiag::engine {
 namespace {
@@ -148,13 +149,13 @@ std::optional<ident::AllanResult> AllanOfStaticSegments(const BenchRun& run, con
   return std::nullopt;
 }
 
-// The a-priori model: datasheet, nominal, else the Allan fit. Drift
-// identification searches decades from the a-priori drifts for a type's
-// nominal model or an Allan fit — a class prior a unit may be far from. A
-// datasheet's drifts are the unit's own specification; a unit far from it
-// shows as a re-tuned drift or as effects near it.
+// The a-priori model: datasheet, nominal, else the Allan fit, which `allan`
+// then receives. Drift identification searches decades from the a-priori
+// drifts for a type's nominal model or an Allan fit — a class prior a unit may
+// be far from. A datasheet's drifts are the unit's own specification; a unit
+// far from it shows as a re-tuned drift or as effects near it.
 absl::StatusOr<pipeline::APriori> ChooseAPrioriModel(const BenchRun& run, const AnalysisRequest& request,
-                                                     const std::optional<ident::AllanResult>& allan,
+                                                     std::optional<ident::AllanResult>& allan,
                                                      const AnalysisOptions& options, std::vector<std::string>& notes) {
   pipeline::APriori out;
   out.drift_starts = options.drift_starts;
@@ -167,6 +168,7 @@ absl::StatusOr<pipeline::APriori> ChooseAPrioriModel(const BenchRun& run, const 
     out.model = *std::move(model);
     return out;
   }
+  allan = AllanOfStaticSegments(run, options, notes);
   if (!allan.has_value()) return model.status();
   auto from_allan = ident::ErrorModelFromAllan(*allan, options.reference, &notes);
   if (!from_allan.ok()) return from_allan.status();
@@ -235,9 +237,8 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   const std::vector<std::array<double, 6>> reference_measurements = ReferenceMeasurements(run);
   const std::vector<SampleOutlier> spikes = ScreenAndRepairSpikes(run, reference_measurements, options.screening);
 
-  Progress(options, 0.05, "Allan deviation");
-  std::optional<ident::AllanResult> allan = AllanOfStaticSegments(run, options, notes);
-
+  Progress(options, 0.05, "Allan deviation and the run condensed to its epochs");
+  std::optional<ident::AllanResult> allan;
   auto a_priori = ChooseAPrioriModel(run, request, allan, options, notes);
   if (!a_priori.ok()) return a_priori.status();
   const std::vector<ParameterEstimate> removed_constants =
@@ -250,8 +251,17 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
     return st;
   }
 
-  // The run condensed to its update epochs once: every pass below filters the epochs.
-  auto epochs = CondenseRun(run, base, options.filter.update_interval_s);
+  // The run condensed to its update epochs once: every pass below filters the
+  // epochs. Beside it, the Allan analysis, where the a-priori model did not
+  // need it first: identification and the report take it (the dominant
+  // constants removed leave an Allan deviation as it was).
+  absl::StatusOr<EpochRun> epochs;
+  std::vector<std::string> allan_notes;
+  numerics::InParallel([&] { epochs = CondenseRun(run, base, options.filter.update_interval_s); },
+                       [&] {
+                         if (!allan.has_value()) allan = AllanOfStaticSegments(run, options, allan_notes);
+                       });
+  notes.insert(notes.end(), allan_notes.begin(), allan_notes.end());
   if (!epochs.ok()) return epochs.status();
   const pipeline::RunContext context{run, *epochs, reference_measurements, spikes, options, *a_priori};
 

@@ -10,6 +10,7 @@
 #include "insdiag/engine/nav/strapdown.h"
 #include "insdiag/engine/nav/table_motion.h"
 #include "insdiag/engine/nav/wgs84.h"
+#include "insdiag/engine/numerics/parallel_map.h"
 
 namespace insdiag::engine {
 namespace {
@@ -60,29 +61,38 @@ double RobustSigma(std::vector<double>& magnitude) {
 std::vector<std::array<double, 6>> ReferenceMeasurements(const BenchRun& run) {
   const auto& samples = run.samples;
   std::vector<std::array<double, 6>> expected(samples.size());
+  if (samples.size() < 2) return expected;
   const auto& site = run.metadata.site;
   const Eigen::Vector3d w_ie_n = wgs84::EarthRateNed(site.latitude_rad);
   const Eigen::Vector3d minus_g_n = -nav::GravityNed(site.latitude_rad, site.height_m);
-  nav::ReferenceMotion motion(run);
-  Eigen::Matrix3d C1 = samples.empty() ? Eigen::Matrix3d::Identity() : nav::EulerToDcm(samples[0].ref_rpy_rad);
-  for (size_t k = 1; k < samples.size(); ++k) {
-    const Eigen::Matrix3d C0 = C1;
-    C1 = nav::EulerToDcm(samples[k].ref_rpy_rad);
-    const double dt = samples[k].t_s - samples[k - 1].t_s;
-    // The body rate's integral is the interval's rotation vector less its
-    // coning, and the mean rotation of gravity is the constant-rate one with
-    // the motion's shape added (nav/table_motion.h): a rate that steps inside
-    // a sample, or one axis stopping as the other starts, is not a spike.
-    const nav::IntervalCompensation shape = motion.Compensation(k);
-    const Eigen::Vector3d dtheta =
-        nav::QuaternionToRotationVector(Eigen::Quaterniond(C0.transpose() * C1)) - shape.coning_rad;
-    const Eigen::Vector3d rate = dtheta / dt + C0.transpose() * w_ie_n;
-    const Eigen::Matrix3d mean_rotation =
-        (nav::MeanBodyRotation(dtheta).inverse() + shape.velocity_map_correction).inverse();
-    const Eigen::Vector3d force = mean_rotation * (C0.transpose() * minus_g_n);
-    expected[k] = {rate.x(), rate.y(), rate.z(), force.x(), force.y(), force.z()};
-  }
-  if (samples.size() > 1) expected[0] = expected[1];
+  // Each interval's values follow from the reference alone: contiguous
+  // blocks of samples on every core.
+  const size_t blocks = static_cast<size_t>(numerics::WorkerThreads());
+  numerics::ParallelMap(blocks, [&](size_t b) {
+    const size_t begin = std::max<size_t>(1, samples.size() * b / blocks);
+    const size_t end = samples.size() * (b + 1) / blocks;
+    nav::ReferenceMotion motion(run);
+    Eigen::Matrix3d C1 = nav::EulerToDcm(samples[begin - 1].ref_rpy_rad);
+    for (size_t k = begin; k < end; ++k) {
+      const Eigen::Matrix3d C0 = C1;
+      C1 = nav::EulerToDcm(samples[k].ref_rpy_rad);
+      const double dt = samples[k].t_s - samples[k - 1].t_s;
+      // The body rate's integral is the interval's rotation vector less its
+      // coning, and the mean rotation of gravity is the constant-rate one with
+      // the motion's shape added (nav/table_motion.h): a rate that steps inside
+      // a sample, or one axis stopping as the other starts, is not a spike.
+      const nav::IntervalCompensation shape = motion.Compensation(k);
+      const Eigen::Vector3d dtheta =
+          nav::QuaternionToRotationVector(Eigen::Quaterniond(C0.transpose() * C1)) - shape.coning_rad;
+      const Eigen::Vector3d rate = dtheta / dt + C0.transpose() * w_ie_n;
+      const Eigen::Matrix3d mean_rotation =
+          (nav::MeanBodyRotation(dtheta).inverse() + shape.velocity_map_correction).inverse();
+      const Eigen::Vector3d force = mean_rotation * (C0.transpose() * minus_g_n);
+      expected[k] = {rate.x(), rate.y(), rate.z(), force.x(), force.y(), force.z()};
+    }
+    return true;
+  });
+  expected[0] = expected[1];
   return expected;
 }
 

@@ -3,8 +3,10 @@
 // these stages in order, each with explicit inputs and outputs
 // (engine/src/analysis.cc, the stages in engine/src/analysis/):
 //
-//   1. screening: spikes found and repaired in the raw samples
-//   2. Allan deviation of the static segments
+//   1. screening: spikes found and repaired in the raw samples, against what
+//      the table's motion alone would have made a perfect unit measure
+//   2. Allan deviation of the static segments: here when the a-priori model
+//      is its fit, else beside stage 4 on another core
 //   3. a-priori model: the run's datasheet, else the caller's nominal model
 //      (the knowledge base's unit type), else the Allan fit; dominant
 //      constant biases removed; baseline effects added

@@ -48,4 +48,23 @@ auto ParallelMap(std::size_t n, const Fn& fn) -> std::vector<decltype(fn(std::si
   return out;
 }
 
+// Runs `side` on a worker while the caller runs `main`; both are done on
+// return. With one thread, or inside a map, `side` then `main` on the caller's.
+template <typename Main, typename Side>
+void InParallel(const Main& main, const Side& side) {
+  if (WorkerThreads() <= 1 || detail::InsideParallelMap()) {
+    side();
+    main();
+    return;
+  }
+  std::jthread worker([&] {
+    detail::InsideParallelMap() = true;
+    side();
+  });
+  // Both tasks hold a core: a map inside either runs serially.
+  detail::InsideParallelMap() = true;
+  main();
+  detail::InsideParallelMap() = false;
+}
+
 }  // namespace insdiag::engine::numerics
