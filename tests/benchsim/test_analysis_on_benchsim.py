@@ -1,7 +1,8 @@
 """The engine on runs of the independent simulator: `insdiag analyze` on a
 healthy unit with instantaneous rate changes at 10 Hz, an accelerometer step,
-a gyro ramp, and gyro steps of a tactical unit on each axis (the short version
-of scripts/fault_matrix.py). Needs the
+a gyro ramp, gyro steps of a tactical unit on each axis (the short version
+of scripts/fault_matrix.py), and healthy MEMS units whose a-priori model is
+their own Allan fit (of scripts/allan_prior_probe.py). Needs the
 CLI: INSDIAG_CLI, else build/clients/insdiag."""
 import json
 import os
@@ -81,6 +82,20 @@ class EngineOnIndependentRuns(unittest.TestCase):
                 self.assertTrue(onset_error_s < 60.0 or found[0]["onsetLowS"] <= onset_s <= found[0]["onsetHighS"],
                                 f"onset {found[0]['onsetS']} s, truth {onset_s} s")
                 self.assertEqual(report["verdict"], "FAULTY")
+
+    def test_a_healthy_mems_unit_without_datasheet_or_unit_type_is_good(self):
+        # The a-priori model is the Allan fit's. Seed 23 (a `positions`
+        # table): the gyro curve's rise over one-minute holds fits a ramp;
+        # seed 30 (still): the accelerometer curve's minimum reads as a
+        # flicker floor. Each placeholder once hid a drift the scan then
+        # named (scripts/allan_prior_probe.py, docs/FAULT_SCENARIOS.md).
+        for seed, profile in ((23, "positions"), (30, "static")):
+            with self.subTest(seed=seed), tempfile.TemporaryDirectory() as d:
+                report, _ = analyse(d, "--preset", "mems", "--profile", profile, "--rate-hz", "100",
+                                    "--duration", "1800", "--seed", str(seed), "--datasheet", "no",
+                                    "--unit-type", "none")
+                self.assertEqual(report["verdict"], "GOOD", report.get("faultIntervals"))
+                self.assertEqual([c["name"] for c in significant(report)], [])
 
 
 if __name__ == "__main__":

@@ -7,7 +7,9 @@
 #include <map>
 #include <numbers>
 #include <numeric>
+#include <optional>
 #include <string>
+#include <utility>
 
 #include "insdiag/engine/model/parameters.h"
 #include "insdiag/engine/monitor/sample_screening.h"
@@ -407,12 +409,69 @@ std::vector<ParameterEstimate> AllanParameterEstimates(const AllanResult& result
   return out;
 }
 
+namespace {
+
+// The Gauss–Markov drift a channel's Allan fit stands for, and how it was
+// read: the fitted Markov term; else the larger of the drifts the flicker
+// floor and the rising branch stand for (one process carries both, and the
+// smaller is within its noise); else the bound from the curve's lowest point.
+absl::StatusOr<std::pair<GaussMarkov, std::string>> DriftPlaceholder(const AllanChannel& ch) {
+  const AllanFit& fit = ch.fit;
+  const AllanNoiseTerms terms = fit.Terms();
+  const MarkovPeak& peak = MarkovShapePeak();
+  auto lowest = [&](bool fitted) {
+    const AllanPoint* best = nullptr;
+    for (const AllanPoint& p : ch.curve) {
+      const double v = fitted ? p.fitted_adev : p.adev;
+      if (!(v > 0.0)) continue;
+      if (best == nullptr || v < (fitted ? best->fitted_adev : best->adev)) best = &p;
+    }
+    return best;
+  };
+  if (fit[AllanParameter::kMarkovSigma].included) {
+    return std::pair{GaussMarkov{terms.markov_sigma, terms.markov_tau_s}, std::string("drift from the fitted Gauss–Markov term")};
+  }
+  std::optional<std::pair<GaussMarkov, std::string>> floor_drift, rising_drift;
+  if (fit[AllanParameter::kBiasInstability].included) {
+    const AllanPoint* p = lowest(true);
+    const double floor = std::sqrt(kFlickerAvar) * terms.bias_instability;
+    const double tau_floor = p != nullptr ? p->tau_s : ch.curve.back().tau_s;
+    floor_drift = {GaussMarkov{floor / std::sqrt(peak.g), tau_floor / peak.u},
+                   "drift from the bias instability: the Markov process whose Allan peak is the flicker floor at τ = " +
+                       FormatG(tau_floor) + " s"};
+  }
+  if (fit[AllanParameter::kRateRandomWalk].included || fit[AllanParameter::kRateRamp].included) {
+    // The curve still rising at its longest τ = T: a drift slower than the
+    // segments, τ set to T. Its σ² is 3/2 of the rising terms' Allan
+    // variance at T, K²T/3 + R²T²/2 (IEEE Std 952-1997, Table C.1) — for a
+    // rate random walk alone K²T/2, the walk's variance over T/2. A ramp
+    // counts: over segments shorter than the drift's τ, a drift's rise looks
+    // like one, and the walk's coefficient may then fit to nothing.
+    const double T = ch.curve.back().tau_s;
+    AllanNoiseTerms rising;
+    rising.rate_random_walk = terms.rate_random_walk;
+    rising.rate_ramp = terms.rate_ramp;
+    rising_drift = {GaussMarkov{std::sqrt(1.5 * ModelAllanVariance(rising, T)), T},
+                    "drift from the rate random walk and ramp with T = the longest τ analysed (" + FormatG(T) + " s)"};
+  }
+  if (floor_drift.has_value() && rising_drift.has_value()) {
+    return rising_drift->first.sigma > floor_drift->first.sigma ? *rising_drift : *floor_drift;
+  }
+  if (floor_drift.has_value()) return *floor_drift;
+  if (rising_drift.has_value()) return *rising_drift;
+  const AllanPoint* p = lowest(false);
+  if (p == nullptr) return absl::InvalidArgumentError("Allan: channel " + ch.name + " has no positive deviation");
+  return std::pair{GaussMarkov{p->adev / std::sqrt(peak.g), p->tau_s / peak.u},
+                   std::string("no drift term resolved; Gauss–Markov drift set to the bound from the curve's lowest point")};
+}
+
+}  // namespace
+
 absl::StatusOr<ErrorModel> ErrorModelFromAllan(const AllanResult& result, const ReferenceAccuracy& reference,
                                                std::vector<std::string>* notes) {
   if (result.channels.size() != 6) return absl::InvalidArgumentError("Allan: the result does not hold six channels");
   ErrorModel model;
   model.reference = reference;
-  const MarkovPeak& peak = MarkovShapePeak();
   auto note = [&](const std::string& s) {
     if (notes != nullptr) notes->push_back(s);
   };
@@ -436,38 +495,10 @@ absl::StatusOr<ErrorModel> ErrorModelFromAllan(const AllanResult& result, const 
     triad.quantization[ch.axis] =
         fit[AllanParameter::kQuantization].included ? fit[AllanParameter::kQuantization].value : 0.0;
 
-    // Drift.
-    const AllanNoiseTerms terms = fit.Terms();
-    auto lowest = [&](bool fitted) {
-      const AllanPoint* best = nullptr;
-      for (const AllanPoint& p : ch.curve) {
-        const double v = fitted ? p.fitted_adev : p.adev;
-        if (!(v > 0.0)) continue;
-        if (best == nullptr || v < (fitted ? best->fitted_adev : best->adev)) best = &p;
-      }
-      return best;
-    };
-    GaussMarkov& gm = triad.bias[axis];
-    if (fit[AllanParameter::kMarkovSigma].included) {
-      gm = {terms.markov_sigma, terms.markov_tau_s};
-      note(ch.name + ": drift from the fitted Gauss–Markov term");
-    } else if (fit[AllanParameter::kBiasInstability].included) {
-      const AllanPoint* p = lowest(true);
-      const double floor = std::sqrt(kFlickerAvar) * terms.bias_instability;
-      const double tau_floor = p != nullptr ? p->tau_s : ch.curve.back().tau_s;
-      gm = {floor / std::sqrt(peak.g), tau_floor / peak.u};
-      note(ch.name + ": drift from the bias instability: the Markov process whose Allan peak is the flicker floor at τ = " +
-           FormatG(tau_floor) + " s");
-    } else if (fit[AllanParameter::kRateRandomWalk].included) {
-      const double T = ch.curve.back().tau_s;
-      gm = {terms.rate_random_walk * std::sqrt(0.5 * T), T};
-      note(ch.name + ": drift from the rate random walk with T = the longest τ analysed (" + FormatG(T) + " s)");
-    } else {
-      const AllanPoint* p = lowest(false);
-      if (p == nullptr) return absl::InvalidArgumentError("Allan: channel " + ch.name + " has no positive deviation");
-      gm = {p->adev / std::sqrt(peak.g), p->tau_s / peak.u};
-      note(ch.name + ": no drift term resolved; Gauss–Markov drift set to the bound from the curve's lowest point");
-    }
+    auto drift = DriftPlaceholder(ch);
+    if (!drift.ok()) return drift.status();
+    triad.bias[axis] = drift->first;
+    note(ch.name + ": " + drift->second);
   }
   return model;
 }
