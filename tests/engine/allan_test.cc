@@ -627,6 +627,71 @@ TEST(AllanAnalysisTest, ParameterEstimatesAndAPrioriModel) {
   EXPECT_EQ(notes.size(), 6u);
 }
 
+// Six channels whose curves are exactly the model with white noise N, flicker
+// floor B, rate random walk `walk` (K) and rate ramp R, each term in the fit when
+// non-zero.
+AllanResult ExactFitOfEveryChannel(double N, double B, double walk, double R) {
+  AllanResult r;
+  r.tau0_s = 0.01;
+  AllanNoiseTerms terms;
+  terms.white_density = N;
+  terms.bias_instability = B;
+  terms.rate_random_walk = walk;
+  terms.rate_ramp = R;
+  for (int c = 0; c < 6; ++c) {
+    AllanChannel ch;
+    ch.name = std::string(kSensorChannelNames[c]);
+    ch.sensor = c < 3 ? Sensor::kGyro : Sensor::kAccelerometer;
+    ch.axis = c % 3;
+    for (double tau_s : {0.1, 1.0, 10.0, 60.0}) {
+      AllanPoint p;
+      p.tau_s = tau_s;
+      p.adev = p.fitted_adev = std::sqrt(ModelAllanVariance(terms, tau_s));
+      ch.curve.push_back(p);
+    }
+    const std::pair<AllanParameter, double> fitted[] = {{AllanParameter::kWhiteDensity, N},
+                                                        {AllanParameter::kBiasInstability, B},
+                                                        {AllanParameter::kRateRandomWalk, walk},
+                                                        {AllanParameter::kRateRamp, R}};
+    for (const auto& [term, value] : fitted) {
+      ch.fit[term].included = value > 0.0;
+      ch.fit[term].value = value;
+    }
+    r.channels.push_back(ch);
+  }
+  return r;
+}
+
+// The a-priori drift read from a fit whose curve still rises at its longest
+// τ, T: τ = T and σ² = 3/2 of the rising terms' Allan variance at T (IEEE Std
+// 952 Table C.1: K²T/3 + R²T²/2). A ramp counts as rising, and of a flicker
+// floor and a rise the larger drift is the placeholder.
+TEST(AllanAnalysisTest, TheAPrioriDriftOfARisingCurveCarriesItsRampAndTheLargerOfFloorAndRise) {
+  const double N = 1e-4, T = 60.0;
+  const auto drift_of = [](const AllanResult& r) {
+    auto model = ErrorModelFromAllan(r, AnalysisOptions{}.reference, nullptr);
+    EXPECT_TRUE(model.ok()) << model.status();
+    return model.ok() ? model->gyro.bias[0] : GaussMarkov{};
+  };
+  // A ramp alone (a walk fitted to nothing): σ² = 3/2 · R²T²/2, not zero.
+  const double R = 5e-7;
+  GaussMarkov gm = drift_of(ExactFitOfEveryChannel(N, 0.0, 0.0, R));
+  EXPECT_DOUBLE_EQ(gm.tau_s, T);
+  EXPECT_NEAR(gm.sigma, std::sqrt(1.5 * 0.5 * R * R * T * T), 1e-12 * gm.sigma);
+  // A walk and a ramp add their Allan variances.
+  const double walk = 6e-6;
+  gm = drift_of(ExactFitOfEveryChannel(N, 0.0, walk, R));
+  EXPECT_NEAR(gm.sigma, std::sqrt(1.5 * (walk * walk * T / 3.0 + 0.5 * R * R * T * T)), 1e-12 * gm.sigma);
+  // A rise far above a floor: the rise's drift, not the floor's short one.
+  gm = drift_of(ExactFitOfEveryChannel(N, 1e-6, 1e-4, 0.0));
+  EXPECT_DOUBLE_EQ(gm.tau_s, T);
+  EXPECT_NEAR(gm.sigma, 1e-4 * std::sqrt(T / 2.0), 1e-12 * gm.sigma);
+  // A floor far above a rise: the floor's drift, its τ from where the curve is lowest.
+  gm = drift_of(ExactFitOfEveryChannel(N, 1e-4, 1e-9, 0.0));
+  EXPECT_LT(gm.tau_s, T);
+  EXPECT_GT(gm.sigma, 1e-9 * std::sqrt(T / 2.0) * 1e3);
+}
+
 // --- against an independent computation (tests/engine/allan_check.py) -------
 
 // The samples of the static segments of a run with holds of 900, 90 and 300 s
