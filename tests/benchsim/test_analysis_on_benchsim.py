@@ -97,6 +97,23 @@ class EngineOnIndependentRuns(unittest.TestCase):
                 self.assertEqual(report["verdict"], "GOOD", report.get("faultIntervals"))
                 self.assertEqual([c["name"] for c in significant(report)], [])
 
+    def test_a_mems_gyro_step_without_datasheet_is_not_taken_for_a_wider_drift(self):
+        # With no datasheet and no unit type the drifts are identified from
+        # decades around the Allan fit's; a 5 σ step (50 °/h) then fitted as
+        # a drift six times wider, and the scan found nothing. The step found
+        # against the Allan fit's drifts is now tested against the drifts
+        # identified beside it (docs/IDENTIFICATION.md).
+        sigma = 10.0 * 3.141592653589793 / 180.0 / 3600.0
+        with tempfile.TemporaryDirectory() as d:
+            report, _ = analyse(d, "--preset", "mems", "--profile", "mixed", "--rate-hz", "50", "--duration", "1800",
+                                "--seed", "5000", "--datasheet", "no", "--unit-type", "none",
+                                "--fault", f"gyro_bias_step.x={5.0 * sigma}@639.74")
+        found = significant(report)
+        self.assertTrue(found, f"nothing significant; verdict {report['verdict']}")
+        self.assertEqual(found[0]["name"], "gyro_bias_step.x")
+        self.assertLess(abs(found[0]["onsetS"] - 639.74), 60.0)
+        self.assertEqual(report["verdict"], "FAULTY")
+
 
 if __name__ == "__main__":
     unittest.main()

@@ -142,6 +142,11 @@ struct Retargeted {
   bool faults_flagged = false;           // by the last pass's monitoring or onset scan
   bool drifts_by_likelihood = false;     // the misfit was the drifts': their σ and τ are in the model
   bool deferred = false;                 // the a-priori model's missing effects go first
+  // The most significant bias step and the most significant ramp the first
+  // pass found against an Allan fit's placeholders (family-wise over the
+  // fault terms): a step and a ramp of one axis look alike there.
+  std::vector<OnsetFit> placeholder_faults;
+  int fault_terms_scanned = 0;
 };
 
 // The a-priori model's misfit against its best missing effect: a drift whose
@@ -216,11 +221,21 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std
     out.drifts = ident::CorrelateDrifts(pass->forward, pass->smoothed, *pass->layout, options.correlation,
                                         scan_a_priori ? &found_notes : nullptr);
     // A bias step or ramp the onset scan finds counts too (Bonferroni over its terms).
-    out.faults_flagged = !pass->monitor.faults.empty() ||
-                         std::any_of(pass->onsets.begin(), pass->onsets.end(), [&](const OnsetFit& f) {
-                           return f.p_value * static_cast<double>(pass->onsets.size()) <
-                                  options.finder.family_wise_alpha;
-                         });
+    const auto family_wise = [&](const OnsetFit& f) {
+      return f.p_value * static_cast<double>(pass->onsets.size()) < options.finder.family_wise_alpha;
+    };
+    out.faults_flagged = !pass->monitor.faults.empty() || std::any_of(pass->onsets.begin(), pass->onsets.end(), family_wise);
+    if (first && c.a_priori.from_allan) {
+      for (const bool step : {true, false}) {
+        const OnsetFit* best = nullptr;
+        for (const OnsetFit& f : pass->onsets) {
+          if (!f.identifiable || !family_wise(f) || (f.term.family->name.ends_with("_step") != step)) continue;
+          if (best == nullptr || f.p_value < best->p_value) best = &f;
+        }
+        if (best != nullptr) out.placeholder_faults.push_back(*best);
+      }
+      out.fault_terms_scanned = static_cast<int>(pass->onsets.size());
+    }
     // The a-priori model's missing effects, the likelihood's structures
     // among them: a walk is a missing effect as much as a constant term,
     // and a drift σ re-tuned before it is tested takes the walk's slow
@@ -338,6 +353,88 @@ absl::Status MatchReferenceNoiseToTheIdentifiedModel(const RunContext& c, Identi
   return absl::OkStatus();
 }
 
+// A bias step or ramp found against an Allan fit's placeholders, tested
+// against the drifts identified without it. Drifts identified from decades
+// take a step as a slower, wider drift (a 50 °/h MEMS gyro step became a
+// drift σ × 6 with τ × 17, and the step's scan on that model stayed below
+// its level), so the drifts are identified again with the fault in the model
+// at the scan's onset, and the two fitted likelihoods decide: the fault
+// stands when 2Δℓ exceeds the onset scan's own bound (Davies over the onsets,
+// Bonferroni over the fault terms) — the likelihood ratio fitted on both
+// sides. Model A then has the drifts identified beside the fault, without
+// it: the scan names the fault, and adding it is the user's step, as for any
+// unit.
+struct PlaceholderFaultTest {
+  const OnsetFit* fault = nullptr;
+  Identification with_fault;  // the drifts identified beside it (the fault in the model)
+  std::vector<std::string> notes;
+  double statistic = 0.0;
+  double p_value = 1.0;
+  bool tested = false;
+};
+
+PlaceholderFaultTest TestPlaceholderFault(const RunContext& c, const Retargeted& retargeted, const OnsetFit& fault,
+                                          const Identification& id, double log_likelihood_without) {
+  PlaceholderFaultTest t;
+  t.fault = &fault;
+  t.with_fault.model = id.model;
+  t.with_fault.identified = id.identified;
+  ModelEffect e;
+  e.term = fault.term;
+  e.onset_s = fault.onset_s;
+  e.prior_sigma[0] = c.options.estimated_prior_scale * std::max(std::abs(fault.estimate), 3.0 * fault.std_error);
+  t.with_fault.model.effects.push_back(e);
+  IdentifyFinalDrifts(c, retargeted, t.with_fault, t.notes);
+  auto pass = RunPass(c.run, c.epochs, t.with_fault.model, c.spikes, c.options, /*with_scan=*/false);
+  if (!pass.ok()) {
+    t.notes = {fault.term.Name() + " against the identified drifts: not tested (" +
+               std::string(pass.status().message()) + ")"};
+    return t;
+  }
+  t.tested = true;
+  t.statistic = std::max(0.0, 2.0 * (pass->log_likelihood - log_likelihood_without));
+  t.p_value =
+      std::min(1.0, OnsetPValue(t.statistic, fault.path_length) * static_cast<double>(retargeted.fault_terms_scanned));
+  t.with_fault.model.effects.pop_back();
+  return t;
+}
+
+// The faults found against the placeholders, each against the identified
+// drifts; model A takes the drifts identified beside the one whose fitted
+// 2Δℓ is largest among those that stand.
+void TestPlaceholderFaults(const RunContext& c, const Retargeted& retargeted, Identification& id,
+                           std::vector<std::string>& notes) {
+  auto without = RunPass(c.run, c.epochs, id.model, c.spikes, c.options, /*with_scan=*/false);
+  if (!without.ok()) {
+    notes.push_back("faults found against the Allan fit's drifts: not tested (" +
+                    std::string(without.status().message()) + ")");
+    return;
+  }
+  PlaceholderFaultTest* best = nullptr;
+  std::vector<PlaceholderFaultTest> tests;
+  for (const OnsetFit& f : retargeted.placeholder_faults) {
+    tests.push_back(TestPlaceholderFault(c, retargeted, f, id, without->log_likelihood));
+  }
+  for (PlaceholderFaultTest& t : tests) {
+    if (!t.tested) {
+      notes.insert(notes.end(), t.notes.begin(), t.notes.end());
+      continue;
+    }
+    const bool stands = t.p_value < c.options.finder.family_wise_alpha;
+    notes.push_back(absl::StrFormat("%s at %.0f s, found against the Allan fit's drifts: 2Δℓ = %.1f with the drifts "
+                                    "identified beside it (p = %.2g over the onsets and fault terms) — %s",
+                                    t.fault->term.Name(), t.fault->onset_s, t.statistic, t.p_value,
+                                    stands ? "it stands against the drifts identified from decades"
+                                           : "their misfit"));
+    if (stands && (best == nullptr || t.statistic > best->statistic)) best = &t;
+  }
+  if (best == nullptr) return;
+  notes.push_back("model A has the drifts identified beside " + best->fault->term.Name());
+  notes.insert(notes.end(), best->notes.begin(), best->notes.end());
+  id.model = std::move(best->with_fault.model);
+  id.identified = std::move(best->with_fault.identified);
+}
+
 }  // namespace
 
 absl::StatusOr<Identification> IdentifyModel(const RunContext& c, const std::optional<ident::AllanResult>& allan,
@@ -348,7 +445,10 @@ absl::StatusOr<Identification> IdentifyModel(const RunContext& c, const std::opt
   id.model = std::move(base);
   auto retargeted = Retarget(c, id, notes);
   if (!retargeted.ok()) return retargeted.status();
-  if (c.options.identify_drifts_by_likelihood && !retargeted->deferred) IdentifyFinalDrifts(c, *retargeted, id, notes);
+  if (c.options.identify_drifts_by_likelihood && !retargeted->deferred) {
+    IdentifyFinalDrifts(c, *retargeted, id, notes);
+    if (!retargeted->placeholder_faults.empty()) TestPlaceholderFaults(c, *retargeted, id, notes);
+  }
   if (c.a_priori.from_allan && !retargeted->deferred) {
     if (auto matched = MatchReferenceNoiseToTheIdentifiedModel(c, id, notes); !matched.ok()) return matched;
   }

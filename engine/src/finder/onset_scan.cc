@@ -198,12 +198,15 @@ OnsetFit FitTerm(const EffectTerm& term, const PairSums& sums, const EpochRun& r
   fit.onset_s = run.epochs[static_cast<size_t>(fit.onset_epoch)].start_s;
   fit.onset_low_s = run.epochs[static_cast<size_t>(quantile(options.interval_tail))].start_s;
   fit.onset_high_s = run.epochs[static_cast<size_t>(quantile(1.0 - options.interval_tail))].start_s;
-  fit.p_value = std::min(1.0, stats::ChiSquareSurvival(fit.statistic, 1) +
-                                  fit.path_length * std::exp(-0.5 * fit.statistic) / std::numbers::pi);
+  fit.p_value = OnsetPValue(fit.statistic, fit.path_length);
   return fit;
 }
 
 }  // namespace
+
+double OnsetPValue(double statistic, double path_length) {
+  return std::min(1.0, stats::ChiSquareSurvival(statistic, 1) + path_length * std::exp(-0.5 * statistic) / std::numbers::pi);
+}
 
 std::vector<EffectTerm> AbsentFaultTerms(const ErrorModel& model) {
   std::vector<EffectTerm> out;

@@ -76,6 +76,10 @@ struct OnsetFit {
   int onsets_tried = 0;
 };
 
+// Davies' bound on P(max over onsets of 2Δℓ ≥ statistic) for a scan whose
+// path length is `path_length` (the p-value of OnsetFit).
+double OnsetPValue(double statistic, double path_length);
+
 // Every fault term of the catalogue absent from `model`.
 std::vector<EffectTerm> AbsentFaultTerms(const ErrorModel& model);
 
