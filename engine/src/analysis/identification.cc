@@ -229,7 +229,7 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std
       for (const bool step : {true, false}) {
         const OnsetFit* best = nullptr;
         for (const OnsetFit& f : pass->onsets) {
-          if (!f.identifiable || !family_wise(f) || (f.term.family->name.ends_with("_step") != step)) continue;
+          if (!f.identifiable || !family_wise(f) || (f.term.family->regressor == Regressor::kStep) != step) continue;
           if (best == nullptr || f.p_value < best->p_value) best = &f;
         }
         if (best != nullptr) out.placeholder_faults.push_back(*best);
