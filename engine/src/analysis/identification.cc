@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "analysis/model_change.h"
 #include "insdiag/engine/ident/correlation.h"
 #include "insdiag/engine/ident/retarget.h"
 #include "insdiag/engine/stats/distributions.h"
@@ -382,7 +383,7 @@ PlaceholderFaultTest TestPlaceholderFault(const RunContext& c, const Retargeted&
   ModelEffect e;
   e.term = fault.term;
   e.onset_s = fault.onset_s;
-  e.prior_sigma[0] = c.options.estimated_prior_scale * std::max(std::abs(fault.estimate), 3.0 * fault.std_error);
+  e.prior_sigma[0] = PriorSigmaAroundEstimate(fault.estimate, fault.std_error, c.options);
   t.with_fault.model.effects.push_back(e);
   IdentifyFinalDrifts(c, retargeted, t.with_fault, t.notes);
   auto pass = RunPass(c.run, c.epochs, t.with_fault.model, c.spikes, c.options, /*with_scan=*/false);

@@ -25,6 +25,10 @@ std::vector<ParameterEstimate> WithTakenStructures(std::vector<ParameterEstimate
   return identified;
 }
 
+double PriorSigmaAroundEstimate(double estimate, double std_error, const AnalysisOptions& options) {
+  return options.estimated_prior_scale * std::max(std::abs(estimate), 3.0 * std_error);
+}
+
 // Model `base` plus `selectors`, with priors from what model A's scan and
 // correlation processing found; anything not found gets the diffuse prior.
 absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& base,
@@ -54,7 +58,7 @@ absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& ba
         ModelEffect e;
         e.term = term;
         e.onset_s = *onset_s;
-        e.prior_sigma[0] = options.estimated_prior_scale * std::max(std::abs(c->estimate), 3.0 * c->std_error);
+        e.prior_sigma[0] = PriorSigmaAroundEstimate(c->estimate, c->std_error, options);
         model.effects.push_back(e);
         continue;
       }
@@ -86,7 +90,7 @@ absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& ba
           }
           const double beta = s[i] / I(i, i);
           const double se = 1.0 / std::sqrt(I(i, i));
-          e.prior_sigma[static_cast<size_t>(p)] = options.estimated_prior_scale * std::max(std::abs(beta), 3.0 * se);
+          e.prior_sigma[static_cast<size_t>(p)] = PriorSigmaAroundEstimate(beta, se, options);
         }
         if (placed) model.effects.push_back(e);
       }
