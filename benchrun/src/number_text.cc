@@ -1,6 +1,6 @@
 #include "number_text.h"
 
-#include "insdiag/benchrun/site_angles.h"
+#include "insdiag/benchrun/numbers.h"
 
 #include <absl/strings/str_format.h>
 
@@ -105,6 +105,12 @@ double DegreesFromRadians(double radians) {
 }  // namespace insdiag::benchrun::internal
 
 namespace insdiag::benchrun {
+
+std::optional<double> FiniteNumber(std::string_view text) {
+  double value = 0.0;
+  if (internal::ParseDouble(text, value) != internal::NumberParse::kOk) return std::nullopt;
+  return value;
+}
 
 std::optional<double> SiteAngleRadians(std::string_view degrees_text) {
   double radians = 0.0;

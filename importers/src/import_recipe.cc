@@ -10,12 +10,12 @@
 #include <numbers>
 
 #include "insdiag/benchrun/bench_run_validation.h"
-#include "insdiag/benchrun/site_angles.h"
+#include "insdiag/benchrun/numbers.h"
 #include "text_fields.h"
 
 namespace insdiag::importers {
 
-using internal::FiniteNumber;
+using benchrun::FiniteNumber;
 using internal::Split;
 using internal::Trim;
 namespace {

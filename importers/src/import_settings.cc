@@ -1,13 +1,12 @@
 #include "insdiag/importers/import_settings.h"
 
-
 #include <fstream>
 #include <sstream>
+
 #include "text_fields.h"
 
 namespace insdiag::importers {
 
-using internal::FiniteNumber;
 using internal::Split;
 using internal::Trim;
 

@@ -7,11 +7,12 @@
 #include <cmath>
 
 #include "insdiag/benchrun/bench_run_validation.h"
+#include "insdiag/benchrun/numbers.h"
 #include "text_fields.h"
 
 namespace insdiag::importers {
 
-using internal::FiniteNumber;
+using benchrun::FiniteNumber;
 using internal::Split;
 using internal::Trim;
 namespace {

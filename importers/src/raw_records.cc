@@ -8,11 +8,13 @@
 #include <cstring>
 
 #include "insdiag/benchrun/bench_run_validation.h"
+#include "insdiag/benchrun/numbers.h"
 #include "text_fields.h"
 
 namespace insdiag::importers::internal {
 namespace {
 
+using benchrun::FiniteNumber;
 using benchrun::Refusal;
 
 constexpr double kSecondsPerGpsWeek = 604800.0;

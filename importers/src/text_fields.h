@@ -3,7 +3,6 @@
 #pragma once
 
 #include <charconv>
-#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <string_view>
@@ -11,6 +10,9 @@
 
 namespace insdiag::importers::internal {
 
+// Without the spaces, tabs and carriage returns around it: raw logs keep a
+// "\r" from CRLF files in their lines, where the bench-run reader's lines
+// have none.
 inline std::string_view Trim(std::string_view text) {
   const std::size_t begin = text.find_first_not_of(" \t\r");
   if (begin == std::string_view::npos) return {};
@@ -28,17 +30,6 @@ inline std::vector<std::string_view> Split(std::string_view text, char separator
     if (end == std::string_view::npos) return parts;
     begin = end + 1;
   }
-}
-
-// A finite number, the whole text (a leading '+' allowed).
-inline std::optional<double> FiniteNumber(std::string_view text) {
-  if (text.starts_with('+')) text.remove_prefix(1);
-  double value = 0.0;
-  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (text.empty() || ec != std::errc() || end != text.data() + text.size() || !std::isfinite(value)) {
-    return std::nullopt;
-  }
-  return value;
 }
 
 template <typename Integer>

@@ -1,6 +1,9 @@
 // insdiag analyze RUN.csv [--add EFFECT]... [--base REPORT.json] [--json] [--series OUT.csv]
 // Runs the engine locally on a bench-run file, no server needed.
+#include <absl/strings/numbers.h>
+
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -83,9 +86,8 @@ class AnalyzeVerb final : public Verb {
       }
     }
     engine::AnalysisOptions options;
-    try {
-      options.filter.update_interval_s = std::stod(update_interval_);
-    } catch (...) {
+    if (!absl::SimpleAtod(update_interval_, &options.filter.update_interval_s) ||
+        !std::isfinite(options.filter.update_interval_s)) {
       err << "insdiag analyze: --update-interval: '" << update_interval_ << "' is not a number\n";
       return kExitUsage;
     }

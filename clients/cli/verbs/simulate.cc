@@ -2,7 +2,6 @@
 // Writes a bench run of a simulated unit on a two-axis rotary table, with the
 // given effects (and faults) hidden in it. The unit's base model is its unit
 // type's nominal model (data/unit-types), so no sensor number lives here.
-#include <charconv>
 #include <cmath>
 #include <numbers>
 #include <ostream>
@@ -18,21 +17,10 @@ namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
+// Exactly `count` comma-separated numbers.
 absl::StatusOr<std::vector<double>> Numbers(std::string_view text, const std::string& what, size_t count) {
-  std::vector<double> out;
-  while (!text.empty()) {
-    const size_t comma = text.find(',');
-    const std::string_view item = text.substr(0, comma);
-    double v = 0.0;
-    const auto [ptr, ec] = std::from_chars(item.data(), item.data() + item.size(), v);
-    if (ec != std::errc() || ptr != item.data() + item.size() || !std::isfinite(v)) {
-      return absl::InvalidArgumentError(what + ": '" + std::string(item) + "' is not a number");
-    }
-    out.push_back(v);
-    if (comma == std::string_view::npos) break;
-    text.remove_prefix(comma + 1);
-  }
-  if (out.size() != count) {
+  auto out = engine::sim::ParseNumberList(text, what);
+  if (out.ok() && out->size() != count) {
     return absl::InvalidArgumentError(what + ": expected " + std::to_string(count) + " comma-separated numbers");
   }
   return out;

@@ -12,24 +12,6 @@
 namespace insdiag::engine::sim {
 namespace {
 
-absl::StatusOr<std::vector<double>> ParseNumbers(std::string_view text, std::string_view spec) {
-  std::vector<double> values;
-  while (!text.empty()) {
-    const size_t comma = text.find(',');
-    const std::string_view item = text.substr(0, comma);
-    double v = 0.0;
-    const auto [ptr, ec] = std::from_chars(item.data(), item.data() + item.size(), v);
-    if (ec != std::errc() || ptr != item.data() + item.size() || !std::isfinite(v)) {
-      return absl::InvalidArgumentError("--effect " + std::string(spec) + ": '" + std::string(item) +
-                                        "' is not a number");
-    }
-    values.push_back(v);
-    if (comma == std::string_view::npos) break;
-    text.remove_prefix(comma + 1);
-  }
-  return values;
-}
-
 // Interval integrals of the table's true motion over (a, b].
 struct IntervalIntegrals {
   Eigen::Vector3d angle_rad = Eigen::Vector3d::Zero();  // ∫ ω_ib^b dt
@@ -125,6 +107,23 @@ double AxisRms(const std::array<GaussMarkov, 3>& b, double GaussMarkov::*field) 
 
 }  // namespace
 
+absl::StatusOr<std::vector<double>> ParseNumberList(std::string_view text, std::string_view what) {
+  std::vector<double> values;
+  while (!text.empty()) {
+    const size_t comma = text.find(',');
+    const std::string_view item = text.substr(0, comma);
+    double v = 0.0;
+    const auto [ptr, ec] = std::from_chars(item.data(), item.data() + item.size(), v);
+    if (ec != std::errc() || ptr != item.data() + item.size() || !std::isfinite(v)) {
+      return absl::InvalidArgumentError(std::string(what) + ": '" + std::string(item) + "' is not a number");
+    }
+    values.push_back(v);
+    if (comma == std::string_view::npos) break;
+    text.remove_prefix(comma + 1);
+  }
+  return values;
+}
+
 absl::StatusOr<std::vector<TrueEffect>> ParseTrueEffect(std::string_view spec) {
   const size_t eq = spec.find('=');
   if (eq == std::string_view::npos) {
@@ -142,7 +141,7 @@ absl::StatusOr<std::vector<TrueEffect>> ParseTrueEffect(std::string_view spec) {
   if (terms->front().family->kind != EffectKind::kFault && onset->has_value()) {
     return absl::InvalidArgumentError("--effect " + std::string(spec) + ": only faults take an onset '@SECONDS'");
   }
-  auto values = ParseNumbers(value_text, spec);
+  auto values = ParseNumberList(value_text, "--effect " + std::string(spec));
   if (!values.ok()) return values.status();
   const EffectFamily& family = *terms->front().family;
   const auto& v = *values;

@@ -44,6 +44,10 @@ struct TrueEffect {
   double onset_s = 0.0;
 };
 
+// The comma-separated finite numbers of `text` ("1.5,-2,3e-3"; empty: none).
+// `what` names the input in the error: "<what>: 'x' is not a number".
+absl::StatusOr<std::vector<double>> ParseNumberList(std::string_view text, std::string_view what);
+
 // Parses `NAME=VALUE[,VALUE…]` (insdiag simulate --effect): NAME is a term
 // ("gyro_scale_factor.z") or a family (every axis gets the value). Values:
 // constant families one value (yaw harmonics: sin[,cos]); bias_rw K;
