@@ -91,7 +91,7 @@ void EpochFilter::Step(int index, ForwardPass* pass, FilterObserver* observer) {
   if (observer != nullptr) observer->OnPrediction(index, e, tr);
   const auto k = static_cast<Eigen::Index>(index);
   if (pass != nullptr) {
-    pass->transitions.push_back({tr.A, tr.B, tr.D});
+    pass->transitions.push_back(static_cast<const StateTransition&>(tr));  // Φ alone
     pass->x_pred.row(k) = x_.transpose();
     PackSymmetric(P_, pass->P_pred.row(k).data());
   }

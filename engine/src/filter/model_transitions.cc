@@ -12,6 +12,11 @@ namespace {
 
 using GramMatrix = Eigen::Matrix<double, kCouplingMoments, kCouplingMoments>;
 
+// Relative change of an epoch's sample interval or Gram matrix below which
+// the last grid weights still serve: rounding of the sample times, not a
+// different sampling.
+constexpr double kGridRelativeTolerance = 1e-12;
+
 // S⁻¹ of the leading (degree + 1) block of the Gram, zero elsewhere.
 GramMatrix InverseGram(const GramMatrix& gram, int degree) {
   GramMatrix inverse = GramMatrix::Zero();
@@ -135,8 +140,12 @@ void ModelTransitions::PrepareGrid(int samples, double dt, const GramMatrix& gra
 
 const IntervalTransition& ModelTransitions::Build(const EpochInterval& e) {
   const double interval_s = e.time_s - e.start_s;
-  if (e.samples != grid_samples_ || std::abs(e.sample_interval_s - grid_dt_) > 1e-12 * grid_dt_ ||
-      e.gram != grid_gram_) {
+  // The sample times' rounding moves an interval's Gram matrix by parts in
+  // 10¹³ from one epoch to the next; the weights it gives differ by as
+  // little, and are not worth recomputing (an eigen-decomposition per drift).
+  const double gram_change = (e.gram - grid_gram_).cwiseAbs().maxCoeff();
+  if (e.samples != grid_samples_ || std::abs(e.sample_interval_s - grid_dt_) > kGridRelativeTolerance * grid_dt_ ||
+      !(gram_change <= kGridRelativeTolerance * grid_gram_.cwiseAbs().maxCoeff())) {
     PrepareGrid(e.samples, e.sample_interval_s, e.gram, interval_s);
   }
   t_.A = e.A;

@@ -11,16 +11,6 @@ namespace {
 // Relative size below which P_f − P_s counts as "the future adds nothing".
 constexpr double kNoInformationRatio = 1e-9;
 
-// M ← Φ M for the stored transition.
-void ApplyTransition(const StoredTransition& t, Eigen::MatrixXd& M) {
-  const auto m = t.B.cols();
-  Eigen::MatrixXd nav = t.A * M.topRows<9>() + t.B * M.bottomRows(m);
-  Eigen::MatrixXd sensorsT = M.bottomRows(m).transpose();
-  t.D.RightMultiplyTranspose(sensorsT);
-  M.topRows<9>() = nav;
-  M.bottomRows(m) = sensorsT.transpose();
-}
-
 }  // namespace
 
 absl::StatusOr<SmoothedPass> RunSmoother(const ForwardPass& fw, const SmootherOptions& options) {
@@ -112,6 +102,10 @@ absl::StatusOr<SmoothedPass> RunSmoother(const ForwardPass& fw, const SmootherOp
   };
   start_carriers(K - 1, P_s);
 
+  // Per-epoch work in buffers sized once: the smoother runs in every EM step.
+  Eigen::MatrixXd P_scaled(n, n), spread(n, n);
+  Eigen::LDLT<Eigen::MatrixXd> ldlt(n);
+  Eigen::VectorXd x_next(n), correction(n);
   for (int k = K - 2; k >= 0; --k) {
     UnpackSymmetric(fw.P_filt.row(k).data(), n, P_f);
     UnpackSymmetric(fw.P_pred.row(k + 1).data(), n, P_p);
@@ -119,32 +113,41 @@ absl::StatusOr<SmoothedPass> RunSmoother(const ForwardPass& fw, const SmootherOp
     // (metres, rad, rad/s): solve in Jacobi-scaled form so the Cholesky factor
     // sees correlations, not units.
     gain_T = P_f;
-    ApplyTransition(fw.transitions[static_cast<size_t>(k + 1)], gain_T);
+    fw.transitions[static_cast<size_t>(k + 1)].PropagateRows(gain_T);
     for (int i = 0; i < n; ++i) {
       scale[i] = std::sqrt(std::max(P_p(i, i), std::numeric_limits<double>::min()));
       inv_scale[i] = 1.0 / scale[i];
     }
-    const Eigen::MatrixXd P_scaled = inv_scale.asDiagonal() * P_p * inv_scale.asDiagonal();
-    const Eigen::LDLT<Eigen::MatrixXd> ldlt(P_scaled);
+    P_scaled = inv_scale.asDiagonal() * P_p * inv_scale.asDiagonal();
+    ldlt.compute(P_scaled);
     if (ldlt.info() != Eigen::Success) {
       return absl::InternalError("smoother: predicted covariance is not positive definite at epoch " +
                                  std::to_string(k + 1));
     }
-    gain_T = inv_scale.asDiagonal() * ldlt.solve(inv_scale.asDiagonal() * gain_T);
+    gain_T = inv_scale.asDiagonal() * gain_T;
+    ldlt.solveInPlace(gain_T);
+    gain_T = inv_scale.asDiagonal() * gain_T;
 
-    const Eigen::VectorXd x_f = fw.x_filt.row(k).transpose();
-    const Eigen::VectorXd x_p = fw.x_pred.row(k + 1).transpose();
-    const Eigen::VectorXd x_next = x_s;
-    x_s = x_f + gain_T.transpose() * (x_next - x_p);
-    diff = P_s - P_p;
-    const Eigen::MatrixXd lag = P_s * gain_T;  // P_{k+1,k|K} = P_{k+1|K} C_kᵀ
-    out.lag_one_covariance.row(k) = lag.diagonal().transpose();
+    x_next = x_s - fw.x_pred.row(k + 1).transpose();
+    correction.noalias() = gain_T.transpose() * x_next;
+    x_s = fw.x_filt.row(k).transpose() + correction;
+    // P_{k+1,k|K} = P_{k+1|K} C_kᵀ: its diagonal, and a pair's 2 × 2, from
+    // the columns needed (P_{k+1|K} is symmetric), not the whole product.
+    out.lag_one_covariance.row(k) = P_s.cwiseProduct(gain_T).colwise().sum();
     for (size_t p = 0; p < options.pair_states.size(); ++p) {
       const int i = options.pair_states[p];
-      out.pair_moments[p].block<1, 4>(k, 3) << lag(i, i), lag(i, i + 1), lag(i + 1, i), lag(i + 1, i + 1);
+      out.pair_moments[p].block<1, 4>(k, 3) << out.lag_one_covariance(k, i), P_s.col(i).dot(gain_T.col(i + 1)),
+          P_s.col(i + 1).dot(gain_T.col(i)), out.lag_one_covariance(k, i + 1);
     }
-    P_s = P_f + gain_T.transpose() * diff * gain_T;
-    P_s = 0.5 * (P_s + P_s.transpose()).eval();
+    // P_{k|K} = P_{k|k} + C_k (P_{k+1|K} − P_{k+1|k}) C_kᵀ, its lower half
+    // computed (it is symmetric) and mirrored.
+    diff = P_s - P_p;
+    spread.noalias() = diff * gain_T;
+    P_s = P_f;
+    P_s.triangularView<Eigen::Lower>() += gain_T.transpose() * spread;
+    for (int j = 1; j < n; ++j) {
+      for (int i = 0; i < j; ++i) P_s(i, j) = P_s(j, i);
+    }
     record(k, x_s, P_s, P_f);
     for (auto it = carriers.begin(); it != carriers.end();) {
       it->w = gain_T.transpose() * it->w;  // Cov(e_k, e_l[i]) = C_k Cov(e_{k+1}, e_l[i])

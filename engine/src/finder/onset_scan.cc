@@ -48,17 +48,6 @@ void UpdateSequence(const ForwardPass& fw, int k, const std::array<ObservationRo
   }
 }
 
-// Φ = [A B; 0 D] written into `Phi` (zero below the navigation rows and off D's blocks).
-void DenseTransition(const StoredTransition& t, int m, Eigen::MatrixXd& Phi) {
-  Phi.setZero();
-  Phi.topLeftCorner<9, 9>() = t.A;
-  if (m == 0) return;
-  Phi.topRightCorner(9, m) = t.B;
-  for (const SensorBlocks::Block& b : t.D.blocks) {
-    Phi.block(9 + b.offset, 9 + b.offset, b.size, b.size) = b.m.topLeftCorner(b.size, b.size);
-  }
-}
-
 // Per onset θ and sensor axis: the axis pair's score, information and the
 // covariance of successive scores (header).
 struct AxisPair {
@@ -71,7 +60,6 @@ using PairSums = std::vector<std::array<AxisPair, kSensorAxisCount>>;
 PairSums BackwardSweep(const ForwardPass& fw, const StateLayout& layout, const EpochRun& run, double centre_s) {
   const int K = fw.epochs();
   const int n = fw.state_size;
-  const int m = layout.sensor_count();
   const auto rows = ObservationRows(layout);
   PairSums out(static_cast<size_t>(K));
   Eigen::MatrixXd P(n, n), H(kChannelCount, n), L(n, n), Phi(n, n), F(n, n), Gamma = Eigen::MatrixXd::Zero(n, n);
@@ -83,7 +71,7 @@ PairSums BackwardSweep(const ForwardPass& fw, const StateLayout& layout, const E
   for (int k = K - 1; k >= 0; --k) {
     UpdateSequence(fw, k, rows, P, PH, gain, H, L);
     if (k + 1 < K) {
-      DenseTransition(fw.transitions[static_cast<size_t>(k + 1)], m, Phi);
+      fw.transitions[static_cast<size_t>(k + 1)].WriteDense(Phi);
       F.noalias() = Phi * L;
       next_gamma_w.noalias() = Gamma.leftCols<9>() * Z_next;
       next_gamma_w += adjoint_columns;

@@ -128,6 +128,19 @@ bool PairMStep(const Eigen::MatrixXd& x, int i, const Eigen::Matrix<double, Eige
   return out.beta_rad_s > 0.0;
 }
 
+// Whether a cycle's likelihood gain `gain`, after `last_gain` (NaN: none
+// yet), leaves less than `tolerance` to gain (DriftLikelihoodOptions::
+// likelihood_tolerance): EM's gains shrink geometrically near the maximum,
+// by r = gain / last_gain a cycle, so what remains is gain · r / (1 − r).
+// A gain that does not shrink (r ≥ 1) is EM crawling, not converging.
+bool LikelihoodSettled(double gain, double last_gain, double tolerance) {
+  if (!(gain < tolerance)) return false;
+  if (gain <= 0.0) return true;
+  if (!(last_gain > 0.0)) return false;
+  const double r = gain / last_gain;
+  return r < 1.0 && gain * r / (1.0 - r) < tolerance;
+}
+
 // EM over θ = ln of each parameter (header), with the pass count of `out`.
 class Maximiser {
  public:
@@ -253,10 +266,22 @@ class Maximiser {
   // Returns the maximiser; `first_likelihood` gets ℓ at the start.
   absl::StatusOr<Eigen::VectorXd> Maximise(Eigen::VectorXd theta, double* first_likelihood) {
     const Eigen::Index m = theta.size();
+    double cycle_start_likelihood = 0.0;
+    double last_gain = std::numeric_limits<double>::quiet_NaN();
     for (int cycle = 0, iterations = 0; iterations < options_.max_iterations; ++cycle) {
       auto first = EmStep(theta);
       if (!first.ok()) return first.status();
       if (cycle == 0 && first_likelihood != nullptr) *first_likelihood = first->log_likelihood;
+      if (cycle > 0) {
+        const double gain = first->log_likelihood - cycle_start_likelihood;
+        if (LikelihoodSettled(gain, last_gain, options_.likelihood_tolerance)) {
+          converged_ = true;
+          iterations_ = iterations + 1;
+          return first->next;
+        }
+        last_gain = gain;
+      }
+      cycle_start_likelihood = first->log_likelihood;
       auto second = EmStep(first->next);
       if (!second.ok()) return second.status();
       iterations += 2;
@@ -366,6 +391,7 @@ class Maximiser {
 
 absl::Status ValidateOptions(const DriftLikelihoodOptions& options) {
   if (!(options.max_iterations > 0 && options.second_order_max_iterations > 0 && options.log_tolerance > 0.0 &&
+        options.likelihood_tolerance > 0.0 &&
         options.curvature_step > 0.0)) {
     return absl::InvalidArgumentError("drift likelihood options out of range");
   }

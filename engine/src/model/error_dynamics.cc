@@ -135,9 +135,9 @@ Eigen::MatrixXd SensorBlocks::Dense(int m) const {
   return out;
 }
 
-// ---- IntervalTransition -----------------------------------------------------
+// ---- StateTransition, IntervalTransition ------------------------------------
 
-void IntervalTransition::PropagateMean(Eigen::VectorXd& x) const {
+void StateTransition::PropagateMean(Eigen::VectorXd& x) const {
   const auto m = B.cols();
   Eigen::Matrix<double, 9, 1> nav = A * x.head<9>() + B * x.tail(m);
   Eigen::RowVectorXd sensors = x.tail(m).transpose();
@@ -146,21 +146,27 @@ void IntervalTransition::PropagateMean(Eigen::VectorXd& x) const {
   x.tail(m) = sensors.transpose();
 }
 
-void IntervalTransition::PropagateRows(Eigen::MatrixXd& M) const {
+void StateTransition::PropagateRows(Eigen::MatrixXd& M) const {
+  // Scratch per thread, sized once per pass: this runs every epoch of every
+  // forward and backward pass.
+  thread_local Eigen::MatrixXd nav, sensors_t;
   const auto m = B.cols();
-  Eigen::MatrixXd nav = A * M.topRows<9>() + B * M.bottomRows(m);
-  Eigen::MatrixXd sensorsT = M.bottomRows(m).transpose();
-  D.RightMultiplyTranspose(sensorsT);
+  nav.noalias() = A * M.topRows<9>();
+  nav.noalias() += B * M.bottomRows(m);
+  sensors_t = M.bottomRows(m).transpose();
+  D.RightMultiplyTranspose(sensors_t);
   M.topRows<9>() = nav;
-  M.bottomRows(m) = sensorsT.transpose();
+  M.bottomRows(m) = sensors_t.transpose();
 }
 
 void IntervalTransition::PropagateCovariance(Eigen::MatrixXd& P) const {
-  // Φ P Φᵀ in two one-sided products, then add Q.
-  PropagateRows(P);
-  Eigen::MatrixXd PT = P.transpose();
-  PropagateRows(PT);
-  P = PT.transpose();
+  // Φ P Φᵀ in two one-sided products, then add Q. Scratch per thread: this
+  // runs every epoch of every pass.
+  thread_local Eigen::MatrixXd half;
+  PropagateRows(P);      // Φ P
+  half = P.transpose();  // P Φᵀ
+  PropagateRows(half);   // Φ P Φᵀ (symmetric but for rounding, evened out below)
+  P = half;
   const auto m = B.cols();
   P.topLeftCorner<9, 9>() += Qnn;
   P.topRightCorner(9, m) += Qns;
@@ -168,16 +174,25 @@ void IntervalTransition::PropagateCovariance(Eigen::MatrixXd& P) const {
   for (const auto& b : Qss.blocks) {
     P.block(9 + b.offset, 9 + b.offset, b.size, b.size) += b.m.topLeftCorner(b.size, b.size);
   }
-  P = 0.5 * (P + P.transpose()).eval();
+  for (Eigen::Index j = 1; j < P.cols(); ++j) {
+    for (Eigen::Index i = 0; i < j; ++i) P(i, j) = P(j, i) = 0.5 * (P(i, j) + P(j, i));
+  }
 }
 
-Eigen::MatrixXd IntervalTransition::DenseTransition(int n) const {
-  Eigen::MatrixXd phi = Eigen::MatrixXd::Zero(n, n);
-  const int m = n - 9;
-  phi.topLeftCorner<9, 9>() = A;
-  phi.topRightCorner(9, m) = B;
-  phi.bottomRightCorner(m, m) = D.Dense(m);
+Eigen::MatrixXd StateTransition::DenseTransition(int n) const {
+  Eigen::MatrixXd phi(n, n);
+  WriteDense(phi);
   return phi;
+}
+
+void StateTransition::WriteDense(Eigen::MatrixXd& phi) const {
+  phi.setZero();
+  phi.topLeftCorner<9, 9>() = A;
+  if (B.cols() == 0) return;
+  phi.topRightCorner(9, B.cols()) = B;
+  for (const SensorBlocks::Block& b : D.blocks) {
+    phi.block(9 + b.offset, 9 + b.offset, b.size, b.size) = b.m.topLeftCorner(b.size, b.size);
+  }
 }
 
 }  // namespace insdiag::engine

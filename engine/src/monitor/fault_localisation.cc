@@ -13,14 +13,6 @@ int EpochAtOrAfter(const ForwardPass& fw, double t) {
   return static_cast<int>(it - fw.epoch_time_s.begin());
 }
 
-void ApplyTransition(const StoredTransition& t, Eigen::MatrixXd& M) {
-  const auto m = t.B.cols();
-  Eigen::MatrixXd nav = t.A * M.topRows<9>() + t.B * M.bottomRows(m);
-  Eigen::MatrixXd sensorsT = M.bottomRows(m).transpose();
-  t.D.RightMultiplyTranspose(sensorsT);
-  M.topRows<9>() = nav;
-  M.bottomRows(m) = sensorsT.transpose();
-}
 
 }  // namespace
 
@@ -69,7 +61,7 @@ std::vector<JumpHypothesis> LocaliseJump(const ForwardPass& fw, const StateLayou
     information.setZero();
     const int stop = std::min(end, onset + window_epochs);
     for (int k = onset; k < stop; ++k) {
-      if (k > onset) ApplyTransition(fw.transitions[static_cast<size_t>(k)], A);
+      if (k > onset) fw.transitions[static_cast<size_t>(k)].PropagateRows(A);
       const Eigen::MatrixXd& G = gains[static_cast<size_t>(k - first)];
       for (int c = 0; c < kChannelCount; ++c) {
         const ObservationRow& h = rows[static_cast<size_t>(c)];

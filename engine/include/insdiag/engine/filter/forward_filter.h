@@ -68,12 +68,6 @@ void UnpackSymmetric(const double* in, int n, Eigen::MatrixXd& P);
 // One packed covariance per row (row-major so that a row is contiguous).
 using PackedCovariances = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
-// The Φ of one interval, kept for the smoother.
-struct StoredTransition {
-  Matrix9d A;
-  Eigen::MatrixXd B;
-  SensorBlocks D;
-};
 
 struct ForwardPass {
   int state_size = 0;
@@ -87,7 +81,7 @@ struct ForwardPass {
   Eigen::MatrixXd observation_noise;    // K × 6 r
   Eigen::MatrixXd x_pred, x_filt;       // K × n, before and after the epoch's updates (before the reset)
   PackedCovariances P_pred, P_filt;     // K × PackedSize(n)
-  std::vector<StoredTransition> transitions;  // transitions[k]: from epoch k−1 (or the start) to k
+  std::vector<StateTransition> transitions;  // transitions[k]: from epoch k−1 (or the start) to k (kept for the smoother)
   Eigen::VectorXd x0;
   Eigen::MatrixXd P0;
   double log_likelihood = 0.0;

@@ -81,7 +81,8 @@ class ModelTransitions {
   // The grid the weights and the sensor blocks were prepared for.
   int grid_samples_ = -1;
   double grid_dt_ = 0.0;
-  Eigen::Matrix<double, kCouplingMoments, kCouplingMoments> grid_gram_;
+  Eigen::Matrix<double, kCouplingMoments, kCouplingMoments> grid_gram_ =
+      Eigen::Matrix<double, kCouplingMoments, kCouplingMoments>::Zero();
   std::vector<StateGridWeights> weights_;  // per source (unused for constants)
   SensorBlocks D_, Qs_;
   Eigen::Matrix<double, kSensorAxisCount, 1> white_var_;  // N² per sensor axis

@@ -93,6 +93,16 @@ struct DriftLikelihoodOptions {
   // Iterations stop when no ln σ moves by more than this (1%: a tenth of the
   // smallest standard error a bench run gives a drift's σ).
   double log_tolerance = 0.01;
+  // …or when the log-likelihood has this little left to gain: the last
+  // cycle's gain and its geometric extrapolation from the cycle before
+  // (Aitken's Δ², as EM converges linearly; McLachlan & Krishnan, The EM
+  // Algorithm and Extensions, 2nd ed., §4.9) both below it. ℓ within 0.01
+  // of its maximum puts the estimate within √(2 · 0.01) = 0.14 standard
+  // errors of it (ℓ quadratic there), and moves a likelihood-ratio
+  // statistic by 0.02. A parameter the run hardly tells, whose ln σ wanders
+  // along a flat likelihood by more than `log_tolerance` a step, then stops
+  // costing passes.
+  double likelihood_tolerance = 0.01;
   // Step of the second difference in ln σ.
   double curvature_step = 0.15;
   // Starting periods of a second-order pair's fit [s] (its decay time starts

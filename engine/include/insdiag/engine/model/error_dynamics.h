@@ -78,11 +78,26 @@ class SensorBlocks {
   Eigen::MatrixXd Dense(int m) const;
 };
 
-// The interval's transition and noise, Φ = [A B; 0 D], Q = [Qnn Qns; Qnsᵀ Qss].
-struct IntervalTransition {
+// The interval's state transition Φ = [A B; 0 D] over a layout of n = 9 + m
+// states (A the navigation block, B the sensors' coupling into it, D the
+// sensors' own blocks).
+struct StateTransition {
   Matrix9d A = Matrix9d::Identity();  // T_M: also maps interval-start coordinates to the end
   Eigen::MatrixXd B;  // 9 × m
   SensorBlocks D;
+
+  // x ← Φ x.
+  void PropagateMean(Eigen::VectorXd& x) const;
+  // M ← Φ M for a matrix with n rows.
+  void PropagateRows(Eigen::MatrixXd& M) const;
+  // Φ, dense, n × n.
+  Eigen::MatrixXd DenseTransition(int n) const;
+  // The same into `phi`, already n × n (no allocation: for per-epoch loops).
+  void WriteDense(Eigen::MatrixXd& phi) const;
+};
+
+// The interval's transition and noise, Φ = [A B; 0 D], Q = [Qnn Qns; Qnsᵀ Qss].
+struct IntervalTransition : StateTransition {
   Matrix9d Qnn = Matrix9d::Zero();
   Eigen::MatrixXd Qns;  // 9 × m
   SensorBlocks Qss;
@@ -90,11 +105,6 @@ struct IntervalTransition {
 
   // P ← Φ P Φᵀ + Q for a full covariance over the layout.
   void PropagateCovariance(Eigen::MatrixXd& P) const;
-  // x ← Φ x.
-  void PropagateMean(Eigen::VectorXd& x) const;
-  // M ← Φ M for a matrix with n rows.
-  void PropagateRows(Eigen::MatrixXd& M) const;
-  Eigen::MatrixXd DenseTransition(int n) const;
 };
 
 }  // namespace insdiag::engine
