@@ -234,7 +234,11 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
 
   Progress(options, 0.0, "screening samples");
   BenchRun run = input;
-  const std::vector<std::array<double, 6>> reference_measurements = ReferenceMeasurements(run);
+  // The table's motion within each sample: the screen and the condensation
+  // both need it, and it depends on the reference alone (screening and the
+  // constants removed below change the sensors' samples only).
+  const nav::RunCompensations compensations(run);
+  const std::vector<std::array<double, 6>> reference_measurements = ReferenceMeasurements(run, compensations);
   const std::vector<SampleOutlier> spikes = ScreenAndRepairSpikes(run, reference_measurements, options.screening);
 
   Progress(options, 0.05, "Allan deviation and the run condensed to its epochs");
@@ -257,7 +261,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   // constants removed leave an Allan deviation as it was).
   absl::StatusOr<EpochRun> epochs;
   std::vector<std::string> allan_notes;
-  numerics::InParallel([&] { epochs = CondenseRun(run, base, options.filter.update_interval_s); },
+  numerics::InParallel([&] { epochs = CondenseRun(run, base, options.filter.update_interval_s, &compensations); },
                        [&] {
                          if (!allan.has_value()) allan = AllanOfStaticSegments(run, options, allan_notes);
                        });

@@ -219,7 +219,7 @@ double EpochRun::BytesPerEpoch() const {
 // Everything the condensation carries from one sample to the next.
 struct RunCondenser::State {
   State(const BenchRun& run_in, const ErrorModel& pilot_in, double update_interval_s, double nominal_interval_s,
-        FilterObserver* observer_in)
+        FilterObserver* observer_in, const nav::RunCompensations* compensations_in)
       : run(run_in),
         pilot(pilot_in),
         layout(pilot),
@@ -231,6 +231,7 @@ struct RunCondenser::State {
                   GroupByTerm(out.constant_columns)),
         pilot_filter(pilot, layout, out),
         motion(run_in),
+        compensations(compensations_in),
         observer(observer_in),
         temperature0(run_in.samples[0].temp_degc) {
     const auto per_epoch = static_cast<size_t>(out.samples_per_epoch);
@@ -283,7 +284,8 @@ struct RunCondenser::State {
       disc = &irregular;
     }
     const nav::ImuIncrement current{s.gyro_rad_s * dt, s.acc_mps2 * dt};
-    ins = nav::PropagateStrapdown(ins, current, motion.Compensation(k), dt);
+    ins = nav::PropagateStrapdown(ins, current, compensations != nullptr ? compensations->At(k) : motion.Compensation(k),
+                                  dt);
 
     const Eigen::Quaterniond q_ref(nav::EulerToDcm(s.ref_rpy_rad));
     RegressorInputs inputs;
@@ -320,6 +322,7 @@ struct RunCondenser::State {
   IntervalCondenser condenser;
   EpochFilter pilot_filter;  // stepped epoch by epoch beside the mechanisation
   nav::ReferenceMotion motion;
+  const nav::RunCompensations* compensations;  // the run's, when given: else from `motion`
   FilterObserver* observer;
   const double temperature0;
   nav::NavState ins;
@@ -331,13 +334,14 @@ struct RunCondenser::State {
 absl::StatusOr<std::unique_ptr<RunCondenser>> RunCondenser::Create(const BenchRun& run, const ErrorModel& pilot,
                                                                    double update_interval_s,
                                                                    double nominal_interval_s,
-                                                                   FilterObserver* pilot_observer) {
+                                                                   FilterObserver* pilot_observer,
+                                                                   const nav::RunCompensations* compensations) {
   if (!(update_interval_s > 0.0)) return absl::InvalidArgumentError("update interval must be positive");
   if (!(nominal_interval_s > 0.0)) return absl::InvalidArgumentError("nominal sample interval must be positive");
   if (run.samples.size() < 2) return absl::InvalidArgumentError("a bench run needs at least two samples");
   if (auto st = ValidateErrorModel(pilot); !st.ok()) return st;
   return std::unique_ptr<RunCondenser>(new RunCondenser(
-      std::make_unique<State>(run, pilot, update_interval_s, nominal_interval_s, pilot_observer)));
+      std::make_unique<State>(run, pilot, update_interval_s, nominal_interval_s, pilot_observer, compensations)));
 }
 
 RunCondenser::RunCondenser(std::unique_ptr<State> state) : state_(std::move(state)) {}
@@ -368,8 +372,10 @@ const EpochRun& RunCondenser::condensed() const { return state_->out; }
 
 EpochRun RunCondenser::TakeCondensed() { return std::move(state_->out); }
 
-absl::StatusOr<EpochRun> CondenseRun(const BenchRun& run, const ErrorModel& pilot, double update_interval_s) {
-  auto condenser = RunCondenser::Create(run, pilot, update_interval_s, run.NominalIntervalS());
+absl::StatusOr<EpochRun> CondenseRun(const BenchRun& run, const ErrorModel& pilot, double update_interval_s,
+                                     const nav::RunCompensations* compensations) {
+  auto condenser =
+      RunCondenser::Create(run, pilot, update_interval_s, run.NominalIntervalS(), nullptr, compensations);
   if (!condenser.ok()) return condenser.status();
   (*condenser)->Finish();
   return (*condenser)->TakeCondensed();

@@ -58,7 +58,8 @@ double RobustSigma(std::vector<double>& magnitude) {
 
 }  // namespace
 
-std::vector<std::array<double, 6>> ReferenceMeasurements(const BenchRun& run) {
+std::vector<std::array<double, 6>> ReferenceMeasurements(const BenchRun& run,
+                                                         const nav::RunCompensations& compensations) {
   const auto& samples = run.samples;
   std::vector<std::array<double, 6>> expected(samples.size());
   if (samples.size() < 2) return expected;
@@ -71,7 +72,6 @@ std::vector<std::array<double, 6>> ReferenceMeasurements(const BenchRun& run) {
   numerics::ParallelMap(blocks, [&](size_t b) {
     const size_t begin = std::max<size_t>(1, samples.size() * b / blocks);
     const size_t end = samples.size() * (b + 1) / blocks;
-    nav::ReferenceMotion motion(run);
     Eigen::Matrix3d C1 = nav::EulerToDcm(samples[begin - 1].ref_rpy_rad);
     for (size_t k = begin; k < end; ++k) {
       const Eigen::Matrix3d C0 = C1;
@@ -81,7 +81,7 @@ std::vector<std::array<double, 6>> ReferenceMeasurements(const BenchRun& run) {
       // coning, and the mean rotation of gravity is the constant-rate one with
       // the motion's shape added (nav/table_motion.h): a rate that steps inside
       // a sample, or one axis stopping as the other starts, is not a spike.
-      const nav::IntervalCompensation shape = motion.Compensation(k);
+      const nav::IntervalCompensation& shape = compensations.At(k);
       const Eigen::Vector3d dtheta =
           nav::QuaternionToRotationVector(Eigen::Quaterniond(C0.transpose() * C1)) - shape.coning_rad;
       const Eigen::Vector3d rate = dtheta / dt + C0.transpose() * w_ie_n;
@@ -97,7 +97,7 @@ std::vector<std::array<double, 6>> ReferenceMeasurements(const BenchRun& run) {
 }
 
 std::vector<SampleOutlier> ScreenAndRepairSpikes(BenchRun& run, const ScreeningOptions& options) {
-  return ScreenAndRepairSpikes(run, ReferenceMeasurements(run), options);
+  return ScreenAndRepairSpikes(run, ReferenceMeasurements(run, nav::RunCompensations(run)), options);
 }
 
 std::vector<SampleOutlier> ScreenAndRepairSpikes(BenchRun& run, const std::vector<std::array<double, 6>>& expected,

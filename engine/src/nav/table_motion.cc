@@ -1,15 +1,18 @@
 #include "insdiag/engine/nav/table_motion.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <utility>
 
 #include <Eigen/LU>
 
 #include "insdiag/engine/nav/rotation.h"
 #include "insdiag/engine/nav/strapdown.h"
 #include "insdiag/engine/nav/wgs84.h"
+#include "insdiag/engine/numerics/parallel_map.h"
 
 namespace insdiag::engine::nav {
 
@@ -226,6 +229,37 @@ IntervalCompensation ReferenceMotion::Compensation(size_t k) {
   const Eigen::Vector3d phi = QuaternionToRotationVector(RotationVectorToQuaternion(a * h) * RotationVectorToQuaternion(r_end));
   out.coning_rad = phi - integral;
   return out;
+}
+
+RunCompensations::RunCompensations(const BenchRun& run) : slot_(run.samples.size(), 0) {
+  const size_t n = run.samples.size();
+  if (n < 2) return;
+  // Each block's moving intervals, then numbered in sample order: the same
+  // whatever the thread count.
+  const auto blocks = static_cast<size_t>(numerics::WorkerThreads());
+  auto parts = numerics::ParallelMap(blocks, [&](size_t b) {
+    const size_t begin = std::max<size_t>(1, n * b / blocks);
+    const size_t end = n * (b + 1) / blocks;
+    std::vector<std::pair<size_t, IntervalCompensation>> moving;
+    ReferenceMotion motion(run);
+    for (size_t k = begin; k < end; ++k) {
+      IntervalCompensation c = motion.Compensation(k);
+      if (c.coning_rad.isZero(0.0) && c.velocity_map_correction.isZero(0.0)) continue;
+      moving.emplace_back(k, std::move(c));
+    }
+    return moving;
+  });
+  for (auto& part : parts) {
+    for (auto& [k, c] : part) {
+      moving_.push_back(std::move(c));
+      slot_[k] = static_cast<std::uint32_t>(moving_.size());
+    }
+  }
+}
+
+const IntervalCompensation& RunCompensations::At(size_t k) const {
+  const std::uint32_t slot = slot_[k];
+  return slot == 0 ? still_ : moving_[slot - 1];
 }
 
 }  // namespace insdiag::engine::nav

@@ -56,6 +56,7 @@
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/model/error_dynamics.h"
 #include "insdiag/engine/model/error_model.h"
+#include "insdiag/engine/nav/table_motion.h"
 
 namespace insdiag::engine {
 
@@ -112,8 +113,11 @@ struct EpochRun {
 };
 
 // Condenses `run` with `pilot` correcting the mechanisation. Needs at least
-// two samples and a valid model (σ ≥ 0, τ > 0 where σ > 0).
-absl::StatusOr<EpochRun> CondenseRun(const BenchRun& run, const ErrorModel& pilot, double update_interval_s);
+// two samples and a valid model (σ ≥ 0, τ > 0 where σ > 0). `compensations`:
+// the run's motion compensations when the caller has them (else computed
+// sample by sample).
+absl::StatusOr<EpochRun> CondenseRun(const BenchRun& run, const ErrorModel& pilot, double update_interval_s,
+                                     const nav::RunCompensations* compensations = nullptr);
 
 class FilterObserver;
 
@@ -131,9 +135,11 @@ class RunCondenser {
   // samples may be appended to between calls, its metadata must not change.
   // `nominal_interval_s`: the run's nominal Δt (BenchRun::NominalIntervalS
   // of the complete run, or of the samples so far while it arrives).
+  // `compensations`: the complete run's (CondenseRun), else null.
   static absl::StatusOr<std::unique_ptr<RunCondenser>> Create(const BenchRun& run, const ErrorModel& pilot,
                                                               double update_interval_s, double nominal_interval_s,
-                                                              FilterObserver* pilot_observer = nullptr);
+                                                              FilterObserver* pilot_observer = nullptr,
+                                                              const nav::RunCompensations* compensations = nullptr);
   ~RunCondenser();
 
   // Condenses what the samples so far allow; returns the epochs completed by this call.

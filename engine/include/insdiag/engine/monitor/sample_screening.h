@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "insdiag/engine/bench_run.h"
+#include "insdiag/engine/nav/table_motion.h"
 
 namespace insdiag::engine {
 
@@ -45,11 +46,12 @@ struct SampleOutlier {
 // What a perfect unit would have measured over each sample's interval given
 // the table's reference attitude at the site: the body rate (with Earth's)
 // and the specific force, gyro x, y, z then accelerometer x, y, z; sample 0
-// takes sample 1's.
-std::vector<std::array<double, 6>> ReferenceMeasurements(const BenchRun& run);
+// takes sample 1's. `compensations`: the run's (nav/table_motion.h).
+std::vector<std::array<double, 6>> ReferenceMeasurements(const BenchRun& run,
+                                                         const nav::RunCompensations& compensations);
 
 // Finds spikes and replaces them in `run` (in place), against
-// `reference_measurements` = ReferenceMeasurements(run) when the caller has it.
+// `reference_measurements` = ReferenceMeasurements(run, …) when the caller has it.
 std::vector<SampleOutlier> ScreenAndRepairSpikes(BenchRun& run,
                                                  const std::vector<std::array<double, 6>>& reference_measurements,
                                                  const ScreeningOptions& options);

@@ -40,6 +40,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Core>
@@ -78,6 +79,25 @@ class ReferenceMotion {
     Eigen::Quaterniond q;
   };
   std::array<Cached, 8> cache_;  // ω_in^n of the site (Earth rate; the body is at rest on it)
+};
+
+// The compensation of every sample interval of a complete run, computed once
+// (in blocks of samples on every core) for the stages that each need it: the
+// spike screen's reference measurements and the condensation. A still
+// interval holds nothing: 4 bytes a sample, and 96 more for each interval in
+// which the table moves.
+class RunCompensations {
+ public:
+  // `run` need not outlive this object.
+  explicit RunCompensations(const BenchRun& run);
+
+  // The compensation of interval (t_{k−1}, t_k], 1 ≤ k < samples.
+  const IntervalCompensation& At(size_t k) const;
+
+ private:
+  std::vector<std::uint32_t> slot_;  // per sample: 0 still, else 1 + its index in moving_
+  std::vector<IntervalCompensation> moving_;
+  IntervalCompensation still_;
 };
 
 }  // namespace insdiag::engine::nav
