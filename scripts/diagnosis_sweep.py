@@ -12,6 +12,9 @@ simulator how often the first-ranked module is the right one.
                        drift test with tilted positions (cpp: the `drift`
                        profile's first 4 h; py: `positions`), 10 or 50 Hz.
                        Right: the first module is that gyro's.
+  drift_sigma_x3_8h    the same over 8 h (cpp: the whole `drift` profile;
+                       py: `positions`), as the eight-hour runs of the
+                       report that opened the faults issue.
   healthy              1 h, datasheet, rates 10/50/100 Hz, three profiles a
                        simulator (the project's ramps its rate changes, the
                        independent one makes them instantaneous). Right: the
@@ -47,7 +50,8 @@ matrix = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(matrix)
 
 SERVER = os.path.join(matrix.ROOT, "build", "server", "insdiagd")
-LONG_S = 4 * 3600.0
+# The drift scenarios' durations.
+LONG_S = {"drift_sigma_x3_long": 4 * 3600.0, "drift_sigma_x3_8h": 8 * 3600.0}
 
 
 def free_port():
@@ -95,11 +99,11 @@ def make_run(simulator, scenario, index, path):
         cmd = [matrix.CLI, "simulate", path, "--profile", "drift", "--rate", f"{rate:g}", "--seed", str(seed),
                "--no-datasheet", "--param", f"{name}={matrix.NOMINAL[name] * 3.0:.6g}"]
         subprocess.run(cmd, check=True, capture_output=True, text=True)
-        matrix.truncate(path, LONG_S)
-        profile = "drift (first 4 h)"
+        matrix.truncate(path, LONG_S[scenario])
+        profile = f"drift (first {LONG_S[scenario] / 3600:g} h)"
     else:
         cmd = [matrix.PYTHON, matrix.BENCHSIM, "--out", path, "--preset", "nav", "--profile", "positions",
-               "--rate-hz", f"{rate:g}", "--duration", f"{LONG_S:g}", "--seed", str(seed), "--datasheet", "no",
+               "--rate-hz", f"{rate:g}", "--duration", f"{LONG_S[scenario]:g}", "--seed", str(seed), "--datasheet", "no",
                "--unit-type", "INS-2000", "--fault", f"{name}*3"]
         subprocess.run(cmd, check=True, capture_output=True, text=True)
         profile = "positions"

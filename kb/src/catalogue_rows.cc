@@ -1,17 +1,17 @@
 #include "catalogue_rows.h"
 
-#include <absl/strings/match.h>
 #include <absl/strings/str_cat.h>
 
 #include <map>
 
+#include "insdiag/api/resource_names.h"
 #include "insdiag/kb/diagnosis.h"
 #include "store_util.h"
 
 namespace insdiag::kb::internal {
 
 std::string UnitTypeId(const std::string& name) {
-  return absl::StartsWith(name, "unitTypes/") ? name.substr(10) : name;
+  return api::IdOrSelf(name, api::kUnitTypes);
 }
 
 absl::StatusOr<v1::UnitType> LoadUnitType(Connection& db, const std::string& id) {

@@ -13,6 +13,7 @@
 
 #include "failure_mode_data.h"
 #include "insdiag/api/json.h"
+#include "insdiag/api/resource_names.h"
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/stats/distributions.h"
 
@@ -247,7 +248,7 @@ std::vector<v1::FailureModeCatalogue> BuiltinFailureModeCatalogues() {
 }
 
 absl::StatusOr<v1::FailureModeCatalogue> BuiltinFailureModeCatalogue(const std::string& unit_type) {
-  const std::string name = absl::StartsWith(unit_type, "unitTypes/") ? unit_type.substr(10) : unit_type;
+  const std::string name = api::IdOrSelf(unit_type, api::kUnitTypes);
   for (auto& catalogue : BuiltinFailureModeCatalogues()) {
     if (catalogue.unit_type() == name) return catalogue;
   }

@@ -5,6 +5,7 @@
 
 #include <exception>
 
+#include "insdiag/api/resource_names.h"
 #include "insdiag/api/report_codec.h"
 #include "insdiag/engine/analysis.h"
 #include "insdiag/engine/model/parameters.h"
@@ -160,7 +161,9 @@ std::string_view AnalysisWorkers::RunJobOutcome(const kb::ClaimedJob& job, const
     request.baseline_effects.assign(job.spec.baseline().effects().begin(), job.spec.baseline().effects().end());
     request.discover = job.spec.discover();
     if (!job.spec.base_analysis().empty()) {
-      auto base = store_.Get(job.spec.base_analysis().substr(std::string_view("analyses/").size()), true);
+      auto base_id = api::ResourceId(job.spec.base_analysis(), api::kAnalyses, "base_analysis");
+      if (!base_id.ok()) return base_id.status();
+      auto base = store_.Get(*base_id, true);
       if (!base.ok()) return base.status();
       auto identified = api::IdentifiedModelOf(base->report());
       if (!identified.ok()) return identified.status();

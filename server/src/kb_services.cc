@@ -1,6 +1,5 @@
 #include "insdiag/server/kb_services.h"
 
-#include <absl/strings/match.h>
 #include <absl/strings/str_cat.h>
 
 #include <algorithm>
@@ -8,19 +7,12 @@
 #include <thread>
 
 #include "insdiag/api/report_codec.h"
+#include "insdiag/api/resource_names.h"
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/server/display_series.h"
 
 namespace insdiag::server {
 namespace {
-
-absl::StatusOr<std::string> AnalysisId(const std::string& name, const char* field = "name") {
-  const std::string prefix = "analyses/";
-  if (!absl::StartsWith(name, prefix) || name.size() == prefix.size() || name.find('/', prefix.size()) != std::string::npos) {
-    return absl::InvalidArgumentError(absl::StrCat(field, ": '", name, "' is not an analysis name (analyses/{analysis})"));
-  }
-  return name.substr(prefix.size());
-}
 
 bool Terminal(v1::Analysis::State s) {
   return s == v1::Analysis::SUCCEEDED || s == v1::Analysis::FAILED || s == v1::Analysis::CANCELLED;
@@ -35,11 +27,9 @@ absl::Status CheckPageSize(int page_size) {
 
 absl::StatusOr<v1::Analysis> AnalysisService::CreateAnalysis(const v1::CreateAnalysisRequest& request) {
   const std::string& run = request.analysis().run();
-  const std::string prefix = "runs/";
   if (run.empty()) return absl::InvalidArgumentError("analysis.run: required (runs/{run})");
-  if (!absl::StartsWith(run, prefix) || run.find('/', prefix.size()) != std::string::npos) {
-    return absl::InvalidArgumentError(absl::StrCat("analysis.run: '", run, "' is not a run name (runs/{run})"));
-  }
+  auto run_id = api::ResourceId(run, api::kRuns, "analysis.run");
+  if (!run_id.ok()) return run_id.status();
   v1::AnalysisSpec spec;
   *spec.mutable_model() = request.analysis().model();
   if (request.analysis().has_baseline()) *spec.mutable_baseline() = request.analysis().baseline();
@@ -47,13 +37,13 @@ absl::StatusOr<v1::Analysis> AnalysisService::CreateAnalysis(const v1::CreateAna
   if (!request.analysis().base_analysis().empty()) {
     if (auto checked = CheckBaseAnalysis(request.analysis(), spec); !checked.ok()) return checked;
   }
-  return store_.Create(run.substr(prefix.size()), spec, request.request_id());
+  return store_.Create(*run_id, spec, request.request_id());
 }
 
 // An analysis that starts from an earlier one's identified model: the earlier
 // one succeeded on the same run, and the baseline is (within) its model.
 absl::Status AnalysisService::CheckBaseAnalysis(const v1::Analysis& asked, v1::AnalysisSpec& spec) {
-  auto id = AnalysisId(asked.base_analysis(), "analysis.base_analysis");
+  auto id = api::ResourceId(asked.base_analysis(), api::kAnalyses, "analysis.base_analysis");
   if (!id.ok()) return id.status();
   auto base = store_.Get(*id, true);
   if (!base.ok()) return base.status();
@@ -86,7 +76,7 @@ absl::Status AnalysisService::CheckBaseAnalysis(const v1::Analysis& asked, v1::A
 }
 
 absl::StatusOr<v1::Analysis> AnalysisService::GetAnalysis(const v1::GetAnalysisRequest& request) {
-  auto id = AnalysisId(request.name());
+  auto id = api::ResourceId(request.name(), api::kAnalyses);
   if (!id.ok()) return id.status();
   return store_.Get(*id, true);
 }
@@ -98,16 +88,14 @@ absl::StatusOr<v1::ListAnalysesResponse> AnalysisService::ListAnalyses(const v1:
   query.page_token = request.page_token();
   query.include_reports = request.include_reports();
   if (!request.run().empty()) {
-    if (!absl::StartsWith(request.run(), "runs/")) {
-      return absl::InvalidArgumentError(absl::StrCat("run: '", request.run(), "' is not a run name (runs/{run})"));
-    }
-    query.run_id = request.run().substr(5);
+    auto run_id = api::ResourceId(request.run(), api::kRuns, "run");
+    if (!run_id.ok()) return run_id.status();
+    query.run_id = *std::move(run_id);
   }
   if (!request.unit().empty()) {
-    if (!absl::StartsWith(request.unit(), "units/")) {
-      return absl::InvalidArgumentError(absl::StrCat("unit: '", request.unit(), "' is not a unit name (units/{unit})"));
-    }
-    query.unit_serial = request.unit().substr(6);
+    auto serial = api::ResourceId(request.unit(), api::kUnits, "unit");
+    if (!serial.ok()) return serial.status();
+    query.unit_serial = *std::move(serial);
   }
   auto page = store_.List(query);
   if (!page.ok()) return page.status();
@@ -118,7 +106,7 @@ absl::StatusOr<v1::ListAnalysesResponse> AnalysisService::ListAnalyses(const v1:
 }
 
 absl::StatusOr<v1::Analysis> AnalysisService::CancelAnalysis(const v1::CancelAnalysisRequest& request) {
-  auto id = AnalysisId(request.name());
+  auto id = api::ResourceId(request.name(), api::kAnalyses);
   if (!id.ok()) return id.status();
   return store_.Cancel(*id);
 }
@@ -126,7 +114,7 @@ absl::StatusOr<v1::Analysis> AnalysisService::CancelAnalysis(const v1::CancelAna
 absl::Status AnalysisService::WatchAnalysis(const v1::WatchAnalysisRequest& request,
                                             absl::FunctionRef<bool(const v1::Analysis&)> send,
                                             std::function<bool()> stop) {
-  auto id = AnalysisId(request.name());
+  auto id = api::ResourceId(request.name(), api::kAnalyses);
   if (!id.ok()) return id.status();
   std::string last;
   for (;;) {
@@ -152,7 +140,7 @@ absl::Status AnalysisService::WatchAnalysis(const v1::WatchAnalysisRequest& requ
 
 absl::Status AnalysisService::ReadResidualSeries(const v1::ReadResidualSeriesRequest& request,
                                                  absl::FunctionRef<bool(const v1::ResidualSeriesChunk&)> send) {
-  auto id = AnalysisId(request.name());
+  auto id = api::ResourceId(request.name(), api::kAnalyses);
   if (!id.ok()) return id.status();
   if (request.chunk_size() < 0 || request.chunk_size() > 50'000) {
     return absl::InvalidArgumentError("chunk_size must be within 0 … 50000");
@@ -174,7 +162,7 @@ absl::StatusOr<v1::DisplaySeries> AnalysisService::ReadDisplaySeries(const v1::R
     return absl::InvalidArgumentError(absl::StrCat("end_s (", request.end_s(), ") must be after start_s (",
                                                    request.start_s(), "); both 0 ask for the whole series"));
   }
-  auto id = AnalysisId(request.name());
+  auto id = api::ResourceId(request.name(), api::kAnalyses);
   if (!id.ok()) return id.status();
   // The stored series arrives channel by channel, each in time order.
   std::vector<std::string> order;

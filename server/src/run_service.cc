@@ -1,6 +1,5 @@
 #include "insdiag/server/run_service.h"
 
-#include <absl/strings/match.h>
 #include <absl/strings/str_cat.h>
 
 #include <algorithm>
@@ -8,26 +7,18 @@
 
 #include <google/protobuf/util/time_util.h>
 
+#include "insdiag/api/resource_names.h"
 #include "insdiag/server/status_mapping.h"
 
 namespace insdiag::server {
 namespace {
 
-constexpr char kRunPrefix[] = "runs/";
 constexpr int kDefaultChunkSamples = 10'000;
 constexpr int kMaxChunkSamples = 50'000;
 
-absl::StatusOr<std::string> RunIdOf(const std::string& name) {
-  if (!absl::StartsWith(name, kRunPrefix) || name.size() == sizeof kRunPrefix - 1 ||
-      name.find('/', sizeof kRunPrefix - 1) != std::string::npos) {
-    return absl::InvalidArgumentError(absl::StrCat("'", name, "' is not a run name (runs/{run})"));
-  }
-  return name.substr(sizeof kRunPrefix - 1);
-}
-
 v1::Run ToProto(const kb::StoredRun& stored) {
   v1::Run run;
-  run.set_name(absl::StrCat(kRunPrefix, stored.id));
+  run.set_name(api::ResourceName(api::kRuns, stored.id));
   *run.mutable_metadata() = api::ToProto(stored.metadata, stored.has_temperature);
   run.mutable_metadata()->set_request_id(stored.request_id);
   run.set_sample_count(stored.sample_count);
@@ -42,7 +33,7 @@ v1::Run ToProto(const kb::StoredRun& stored) {
 }  // namespace
 
 absl::StatusOr<v1::Run> RunService::GetRun(const v1::GetRunRequest& request) {
-  auto id = RunIdOf(request.name());
+  auto id = api::ResourceId(request.name(), api::kRuns);
   if (!id.ok()) return id.status();
   auto stored = store_.Get(*id);
   if (!stored.ok()) return stored.status();
@@ -64,14 +55,14 @@ absl::StatusOr<v1::ListRunsResponse> RunService::ListRuns(const v1::ListRunsRequ
 }
 
 absl::Status RunService::DeleteRun(const v1::DeleteRunRequest& request) {
-  auto id = RunIdOf(request.name());
+  auto id = api::ResourceId(request.name(), api::kRuns);
   if (!id.ok()) return id.status();
   return store_.Delete(*id);
 }
 
 absl::Status RunService::ReadRunSamples(const v1::ReadRunSamplesRequest& request,
                                         absl::FunctionRef<bool(const v1::SampleChunk&)> send) {
-  auto id = RunIdOf(request.name());
+  auto id = api::ResourceId(request.name(), api::kRuns);
   if (!id.ok()) return id.status();
   if (request.chunk_size() < 0 || request.chunk_size() > kMaxChunkSamples) {
     return absl::InvalidArgumentError(absl::StrCat("chunk_size must be within 0 … ", kMaxChunkSamples));

@@ -4,7 +4,7 @@
 // channel (decimated by the server to the plot's width, finer on zoom), the
 // fault intervals, the missing effects with an Add button each, the
 // identification (ACF, Allan) and the unit's diagnosis.
-import { api, num } from './api.js';
+import { api, num, idOf } from './api.js';
 import { h, fmt, fmtP, fmtSeconds, fmtTime, empty, section, table } from './dom.js';
 import { plot, replaceData, destroy, line, colors, secondsAxis, valueAxis, uPlot } from './charts.js';
 import { navigate, startAnalysis, errorCard } from './nav.js';
@@ -63,9 +63,9 @@ export async function showAnalysis(view, name, leaving) {
 
 function header(analysis) {
   const report = analysis.report;
-  const runId = analysis.run.split('/')[1];
+  const runId = idOf(analysis.run);
   return h('div',
-    h('h1', 'Analysis ', h('span.muted', analysis.name.split('/')[1].slice(0, 8)), ' ',
+    h('h1', 'Analysis ', h('span.muted', idOf(analysis.name).slice(0, 8)), ' ',
       report && analysis.state === 'SUCCEEDED'
         ? h(`span.badge.${report.verdict}#verdict`, report.verdict)
         : h(`span.badge.${analysis.state}#state`, analysis.state)),

@@ -110,6 +110,11 @@ async function stream(path, onMessage, signal) {
   }
 }
 
+/** The id of a resource name, "runs/abc" → "abc" (AIP-122: a collection, then the id). */
+export function idOf(name) {
+  return name.slice(name.indexOf('/') + 1);
+}
+
 /** A number of the JSON mapping (doubles may be "NaN"; int64 are strings). */
 export function num(value) {
   const n = typeof value === 'number' ? value : Number(value);
@@ -167,7 +172,7 @@ async function downloadRun(name) {
   if (!response.ok) throw await errorFrom(response);
   const link = document.createElement('a');
   link.href = URL.createObjectURL(await response.blob());
-  link.download = `${name.split('/')[1]}.csv`;
+  link.download = `${idOf(name)}.csv`;
   link.click();
   setTimeout(() => URL.revokeObjectURL(link.href), 60_000);
 }

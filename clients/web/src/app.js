@@ -8,7 +8,7 @@
 //   #/live              tests being recorded (live.js)
 //   #/liveRuns/{id}     one of them, watched as it happens (live.js)
 //   #/fleet             fleet statistics (fleet.js)
-import { api, ApiError, listAll, num, session } from './api.js';
+import { api, ApiError, listAll, num, session, idOf } from './api.js';
 import { h, fmt, fmtSeconds, fmtTime, empty, section, table } from './dom.js';
 import { navigate, startAnalysis, errorCard } from './nav.js';
 import { showAnalysis } from './analysis.js';
@@ -65,7 +65,7 @@ async function fillRunList(listing) {
     table(
       ['Run', 'Unit', 'Type', 'Samples', 'Duration', 'Uploaded', ''],
       runs.map((run) => {
-        const id = run.name.split('/')[1];
+        const id = idOf(run.name);
         return h('tr.clickable', { dataset: { run: run.name }, onclick: () => navigate(`#/runs/${id}`) },
           h('td', h('a', { href: `#/runs/${id}` }, id.slice(0, 8))),
           h('td', unitLink(run.metadata.unitSerial)),
@@ -175,7 +175,7 @@ async function showRun(view, name) {
   const [run, analyses] = await Promise.all([api.getRun(name), api.listAnalyses(name)]);
   const meta = run.metadata;
   view.append(
-    h('h1', `Run ${name.split('/')[1]}`),
+    h('h1', `Run ${idOf(name)}`),
     section('Run',
       table(['Unit', 'Type', 'Samples', 'Rate', 'Duration', 'Temperature', 'Uploaded'], [h('tr',
         h('td', unitLink(meta.unitSerial)), h('td', meta.unitType || '—'), h('td.num', Number(run.sampleCount).toLocaleString()),
@@ -217,7 +217,7 @@ function unitLink(serial) {
 
 function analysisTable(analyses) {
   return table(['Analysis', 'Model', 'State', 'Created'], analyses.map((a) => {
-    const id = a.name.split('/')[1];
+    const id = idOf(a.name);
     return h('tr.clickable', { onclick: () => navigate(`#/${a.name}`) },
       h('td', h('a', { href: `#/${a.name}` }, id.slice(0, 8))),
       h('td', a.model.effects.length ? a.model.effects.join(', ') : 'base model', a.discover ? ' (discover)' : ''),

@@ -2,7 +2,7 @@
 // analyses over time, a table of every identified parameter's repeatability
 // and trend, and a plot per parameter — each run's value ± its standard error
 // against the test date, with the weighted trend line.
-import { api, num } from './api.js';
+import { api, num, idOf } from './api.js';
 import { h, fmt, fmtP, fmtTime, empty, section, table } from './dom.js';
 import { plot, markers, line, formatTick, colors } from './charts.js';
 import { navigate } from './nav.js';
@@ -40,12 +40,12 @@ export async function showHistory(view, unit) {
 function runTable(runs) {
   if (!runs.length) return empty('No run of this unit.');
   const rows = runs.flatMap((run) => {
-    const id = run.run.split('/')[1];
+    const id = idOf(run.run);
     const analyses = run.analyses.length ? run.analyses : [null];
     return analyses.map((a, i) => h(a ? 'tr.clickable' : 'tr', { onclick: a ? () => navigate(`#/${a.analysis}`) : null },
       h('td', i === 0 ? h('a', { href: `#/runs/${id}` }, id.slice(0, 8)) : ''),
       h('td', i === 0 ? fmtTime(run.testTime) : ''),
-      h('td', a ? h('a', { href: `#/${a.analysis}` }, a.analysis.split('/')[1].slice(0, 8)) : 'not analysed'),
+      h('td', a ? h('a', { href: `#/${a.analysis}` }, idOf(a.analysis).slice(0, 8)) : 'not analysed'),
       h('td', a ? h(`span.badge.${a.verdict}`, a.verdict.replace('VERDICT_UNSPECIFIED', '—')) : ''),
       h('td.num', a ? String(a.identifiedCount) : ''),
       h('td', a?.counted ? 'counted' : '')));

@@ -1,0 +1,39 @@
+// The v1 API's resource names: a collection and an id, "runs/{run}",
+// "analyses/{analysis}", "units/{unit}", "unitTypes/{unitType}", … (AIP-122).
+// One place builds and reads them, with one refusal for a name that is not
+// one: "analysis.run: 'x' is not a run name (runs/{run})".
+#pragma once
+
+#include <absl/status/statusor.h>
+
+#include <string>
+#include <string_view>
+
+namespace insdiag::api {
+
+struct Collection {
+  std::string_view segment;  // "runs"
+  std::string_view noun;     // "a run": what a refusal says the name is not
+  std::string_view id;       // "run": the id's placeholder in the pattern
+};
+
+inline constexpr Collection kRuns{"runs", "a run", "run"};
+inline constexpr Collection kAnalyses{"analyses", "an analysis", "analysis"};
+inline constexpr Collection kUnits{"units", "a unit", "unit"};
+inline constexpr Collection kUnitTypes{"unitTypes", "a unit type", "unitType"};
+inline constexpr Collection kDiagnoses{"diagnoses", "a diagnosis", "diagnosis"};
+inline constexpr Collection kFailureRecords{"failureRecords", "a failure record", "failureRecord"};
+
+// "runs/abc".
+std::string ResourceName(const Collection& collection, std::string_view id);
+
+// The id of `name` in `collection`: a non-empty id without '/'. `field`
+// names the request field in the refusal ("name", "analysis.run").
+absl::StatusOr<std::string> ResourceId(std::string_view name, const Collection& collection,
+                                       std::string_view field = "name");
+
+// The id when `name` is in `collection`, else `name` itself: for inputs that
+// accept a bare id too (a unit type given as "INS-2000").
+std::string IdOrSelf(std::string_view name, const Collection& collection);
+
+}  // namespace insdiag::api
