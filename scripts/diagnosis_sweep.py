@@ -27,7 +27,7 @@ docs/DIAGNOSIS.md, with its 95 % profile-likelihood interval. The catalogue's
 `incidentalContamination` is that estimate.
 
 Usage:
-  scripts/diagnosis_sweep.py [--runs N] [--scenarios a,b] [--simulators cpp,py] [--out results.json]
+  scripts/diagnosis_sweep.py [--runs N] [--first-index I] [--scenarios a,b] [--simulators cpp,py] [--out results.json]
 The figures in docs/FAULT_SCENARIOS.md come from
   scripts/diagnosis_sweep.py --runs 5 --scenarios drift_sigma_x3_long
   scripts/diagnosis_sweep.py --runs 6 --scenarios healthy
@@ -168,6 +168,8 @@ def incidental_share(results):
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--first-index", type=int, default=0,
+                        help="the first run's index (seeds and axes follow it): to extend an earlier sweep")
     parser.add_argument("--scenarios", default="drift_sigma_x3_long,healthy")
     parser.add_argument("--simulators", default="cpp,py")
     parser.add_argument("--out", default=None)
@@ -179,7 +181,7 @@ def main():
         try:
             for scenario in args.scenarios.split(","):
                 for simulator in args.simulators.split(","):
-                    for index in range(args.runs):
+                    for index in range(args.first_index, args.first_index + args.runs):
                         path = os.path.join(tmp, "run.csv")
                         hidden = make_run(simulator, scenario, index, path)
                         started = time.monotonic()

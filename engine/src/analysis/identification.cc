@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
 #include "analysis/model_change.h"
 #include "insdiag/engine/ident/correlation.h"
@@ -73,11 +72,10 @@ bool ApplyDriftLikelihood(const ident::DriftLikelihoodResult& ml, double alpha, 
   if (takes) base = ml.model;
   std::string names;
   for (const ParameterEstimate& p : ml.identified) names += (names.empty() ? "" : ", ") + p.name;
-  char buf[200];
-  std::snprintf(buf, sizeof buf, " (EM, %d iterations%s, %d filter passes): 2Δℓ = %.1f against χ²(%d) at %.2g — ",
-                ml.iterations, ml.converged ? "" : ", not converged", ml.filter_passes, statistic, dof, alpha);
-  notes.push_back("drift parameters identified by likelihood of the innovations: " +
-                  names + buf +
+  notes.push_back("drift parameters identified by likelihood of the innovations: " + names +
+                  absl::StrFormat(" (EM, %d iterations%s, %d filter passes): 2Δℓ = %.1f against χ²(%d) at %.2g — ",
+                                  ml.iterations, ml.converged ? "" : ", not converged", ml.filter_passes, statistic,
+                                  dof, alpha) +
                   (rejects        ? "the model takes the estimates"
                    : placeholders ? "the model's values were the Allan fit's placeholders: it takes the estimates"
                                   : "the data do not reject the model's values, kept"));

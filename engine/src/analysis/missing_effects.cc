@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <map>
 #include <numbers>
@@ -106,10 +105,10 @@ std::vector<StructureProposal> ProposeStructures(const std::vector<DriftCorrelat
         c.statistic = f.lr_statistic;
         c.dof = f.lr_dof;
         c.p_value = f.lr_p_value;
-        char buf[192];
-        std::snprintf(buf, sizeof buf, "; its fit to the correlation function gains χ² %.1f, p = %.2g (%d starts): "
-                      "below the screen", f.lr_statistic, f.lr_p_value, p->searched_starts);
-        c.note = "correlation function of " + d.state + " against " + ident::CorrelationFamilyName(f.family) + buf;
+        c.note = "correlation function of " + d.state + " against " + ident::CorrelationFamilyName(f.family) +
+                 absl::StrFormat("; its fit to the correlation function gains χ² %.1f, p = %.2g (%d starts): "
+                                 "below the screen",
+                                 f.lr_statistic, f.lr_p_value, p->searched_starts);
         auto [it, inserted] = outcomes.emplace(c.name, c);
         if (!inserted && c.p_value < it->second.p_value) it->second = c;
         continue;
@@ -289,11 +288,9 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
         c.estimate = w.parameters.front().value;
         c.statistic = w.statistic;
         c.p_value = ident::NestedPValue(w);
-        char buf[256];
-        std::snprintf(buf, sizeof buf, "likelihood of the innovations: 2Δℓ = %.1f beyond the drift σ re-fitted "
-                      "alone, p = %.2g (%d starts) — below the screen; no standard error computed",
-                      w.statistic, c.p_value, w.starts);
-        c.note = buf;
+        c.note = absl::StrFormat("likelihood of the innovations: 2Δℓ = %.1f beyond the drift σ re-fitted "
+                                 "alone, p = %.2g (%d starts) — below the screen; no standard error computed",
+                                 w.statistic, c.p_value, w.starts);
         outcomes.insert_or_assign(w.effect, c);
         continue;
       }
@@ -315,17 +312,12 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
       c.predicted_delta_bic = -c.statistic + c.dof * log_n;
       std::string parameters;
       for (const ParameterEstimate& e : w.parameters) {
-        char buf[96];
-        std::snprintf(buf, sizeof buf, "%s%s %.3g %s", parameters.empty() ? "" : ", ",
-                      e.name.substr(e.name.rfind('.') + 1).c_str(), e.value, e.unit.c_str());
-        parameters += buf;
+        parameters += absl::StrFormat("%s%s %.3g %s", parameters.empty() ? "" : ", ",
+                                      e.name.substr(e.name.rfind('.') + 1), e.value, e.unit);
       }
-      char buf[64];
-      std::snprintf(buf, sizeof buf, "%.3g %s", w.drift_sigma.value, w.drift_sigma.unit.c_str());
-      char nested[96];
-      std::snprintf(nested, sizeof nested, "2Δℓ = %.1f beyond the drift σ re-fitted alone", w.statistic);
       c.note = "likelihood of the innovations with " + parameters + " and the drift σ re-fitted (" +
-               DriftName(w.drift) + ".sigma " + buf + " with it); " + nested;
+               DriftName(w.drift) + ".sigma " + absl::StrFormat("%.3g %s", w.drift_sigma.value, w.drift_sigma.unit) +
+               " with it); " + absl::StrFormat("2Δℓ = %.1f beyond the drift σ re-fitted alone", w.statistic);
       out.push_back(std::move(p));
     }
   }

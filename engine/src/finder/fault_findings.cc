@@ -1,8 +1,9 @@
 #include "insdiag/engine/finder/fault_findings.h"
 
+#include <absl/strings/str_format.h>
+
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 
 #include "insdiag/engine/model/effect_catalogue.h"
@@ -46,10 +47,8 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
     c.onset_std_s = f.onset_std_s;
     c.onset_low_s = f.onset_low_s;
     c.onset_high_s = f.onset_high_s;
-    char buf[200];
-    std::snprintf(buf, sizeof buf, "likelihood ratio over %d onsets: max 2Δℓ %.1f; onset %.0f s (±1σ %.0f–%.0f s)",
-                  f.onsets_tried, f.statistic, f.onset_s, f.onset_low_s, f.onset_high_s);
-    c.note = buf;
+    c.note = absl::StrFormat("likelihood ratio over %d onsets: max 2Δℓ %.1f; onset %.0f s (±1σ %.0f–%.0f s)",
+                             f.onsets_tried, f.statistic, f.onset_s, f.onset_low_s, f.onset_high_s);
     out.push_back(std::move(c));
   }
   // A step and a ramp of one sensor axis whose 2Δℓ are within 2 of each

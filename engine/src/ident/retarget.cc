@@ -1,8 +1,9 @@
 #include "insdiag/engine/ident/retarget.h"
 
+#include <absl/strings/str_format.h>
+
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/numerics/parallel_map.h"
@@ -11,11 +12,7 @@
 namespace insdiag::engine::ident {
 namespace {
 
-std::string Format(const char* fmt, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, fmt, v);
-  return buf;
-}
+std::string ThreeFigures(double v) { return absl::StrFormat("%.3g", v); }
 
 double EpochInterval(const ForwardPass& fw) {
   return fw.epochs() > 1 ? (fw.epoch_time_s.back() - fw.epoch_time_s.front()) / (fw.epochs() - 1) : 1.0;
@@ -191,7 +188,7 @@ bool MatchReferenceNoise(const ForwardPass& fw, double alpha, ErrorModel& model,
     if (notes != nullptr) {
       notes->push_back(std::string("the ") + (group == 0 ? "position" : "velocity") +
                        " innovations exceed their predicted variance: the reference noise was raised from " +
-                       Format("%.3g", before) + " to " + Format("%.3g", sigma) + (group == 0 ? " m" : " m/s") +
+                       ThreeFigures(before) + " to " + ThreeFigures(sigma) + (group == 0 ? " m" : " m/s") +
                        " — the unit moved in ways the bench's reference did not record (sway, vibration)");
     }
   }
