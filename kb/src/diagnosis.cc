@@ -404,17 +404,22 @@ Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType
       evidence.terms.push_back(std::move(t));
       continue;
     }
-    // Without a standard error (a structure below its test's screen), the z
-    // of the same two-sided p-value: √χ² on one degree of freedom, and on
-    // more not an inflated √χ² (a pair's 2Δℓ has three). A fault from the
-    // onset scan: its estimate over its SE is the best onset's, inflated by
-    // the search over onsets; the z of its p-value (Davies' bound over the
-    // onsets) is what a healthy unit scatters like N(0, 1).
+    // A random structure (a walk, a second-order pair): its magnitude is
+    // bounded at zero, so estimate over SE is positive whatever the unit and
+    // no standard score (a pair whose own test gave p = 1 had 6.6 SE, and
+    // named the wrong gyro); the z of its likelihood-ratio test's p-value is.
+    // Without a standard error, the z of the same two-sided p-value: √χ² on
+    // one degree of freedom, and on more not an inflated √χ² (a pair's 2Δℓ
+    // has three). A fault from the onset scan: its estimate over its SE is
+    // the best onset's, inflated by the search over onsets; the z of its
+    // p-value (Davies' bound over the onsets) is what a healthy unit
+    // scatters like N(0, 1).
     const auto z_of_p = [&] {
       return std::copysign(-engine::stats::NormalQuantile(0.5 * std::clamp(c.p_value(), 1e-300, 1.0)),
                            c.estimate());
     };
-    const double z = c.source() == "GLR"             ? z_of_p()
+    const bool structure = c.source() == "STRUCTURE" || c.source() == "LIKELIHOOD";
+    const double z = c.source() == "GLR" || structure ? z_of_p()
                      : c.std_error() > 0            ? c.estimate() / c.std_error()
                      : c.degrees_of_freedom() <= 1 ? std::copysign(std::sqrt(std::max(c.statistic(), 0.0)), c.estimate())
                                                     : z_of_p();

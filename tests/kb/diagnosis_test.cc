@@ -168,6 +168,42 @@ TEST(DiagnosisTest, UntestedStructuresAreNoEvidenceAndScreenedOnesWeighByTheirPV
   EXPECT_NEAR(y->x, 0.6745, 1e-3);  // Φ⁻¹(1 − 0.5/2)
 }
 
+// A structure's magnitude is bounded at zero: estimate over SE is no
+// standard score. One whose own test found nothing (p = 1) but whose fit
+// put it 6.6 SE from zero is no evidence; one its test finds is.
+TEST(DiagnosisTest, AStructureWeighsByItsTestNotByItsEstimateOverItsError) {
+  v1::AnalysisReport report = NominalReport();
+  for (const auto& [name, p_value] : {std::pair{"gyro_bias_second_order.y", 1.0}, {"gyro_bias_rw.z", 1e-6}}) {
+    auto* c = report.add_effect_candidates();
+    c->set_name(name);
+    c->set_family(std::string(name).substr(0, std::string(name).find('.')));
+    c->set_source("STRUCTURE");
+    c->set_degrees_of_freedom(3);
+    c->set_estimate(9.24e-9);
+    c->set_std_error(1.41e-9);
+    c->set_p_value(p_value);
+    c->set_p_value_holm(p_value);
+    c->set_identifiable(true);
+  }
+  const auto& f = Ins2000();
+  const Evidence evidence = EvidenceFromReport(report, f.unit_type, f.catalogue.settings());
+  const EvidenceTerm* pair = nullptr;
+  const EvidenceTerm* walk = nullptr;
+  for (const EvidenceTerm& t : evidence.terms) {
+    if (t.name == "gyro_bias_second_order.y") pair = &t;
+    if (t.name == "gyro_bias_rw.z") walk = &t;
+  }
+  ASSERT_NE(pair, nullptr);
+  ASSERT_NE(walk, nullptr);
+  EXPECT_NEAR(pair->x, 0.0, 1e-9);
+  EXPECT_NEAR(walk->x, 4.892, 1e-3);  // Φ⁻¹(1 − 1e-6/2)
+  // The pair alone leaves a nominal unit healthy.
+  report.mutable_effect_candidates()->RemoveLast();
+  const v1::Diagnosis d = DiagnoseReport(report);
+  ASSERT_GT(d.candidates_size(), 0);
+  EXPECT_EQ(d.candidates(0).module(), "healthy");
+}
+
 TEST(DiagnosisTest, ReportWithoutEvidenceIsHealthyWhenGoodAndUnknownOtherwise) {
   v1::AnalysisReport report;
   report.set_verdict(v1::AnalysisReport::GOOD);
