@@ -219,7 +219,7 @@ absl::StatusOr<pipeline::ScannedModel> ScanModelA(const pipeline::RunContext& c,
                     "analysis found a structure or did not test one");
   }
   pipeline::ScannedModel a;
-  a.found = pipeline::FindMissingEffects(c.run, c.epochs, *pass, c.a_priori.model, c.spikes, c.options, &notes, settled);
+  a.found = pipeline::FindMissingEffects(c.run, c.epochs, *pass, c.a_priori.model, c.options, &notes, settled);
   a.pass = *std::move(pass);
   return a;
 }

@@ -243,7 +243,7 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std
     Findings found;
     const EffectCandidate* best = nullptr;
     if (scan_a_priori) {
-      found = FindMissingEffects(c.run, c.epochs, *pass, out.drifts, c.a_priori.model, c.spikes, options, &found_notes);
+      found = FindMissingEffects(c.run, c.epochs, *pass, out.drifts, c.a_priori.model, options, &found_notes);
       best = LowestBicSignificant(found.candidates, found.families, options);
     }
     if (best != nullptr) {
@@ -384,14 +384,14 @@ PlaceholderFaultTest TestPlaceholderFault(const RunContext& c, const Retargeted&
   e.prior_sigma[0] = PriorSigmaAroundEstimate(fault.estimate, fault.std_error, c.options);
   t.with_fault.model.effects.push_back(e);
   IdentifyFinalDrifts(c, retargeted, t.with_fault, t.notes);
-  auto pass = RunPass(c.run, c.epochs, t.with_fault.model, c.spikes, c.options, /*with_scan=*/false);
-  if (!pass.ok()) {
+  auto with = ProfileLogLikelihood(c.epochs, t.with_fault.model);
+  if (!with.ok()) {
     t.notes = {fault.term.Name() + " against the identified drifts: not tested (" +
-               std::string(pass.status().message()) + ")"};
+               std::string(with.status().message()) + ")"};
     return t;
   }
   t.tested = true;
-  t.statistic = std::max(0.0, 2.0 * (pass->log_likelihood - log_likelihood_without));
+  t.statistic = std::max(0.0, 2.0 * (*with - log_likelihood_without));
   t.p_value =
       std::min(1.0, OnsetPValue(t.statistic, fault.path_length) * static_cast<double>(retargeted.fault_terms_scanned));
   t.with_fault.model.effects.pop_back();
@@ -403,7 +403,7 @@ PlaceholderFaultTest TestPlaceholderFault(const RunContext& c, const Retargeted&
 // 2Δℓ is largest among those that stand.
 void TestPlaceholderFaults(const RunContext& c, const Retargeted& retargeted, Identification& id,
                            std::vector<std::string>& notes) {
-  auto without = RunPass(c.run, c.epochs, id.model, c.spikes, c.options, /*with_scan=*/false);
+  auto without = ProfileLogLikelihood(c.epochs, id.model);
   if (!without.ok()) {
     notes.push_back("faults found against the Allan fit's drifts: not tested (" +
                     std::string(without.status().message()) + ")");
@@ -412,7 +412,7 @@ void TestPlaceholderFaults(const RunContext& c, const Retargeted& retargeted, Id
   PlaceholderFaultTest* best = nullptr;
   std::vector<PlaceholderFaultTest> tests;
   for (const OnsetFit& f : retargeted.placeholder_faults) {
-    tests.push_back(TestPlaceholderFault(c, retargeted, f, id, without->log_likelihood));
+    tests.push_back(TestPlaceholderFault(c, retargeted, f, id, *without));
   }
   for (PlaceholderFaultTest& t : tests) {
     if (!t.tested) {

@@ -125,10 +125,8 @@ std::vector<StructureProposal> ProposeStructures(const std::vector<DriftCorrelat
 
 // Confirms each proposal with the filter's exact likelihood: model A plus the
 // effect, against model A.
-std::vector<StructureProposal> ConfirmStructures(const BenchRun& run, const EpochRun& epochs, const ModelPass& a,
-                                                 std::vector<StructureProposal> proposals,
-                                                 const std::vector<SampleOutlier>& spikes,
-                                                 const AnalysisOptions& options) {
+std::vector<StructureProposal> ConfirmStructures(const EpochRun& epochs, const ModelPass& a,
+                                                 std::vector<StructureProposal> proposals) {
   const double log_n = std::log(static_cast<double>(std::max(1, a.forward.scalar_updates)));
   const auto needs_pass = [&](const StructureProposal& p) {
     return !p.fitted.has_value() && a.model.FindEffect(p.effect.term) < 0;
@@ -139,9 +137,7 @@ std::vector<StructureProposal> ConfirmStructures(const BenchRun& run, const Epoc
         if (!needs_pass(proposals[i])) return 0.0;
         ErrorModel b = a.model;
         b.effects.push_back(proposals[i].effect);
-        auto pass = RunPass(run, epochs, b, spikes, options, /*with_scan=*/false);
-        if (!pass.ok()) return pass.status();
-        return pass->log_likelihood;
+        return ProfileLogLikelihood(epochs, b);
       });
   for (std::size_t i = 0; i < proposals.size(); ++i) {
     StructureProposal& p = proposals[i];
@@ -381,8 +377,7 @@ std::vector<FaultFinding> FaultFindings(const ModelPass& pass, const Findings& f
 
 // `drifts`: correlation processing of this pass's smoothed drifts.
 Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass, std::vector<DriftCorrelation> drifts,
-                            const ErrorModel& a_priori, const std::vector<SampleOutlier>& spikes,
-                            const AnalysisOptions& options, std::vector<std::string>* notes,
+                            const ErrorModel& a_priori, const AnalysisOptions& options, std::vector<std::string>* notes,
                             const SettledStructures& settled) {
   Findings f;
   f.drifts = std::move(drifts);
@@ -432,7 +427,7 @@ Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const M
                     : "the model has no " + DriftName(DriftAxis::Of(term)) + " drift to test it beside"));
     }
   }
-  f.structures = ConfirmStructures(run, epochs, pass, std::move(proposals), spikes, options);
+  f.structures = ConfirmStructures(epochs, pass, std::move(proposals));
   for (EffectCandidate& c : FaultCandidates(pass.onsets, pass.forward.scalar_updates)) others.push_back(std::move(c));
   f.candidates = MergeCandidates(std::move(ranked.terms), f.structures, std::move(others),
                                  options.finder.family_wise_alpha);
@@ -440,11 +435,11 @@ Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const M
 }
 
 Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass, const ErrorModel& a_priori,
-                            const std::vector<SampleOutlier>& spikes, const AnalysisOptions& options,
-                            std::vector<std::string>* notes, const SettledStructures& settled) {
+                            const AnalysisOptions& options, std::vector<std::string>* notes,
+                            const SettledStructures& settled) {
   return FindMissingEffects(run, epochs, pass,
                             ident::CorrelateDrifts(pass.forward, pass.smoothed, *pass.layout, options.correlation, notes),
-                            a_priori, spikes, options, notes, settled);
+                            a_priori, options, notes, settled);
 }
 
 bool AddsOnlyDeterministicEffects(const std::vector<std::string>& selectors) {

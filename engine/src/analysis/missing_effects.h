@@ -66,12 +66,12 @@ struct ScannedModel {
 // structures `settled` holds; the report takes their outcomes.
 Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass,
                             std::vector<DriftCorrelation> drifts, const ErrorModel& a_priori,
-                            const std::vector<SampleOutlier>& spikes, const AnalysisOptions& options,
-                            std::vector<std::string>* notes, const SettledStructures& settled = {});
+                            const AnalysisOptions& options, std::vector<std::string>* notes,
+                            const SettledStructures& settled = {});
 // The same, correlating the pass's drifts first.
 Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass, const ErrorModel& a_priori,
-                            const std::vector<SampleOutlier>& spikes, const AnalysisOptions& options,
-                            std::vector<std::string>* notes, const SettledStructures& settled = {});
+                            const AnalysisOptions& options, std::vector<std::string>* notes,
+                            const SettledStructures& settled = {});
 
 // The significant, identifiable candidate whose predicted ΔBIC is lowest,
 // among single terms and whole families; nullptr when none is significant.

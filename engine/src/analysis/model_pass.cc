@@ -87,6 +87,12 @@ absl::StatusOr<ModelPass> RunPass(const BenchRun& run, const EpochRun& epochs, c
   return pass;
 }
 
+absl::StatusOr<double> ProfileLogLikelihood(const EpochRun& epochs, const ErrorModel& model) {
+  auto forward = RunForwardFilter(epochs, model);
+  if (!forward.ok()) return forward.status();
+  return forward->log_likelihood + ProfileCorrection(*forward, model, StateLayout(model));
+}
+
 void FillFit(const ModelPass& pass, const BenchRun& run, const AnalysisOptions& options, AnalysisReport& r) {
   const MonitorResult& m = pass.monitor;
   r.verdict = m.verdict;
