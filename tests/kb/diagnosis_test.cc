@@ -32,6 +32,14 @@ v1::Diagnosis DiagnoseReport(const v1::AnalysisReport& report, PriorInputs prior
                   prior);
 }
 
+// The evidence term named `name`, or nullptr.
+const EvidenceTerm* TermNamed(const Evidence& evidence, const std::string& name) {
+  for (const EvidenceTerm& t : evidence.terms) {
+    if (t.name == name) return &t;
+  }
+  return nullptr;
+}
+
 double ProbabilityOf(const v1::Diagnosis& d, const std::string& mode) {
   for (const auto& h : d.hypotheses()) {
     if (h.failure_mode() == mode) return h.probability();
@@ -156,12 +164,8 @@ TEST(DiagnosisTest, UntestedStructuresAreNoEvidenceAndScreenedOnesWeighByTheirPV
   screened->set_identifiable(true);
   const auto& f = Ins2000();
   const Evidence evidence = EvidenceFromReport(report, f.unit_type, f.catalogue.settings());
-  const EvidenceTerm* x = nullptr;
-  const EvidenceTerm* y = nullptr;
-  for (const EvidenceTerm& t : evidence.terms) {
-    if (t.name == "gyro_bias_second_order.x") x = &t;
-    if (t.name == "gyro_bias_second_order.y") y = &t;
-  }
+  const EvidenceTerm* x = TermNamed(evidence, "gyro_bias_second_order.x");
+  const EvidenceTerm* y = TermNamed(evidence, "gyro_bias_second_order.y");
   EXPECT_EQ(x, nullptr) << "an untested candidate counted as evidence";
   ASSERT_NE(y, nullptr);
   EXPECT_EQ(y->scale, Scale::kZ);
@@ -187,12 +191,8 @@ TEST(DiagnosisTest, AStructureWeighsByItsTestNotByItsEstimateOverItsError) {
   }
   const auto& f = Ins2000();
   const Evidence evidence = EvidenceFromReport(report, f.unit_type, f.catalogue.settings());
-  const EvidenceTerm* pair = nullptr;
-  const EvidenceTerm* walk = nullptr;
-  for (const EvidenceTerm& t : evidence.terms) {
-    if (t.name == "gyro_bias_second_order.y") pair = &t;
-    if (t.name == "gyro_bias_rw.z") walk = &t;
-  }
+  const EvidenceTerm* pair = TermNamed(evidence, "gyro_bias_second_order.y");
+  const EvidenceTerm* walk = TermNamed(evidence, "gyro_bias_rw.z");
   ASSERT_NE(pair, nullptr);
   ASSERT_NE(walk, nullptr);
   EXPECT_NEAR(pair->x, 0.0, 1e-9);
