@@ -13,6 +13,7 @@
 #include <cstring>
 #include <tuple>
 
+#include "insdiag/api/resource_names.h"
 #include "insdiag/api/run_codec.h"
 #include "store_util.h"
 
@@ -149,7 +150,7 @@ absl::StatusOr<std::pair<std::vector<v1::Token>, std::string>> AccessStore::List
 }
 
 absl::StatusOr<v1::Token> AccessStore::RevokeToken(const std::string& name) {
-  auto id = internal::UuidOf(name, "tokens", "name");
+  auto id = internal::UuidOf(name, api::kTokens, "name");
   if (!id.ok()) return id.status();
   auto db = pool_.Acquire();
   if (!db.ok()) return db.status();
@@ -190,7 +191,7 @@ absl::StatusOr<bool> AccessStore::CreateFirstAdminToken(const std::filesystem::p
 absl::Status AccessStore::RecordAuditEvent(const AuditedCall& call) {
   std::optional<std::string> token_id;
   if (call.caller.has_value()) {
-    auto id = internal::UuidOf(call.caller->token(), "tokens", "token");
+    auto id = internal::UuidOf(call.caller->token(), api::kTokens, "token");
     if (id.ok()) token_id = *id;
   }
   auto db = pool_.Acquire();
@@ -217,7 +218,7 @@ absl::StatusOr<std::pair<std::vector<v1::AuditEvent>, std::string>> AccessStore:
   }
   std::optional<std::string> token_id;
   if (!query.token.empty()) {
-    auto id = internal::UuidOf(query.token, "tokens", "token");
+    auto id = internal::UuidOf(query.token, api::kTokens, "token");
     if (!id.ok()) return id.status();
     token_id = *id;
   }

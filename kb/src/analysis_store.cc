@@ -7,6 +7,7 @@
 #include <cmath>
 #include <set>
 
+#include "insdiag/api/resource_names.h"
 #include "insdiag/engine/filter/observation.h"
 #include "report_rows.h"
 #include "store_util.h"
@@ -34,8 +35,8 @@ v1::Analysis::State StateOf(std::string_view text) {
 
 v1::Analysis AnalysisFromRow(const Result& rows, int row) {
   v1::Analysis a;
-  a.set_name(absl::StrCat("analyses/", rows.String(row, 0)));
-  a.set_run(absl::StrCat("runs/", rows.String(row, 1)));
+  a.set_name(api::ResourceName(api::kAnalyses, rows.String(row, 0)));
+  a.set_run(api::ResourceName(api::kRuns, rows.String(row, 1)));
   // bytea travels as hex text here: the rest of the row is text.
   v1::AnalysisSpec spec;
   spec.ParseFromString(absl::HexStringToBytes(rows.String(row, 3)));
@@ -51,7 +52,7 @@ v1::Analysis AnalysisFromRow(const Result& rows, int row) {
     a.mutable_error()->set_message(rows.String(row, 7));
   }
   a.set_attempts(static_cast<int>(internal::IntOr0(rows, row, 8)));
-  a.set_unit(absl::StrCat("units/", rows.String(row, 9)));
+  a.set_unit(api::ResourceName(api::kUnits, rows.String(row, 9)));
   *a.mutable_create_time() = internal::TimestampOfMicros(internal::IntOr0(rows, row, 10));
   *a.mutable_update_time() = internal::TimestampOfMicros(internal::IntOr0(rows, row, 11));
   if (!rows.IsNull(row, 12)) a.mutable_report()->ParseFromString(absl::HexStringToBytes(rows.String(row, 12)));
@@ -201,7 +202,9 @@ absl::StatusOr<v1::Analysis> AnalysisStore::Create(const std::string& run_id, co
         {Param::Text(run_id), Param::Bytes(request_bytes), Param::TextOrNull(request_id),
          Param::TextOrNull(request_id.empty() ? "" : fingerprint), Param::Int(max_attempts)});
     if (!inserted.ok()) return inserted.status();
-    if (inserted->rows() == 0) return absl::NotFoundError(absl::StrCat("runs/", run_id, " does not exist"));
+    if (inserted->rows() == 0)
+      return absl::NotFoundError(
+          absl::StrCat(api::ResourceName(api::kRuns, run_id), " does not exist"));
     id = inserted->String(0, 0);
     return absl::OkStatus();
   });
@@ -218,7 +221,9 @@ absl::StatusOr<v1::Analysis> AnalysisStore::Get(const std::string& analysis_id, 
   auto rows = (*db)->Exec(SelectAnalyses(include_report) + "WHERE a.analysis_id = $1::uuid",
                           {Param::Text(analysis_id)}, ResultFormat::kText);
   if (!rows.ok()) return rows.status();
-  if (rows->rows() == 0) return absl::NotFoundError(absl::StrCat("analyses/", analysis_id, " does not exist"));
+  if (rows->rows() == 0)
+    return absl::NotFoundError(
+        absl::StrCat(api::ResourceName(api::kAnalyses, analysis_id), " does not exist"));
   v1::Analysis analysis = AnalysisFromRow(*rows, 0);
   if (include_report) {
     if (auto s = CompleteReport(**db, *rows, 0, analysis); !s.ok()) return s;
@@ -351,7 +356,8 @@ absl::Status AnalysisStore::Complete(const std::string& analysis_id, const std::
     if (!updated.ok()) return updated.status();
     if (updated->AffectedRows() == 0) {
       return absl::FailedPreconditionError(
-          absl::StrCat("analyses/", analysis_id, " is no longer held by ", owner, " (lease lost or cancelled)"));
+          absl::StrCat(api::ResourceName(api::kAnalyses, analysis_id), " is no longer held by ",
+                       owner, " (lease lost or cancelled)"));
     }
     if (auto s = StoreReportRows(**db, analysis_id, report); !s.ok()) return s;
     if (series != nullptr && !series->time_s.empty()) {

@@ -17,9 +17,11 @@ std::string UnitTypeId(const std::string& name) {
 absl::StatusOr<v1::UnitType> LoadUnitType(Connection& db, const std::string& id) {
   auto rows = db.Exec("SELECT display_name, description FROM unit_types WHERE unit_type = $1", {Param::Text(id)});
   if (!rows.ok()) return rows.status();
-  if (rows->rows() == 0) return absl::NotFoundError(absl::StrCat("unitTypes/", id, " does not exist"));
+  if (rows->rows() == 0)
+    return absl::NotFoundError(
+        absl::StrCat(api::ResourceName(api::kUnitTypes, id), " does not exist"));
   v1::UnitType t;
-  t.set_name(absl::StrCat("unitTypes/", id));
+  t.set_name(api::ResourceName(api::kUnitTypes, id));
   t.set_display_name(rows->String(0, 0));
   t.set_description(rows->String(0, 1));
   auto nominal = db.Exec(
@@ -68,9 +70,9 @@ absl::StatusOr<std::vector<v1::FailureMode>> LoadModes(Connection& db, const std
   std::map<std::string, v1::DiagnosisSettings> settings;
   for (int r = 0; r < rows->rows(); ++r) {
     v1::FailureMode m;
-    m.set_name(absl::StrCat(kModePrefix, "/", rows->String(r, 0)));
+    m.set_name(api::ResourceName(api::kFailureModes, rows->String(r, 0)));
     const std::string type = rows->String(r, 1);
-    m.set_unit_type(absl::StrCat(kUnitTypePrefix, "/", type));
+    m.set_unit_type(api::ResourceName(api::kUnitTypes, type));
     m.set_module_role(rows->String(r, 2));
     m.set_display_name(rows->String(r, 3));
     m.set_description(rows->String(r, 4));

@@ -12,9 +12,6 @@
 
 namespace insdiag::kb::internal {
 
-inline constexpr char kUnitTypePrefix[] = "unitTypes";
-inline constexpr char kModePrefix[] = "failureModes";
-
 // unitTypes/{t} or a bare display name → {t}.
 std::string UnitTypeId(const std::string& name);
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "catalogue_rows.h"
+#include "insdiag/api/resource_names.h"
 #include "insdiag/kb/diagnosis.h"
 #include "store_util.h"
 
@@ -12,8 +13,6 @@ namespace insdiag::kb {
 namespace {
 
 using internal::BoolText;
-using internal::kModePrefix;
-using internal::kUnitTypePrefix;
 using internal::LoadModes;
 using internal::LoadUnitType;
 using internal::Micros;
@@ -50,7 +49,7 @@ absl::Status UpsertUnitType(Connection& db, const v1::UnitType& t) {
 // when the expert's values changed: otherwise they keep what confirmed
 // cases refined.
 absl::Status UpsertFailureMode(Connection& db, const v1::FailureMode& mode) {
-  const std::string id = mode.name().substr(sizeof kModePrefix);
+  const std::string id = api::IdOrSelf(mode.name(), api::kFailureModes);
   auto upserted = db.Exec(
       "INSERT INTO failure_modes (failure_mode, unit_type, module_role, display_name, description, "
       "expert_rate_per_hour, weibull_shape, weibull_scale_hours) VALUES ($1, $2, $3, $4, $5, $6, $7, $8) "
@@ -99,8 +98,9 @@ constexpr char kUnitColumns[] =
 
 v1::Unit UnitFromRow(const Result& rows, int r) {
   v1::Unit u;
-  u.set_name(absl::StrCat("units/", rows.String(r, 0)));
-  if (!rows.String(r, 1).empty()) u.set_unit_type(absl::StrCat("unitTypes/", rows.String(r, 1)));
+  u.set_name(api::ResourceName(api::kUnits, rows.String(r, 0)));
+  if (!rows.String(r, 1).empty())
+    u.set_unit_type(api::ResourceName(api::kUnitTypes, rows.String(r, 1)));
   u.set_operating_hours(internal::DoubleOr0(rows, r, 2));
   *u.mutable_create_time() = internal::TimestampOfMicros(internal::IntOr0(rows, r, 3));
   u.set_batch(rows.String(r, 4));
@@ -133,7 +133,7 @@ absl::Status CatalogueStore::Seed(std::span<const v1::UnitType> unit_types,
 }
 
 absl::StatusOr<v1::UnitType> CatalogueStore::GetUnitType(const std::string& name) {
-  auto id = internal::IdOf(name, kUnitTypePrefix, "name");
+  auto id = api::ResourceId(name, api::kUnitTypes, "name");
   if (!id.ok()) return id.status();
   auto db = pool_.Acquire();
   if (!db.ok()) return db.status();
@@ -155,7 +155,7 @@ absl::StatusOr<std::vector<v1::UnitType>> CatalogueStore::ListUnitTypes() {
 }
 
 absl::StatusOr<v1::Unit> CatalogueStore::GetUnit(const std::string& name) {
-  auto serial = internal::IdOf(name, "units", "name");
+  auto serial = api::ResourceId(name, api::kUnits, "name");
   if (!serial.ok()) return serial.status();
   auto db = pool_.Acquire();
   if (!db.ok()) return db.status();
@@ -193,7 +193,7 @@ absl::StatusOr<std::pair<std::vector<v1::Unit>, std::string>> CatalogueStore::Li
 }
 
 absl::StatusOr<std::vector<v1::Module>> CatalogueStore::ListModules(const std::string& unit_name) {
-  auto serial = internal::IdOf(unit_name, "units", "parent");
+  auto serial = api::ResourceId(unit_name, api::kUnits, "parent");
   if (!serial.ok()) return serial.status();
   auto db = list_pool_.Acquire();
   if (!db.ok()) return db.status();
@@ -224,7 +224,7 @@ absl::StatusOr<std::vector<v1::Module>> CatalogueStore::ListModules(const std::s
 }
 
 absl::StatusOr<v1::FailureMode> CatalogueStore::GetFailureMode(const std::string& name) {
-  auto id = internal::IdOf(name, kModePrefix, "name");
+  auto id = api::ResourceId(name, api::kFailureModes, "name");
   if (!id.ok()) return id.status();
   auto db = pool_.Acquire();
   if (!db.ok()) return db.status();

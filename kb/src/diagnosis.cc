@@ -22,7 +22,6 @@ namespace {
 
 constexpr char kHealthy[] = "healthy";
 constexpr char kUnknown[] = "unknown";
-constexpr char kModePrefix[] = "failureModes/";
 
 double LogNormalPdf(double x, double mean, double variance) {
   const double d = x - mean;
@@ -274,12 +273,12 @@ absl::StatusOr<std::vector<v1::FailureMode>> ExpandCatalogue(const v1::FailureMo
         return axis.empty() ? text : absl::StrReplaceAll(text, {{"{i}", axis}});
       };
       v1::FailureMode mode;
-      mode.set_name(absl::StrCat(kModePrefix, fill(tmpl.id())));
+      mode.set_name(api::ResourceName(api::kFailureModes, fill(tmpl.id())));
       if (!seen.insert(mode.name()).second) return bad("id", "expands to a name used twice");
       mode.set_module_role(fill(tmpl.module_role()));
       mode.set_display_name(axis.empty() ? tmpl.display_name() : absl::StrCat(tmpl.display_name(), " (", axis, ")"));
       mode.set_description(tmpl.description());
-      mode.set_unit_type(absl::StrCat("unitTypes/", catalogue.unit_type()));
+      mode.set_unit_type(api::ResourceName(api::kUnitTypes, catalogue.unit_type()));
       mode.set_expert_rate_per_million_hours(tmpl.rate_per_million_hours());
       mode.set_rate_per_million_hours(tmpl.rate_per_million_hours());
       mode.set_weibull_shape(tmpl.weibull_shape());

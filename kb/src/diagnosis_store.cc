@@ -8,6 +8,7 @@
 #include "catalogue_rows.h"
 #include "failure_record_writes.h"
 #include "history_rows.h"
+#include "insdiag/api/resource_names.h"
 #include "insdiag/kb/diagnosis.h"
 #include "insdiag/kb/unit_history.h"
 #include "report_rows.h"
@@ -22,7 +23,6 @@ using internal::CheckModuleRole;
 using internal::CurrentModule;
 using internal::FleetExposure;
 using internal::InsertFailureRecord;
-using internal::kModePrefix;
 using internal::LoadModes;
 using internal::LoadReport;
 using internal::LoadUnitType;
@@ -38,11 +38,13 @@ absl::StatusOr<v1::Diagnosis> LoadDiagnosis(Connection& db, const std::string& i
       "LEFT JOIN modules m ON m.module_id = r.module_id WHERE d.diagnosis_id = $1::uuid",
       {Param::Text(id)}, ResultFormat::kBinary);
   if (!rows.ok()) return rows.status();
-  if (rows->rows() == 0) return absl::NotFoundError(absl::StrCat("diagnoses/", id, " does not exist"));
+  if (rows->rows() == 0)
+    return absl::NotFoundError(
+        absl::StrCat(api::ResourceName(api::kDiagnoses, id), " does not exist"));
   v1::Diagnosis d;
   d.ParseFromString(std::string(rows->Get(0, 0)));
   if (!rows->Get(0, 1).empty()) {
-    d.set_failure_record(absl::StrCat("failureRecords/", rows->String(0, 1)));
+    d.set_failure_record(api::ResourceName(api::kFailureRecords, rows->String(0, 1)));
     d.set_confirmed(rows->Get(0, 2) == std::string_view("\x01", 1));
     d.set_resolved_module(rows->String(0, 3));
   }
@@ -75,7 +77,7 @@ absl::Status AddHistoryEvidence(Connection& db, const std::string& unit_id, cons
 }  // namespace
 
 absl::StatusOr<v1::Diagnosis> DiagnosisStore::Create(const std::string& analysis_name) {
-  auto analysis_id = internal::UuidOf(analysis_name, "analyses", "analysis");
+  auto analysis_id = internal::UuidOf(analysis_name, api::kAnalyses, "analysis");
   if (!analysis_id.ok()) return analysis_id.status();
   auto db = pool_.Acquire();
   if (!db.ok()) return db.status();
@@ -91,16 +93,18 @@ absl::StatusOr<v1::Diagnosis> DiagnosisStore::Create(const std::string& analysis
   const std::string serial = unit->String(0, 1);
   const std::string type_id = unit->String(0, 2);
   if (type_id.empty()) {
-    return absl::FailedPreconditionError(absl::StrCat("units/", serial, " has no unit type (its runs name none): ",
-                                                      "there is no nominal model to diagnose against"));
+    return absl::FailedPreconditionError(absl::StrCat(
+        api::ResourceName(api::kUnits, serial), " has no unit type (its runs name none): ",
+        "there is no nominal model to diagnose against"));
   }
   auto report = LoadReport(**db, *analysis_id);
   if (!report.ok()) return report.status();
   auto unit_type = LoadUnitType(**db, type_id);
   if (!unit_type.ok()) {
     if (unit_type.status().code() == absl::StatusCode::kNotFound) {
-      return absl::FailedPreconditionError(absl::StrCat("units/", serial, " is of unit type '", type_id,
-                                                        "', which the knowledge base does not know"));
+      return absl::FailedPreconditionError(
+          absl::StrCat(api::ResourceName(api::kUnits, serial), " is of unit type '", type_id,
+                       "', which the knowledge base does not know"));
     }
     return unit_type.status();
   }
@@ -120,13 +124,13 @@ absl::StatusOr<v1::Diagnosis> DiagnosisStore::Create(const std::string& analysis
   if (auto added = AddHistoryEvidence(**db, unit_id, *analysis_id, settings, observed); !added.ok()) return added;
   v1::Diagnosis diagnosis = Diagnose(observed, *modes, settings, prior);
   diagnosis.set_analysis(analysis_name);
-  diagnosis.set_unit(absl::StrCat("units/", serial));
+  diagnosis.set_unit(api::ResourceName(api::kUnits, serial));
   std::string id;
   const absl::Status status = (*db)->InTransaction([&]() -> absl::Status {
     auto made = (*db)->Exec("SELECT gen_random_uuid()::text, " + Micros("now()"));
     if (!made.ok()) return made.status();
     id = made->String(0, 0);
-    diagnosis.set_name(absl::StrCat("diagnoses/", id));
+    diagnosis.set_name(api::ResourceName(api::kDiagnoses, id));
     *diagnosis.mutable_create_time() = internal::TimestampOfMicros(internal::IntOr0(*made, 0, 1));
     const DiagnosisHeadline headline = HeadlineOf(diagnosis);
     const v1::Candidate* top = headline.top;
@@ -160,7 +164,7 @@ absl::StatusOr<v1::Diagnosis> DiagnosisStore::Create(const std::string& analysis
 }
 
 absl::StatusOr<v1::Diagnosis> DiagnosisStore::Get(const std::string& name) {
-  auto id = internal::UuidOf(name, "diagnoses", "name");
+  auto id = internal::UuidOf(name, api::kDiagnoses, "name");
   if (!id.ok()) return id.status();
   auto db = pool_.Acquire();
   if (!db.ok()) return db.status();
@@ -172,12 +176,12 @@ absl::StatusOr<std::pair<std::vector<v1::Diagnosis>, std::string>> DiagnosisStor
   const int size = internal::ClampPageSize(query.page.page_size);
   std::string analysis_id, serial;
   if (!query.analysis.empty()) {
-    auto id = internal::UuidOf(query.analysis, "analyses", "analysis");
+    auto id = internal::UuidOf(query.analysis, api::kAnalyses, "analysis");
     if (!id.ok()) return id.status();
     analysis_id = *id;
   }
   if (!query.unit.empty()) {
-    auto s = internal::IdOf(query.unit, "units", "unit");
+    auto s = api::ResourceId(query.unit, api::kUnits, "unit");
     if (!s.ok()) return s.status();
     serial = *s;
   }
@@ -206,14 +210,14 @@ absl::StatusOr<std::pair<std::vector<v1::Diagnosis>, std::string>> DiagnosisStor
 }
 
 absl::StatusOr<v1::Diagnosis> DiagnosisStore::Resolve(const v1::ResolveDiagnosisRequest& request) {
-  auto id = internal::UuidOf(request.name(), "diagnoses", "name");
+  auto id = internal::UuidOf(request.name(), api::kDiagnoses, "name");
   if (!id.ok()) return id.status();
   if (request.module().empty()) {
     return absl::InvalidArgumentError("module: the module found faulty (or suspected) is required");
   }
   std::string mode_id;
   if (!request.failure_mode().empty()) {
-    auto m = internal::IdOf(request.failure_mode(), kModePrefix, "failure_mode");
+    auto m = api::ResourceId(request.failure_mode(), api::kFailureModes, "failure_mode");
     if (!m.ok()) return m.status();
     mode_id = *m;
   }

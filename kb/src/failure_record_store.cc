@@ -7,6 +7,7 @@
 
 #include "catalogue_rows.h"
 #include "failure_record_writes.h"
+#include "insdiag/api/resource_names.h"
 #include "signature_refinement.h"
 #include "store_util.h"
 
@@ -18,7 +19,6 @@ using internal::CheckModeOfRole;
 using internal::CheckModuleRole;
 using internal::CurrentModule;
 using internal::InsertFailureRecord;
-using internal::kModePrefix;
 using internal::Micros;
 using internal::RefineModeSignature;
 
@@ -31,10 +31,13 @@ constexpr char kRecordColumns[] =
 
 v1::FailureRecord RecordFromRow(const Result& rows, int r) {
   v1::FailureRecord f;
-  f.set_name(absl::StrCat("failureRecords/", rows.String(r, 0)));
-  f.set_module(absl::StrCat("units/", rows.String(r, 1), "/modules/", rows.String(r, 2)));
-  if (!rows.String(r, 3).empty()) f.set_failure_mode(absl::StrCat(kModePrefix, "/", rows.String(r, 3)));
-  if (!rows.String(r, 4).empty()) f.set_analysis(absl::StrCat("analyses/", rows.String(r, 4)));
+  f.set_name(api::ResourceName(api::kFailureRecords, rows.String(r, 0)));
+  f.set_module(absl::StrCat(api::ResourceName(api::kUnits, rows.String(r, 1)), "/modules/",
+                            rows.String(r, 2)));
+  if (!rows.String(r, 3).empty())
+    f.set_failure_mode(api::ResourceName(api::kFailureModes, rows.String(r, 3)));
+  if (!rows.String(r, 4).empty())
+    f.set_analysis(api::ResourceName(api::kAnalyses, rows.String(r, 4)));
   f.set_operating_hours(internal::DoubleOr0(rows, r, 5));
   f.set_confirmed(rows.Bool(r, 6));
   f.set_repaired(rows.Bool(r, 7));
@@ -43,7 +46,8 @@ v1::FailureRecord RecordFromRow(const Result& rows, int r) {
   f.set_no_fault_found(rows.Bool(r, 10));
   f.set_repair_action(rows.String(r, 11));
   *f.mutable_detected_time() = internal::TimestampOfMicros(internal::IntOr0(rows, r, 12));
-  if (!rows.String(r, 13).empty()) f.set_diagnosis(absl::StrCat("diagnoses/", rows.String(r, 13)));
+  if (!rows.String(r, 13).empty())
+    f.set_diagnosis(api::ResourceName(api::kDiagnoses, rows.String(r, 13)));
   f.set_notes(rows.String(r, 14));
   f.set_revision(static_cast<int>(internal::IntOr0(rows, r, 16)));
   return f;
@@ -54,7 +58,8 @@ v1::FailureRecord RecordFromRow(const Result& rows, int r) {
 absl::StatusOr<std::string> CheckedFacts(const v1::FailureRecord& facts) {
   std::string mode_id;
   if (!facts.failure_mode().empty()) {
-    auto id = internal::IdOf(facts.failure_mode(), kModePrefix, "failure_record.failure_mode");
+    auto id =
+        api::ResourceId(facts.failure_mode(), api::kFailureModes, "failure_record.failure_mode");
     if (!id.ok()) return id.status();
     mode_id = *id;
   }
@@ -73,7 +78,9 @@ absl::StatusOr<std::string> CheckedFacts(const v1::FailureRecord& facts) {
 absl::StatusOr<v1::FailureRecord> GetRecord(Connection& db, const std::string& id) {
   auto rows = db.Exec(absl::StrCat(kRecordColumns, "WHERE r.record_id = $1::uuid"), {Param::Text(id)});
   if (!rows.ok()) return rows.status();
-  if (rows->rows() == 0) return absl::NotFoundError(absl::StrCat("failureRecords/", id, " does not exist"));
+  if (rows->rows() == 0)
+    return absl::NotFoundError(
+        absl::StrCat(api::ResourceName(api::kFailureRecords, id), " does not exist"));
   return RecordFromRow(*rows, 0);
 }
 
@@ -95,7 +102,7 @@ absl::StatusOr<v1::FailureRecord> FailureRecordStore::Create(const v1::FailureRe
   const std::string mode_id = *checked_mode;
   std::string analysis_id;
   if (!record.analysis().empty()) {
-    auto id = internal::UuidOf(record.analysis(), "analyses", "failure_record.analysis");
+    auto id = internal::UuidOf(record.analysis(), api::kAnalyses, "failure_record.analysis");
     if (!id.ok()) return id.status();
     analysis_id = *id;
   }
@@ -134,7 +141,7 @@ absl::StatusOr<v1::FailureRecord> FailureRecordStore::Create(const v1::FailureRe
 
 absl::StatusOr<v1::FailureRecord> FailureRecordStore::Correct(const std::string& name, const v1::FailureRecord& facts,
                                                               const std::string& reason) {
-  auto id = internal::UuidOf(name, "failureRecords", "name");
+  auto id = internal::UuidOf(name, api::kFailureRecords, "name");
   if (!id.ok()) return id.status();
   if (reason.empty()) return absl::InvalidArgumentError("reason: required (why the record was wrong)");
   auto checked_mode = CheckedFacts(facts);
@@ -186,7 +193,7 @@ absl::StatusOr<v1::FailureRecord> FailureRecordStore::Correct(const std::string&
 
 absl::StatusOr<std::vector<v1::FailureRecordRevision>> FailureRecordStore::ListRevisions(
     const std::string& name) {
-  auto id = internal::UuidOf(name, "failureRecords", "name");
+  auto id = internal::UuidOf(name, api::kFailureRecords, "name");
   if (!id.ok()) return id.status();
   auto db = list_pool_.Acquire();
   if (!db.ok()) return db.status();
@@ -206,7 +213,8 @@ absl::StatusOr<std::vector<v1::FailureRecordRevision>> FailureRecordStore::ListR
     f = *current;  // name, module, analysis and diagnosis do not change
     f.set_revision(static_cast<int>(internal::IntOr0(*rows, r, 0)));
     f.clear_failure_mode();
-    if (!rows->String(r, 1).empty()) f.set_failure_mode(absl::StrCat(kModePrefix, "/", rows->String(r, 1)));
+    if (!rows->String(r, 1).empty())
+      f.set_failure_mode(api::ResourceName(api::kFailureModes, rows->String(r, 1)));
     f.set_operating_hours(internal::DoubleOr0(*rows, r, 2));
     f.set_confirmed(rows->Bool(r, 3));
     f.set_no_fault_found(rows->Bool(r, 4));
@@ -236,12 +244,12 @@ absl::StatusOr<std::pair<std::vector<v1::FailureRecord>, std::string>> FailureRe
     role = query.module.substr(slash + 9);
   }
   if (!query.unit.empty()) {
-    auto s = internal::IdOf(query.unit, "units", "unit");
+    auto s = api::ResourceId(query.unit, api::kUnits, "unit");
     if (!s.ok()) return s.status();
     serial = *s;
   }
   if (!query.failure_mode.empty()) {
-    auto m = internal::IdOf(query.failure_mode, kModePrefix, "failure_mode");
+    auto m = api::ResourceId(query.failure_mode, api::kFailureModes, "failure_mode");
     if (!m.ok()) return m.status();
     mode_id = *m;
   }

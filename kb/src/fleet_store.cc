@@ -6,6 +6,7 @@
 #include <cmath>
 #include <vector>
 
+#include "insdiag/api/resource_names.h"
 #include "insdiag/kb/reliability.h"
 #include "store_util.h"
 
@@ -16,14 +17,14 @@ using internal::Micros;
 
 absl::StatusOr<std::string> UnitTypeFilter(const std::string& unit_type) {
   if (unit_type.empty()) return std::string();
-  return internal::IdOf(unit_type, "unitTypes", "unit_type");
+  return api::ResourceId(unit_type, api::kUnitTypes, "unit_type");
 }
 
 double Confidence(double requested) { return requested > 0.0 && requested < 1.0 ? requested : 0.90; }
 
 absl::StatusOr<std::string> ModeFilter(const std::string& failure_mode) {
   if (failure_mode.empty()) return std::string();
-  return internal::IdOf(failure_mode, "failureModes", "failure_mode");
+  return api::ResourceId(failure_mode, api::kFailureModes, "failure_mode");
 }
 
 constexpr double kSecondsPerYear = 365.25 * 86400.0;
@@ -112,9 +113,10 @@ absl::StatusOr<v1::ListFailureCountsResponse> FleetStore::ListFailureCounts(
   v1::ListFailureCountsResponse out;
   for (int r = 0; r < rows->rows(); ++r) {
     auto* c = out.add_counts();
-    c->set_failure_mode(absl::StrCat("failureModes/", rows->String(r, 0)));
+    c->set_failure_mode(api::ResourceName(api::kFailureModes, rows->String(r, 0)));
     c->set_module_role(rows->String(r, 1));
-    if (!rows->String(r, 2).empty()) c->set_unit_type(absl::StrCat("unitTypes/", rows->String(r, 2)));
+    if (!rows->String(r, 2).empty())
+      c->set_unit_type(api::ResourceName(api::kUnitTypes, rows->String(r, 2)));
     c->set_batch(rows->String(r, 3));
     *c->mutable_period_start() = internal::TimestampOfMicros(internal::IntOr0(*rows, r, 4));
     c->set_failures(internal::IntOr0(*rows, r, 5));
@@ -143,7 +145,7 @@ absl::StatusOr<v1::FailurePareto> FleetStore::GetFailurePareto(const v1::GetFail
   double cumulative = 0.0;
   for (int r = 0; r < rows->rows(); ++r) {
     auto* e = out.add_entries();
-    e->set_failure_mode(absl::StrCat("failureModes/", rows->String(r, 0)));
+    e->set_failure_mode(api::ResourceName(api::kFailureModes, rows->String(r, 0)));
     e->set_module_role(rows->String(r, 1));
     e->set_display_name(rows->String(r, 2));
     e->set_failures(internal::IntOr0(*rows, r, 3));
@@ -214,7 +216,7 @@ absl::StatusOr<v1::ListParameterTrendsResponse> FleetStore::ListParameterTrends(
   if (request.parameter().empty()) return absl::InvalidArgumentError("parameter: required, e.g. gyro_bias_gm.x.sigma");
   std::string serial;
   if (!request.unit().empty()) {
-    auto s = internal::IdOf(request.unit(), "units", "unit");
+    auto s = api::ResourceId(request.unit(), api::kUnits, "unit");
     if (!s.ok()) return s.status();
     serial = *s;
   }
@@ -240,8 +242,8 @@ absl::StatusOr<v1::ListParameterTrendsResponse> FleetStore::ListParameterTrends(
   const int shown = std::min(rows->rows(), size);
   for (int r = 0; r < shown; ++r) {
     auto* p = out.add_points();
-    p->set_unit(absl::StrCat("units/", rows->String(r, 0)));
-    p->set_analysis(absl::StrCat("analyses/", rows->String(r, 1)));
+    p->set_unit(api::ResourceName(api::kUnits, rows->String(r, 0)));
+    p->set_analysis(api::ResourceName(api::kAnalyses, rows->String(r, 1)));
     p->set_operating_hours(internal::DoubleOr0(*rows, r, 2));
     p->set_value(internal::DoubleOr0(*rows, r, 3));
     p->set_std_error(internal::DoubleOr0(*rows, r, 4));
@@ -252,7 +254,7 @@ absl::StatusOr<v1::ListParameterTrendsResponse> FleetStore::ListParameterTrends(
 }
 
 absl::StatusOr<v1::ParameterTrend> FleetStore::GetParameterTrend(const v1::GetParameterTrendRequest& request) {
-  auto type = internal::IdOf(request.unit_type(), "unitTypes", "unit_type");
+  auto type = api::ResourceId(request.unit_type(), api::kUnitTypes, "unit_type");
   if (!type.ok()) return type.status();
   if (request.parameter().empty()) return absl::InvalidArgumentError("parameter: required, e.g. gyro_bias_gm.x.sigma");
   auto db = pool_.Acquire();
@@ -333,14 +335,15 @@ absl::StatusOr<v1::RankUnitsResponse> FleetStore::RankUnits(const v1::RankUnitsR
   const int shown = std::min(rows->rows(), size);
   for (int r = 0; r < shown; ++r) {
     auto* u = out.add_units();
-    u->set_unit(absl::StrCat("units/", rows->String(r, 0)));
-    if (!rows->String(r, 1).empty()) u->set_unit_type(absl::StrCat("unitTypes/", rows->String(r, 1)));
+    u->set_unit(api::ResourceName(api::kUnits, rows->String(r, 0)));
+    if (!rows->String(r, 1).empty())
+      u->set_unit_type(api::ResourceName(api::kUnitTypes, rows->String(r, 1)));
     u->set_batch(rows->String(r, 2));
     u->set_fault_probability(internal::DoubleOr0(*rows, r, 3));
     u->set_top_module(rows->String(r, 4));
     u->set_top_failure_mode(rows->String(r, 5));
     u->set_top_probability(internal::DoubleOr0(*rows, r, 6));
-    u->set_diagnosis(absl::StrCat("diagnoses/", rows->String(r, 7)));
+    u->set_diagnosis(api::ResourceName(api::kDiagnoses, rows->String(r, 7)));
     u->set_operating_hours(internal::DoubleOr0(*rows, r, 8));
   }
   if (rows->rows() > size) out.set_next_page_token(internal::EncodeToken(rows->String(shown - 1, 9), rows->String(shown - 1, 0)));

@@ -2,6 +2,7 @@
 
 #include <absl/strings/str_cat.h>
 
+#include "insdiag/api/resource_names.h"
 #include "insdiag/engine/model/parameters.h"
 #include "store_util.h"
 
@@ -41,8 +42,8 @@ absl::StatusOr<std::vector<v1::UnitParameterHistory>> LoadParameterHistories(Con
       first_micros = IntOr0(*rows, r, 3);
     }
     v1::RunParameterPoint* point = out.back().add_points();
-    point->set_run(absl::StrCat("runs/", rows->String(r, 1)));
-    point->set_analysis(absl::StrCat("analyses/", rows->String(r, 2)));
+    point->set_run(api::ResourceName(api::kRuns, rows->String(r, 1)));
+    point->set_analysis(api::ResourceName(api::kAnalyses, rows->String(r, 2)));
     const std::int64_t micros = IntOr0(*rows, r, 3);
     *point->mutable_test_time() = TimestampOfMicros(micros);
     point->set_days(static_cast<double>(micros - first_micros) / kMicrosPerDay);

@@ -5,6 +5,7 @@
 #include <bit>
 #include <cstdint>
 
+#include "insdiag/api/resource_names.h"
 #include "store_util.h"
 
 namespace insdiag::kb::internal {
@@ -102,7 +103,9 @@ absl::StatusOr<v1::AnalysisReport> RebuildReport(Connection& db, const std::stri
       "WHERE analysis_id = $1::uuid",
       {Param::Text(analysis_id)}, ResultFormat::kBinary);
   if (!rows.ok()) return rows.status();
-  if (rows->rows() == 0) return absl::NotFoundError(absl::StrCat("analyses/", analysis_id, " does not exist"));
+  if (rows->rows() == 0)
+    return absl::NotFoundError(
+        absl::StrCat(api::ResourceName(api::kAnalyses, analysis_id), " does not exist"));
   v1::AnalysisReport report;
   v1::AnalysisReport::Verdict verdict = v1::AnalysisReport::VERDICT_UNSPECIFIED;
   v1::AnalysisReport::Verdict_Parse(rows->String(0, 0), &verdict);
@@ -130,10 +133,13 @@ absl::StatusOr<v1::AnalysisReport> LoadReport(Connection& db, const std::string&
   auto rows = db.Exec("SELECT state, report FROM analyses WHERE analysis_id = $1::uuid", {Param::Text(analysis_id)},
                       ResultFormat::kBinary);
   if (!rows.ok()) return rows.status();
-  if (rows->rows() == 0) return absl::NotFoundError(absl::StrCat("analyses/", analysis_id, " does not exist"));
+  if (rows->rows() == 0)
+    return absl::NotFoundError(
+        absl::StrCat(api::ResourceName(api::kAnalyses, analysis_id), " does not exist"));
   if (rows->Get(0, 0) != "SUCCEEDED") {
     return absl::FailedPreconditionError(
-        absl::StrCat("analyses/", analysis_id, " is ", rows->String(0, 0), ": only a SUCCEEDED analysis has evidence"));
+        absl::StrCat(api::ResourceName(api::kAnalyses, analysis_id), " is ", rows->String(0, 0),
+                     ": only a SUCCEEDED analysis has evidence"));
   }
   if (rows->IsNull(0, 1)) return RebuildReport(db, analysis_id);
   v1::AnalysisReport report;

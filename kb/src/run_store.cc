@@ -11,8 +11,9 @@
 #include <map>
 #include <numbers>
 
-#include "insdiag/benchrun/bench_run_validation.h"
 #include "insdiag/api/json.h"
+#include "insdiag/api/resource_names.h"
+#include "insdiag/benchrun/bench_run_validation.h"
 #include "store_util.h"
 
 namespace insdiag::kb {
@@ -195,7 +196,9 @@ absl::StatusOr<StoredRun> GetRun(Connection& db, const std::string& run_id) {
   auto rows = db.Exec(absl::StrCat("SELECT ", kRunColumns, " FROM runs WHERE run_id = $1::uuid"),
                       {Param::Text(run_id)});
   if (!rows.ok()) return rows.status();
-  if (rows->rows() == 0) return absl::NotFoundError(absl::StrCat("runs/", run_id, " does not exist"));
+  if (rows->rows() == 0)
+    return absl::NotFoundError(
+        absl::StrCat(api::ResourceName(api::kRuns, run_id), " does not exist"));
   std::vector<StoredRun> runs;
   auto run = RunFromRow(*rows, 0);
   if (!run.ok()) return run.status();
@@ -345,7 +348,9 @@ absl::Status RunStore::Delete(const std::string& run_id) {
     // the foreign keys (migrations/0004_access.sql): the check gives the message.
     auto run = (*db)->Exec("SELECT 1 FROM runs WHERE run_id = $1::uuid FOR UPDATE", {Param::Text(run_id)});
     if (!run.ok()) return run.status();
-    if (run->rows() == 0) return absl::NotFoundError(absl::StrCat("runs/", run_id, " does not exist"));
+    if (run->rows() == 0)
+      return absl::NotFoundError(
+          absl::StrCat(api::ResourceName(api::kRuns, run_id), " does not exist"));
     auto history = (*db)->Exec(
         "SELECT (SELECT count(*) FROM diagnoses d JOIN analyses a USING (analysis_id) WHERE a.run_id = $1::uuid), "
         "(SELECT count(*) FROM failure_records f JOIN analyses a USING (analysis_id) WHERE a.run_id = $1::uuid)",
@@ -354,8 +359,8 @@ absl::Status RunStore::Delete(const std::string& run_id) {
     const std::string diagnoses = history->String(0, 0), records = history->String(0, 1);
     if (diagnoses != "0" || records != "0") {
       return absl::FailedPreconditionError(absl::StrCat(
-          "runs/", run_id, " is not deleted: ", diagnoses, " diagnoses and ", records,
-          " failure records rest on its analyses, and the failure history is kept"));
+          api::ResourceName(api::kRuns, run_id), " is not deleted: ", diagnoses, " diagnoses and ",
+          records, " failure records rest on its analyses, and the failure history is kept"));
     }
     return (*db)->Exec("DELETE FROM runs WHERE run_id = $1::uuid", {Param::Text(run_id)}).status();
   });

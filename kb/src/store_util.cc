@@ -11,25 +11,20 @@
 
 namespace insdiag::kb::internal {
 
-absl::StatusOr<std::string> IdOf(const std::string& name, const std::string& prefix, const std::string& field) {
-  const std::string p = absl::StrCat(prefix, "/");
-  if (!absl::StartsWith(name, p) || name.size() == p.size() || name.find('/', p.size()) != std::string::npos) {
-    return absl::InvalidArgumentError(absl::StrCat(field, ": '", name, "' is not a name of the form ", prefix, "/{id}"));
-  }
-  return name.substr(p.size());
-}
-
 bool IsUuid(std::string_view text) {
   return text.size() == 36 && std::all_of(text.begin(), text.end(), [](char c) {
            return std::isxdigit(static_cast<unsigned char>(c)) || c == '-';
          }) && text[8] == '-' && text[13] == '-' && text[18] == '-' && text[23] == '-';
 }
 
-absl::StatusOr<std::string> UuidOf(const std::string& name, const std::string& prefix, const std::string& field) {
-  auto id = IdOf(name, prefix, field);
+absl::StatusOr<std::string> UuidOf(const std::string& name, const api::Collection& collection,
+                                   const std::string& field) {
+  auto id = api::ResourceId(name, collection, field);
   if (!id.ok()) return id;
   if (!IsUuid(*id)) {
-    return absl::InvalidArgumentError(absl::StrCat(field, ": '", name, "': the id after ", prefix, "/ is not a UUID"));
+    return absl::InvalidArgumentError(absl::StrCat(field, ": '", name, "': the id after ",
+                                                   std::string(collection.segment),
+                                                   "/ is not a UUID"));
   }
   return id;
 }

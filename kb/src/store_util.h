@@ -10,14 +10,14 @@
 #include <utility>
 #include <vector>
 
+#include "insdiag/api/resource_names.h"
 #include "insdiag/kb/pg.h"
 
 namespace insdiag::kb::internal {
 
-// The id of `prefix/{id}` (one segment); INVALID_ARGUMENT naming `field`.
-absl::StatusOr<std::string> IdOf(const std::string& name, const std::string& prefix, const std::string& field);
-// As IdOf, and the id must be a UUID.
-absl::StatusOr<std::string> UuidOf(const std::string& name, const std::string& prefix, const std::string& field);
+// As api::ResourceId, and the id must be a UUID.
+absl::StatusOr<std::string> UuidOf(const std::string& name, const api::Collection& collection,
+                                   const std::string& field);
 bool IsUuid(std::string_view text);
 
 // SQL expression of a timestamptz column as microseconds since the epoch.

@@ -6,6 +6,7 @@
 #include <map>
 
 #include "history_rows.h"
+#include "insdiag/api/resource_names.h"
 #include "store_util.h"
 
 namespace insdiag::kb {
@@ -35,7 +36,7 @@ absl::Status LoadRuns(Connection& db, const std::string& unit_id, const v1::GetU
   for (int r = 0; r < shown; ++r) {
     v1::HistoryRun* run = out.add_runs();
     ids.push_back(runs->String(r, 0));
-    run->set_run(absl::StrCat("runs/", ids.back()));
+    run->set_run(api::ResourceName(api::kRuns, ids.back()));
     *run->mutable_test_time() = internal::TimestampOfMicros(internal::IntOr0(*runs, r, 1));
     run->set_duration_s(internal::DoubleOr0(*runs, r, 3));
     by_id[ids.back()] = run;
@@ -55,7 +56,7 @@ absl::Status LoadRuns(Connection& db, const std::string& unit_id, const v1::GetU
   if (!analyses.ok()) return analyses.status();
   for (int r = 0; r < analyses->rows(); ++r) {
     v1::HistoryAnalysis* a = by_id[analyses->String(r, 0)]->add_analyses();
-    a->set_analysis(absl::StrCat("analyses/", analyses->String(r, 1)));
+    a->set_analysis(api::ResourceName(api::kAnalyses, analyses->String(r, 1)));
     *a->mutable_create_time() = internal::TimestampOfMicros(internal::IntOr0(*analyses, r, 2));
     v1::AnalysisReport::Verdict verdict = v1::AnalysisReport::VERDICT_UNSPECIFIED;
     v1::AnalysisReport::Verdict_Parse(analyses->String(r, 3), &verdict);
@@ -70,7 +71,7 @@ absl::Status LoadRuns(Connection& db, const std::string& unit_id, const v1::GetU
 }  // namespace
 
 absl::StatusOr<v1::UnitHistory> UnitHistoryStore::Get(const v1::GetUnitHistoryRequest& request) {
-  auto serial = internal::IdOf(request.unit(), "units", "unit");
+  auto serial = api::ResourceId(request.unit(), api::kUnits, "unit");
   if (!serial.ok()) return serial.status();
   HistoryOptions options;
   options.confidence = request.confidence() == 0.0 ? kDefaultConfidence : request.confidence();
@@ -86,8 +87,9 @@ absl::StatusOr<v1::UnitHistory> UnitHistoryStore::Get(const v1::GetUnitHistoryRe
   if (!unit.ok()) return unit.status();
   if (unit->rows() == 0) return absl::NotFoundError(absl::StrCat(request.unit(), " does not exist"));
   v1::UnitHistory out;
-  out.set_unit(absl::StrCat("units/", *serial));
-  if (!unit->String(0, 1).empty()) out.set_unit_type(absl::StrCat("unitTypes/", unit->String(0, 1)));
+  out.set_unit(api::ResourceName(api::kUnits, *serial));
+  if (!unit->String(0, 1).empty())
+    out.set_unit_type(api::ResourceName(api::kUnitTypes, unit->String(0, 1)));
   out.set_run_count(static_cast<int>(internal::IntOr0(*unit, 0, 2)));
   out.set_analysed_run_count(static_cast<int>(internal::IntOr0(*unit, 0, 3)));
   out.set_confidence(options.confidence);

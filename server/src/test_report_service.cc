@@ -5,6 +5,7 @@
 #include <absl/time/clock.h>
 #include <absl/time/time.h>
 
+#include "insdiag/api/resource_names.h"
 #include "insdiag/testreport/test_report.h"
 
 namespace insdiag::server {
@@ -80,7 +81,7 @@ absl::StatusOr<std::optional<v1::Diagnosis>> TestReportService::DiagnosisOf(cons
 absl::StatusOr<std::optional<v1::UnitType>> TestReportService::UnitTypeOf(const v1::Run& run) {
   if (run.metadata().unit_type().empty()) return std::optional<v1::UnitType>();
   v1::GetUnitTypeRequest get;
-  get.set_name(absl::StrCat("unitTypes/", run.metadata().unit_type()));
+  get.set_name(api::ResourceName(api::kUnitTypes, run.metadata().unit_type()));
   auto unit_type = knowledge_.GetUnitType(get);
   // A type the knowledge base does not know has no nominal values: the
   // report then says so rather than failing.

@@ -2,6 +2,7 @@
 
 #include <string>
 
+#include "insdiag/api/resource_names.h"
 #include "insdiag/api/unit_types.h"
 #include "insdiag/kb/catalogue_store.h"
 
@@ -11,9 +12,7 @@ absl::StatusOr<std::optional<engine::ErrorModel>> NominalModelOfUnitType(kb::Con
                                                                          std::string_view unit_type) {
   if (unit_type.empty()) return std::nullopt;
   kb::CatalogueStore catalogue(pool);
-  std::string name = "unitTypes/";
-  name.append(unit_type);
-  auto found = catalogue.GetUnitType(name);
+  auto found = catalogue.GetUnitType(api::ResourceName(api::kUnitTypes, unit_type));
   if (!found.ok()) {
     const auto code = found.status().code();
     if (code == absl::StatusCode::kNotFound || code == absl::StatusCode::kInvalidArgument) return std::nullopt;

@@ -1,6 +1,6 @@
 // The v1 API's resource names: a collection and an id, "runs/{run}",
 // "analyses/{analysis}", "units/{unit}", "unitTypes/{unitType}", … (AIP-122).
-// One place builds and reads them, with one refusal for a name that is not
+// One place builds and reads them for the server and the stores, with one refusal for a name that is not
 // one: "analysis.run: 'x' is not a run name (runs/{run})".
 #pragma once
 
@@ -23,6 +23,8 @@ inline constexpr Collection kUnits{"units", "a unit", "unit"};
 inline constexpr Collection kUnitTypes{"unitTypes", "a unit type", "unitType"};
 inline constexpr Collection kDiagnoses{"diagnoses", "a diagnosis", "diagnosis"};
 inline constexpr Collection kFailureRecords{"failureRecords", "a failure record", "failureRecord"};
+inline constexpr Collection kFailureModes{"failureModes", "a failure mode", "failureMode"};
+inline constexpr Collection kTokens{"tokens", "a token", "token"};
 
 // "runs/abc".
 std::string ResourceName(const Collection& collection, std::string_view id);
