@@ -209,7 +209,7 @@ absl::StatusOr<std::vector<v1::Module>> CatalogueStore::ListModules(const std::s
   std::vector<v1::Module> out;
   for (int r = 0; r < rows->rows(); ++r) {
     v1::Module m;
-    m.set_name(absl::StrCat(unit_name, "/modules/", rows->String(r, 0)));
+    m.set_name(api::ModuleName(*serial, rows->String(r, 0)));
     m.set_role(rows->String(r, 0));
     m.set_part_serial(rows->String(r, 1));
     *m.mutable_installed_time() = internal::TimestampOfMicros(internal::IntOr0(*rows, r, 2));

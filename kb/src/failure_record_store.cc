@@ -32,8 +32,7 @@ constexpr char kRecordColumns[] =
 v1::FailureRecord RecordFromRow(const Result& rows, int r) {
   v1::FailureRecord f;
   f.set_name(api::ResourceName(api::kFailureRecords, rows.String(r, 0)));
-  f.set_module(absl::StrCat(api::ResourceName(api::kUnits, rows.String(r, 1)), "/modules/",
-                            rows.String(r, 2)));
+  f.set_module(api::ModuleName(rows.String(r, 1), rows.String(r, 2)));
   if (!rows.String(r, 3).empty())
     f.set_failure_mode(api::ResourceName(api::kFailureModes, rows.String(r, 3)));
   if (!rows.String(r, 4).empty())
@@ -87,16 +86,10 @@ absl::StatusOr<v1::FailureRecord> GetRecord(Connection& db, const std::string& i
 }  // namespace
 
 absl::StatusOr<v1::FailureRecord> FailureRecordStore::Create(const v1::FailureRecord& record) {
-  // failure_record.module: units/{serial}/modules/{role}
-  const std::string& module = record.module();
-  const auto slash = module.find("/modules/");
-  if (!absl::StartsWith(module, "units/") || slash == std::string::npos || slash <= 6 ||
-      slash + 9 >= module.size()) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("failure_record.module: '", module, "' is not units/{unit}/modules/{module}"));
-  }
-  const std::string serial = module.substr(6, slash - 6);
-  const std::string role = module.substr(slash + 9);
+  auto module = api::ParseModuleName(record.module(), "failure_record.module");
+  if (!module.ok()) return module.status();
+  const std::string& serial = module->unit;
+  const std::string& role = module->role;
   auto checked_mode = CheckedFacts(record);
   if (!checked_mode.ok()) return checked_mode.status();
   const std::string mode_id = *checked_mode;
@@ -235,13 +228,10 @@ absl::StatusOr<std::pair<std::vector<v1::FailureRecord>, std::string>> FailureRe
   const int size = internal::ClampPageSize(query.page.page_size);
   std::string serial, role, mode_id;
   if (!query.module.empty()) {
-    const auto slash = query.module.find("/modules/");
-    if (!absl::StartsWith(query.module, "units/") || slash == std::string::npos) {
-      return absl::InvalidArgumentError(
-          absl::StrCat("module: '", query.module, "' is not units/{unit}/modules/{module}"));
-    }
-    serial = query.module.substr(6, slash - 6);
-    role = query.module.substr(slash + 9);
+    auto module = api::ParseModuleName(query.module, "module");
+    if (!module.ok()) return module.status();
+    serial = module->unit;
+    role = module->role;
   }
   if (!query.unit.empty()) {
     auto s = api::ResourceId(query.unit, api::kUnits, "unit");

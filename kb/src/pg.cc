@@ -132,6 +132,18 @@ absl::Status Connection::ExecScript(std::string_view sql) {
   return Check(PQexec(conn_.get(), script.c_str()), sql).status();
 }
 
+absl::StatusOr<std::string> Connection::QuoteIdentifier(std::string_view name) {
+  char* quoted = PQescapeIdentifier(conn_.get(), name.data(), name.size());
+  if (quoted == nullptr) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "'", std::string(name),
+        "' cannot be quoted as an identifier: ", FirstLine(PQerrorMessage(conn_.get()))));
+  }
+  std::string result(quoted);
+  PQfreemem(quoted);
+  return result;
+}
+
 absl::StatusOr<std::int64_t> Connection::CopyIn(std::string_view copy_sql,
                                                 absl::FunctionRef<bool(std::string&)> produce) {
   const std::string statement(copy_sql);

@@ -36,6 +36,37 @@ absl::StatusOr<std::string> ResourceId(std::string_view name, const Collection& 
   return std::string(id);
 }
 
+namespace {
+constexpr std::string_view kModulesSegment = "/modules/";
+}  // namespace
+
+std::string ModuleName(std::string_view unit_id, std::string_view role) {
+  std::string name = ResourceName(kUnits, unit_id);
+  name += kModulesSegment;
+  name += role;
+  return name;
+}
+
+absl::StatusOr<ModuleOfUnit> ParseModuleName(std::string_view name, std::string_view field) {
+  const std::string_view after_unit = IdAfterSegment(name, kUnits);
+  const std::size_t split = after_unit.find(kModulesSegment);
+  if (split != std::string_view::npos && split > 0) {
+    const std::string_view unit = after_unit.substr(0, split);
+    const std::string_view role = after_unit.substr(split + kModulesSegment.size());
+    if (unit.find('/') == std::string_view::npos && !role.empty() &&
+        role.find('/') == std::string_view::npos) {
+      return ModuleOfUnit{std::string(unit), std::string(role)};
+    }
+  }
+  std::string message(field);
+  for (std::string_view part :
+       {std::string_view(": '"), name,
+        std::string_view("' is not a module name (units/{unit}/modules/{module})")}) {
+    message += part;
+  }
+  return absl::InvalidArgumentError(message);
+}
+
 std::string IdOrSelf(std::string_view name, const Collection& collection) {
   const std::string_view id = IdAfterSegment(name, collection);
   return std::string(id.empty() ? name : id);

@@ -172,11 +172,10 @@ absl::StatusOr<std::unique_ptr<PostgresSupervisor>> PostgresSupervisor::Start(Op
   auto exists = admin->Exec("SELECT 1 FROM pg_database WHERE datname = $1", {kb::Param::Text(supervisor->options_.database)});
   if (!exists.ok()) return exists.status();
   if (exists->rows() == 0) {
-    // CREATE DATABASE takes no parameters: the name is quoted as an identifier.
-    std::string quoted = "\"";
-    for (const char c : supervisor->options_.database) quoted += (c == '"') ? std::string("\"\"") : std::string(1, c);
-    quoted += '"';
-    if (auto status = admin->ExecScript("CREATE DATABASE " + quoted); !status.ok()) return status;
+    // CREATE DATABASE takes no parameters: the name goes in as a quoted identifier.
+    auto quoted = admin->QuoteIdentifier(supervisor->options_.database);
+    if (!quoted.ok()) return quoted.status();
+    if (auto status = admin->ExecScript("CREATE DATABASE " + *quoted); !status.ok()) return status;
   }
   return supervisor;
 }

@@ -34,5 +34,22 @@ TEST(ResourceNamesTest, ABareIdIsAcceptedWhereTheInputAllowsIt) {
   EXPECT_EQ(IdOrSelf("unitTypes", kUnitTypes), "unitTypes");
 }
 
+TEST(ResourceNamesTest, AModuleIsNamedWithinItsUnitByItsRole) {
+  EXPECT_EQ(ModuleName("INS-0002", "gyro.x"), "units/INS-0002/modules/gyro.x");
+  auto module = ParseModuleName("units/INS-0002/modules/gyro.x");
+  ASSERT_TRUE(module.ok()) << module.status();
+  EXPECT_EQ(module->unit, "INS-0002");
+  EXPECT_EQ(module->role, "gyro.x");
+  for (const char* bad : {"", "units/INS-0002", "units//modules/gyro.x", "units/INS-0002/modules/",
+                          "units/a/b/modules/gyro.x", "units/a/modules/gyro/x",
+                          "unit/a/modules/gyro.x", "units/a/module/gyro.x"}) {
+    auto parsed = ParseModuleName(bad, "failure_record.module");
+    ASSERT_FALSE(parsed.ok()) << bad;
+    EXPECT_EQ(parsed.status().message(),
+              std::string("failure_record.module: '") + bad +
+                  "' is not a module name (units/{unit}/modules/{module})");
+  }
+}
+
 }  // namespace
 }  // namespace insdiag::api

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -169,28 +170,17 @@ TEST(AllanFitTest, StandardErrorsAreCalibratedOverSeeds) {
   EXPECT_LT(rms_k, 1.5);
 }
 
-TEST(AllanFitTest, RecoversEveryTermOfAnExactCurve) {
-  AllanNoiseTerms truth;
-  truth.quantization = 2e-7;
-  truth.white_density = 6e-7;
-  truth.rate_random_walk = 2e-9;
-  truth.markov_sigma = 2e-7;
-  truth.markov_tau_s = 50.0;
-  const std::vector<size_t> segment = {720000};
-  // The fit alone (the selection would drop K: a real two-hour run could not
-  // resolve it next to this Markov drift, and V says so).
-  AllanOptions options;
-  options.candidates = {.quantization = true, .white = true, .bias_instability = false,
-                        .rate_random_walk = true, .rate_ramp = false, .markov = true};
-  options.select_terms = false;
+// The curve of `truth` without estimation noise, each point's ln σ̂² shifted
+// by the mean of ln χ²_ν/ν that the fit corrects for.
+std::vector<AllanPoint> ExactCurve(const AllanNoiseTerms& truth, size_t samples, double tau0_s,
+                                   const AllanOptions& options) {
   std::vector<AllanPoint> curve;
-  for (int64_t m : AllanClusterSizes(segment[0], options)) {
+  for (int64_t m : AllanClusterSizes(samples, options)) {
     AllanPoint p;
     p.m = m;
-    p.tau_s = 0.01 * static_cast<double>(m);
+    p.tau_s = tau0_s * static_cast<double>(m);
     p.adev = std::sqrt(ModelAllanVariance(truth, p.tau_s));
-    p.edf = AllanEdf(PowerLawNoise::kWhiteRate, 720001, m);
-    // The fit corrects ln σ̂² for the mean of ln χ²_ν/ν; give it that mean.
+    p.edf = AllanEdf(PowerLawNoise::kWhiteRate, static_cast<int64_t>(samples) + 1, m);
     const double half = 0.5 * p.edf;
     double digamma = 0.0;
     {
@@ -202,6 +192,43 @@ TEST(AllanFitTest, RecoversEveryTermOfAnExactCurve) {
     p.adev *= std::exp(0.5 * (digamma - std::log(half)));
     curve.push_back(p);
   }
+  return curve;
+}
+
+AllanNoiseTerms FiveTermTruth() {
+  AllanNoiseTerms truth;
+  truth.quantization = 2e-7;
+  truth.white_density = 6e-7;
+  truth.rate_random_walk = 2e-9;
+  truth.markov_sigma = 2e-7;
+  truth.markov_tau_s = 50.0;
+  return truth;
+}
+
+// The fit alone (the selection would drop K: a real two-hour run could not
+// resolve it next to this Markov drift, and V says so).
+AllanOptions FitWithoutSelection() {
+  AllanOptions options;
+  options.candidates = {.quantization = true,
+                        .white = true,
+                        .bias_instability = false,
+                        .rate_random_walk = true,
+                        .rate_ramp = false,
+                        .markov = true};
+  options.select_terms = false;
+  return options;
+}
+
+bool HasNoteContaining(const AllanFit& fit, const std::string& text) {
+  return std::any_of(fit.notes.begin(), fit.notes.end(),
+                     [&](const std::string& note) { return note.find(text) != std::string::npos; });
+}
+
+TEST(AllanFitTest, RecoversEveryTermOfAnExactCurve) {
+  const AllanNoiseTerms truth = FiveTermTruth();
+  const std::vector<size_t> segment = {720000};
+  const AllanOptions options = FitWithoutSelection();
+  std::vector<AllanPoint> curve = ExactCurve(truth, segment[0], 0.01, options);
   auto fit = FitAllanCurve(curve, 0.01, segment, options);
   ASSERT_TRUE(fit.ok()) << fit.status();
   EXPECT_TRUE(fit->markov_structure);
@@ -213,6 +240,18 @@ TEST(AllanFitTest, RecoversEveryTermOfAnExactCurve) {
   EXPECT_FALSE((*fit)[AllanParameter::kBiasInstability].included);
   EXPECT_FALSE((*fit)[AllanParameter::kRateRamp].included);
   EXPECT_LT(fit->generalized_chi2, 1e-3);
+  EXPECT_FALSE(HasNoteContaining(*fit, "iteration cap"));
+}
+
+// A fit that ran out of solver iterations is reported, not passed off as the optimum.
+TEST(AllanFitTest, AFitStoppedAtItsIterationCapSaysSo) {
+  const std::vector<size_t> segment = {720000};
+  AllanOptions options = FitWithoutSelection();
+  options.max_solver_iterations = 1;
+  std::vector<AllanPoint> curve = ExactCurve(FiveTermTruth(), segment[0], 0.01, options);
+  auto fit = FitAllanCurve(curve, 0.01, segment, options);
+  ASSERT_TRUE(fit.ok()) << fit.status();
+  EXPECT_TRUE(HasNoteContaining(*fit, "stopped at its iteration cap (1)"));
 }
 
 // --- static segments ---------------------------------------------------------

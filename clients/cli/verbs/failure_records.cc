@@ -11,6 +11,7 @@
 // All take [--json] [--server ADDR].
 #include <ostream>
 
+#include "insdiag/api/resource_names.h"
 #include "insdiag/client/unary.h"
 #include "insdiag/v1/knowledge.grpc.pb.h"
 #include "server_output.h"
@@ -19,12 +20,13 @@
 namespace insdiag::cli {
 namespace {
 
-// units/{serial}/modules/{role} from itself or "SERIAL/ROLE".
-std::string ModuleName(const std::string& text) {
-  if (text.empty() || text.starts_with("units/")) return text;
+// units/{serial}/modules/{role} from itself or "SERIAL/ROLE"; anything else
+// goes to the server as given, to be refused there.
+std::string ModuleNameOf(const std::string& text) {
+  if (text.empty() || text.starts_with(api::ResourceName(api::kUnits, ""))) return text;
   const auto slash = text.find('/');
   if (slash == std::string::npos) return text;
-  return "units/" + text.substr(0, slash) + "/modules/" + text.substr(slash + 1);
+  return api::ModuleName(text.substr(0, slash), text.substr(slash + 1));
 }
 
 class FailureRecordsVerb final : public Verb {
@@ -74,7 +76,7 @@ class FailureRecordsVerb final : public Verb {
     request.set_page_size(page_size);
     request.set_page_token(page_token_);
     request.set_unit(ResourceName("units", unit_));
-    request.set_module(ModuleName(module_));
+    request.set_module(ModuleNameOf(module_));
     request.set_failure_mode(ResourceName("failureModes", mode_));
     auto response = client::CallUnary<v1::ListFailureRecordsResponse>(
         [&](grpc::ClientContext* c, v1::ListFailureRecordsResponse* r) { return stub_->ListFailureRecords(c, request, r); });
@@ -155,7 +157,7 @@ class FailureRecordsVerb final : public Verb {
     v1::CreateFailureRecordRequest request;
     v1::FailureRecord* f = request.mutable_failure_record();
     if (!Facts("create", f, err)) return kExitUsage;
-    f->set_module(ModuleName(module_));
+    f->set_module(ModuleNameOf(module_));
     f->set_analysis(ResourceName("analyses", analysis_));
     auto record = client::CallUnary<v1::FailureRecord>(
         [&](grpc::ClientContext* c, v1::FailureRecord* r) { return stub_->CreateFailureRecord(c, request, r); });

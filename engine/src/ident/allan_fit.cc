@@ -222,8 +222,15 @@ Start StartingValues(const FitData& data, const TermMask& on) {
   return s;
 }
 
-// Weighted least squares in Ceres; returns Σ r².
-double Solve(const FitData& data, const TermMask& on, const Bounds& bounds, int max_iterations, LogParameters& a) {
+struct SolveOutcome {
+  double cost = 0.0;  // Σ r²
+  // Ceres ran out of iterations before any of its tolerances was met.
+  bool stopped_at_iteration_cap = false;
+};
+
+// Weighted least squares in Ceres.
+SolveOutcome Solve(const FitData& data, const TermMask& on, const Bounds& bounds,
+                   int max_iterations, LogParameters& a) {
   ceres::Problem problem;
   for (size_t j = 0; j < data.tau.size(); ++j) {
     problem.AddResidualBlock(AllanLogResidual::Create(data.tau[j], data.y[j], 1.0 / data.sd[j], on), nullptr,
@@ -247,14 +254,15 @@ double Solve(const FitData& data, const TermMask& on, const Bounds& bounds, int 
   const LogParameters start = a;
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
-  if (summary.IsSolutionUsable()) return 2.0 * summary.final_cost;
+  const bool capped = summary.termination_type == ceres::NO_CONVERGENCE;
+  if (summary.IsSolutionUsable()) return {2.0 * summary.final_cost, capped};
   // A failed solve (a numerical failure, not a slow one) may leave anything
   // in `a`: the fit stays at its start, with the cost of the start, so that
   // model selection compares a cost with the parameters it belongs to.
   a = start;
   double cost = std::numeric_limits<double>::infinity();
   problem.Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, nullptr);
-  return 2.0 * cost;
+  return {2.0 * cost, capped};
 }
 
 // Largest element (Eigen's maxCoeff trips GCC's -Wnull-dereference on dynamic vectors).
@@ -336,8 +344,16 @@ struct StructureFit {
   LogParameters a{};
   Bounds bounds;
   double cost = 0.0;
+  bool stopped_at_iteration_cap = false;        // of the solve that gave `a`
   std::vector<std::pair<int, double>> dropped;  // term, z when dropped
 };
+
+// Fits `fit`'s terms again from `fit.a`.
+void Refit(const FitData& data, const Bounds& bounds, int max_iterations, StructureFit& fit) {
+  const SolveOutcome outcome = Solve(data, fit.on, bounds, max_iterations, fit.a);
+  fit.cost = outcome.cost;
+  fit.stopped_at_iteration_cap = outcome.stopped_at_iteration_cap;
+}
 
 // Fits the candidate set and drops insignificant terms one at a time.
 // `V` is the working covariance of ln σ̂² (with δ²I); empty: computed from
@@ -350,7 +366,7 @@ StructureFit FitStructure(const FitData& data, const TermMask& candidates, doubl
   const Start start = StartingValues(data, candidates);
   fit.a = start.a;
   fit.bounds = start.bounds;
-  fit.cost = Solve(data, fit.on, start.bounds, options.max_solver_iterations, fit.a);
+  Refit(data, start.bounds, options.max_solver_iterations, fit);
   if (V_model.size() == 0) V_model = LogAvarCovariance(data, fit.a, fit.on, tau0, segment_samples);
   const Eigen::MatrixXd V = WithDiscrepancy(V_model, data.discrepancy2);
   while (TermCount(fit.on) > 1) {
@@ -372,7 +388,7 @@ StructureFit FitStructure(const FitData& data, const TermMask& candidates, doubl
     fit.dropped.emplace_back(worst, worst_z);
     fit.on[static_cast<size_t>(worst)] = false;
     if (worst == kMs) fit.on[kMt] = false;
-    fit.cost = Solve(data, fit.on, start.bounds, options.max_solver_iterations, fit.a);
+    Refit(data, start.bounds, options.max_solver_iterations, fit);
   }
   return fit;
 }
@@ -443,11 +459,13 @@ void TestRamp(const FitData& data, const FitContext& c, Selection& sel) {
   for (double fraction : {1e-1, 1e-4}) {
     LogParameters a = sel.fit.a;
     a[kR] = std::log(fraction * ramp.bounds.envelope[kR]);
-    const double cost = Solve(data, ramp.on, ramp.bounds, c.options.max_solver_iterations, a);
-    if (cost < best) {
-      best = cost;
+    const SolveOutcome outcome =
+        Solve(data, ramp.on, ramp.bounds, c.options.max_solver_iterations, a);
+    if (outcome.cost < best) {
+      best = outcome.cost;
       ramp.a = a;
-      ramp.cost = cost;
+      ramp.cost = outcome.cost;
+      ramp.stopped_at_iteration_cap = outcome.stopped_at_iteration_cap;
     }
   }
   const Eigen::MatrixXd V0 = WithDiscrepancy(sel.V_model, data.discrepancy2);
@@ -473,7 +491,7 @@ Selection SelectTerms(const FitData& data, const CandidateSets& sets, const FitC
     const Start start = StartingValues(data, sets.all);
     sel.fit.a = start.a;
     sel.fit.bounds = start.bounds;
-    sel.fit.cost = Solve(data, sets.all, start.bounds, options.max_solver_iterations, sel.fit.a);
+    Refit(data, start.bounds, options.max_solver_iterations, sel.fit);
     sel.markov = sets.all[kMs];
     sel.candidates = sets.all;
     sel.V_model = LogAvarCovariance(data, sel.fit.a, sel.fit.on, c.tau0_s, c.segment_samples);
@@ -559,7 +577,7 @@ void FitWithDiscrepancy(FitData& data, const CandidateSets& sets, const FitConte
       sel = SelectTerms(data, sets, c, V_work);
     } else {
       const Start start = StartingValues(data, sel.fit.on);
-      sel.fit.cost = Solve(data, sel.fit.on, start.bounds, c.options.max_solver_iterations, sel.fit.a);
+      Refit(data, start.bounds, c.options.max_solver_iterations, sel.fit);
       sel.V_model = LogAvarCovariance(data, sel.fit.a, sel.fit.on, c.tau0_s, c.segment_samples);
     }
     e = Residuals(data, sel.fit);
@@ -657,6 +675,11 @@ absl::StatusOr<AllanFit> FitAllanCurve(std::vector<AllanPoint>& curve, double ta
   }
   FillEstimates(sel, cov, out);
   if (!out.adequate) out.notes.push_back(InadequacyNote(curve, disagree, out));
+  if (sel.fit.stopped_at_iteration_cap) {
+    out.notes.push_back("the least-squares fit stopped at its iteration cap (" +
+                        std::to_string(options.max_solver_iterations) +
+                        ") before converging: its estimates may not be at the optimum");
+  }
   return out;
 }
 

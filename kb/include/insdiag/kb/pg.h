@@ -96,6 +96,10 @@ class Connection {
   // Runs a script of several statements without parameters (migrations).
   absl::Status ExecScript(std::string_view sql);
 
+  // `name` quoted as an SQL identifier by libpq (PQescapeIdentifier), for
+  // statements that take no parameters in that place (CREATE DATABASE).
+  absl::StatusOr<std::string> QuoteIdentifier(std::string_view name);
+
   // COPY … FROM STDIN in text format: `produce` appends rows (tab-separated,
   // newline-terminated) to its buffer and returns false once it has no more.
   // Returns the number of rows COPY reports.

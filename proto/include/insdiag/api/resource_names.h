@@ -34,6 +34,17 @@ std::string ResourceName(const Collection& collection, std::string_view id);
 absl::StatusOr<std::string> ResourceId(std::string_view name, const Collection& collection,
                                        std::string_view field = "name");
 
+// A unit's module: "units/{unit}/modules/{module}", the module named by its
+// role in the unit ("gyro.x").
+struct ModuleOfUnit {
+  std::string unit;
+  std::string role;
+};
+std::string ModuleName(std::string_view unit_id, std::string_view role);
+// Both ids non-empty and without '/'; the refusal names `field`.
+absl::StatusOr<ModuleOfUnit> ParseModuleName(std::string_view name,
+                                             std::string_view field = "module");
+
 // The id when `name` is in `collection`, else `name` itself: for inputs that
 // accept a bare id too (a unit type given as "INS-2000").
 std::string IdOrSelf(std::string_view name, const Collection& collection);
