@@ -1,5 +1,5 @@
 // ParallelMap: results in index order whatever the schedule, and a map
-// inside a map runs on its caller's thread.
+// inside a map runs on its caller's thread; tasks alongside each other.
 #include "insdiag/engine/numerics/parallel_map.h"
 
 #include <gtest/gtest.h>
@@ -38,6 +38,19 @@ TEST(ParallelMap, AMapInsideAMapGivesTheSameResults) {
     for (std::size_t j = 0; j < 50; ++j) sum += Work(i * 50 + j);
     EXPECT_EQ(outer[i], sum) << i;
   }
+}
+
+// Two tasks alongside each other, each with a map inside: both run to the
+// end, and each gets the results of its serial loop.
+TEST(ParallelMap, TasksAlongsideEachOtherGiveTheirSerialResults) {
+  std::vector<double> first, second;
+  AlongsideEachOther(
+      [&] { first = ParallelMap(300, Work); },
+      [&] { second = ParallelMap(200, [](std::size_t i) { return Work(i + 300); }); });
+  std::vector<double> serial;
+  for (std::size_t i = 0; i < 500; ++i) serial.push_back(Work(i));
+  EXPECT_EQ(first, std::vector<double>(serial.begin(), serial.begin() + 300));
+  EXPECT_EQ(second, std::vector<double>(serial.begin() + 300, serial.end()));
 }
 
 TEST(ParallelMap, UsesAtLeastOneThread) { EXPECT_GE(WorkerThreads(), 1); }

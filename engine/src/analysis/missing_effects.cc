@@ -3,10 +3,12 @@
 #include <absl/strings/str_format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
 #include <numbers>
+#include <optional>
 
 #include "insdiag/engine/finder/effect_finder.h"
 #include "insdiag/engine/finder/fault_findings.h"
@@ -238,13 +240,14 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
                                             "tests it"));
     }
   }
-  // One test after the other: each spreads its own independent passes (its
-  // starts, the fits without each structure) over every core, and the walk
-  // test is much the cheaper, so running the two side by side would leave a
-  // core idle through most of the pairs' test.
-  for (const Test& test : tests) {
+  // The axes each test fits: those no earlier model settled.
+  constexpr std::size_t kTests = std::size(tests);
+  std::array<DriftSelection, kTests> axes_of;
+  for (std::size_t t = 0; t < kTests; ++t) {
+    const Test& test = tests[t];
     if (!test.enabled) continue;
-    DriftSelection axes = test.axes;
+    DriftSelection& axes = axes_of[t];
+    axes = test.axes;
     for (const DriftAxis d : DriftAxis::All()) {
       const EffectCandidate* was = SettledOutcome(settled, test.structure_name(d), screen_alpha);
       if (was == nullptr || !axes.Contains(d)) continue;
@@ -256,8 +259,22 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
       }
       outcomes.insert_or_assign(c.name, c);
     }
-    if (!axes.Any()) continue;
-    auto fitted = test.fit(epochs, pass.model, a_priori, axes, screen_alpha, options.drift_likelihood);
+  }
+  // The two tests alongside each other: each is mostly one EM chain, a pass
+  // after the other, which holds one core; their results are read in order
+  // below, as if they had run one after the other.
+  std::array<std::optional<absl::StatusOr<ident::DriftLikelihoodResult>>, kTests> fits;
+  auto fit = [&](std::size_t t) {
+    if (tests[t].enabled && axes_of[t].Any()) {
+      fits[t] = tests[t].fit(epochs, pass.model, a_priori, axes_of[t], screen_alpha,
+                             options.drift_likelihood);
+    }
+  };
+  numerics::AlongsideEachOther([&] { fit(1); }, [&] { fit(0); });
+  for (std::size_t t = 0; t < kTests; ++t) {
+    const Test& test = tests[t];
+    if (!fits[t].has_value()) continue;
+    const absl::StatusOr<ident::DriftLikelihoodResult>& fitted = *fits[t];
     if (!fitted.ok()) {
       if (notes != nullptr) {
         notes->push_back(std::string("no likelihood test of ") + test.what + ": " +

@@ -106,16 +106,19 @@ void EpochFilter::Step(int index, ForwardPass* pass, FilterObserver* observer) {
       // remainder of each accelerometer, white with variance Q² (IEEE 952).
       r = r_velocity + e.C_b_n.row(c - 3).transpose().cwiseAbs2().dot(acc_quantization_var);
     }
-    PH_ = h.sign * P_.col(h.state);
+    // P is kept in its lower triangle through the updates: column `state`
+    // is its row left of the diagonal and its column from the diagonal down.
+    const auto s = static_cast<Eigen::Index>(h.state);
+    PH_.head(s) = h.sign * P_.row(s).head(s).transpose();
+    PH_.tail(PH_.size() - s) = h.sign * P_.col(s).tail(PH_.size() - s);
     const double S = h.sign * PH_[h.state] + r;
     const double nu = e.z[static_cast<size_t>(c)] - h.sign * x_[h.state];
     gain_ = PH_ / S;
     x_ += gain_ * nu;
     // The expanded Joseph form (header) as a symmetric rank-two update,
-    // P += K wᵀ + w Kᵀ with w = ½ S K − Phᵀ: two outer products, not three.
+    // P += K wᵀ + w Kᵀ with w = ½ S K − Phᵀ, of the lower triangle alone.
     half_joseph_ = 0.5 * S * gain_ - PH_;
-    P_.noalias() += gain_ * half_joseph_.transpose();
-    P_.noalias() += half_joseph_ * gain_.transpose();
+    P_.selfadjointView<Eigen::Lower>().rankUpdate(gain_, half_joseph_);
     log_likelihood_ += -0.5 * (std::log(2.0 * std::numbers::pi * S) + nu * nu / S);
     ++scalar_updates_;
     if (pass != nullptr) {
@@ -126,7 +129,7 @@ void EpochFilter::Step(int index, ForwardPass* pass, FilterObserver* observer) {
     }
     if (observer != nullptr) observer->OnScalarUpdate(c, h, gain_, nu, S);
   }
-  P_ = 0.5 * (P_ + P_.transpose()).eval();
+  P_.triangularView<Eigen::StrictlyUpper>() = P_.transpose();
   if (pass != nullptr) {
     pass->x_filt.row(k) = x_.transpose();
     PackSymmetric(P_, pass->P_filt.row(k).data());

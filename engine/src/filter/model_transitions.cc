@@ -152,13 +152,17 @@ const IntervalTransition& ModelTransitions::Build(const EpochInterval& e) {
   t_.D = D_;
   t_.Qss = Qs_;
   t_.duration_s = interval_s;
-  Matrix9d Qnn = Matrix9d::Zero();
+  // The white noise and quantisation summed in packed form, unpacked once.
+  PackedSymmetric9d sensor_noise = PackedSymmetric9d::Zero();
   for (int a = 0; a < kSensorAxisCount; ++a) {
-    if (white_var_[a] > 0.0) Qnn.noalias() += white_var_[a] * Unpack9(e.white[static_cast<size_t>(a)]);
+    if (white_var_[a] > 0.0)
+      sensor_noise.noalias() += white_var_[a] * e.white[static_cast<size_t>(a)];
   }
   for (int a = 0; a < 3; ++a) {
-    if (quantisation_var_[a] > 0.0) Qnn.noalias() += quantisation_var_[a] * Unpack9(e.quantisation[static_cast<size_t>(a)]);
+    if (quantisation_var_[a] > 0.0)
+      sensor_noise.noalias() += quantisation_var_[a] * e.quantisation[static_cast<size_t>(a)];
   }
+  Matrix9d Qnn = Unpack9(sensor_noise);
   for (size_t i = 0; i < sources_.size(); ++i) {
     const StateSource& src = sources_[i];
     if (src.constant_column >= 0) {

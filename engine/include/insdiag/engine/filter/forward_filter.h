@@ -12,7 +12,8 @@
 //   x ← x + K ν
 //   P ← (I − K h) P (I − K h)ᵀ + K r Kᵀ  =  P − K (Phᵀ)ᵀ − (Phᵀ) Kᵀ + S K Kᵀ
 // (the expanded form keeps Joseph's first-order insensitivity to errors in K
-// and is symmetric by construction). Per channel and epoch it keeps ν,
+// and is symmetric by construction: the updates of an epoch work on P's
+// lower triangle, mirrored once after them). Per channel and epoch it keeps ν,
 // α² = S and β² = ν²/α² (seed, monitoring section) and the innovations'
 // log-likelihood −½ Σ (ln 2πS + ν²/S).
 //

@@ -67,4 +67,21 @@ void InParallel(const Main& main, const Side& side) {
   detail::InsideParallelMap() = false;
 }
 
+// Runs `side` on a thread of its own while the caller runs `main`; both are
+// done on return. Unlike InParallel, a map inside either still spreads over
+// every core: for two tasks that are each mostly one chain of passes, one
+// after the other, with a few independent passes between (the cores are
+// oversubscribed while both map). With one thread, or inside a map, `side`
+// then `main` on the caller's.
+template <typename Main, typename Side>
+void AlongsideEachOther(const Main& main, const Side& side) {
+  if (WorkerThreads() <= 1 || detail::InsideParallelMap()) {
+    side();
+    main();
+    return;
+  }
+  std::jthread worker([&] { side(); });
+  main();
+}
+
 }  // namespace insdiag::engine::numerics
