@@ -236,19 +236,23 @@ std::string ModuleOfHypothesis(const v1::Hypothesis& h) { return h.module(); }
 
 }  // namespace
 
-std::vector<v1::FailureModeCatalogue> BuiltinFailureModeCatalogues() {
-  std::vector<v1::FailureModeCatalogue> out;
-  for (const std::string_view json : kFailureModeJson) {
-    v1::FailureModeCatalogue catalogue;
-    // The files are part of the build and parsed by a unit test.
-    if (api::FromJson(json, &catalogue).ok()) out.push_back(std::move(catalogue));
-  }
-  return out;
+const std::vector<v1::FailureModeCatalogue>& BuiltinFailureModeCatalogues() {
+  // Parsed once: the diagnosis's settings are read from them for every request.
+  static const std::vector<v1::FailureModeCatalogue> catalogues = [] {
+    std::vector<v1::FailureModeCatalogue> out;
+    for (const std::string_view json : kFailureModeJson) {
+      v1::FailureModeCatalogue catalogue;
+      // The files are part of the build and parsed by a unit test.
+      if (api::FromJson(json, &catalogue).ok()) out.push_back(std::move(catalogue));
+    }
+    return out;
+  }();
+  return catalogues;
 }
 
 absl::StatusOr<v1::FailureModeCatalogue> BuiltinFailureModeCatalogue(const std::string& unit_type) {
   const std::string name = api::IdOrSelf(unit_type, api::kUnitTypes);
-  for (auto& catalogue : BuiltinFailureModeCatalogues()) {
+  for (const auto& catalogue : BuiltinFailureModeCatalogues()) {
     if (catalogue.unit_type() == name) return catalogue;
   }
   return absl::NotFoundError(absl::StrCat("no failure modes for unit type '", unit_type, "'"));

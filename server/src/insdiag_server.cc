@@ -122,7 +122,7 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
   if (options.seed_knowledge_base) {
     // The built-in unit types and failure modes, upserted idempotently.
     const auto unit_types = api::BuiltinUnitTypes();
-    const auto catalogues = kb::BuiltinFailureModeCatalogues();
+    const auto& catalogues = kb::BuiltinFailureModeCatalogues();
     if (auto seeded = server->services_->catalogue_store.Seed(unit_types, catalogues); !seeded.ok()) return seeded;
   }
 

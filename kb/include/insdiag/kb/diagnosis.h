@@ -83,7 +83,7 @@ struct Evidence {
 };
 
 // The unit types' failure modes as data (data/failure-modes/*.json, built in).
-std::vector<v1::FailureModeCatalogue> BuiltinFailureModeCatalogues();
+const std::vector<v1::FailureModeCatalogue>& BuiltinFailureModeCatalogues();
 // The catalogue of one unit type (display or resource name); NOT_FOUND when none.
 absl::StatusOr<v1::FailureModeCatalogue> BuiltinFailureModeCatalogue(const std::string& unit_type);
 
