@@ -1,14 +1,15 @@
 // A model's named parameters state it completely: a report's model is the
 // model the analysis ran, and a later analysis of the same run starts from
 // it (engine/model/parameters.h, api::IdentifiedModelOf).
-#include "insdiag/engine/model/parameters.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numbers>
 #include <random>
 #include <string>
+
+#include "insdiag/engine/model/drift_axis.h"
+#include "insdiag/engine/model/parameters.h"
 
 namespace insdiag::engine {
 namespace {
@@ -77,6 +78,26 @@ TEST(ModelParameters, NameTheirUnits) {
   EXPECT_EQ(ParameterUnit("reference.position_sigma"), "m");
   EXPECT_EQ(ParameterUnit("gyro_bias_step.x.onset"), "s");
   EXPECT_EQ(ParameterUnit("gyro_bias_gm.x.sigma"), "rad/s");
+}
+
+TEST(ModelParameters, ADriftsParametersAreNamedAndFoundInOnePlace) {
+  const DriftAxis acc_y{Sensor::kAccelerometer, 1};
+  EXPECT_EQ(DriftSigmaName(acc_y), "acc_bias_gm.y.sigma");
+  EXPECT_EQ(DriftTauName(acc_y), "acc_bias_gm.y.tau");
+  for (const DriftAxis d : DriftAxis::All()) {
+    EXPECT_EQ(DriftOfParameter(DriftSigmaName(d)), d);
+    EXPECT_EQ(DriftOfParameter(DriftTauName(d)), d);
+  }
+  for (const char* other :
+       {"gyro_bias_gm.x", "gyro_bias_rw.x.density", "gyro_bias_second_order.x.sigma",
+        "acc_bias_gm.w.sigma", "gyro_arw.x", ""}) {
+    EXPECT_FALSE(DriftOfParameter(other).has_value()) << other;
+  }
+  // The model's parameter list names its drifts so.
+  ErrorModel m;
+  m.acc.bias[1] = {3e-4, 900.0};
+  ASSERT_TRUE(SetParameter(DriftTauName(acc_y), 1200.0, m).ok());
+  EXPECT_EQ(DriftOf(m, acc_y).tau_s, 1200.0);
 }
 
 TEST(ModelParameters, RefuseWhatTheyCannotBe) {

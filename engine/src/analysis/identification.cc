@@ -90,9 +90,9 @@ std::vector<ParameterEstimate> ApplyAllanNoise(const RunContext& c, const ident:
   std::vector<ParameterEstimate> identified =
       ident::ApplyAllanNoise(allan, c.a_priori.model, base, c.options.monitor.family_wise_alpha);
   for (const ParameterEstimate& p : ident::AllanParameterEstimates(allan, &c.a_priori.model)) {
-    const bool drift = p.name.find("_bias_gm.") != std::string::npos;
-    if (!drift && std::none_of(identified.begin(), identified.end(),
-                               [&](const ParameterEstimate& q) { return q.name == p.name; })) {
+    if (!DriftOfParameter(p.name).has_value() &&
+        std::none_of(identified.begin(), identified.end(),
+                     [&](const ParameterEstimate& q) { return q.name == p.name; })) {
       identified.push_back(p);
     }
   }

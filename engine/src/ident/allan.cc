@@ -11,11 +11,12 @@
 #include <string>
 #include <utility>
 
+#include "ident/allan_model.h"
+#include "insdiag/engine/model/drift_axis.h"
 #include "insdiag/engine/model/parameters.h"
 #include "insdiag/engine/monitor/sample_screening.h"
 #include "insdiag/engine/nav/rotation.h"
 #include "insdiag/engine/stats/distributions.h"
-#include "ident/allan_model.h"
 
 namespace insdiag::engine::ident {
 namespace {
@@ -403,8 +404,9 @@ std::vector<ParameterEstimate> AllanParameterEstimates(const AllanResult& result
     add(AllanParameter::kBiasInstability, s + "_bias_instability." + axis, gyro ? "rad/s" : "m/s^2");
     add(AllanParameter::kRateRandomWalk, s + "_rate_random_walk." + axis, gyro ? "rad/s/sqrt(s)" : "m/s^2/sqrt(s)");
     add(AllanParameter::kRateRamp, s + "_rate_ramp." + axis, gyro ? "rad/s^2" : "m/s^3");
-    add(AllanParameter::kMarkovSigma, s + "_bias_gm." + axis + ".sigma", gyro ? "rad/s" : "m/s^2");
-    add(AllanParameter::kMarkovTau, s + "_bias_gm." + axis + ".tau", "s");
+    const DriftAxis drift{ch.sensor, ch.axis};
+    add(AllanParameter::kMarkovSigma, DriftSigmaName(drift), gyro ? "rad/s" : "m/s^2");
+    add(AllanParameter::kMarkovTau, DriftTauName(drift), "s");
   }
   return out;
 }

@@ -58,9 +58,9 @@ auto& ValueOf(Model& m, const Parameter& p) {
 std::string NameOf(const Parameter& p) {
   switch (p.kind) {
     case Kind::kSigma:
-      return DriftName(p.drift) + ".sigma";
+      return DriftSigmaName(p.drift);
     case Kind::kTau:
-      return DriftName(p.drift) + ".tau";
+      return DriftTauName(p.drift);
     case Kind::kWalk:
       return WalkName(p.drift) + ".density";
     case Kind::kPairSigma:

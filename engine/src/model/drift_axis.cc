@@ -19,6 +19,17 @@ std::string DriftName(DriftAxis drift) {
   return std::string(SensorPrefix(drift.sensor)) + "_bias_gm." + AxisLabel(AxisSet::kSingle, drift.axis, drift.axis);
 }
 
+std::string DriftSigmaName(DriftAxis drift) { return DriftName(drift) + ".sigma"; }
+
+std::string DriftTauName(DriftAxis drift) { return DriftName(drift) + ".tau"; }
+
+std::optional<DriftAxis> DriftOfParameter(std::string_view parameter) {
+  for (const DriftAxis d : DriftAxis::All()) {
+    if (parameter == DriftSigmaName(d) || parameter == DriftTauName(d)) return d;
+  }
+  return std::nullopt;
+}
+
 std::string WalkName(DriftAxis drift) { return TermName(drift, "bias_rw"); }
 
 std::string SecondOrderName(DriftAxis drift) { return TermName(drift, "bias_second_order"); }

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "insdiag/engine/model/drift_axis.h"
+
 namespace insdiag::engine {
 namespace {
 
@@ -79,8 +81,9 @@ std::vector<NamedParameter> ParametersOf(const ErrorModel& model) {
     const std::string p = b.prefix;
     const std::string u = SensorUnit(b.sensor);
     for (int i = 0; i < 3; ++i) {
-      out.push_back({p + "_bias_gm." + kAxes[i] + ".sigma", t.bias[static_cast<size_t>(i)].sigma, u});
-      out.push_back({p + "_bias_gm." + kAxes[i] + ".tau", t.bias[static_cast<size_t>(i)].tau_s, "s"});
+      const DriftAxis drift{b.sensor, i};
+      out.push_back({DriftSigmaName(drift), t.bias[static_cast<size_t>(i)].sigma, u});
+      out.push_back({DriftTauName(drift), t.bias[static_cast<size_t>(i)].tau_s, "s"});
     }
     for (int i = 0; i < 3; ++i) {
       out.push_back({p + (b.sensor == Sensor::kGyro ? "_arw." : "_vrw.") + kAxes[i], t.white_noise_density[i],
@@ -132,12 +135,13 @@ absl::Status SetParameter(const std::string& name, double value, ErrorModel& mod
       const std::string p = b.prefix;
       for (int i = 0; i < 3; ++i) {
         const std::string axis = kAxes[i];
-        if (name == p + "_bias_gm." + axis + ".sigma") {
-          t.bias[static_cast<size_t>(i)].sigma = value;
+        const DriftAxis drift{b.sensor, i};
+        if (name == DriftSigmaName(drift)) {
+          DriftOf(model, drift).sigma = value;
           return absl::OkStatus();
         }
-        if (name == p + "_bias_gm." + axis + ".tau") {
-          t.bias[static_cast<size_t>(i)].tau_s = value;
+        if (name == DriftTauName(drift)) {
+          DriftOf(model, drift).tau_s = value;
           return absl::OkStatus();
         }
         if (name == p + (b.sensor == Sensor::kGyro ? "_arw." : "_vrw.") + axis) {

@@ -4,7 +4,9 @@
 #pragma once
 
 #include <array>
+#include <optional>
 #include <string>
+#include <string_view>
 
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/model/error_model.h"
@@ -37,6 +39,12 @@ struct DriftAxis {
 std::string DriftName(DriftAxis drift);
 std::string WalkName(DriftAxis drift);
 std::string SecondOrderName(DriftAxis drift);
+
+// The names of the drift's parameters: "gyro_bias_gm.x.sigma", "….tau".
+std::string DriftSigmaName(DriftAxis drift);
+std::string DriftTauName(DriftAxis drift);
+// The drift whose σ or τ `parameter` names, if it names one.
+std::optional<DriftAxis> DriftOfParameter(std::string_view parameter);
 
 // The drift's Gauss–Markov parameters in a model.
 GaussMarkov& DriftOf(ErrorModel& model, DriftAxis drift);
