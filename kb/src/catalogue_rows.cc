@@ -46,14 +46,12 @@ absl::StatusOr<double> FleetExposure(Connection& db, const std::string& unit_typ
 }
 
 v1::DiagnosisSettings SettingsFor(const std::string& unit_type_id) {
-  const auto& all = BuiltinFailureModeCatalogues();
-  const std::string id = api::IdOrSelf(unit_type_id, api::kUnitTypes);
-  for (const v1::FailureModeCatalogue& catalogue : all) {
-    if (catalogue.unit_type() == id) return catalogue.settings();
-  }
+  auto catalogue = BuiltinFailureModeCatalogue(unit_type_id);
+  if (catalogue.ok()) return catalogue->settings();
   // A unit type without a built-in catalogue: these settings only rank
   // healthy against unknown and against the modes written for it through
   // the API. Take the first catalogue's constants.
+  const auto& all = BuiltinFailureModeCatalogues();
   return all.empty() ? v1::DiagnosisSettings() : all.front().settings();
 }
 

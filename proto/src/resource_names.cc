@@ -1,5 +1,7 @@
 #include "insdiag/api/resource_names.h"
 
+#include <initializer_list>
+
 namespace insdiag::api {
 namespace {
 
@@ -10,6 +12,16 @@ std::string_view IdAfterSegment(std::string_view name, const Collection& collect
     return {};
   }
   return name.substr(collection.segment.size() + 1);
+}
+
+// The refusal of `name` in `field`: "field: 'name'" and then `what`. Debian's
+// abseil has its own string_view: the message is put together here.
+absl::Status NotAName(std::string_view field, std::string_view name, std::initializer_list<std::string_view> what) {
+  std::string message(field);
+  message += ": '";
+  message += name;
+  for (std::string_view part : what) message += part;
+  return absl::InvalidArgumentError(message);
 }
 
 }  // namespace
@@ -24,14 +36,7 @@ std::string ResourceName(const Collection& collection, std::string_view id) {
 absl::StatusOr<std::string> ResourceId(std::string_view name, const Collection& collection, std::string_view field) {
   const std::string_view id = IdAfterSegment(name, collection);
   if (id.empty() || id.find('/') != std::string_view::npos) {
-    // Debian's abseil has its own string_view: the message is put together here.
-    std::string message(field);
-    for (std::string_view part : {std::string_view(": '"), name, std::string_view("' is not "), collection.noun,
-                                  std::string_view(" name ("), collection.segment, std::string_view("/{"), collection.id,
-                                  std::string_view("})")}) {
-      message += part;
-    }
-    return absl::InvalidArgumentError(message);
+    return NotAName(field, name, {"' is not ", collection.noun, " name (", collection.segment, "/{", collection.id, "})"});
   }
   return std::string(id);
 }
@@ -58,13 +63,7 @@ absl::StatusOr<ModuleOfUnit> ParseModuleName(std::string_view name, std::string_
       return ModuleOfUnit{std::string(unit), std::string(role)};
     }
   }
-  std::string message(field);
-  for (std::string_view part :
-       {std::string_view(": '"), name,
-        std::string_view("' is not a module name (units/{unit}/modules/{module})")}) {
-    message += part;
-  }
-  return absl::InvalidArgumentError(message);
+  return NotAName(field, name, {"' is not a module name (units/{unit}/modules/{module})"});
 }
 
 std::string IdOrSelf(std::string_view name, const Collection& collection) {

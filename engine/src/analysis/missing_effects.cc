@@ -263,6 +263,7 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
   // The two tests alongside each other: each is mostly one EM chain, a pass
   // after the other, which holds one core; their results are read in order
   // below, as if they had run one after the other.
+  static_assert(kTests == 2, "the walks (0) and the second-order pairs (1)");
   std::array<std::optional<absl::StatusOr<ident::DriftLikelihoodResult>>, kTests> fits;
   auto fit = [&](std::size_t t) {
     if (tests[t].enabled && axes_of[t].Any()) {
