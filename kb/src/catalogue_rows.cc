@@ -45,14 +45,21 @@ absl::StatusOr<double> FleetExposure(Connection& db, const std::string& unit_typ
   return DoubleOr0(*rows, 0, 0);
 }
 
-v1::DiagnosisSettings SettingsFor(const std::string& unit_type_id) {
-  auto catalogue = BuiltinFailureModeCatalogue(unit_type_id);
-  if (catalogue.ok()) return catalogue->settings();
-  // A unit type without a built-in catalogue: these settings only rank
-  // healthy against unknown and against the modes written for it through
-  // the API. Take the first catalogue's constants.
-  const auto& all = BuiltinFailureModeCatalogues();
-  return all.empty() ? v1::DiagnosisSettings() : all.front().settings();
+absl::StatusOr<UnitTypeSettings> SettingsFor(const std::string& unit_type_id) {
+  if (auto own = BuiltinFailureModeCatalogue(unit_type_id); own.ok())
+    return UnitTypeSettings{own->settings(), ""};
+  auto fallback = BuiltinFailureModeCatalogue(kDefaultSettingsUnitType);
+  if (!fallback.ok()) {
+    return absl::FailedPreconditionError(absl::StrCat(
+        "unit type '", unit_type_id, "' has no built-in failure-mode catalogue, and neither has ",
+        kDefaultSettingsUnitType, ", whose diagnosis settings apply then"));
+  }
+  return UnitTypeSettings{
+      fallback->settings(),
+      absl::StrCat("unit type '", unit_type_id,
+                   "' has no built-in failure-mode catalogue: diagnosed with ",
+                   kDefaultSettingsUnitType,
+                   "'s settings (healthy spreads, contamination, significance level)")};
 }
 
 absl::StatusOr<std::vector<v1::FailureMode>> LoadModes(Connection& db, const std::string& unit_type_id,
@@ -86,7 +93,9 @@ absl::StatusOr<std::vector<v1::FailureMode>> LoadModes(Connection& db, const std
       auto hours = FleetExposure(db, type);
       if (!hours.ok()) return hours.status();
       exposure[type] = *hours;
-      settings[type] = SettingsFor(type);
+      auto type_settings = SettingsFor(type);
+      if (!type_settings.ok()) return type_settings.status();
+      settings[type] = type_settings->settings;
     }
     m.set_rate_per_million_hours(
         1e6 * ModeRatePerHour(m, m.confirmed_failures(), exposure[type], settings[type]));

@@ -112,7 +112,9 @@ absl::StatusOr<v1::Diagnosis> DiagnosisStore::Create(const std::string& analysis
   if (!modes.ok()) return modes.status();
   auto fleet = FleetExposure(**db, type_id);
   if (!fleet.ok()) return fleet.status();
-  const v1::DiagnosisSettings settings = SettingsFor(type_id);
+  auto type_settings = SettingsFor(type_id);
+  if (!type_settings.ok()) return type_settings.status();
+  const v1::DiagnosisSettings& settings = type_settings->settings;
   PriorInputs prior;
   const double hours = internal::DoubleOr0(*unit, 0, 3);
   const double previous = internal::DoubleOr0(*unit, 0, 4);
@@ -122,6 +124,7 @@ absl::StatusOr<v1::Diagnosis> DiagnosisStore::Create(const std::string& analysis
 
   Evidence observed = EvidenceFromReport(*report, *unit_type, settings);
   if (auto added = AddHistoryEvidence(**db, unit_id, *analysis_id, settings, observed); !added.ok()) return added;
+  if (!type_settings->note.empty()) observed.notes.push_back(type_settings->note);
   v1::Diagnosis diagnosis = Diagnose(observed, *modes, settings, prior);
   diagnosis.set_analysis(analysis_name);
   diagnosis.set_unit(api::ResourceName(api::kUnits, serial));

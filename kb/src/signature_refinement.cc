@@ -16,7 +16,9 @@ absl::Status RefineModeSignature(Connection& db, const std::string& mode_id) {
   const std::string type_id = UnitTypeId(mode.unit_type());
   auto unit_type = LoadUnitType(db, type_id);
   if (!unit_type.ok()) return unit_type.status();
-  const v1::DiagnosisSettings settings = SettingsFor(type_id);
+  auto type_settings = SettingsFor(type_id);
+  if (!type_settings.ok()) return type_settings.status();
+  const v1::DiagnosisSettings& settings = type_settings->settings;
   auto cases = db.Exec(
       "SELECT DISTINCT analysis_id::text FROM failure_records WHERE failure_mode = $1 AND confirmed "
       "AND analysis_id IS NOT NULL",

@@ -36,11 +36,12 @@ class KnowledgeBaseTest : public insdiag::testing::DatabaseTest {
   }
 
   // A SUCCEEDED analysis of unit `serial` with `report`.
-  std::string StoreAnalysis(const std::string& serial, const v1::AnalysisReport& report) {
+  std::string StoreAnalysis(const std::string& serial, const v1::AnalysisReport& report,
+                            const std::string& unit_type = "INS-2000") {
     RunStore runs(pool());
     engine::BenchRun run = insdiag::testing::SyntheticStaticRun(20, 10.0, 3);
     run.metadata.unit_serial = serial;
-    run.metadata.unit_type = "INS-2000";
+    run.metadata.unit_type = unit_type;
     auto stored = runs.Create(run, {.sha256 = "x", .request_id = "", .request_fingerprint = ""});
     EXPECT_TRUE(stored.ok()) << stored.status();
     AnalysisStore analyses(pool());
@@ -91,6 +92,26 @@ TEST_F(KnowledgeBaseTest, ARunOfANewSerialRegistersTheUnitWithItsModules) {
   auto modules = catalogue_->ListModules("units/INS-0001");
   ASSERT_TRUE(modules.ok());
   EXPECT_EQ(modules->size(), 10u);
+}
+
+// A unit type the knowledge base knows but has no built-in failure modes for
+// is diagnosed with the default catalogue's settings, and the diagnosis says so.
+TEST_F(KnowledgeBaseTest, AUnitTypeWithoutBuiltInFailureModesIsDiagnosedWithSettingsItNames) {
+  v1::UnitType other = api::BuiltinUnitTypes().front();
+  other.set_name("unitTypes/INS-2000-LAB");
+  other.set_display_name("INS-2000 (lab variant)");
+  ASSERT_TRUE(catalogue_->Seed({&other, 1}, {}).ok());
+  auto diagnosis = diagnoses_->Create(StoreAnalysis("LAB-0001", WornGyroX(), "INS-2000-LAB"));
+  ASSERT_TRUE(diagnosis.ok()) << diagnosis.status();
+  EXPECT_THAT(diagnosis->notes(),
+              ::testing::Contains(::testing::AllOf(
+                  ::testing::HasSubstr("'INS-2000-LAB' has no built-in failure-mode"),
+                  ::testing::HasSubstr("INS-2000's settings"))));
+  auto own = diagnoses_->Create(StoreAnalysis("INS-0009", WornGyroX()));
+  ASSERT_TRUE(own.ok()) << own.status();
+  EXPECT_THAT(
+      own->notes(),
+      ::testing::Not(::testing::Contains(::testing::HasSubstr("no built-in failure-mode"))));
 }
 
 TEST_F(KnowledgeBaseTest, ConfirmingADiagnosisWritesAFailureRecordAndRaisesLaterPosteriors) {
