@@ -133,7 +133,7 @@ void WriteCorrelationCsv(const engine::AnalysisReport& r, std::ostream& out) {
       const double band = j < a.acf_band.size() ? a.acf_band[j] : 0.0;
       const double error = j < a.error_acf.size() ? a.error_acf[j] : 0.0;
       for (const auto& f : a.fits) {
-        if (!f.converged || j >= f.expected.size()) continue;
+        if (!f.usable || j >= f.expected.size()) continue;
         std::string line = d.state + ",";
         AppendNumber(line, static_cast<double>(j) * a.dt_s);
         for (double v : {a.acf[j], band, error}) {

@@ -134,7 +134,7 @@ void Fill(const engine::DriftCorrelation& in, v1::CorrelationCurve* out) {
   for (double v : a.acf_band) out->add_band(Finite(v));
   for (double v : a.error_acf) out->add_error_acf(v);
   for (const engine::ident::FamilyFit& f : a.fits) {
-    if (!f.converged) continue;
+    if (!f.usable) continue;
     v1::FamilyCurve* fc = out->add_fits();
     fc->set_family(engine::ident::CorrelationFamilyName(f.family));
     for (double v : f.expected) fc->add_expected(v);

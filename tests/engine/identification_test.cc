@@ -98,8 +98,8 @@ double ScreenAlpha() { return FinderOptions{}.family_wise_alpha / (6.0 * 3.0); }
 std::vector<CorrelationFamily> Reported(const CorrelationAnalysis& a) {
   std::vector<CorrelationFamily> out;
   for (const FamilyFit& f : a.fits) {
-    if (f.converged && f.family != CorrelationFamily::kWhite && f.family != CorrelationFamily::kExponential &&
-        f.lr_p_value < ScreenAlpha()) {
+    if (f.usable && f.family != CorrelationFamily::kWhite &&
+        f.family != CorrelationFamily::kExponential && f.lr_p_value < ScreenAlpha()) {
       out.push_back(f.family);
     }
   }
@@ -302,7 +302,7 @@ TEST(CorrelationCrossCheckTest, ExponentialFitAgreesWithScipyMaximumLikelihood) 
     const CorrelationAnalysis a = AnalyseOrDie(x);
     const FamilyFit* fit = a.Fit(CorrelationFamily::kExponential);
     ASSERT_NE(fit, nullptr);
-    ASSERT_TRUE(fit->converged);
+    ASSERT_TRUE(fit->usable);
     const absl::StatusOr<std::string> out = RunPythonOnSeries("acf_fit_check.py", x, std::to_string(kSeriesDtS));
     ASSERT_TRUE(out.ok()) << out.status();
     std::map<std::string, std::pair<double, double>> ml;  // value, SE of its log
@@ -365,7 +365,7 @@ TEST(CorrelationCoverageTest, IntervalsCoverTheTrueDriftsOverSeeds) {
     for (const DriftCorrelation& d : drifts) {
       auto& t = tally[d.state];
       const FamilyFit* e = d.analysis.Fit(CorrelationFamily::kExponential);
-      if (!d.analysis.resolved || e == nullptr || !e->converged) continue;
+      if (!d.analysis.resolved || e == nullptr || !e->usable) continue;
       const GaussMarkov& truth = TrueDrift(unit, d.state);
       const FittedParameter* sigma = e->Parameter("sigma");
       const FittedParameter* tau = e->Parameter("tau_s");

@@ -99,7 +99,7 @@ std::vector<StructureProposal> ProposeStructures(const std::vector<DriftCorrelat
   for (const DriftCorrelation& d : drifts) {
     if (!d.analysis.resolved) continue;
     for (const ident::FamilyFit& f : d.analysis.fits) {
-      if (!f.converged) continue;
+      if (!f.usable) continue;
       std::optional<StructureProposal> p = StructureOfFit(d, f, run_s);
       if (!p.has_value()) continue;
       if (f.lr_p_value >= screen_alpha) {

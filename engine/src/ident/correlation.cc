@@ -83,17 +83,24 @@ double MeanVariance(const SeriesCovariance& K, int N) {
   return sum / (static_cast<double>(N) * N);
 }
 
+struct FamilyParameter {
+  std::string name;
+  bool is_time_s = false;  // a correlation time or a period: bounded by the epoch and the run
+};
+
 struct FamilySpec {
   CorrelationFamily family;
-  std::vector<std::string> names;  // parameters, all fitted as logarithms
+  std::vector<FamilyParameter> parameters;  // all fitted as logarithms
 };
 
 std::vector<FamilySpec> Families() {
-  return {{CorrelationFamily::kWhite, {"sigma"}},
-          {CorrelationFamily::kExponential, {"sigma", "tau_s"}},
-          {CorrelationFamily::kExponentialCosine, {"sigma", "tau_s", "sigma2", "tau2_s", "period_s"}},
-          {CorrelationFamily::kRandomWalk, {"sigma", "tau_s", "density"}},
-          {CorrelationFamily::kTwoExponentials, {"sigma", "tau_s", "sigma2", "tau2_s"}}};
+  const FamilyParameter sigma{"sigma"}, tau{"tau_s", true}, sigma2{"sigma2"}, tau2{"tau2_s", true},
+      period{"period_s", true}, density{"density"};
+  return {{CorrelationFamily::kWhite, {sigma}},
+          {CorrelationFamily::kExponential, {sigma, tau}},
+          {CorrelationFamily::kExponentialCosine, {sigma, tau, sigma2, tau2, period}},
+          {CorrelationFamily::kRandomWalk, {sigma, tau, density}},
+          {CorrelationFamily::kTwoExponentials, {sigma, tau, sigma2, tau2}}};
 }
 
 // The series' covariance under a family with parameters θ (natural units) —
@@ -348,7 +355,7 @@ Eigen::MatrixXd BartlettOnGrid(const Problem& pb, const std::vector<double>& sta
 FamilyFit FitFamily(const Problem& pb, CorrelationFamily family, std::vector<double> start,
                     const std::vector<int>& fixed = {}) {
   const auto spec = Families()[static_cast<size_t>(family)];
-  const int k = static_cast<int>(spec.names.size());
+  const int k = static_cast<int>(spec.parameters.size());
   std::vector<double> theta(static_cast<size_t>(k));
   for (int i = 0; i < k; ++i) theta[static_cast<size_t>(i)] = std::log(std::max(start[static_cast<size_t>(i)], 1e-300));
   // The solver sees the free logarithms only: a fixed one costs nothing to differentiate.
@@ -368,8 +375,7 @@ FamilyFit FitFamily(const Problem& pb, CorrelationFamily family, std::vector<dou
   problem.AddResidualBlock(cost, nullptr, free_theta.data());
   // Correlation times between a tenth of an epoch and a hundred runs.
   for (int c = 0; c < free_count; ++c) {
-    const std::string& name = spec.names[static_cast<size_t>(free_index[static_cast<size_t>(c)])];
-    if (name.find("tau") != std::string::npos || name == "period_s") {
+    if (spec.parameters[static_cast<size_t>(free_index[static_cast<size_t>(c)])].is_time_s) {
       problem.SetParameterLowerBound(free_theta.data(), c, std::log(0.1 * pb.dt));
       problem.SetParameterUpperBound(free_theta.data(), c, std::log(100.0 * pb.T));
     }
@@ -388,7 +394,8 @@ FamilyFit FitFamily(const Problem& pb, CorrelationFamily family, std::vector<dou
   FamilyFit fit;
   fit.family = family;
   fit.parameter_count = free_count;
-  fit.converged = summary.IsSolutionUsable();
+  fit.usable = summary.IsSolutionUsable();
+  fit.stopped_at_iteration_cap = summary.termination_type == ceres::NO_CONVERGENCE;
   fit.chi2 = 2.0 * summary.final_cost;
   // Covariance of the free logarithms from the Jacobian at the solution.
   Eigen::MatrixXd cov = Eigen::MatrixXd::Constant(k, k, std::numeric_limits<double>::quiet_NaN());
@@ -421,8 +428,8 @@ FamilyFit FitFamily(const Problem& pb, CorrelationFamily family, std::vector<dou
   for (int i = 0; i < k; ++i) {
     const double v = std::exp(theta[static_cast<size_t>(i)]);
     const double se_log = std::sqrt(cov(i, i));
-    fit.parameters.push_back({spec.names[static_cast<size_t>(i)], v, v * se_log, v * std::exp(-1.96 * se_log),
-                              v * std::exp(1.96 * se_log)});
+    fit.parameters.push_back({spec.parameters[static_cast<size_t>(i)].name, v, v * se_log,
+                              v * std::exp(-1.96 * se_log), v * std::exp(1.96 * se_log)});
   }
   std::vector<double> natural(static_cast<size_t>(k));
   for (int i = 0; i < k; ++i) natural[static_cast<size_t>(i)] = std::exp(theta[static_cast<size_t>(i)]);
@@ -454,7 +461,7 @@ std::vector<double> LogSpaced(double lo, double hi, int count) {
 // refit from its point with the same parameters free, and take the errors
 // from there; the values and the test statistics stay as they were.
 void ErrorsUnderAlternative(const Problem& pb, const std::vector<int>& fixed, FamilyFit& fit) {
-  if (!fit.converged) return;
+  if (!fit.usable) return;
   std::vector<double> p;
   double longest_s = 0.0;
   for (const FittedParameter& q : fit.parameters) {
@@ -468,7 +475,7 @@ void ErrorsUnderAlternative(const Problem& pb, const std::vector<int>& fixed, Fa
   Problem alternative = pb;
   alternative.L = llt.matrixL();
   const FamilyFit refit = FitFamily(alternative, fit.family, p, fixed);
-  if (!refit.converged) return;
+  if (!refit.usable) return;
   fit.log_covariance = refit.log_covariance;
   for (size_t i = 0; i < fit.parameters.size(); ++i) {
     FittedParameter& q = fit.parameters[i];
@@ -490,7 +497,7 @@ FamilyFit ProfiledAlternative(const Problem& pb, CorrelationFamily family, const
   FamilyFit best_on_grid;
   for (const auto& start : grid_starts) {
     FamilyFit f = FitFamily(pb, family, start, shape);
-    if (f.converged && f.chi2 < best_chi2) {
+    if (f.usable && f.chi2 < best_chi2) {
       best_chi2 = f.chi2;
       best_start = &start;
       best_on_grid = std::move(f);
@@ -503,7 +510,7 @@ FamilyFit ProfiledAlternative(const Problem& pb, CorrelationFamily family, const
   const FittedParameter* decay = out.Parameter("tau2_s");
   const FittedParameter* period = out.Parameter("period_s");
   const bool left_family = decay != nullptr && period != nullptr && decay->value > kMaxDecayInPeriods * period->value;
-  const bool shape_fixed = !out.converged || out.chi2 > best_chi2 || left_family;
+  const bool shape_fixed = !out.usable || out.chi2 > best_chi2 || left_family;
   if (shape_fixed) {
     // Keep the grid's point when the free fit wanders off.
     out = std::move(best_on_grid);
@@ -682,7 +689,7 @@ absl::StatusOr<CorrelationAnalysis> AnalyseCorrelation(std::span<const double> s
   for (FamilyFit& f : out.fits) {
     f.aic = f.chi2 + 2.0 * f.parameter_count;
     f.bic = f.chi2 + f.parameter_count * log_n;
-    if (f.converged && f.bic < best_aic) {
+    if (f.usable && f.bic < best_aic) {
       best_aic = f.bic;
       out.best = f.family;
     }
@@ -694,7 +701,8 @@ absl::StatusOr<CorrelationAnalysis> AnalyseCorrelation(std::span<const double> s
   const FittedParameter& tau_fit = exponential.parameters[1];
   const bool tau_bounded = std::isfinite(tau_fit.std_error) && tau_fit.ci95_high < 0.5 * T &&
                            tau_fit.ci95_high < kMaxTauIntervalRatio * tau_fit.ci95_low;
-  out.resolved = exponential.converged && tau_bounded && out.unresolved_fraction <= options.max_unresolved_fraction;
+  out.resolved = exponential.usable && tau_bounded &&
+                 out.unresolved_fraction <= options.max_unresolved_fraction;
   return out;
 }
 

@@ -55,6 +55,14 @@ std::vector<DriftCorrelation> CorrelateDrifts(const ForwardPass& fw, const Smoot
       if (notes != nullptr) notes->push_back(drift.name + ": no correlation processing (" + std::string(analysis.status().message()) + ")");
       continue;
     }
+    const FamilyFit* exponential = analysis->Fit(CorrelationFamily::kExponential);
+    if (notes != nullptr && exponential != nullptr && exponential->usable &&
+        exponential->stopped_at_iteration_cap) {
+      notes->push_back(drift.name +
+                       ": the exponential fit of the smoothed drift's autocorrelation stopped at "
+                       "its iteration cap "
+                       "before converging; its σ and τ are the last iterate's");
+    }
     out.push_back({drift.name, drift.sensor, drift.axis, *std::move(analysis)});
   }
   return out;
@@ -67,7 +75,7 @@ RetargetResult RetargetDrifts(const ErrorModel& current, const ErrorModel& a_pri
   const double reject = stats::ChiSquareQuantile(1.0 - alpha, 2.0);
   for (const DriftCorrelation& d : drifts) {
     const FamilyFit* fit = d.analysis.Fit(CorrelationFamily::kExponential);
-    if (!d.analysis.resolved || fit == nullptr || !fit->converged) continue;
+    if (!d.analysis.resolved || fit == nullptr || !fit->usable) continue;
     const bool gyro = d.sensor == Sensor::kGyro;
     GaussMarkov& gm = (gyro ? r.model.gyro : r.model.acc).bias[static_cast<size_t>(d.axis)];
     const GaussMarkov& prior = (gyro ? a_priori.gyro : a_priori.acc).bias[static_cast<size_t>(d.axis)];

@@ -78,7 +78,10 @@ struct FittedParameter {
 
 struct FamilyFit {
   CorrelationFamily family = CorrelationFamily::kExponential;
-  bool converged = false;
+  // The solver ended at a point worth reading: converged, or stopped at its
+  // iteration cap (then said by stopped_at_iteration_cap).
+  bool usable = false;
+  bool stopped_at_iteration_cap = false;
   std::vector<FittedParameter> parameters;
   double chi2 = 0.0;  // rᵀ C⁻¹ r plus the mean's term (m/σ_m)²
   int parameter_count = 0;
