@@ -2,11 +2,8 @@
 // outputs are explicit; the stages live in engine/src/analysis/.
 #include "insdiag/engine/analysis.h"
 
-#include <absl/strings/str_format.h>
-
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <numbers>
 #include <optional>
 
@@ -18,44 +15,13 @@
 #include "insdiag/engine/numerics/parallel_map.h"
 
 namespace insdiag::engine {
+namespace {
 
-absl::Status UpdateIntervalChoice::Validate() const {
-  if (!(shortest_s > 0.0))
-    return absl::InvalidArgumentError("shortest update interval must be positive");
-  if (max_epochs < 1)
-    return absl::InvalidArgumentError("the most update epochs must be at least one");
-  if (!(min_intervals_per_correlation_time >= 1.0)) {
-    return absl::InvalidArgumentError("update intervals per correlation time must be at least one");
-  }
-  return absl::OkStatus();
-}
 
-double ChooseUpdateIntervalS(double run_duration_s, const ErrorModel& a_priori,
-                             const UpdateIntervalChoice& choice) {
-  double shortest_correlation_s = std::numeric_limits<double>::infinity();
-  for (const SensorTriadModel* triad : {&a_priori.gyro, &a_priori.acc}) {
-    for (const GaussMarkov& drift : triad->bias) {
-      if (drift.sigma > 0.0 && drift.tau_s > 0.0)
-        shortest_correlation_s = std::min(shortest_correlation_s, drift.tau_s);
-    }
-  }
-  for (const ModelEffect& e : a_priori.effects) {
-    if (e.second_order_alpha_per_s > 0.0) {
-      shortest_correlation_s = std::min(shortest_correlation_s, 1.0 / e.second_order_alpha_per_s);
-    }
-  }
-  // Whole seconds: a report reads "updates every 4 s".
-  const double for_the_epochs_s = std::ceil(run_duration_s / choice.max_epochs);
-  const double for_the_drifts_s =
-      std::floor(shortest_correlation_s / choice.min_intervals_per_correlation_time);
-  return std::max(choice.shortest_s, std::min(for_the_epochs_s, for_the_drifts_s));
-}
+}  // namespace
 
 absl::Status AnalysisOptions::Validate() const {
-  if (filter.update_interval_s != 0.0) {
-    if (auto st = filter.Validate(); !st.ok()) return st;
-  }
-  if (auto st = update_interval.Validate(); !st.ok()) return st;
+  if (auto st = filter.Validate(); !st.ok()) return st;
   if (!(monitor.window_s > 0.0)) return absl::InvalidArgumentError("monitor window must be positive");
   if (!(monitor.family_wise_alpha > 0.0 && monitor.family_wise_alpha < 1.0)) {
     return absl::InvalidArgumentError("family-wise α must be in (0, 1)");
@@ -261,12 +227,10 @@ absl::StatusOr<pipeline::ScannedModel> ScanModelA(const pipeline::RunContext& c,
 }  // namespace
 
 absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& request,
-                                 const AnalysisOptions& requested) {
-  if (auto st = requested.Validate(); !st.ok()) return st;
+                                 const AnalysisOptions& options) {
+  if (auto st = options.Validate(); !st.ok()) return st;
   if (input.samples.size() < 2) return absl::InvalidArgumentError("the run has fewer than two samples");
   std::vector<std::string> notes;
-  // The options as requested, with the update interval chosen once the a-priori model is.
-  AnalysisOptions options = requested;
 
   Progress(options, 0.0, "screening samples");
   BenchRun run = input;
@@ -281,16 +245,6 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   std::optional<ident::AllanResult> allan;
   auto a_priori = ChooseAPrioriModel(run, request, allan, options, notes);
   if (!a_priori.ok()) return a_priori.status();
-  if (options.filter.update_interval_s == 0.0) {
-    options.filter.update_interval_s =
-        ChooseUpdateIntervalS(run.DurationS(), a_priori->model, options.update_interval);
-    if (options.filter.update_interval_s > options.update_interval.shortest_s) {
-      notes.push_back(absl::StrFormat(
-          "updates every %.0f s: the %.1f-hour run is condensed to at most %d update epochs",
-          options.filter.update_interval_s, run.DurationS() / 3600.0,
-          options.update_interval.max_epochs));
-    }
-  }
   const std::vector<ParameterEstimate> removed_constants =
       options.remove_dominant_constants ? RemoveDominantConstants(run, allan, a_priori->model, options, notes)
                                         : std::vector<ParameterEstimate>{};

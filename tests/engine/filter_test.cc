@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "insdiag/engine/analysis.h"
 #include "insdiag/engine/filter/forward_filter.h"
 #include "insdiag/engine/filter/smoother.h"
 #include "insdiag/engine/stats/distributions.h"
@@ -71,7 +70,7 @@ TEST_P(TrueModelConsistency, NisInItsBandAndSmoothedDriftsWithinThreeSigma) {
   EXPECT_TRUE(r.faults.empty());
 
   const ErrorModel model = testing::TrueBaseModel(unit);
-  auto fw = RunForwardFilter(sim.run, model, FilterOptions{});
+  auto fw = RunForwardFilter(sim.run, model, options.filter);
   ASSERT_TRUE(fw.ok());
   auto sm = RunSmoother(*fw);
   ASSERT_TRUE(sm.ok());
@@ -277,41 +276,6 @@ TEST(Spikes, AreFlaggedAsOutliersAndDoNotCorruptTheEstimatesAfterThem) {
   auto sm = RunSmoother(*fw);
   ASSERT_TRUE(sm.ok());
   EXPECT_GE(FractionWithinThreeSigma(sim, *fw, *sm, StateLayout(model)), 0.99);
-}
-
-// The analysis updates once a second up to the epoch budget, then in whole
-// seconds so that a run has at most that many epochs, never longer than the
-// shortest drift correlation time over its bound, never shorter than a second.
-TEST(UpdateInterval, OneSecondUpToTheEpochBudgetThenWholeSecondsWithinTheShortestDrift) {
-  const UpdateIntervalChoice choice;
-  const double budget_s = choice.shortest_s * choice.max_epochs;
-  ErrorModel slow;
-  for (auto& b : slow.gyro.bias) b = {.sigma = 1e-7, .tau_s = 3600.0};
-  EXPECT_EQ(ChooseUpdateIntervalS(3600.0, slow, choice), 1.0);
-  EXPECT_EQ(ChooseUpdateIntervalS(budget_s, slow, choice), 1.0);
-  EXPECT_EQ(ChooseUpdateIntervalS(budget_s + 1.0, slow, choice), 2.0);
-  EXPECT_EQ(ChooseUpdateIntervalS(4.0 * budget_s, slow, choice), 4.0);
-  EXPECT_EQ(ChooseUpdateIntervalS(4.0 * budget_s + 100.0, slow, choice), 5.0);
-
-  // A drift of τ = 100 s bounds the interval to 100 s / 50 = 2 s; a faster
-  // one leaves the one-second default; a drift with σ = 0 is not a drift.
-  ErrorModel fast = slow;
-  fast.acc.bias[1] = {.sigma = 1e-4, .tau_s = 100.0};
-  EXPECT_EQ(ChooseUpdateIntervalS(8.0 * budget_s, fast, choice),
-            std::floor(100.0 / choice.min_intervals_per_correlation_time));
-  fast.acc.bias[1].tau_s = 10.0;
-  EXPECT_EQ(ChooseUpdateIntervalS(8.0 * budget_s, fast, choice), 1.0);
-  fast.acc.bias[1].sigma = 0.0;
-  EXPECT_EQ(ChooseUpdateIntervalS(8.0 * budget_s, fast, choice), 8.0);
-  // A second-order drift's correlation time is 1/α.
-  ModelEffect pair;
-  pair.second_order_alpha_per_s = 1.0 / 150.0;
-  fast.effects.push_back(pair);
-  EXPECT_EQ(ChooseUpdateIntervalS(8.0 * budget_s, fast, choice), 3.0);
-
-  AnalysisOptions options;
-  options.update_interval.max_epochs = 0;
-  EXPECT_FALSE(options.Validate().ok());
 }
 
 }  // namespace

@@ -156,10 +156,7 @@ struct Retargeted {
 // from its type's nominal model is the case this is for — against the best
 // candidate's predicted ΔBIC. Also when faults are flagged: a drift far wider
 // than the model's trips the monitor and the onset scan as a jump would, and
-// BIC decides which it is. The model changes only when the drifts are worth
-// telling apart from the candidate: a slow drift and a walk can explain a
-// run equally well, and then the candidates stand with the drifts reported
-// beside them. True when the model took the drifts.
+// BIC decides which it is. True when the model took the drifts.
 bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass, const EffectCandidate& best,
                                       ErrorModel& base, std::vector<ParameterEstimate>& identified,
                                       std::vector<std::string>& notes) {
@@ -179,9 +176,8 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
     return false;
   }
   const double drift_bic = -DriftStatistic(*ml) + static_cast<double>(ml->identified.size()) * log_n;
-  if (drift_bic < best.predicted_delta_bic - stats::kIndistinguishableDeltaBic &&
-      ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, c.a_priori.from_allan, base,
-                           identified, notes)) {
+  if (drift_bic < best.predicted_delta_bic &&
+      ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, c.a_priori.from_allan, base, identified, notes)) {
     notes.push_back(absl::StrFormat("the a-priori model's misfit is the drifts' σ rather than a missing effect (ΔBIC "
                                     "%.1f against the best candidate's %.1f): the model takes them and is scanned "
                                     "again",

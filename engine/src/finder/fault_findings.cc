@@ -51,9 +51,10 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
                              f.onsets_tried, f.statistic, f.onset_s, f.onset_low_s, f.onset_high_s);
     out.push_back(std::move(c));
   }
-  // A step and a ramp of one sensor axis whose 2Δℓ are within
-  // kIndistinguishableDeltaBic of each other (their parameter counts are
-  // equal) are not worth telling apart: each names the other.
+  // A step and a ramp of one sensor axis whose 2Δℓ are within 2 of each
+  // other (their parameter counts are equal) are not worth telling apart
+  // (Kass & Raftery, JASA 90(430), 1995): each names the other.
+  constexpr double kIndistinguishableDeltaBic = 2.0;
   for (size_t i = 0; i < out.size(); ++i) {
     for (size_t j = 0; j < out.size(); ++j) {
       const OnsetFit& a = fits[i];
@@ -62,8 +63,7 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
           a.term.axis != b.term.axis || a.term.family == b.term.family) {
         continue;
       }
-      if (std::abs(a.statistic - b.statistic) < stats::kIndistinguishableDeltaBic)
-        out[i].correlated_with.push_back(out[j].name);
+      if (std::abs(a.statistic - b.statistic) < kIndistinguishableDeltaBic) out[i].correlated_with.push_back(out[j].name);
     }
   }
   return out;

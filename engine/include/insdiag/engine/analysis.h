@@ -51,36 +51,8 @@
 
 namespace insdiag::engine {
 
-// How the filter's update interval is chosen from the run. A filter pass
-// costs its epochs, and an analysis makes hundreds of passes: a long run is
-// condensed to fewer, longer update intervals. The drifts and the
-// navigation errors (Schuler period 84 min) are slow beside them, and the
-// condensation is exact for constant effects and white noise and, for a
-// state that decays within the interval, accurate to third order in Δt/τ
-// (filter/epoch_run.h).
-struct UpdateIntervalChoice {
-  // Seconds between updates on a run short enough: the table's reference is
-  // observed once a second …
-  double shortest_s = 1.0;
-  // … and a longer run gets whole-second intervals, so that it has at most
-  // this many epochs (two hours at one second) …
-  int max_epochs = 7200;
-  // … but an interval is never longer than the a-priori model's shortest
-  // correlation time over this (a 2 % decay within it).
-  double min_intervals_per_correlation_time = 50.0;
-
-  absl::Status Validate() const;
-};
-
-// The filter's update interval for `run` with `a_priori` (UpdateIntervalChoice).
-double ChooseUpdateIntervalS(double run_duration_s, const ErrorModel& a_priori,
-                             const UpdateIntervalChoice& choice);
-
 struct AnalysisOptions {
-  // The filter's options; an update interval of 0 is chosen from the run
-  // (update_interval), any other is taken as it is.
-  FilterOptions filter{.update_interval_s = 0.0};
-  UpdateIntervalChoice update_interval;
+  FilterOptions filter;
   MonitorOptions monitor;
   ScreeningOptions screening;
   // Accuracy of the bench's reference (table encoders, surveyed site, a body

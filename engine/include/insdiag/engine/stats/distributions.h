@@ -31,8 +31,4 @@ double LjungBoxPValue(std::span<const double> series, int lags);
 // adjusted p_(i) = max_{j ≤ i} min(1, (m − j + 1) p_(j)) in ascending order.
 void HolmAdjust(std::span<const double> p, std::span<double> adjusted);
 
-// Two models whose BIC differ by less than this are not worth telling apart
-// (Kass & Raftery, JASA 90(430), 1995: a Bayes factor under e).
-inline constexpr double kIndistinguishableDeltaBic = 2.0;
-
 }  // namespace insdiag::engine::stats
