@@ -59,9 +59,8 @@ std::vector<DriftCorrelation> CorrelateDrifts(const ForwardPass& fw, const Smoot
     if (notes != nullptr && exponential != nullptr && exponential->usable &&
         exponential->stopped_at_iteration_cap) {
       notes->push_back(drift.name +
-                       ": the exponential fit of the smoothed drift's autocorrelation stopped at "
-                       "its iteration cap "
-                       "before converging; its σ and τ are the last iterate's");
+                       ": the exponential fit of the smoothed drift's autocorrelation stopped at its "
+                       "iteration cap before converging; its σ and τ are the last iterate's");
     }
     out.push_back({drift.name, drift.sensor, drift.axis, *std::move(analysis)});
   }
