@@ -2,13 +2,15 @@
 
 #include <ceres/ceres.h>
 
-#include "insdiag/engine/stats/distributions.h"
-
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
+#include <string_view>
+
+#include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::engine::ident {
 namespace {
@@ -83,9 +85,17 @@ double MeanVariance(const SeriesCovariance& K, int N) {
   return sum / (static_cast<double>(N) * N);
 }
 
+enum class FamilyParameterKind {
+  kMagnitude,        // a standard deviation or a walk's density
+  kCorrelationTime,  // a decay time, s
+  kPeriod,           // an oscillation's period, s
+};
+
 struct FamilyParameter {
-  std::string name;
-  bool is_time_s = false;  // a correlation time or a period: bounded by the epoch and the run
+  std::string_view name;
+  FamilyParameterKind kind = FamilyParameterKind::kMagnitude;
+  // Times are bounded by the epoch and the run.
+  bool IsTimeS() const { return kind != FamilyParameterKind::kMagnitude; }
 };
 
 struct FamilySpec {
@@ -93,14 +103,21 @@ struct FamilySpec {
   std::vector<FamilyParameter> parameters;  // all fitted as logarithms
 };
 
-std::vector<FamilySpec> Families() {
-  const FamilyParameter sigma{"sigma"}, tau{"tau_s", true}, sigma2{"sigma2"}, tau2{"tau2_s", true},
-      period{"period_s", true}, density{"density"};
-  return {{CorrelationFamily::kWhite, {sigma}},
-          {CorrelationFamily::kExponential, {sigma, tau}},
-          {CorrelationFamily::kExponentialCosine, {sigma, tau, sigma2, tau2, period}},
-          {CorrelationFamily::kRandomWalk, {sigma, tau, density}},
-          {CorrelationFamily::kTwoExponentials, {sigma, tau, sigma2, tau2}}};
+// The fitted families' parameters, in the order CovarianceInto reads them.
+const FamilySpec& SpecOf(CorrelationFamily family) {
+  static const std::array<FamilySpec, 5> kFamilies = [] {
+    constexpr FamilyParameter sigma{"sigma"}, tau{"tau_s", FamilyParameterKind::kCorrelationTime},
+        sigma2{"sigma2"}, tau2{"tau2_s", FamilyParameterKind::kCorrelationTime},
+        period{"period_s", FamilyParameterKind::kPeriod}, density{"density"};
+    return std::array<FamilySpec, 5>{
+        {{CorrelationFamily::kWhite, {sigma}},
+         {CorrelationFamily::kExponential, {sigma, tau}},
+         {CorrelationFamily::kExponentialCosine, {sigma, tau, sigma2, tau2, period}},
+         {CorrelationFamily::kRandomWalk, {sigma, tau, density}},
+         {CorrelationFamily::kTwoExponentials, {sigma, tau, sigma2, tau2}}}};
+  }();
+  // The exponential-plus-constant family has no entry: it is built from the exponential fit.
+  return kFamilies.at(static_cast<size_t>(family));
 }
 
 // The series' covariance under a family with parameters θ (natural units) —
@@ -265,20 +282,54 @@ const FamilyFit* CorrelationAnalysis::Fit(CorrelationFamily f) const {
   return nullptr;
 }
 
+namespace {
+
+std::vector<double> Centred(std::span<const double> x) {
+  double m = 0.0;
+  for (double v : x) m += v;
+  m /= static_cast<double>(x.size());
+  std::vector<double> c(x.size());
+  for (size_t i = 0; i < x.size(); ++i) c[i] = x[i] - m;
+  return c;
+}
+
+// Seed eq. 9 at one lag of a centred series.
+double AutocovarianceAt(const std::vector<double>& centred, int lag) {
+  const auto n = static_cast<int>(centred.size());
+  double s = 0.0;
+  for (int i = 0; i + lag < n; ++i)
+    s += centred[static_cast<size_t>(i)] * centred[static_cast<size_t>(i + lag)];
+  return s / n;
+}
+
+// The first lag at which the autocovariance, corrected by the smoother's
+// error autocovariance, falls to 1/e of its zero lag, or 0 if it does not
+// by max_lag. Lags are computed only up to the fall: on a long run the fall
+// comes within a few correlation times, far short of max_lag.
+int EFoldingLag(std::span<const double> series, std::span<const double> series_error_acf,
+                int max_lag) {
+  if (series.empty()) return 0;
+  const std::vector<double> centred = Centred(series);
+  auto error_at = [&](int j) {
+    return j < static_cast<int>(series_error_acf.size()) ? series_error_acf[static_cast<size_t>(j)]
+                                                         : 0.0;
+  };
+  const double threshold = (AutocovarianceAt(centred, 0) + error_at(0)) / std::numbers::e;
+  const int last = std::min(max_lag, static_cast<int>(series.size()) - 1);
+  for (int j = 1; j <= last; ++j) {
+    if (AutocovarianceAt(centred, j) + error_at(j) <= threshold) return j;
+  }
+  return 0;
+}
+
+}  // namespace
+
 std::vector<double> SampleAutocovariance(std::span<const double> x, int max_lag) {
   const auto n = static_cast<int>(x.size());
   std::vector<double> out(static_cast<size_t>(std::max(0, max_lag) + 1), 0.0);
   if (n == 0) return out;
-  double m = 0.0;
-  for (double v : x) m += v;
-  m /= n;
-  std::vector<double> c(x.size());
-  for (size_t i = 0; i < x.size(); ++i) c[i] = x[i] - m;
-  for (int j = 0; j <= max_lag && j < n; ++j) {
-    double s = 0.0;
-    for (int i = 0; i + j < n; ++i) s += c[static_cast<size_t>(i)] * c[static_cast<size_t>(i + j)];
-    out[static_cast<size_t>(j)] = s / n;
-  }
+  const std::vector<double> c = Centred(x);
+  for (int j = 0; j <= max_lag && j < n; ++j) out[static_cast<size_t>(j)] = AutocovarianceAt(c, j);
   return out;
 }
 
@@ -354,7 +405,7 @@ Eigen::MatrixXd BartlettOnGrid(const Problem& pb, const std::vector<double>& sta
 // whitened Jacobian, (JᵀJ)⁻¹, when it is well conditioned.
 FamilyFit FitFamily(const Problem& pb, CorrelationFamily family, std::vector<double> start,
                     const std::vector<int>& fixed = {}) {
-  const auto spec = Families()[static_cast<size_t>(family)];
+  const FamilySpec& spec = SpecOf(family);
   const int k = static_cast<int>(spec.parameters.size());
   std::vector<double> theta(static_cast<size_t>(k));
   for (int i = 0; i < k; ++i) theta[static_cast<size_t>(i)] = std::log(std::max(start[static_cast<size_t>(i)], 1e-300));
@@ -375,7 +426,7 @@ FamilyFit FitFamily(const Problem& pb, CorrelationFamily family, std::vector<dou
   problem.AddResidualBlock(cost, nullptr, free_theta.data());
   // Correlation times between a tenth of an epoch and a hundred runs.
   for (int c = 0; c < free_count; ++c) {
-    if (spec.parameters[static_cast<size_t>(free_index[static_cast<size_t>(c)])].is_time_s) {
+    if (spec.parameters[static_cast<size_t>(free_index[static_cast<size_t>(c)])].IsTimeS()) {
       problem.SetParameterLowerBound(free_theta.data(), c, std::log(0.1 * pb.dt));
       problem.SetParameterUpperBound(free_theta.data(), c, std::log(100.0 * pb.T));
     }
@@ -428,8 +479,9 @@ FamilyFit FitFamily(const Problem& pb, CorrelationFamily family, std::vector<dou
   for (int i = 0; i < k; ++i) {
     const double v = std::exp(theta[static_cast<size_t>(i)]);
     const double se_log = std::sqrt(cov(i, i));
-    fit.parameters.push_back({spec.parameters[static_cast<size_t>(i)].name, v, v * se_log,
-                              v * std::exp(-1.96 * se_log), v * std::exp(1.96 * se_log)});
+    fit.parameters.push_back({std::string(spec.parameters[static_cast<size_t>(i)].name), v,
+                              v * se_log, v * std::exp(-1.96 * se_log),
+                              v * std::exp(1.96 * se_log)});
   }
   std::vector<double> natural(static_cast<size_t>(k));
   for (int i = 0; i < k; ++i) natural[static_cast<size_t>(i)] = std::exp(theta[static_cast<size_t>(i)]);
@@ -464,9 +516,11 @@ void ErrorsUnderAlternative(const Problem& pb, const std::vector<int>& fixed, Fa
   if (!fit.usable) return;
   std::vector<double> p;
   double longest_s = 0.0;
-  for (const FittedParameter& q : fit.parameters) {
-    p.push_back(q.value);
-    if (q.name.find("tau") != std::string::npos) longest_s = std::max(longest_s, q.value);
+  const FamilySpec& spec = SpecOf(fit.family);
+  for (size_t i = 0; i < fit.parameters.size(); ++i) {
+    p.push_back(fit.parameters[i].value);
+    if (spec.parameters[i].kind == FamilyParameterKind::kCorrelationTime)
+      longest_s = std::max(longest_s, p.back());
   }
   const std::vector<double> stationary = CovarianceOf(fit.family, p.data(), pb.N, pb.dt, pb.error_acf).stationary;
   const int M = std::min(pb.N - 1, pb.lags.back() + static_cast<int>(6.0 * longest_s / pb.dt) + 1);
@@ -536,15 +590,10 @@ absl::StatusOr<CorrelationAnalysis> AnalyseCorrelation(std::span<const double> s
   // little about a drift but cost every evaluation of the fit.
   int decimation = 1;
   {
-    const auto raw = SampleAutocovariance(series, static_cast<int>(options.max_lag_fraction * static_cast<double>(series.size())));
-    const double e0 = series_error_acf.empty() ? 0.0 : series_error_acf[0];
-    for (size_t j = 1; j < raw.size(); ++j) {
-      const double ej = j < series_error_acf.size() ? series_error_acf[j] : 0.0;
-      if (raw[j] + ej <= (raw[0] + e0) / std::numbers::e) {
-        decimation = std::max(1, static_cast<int>(j) / kEpochsPerCorrelationTime);
-        break;
-      }
-    }
+    const int fall = EFoldingLag(
+        series, series_error_acf,
+        static_cast<int>(options.max_lag_fraction * static_cast<double>(series.size())));
+    if (fall > 0) decimation = std::max(1, fall / kEpochsPerCorrelationTime);
     // Keep enough epochs for the lag grid (see the minimum below).
     const int most = static_cast<int>(series.size()) / (8 * options.grid_lags);
     decimation = std::max(1, std::min(decimation, most));
