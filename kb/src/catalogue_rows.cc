@@ -47,7 +47,7 @@ absl::StatusOr<double> FleetExposure(Connection& db, const std::string& unit_typ
 
 absl::StatusOr<UnitTypeSettings> SettingsFor(const std::string& unit_type_id) {
   if (auto own = BuiltinFailureModeCatalogue(unit_type_id); own.ok())
-    return UnitTypeSettings{own->settings(), ""};
+    return UnitTypeSettings{(*own)->settings(), ""};
   auto fallback = BuiltinFailureModeCatalogue(kDefaultSettingsUnitType);
   if (!fallback.ok()) {
     return absl::FailedPreconditionError(absl::StrCat(
@@ -55,7 +55,7 @@ absl::StatusOr<UnitTypeSettings> SettingsFor(const std::string& unit_type_id) {
         kDefaultSettingsUnitType, ", whose diagnosis settings apply then"));
   }
   return UnitTypeSettings{
-      fallback->settings(),
+      (*fallback)->settings(),
       absl::StrCat("unit type '", unit_type_id,
                    "' has no built-in failure-mode catalogue: diagnosed with ",
                    kDefaultSettingsUnitType,

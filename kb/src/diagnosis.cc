@@ -250,10 +250,11 @@ const std::vector<v1::FailureModeCatalogue>& BuiltinFailureModeCatalogues() {
   return catalogues;
 }
 
-absl::StatusOr<v1::FailureModeCatalogue> BuiltinFailureModeCatalogue(const std::string& unit_type) {
+absl::StatusOr<const v1::FailureModeCatalogue*> BuiltinFailureModeCatalogue(
+    const std::string& unit_type) {
   const std::string name = api::IdOrSelf(unit_type, api::kUnitTypes);
   for (const auto& catalogue : BuiltinFailureModeCatalogues()) {
-    if (catalogue.unit_type() == name) return catalogue;
+    if (catalogue.unit_type() == name) return &catalogue;
   }
   return absl::NotFoundError(absl::StrCat("no failure modes for unit type '", unit_type, "'"));
 }

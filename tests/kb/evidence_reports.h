@@ -27,7 +27,7 @@ inline const Fixture& Ins2000() {
     out.unit_type = *type;
     auto catalogue = BuiltinFailureModeCatalogue("INS-2000");
     EXPECT_TRUE(catalogue.ok()) << catalogue.status();
-    out.catalogue = *catalogue;
+    out.catalogue = **catalogue;
     auto modes = ExpandCatalogue(out.catalogue);
     EXPECT_TRUE(modes.ok()) << modes.status();
     out.modes = *modes;

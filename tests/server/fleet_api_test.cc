@@ -141,7 +141,7 @@ class FleetApiTest : public ::testing::Test {
 
   static std::vector<v1::FailureMode> Modes() {
     auto catalogue = kb::BuiltinFailureModeCatalogue("INS-2000");
-    auto modes = kb::ExpandCatalogue(*catalogue);
+    auto modes = kb::ExpandCatalogue(**catalogue);
     return *modes;
   }
 

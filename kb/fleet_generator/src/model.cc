@@ -39,8 +39,8 @@ absl::Status LoadData(const FleetGeneratorOptions& options, Model& m) {
   m.unit_type_id = m.unit_type.name().substr(std::string("unitTypes/").size());
   auto catalogue = BuiltinFailureModeCatalogue(m.unit_type_id);
   if (!catalogue.ok()) return catalogue.status();
-  m.settings = catalogue->settings();
-  auto modes = ExpandCatalogue(*catalogue);
+  m.settings = (*catalogue)->settings();
+  auto modes = ExpandCatalogue(**catalogue);
   if (!modes.ok()) return modes.status();
   m.modes = *modes;
   if (options.profile) {

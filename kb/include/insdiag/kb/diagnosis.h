@@ -84,8 +84,10 @@ struct Evidence {
 
 // The unit types' failure modes as data (data/failure-modes/*.json, built in).
 const std::vector<v1::FailureModeCatalogue>& BuiltinFailureModeCatalogues();
-// The catalogue of one unit type (display or resource name); NOT_FOUND when none.
-absl::StatusOr<v1::FailureModeCatalogue> BuiltinFailureModeCatalogue(const std::string& unit_type);
+// The catalogue of one unit type (display or resource name), one of
+// BuiltinFailureModeCatalogues(); NOT_FOUND when none.
+absl::StatusOr<const v1::FailureModeCatalogue*> BuiltinFailureModeCatalogue(
+    const std::string& unit_type);
 
 // The catalogue's templates expanded per axis into failure modes
 // (failureModes/{id}), signatures at the expert's values. INVALID_ARGUMENT
