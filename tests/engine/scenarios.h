@@ -34,21 +34,6 @@ inline sim::SimulatedUnit NavigationGradeUnit() {
   return u;
 }
 
-// A MEMS-class unit, as the independent simulator's `mems` preset: drift
-// 10 °/h and 500 µg (τ 100 s), ARW 0.3 °/√h, VRW 100 µg/√Hz.
-inline sim::SimulatedUnit MemsUnit() {
-  sim::SimulatedUnit u = NavigationGradeUnit();
-  for (int a = 0; a < 3; ++a) {
-    u.gyro.bias[static_cast<size_t>(a)] = {10.0 * kDegPerHour, 100.0};
-    u.acc.bias[static_cast<size_t>(a)] = {500.0 * kMicroG, 100.0};
-  }
-  u.gyro.white_noise_density.setConstant(0.3 * kDeg / 60.0);
-  u.acc.white_noise_density.setConstant(100.0 * kMicroG);
-  u.gyro.quantization.setZero();
-  u.acc.quantization.setZero();
-  return u;
-}
-
 // The unit's true base model as an ErrorModel, with the analysis' bench accuracy.
 inline ErrorModel TrueBaseModel(const sim::SimulatedUnit& u) {
   ErrorModel m;

@@ -22,7 +22,21 @@ namespace {
 using testing::kDeg;
 using testing::kDegPerHour;
 using testing::kMicroG;
-using testing::MemsUnit;
+
+// The independent simulator's `mems` preset: drift 10 °/h and 500 µg (τ 100 s),
+// ARW 0.3 °/√h, VRW 100 µg/√Hz.
+sim::SimulatedUnit MemsUnit() {
+  sim::SimulatedUnit u = testing::NavigationGradeUnit();
+  for (int a = 0; a < 3; ++a) {
+    u.gyro.bias[static_cast<size_t>(a)] = {10.0 * kDegPerHour, 100.0};
+    u.acc.bias[static_cast<size_t>(a)] = {500.0 * kMicroG, 100.0};
+  }
+  u.gyro.white_noise_density.setConstant(0.3 * kDeg / 60.0);
+  u.acc.white_noise_density.setConstant(100.0 * kMicroG);
+  u.gyro.quantization.setZero();
+  u.acc.quantization.setZero();
+  return u;
+}
 
 std::string Number(double v) {
   char buf[32];
