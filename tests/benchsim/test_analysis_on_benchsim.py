@@ -28,6 +28,18 @@ def analyse(directory, *args):
         return json.loads(done.stdout), json.load(f)
 
 
+def analyse_mems_without_datasheet(directory, profile, rate_hz, seed, fault=None):
+    """Half an hour of the `mems` preset with neither datasheet nor unit type:
+    the a-priori model is the run's own Allan fit."""
+    return analyse(directory, "--preset", "mems", "--profile", profile, "--rate-hz", str(rate_hz),
+                   "--duration", "1800", "--seed", str(seed), "--datasheet", "no", "--unit-type", "none",
+                   *(("--fault", fault) if fault else ()))
+
+
+def mems_gyro_drift_sigma(axis):
+    return unit_classes.PRESETS["mems"]()[f"gyro_bias_gm.{axis}.sigma"]
+
+
 def significant(report):
     return [c for c in report["effectCandidates"]
             if c.get("identifiable") and not c.get("notTested") and c.get("pValueHolm", 1.0) < 0.01]
@@ -91,9 +103,7 @@ class EngineOnIndependentRuns(unittest.TestCase):
         # named (scripts/allan_prior_probe.py, docs/FAULT_SCENARIOS.md).
         for seed, profile in ((23, "positions"), (30, "static")):
             with self.subTest(seed=seed), tempfile.TemporaryDirectory() as d:
-                report, _ = analyse(d, "--preset", "mems", "--profile", profile, "--rate-hz", "100",
-                                    "--duration", "1800", "--seed", str(seed), "--datasheet", "no",
-                                    "--unit-type", "none")
+                report, _ = analyse_mems_without_datasheet(d, profile, 100, seed)
                 self.assertEqual(report["verdict"], "GOOD", report.get("faultIntervals"))
                 self.assertEqual([c["name"] for c in significant(report)], [])
 
@@ -103,17 +113,14 @@ class EngineOnIndependentRuns(unittest.TestCase):
         # a drift six times wider, and the scan found nothing. The step found
         # against the Allan fit's drifts is now tested against the drifts
         # identified beside it (docs/IDENTIFICATION.md).
-        sigma = 10.0 * 3.141592653589793 / 180.0 / 3600.0
+        sigma = mems_gyro_drift_sigma("x")
         with tempfile.TemporaryDirectory() as d:
-            report, _ = analyse(d, "--preset", "mems", "--profile", "mixed", "--rate-hz", "50", "--duration", "1800",
-                                "--seed", "5000", "--datasheet", "no", "--unit-type", "none",
-                                "--fault", f"gyro_bias_step.x={5.0 * sigma}@639.74")
+            report, _ = analyse_mems_without_datasheet(d, "mixed", 50, 5000, f"gyro_bias_step.x={5.0 * sigma}@639.74")
         found = significant(report)
         self.assertTrue(found, f"nothing significant; verdict {report['verdict']}")
         self.assertEqual(found[0]["name"], "gyro_bias_step.x")
         self.assertLess(abs(found[0]["onsetS"] - 639.74), 60.0)
         self.assertEqual(report["verdict"], "FAULTY")
-
 
     def test_a_mems_gyro_step_the_allan_fit_read_as_a_walk_is_found(self):
         # A still, level table: the step inside the still record raises the
@@ -124,17 +131,17 @@ class EngineOnIndependentRuns(unittest.TestCase):
         # against the drifts identified beside it (docs/IDENTIFICATION.md).
         # On a still table an x gyro step tilts the platform as a y
         # accelerometer ramp does: the step must be among the findings.
-        sigma = 10.0 * 3.141592653589793 / 180.0 / 3600.0
+        sigma = mems_gyro_drift_sigma("x")
         with tempfile.TemporaryDirectory() as d:
-            report, _ = analyse(d, "--preset", "mems", "--profile", "static", "--rate-hz", "100", "--duration", "1800",
-                                "--seed", "5006", "--datasheet", "no", "--unit-type", "none",
-                                "--fault", f"gyro_bias_step.x={-5.0 * sigma}@1002.66")
+            report, _ = analyse_mems_without_datasheet(d, "static", 100, 5006,
+                                                       f"gyro_bias_step.x={-5.0 * sigma}@1002.66")
         found = significant(report)
         self.assertTrue(found, f"nothing significant; verdict {report['verdict']}")
         steps = [c for c in found if c["name"] == "gyro_bias_step.x"]
         self.assertTrue(steps, [c["name"] for c in found])
         self.assertLess(abs(steps[0]["onsetS"] - 1002.66), 60.0)
         self.assertEqual(report["verdict"], "FAULTY")
+
 
 if __name__ == "__main__":
     unittest.main()

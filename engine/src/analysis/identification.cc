@@ -141,9 +141,10 @@ struct Retargeted {
   bool faults_flagged = false;           // by the last pass's monitoring or onset scan
   bool drifts_by_likelihood = false;     // the misfit was the drifts': their σ and τ are in the model
   bool deferred = false;                 // the a-priori model's missing effects go first
-  // The most significant bias step and the most significant ramp the first
-  // pass found against an Allan fit's placeholders (family-wise over the
-  // fault terms): a step and a ramp of one axis look alike there.
+  // The faults to test against the drifts identified beside them: the most
+  // significant bias step and ramp the first pass found against an Allan
+  // fit's placeholders (family-wise over the fault terms), then those of the
+  // identified drifts' own scan (AddFaultsOfTheIdentifiedDrifts).
   std::vector<OnsetFit> placeholder_faults;
   int fault_terms_scanned = 0;
 };
@@ -419,13 +420,10 @@ PlaceholderFaultTest TestPlaceholderFault(const RunContext& c, const Retargeted&
 // onset scan still peaks near the step: its most significant step and ramp
 // not tested already join the faults tested against the drifts identified
 // beside them, whose level decides. Each costs one drift identification.
-absl::Status AddFaultsOfTheIdentifiedDrifts(const RunContext& c, const ErrorModel& model,
-                                            Retargeted& retargeted) {
-  auto forward = RunForwardFilter(c.epochs, model);
-  if (!forward.ok()) return forward.status();
-  const StateLayout layout(model);
-  const std::vector<OnsetFit> onsets =
-      ScanOnsets(*forward, layout, c.epochs, AbsentFaultTerms(model), c.options.onset_scan);
+void AddFaultsOfTheIdentifiedDrifts(const RunContext& c, const ErrorModel& model,
+                                    const ForwardPass& forward, Retargeted& retargeted) {
+  const std::vector<OnsetFit> onsets = ScanOnsets(forward, StateLayout(model), c.epochs,
+                                                  AbsentFaultTerms(model), c.options.onset_scan);
   const auto not_tested = [&](const OnsetFit& f) {
     return std::none_of(retargeted.placeholder_faults.begin(), retargeted.placeholder_faults.end(),
                         [&](const OnsetFit& g) { return g.term == f.term; });
@@ -434,24 +432,18 @@ absl::Status AddFaultsOfTheIdentifiedDrifts(const RunContext& c, const ErrorMode
     retargeted.placeholder_faults.push_back(std::move(f));
   }
   retargeted.fault_terms_scanned = static_cast<int>(onsets.size());
-  return absl::OkStatus();
 }
 
 // The faults found against the placeholders, each against the identified
 // drifts; model A takes the drifts identified beside the one whose fitted
 // 2Δℓ is largest among those that stand.
-void TestPlaceholderFaults(const RunContext& c, const Retargeted& retargeted, Identification& id,
+void TestPlaceholderFaults(const RunContext& c, const Retargeted& retargeted,
+                           double log_likelihood_without, Identification& id,
                            std::vector<std::string>& notes) {
-  auto without = ProfileLogLikelihood(c.epochs, id.model);
-  if (!without.ok()) {
-    notes.push_back("faults found against the Allan fit's drifts: not tested (" +
-                    std::string(without.status().message()) + ")");
-    return;
-  }
   PlaceholderFaultTest* best = nullptr;
   std::vector<PlaceholderFaultTest> tests;
   for (const OnsetFit& f : retargeted.placeholder_faults) {
-    tests.push_back(TestPlaceholderFault(c, retargeted, f, id, *without));
+    tests.push_back(TestPlaceholderFault(c, retargeted, f, id, log_likelihood_without));
   }
   for (PlaceholderFaultTest& t : tests) {
     if (!t.tested) {
@@ -473,6 +465,23 @@ void TestPlaceholderFaults(const RunContext& c, const Retargeted& retargeted, Id
   id.identified = std::move(best->with_fault.identified);
 }
 
+// The faults of an Allan fit's placeholders and of the drifts identified
+// from them, each tested against the drifts identified beside it; one
+// forward pass of the identified model serves the scan and the likelihood
+// the tests are against.
+void TestFaultsAgainstTheIdentifiedDrifts(const RunContext& c, Retargeted& retargeted,
+                                          Identification& id, std::vector<std::string>& notes) {
+  auto forward = RunForwardFilter(c.epochs, id.model);
+  if (!forward.ok()) {
+    notes.push_back("faults found against the Allan fit's drifts: not tested (" +
+                    std::string(forward.status().message()) + ")");
+    return;
+  }
+  AddFaultsOfTheIdentifiedDrifts(c, id.model, *forward, retargeted);
+  if (retargeted.placeholder_faults.empty()) return;
+  TestPlaceholderFaults(c, retargeted, ProfileLogLikelihood(*forward, id.model), id, notes);
+}
+
 }  // namespace
 
 absl::StatusOr<Identification> IdentifyModel(const RunContext& c, const std::optional<ident::AllanResult>& allan,
@@ -485,13 +494,8 @@ absl::StatusOr<Identification> IdentifyModel(const RunContext& c, const std::opt
   if (!retargeted.ok()) return retargeted.status();
   if (c.options.identify_drifts_by_likelihood && !retargeted->deferred) {
     IdentifyFinalDrifts(c, *retargeted, id, notes);
-    if (c.a_priori.from_allan) {
-      if (auto added = AddFaultsOfTheIdentifiedDrifts(c, id.model, *retargeted); !added.ok()) {
-        notes.push_back("the identified drifts' own onset scan did not run: " +
-                        std::string(added.message()));
-      }
-    }
-    if (!retargeted->placeholder_faults.empty()) TestPlaceholderFaults(c, *retargeted, id, notes);
+    // Only an Allan fit's placeholders have faults to test against the drifts identified from them.
+    if (c.a_priori.from_allan) TestFaultsAgainstTheIdentifiedDrifts(c, *retargeted, id, notes);
   }
   if (c.a_priori.from_allan && !retargeted->deferred) {
     if (auto matched = MatchReferenceNoiseToTheIdentifiedModel(c, id, notes); !matched.ok()) return matched;

@@ -90,7 +90,11 @@ absl::StatusOr<ModelPass> RunPass(const BenchRun& run, const EpochRun& epochs, c
 absl::StatusOr<double> ProfileLogLikelihood(const EpochRun& epochs, const ErrorModel& model) {
   auto forward = RunForwardFilter(epochs, model);
   if (!forward.ok()) return forward.status();
-  return forward->log_likelihood + ProfileCorrection(*forward, model, StateLayout(model));
+  return ProfileLogLikelihood(*forward, model);
+}
+
+double ProfileLogLikelihood(const ForwardPass& forward, const ErrorModel& model) {
+  return forward.log_likelihood + ProfileCorrection(forward, model, StateLayout(model));
 }
 
 void FillFit(const ModelPass& pass, const BenchRun& run, const AnalysisOptions& options, AnalysisReport& r) {

@@ -44,6 +44,8 @@ absl::StatusOr<ModelPass> RunPass(const BenchRun& run, const EpochRun& epochs, c
 // ModelPass::log_likelihood alone, from the forward filter: for a model that
 // is only compared, not reported (no smoother, no monitor).
 absl::StatusOr<double> ProfileLogLikelihood(const EpochRun& epochs, const ErrorModel& model);
+// The same from a forward pass of `model` already run.
+double ProfileLogLikelihood(const ForwardPass& forward, const ErrorModel& model);
 
 // The report's fit of a pass: verdict, channels, NIS, likelihood, criteria.
 void FillFit(const ModelPass& pass, const BenchRun& run, const AnalysisOptions& options, AnalysisReport& r);
