@@ -9,6 +9,7 @@
 #include <string>
 
 #include "insdiag/engine/model/drift_axis.h"
+#include "insdiag/engine/model/parameter_field.h"
 #include "insdiag/engine/model/parameters.h"
 
 namespace insdiag::engine {
@@ -98,6 +99,44 @@ TEST(ModelParameters, ADriftsParametersAreNamedAndFoundInOnePlace) {
   m.acc.bias[1] = {3e-4, 900.0};
   ASSERT_TRUE(SetParameter(DriftTauName(acc_y), 1200.0, m).ok());
   EXPECT_EQ(DriftOf(m, acc_y).tau_s, 1200.0);
+}
+
+TEST(ModelParameters, AFieldIsSplitOffANameAndPutBackTheSameWay) {
+  for (const ParameterField field :
+       {ParameterField::kPriorSigma, ParameterField::kOnset, ParameterField::kDensity,
+        ParameterField::kSigma, ParameterField::kTau, ParameterField::kPeriod,
+        ParameterField::kDecayRate, ParameterField::kFrequency}) {
+    const std::string name = ParameterName("gyro_bias_second_order.y", field);
+    const SplitParameter split = SplitParameterName(name);
+    EXPECT_EQ(split.quantity, "gyro_bias_second_order.y") << name;
+    EXPECT_EQ(split.field, field) << name;
+  }
+  // A term's own axis or harmonic is not a field.
+  for (const char* whole : {"gyro_scale_factor.z", "gyro_yaw_harmonic.x.sin", "sigma", ".tau"}) {
+    EXPECT_EQ(SplitParameterName(whole).field, ParameterField::kValue) << whole;
+    EXPECT_EQ(SplitParameterName(whole).quantity, whole);
+  }
+  EXPECT_EQ(ParameterName("gyro_scale_factor.z", ParameterField::kValue), "gyro_scale_factor.z");
+  // A second-order process set by its fit's α and β reads back as τ and period.
+  ErrorModel m;
+  ASSERT_TRUE(
+      SetParameter(ParameterName("gyro_bias_second_order.y", ParameterField::kDecayRate), 0.01, m)
+          .ok());
+  ASSERT_TRUE(
+      SetParameter(ParameterName("gyro_bias_second_order.y", ParameterField::kFrequency), 0.1, m)
+          .ok());
+  int read_back = 0;
+  for (const NamedParameter& p : ParametersOf(m)) {
+    if (p.name == "gyro_bias_second_order.y.tau") {
+      EXPECT_NEAR(p.value, 100.0, 1e-9);
+      ++read_back;
+    }
+    if (p.name == "gyro_bias_second_order.y.period") {
+      EXPECT_NEAR(p.value, 2.0 * std::numbers::pi / 0.1, 1e-9);
+      ++read_back;
+    }
+  }
+  EXPECT_EQ(read_back, 2);
 }
 
 TEST(ModelParameters, RefuseWhatTheyCannotBe) {

@@ -12,6 +12,7 @@
 
 #include "insdiag/engine/finder/effect_finder.h"
 #include "insdiag/engine/finder/fault_findings.h"
+#include "insdiag/engine/model/parameter_field.h"
 #include "insdiag/engine/numerics/parallel_map.h"
 #include "insdiag/engine/stats/distributions.h"
 
@@ -326,8 +327,9 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
       c.predicted_delta_bic = -c.statistic + c.dof * log_n;
       std::string parameters;
       for (const ParameterEstimate& e : w.parameters) {
-        parameters += absl::StrFormat("%s%s %.3g %s", parameters.empty() ? "" : ", ",
-                                      e.name.substr(e.name.rfind('.') + 1), e.value, e.unit);
+        parameters +=
+            absl::StrFormat("%s%s %.3g %s", parameters.empty() ? "" : ", ",
+                            FieldSuffix(SplitParameterName(e.name).field), e.value, e.unit);
       }
       c.note = "likelihood of the innovations with " + parameters + " and the drift σ re-fitted (" +
                DriftName(w.drift) + ".sigma " + absl::StrFormat("%.3g %s", w.drift_sigma.value, w.drift_sigma.unit) +

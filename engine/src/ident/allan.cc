@@ -398,13 +398,12 @@ std::vector<ParameterEstimate> AllanParameterEstimates(const AllanResult& result
       if (auto it = prior.find(name); it != prior.end()) e.a_priori = it->second;
       out.push_back(e);
     };
-    add(AllanParameter::kQuantization, s + "_quantization." + axis, gyro ? "rad" : "m/s");
-    add(AllanParameter::kWhiteDensity, (gyro ? "gyro_arw." : "acc_vrw.") + axis,
-        gyro ? "rad/sqrt(s)" : "m/s/sqrt(s)");
+    const DriftAxis drift{ch.sensor, ch.axis};
+    add(AllanParameter::kQuantization, QuantizationName(drift), gyro ? "rad" : "m/s");
+    add(AllanParameter::kWhiteDensity, WhiteNoiseName(drift), gyro ? "rad/sqrt(s)" : "m/s/sqrt(s)");
     add(AllanParameter::kBiasInstability, s + "_bias_instability." + axis, gyro ? "rad/s" : "m/s^2");
     add(AllanParameter::kRateRandomWalk, s + "_rate_random_walk." + axis, gyro ? "rad/s/sqrt(s)" : "m/s^2/sqrt(s)");
     add(AllanParameter::kRateRamp, s + "_rate_ramp." + axis, gyro ? "rad/s^2" : "m/s^3");
-    const DriftAxis drift{ch.sensor, ch.axis};
     add(AllanParameter::kMarkovSigma, DriftSigmaName(drift), gyro ? "rad/s" : "m/s^2");
     add(AllanParameter::kMarkovTau, DriftTauName(drift), "s");
   }

@@ -1,17 +1,17 @@
 #include "insdiag/engine/ident/drift_likelihood.h"
 
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <string>
 
-#include <Eigen/Core>
-#include <Eigen/Cholesky>
-#include <Eigen/LU>
-
 #include "insdiag/engine/filter/smoother.h"
 #include "insdiag/engine/model/effect_catalogue.h"
+#include "insdiag/engine/model/parameter_field.h"
 #include "insdiag/engine/model/state_layout.h"
 #include "insdiag/engine/numerics/parallel_map.h"
 #include "insdiag/engine/stats/distributions.h"
@@ -62,15 +62,15 @@ std::string NameOf(const Parameter& p) {
     case Kind::kTau:
       return DriftTauName(p.drift);
     case Kind::kWalk:
-      return WalkName(p.drift) + ".density";
+      return ParameterName(WalkName(p.drift), ParameterField::kDensity);
     case Kind::kPairSigma:
-      return SecondOrderName(p.drift) + ".sigma";
+      return ParameterName(SecondOrderName(p.drift), ParameterField::kSigma);
     case Kind::kPairDecayRate:
-      return SecondOrderName(p.drift) + ".alpha";
+      return ParameterName(SecondOrderName(p.drift), ParameterField::kDecayRate);
     case Kind::kPairFrequency:
       break;
   }
-  return SecondOrderName(p.drift) + ".beta";
+  return ParameterName(SecondOrderName(p.drift), ParameterField::kFrequency);
 }
 
 const char* UnitOf(const Parameter& p) {
@@ -551,7 +551,8 @@ std::vector<ParameterEstimate> ReportedParameters(const StructureKind& kind, Dri
     ParameterEstimate e = fitted[k];
     const double log_se = e.std_error / e.value;
     const double scale = k == 1 ? 1.0 : 2.0 * std::numbers::pi;
-    e.name = SecondOrderName(drift) + (k == 1 ? ".tau" : ".period");
+    e.name = ParameterName(SecondOrderName(drift),
+                           k == 1 ? ParameterField::kTau : ParameterField::kPeriod);
     e.value = scale / fitted[k].value;
     e.std_error = e.value * log_se;
     e.ci95_low = e.value * std::exp(-1.96 * log_se);

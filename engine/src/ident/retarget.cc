@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "insdiag/engine/model/drift_axis.h"
 #include "insdiag/engine/model/effect_catalogue.h"
+#include "insdiag/engine/model/parameter_field.h"
 #include "insdiag/engine/numerics/parallel_map.h"
 #include "insdiag/engine/stats/distributions.h"
 
@@ -96,10 +98,10 @@ RetargetResult RetargetDrifts(const ErrorModel& current, const ErrorModel& a_pri
       *value = new_value;
     }
     for (const auto& [estimate, prior_value, suffix, unit] :
-         {std::tuple{&sigma, prior.sigma, ".sigma", gyro ? "rad/s" : "m/s^2"},
-          std::tuple{&tau, prior.tau_s, ".tau", "s"}}) {
+         {std::tuple{&sigma, prior.sigma, ParameterField::kSigma, gyro ? "rad/s" : "m/s^2"},
+          std::tuple{&tau, prior.tau_s, ParameterField::kTau, "s"}}) {
       ParameterEstimate p;
-      p.name = d.state + suffix;
+      p.name = ParameterName(d.state, suffix);
       p.value = estimate->value;
       p.std_error = estimate->std_error;
       p.ci95_low = estimate->ci95_low;
@@ -137,12 +139,11 @@ std::vector<ParameterEstimate> ApplyAllanNoise(const AllanResult& allan, const E
     const SensorTriadModel& prior = ch.sensor == Sensor::kGyro ? a_priori.gyro : a_priori.acc;
     const AllanTermEstimate& n = ch.fit[AllanParameter::kWhiteDensity];
     const AllanTermEstimate& q = ch.fit[AllanParameter::kQuantization];
-    const std::string axis = AxisLabel(AxisSet::kSingle, ch.axis, ch.axis);
     if (n.included && n.value > 0.0 && std::isfinite(n.std_error) &&
         rejects(n.value, n.std_error, prior.white_noise_density[ch.axis])) {
       triad.white_noise_density[ch.axis] = n.value;
       ParameterEstimate p;
-      p.name = std::string(ch.sensor == Sensor::kGyro ? "gyro_arw." : "acc_vrw.") + axis;
+      p.name = WhiteNoiseName({ch.sensor, ch.axis});
       p.value = n.value;
       p.std_error = n.std_error;
       p.method = EstimationMethod::kAllan;
@@ -254,8 +255,9 @@ absl::StatusOr<NoiseScaleResult> ScaleUnresolvedNoise(const EpochRun& run, const
   out.model = model;
   ErrorModel& m = out.model;
   std::vector<Group> groups;
-  auto add_group = [&](const char* name, const std::array<bool, 3>& flags, SensorTriadModel& triad, bool drift,
-                       const char* prefix, const char* unit, double max_scale) {
+  auto add_group = [&](const char* name, const std::array<bool, 3>& flags, Sensor sensor,
+                       bool drift, const char* unit, double max_scale) {
+    SensorTriadModel& triad = sensor == Sensor::kGyro ? m.gyro : m.acc;
     Group g;
     g.name = name;
     g.max_scale = max_scale;
@@ -265,18 +267,19 @@ absl::StatusOr<NoiseScaleResult> ScaleUnresolvedNoise(const EpochRun& run, const
       // A zero term has no scale to find.
       if (!(*v > 0.0)) continue;
       const int axis = static_cast<int>(a);
-      g.terms.push_back({v, *v, std::string(prefix) + AxisLabel(AxisSet::kSingle, axis, axis) + (drift ? ".sigma" : ""),
-                         unit});
+      const DriftAxis sensor_axis{sensor, axis};
+      g.terms.push_back(
+          {v, *v, drift ? DriftSigmaName(sensor_axis) : WhiteNoiseName(sensor_axis), unit});
     }
     if (!g.terms.empty()) groups.push_back(std::move(g));
   };
   const double bound = options.max_scale, seed = options.max_seed_scale;
-  add_group("gyro white", which.gyro_white, m.gyro, false, "gyro_arw.", "rad/sqrt(s)", bound);
-  add_group("acc white", which.acc_white, m.acc, false, "acc_vrw.", "m/s/sqrt(s)", bound);
-  add_group("gyro drift", which.gyro_drift, m.gyro, true, "gyro_bias_gm.", "rad/s", bound);
-  add_group("acc drift", which.acc_drift, m.acc, true, "acc_bias_gm.", "m/s^2", bound);
-  add_group("gyro drift seed", which.gyro_drift_seed, m.gyro, true, "gyro_bias_gm.", "rad/s", seed);
-  add_group("acc drift seed", which.acc_drift_seed, m.acc, true, "acc_bias_gm.", "m/s^2", seed);
+  add_group("gyro white", which.gyro_white, Sensor::kGyro, false, "rad/sqrt(s)", bound);
+  add_group("acc white", which.acc_white, Sensor::kAccelerometer, false, "m/s/sqrt(s)", bound);
+  add_group("gyro drift", which.gyro_drift, Sensor::kGyro, true, "rad/s", bound);
+  add_group("acc drift", which.acc_drift, Sensor::kAccelerometer, true, "m/s^2", bound);
+  add_group("gyro drift seed", which.gyro_drift_seed, Sensor::kGyro, true, "rad/s", seed);
+  add_group("acc drift seed", which.acc_drift_seed, Sensor::kAccelerometer, true, "m/s^2", seed);
 
   auto apply = [](Group& g, double log_scale) {
     g.log_scale = log_scale;

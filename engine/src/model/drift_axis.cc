@@ -2,6 +2,8 @@
 
 #include <string_view>
 
+#include "insdiag/engine/model/parameter_field.h"
+
 namespace insdiag::engine {
 namespace {
 
@@ -19,9 +21,23 @@ std::string DriftName(DriftAxis drift) {
   return std::string(SensorPrefix(drift.sensor)) + "_bias_gm." + AxisLabel(AxisSet::kSingle, drift.axis, drift.axis);
 }
 
-std::string DriftSigmaName(DriftAxis drift) { return DriftName(drift) + ".sigma"; }
+std::string DriftSigmaName(DriftAxis drift) {
+  return ParameterName(DriftName(drift), ParameterField::kSigma);
+}
 
-std::string DriftTauName(DriftAxis drift) { return DriftName(drift) + ".tau"; }
+std::string DriftTauName(DriftAxis drift) {
+  return ParameterName(DriftName(drift), ParameterField::kTau);
+}
+
+std::string WhiteNoiseName(DriftAxis drift) {
+  return std::string(drift.sensor == Sensor::kGyro ? "gyro_arw." : "acc_vrw.") +
+         AxisLabel(AxisSet::kSingle, drift.axis, drift.axis);
+}
+
+std::string QuantizationName(DriftAxis drift) {
+  return std::string(SensorPrefix(drift.sensor)) + "_quantization." +
+         AxisLabel(AxisSet::kSingle, drift.axis, drift.axis);
+}
 
 std::optional<DriftAxis> DriftOfParameter(std::string_view parameter) {
   for (const DriftAxis d : DriftAxis::All()) {

@@ -2,23 +2,23 @@
 
 #include <cmath>
 #include <numbers>
+#include <string_view>
+#include <utility>
 
 #include "insdiag/engine/model/drift_axis.h"
+#include "insdiag/engine/model/parameter_field.h"
 
 namespace insdiag::engine {
 namespace {
-
-constexpr const char* kAxes[] = {"x", "y", "z"};
 
 std::string SensorUnit(Sensor s) { return s == Sensor::kGyro ? "rad/s" : "m/s^2"; }
 
 struct BaseName {
   SensorTriadModel ErrorModel::*triad;
-  const char* prefix;
   Sensor sensor;
 };
-constexpr BaseName kTriads[] = {{&ErrorModel::gyro, "gyro", Sensor::kGyro},
-                                {&ErrorModel::acc, "acc", Sensor::kAccelerometer}};
+constexpr BaseName kTriads[] = {{&ErrorModel::gyro, Sensor::kGyro},
+                                {&ErrorModel::acc, Sensor::kAccelerometer}};
 
 // The bench reference's accuracy: identification may widen it (retarget.h).
 struct ReferenceName {
@@ -32,30 +32,33 @@ constexpr ReferenceName kReferences[] = {
     {&ReferenceAccuracy::velocity_sigma_mps, "reference.velocity_sigma", "m/s"},
 };
 
-// Sets `field` ("" or "prior_sigma", "onset", "density", "sigma", "tau",
-// "period") of parameter `parameter` of effect `e`; false when the effect's
-// family has no such field.
-bool SetEffectField(const std::string& field, int parameter, double value, ModelEffect& e) {
+// Sets `field` of parameter `parameter` of effect `e`; false when the
+// effect's family has no such field.
+bool SetEffectField(ParameterField field, int parameter, double value, ModelEffect& e) {
   switch (e.term.family->process) {
     case RandomProcess::kNone:
-      if (field == "onset" && e.term.family->kind == EffectKind::kFault) {
+      if (field == ParameterField::kOnset && e.term.family->kind == EffectKind::kFault) {
         e.onset_s = value;
         return true;
       }
-      if (!(field.empty() || field == "prior_sigma")) return false;
+      if (field != ParameterField::kValue && field != ParameterField::kPriorSigma) return false;
       e.prior_sigma[static_cast<size_t>(parameter)] = std::abs(value);
       return true;
     case RandomProcess::kRandomWalk:
-      if (field != "density") return false;
+      if (field != ParameterField::kDensity) return false;
       e.random_walk_density = value;
       return true;
     case RandomProcess::kSecondOrderMarkov:
-      if (field == "sigma") {
+      if (field == ParameterField::kSigma) {
         e.second_order_sigma = value;
-      } else if (field == "tau" && value > 0.0) {
+      } else if (field == ParameterField::kTau && value > 0.0) {
         e.second_order_alpha_per_s = 1.0 / value;
-      } else if (field == "period" && value > 0.0) {
+      } else if (field == ParameterField::kDecayRate && value > 0.0) {
+        e.second_order_alpha_per_s = value;
+      } else if (field == ParameterField::kPeriod && value > 0.0) {
         e.second_order_beta_rad_s = 2.0 * std::numbers::pi / value;
+      } else if (field == ParameterField::kFrequency && value > 0.0) {
+        e.second_order_beta_rad_s = value;
       } else {
         return false;
       }
@@ -64,12 +67,17 @@ bool SetEffectField(const std::string& field, int parameter, double value, Model
   return false;
 }
 
-bool Split(const std::string& name, std::string* head, std::string* tail) {
-  const size_t dot = name.rfind('.');
-  if (dot == std::string::npos) return false;
-  *head = name.substr(0, dot);
-  *tail = name.substr(dot + 1);
-  return true;
+// A harmonic effect's parameter is named by ".sin" or ".cos" after its term.
+std::string_view SplitHarmonic(std::string_view name, int* parameter) {
+  *parameter = 0;
+  for (const auto& [suffix, index] :
+       {std::pair{std::string_view(".sin"), 0}, std::pair{std::string_view(".cos"), 1}}) {
+    if (name.size() > suffix.size() && name.ends_with(suffix)) {
+      *parameter = index;
+      return name.substr(0, name.size() - suffix.size());
+    }
+  }
+  return name;
 }
 
 }  // namespace
@@ -78,7 +86,6 @@ std::vector<NamedParameter> ParametersOf(const ErrorModel& model) {
   std::vector<NamedParameter> out;
   for (const BaseName& b : kTriads) {
     const SensorTriadModel& t = model.*(b.triad);
-    const std::string p = b.prefix;
     const std::string u = SensorUnit(b.sensor);
     for (int i = 0; i < 3; ++i) {
       const DriftAxis drift{b.sensor, i};
@@ -86,11 +93,12 @@ std::vector<NamedParameter> ParametersOf(const ErrorModel& model) {
       out.push_back({DriftTauName(drift), t.bias[static_cast<size_t>(i)].tau_s, "s"});
     }
     for (int i = 0; i < 3; ++i) {
-      out.push_back({p + (b.sensor == Sensor::kGyro ? "_arw." : "_vrw.") + kAxes[i], t.white_noise_density[i],
+      out.push_back({WhiteNoiseName({b.sensor, i}), t.white_noise_density[i],
                      b.sensor == Sensor::kGyro ? "rad/sqrt(s)" : "m/s/sqrt(s)"});
     }
     for (int i = 0; i < 3; ++i) {
-      out.push_back({p + "_quantization." + kAxes[i], t.quantization[i], b.sensor == Sensor::kGyro ? "rad" : "m/s"});
+      out.push_back({QuantizationName({b.sensor, i}), t.quantization[i],
+                     b.sensor == Sensor::kGyro ? "rad" : "m/s"});
     }
   }
   for (const ReferenceName& r : kReferences) out.push_back({r.name, model.reference.*(r.sigma), r.unit});
@@ -101,17 +109,24 @@ std::vector<NamedParameter> ParametersOf(const ErrorModel& model) {
       case RandomProcess::kNone:
         for (int p = 0; p < f.parameters_per_term; ++p) {
           // A constant effect in a model is a prior; its σ is what the model states.
-          out.push_back({e.term.ParameterName(p) + ".prior_sigma", e.prior_sigma[static_cast<size_t>(p)], unit});
+          out.push_back({ParameterName(e.term.ParameterName(p), ParameterField::kPriorSigma),
+                         e.prior_sigma[static_cast<size_t>(p)], unit});
         }
-        if (f.kind == EffectKind::kFault) out.push_back({e.term.Name() + ".onset", e.onset_s, "s"});
+        if (f.kind == EffectKind::kFault) {
+          out.push_back({ParameterName(e.term.Name(), ParameterField::kOnset), e.onset_s, "s"});
+        }
         break;
       case RandomProcess::kRandomWalk:
-        out.push_back({e.term.Name() + ".density", e.random_walk_density, unit});
+        out.push_back(
+            {ParameterName(e.term.Name(), ParameterField::kDensity), e.random_walk_density, unit});
         break;
       case RandomProcess::kSecondOrderMarkov:
-        out.push_back({e.term.Name() + ".sigma", e.second_order_sigma, unit});
-        out.push_back({e.term.Name() + ".tau", 1.0 / e.second_order_alpha_per_s, "s"});
-        out.push_back({e.term.Name() + ".period", 2.0 * std::numbers::pi / e.second_order_beta_rad_s, "s"});
+        out.push_back(
+            {ParameterName(e.term.Name(), ParameterField::kSigma), e.second_order_sigma, unit});
+        out.push_back({ParameterName(e.term.Name(), ParameterField::kTau),
+                       1.0 / e.second_order_alpha_per_s, "s"});
+        out.push_back({ParameterName(e.term.Name(), ParameterField::kPeriod),
+                       2.0 * std::numbers::pi / e.second_order_beta_rad_s, "s"});
         break;
     }
   }
@@ -122,37 +137,29 @@ std::string ParameterUnit(const std::string& name) {
   ErrorModel probe;
   if (!SetParameter(name, 1.0, probe).ok()) return "";
   for (const NamedParameter& p : ParametersOf(probe)) {
-    if (p.name == name || p.name == name + ".prior_sigma") return p.unit;
+    if (p.name == name || p.name == ParameterName(name, ParameterField::kPriorSigma)) return p.unit;
   }
   return "";
 }
 
 absl::Status SetParameter(const std::string& name, double value, ErrorModel& model) {
-  std::string head, tail;
-  if (Split(name, &head, &tail)) {
-    for (const BaseName& b : kTriads) {
-      SensorTriadModel& t = model.*(b.triad);
-      const std::string p = b.prefix;
-      for (int i = 0; i < 3; ++i) {
-        const std::string axis = kAxes[i];
-        const DriftAxis drift{b.sensor, i};
-        if (name == DriftSigmaName(drift)) {
-          DriftOf(model, drift).sigma = value;
-          return absl::OkStatus();
-        }
-        if (name == DriftTauName(drift)) {
-          DriftOf(model, drift).tau_s = value;
-          return absl::OkStatus();
-        }
-        if (name == p + (b.sensor == Sensor::kGyro ? "_arw." : "_vrw.") + axis) {
-          t.white_noise_density[i] = value;
-          return absl::OkStatus();
-        }
-        if (name == p + "_quantization." + axis) {
-          t.quantization[i] = value;
-          return absl::OkStatus();
-        }
-      }
+  for (const DriftAxis drift : DriftAxis::All()) {
+    SensorTriadModel& t = drift.sensor == Sensor::kGyro ? model.gyro : model.acc;
+    if (name == DriftSigmaName(drift)) {
+      DriftOf(model, drift).sigma = value;
+      return absl::OkStatus();
+    }
+    if (name == DriftTauName(drift)) {
+      DriftOf(model, drift).tau_s = value;
+      return absl::OkStatus();
+    }
+    if (name == WhiteNoiseName(drift)) {
+      t.white_noise_density[drift.axis] = value;
+      return absl::OkStatus();
+    }
+    if (name == QuantizationName(drift)) {
+      t.quantization[drift.axis] = value;
+      return absl::OkStatus();
     }
   }
   for (const ReferenceName& r : kReferences) {
@@ -161,26 +168,10 @@ absl::Status SetParameter(const std::string& name, double value, ErrorModel& mod
     model.reference.*(r.sigma) = value;
     return absl::OkStatus();
   }
-  // An effect: "<term>", "<term>.sin|cos", "<term>.prior_sigma", "<term>.onset",
-  // "<term>.density|sigma|tau|period".
-  std::string term_name = name;
-  std::string field;
-  for (const char* suffix : {".prior_sigma", ".onset", ".density", ".sigma", ".tau", ".period"}) {
-    const std::string s = suffix;
-    if (term_name.size() > s.size() && term_name.compare(term_name.size() - s.size(), s.size(), s) == 0) {
-      field = s.substr(1);
-      term_name.resize(term_name.size() - s.size());
-      break;
-    }
-  }
+  // An effect: "<term>", "<term>.sin|cos", then any field ("<term>.onset", …).
+  const SplitParameter field = SplitParameterName(name);
   int parameter = 0;
-  for (const char* suffix : {".sin", ".cos"}) {
-    const std::string s = suffix;
-    if (term_name.size() > s.size() && term_name.compare(term_name.size() - s.size(), s.size(), s) == 0) {
-      parameter = s == ".cos" ? 1 : 0;
-      term_name.resize(term_name.size() - s.size());
-    }
-  }
+  const std::string term_name(SplitHarmonic(field.quantity, &parameter));
   auto terms = ParseEffectSelector(term_name);
   if (!terms.ok() || terms->size() != 1) {
     return absl::InvalidArgumentError("unknown model parameter '" + name + "'");
@@ -189,7 +180,7 @@ absl::Status SetParameter(const std::string& name, double value, ErrorModel& mod
   // Set on a copy: a refused parameter leaves the model as it was.
   const int index = model.FindEffect(term);
   ModelEffect e = index >= 0 ? model.effects[static_cast<size_t>(index)] : ModelEffect{.term = term};
-  if (!SetEffectField(field, parameter, value, e)) {
+  if (!SetEffectField(field.field, parameter, value, e)) {
     return absl::InvalidArgumentError("'" + name + "' is not a parameter of " + term.Name());
   }
   if (index >= 0) {

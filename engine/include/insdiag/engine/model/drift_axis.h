@@ -43,6 +43,10 @@ std::string SecondOrderName(DriftAxis drift);
 // The names of the drift's parameters: "gyro_bias_gm.x.sigma", "….tau".
 std::string DriftSigmaName(DriftAxis drift);
 std::string DriftTauName(DriftAxis drift);
+// The sensor axis's white noise ("gyro_arw.x", "acc_vrw.x") and quantization
+// ("gyro_quantization.x") parameters.
+std::string WhiteNoiseName(DriftAxis drift);
+std::string QuantizationName(DriftAxis drift);
 // The drift whose σ or τ `parameter` names, if it names one.
 std::optional<DriftAxis> DriftOfParameter(std::string_view parameter);
 
