@@ -34,16 +34,29 @@ def _correlated_pairs(rng, var_w, cov_wv, var_v, n):
     return pairs[:, 0], pairs[:, 1]
 
 
+def gauss_markov_interval_covariance(sigma, tau_s, dt_s):
+    """φ, Var w, Cov(w, v) and Var v of one interval (the header's formulas)."""
+    beta = 1.0 / tau_s
+    x = beta * dt_s
+    phi = np.exp(-x)
+    one_minus_phi = -np.expm1(-x)
+    q2 = 2.0 * beta * sigma * sigma
+    var_w = sigma * sigma * -np.expm1(-2.0 * x)
+    # Rearranged to keep their digits: (1 − φ) − (1 − φ²)/2 = (1 − φ)²/2, and
+    # Var v = (q²/β³) g(βΔt) with g(x) = x − (1 − φ)(3 − φ)/2, whose terms
+    # cancel to x³/3 − x⁴/4 + 7x⁵/60 − … when βΔt is small (a
+    # navigation-grade τ at 100 Hz and more): there the series.
+    cov = q2 * one_minus_phi ** 2 / (2.0 * beta ** 2)
+    g = x ** 3 / 3.0 - x ** 4 / 4.0 + 7.0 * x ** 5 / 60.0 if x < 1e-3 else x - one_minus_phi * (3.0 - phi) / 2.0
+    return phi, var_w, cov, q2 / beta ** 3 * g
+
+
 def gauss_markov_means(rng, sigma, tau_s, dt_s, n):
     """Interval means of a stationary Gauss–Markov process over n samples of Δt."""
     if sigma <= 0.0:
         return np.zeros(n)
     beta = 1.0 / tau_s
-    phi = np.exp(-beta * dt_s)
-    q2 = 2.0 * beta * sigma * sigma
-    var_w = sigma * sigma * (1.0 - phi * phi)
-    cov = q2 / beta * ((1.0 - phi) / beta - (1.0 - phi * phi) / (2.0 * beta))
-    var_v = q2 / beta ** 2 * (dt_s - 2.0 * (1.0 - phi) / beta + (1.0 - phi * phi) / (2.0 * beta))
+    phi, var_w, cov, var_v = gauss_markov_interval_covariance(sigma, tau_s, dt_s)
     w, v = _correlated_pairs(rng, var_w, cov, var_v, n)
     # b_k = φ b_{k−1} + w_k: a first-order recursion, run by scipy's lfilter.
     from scipy.signal import lfilter

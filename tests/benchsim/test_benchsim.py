@@ -3,6 +3,7 @@ import contextlib
 import io
 import json
 import math
+from decimal import Decimal, getcontext
 import os
 import sys
 import tempfile
@@ -98,6 +99,19 @@ class SensorErrors(unittest.TestCase):
         lag1 = np.mean((means[1:] - means.mean()) * (means[:-1] - means.mean()))
         expected_lag1 = sigma ** 2 * (1.0 - math.exp(-x)) ** 2 / x ** 2
         self.assertLess(abs(lag1 / expected_lag1 - 1.0), 2 * tolerance)
+
+    def test_gauss_markov_interval_covariance_keeps_its_digits_at_high_rates(self):
+        # Against the header's formulas in 60-digit arithmetic: a 30-minute τ
+        # at 200 Hz made Var v negative in double precision.
+        getcontext().prec = 60
+        for tau, dt in ((1800.0, 0.005), (1800.0, 0.01), (300.0, 0.02), (100.0, 0.1), (1.0, 0.5), (1.0, 20.0)):
+            _, var_w, cov, var_v = sensors.gauss_markov_interval_covariance(1.0, tau, dt)
+            beta, q2, phi = 1 / Decimal(tau), 2 / Decimal(tau), (-Decimal(dt) / Decimal(tau)).exp()
+            exact_cov = q2 / beta * ((1 - phi) / beta - (1 - phi * phi) / (2 * beta))
+            exact_var_v = q2 / beta ** 2 * (Decimal(dt) - 2 * (1 - phi) / beta + (1 - phi * phi) / (2 * beta))
+            self.assertAlmostEqual(cov / float(exact_cov), 1.0, delta=1e-9, msg=(tau, dt))
+            self.assertAlmostEqual(var_v / float(exact_var_v), 1.0, delta=1e-9, msg=(tau, dt))
+            self.assertGreater(var_w * var_v, cov * cov, msg=(tau, dt))
 
     def test_random_walk_means_grow_as_the_walk(self):
         rng = np.random.default_rng(5)

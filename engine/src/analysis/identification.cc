@@ -451,11 +451,11 @@ void TestPlaceholderFaults(const RunContext& c, const Retargeted& retargeted,
       continue;
     }
     const bool stands = t.p_value < c.options.finder.family_wise_alpha;
-    notes.push_back(absl::StrFormat("%s at %.0f s, found against the Allan fit's drifts: 2Δℓ = %.1f with the drifts "
-                                    "identified beside it (p = %.2g over the onsets and fault terms) — %s",
-                                    t.fault->term.Name(), t.fault->onset_s, t.statistic, t.p_value,
-                                    stands ? "it stands against the drifts identified from decades"
-                                           : "their misfit"));
+    notes.push_back(absl::StrFormat(
+        "%s at %.0f s, tested with the drifts identified beside it: 2Δℓ = %.1f (p = "
+        "%.2g over the onsets and fault terms) — %s",
+        t.fault->term.Name(), t.fault->onset_s, t.statistic, t.p_value,
+        stands ? "it stands against the drifts identified from decades" : "their misfit"));
     if (stands && (best == nullptr || t.statistic > best->statistic)) best = &t;
   }
   if (best == nullptr) return;
@@ -473,7 +473,7 @@ void TestFaultsAgainstTheIdentifiedDrifts(const RunContext& c, Retargeted& retar
                                           Identification& id, std::vector<std::string>& notes) {
   auto forward = RunForwardFilter(c.epochs, id.model);
   if (!forward.ok()) {
-    notes.push_back("faults found against the Allan fit's drifts: not tested (" +
+    notes.push_back("faults against the drifts identified from the Allan fit: not tested (" +
                     std::string(forward.status().message()) + ")");
     return;
   }

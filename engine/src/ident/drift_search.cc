@@ -198,12 +198,11 @@ absl::StatusOr<std::vector<std::string>> WidenErrorsToTheLikelihoodRatio(const E
   for (const DriftAxis d : DriftAxis::All()) {
     const GaussMarkov& before = DriftOf(reference, d);
     if (!departs(d)) continue;
-    const std::string prefix = DriftName(d) + ".";
     double wald = 0.0;
     std::vector<ParameterEstimate*> estimates;
     for (ParameterEstimate& p : fit.identified) {
-      if (p.name.rfind(prefix, 0) != 0 || !(p.value > 0.0) || !(p.std_error > 0.0)) continue;
-      const bool sigma = p.name == prefix + "sigma";
+      if (DriftOfParameter(p.name) != d || !(p.value > 0.0) || !(p.std_error > 0.0)) continue;
+      const bool sigma = p.name == DriftSigmaName(d);
       const double reference_value = sigma ? before.sigma : before.tau_s;
       const double z = std::log(p.value / reference_value) / (p.std_error / p.value);
       wald += z * z;
