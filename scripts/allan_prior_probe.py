@@ -3,7 +3,10 @@
 
 Each run is a healthy unit of one of the independent simulator's classes
 (tests/benchsim, `--preset`), with no datasheet and no unit type, so the
-analysis starts from the Allan fit of the run's static segments. The profile
+analysis starts from the Allan fit of the run's static segments. With
+`--unit-type INS-2000` the file names that type instead: a unit of another
+class labelled with it, whose nominal model the analysis then weighs
+against the run's Allan deviation. The profile
 and rate come from the seed (`static` or `positions`; 50 or 100 Hz). Per run,
 from `insdiag analyze --json`: the verdict; the candidates significant at
 family-wise 1 %; and the identified drift parameters whose family-wise 1 %
@@ -11,7 +14,7 @@ interval (Bonferroni over those compared) excludes the truth — an estimate
 that is wrong with a standard error that says it is not.
 
 Usage:
-  scripts/allan_prior_probe.py [--preset mems] [--runs N] [--duration S] [--jobs J]
+  scripts/allan_prior_probe.py [--preset mems] [--runs N] [--duration S] [--jobs J] [--unit-type none]
 The figures in docs/FAULT_SCENARIOS.md come from
   scripts/allan_prior_probe.py --preset mems --runs 12
 """
@@ -49,14 +52,14 @@ def wrong_but_sure(report, truth):
 
 
 def run_one(args):
-    preset, seed, duration_s = args
+    preset, seed, duration_s, unit_type = args
     profile = ("static", "positions")[seed % 2]
     rate_hz = (50, 100)[(seed // 2) % 2]
     with tempfile.TemporaryDirectory() as work:
         path = os.path.join(work, "run.csv")
         subprocess.run([sys.executable, BENCHSIM, "--out", path, "--preset", preset, "--profile", profile,
                         "--rate-hz", str(rate_hz), "--duration", str(duration_s), "--seed", str(seed),
-                        "--datasheet", "no", "--unit-type", "none", "--serial", f"PROBE-{seed}"],
+                        "--datasheet", "no", "--unit-type", unit_type, "--serial", f"PROBE-{seed}"],
                        check=True, capture_output=True)
         with open(path + ".truth.json") as f:
             truth = json.load(f)["parameters"]
@@ -77,10 +80,11 @@ def main():
     parser.add_argument("--duration", type=float, default=1800.0)
     parser.add_argument("--jobs", type=int, default=1)
     parser.add_argument("--first-seed", type=int, default=21)
+    parser.add_argument("--unit-type", default="none", help="the unit type the file names (none: no type)")
     options = parser.parse_args()
     seeds = range(options.first_seed, options.first_seed + options.runs)
     with ThreadPoolExecutor(max_workers=options.jobs) as pool:
-        results = list(pool.map(run_one, [(options.preset, s, options.duration) for s in seeds]))
+        results = list(pool.map(run_one, [(options.preset, s, options.duration, options.unit_type) for s in seeds]))
     for r in results:
         print(json.dumps(r))
     good = sum(1 for r in results if r.get("verdict") == "GOOD")

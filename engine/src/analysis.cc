@@ -2,6 +2,8 @@
 // outputs are explicit; the stages live in engine/src/analysis/.
 #include "insdiag/engine/analysis.h"
 
+#include <absl/strings/str_format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -15,11 +17,6 @@
 #include "insdiag/engine/numerics/parallel_map.h"
 
 namespace insdiag::engine {
-namespace {
-
-
-}  // namespace
-
 absl::Status AnalysisOptions::Validate() const {
   if (auto st = filter.Validate(); !st.ok()) return st;
   if (!(monitor.window_s > 0.0)) return absl::InvalidArgumentError("monitor window must be positive");
@@ -149,33 +146,78 @@ std::optional<ident::AllanResult> AllanOfStaticSegments(const BenchRun& run, con
   return std::nullopt;
 }
 
-// The a-priori model: datasheet, nominal, else the Allan fit, which `allan`
-// then receives. Drift identification searches decades from the a-priori
-// drifts for a type's nominal model or an Allan fit — a class prior a unit may
-// be far from. A datasheet's drifts are the unit's own specification; a unit
-// far from it shows as a re-tuned drift or as effects near it.
+// The unit type's nominal model's departure from the run's Allan deviation
+// when it is beyond the drift search's reach: some channel's curve lies,
+// beyond its confidence interval at the analysis's family-wise level, further
+// from the model's curve than the
+// widest σ factors the search starts from. Identification climbs from its
+// starts and cannot reach a unit that far from them (a MEMS unit labelled
+// with a navigation-grade type is 1000 times its drift).
+std::optional<ident::AllanDeparture> DepartureBeyondSearch(const ident::AllanResult& allan,
+                                                           const ErrorModel& nominal,
+                                                           const ident::DriftStartOptions& starts,
+                                                           double family_wise_alpha) {
+  const auto [lowest, highest] = std::ranges::minmax(starts.grid_sigma_factors);
+  std::optional<ident::AllanDeparture> farthest;
+  for (const ident::AllanDeparture& d :
+       ident::AllanDeparturesFrom(allan, nominal, family_wise_alpha)) {
+    if (d.ratio >= lowest && d.ratio <= highest) continue;
+    if (!farthest.has_value() || std::abs(std::log(d.ratio)) > std::abs(std::log(farthest->ratio)))
+      farthest = d;
+  }
+  return farthest;
+}
+
+// The a-priori model: the datasheet; else the unit type's nominal model,
+// unless the run's Allan deviation puts the unit beyond the drift search's
+// reach from it; else the Allan fit. The Allan analysis, which `allan`
+// receives, runs here whenever the datasheet is incomplete. Drift
+// identification searches decades from a class prior (a nominal model or
+// an Allan fit); a datasheet's drifts are the unit's own specification, and
+// a unit far from it shows as a re-tuned drift or as effects near it.
 absl::StatusOr<pipeline::APriori> ChooseAPrioriModel(const BenchRun& run, const AnalysisRequest& request,
                                                      std::optional<ident::AllanResult>& allan,
                                                      const AnalysisOptions& options, std::vector<std::string>& notes) {
   pipeline::APriori out;
   out.drift_starts = options.drift_starts;
-  if (const Datasheet& d = run.metadata.datasheet; d.gyro_bias_sigma_rad_s && d.gyro_bias_tau_s &&
-                                                   d.acc_bias_sigma_mps2 && d.acc_bias_tau_s) {
-    out.drift_starts.grid_tau_points = 0;
-  }
   auto model = APrioriModel(run, request.nominal, options.reference);
-  if (model.ok()) {
+  if (const Datasheet& d = run.metadata.datasheet; d.gyro_bias_sigma_rad_s && d.gyro_bias_tau_s &&
+                                                   d.acc_bias_sigma_mps2 && d.acc_bias_tau_s &&
+                                                   model.ok()) {
+    out.drift_starts.grid_tau_points = 0;
+    out.from_datasheet = true;
     out.model = *std::move(model);
     return out;
   }
   allan = AllanOfStaticSegments(run, options, notes);
-  if (!allan.has_value()) return model.status();
-  auto from_allan = ident::ErrorModelFromAllan(*allan, options.reference, &notes);
+  if (model.ok()) {
+    const auto beyond = allan.has_value() ? DepartureBeyondSearch(*allan, *model, out.drift_starts,
+                                                                  options.monitor.family_wise_alpha)
+                                          : std::nullopt;
+    if (!beyond.has_value()) {
+      out.model = *std::move(model);
+      return out;
+    }
+    notes.push_back(absl::StrFormat(
+        "the run's Allan deviation on %s at τ %.3g s is %.3g times the unit type's nominal model "
+        "at the "
+        "family-wise confidence bound: further than the drift identification searches from it. The "
+        "unit is analysed as "
+        "one without a unit type: the a-priori model comes from its Allan deviation",
+        beyond->channel, beyond->tau_s, beyond->ratio));
+  } else if (!allan.has_value()) {
+    return model.status();
+  }
+  const ReferenceAccuracy& reference = model.ok() ? model->reference : options.reference;
+  auto from_allan = ident::ErrorModelFromAllan(*allan, reference, &notes);
   if (!from_allan.ok()) return from_allan.status();
   out.model = *std::move(from_allan);
   out.from_allan = true;
-  notes.push_back("the run has no complete datasheet and no nominal model: the a-priori model comes from its "
-                  "Allan deviation");
+  if (!model.ok()) {
+    notes.push_back(
+        "the run has no complete datasheet and no nominal model: the a-priori model comes from its "
+        "Allan deviation");
+  }
   return out;
 }
 
@@ -261,10 +303,11 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   // constants removed leave an Allan deviation as it was).
   absl::StatusOr<EpochRun> epochs;
   std::vector<std::string> allan_notes;
-  numerics::InParallel([&] { epochs = CondenseRun(run, base, options.filter.update_interval_s, &compensations); },
-                       [&] {
-                         if (!allan.has_value()) allan = AllanOfStaticSegments(run, options, allan_notes);
-                       });
+  numerics::InParallel(
+      [&] { epochs = CondenseRun(run, base, options.filter.update_interval_s, &compensations); },
+      [&] {
+        if (a_priori->from_datasheet) allan = AllanOfStaticSegments(run, options, allan_notes);
+      });
   notes.insert(notes.end(), allan_notes.begin(), allan_notes.end());
   if (!epochs.ok()) return epochs.status();
   const pipeline::RunContext context{run, *epochs, reference_measurements, spikes, options, *a_priori};

@@ -118,12 +118,13 @@ void Fill(const engine::ParameterEstimate& p, v1::IdentifiedParameter* ip) {
   if (std::isfinite(p.a_priori)) ip->set_a_priori(p.a_priori);
 }
 
-// Unit of a correlation fit's parameter for a drift state of `state`'s sensor.
-std::string CorrelationParameterUnit(const std::string& state, const std::string& parameter) {
-  const bool gyro = state.rfind("gyro", 0) == 0;
-  if (parameter.find("tau") != std::string::npos || parameter.find("period") != std::string::npos) return "s";
-  if (parameter == "density") return gyro ? "rad/s/sqrt(s)" : "m/s^2/sqrt(s)";
-  return gyro ? "rad/s" : "m/s^2";
+// Unit of a correlation fit's parameter for a drift of `sensor`.
+std::string CorrelationParameterUnit(engine::Sensor sensor,
+                                     engine::ident::CorrelationParameter parameter) {
+  if (engine::ident::IsTimeS(parameter)) return "s";
+  const engine::SensorUnits units = engine::UnitsOf(sensor);
+  return std::string(parameter == engine::ident::CorrelationParameter::kDensity ? units.rate_walk
+                                                                                : units.rate);
 }
 
 void Fill(const engine::DriftCorrelation& in, v1::CorrelationCurve* out) {
@@ -144,11 +145,11 @@ void Fill(const engine::DriftCorrelation& in, v1::CorrelationCurve* out) {
     fc->set_lr_p_value(f.lr_p_value);
     for (const engine::ident::FittedParameter& p : f.parameters) {
       v1::IdentifiedParameter* ip = fc->add_parameters();
-      ip->set_name(in.state + "." + p.name);
+      ip->set_name(in.state + "." + std::string(p.Name()));
       ip->set_value(p.value);
       ip->set_std_error(Finite(p.std_error));
       ip->set_method(v1::IdentifiedParameter::ACF);
-      ip->set_unit(CorrelationParameterUnit(in.state, p.name));
+      ip->set_unit(CorrelationParameterUnit(in.sensor, p.id));
     }
   }
   out->set_best_family(engine::ident::CorrelationFamilyName(a.best));

@@ -162,8 +162,9 @@ TEST(CorrelationFamilyTest, DetectsEachStructureWhenPresentAndOnlyThen) {
       // A walk over the run is a second exponential longer than the run: the
       // analysis maps that to the walk too (ProposeStructures).
       const auto* two = a.Fit(CorrelationFamily::kTwoExponentials);
-      const bool long_second = two != nullptr && Has(r, CorrelationFamily::kTwoExponentials) &&
-                               two->Parameter("tau2_s")->value >= 0.5 * kSeriesLength * kSeriesDtS;
+      const bool long_second =
+          two != nullptr && Has(r, CorrelationFamily::kTwoExponentials) &&
+          two->Parameter(CorrelationParameter::kTau2)->value >= 0.5 * kSeriesLength * kSeriesDtS;
       if (Has(r, CorrelationFamily::kRandomWalk) || long_second) ++detected[CorrelationFamily::kRandomWalk];
       else std::printf("seed %d, walk missed: %s\n", seed, Describe(a).c_str());
     }
@@ -223,7 +224,8 @@ TEST(CorrelationFamilyTest, DetectsTwoExponentialsOverAThousandCorrelationTimes)
     if (Has(r, CorrelationFamily::kTwoExponentials) || Has(r, CorrelationFamily::kRandomWalk)) ++screened;
     else std::printf("seed %d, two exponentials missed: %s\n", seed, Describe(a).c_str());
     if (a.best == CorrelationFamily::kTwoExponentials) ++named;
-    const FittedParameter* tau2 = a.Fit(CorrelationFamily::kTwoExponentials)->Parameter("tau2_s");
+    const FittedParameter* tau2 =
+        a.Fit(CorrelationFamily::kTwoExponentials)->Parameter(CorrelationParameter::kTau2);
     if (tau2->ci95_low <= slow_tau_s && slow_tau_s <= tau2->ci95_high) ++tau2_covered;
   }
   // Measured (seeds 5000–5009): screened 10, named best by BIC 5 (the walk
@@ -312,13 +314,15 @@ TEST(CorrelationCrossCheckTest, ExponentialFitAgreesWithScipyMaximumLikelihood) 
     while (in >> kind >> name >> value >> se_log) ml[name] = {value, se_log};
     for (int i = 0; i < 2; ++i) {
       const FittedParameter& p = fit->parameters[static_cast<size_t>(i)];
-      ASSERT_TRUE(ml.count(p.name)) << p.name << " missing from: " << *out;
-      const auto [ml_value, ml_se_log] = ml[p.name];
+      const std::string parameter(p.Name());
+      ASSERT_TRUE(ml.count(parameter)) << parameter << " missing from: " << *out;
+      const auto [ml_value, ml_se_log] = ml[parameter];
       const double fit_se_log = std::sqrt(fit->log_covariance(i, i));
-      std::printf("seed %d %s: ACF fit %.4g (SE of log %.3f), scipy ML %.4g (%.3f)\n", 7000 + seed, p.name.c_str(),
-                  p.value, fit_se_log, ml_value, ml_se_log);
-      EXPECT_LE(std::abs(std::log(p.value / ml_value)), 3.0 * fit_se_log) << p.name << ", seed " << 7000 + seed;
-      EXPECT_LE(ml_se_log, 1.05 * fit_se_log) << p.name << ", seed " << 7000 + seed;
+      std::printf("seed %d %s: ACF fit %.4g (SE of log %.3f), scipy ML %.4g (%.3f)\n", 7000 + seed,
+                  parameter.c_str(), p.value, fit_se_log, ml_value, ml_se_log);
+      EXPECT_LE(std::abs(std::log(p.value / ml_value)), 3.0 * fit_se_log)
+          << parameter << ", seed " << 7000 + seed;
+      EXPECT_LE(ml_se_log, 1.05 * fit_se_log) << parameter << ", seed " << 7000 + seed;
     }
   }
 }
@@ -367,8 +371,8 @@ TEST(CorrelationCoverageTest, IntervalsCoverTheTrueDriftsOverSeeds) {
       const FamilyFit* e = d.analysis.Fit(CorrelationFamily::kExponential);
       if (!d.analysis.resolved || e == nullptr || !e->usable) continue;
       const GaussMarkov& truth = TrueDrift(unit, d.state);
-      const FittedParameter* sigma = e->Parameter("sigma");
-      const FittedParameter* tau = e->Parameter("tau_s");
+      const FittedParameter* sigma = e->Parameter(CorrelationParameter::kSigma);
+      const FittedParameter* tau = e->Parameter(CorrelationParameter::kTau);
       const bool sigma_in = sigma->ci95_low <= truth.sigma && truth.sigma <= sigma->ci95_high;
       const bool tau_in = tau->ci95_low <= truth.tau_s && truth.tau_s <= tau->ci95_high;
       ++t[0];

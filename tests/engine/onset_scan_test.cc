@@ -184,6 +184,47 @@ TEST(OnsetScan, FindsAStepOfFiveDriftSigmaAtItsOnsetOnEverySensorAxis) {
   EXPECT_GE(covered, 10);
 }
 
+// The scan of a gyro-x step of 20 drift σ at `onset_s`, filtered with the
+// unit's true base model: the step's own fit.
+OnsetFit GyroStepFit(const sim::TableProfile& profile, double onset_s, uint64_t seed,
+                     const std::vector<EffectTerm>& terms) {
+  auto unit = testing::NavigationGradeUnit();
+  unit.bias_steps.push_back({Sensor::kGyro, 0, onset_s, 20.0 * unit.gyro.bias[0].sigma});
+  const auto sim = testing::SimulateOrDie(unit, profile, 10.0, seed);
+  const ErrorModel model = testing::TrueBaseModel(unit);
+  auto run = CondenseRun(sim.run, model, 1.0);
+  EXPECT_TRUE(run.ok()) << run.status();
+  auto fw = RunForwardFilter(*run, model);
+  EXPECT_TRUE(fw.ok()) << fw.status();
+  const auto fits = ScanOnsets(*fw, StateLayout(model), *run, terms, OnsetScanOptions{});
+  EXPECT_TRUE(fits.front().identifiable);
+  return fits.front();
+}
+
+// On a still, level table a gyro's step about x tilts the unit about x,
+// which an accelerometer's ramp on y imitates exactly (g times the tilt):
+// the run cannot tell them apart and the step names the ramp. After the
+// onset the `positions` profile tilts the unit through several attitudes,
+// which separates them.
+TEST(OnsetScan, AGyroStepNamesTheAccelerometerRampItsStillLevelTableCannotTellItFrom) {
+  const std::vector<EffectTerm> terms = {Term("gyro_bias_step.x"), Term("acc_bias_ramp.y"),
+                                         Term("acc_bias_ramp.x"), Term("gyro_bias_step.y")};
+  sim::TableProfile still;
+  still.name = "still";
+  still.angular_acceleration_rad_s2 = 10.0 * testing::kDeg;
+  still.thermal.ambient_degc = 25.0;
+  still.segments = {{sim::TableSegment::Kind::kHold, 1800.0, 0, 0, 0}};
+  for (uint64_t seed : {31u, 32u}) {
+    const OnsetFit on_still = GyroStepFit(still, 900.0, seed, terms);
+    EXPECT_EQ(on_still.ambiguous_with.size(), 1u);
+    EXPECT_TRUE(std::ranges::find(on_still.ambiguous_with, Term("acc_bias_ramp.y")) !=
+                on_still.ambiguous_with.end());
+    const OnsetFit tilting =
+        GyroStepFit(testing::BuiltinProfileOrDie("positions"), 900.0, seed, terms);
+    EXPECT_TRUE(tilting.ambiguous_with.empty()) << tilting.ambiguous_with.front().Name();
+  }
+}
+
 // A step and a ramp on one axis that explain the run equally (2Δℓ within 2)
 // name each other, so the report shows the reader that the shape is open;
 // a step on another axis, or a ramp far behind, is no look-alike.

@@ -57,24 +57,28 @@ std::optional<StructureProposal> StructureOfFit(const DriftCorrelation& d, const
   std::string effect;
   if (f.family == ident::CorrelationFamily::kRandomWalk) {
     effect = WalkName(drift);
-    p.effect.random_walk_density = f.Parameter("density")->value;
+    p.effect.random_walk_density = f.Parameter(ident::CorrelationParameter::kDensity)->value;
     p.candidate.estimate = p.effect.random_walk_density;
-    p.candidate.std_error = f.Parameter("density")->std_error;
+    p.candidate.std_error = f.Parameter(ident::CorrelationParameter::kDensity)->std_error;
   } else if (f.family == ident::CorrelationFamily::kExponentialCosine) {
     effect = SecondOrderName(drift);
-    p.effect.second_order_sigma = f.Parameter("sigma2")->value;
-    p.effect.second_order_alpha_per_s = 1.0 / f.Parameter("tau2_s")->value;
-    p.effect.second_order_beta_rad_s = 2.0 * std::numbers::pi / f.Parameter("period_s")->value;
+    p.effect.second_order_sigma = f.Parameter(ident::CorrelationParameter::kSigma2)->value;
+    p.effect.second_order_alpha_per_s =
+        1.0 / f.Parameter(ident::CorrelationParameter::kTau2)->value;
+    p.effect.second_order_beta_rad_s =
+        2.0 * std::numbers::pi / f.Parameter(ident::CorrelationParameter::kPeriod)->value;
     p.candidate.estimate = p.effect.second_order_sigma;
-    p.candidate.std_error = f.Parameter("sigma2")->std_error;
+    p.candidate.std_error = f.Parameter(ident::CorrelationParameter::kSigma2)->std_error;
     p.searched_starts = 16;  // the profile grid of period × decay (correlation.cc)
-  } else if (f.family == ident::CorrelationFamily::kTwoExponentials && f.Parameter("tau2_s")->value >= 0.5 * run_s) {
+  } else if (f.family == ident::CorrelationFamily::kTwoExponentials &&
+             f.Parameter(ident::CorrelationParameter::kTau2)->value >= 0.5 * run_s) {
     effect = WalkName(drift);
-    const double s2 = f.Parameter("sigma2")->value;
-    const double t2 = f.Parameter("tau2_s")->value;
+    const double s2 = f.Parameter(ident::CorrelationParameter::kSigma2)->value;
+    const double t2 = f.Parameter(ident::CorrelationParameter::kTau2)->value;
     p.effect.random_walk_density = s2 * std::sqrt(2.0 / t2);
     p.candidate.estimate = p.effect.random_walk_density;
-    p.candidate.std_error = f.Parameter("sigma2")->std_error * std::sqrt(2.0 / t2);
+    p.candidate.std_error =
+        f.Parameter(ident::CorrelationParameter::kSigma2)->std_error * std::sqrt(2.0 / t2);
     p.searched_starts = 6;
   } else {
     return std::nullopt;

@@ -20,6 +20,8 @@ namespace insdiag::engine::pipeline {
 // The a-priori model and where it came from.
 struct APriori {
   ErrorModel model;
+  // From the run's complete datasheet: the unit's own specification.
+  bool from_datasheet = false;
   // From the run's own Allan fit: its drift τ is a bound or a guess of the
   // static segments, a placeholder the whole run re-tunes.
   bool from_allan = false;

@@ -53,7 +53,8 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
   }
   // A step and a ramp of one sensor axis whose 2Δℓ are within 2 of each
   // other (their parameter counts are equal) are not worth telling apart
-  // (Kass & Raftery, JASA 90(430), 1995): each names the other.
+  // (Kass & Raftery, JASA 90(430), 1995): each names the other. So do faults
+  // whose signatures the scan found nearly parallel (onset_scan.h).
   constexpr double kIndistinguishableDeltaBic = 2.0;
   for (size_t i = 0; i < out.size(); ++i) {
     for (size_t j = 0; j < out.size(); ++j) {
@@ -64,6 +65,11 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
         continue;
       }
       if (std::abs(a.statistic - b.statistic) < kIndistinguishableDeltaBic) out[i].correlated_with.push_back(out[j].name);
+    }
+    for (const EffectTerm& other : fits[i].ambiguous_with) {
+      if (std::ranges::find(out[i].correlated_with, other.Name()) == out[i].correlated_with.end()) {
+        out[i].correlated_with.push_back(other.Name());
+      }
     }
   }
   return out;

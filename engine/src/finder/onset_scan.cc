@@ -48,20 +48,25 @@ void UpdateSequence(const ForwardPass& fw, int k, const std::array<ObservationRo
   }
 }
 
-// Per onset θ and sensor axis: the axis pair's score, information and the
-// covariance of successive scores (header).
-struct AxisPair {
-  Eigen::Vector2d score;
-  Eigen::Matrix2d information;
-  Eigen::Matrix2d successive;  // Cov(s(θ), s(θ+1))
-};
-using PairSums = std::vector<std::array<AxisPair, kSensorAxisCount>>;
+// Per onset θ: every column's score and their information, and per sensor
+// axis the covariance of the axis pair's successive scores (header).
+struct OnsetSums {
+  std::vector<Eigen::Matrix<double, kColumns, 1>> score;
+  std::vector<MatrixCc> information;
+  std::vector<std::array<Eigen::Matrix2d, kSensorAxisCount>> successive;  // Cov(s(θ), s(θ+1))
 
-PairSums BackwardSweep(const ForwardPass& fw, const StateLayout& layout, const EpochRun& run, double centre_s) {
+  explicit OnsetSums(int epochs)
+      : score(static_cast<size_t>(epochs)),
+        information(static_cast<size_t>(epochs)),
+        successive(static_cast<size_t>(epochs)) {}
+};
+
+OnsetSums BackwardSweep(const ForwardPass& fw, const StateLayout& layout, const EpochRun& run,
+                        double centre_s) {
   const int K = fw.epochs();
   const int n = fw.state_size;
   const auto rows = ObservationRows(layout);
-  PairSums out(static_cast<size_t>(K));
+  OnsetSums out(K);
   Eigen::MatrixXd P(n, n), H(kChannelCount, n), L(n, n), Phi(n, n), F(n, n), Gamma = Eigen::MatrixXd::Zero(n, n);
   Eigen::MatrixXd FtGamma(n, n), adjoint_columns = Eigen::MatrixXd::Zero(n, kColumns), next_gamma_w(n, kColumns);
   Eigen::VectorXd PH(n), gain(n), lambda = Eigen::VectorXd::Zero(n), weighted(n);
@@ -91,30 +96,52 @@ PairSums BackwardSweep(const ForwardPass& fw, const StateLayout& layout, const E
     const MatrixCc successive = information + cross;
     score.noalias() += Z.transpose() * lambda.head<9>();
     information += Z.transpose() * Gamma.topLeftCorner<9, 9>() * Z + cross + cross.transpose();
+    const auto at = static_cast<size_t>(k);
+    out.score[at] = score;
+    out.information[at] = information;
     for (int a = 0; a < kSensorAxisCount; ++a) {
-      AxisPair& p = out[static_cast<size_t>(k)][static_cast<size_t>(a)];
-      p.score = score.segment<2>(2 * a);
-      p.information = information.block<2, 2>(2 * a, 2 * a);
-      p.successive = successive.block<2, 2>(2 * a, 2 * a);
+      out.successive[at][static_cast<size_t>(a)] = successive.block<2, 2>(2 * a, 2 * a);
     }
     Z_next = Z;
   }
   return out;
 }
 
+// A fault's direction in its axis pair for onset θ: a step is μ_0, a ramp
+// from t₀ is Z (t_c − t₀, 1) (header).
+Eigen::Vector2d PairDirection(const EffectTerm& term, const EpochRun& run, int theta,
+                              double centre_s) {
+  return term.family->regressor == Regressor::kRamp
+             ? Eigen::Vector2d(centre_s - run.epochs[static_cast<size_t>(theta)].start_s, 1.0)
+             : Eigen::Vector2d(1.0, 0.0);
+}
+
+// A fault's direction among all columns for onset θ.
+Eigen::Matrix<double, kColumns, 1> ColumnDirection(const EffectTerm& term, const EpochRun& run,
+                                                   int theta, double centre_s) {
+  Eigen::Matrix<double, kColumns, 1> e = Eigen::Matrix<double, kColumns, 1>::Zero();
+  e.segment<2>(2 * SensorAxisIndex(term.family->sensor, term.axis)) =
+      PairDirection(term, run, theta, centre_s);
+  return e;
+}
+
 // The statistic profile of one term over the onsets, and its best onset.
-OnsetFit FitTerm(const EffectTerm& term, const PairSums& sums, const EpochRun& run, int first, int last,
-                 double centre_s, const OnsetScanOptions& options) {
+OnsetFit FitTerm(const EffectTerm& term, const OnsetSums& sums, const EpochRun& run, int first,
+                 int last, double centre_s, const OnsetScanOptions& options) {
   OnsetFit fit;
   fit.term = term;
   const int axis = SensorAxisIndex(term.family->sensor, term.axis);
-  const bool ramp = term.family->regressor == Regressor::kRamp;
-  auto direction = [&](int theta) {
-    return ramp ? Eigen::Vector2d(centre_s - run.epochs[static_cast<size_t>(theta)].start_s, 1.0)
-                : Eigen::Vector2d(1.0, 0.0);
+  auto direction = [&](int theta) { return PairDirection(term, run, theta, centre_s); };
+  struct AxisPair {
+    Eigen::Vector2d score;
+    Eigen::Matrix2d information;
+    const Eigen::Matrix2d& successive;
   };
-  auto pair = [&](int theta) -> const AxisPair& {
-    return sums[static_cast<size_t>(theta)][static_cast<size_t>(axis)];
+  auto pair = [&](int theta) {
+    const auto at = static_cast<size_t>(theta);
+    return AxisPair{sums.score[at].segment<2>(2 * axis),
+                    sums.information[at].block<2, 2>(2 * axis, 2 * axis),
+                    sums.successive[at][static_cast<size_t>(axis)]};
   };
   // A run too short for both sides of any onset has no candidate (last < first).
   std::vector<double> T(static_cast<size_t>(std::max(0, last - first + 1)), 0.0);
@@ -190,6 +217,27 @@ OnsetFit FitTerm(const EffectTerm& term, const PairSums& sums, const EpochRun& r
   return fit;
 }
 
+// Each identifiable fault names the others whose signature from its onset
+// is nearly parallel to its own (header).
+void NameAmbiguousFaults(const OnsetSums& sums, const EpochRun& run, double centre_s,
+                         const OnsetScanOptions& options, std::vector<OnsetFit>& fits) {
+  for (OnsetFit& a : fits) {
+    if (!a.identifiable) continue;
+    const MatrixCc& I = sums.information[static_cast<size_t>(a.onset_epoch)];
+    const auto ea = ColumnDirection(a.term, run, a.onset_epoch, centre_s);
+    const double aa = ea.dot(I * ea);
+    for (const OnsetFit& b : fits) {
+      if (&a == &b || !b.identifiable) continue;
+      const auto eb = ColumnDirection(b.term, run, a.onset_epoch, centre_s);
+      const double bb = eb.dot(I * eb);
+      if (!(aa > 0.0 && bb > 0.0)) continue;
+      if (std::abs(ea.dot(I * eb)) / std::sqrt(aa * bb) >= options.ambiguity_threshold) {
+        a.ambiguous_with.push_back(b.term);
+      }
+    }
+  }
+}
+
 }  // namespace
 
 double OnsetPValue(double statistic, double path_length) {
@@ -215,8 +263,9 @@ std::vector<OnsetFit> ScanOnsets(const ForwardPass& fw, const StateLayout& layou
   while (first < K && run.epochs[static_cast<size_t>(first)].start_s < begin_s + options.min_side_s) ++first;
   while (last >= 0 && run.epochs[static_cast<size_t>(last)].start_s > end_s - options.min_side_s) --last;
   const double centre_s = 0.5 * (begin_s + end_s);
-  const PairSums sums = BackwardSweep(fw, layout, run, centre_s);
+  const OnsetSums sums = BackwardSweep(fw, layout, run, centre_s);
   for (const EffectTerm& term : terms) out.push_back(FitTerm(term, sums, run, first, last, centre_s, options));
+  NameAmbiguousFaults(sums, run, centre_s, options, out);
   return out;
 }
 

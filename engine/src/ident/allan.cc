@@ -116,8 +116,6 @@ std::vector<StaticSegment> StillSpans(const BenchRun& run, double tau0, const Al
   return spans;
 }
 
-std::string ChannelUnit(Sensor sensor) { return sensor == Sensor::kGyro ? "rad/s" : "m/s^2"; }
-
 }  // namespace
 
 // ---------------------------------------------------------------------------
@@ -354,7 +352,7 @@ absl::StatusOr<AllanResult> AllanAnalysis(const BenchRun& run, const AllanOption
     ch.name = std::string(kSensorChannelNames[c]);
     ch.sensor = c < 3 ? Sensor::kGyro : Sensor::kAccelerometer;
     ch.axis = c % 3;
-    ch.unit = ChannelUnit(ch.sensor);
+    ch.unit = std::string(UnitsOf(ch.sensor).rate);
     for (size_t s = 0; s < result.segments.size(); ++s) {
       const StaticSegment& seg = result.segments[s];
       rates[s].resize(seg.Samples());
@@ -386,7 +384,7 @@ std::vector<ParameterEstimate> AllanParameterEstimates(const AllanResult& result
     const bool gyro = ch.sensor == Sensor::kGyro;
     const std::string s = gyro ? "gyro" : "acc";
     const std::string axis = kAxis[ch.axis];
-    auto add = [&](AllanParameter p, const std::string& name, const std::string& unit) {
+    auto add = [&](AllanParameter p, const std::string& name, std::string_view unit) {
       const AllanTermEstimate& t = ch.fit[p];
       if (!t.included) return;
       ParameterEstimate e;
@@ -394,17 +392,18 @@ std::vector<ParameterEstimate> AllanParameterEstimates(const AllanResult& result
       e.value = t.value;
       e.std_error = t.std_error;
       e.method = EstimationMethod::kAllan;
-      e.unit = unit;
+      e.unit = std::string(unit);
       if (auto it = prior.find(name); it != prior.end()) e.a_priori = it->second;
       out.push_back(e);
     };
     const DriftAxis drift{ch.sensor, ch.axis};
-    add(AllanParameter::kQuantization, QuantizationName(drift), gyro ? "rad" : "m/s");
-    add(AllanParameter::kWhiteDensity, WhiteNoiseName(drift), gyro ? "rad/sqrt(s)" : "m/s/sqrt(s)");
-    add(AllanParameter::kBiasInstability, s + "_bias_instability." + axis, gyro ? "rad/s" : "m/s^2");
-    add(AllanParameter::kRateRandomWalk, s + "_rate_random_walk." + axis, gyro ? "rad/s/sqrt(s)" : "m/s^2/sqrt(s)");
-    add(AllanParameter::kRateRamp, s + "_rate_ramp." + axis, gyro ? "rad/s^2" : "m/s^3");
-    add(AllanParameter::kMarkovSigma, DriftSigmaName(drift), gyro ? "rad/s" : "m/s^2");
+    const SensorUnits units = UnitsOf(ch.sensor);
+    add(AllanParameter::kQuantization, QuantizationName(drift), units.quantization);
+    add(AllanParameter::kWhiteDensity, WhiteNoiseName(drift), units.white_density);
+    add(AllanParameter::kBiasInstability, s + "_bias_instability." + axis, units.rate);
+    add(AllanParameter::kRateRandomWalk, s + "_rate_random_walk." + axis, units.rate_walk);
+    add(AllanParameter::kRateRamp, s + "_rate_ramp." + axis, units.rate_ramp);
+    add(AllanParameter::kMarkovSigma, DriftSigmaName(drift), units.rate);
     add(AllanParameter::kMarkovTau, DriftTauName(drift), "s");
   }
   return out;
@@ -502,6 +501,40 @@ absl::StatusOr<ErrorModel> ErrorModelFromAllan(const AllanResult& result, const 
     note(ch.name + ": " + drift->second);
   }
   return model;
+}
+
+std::vector<AllanDeparture> AllanDeparturesFrom(const AllanResult& result, const ErrorModel& model,
+                                                double family_wise_alpha) {
+  size_t points = 0;
+  for (const AllanChannel& ch : result.channels) points += ch.curve.size();
+  // Each tail of every point's interval, Bonferroni over the curve's points.
+  const double tail = 0.5 * family_wise_alpha / static_cast<double>(std::max<size_t>(1, points));
+  std::vector<AllanDeparture> out;
+  for (const AllanChannel& ch : result.channels) {
+    const SensorTriadModel& triad = ch.sensor == Sensor::kGyro ? model.gyro : model.acc;
+    const auto axis = static_cast<size_t>(ch.axis);
+    AllanNoiseTerms predicted;
+    predicted.quantization = triad.quantization[ch.axis];
+    predicted.white_density = triad.white_noise_density[ch.axis];
+    predicted.markov_sigma = triad.bias[axis].sigma;
+    predicted.markov_tau_s = triad.bias[axis].tau_s;
+    AllanDeparture farthest{ch.name, 0.0, 1.0};
+    for (const AllanPoint& p : ch.curve) {
+      const double model_adev = std::sqrt(ModelAllanVariance(predicted, p.tau_s));
+      if (!(model_adev > 0.0) || !(p.adev > 0.0) || !(p.edf > 0.0)) continue;
+      // σ² ν/χ²_ν within its interval (the curve's own intervals, at the
+      // family-wise level).
+      const double low = p.adev * std::sqrt(p.edf / ChiSquareQuantileFast(1.0 - tail, p.edf));
+      const double high = p.adev * std::sqrt(p.edf / ChiSquareQuantileFast(tail, p.edf));
+      double ratio = 1.0;
+      if (low > model_adev) ratio = low / model_adev;
+      if (high < model_adev) ratio = high / model_adev;
+      if (std::abs(std::log(ratio)) > std::abs(std::log(farthest.ratio)))
+        farthest = {ch.name, p.tau_s, ratio};
+    }
+    out.push_back(farthest);
+  }
+  return out;
 }
 
 }  // namespace insdiag::engine::ident

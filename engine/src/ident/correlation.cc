@@ -85,30 +85,17 @@ double MeanVariance(const SeriesCovariance& K, int N) {
   return sum / (static_cast<double>(N) * N);
 }
 
-enum class FamilyParameterKind {
-  kMagnitude,        // a standard deviation or a walk's density
-  kCorrelationTime,  // a decay time, s
-  kPeriod,           // an oscillation's period, s
-};
-
-struct FamilyParameter {
-  std::string_view name;
-  FamilyParameterKind kind = FamilyParameterKind::kMagnitude;
-  // Times are bounded by the epoch and the run.
-  bool IsTimeS() const { return kind != FamilyParameterKind::kMagnitude; }
-};
-
 struct FamilySpec {
   CorrelationFamily family;
-  std::vector<FamilyParameter> parameters;  // all fitted as logarithms
+  std::vector<CorrelationParameter> parameters;  // all fitted as logarithms
 };
 
 // The fitted families' parameters, in the order CovarianceInto reads them.
 const FamilySpec& SpecOf(CorrelationFamily family) {
   static const std::array<FamilySpec, 5> kFamilies = [] {
-    constexpr FamilyParameter sigma{"sigma"}, tau{"tau_s", FamilyParameterKind::kCorrelationTime},
-        sigma2{"sigma2"}, tau2{"tau2_s", FamilyParameterKind::kCorrelationTime},
-        period{"period_s", FamilyParameterKind::kPeriod}, density{"density"};
+    using enum CorrelationParameter;
+    constexpr CorrelationParameter sigma = kSigma, tau = kTau, sigma2 = kSigma2, tau2 = kTau2,
+                                   period = kPeriod, density = kDensity;
     return std::array<FamilySpec, 5>{
         {{CorrelationFamily::kWhite, {sigma}},
          {CorrelationFamily::kExponential, {sigma, tau}},
@@ -268,11 +255,22 @@ absl::Status CorrelationOptions::Validate() const {
   return absl::OkStatus();
 }
 
-const FittedParameter* FamilyFit::Parameter(const std::string& name) const {
+const FittedParameter* FamilyFit::Parameter(CorrelationParameter id) const {
   for (const FittedParameter& p : parameters) {
-    if (p.name == name) return &p;
+    if (p.id == id) return &p;
   }
   return nullptr;
+}
+
+std::string_view CorrelationParameterName(CorrelationParameter p) {
+  static constexpr std::array<std::string_view, 7> kNames = {
+      "sigma", "tau_s", "sigma2", "tau2_s", "period_s", "density", "constant"};
+  return kNames.at(static_cast<size_t>(p));
+}
+
+bool IsTimeS(CorrelationParameter p) {
+  return p == CorrelationParameter::kTau || p == CorrelationParameter::kTau2 ||
+         p == CorrelationParameter::kPeriod;
 }
 
 const FamilyFit* CorrelationAnalysis::Fit(CorrelationFamily f) const {
@@ -426,7 +424,7 @@ FamilyFit FitFamily(const Problem& pb, CorrelationFamily family, std::vector<dou
   problem.AddResidualBlock(cost, nullptr, free_theta.data());
   // Correlation times between a tenth of an epoch and a hundred runs.
   for (int c = 0; c < free_count; ++c) {
-    if (spec.parameters[static_cast<size_t>(free_index[static_cast<size_t>(c)])].IsTimeS()) {
+    if (IsTimeS(spec.parameters[static_cast<size_t>(free_index[static_cast<size_t>(c)])])) {
       problem.SetParameterLowerBound(free_theta.data(), c, std::log(0.1 * pb.dt));
       problem.SetParameterUpperBound(free_theta.data(), c, std::log(100.0 * pb.T));
     }
@@ -479,9 +477,8 @@ FamilyFit FitFamily(const Problem& pb, CorrelationFamily family, std::vector<dou
   for (int i = 0; i < k; ++i) {
     const double v = std::exp(theta[static_cast<size_t>(i)]);
     const double se_log = std::sqrt(cov(i, i));
-    fit.parameters.push_back({std::string(spec.parameters[static_cast<size_t>(i)].name), v,
-                              v * se_log, v * std::exp(-1.96 * se_log),
-                              v * std::exp(1.96 * se_log)});
+    fit.parameters.push_back({spec.parameters[static_cast<size_t>(i)], v, v * se_log,
+                              v * std::exp(-1.96 * se_log), v * std::exp(1.96 * se_log)});
   }
   std::vector<double> natural(static_cast<size_t>(k));
   for (int i = 0; i < k; ++i) natural[static_cast<size_t>(i)] = std::exp(theta[static_cast<size_t>(i)]);
@@ -519,7 +516,8 @@ void ErrorsUnderAlternative(const Problem& pb, const std::vector<int>& fixed, Fa
   const FamilySpec& spec = SpecOf(fit.family);
   for (size_t i = 0; i < fit.parameters.size(); ++i) {
     p.push_back(fit.parameters[i].value);
-    if (spec.parameters[i].kind == FamilyParameterKind::kCorrelationTime)
+    if (spec.parameters[i] == CorrelationParameter::kTau ||
+        spec.parameters[i] == CorrelationParameter::kTau2)
       longest_s = std::max(longest_s, p.back());
   }
   const std::vector<double> stationary = CovarianceOf(fit.family, p.data(), pb.N, pb.dt, pb.error_acf).stationary;
@@ -561,8 +559,8 @@ FamilyFit ProfiledAlternative(const Problem& pb, CorrelationFamily family, const
   out.family = family;
   if (best_start == nullptr) return out;
   out = FitFamily(pb, family, *best_start);
-  const FittedParameter* decay = out.Parameter("tau2_s");
-  const FittedParameter* period = out.Parameter("period_s");
+  const FittedParameter* decay = out.Parameter(CorrelationParameter::kTau2);
+  const FittedParameter* period = out.Parameter(CorrelationParameter::kPeriod);
   const bool left_family = decay != nullptr && period != nullptr && decay->value > kMaxDecayInPeriods * period->value;
   const bool shape_fixed = !out.usable || out.chi2 > best_chi2 || left_family;
   if (shape_fixed) {
@@ -727,7 +725,8 @@ absl::StatusOr<CorrelationAnalysis> AnalyseCorrelation(std::span<const double> s
     const double mean_term = mean_sd > 0.0 ? out.mean / mean_sd : 0.0;
     constant.chi2 = exponential.chi2 - mean_term * mean_term;
     constant.parameter_count = exponential.parameter_count + 1;
-    constant.parameters.push_back({"constant", out.mean, mean_sd, out.mean - 1.96 * mean_sd, out.mean + 1.96 * mean_sd});
+    constant.parameters.push_back({CorrelationParameter::kConstant, out.mean, mean_sd,
+                                   out.mean - 1.96 * mean_sd, out.mean + 1.96 * mean_sd});
     constant.lr_statistic = mean_term * mean_term;
     constant.lr_dof = 1;
     constant.lr_p_value = stats::ChiSquareSurvival(constant.lr_statistic, 1.0);

@@ -73,16 +73,15 @@ std::string NameOf(const Parameter& p) {
   return ParameterName(SecondOrderName(p.drift), ParameterField::kFrequency);
 }
 
-const char* UnitOf(const Parameter& p) {
-  const bool gyro = p.drift.sensor == Sensor::kGyro;
+std::string_view UnitOf(const Parameter& p) {
   switch (p.kind) {
     case Kind::kSigma:
     case Kind::kPairSigma:
-      return gyro ? "rad/s" : "m/s^2";
+      return UnitsOf(p.drift.sensor).rate;
     case Kind::kTau:
       return "s";
     case Kind::kWalk:
-      return gyro ? "rad/s/sqrt(s)" : "m/s^2/sqrt(s)";
+      return UnitsOf(p.drift.sensor).rate_walk;
     case Kind::kPairDecayRate:
       return "1/s";
     case Kind::kPairFrequency:
@@ -422,7 +421,7 @@ ParameterEstimate EstimateOf(const Parameter& p, double value, double log_se, co
   e.ci95_low = value * std::exp(-1.96 * log_se);
   e.ci95_high = value * std::exp(1.96 * log_se);
   e.method = EstimationMethod::kMaximumLikelihood;
-  e.unit = UnitOf(p);
+  e.unit = std::string(UnitOf(p));
   if (p.kind == Kind::kSigma || p.kind == Kind::kTau) e.a_priori = ValueOf(a_priori, p);
   return e;
 }

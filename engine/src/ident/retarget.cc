@@ -98,8 +98,8 @@ RetargetResult RetargetDrifts(const ErrorModel& current, const ErrorModel& a_pri
       *value = new_value;
     }
     for (const auto& [estimate, prior_value, suffix, unit] :
-         {std::tuple{&sigma, prior.sigma, ParameterField::kSigma, gyro ? "rad/s" : "m/s^2"},
-          std::tuple{&tau, prior.tau_s, ParameterField::kTau, "s"}}) {
+         {std::tuple{&sigma, prior.sigma, ParameterField::kSigma, UnitsOf(d.sensor).rate},
+          std::tuple{&tau, prior.tau_s, ParameterField::kTau, std::string_view("s")}}) {
       ParameterEstimate p;
       p.name = ParameterName(d.state, suffix);
       p.value = estimate->value;
@@ -107,7 +107,7 @@ RetargetResult RetargetDrifts(const ErrorModel& current, const ErrorModel& a_pri
       p.ci95_low = estimate->ci95_low;
       p.ci95_high = estimate->ci95_high;
       p.method = EstimationMethod::kAutocorrelation;
-      p.unit = unit;
+      p.unit = std::string(unit);
       p.a_priori = prior_value;
       r.identified.push_back(p);
     }
@@ -147,7 +147,7 @@ std::vector<ParameterEstimate> ApplyAllanNoise(const AllanResult& allan, const E
       p.value = n.value;
       p.std_error = n.std_error;
       p.method = EstimationMethod::kAllan;
-      p.unit = ch.sensor == Sensor::kGyro ? "rad/sqrt(s)" : "m/s/sqrt(s)";
+      p.unit = std::string(UnitsOf(ch.sensor).white_density);
       p.a_priori = prior.white_noise_density[ch.axis];
       used.push_back(p);
     }
@@ -256,7 +256,7 @@ absl::StatusOr<NoiseScaleResult> ScaleUnresolvedNoise(const EpochRun& run, const
   ErrorModel& m = out.model;
   std::vector<Group> groups;
   auto add_group = [&](const char* name, const std::array<bool, 3>& flags, Sensor sensor,
-                       bool drift, const char* unit, double max_scale) {
+                       bool drift, double max_scale) {
     SensorTriadModel& triad = sensor == Sensor::kGyro ? m.gyro : m.acc;
     Group g;
     g.name = name;
@@ -269,17 +269,18 @@ absl::StatusOr<NoiseScaleResult> ScaleUnresolvedNoise(const EpochRun& run, const
       const int axis = static_cast<int>(a);
       const DriftAxis sensor_axis{sensor, axis};
       g.terms.push_back(
-          {v, *v, drift ? DriftSigmaName(sensor_axis) : WhiteNoiseName(sensor_axis), unit});
+          {v, *v, drift ? DriftSigmaName(sensor_axis) : WhiteNoiseName(sensor_axis),
+           std::string(drift ? UnitsOf(sensor).rate : UnitsOf(sensor).white_density)});
     }
     if (!g.terms.empty()) groups.push_back(std::move(g));
   };
   const double bound = options.max_scale, seed = options.max_seed_scale;
-  add_group("gyro white", which.gyro_white, Sensor::kGyro, false, "rad/sqrt(s)", bound);
-  add_group("acc white", which.acc_white, Sensor::kAccelerometer, false, "m/s/sqrt(s)", bound);
-  add_group("gyro drift", which.gyro_drift, Sensor::kGyro, true, "rad/s", bound);
-  add_group("acc drift", which.acc_drift, Sensor::kAccelerometer, true, "m/s^2", bound);
-  add_group("gyro drift seed", which.gyro_drift_seed, Sensor::kGyro, true, "rad/s", seed);
-  add_group("acc drift seed", which.acc_drift_seed, Sensor::kAccelerometer, true, "m/s^2", seed);
+  add_group("gyro white", which.gyro_white, Sensor::kGyro, false, bound);
+  add_group("acc white", which.acc_white, Sensor::kAccelerometer, false, bound);
+  add_group("gyro drift", which.gyro_drift, Sensor::kGyro, true, bound);
+  add_group("acc drift", which.acc_drift, Sensor::kAccelerometer, true, bound);
+  add_group("gyro drift seed", which.gyro_drift_seed, Sensor::kGyro, true, seed);
+  add_group("acc drift seed", which.acc_drift_seed, Sensor::kAccelerometer, true, seed);
 
   auto apply = [](Group& g, double log_scale) {
     g.log_scale = log_scale;

@@ -78,7 +78,9 @@ std::string EffectTerm::Name() const {
 }
 
 std::string EffectTerm::ParameterName(int k) const {
-  if (family->regressor == Regressor::kYawSinCos) return Name() + (k == 0 ? ".sin" : ".cos");
+  if (family->regressor == Regressor::kYawSinCos) {
+    return Name() + std::string(kHarmonicParameterSuffixes[static_cast<size_t>(k)]);
+  }
   return Name();
 }
 

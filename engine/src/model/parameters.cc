@@ -11,8 +11,6 @@
 namespace insdiag::engine {
 namespace {
 
-std::string SensorUnit(Sensor s) { return s == Sensor::kGyro ? "rad/s" : "m/s^2"; }
-
 struct BaseName {
   SensorTriadModel ErrorModel::*triad;
   Sensor sensor;
@@ -67,13 +65,13 @@ bool SetEffectField(ParameterField field, int parameter, double value, ModelEffe
   return false;
 }
 
-// A harmonic effect's parameter is named by ".sin" or ".cos" after its term.
+// A harmonic effect's parameter is named by its suffix after its term.
 std::string_view SplitHarmonic(std::string_view name, int* parameter) {
   *parameter = 0;
-  for (const auto& [suffix, index] :
-       {std::pair{std::string_view(".sin"), 0}, std::pair{std::string_view(".cos"), 1}}) {
+  for (size_t index = 0; index < kHarmonicParameterSuffixes.size(); ++index) {
+    const std::string_view suffix = kHarmonicParameterSuffixes[index];
     if (name.size() > suffix.size() && name.ends_with(suffix)) {
-      *parameter = index;
+      *parameter = static_cast<int>(index);
       return name.substr(0, name.size() - suffix.size());
     }
   }
@@ -86,7 +84,7 @@ std::vector<NamedParameter> ParametersOf(const ErrorModel& model) {
   std::vector<NamedParameter> out;
   for (const BaseName& b : kTriads) {
     const SensorTriadModel& t = model.*(b.triad);
-    const std::string u = SensorUnit(b.sensor);
+    const std::string u(UnitsOf(b.sensor).rate);
     for (int i = 0; i < 3; ++i) {
       const DriftAxis drift{b.sensor, i};
       out.push_back({DriftSigmaName(drift), t.bias[static_cast<size_t>(i)].sigma, u});
@@ -94,11 +92,11 @@ std::vector<NamedParameter> ParametersOf(const ErrorModel& model) {
     }
     for (int i = 0; i < 3; ++i) {
       out.push_back({WhiteNoiseName({b.sensor, i}), t.white_noise_density[i],
-                     b.sensor == Sensor::kGyro ? "rad/sqrt(s)" : "m/s/sqrt(s)"});
+                     std::string(UnitsOf(b.sensor).white_density)});
     }
     for (int i = 0; i < 3; ++i) {
       out.push_back({QuantizationName({b.sensor, i}), t.quantization[i],
-                     b.sensor == Sensor::kGyro ? "rad" : "m/s"});
+                     std::string(UnitsOf(b.sensor).quantization)});
     }
   }
   for (const ReferenceName& r : kReferences) out.push_back({r.name, model.reference.*(r.sigma), r.unit});

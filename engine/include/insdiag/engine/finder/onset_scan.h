@@ -40,6 +40,11 @@
 // with its standard deviation and central interval. The magnitude is the
 // one at that onset. Where a still stretch hides the sensor axis the
 // likelihood is flat in the onset, and the interval says so.
+// Two faults whose innovation signatures from one fault's onset are nearly
+// parallel in the S⁻¹ metric, |I_ab(θ)|/√(I_aa(θ) I_bb(θ)) above a
+// threshold, cannot be told apart by the run (on a still, level table a
+// gyro's step about x tilts the unit as an accelerometer's ramp on y
+// does): the fault names the other, as the score test's look-alikes do.
 #pragma once
 
 #include <vector>
@@ -58,6 +63,8 @@ struct OnsetScanOptions {
   double min_side_s = 60.0;
   // Each tail of the onset's posterior left outside its interval (0.16: ±1σ).
   double interval_tail = 0.16;
+  // |cos| of two faults' signatures at one's onset above which it names the other.
+  double ambiguity_threshold = 0.9;
 };
 
 // The best onset of one fault term.
@@ -74,6 +81,8 @@ struct OnsetFit {
   double std_error = 0.0;
   double path_length = 0.0;   // V
   int onsets_tried = 0;
+  std::vector<EffectTerm>
+      ambiguous_with;  // faults whose signature from this onset is nearly parallel
 };
 
 // Davies' bound on P(max over onsets of 2Δℓ ≥ statistic) for a scan whose

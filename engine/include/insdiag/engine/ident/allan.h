@@ -301,4 +301,21 @@ std::vector<ParameterEstimate> AllanParameterEstimates(const AllanResult& result
 absl::StatusOr<ErrorModel> ErrorModelFromAllan(const AllanResult& result, const ReferenceAccuracy& reference,
                                                std::vector<std::string>* notes = nullptr);
 
+// Where the run's Allan deviation lies farthest from what a model predicts
+// for one channel: the model's curve from its white noise, quantisation and
+// Gauss–Markov drift (ModelAllanVariance; the drift's σ²·g(τ/T) is IEEE 952
+// Annex C's first-order Markov term), and at each point of the curve the
+// nearer end of its confidence interval (σ̂² ν/χ²_ν, as the curve's own, at
+// `family_wise_alpha` over all the curve's points by Bonferroni) over the
+// model's deviation. `ratio` is the farthest of those: > 1 when the whole
+// interval lies above the model, < 1 below, 1 when every interval holds the
+// model's curve.
+struct AllanDeparture {
+  std::string channel;  // "gyro_x", …, "acc_z"
+  double tau_s = 0.0;
+  double ratio = 1.0;
+};
+std::vector<AllanDeparture> AllanDeparturesFrom(const AllanResult& result, const ErrorModel& model,
+                                                double family_wise_alpha);
+
 }  // namespace insdiag::engine::ident

@@ -68,12 +68,25 @@ const char* CorrelationFamilyName(CorrelationFamily f);
 // Seed eq. 9 for lags 0 … max_lag.
 std::vector<double> SampleAutocovariance(std::span<const double> x, int max_lag);
 
+// A correlation family's parameters: the first exponential's σ and τ, the
+// second term's σ₂ and τ₂ (decay time) with its period, a walk's density,
+// and the exponential-plus-constant family's constant.
+enum class CorrelationParameter { kSigma, kTau, kSigma2, kTau2, kPeriod, kDensity, kConstant };
+// The name reports give it: "sigma", "tau_s", "sigma2", "tau2_s", "period_s", "density",
+// "constant".
+std::string_view CorrelationParameterName(CorrelationParameter p);
+// True for the times [s] (τ, τ₂, the period); the others are in the drift's
+// unit, the density per √s.
+bool IsTimeS(CorrelationParameter p);
+
 struct FittedParameter {
-  std::string name;  // "sigma", "tau_s", "sigma2", "tau2_s", "period_s", "density", "constant"
+  CorrelationParameter id = CorrelationParameter::kSigma;
   double value = 0.0;
   double std_error = 0.0;
   double ci95_low = 0.0;
   double ci95_high = 0.0;
+
+  std::string_view Name() const { return CorrelationParameterName(id); }
 };
 
 struct FamilyFit {
@@ -95,8 +108,8 @@ struct FamilyFit {
   // Covariance of the logarithms of the parameters (NaN where undetermined).
   Eigen::MatrixXd log_covariance;
 
-  // The parameter named `name`, or nullptr.
-  const FittedParameter* Parameter(const std::string& name) const;
+  // The fit's parameter `id`, or nullptr when the family has none.
+  const FittedParameter* Parameter(CorrelationParameter id) const;
 };
 
 struct CorrelationOptions {

@@ -37,6 +37,20 @@ namespace insdiag::engine {
 
 enum class Sensor { kGyro, kAccelerometer };
 
+// The SI units of one sensor's quantities, spelled as reports spell them.
+struct SensorUnits {
+  std::string_view rate;           // its output and bias: "rad/s" | "m/s^2"
+  std::string_view white_density;  // angle / velocity random walk: "rad/sqrt(s)" | "m/s/sqrt(s)"
+  std::string_view quantization;   // "rad" | "m/s"
+  std::string_view rate_walk;      // rate random walk: "rad/s/sqrt(s)" | "m/s^2/sqrt(s)"
+  std::string_view rate_ramp;      // "rad/s^2" | "m/s^3"
+};
+constexpr SensorUnits UnitsOf(Sensor sensor) {
+  return sensor == Sensor::kGyro
+             ? SensorUnits{"rad/s", "rad/sqrt(s)", "rad", "rad/s/sqrt(s)", "rad/s^2"}
+             : SensorUnits{"m/s^2", "m/s/sqrt(s)", "m/s", "m/s^2/sqrt(s)", "m/s^3"};
+}
+
 enum class EffectKind {
   kConstant,  // unknown parameters: states with zero process noise
   kRandom,    // changes the structure of the drift model: states with process noise
@@ -86,6 +100,10 @@ struct EffectFamily {
 std::span<const EffectFamily> EffectCatalogue();
 
 const EffectFamily* FindEffectFamily(std::string_view name);
+
+// The suffixes that name a yaw harmonic's two parameters after its term:
+// parameter k is the term's name followed by kHarmonicParameterSuffixes[k].
+inline constexpr std::array<std::string_view, 2> kHarmonicParameterSuffixes = {".sin", ".cos"};
 
 // One term of a family: the family applied to one axis (or axis pair).
 struct EffectTerm {
