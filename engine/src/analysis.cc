@@ -149,8 +149,7 @@ std::optional<ident::AllanResult> AllanOfStaticSegments(const BenchRun& run, con
 // The unit type's nominal model's departure from the run's Allan deviation
 // when it is beyond the drift search's reach: some channel's curve lies,
 // beyond its confidence interval at the analysis's family-wise level, further
-// from the model's curve than the
-// widest σ factors the search starts from. Identification climbs from its
+// from the model's curve than the widest σ factors the search starts from. Identification climbs from its
 // starts and cannot reach a unit that far from them (a MEMS unit labelled
 // with a navigation-grade type is 1000 times its drift).
 std::optional<ident::AllanDeparture> DepartureBeyondSearch(const ident::AllanResult& allan,
@@ -162,8 +161,7 @@ std::optional<ident::AllanDeparture> DepartureBeyondSearch(const ident::AllanRes
   for (const ident::AllanDeparture& d :
        ident::AllanDeparturesFrom(allan, nominal, family_wise_alpha)) {
     if (d.ratio >= lowest && d.ratio <= highest) continue;
-    if (!farthest.has_value() || std::abs(std::log(d.ratio)) > std::abs(std::log(farthest->ratio)))
-      farthest = d;
+    if (!farthest.has_value() || d.LogDistance() > farthest->LogDistance()) farthest = d;
   }
   return farthest;
 }
@@ -199,11 +197,10 @@ absl::StatusOr<pipeline::APriori> ChooseAPrioriModel(const BenchRun& run, const 
       return out;
     }
     notes.push_back(absl::StrFormat(
-        "the run's Allan deviation on %s at τ %.3g s is %.3g times the unit type's nominal model "
-        "at the "
-        "family-wise confidence bound: further than the drift identification searches from it. The "
-        "unit is analysed as "
-        "one without a unit type: the a-priori model comes from its Allan deviation",
+        "the run's Allan deviation on %s at τ %.3g s is %.3g times the unit type's nominal model at "
+        "the family-wise confidence bound: further than the drift identification searches from it. "
+        "The unit is analysed as one without a unit type: the a-priori model comes from its Allan "
+        "deviation",
         beyond->channel, beyond->tau_s, beyond->ratio));
   } else if (!allan.has_value()) {
     return model.status();

@@ -526,11 +526,10 @@ std::vector<AllanDeparture> AllanDeparturesFrom(const AllanResult& result, const
       // family-wise level).
       const double low = p.adev * std::sqrt(p.edf / ChiSquareQuantileFast(1.0 - tail, p.edf));
       const double high = p.adev * std::sqrt(p.edf / ChiSquareQuantileFast(tail, p.edf));
-      double ratio = 1.0;
-      if (low > model_adev) ratio = low / model_adev;
-      if (high < model_adev) ratio = high / model_adev;
-      if (std::abs(std::log(ratio)) > std::abs(std::log(farthest.ratio)))
-        farthest = {ch.name, p.tau_s, ratio};
+      AllanDeparture here{ch.name, p.tau_s, 1.0};
+      if (low > model_adev) here.ratio = low / model_adev;
+      if (high < model_adev) here.ratio = high / model_adev;
+      if (here.LogDistance() > farthest.LogDistance()) farthest = here;
     }
     out.push_back(farthest);
   }

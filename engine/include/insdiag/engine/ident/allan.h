@@ -85,6 +85,7 @@
 #include <absl/status/statusor.h>
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <span>
@@ -314,6 +315,9 @@ struct AllanDeparture {
   std::string channel;  // "gyro_x", …, "acc_z"
   double tau_s = 0.0;
   double ratio = 1.0;
+
+  // How far: |ln ratio|, the same above and below.
+  double LogDistance() const { return std::abs(std::log(ratio)); }
 };
 std::vector<AllanDeparture> AllanDeparturesFrom(const AllanResult& result, const ErrorModel& model,
                                                 double family_wise_alpha);
