@@ -141,12 +141,20 @@ struct Retargeted {
   bool faults_flagged = false;           // by the last pass's monitoring or onset scan
   bool drifts_by_likelihood = false;     // the misfit was the drifts': their σ and τ are in the model
   bool deferred = false;                 // the a-priori model's missing effects go first
-  // The faults to test against the drifts identified beside them: the most
-  // significant bias step and ramp the first pass found against an Allan
-  // fit's placeholders (family-wise over the fault terms), then those of the
+  // The faults to test against the drifts identified beside them, where the
+  // drifts were identified from a class prior (an Allan fit's placeholders,
+  // or a nominal model whose drifts the run overturned): the most
+  // significant bias step and ramp the first pass found against the
+  // a-priori model (family-wise over the fault terms), then those of the
   // identified drifts' own scan (AddFaultsOfTheIdentifiedDrifts).
-  std::vector<OnsetFit> placeholder_faults;
+  std::vector<OnsetFit> faults_to_test;
   int fault_terms_scanned = 0;
+
+  // Whether the drifts were identified from a class prior rather than
+  // re-tuned from the unit's own specification: a fault may be inside them.
+  bool DriftsFromAClassPrior(const APriori& a_priori) const {
+    return a_priori.from_allan || drifts_by_likelihood;
+  }
 };
 
 // The most significant bias step and the most significant ramp among the
@@ -243,8 +251,8 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std
       return f.p_value * static_cast<double>(pass->onsets.size()) < options.finder.family_wise_alpha;
     };
     out.faults_flagged = !pass->monitor.faults.empty() || std::any_of(pass->onsets.begin(), pass->onsets.end(), family_wise);
-    if (first && c.a_priori.from_allan) {
-      out.placeholder_faults = MostSignificantStepAndRamp(pass->onsets, family_wise);
+    if (first) {
+      out.faults_to_test = MostSignificantStepAndRamp(pass->onsets, family_wise);
       out.fault_terms_scanned = static_cast<int>(pass->onsets.size());
     }
     // The a-priori model's missing effects, the likelihood's structures
@@ -273,15 +281,17 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std
     }
     ident::RetargetResult step = ident::RetargetDrifts(id.model, c.a_priori.model, out.drifts,
                                                        options.settle_log_ratio, options.monitor.family_wise_alpha);
-    // An Allan-fit model's drifts are placeholders (a bound or a guess from
-    // the static segments): innovations beyond them are the drifts' misfit
-    // before they are noise of the bench's reference, and a reference noise
-    // raised to absorb them flattens the likelihood the drifts are then
-    // identified by. Such a model's reference is matched once its drifts
+    // Drifts from a class prior (an Allan fit's placeholders, a bound or a
+    // guess from the static segments; a nominal model the run overturned):
+    // innovations beyond them are the drifts' misfit, or a fault's, before
+    // they are noise of the bench's reference, and a reference noise raised
+    // to absorb them flattens the likelihood the drifts and the faults are
+    // then tested by. Such a model's reference is matched once its drifts
     // have their likelihood values (MatchReferenceNoiseToTheIdentifiedModel).
     const bool reference_changed =
-        !c.a_priori.from_allan &&
-        ident::MatchReferenceNoise(pass->forward, options.monitor.family_wise_alpha, step.model, &notes);
+        !out.DriftsFromAClassPrior(c.a_priori) &&
+        ident::MatchReferenceNoise(pass->forward, options.monitor.family_wise_alpha, step.model,
+                                   &notes);
     // Nothing significant: the report's scan when nothing below re-tunes
     // the model (the unit's a-priori model fits), else a new one.
     if (scan_a_priori) id.scanned = ScannedModel{std::move(*pass), std::move(found), std::move(found_notes)};
@@ -311,17 +321,22 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std
 // start near the likelihood's ridge. Apart, because one EM over both sets
 // crawls: on an eight-hour run with a tripled gyro σ it had not converged
 // after 30 steps, that σ still 15 % short.
-absl::StatusOr<ident::DriftLikelihoodResult> IdentifyDriftSet(const RunContext& c, const ErrorModel& model,
-                                                              const Retargeted& retargeted, bool resolved_set) {
+absl::StatusOr<ident::DriftLikelihoodResult> IdentifyDriftSet(const RunContext& c,
+                                                              const ErrorModel& model,
+                                                              const Retargeted& retargeted,
+                                                              bool resolved_set,
+                                                              bool fault_in_model) {
   Progress(c.options, 0.6, "maximum-likelihood drift identification");
   const DriftSelection resolved = ResolvedDrifts(retargeted.drifts);
   DriftSelection selection, tau_too;
   for (const DriftAxis d : DriftAxis::All()) {
     // A run whose monitoring flags faults (a drift that jumped, say) is
     // not re-tuned: a wider drift would hide the fault the diagnosis is for.
-    // Unless the model is an Allan fit's placeholders: what they flag says
-    // how far they are from the unit, not that it failed.
-    const bool keep_for_faults = retargeted.faults_flagged && !c.a_priori.from_allan;
+    // Unless the model is an Allan fit's placeholders (what they flag says
+    // how far they are from the unit, not that it failed), or the fault
+    // tested is in the model.
+    const bool keep_for_faults =
+        retargeted.faults_flagged && !c.a_priori.from_allan && !fault_in_model;
     selection.Set(d, !keep_for_faults && resolved.Contains(d) == resolved_set);
     tau_too.Set(d, selection.Contains(d) && (resolved_set || c.a_priori.from_allan));
   }
@@ -338,12 +353,14 @@ absl::StatusOr<ident::DriftLikelihoodResult> IdentifyDriftSet(const RunContext& 
 // smoother's shrinkage biases its σ and τ low together along the fit's ridge
 // (docs/IDENTIFICATION.md, coverage); the likelihood's estimates carry no
 // such bias and their intervals cover the truth. The unresolved set is done
-// already when the misfit's competition took it.
+// already when the misfit's competition took it, unless a fault tested
+// against the drifts is in the model: a drift that took the fault in is
+// identified again beside it.
 void IdentifyFinalDrifts(const RunContext& c, const Retargeted& retargeted, Identification& id,
-                         std::vector<std::string>& notes) {
+                         std::vector<std::string>& notes, bool fault_in_model = false) {
   for (const bool resolved_set : {false, true}) {
-    if (!resolved_set && retargeted.drifts_by_likelihood) continue;
-    auto ml = IdentifyDriftSet(c, id.model, retargeted, resolved_set);
+    if (!resolved_set && retargeted.drifts_by_likelihood && !fault_in_model) continue;
+    auto ml = IdentifyDriftSet(c, id.model, retargeted, resolved_set, fault_in_model);
     if (ml.ok()) WidenErrorsOrSay(c.epochs, c.a_priori.model, *ml, notes);
     if (!ml.ok()) {
       notes.push_back("the drifts were not identified by likelihood: " + std::string(ml.status().message()));
@@ -354,8 +371,8 @@ void IdentifyFinalDrifts(const RunContext& c, const Retargeted& retargeted, Iden
   }
 }
 
-// The reference noise of a model whose drifts were identified from
-// placeholders, against one pass of the identified model.
+// The reference noise of a model whose drifts were identified from a class
+// prior, against one pass of the identified model.
 absl::Status MatchReferenceNoiseToTheIdentifiedModel(const RunContext& c, Identification& id,
                                                      std::vector<std::string>& notes) {
   auto pass = RunForwardFilter(c.epochs, id.model);
@@ -364,18 +381,19 @@ absl::Status MatchReferenceNoiseToTheIdentifiedModel(const RunContext& c, Identi
   return absl::OkStatus();
 }
 
-// A bias step or ramp found against an Allan fit's placeholders, tested
-// against the drifts identified without it. Drifts identified from decades
-// take a step as a slower, wider drift (a 50 °/h MEMS gyro step became a
-// drift σ × 6 with τ × 17, and the step's scan on that model stayed below
-// its level), so the drifts are identified again with the fault in the model
+// A bias step or ramp found against a class prior's drifts, tested against
+// the drifts identified without it. Drifts identified from decades take a
+// step as a slower, wider drift (a 50 °/h MEMS gyro step became a drift σ × 6
+// with τ × 17, and the step's scan on that model stayed below its level; a
+// 0.5 °/h step of a 0.1 °/h gyro labelled with a type of 0.01 °/h became a
+// drift σ × 2.4), so the drifts are identified again with the fault in the model
 // at the scan's onset, and the two fitted likelihoods decide: the fault
 // stands when 2Δℓ exceeds the onset scan's own bound (Davies over the onsets,
 // Bonferroni over the fault terms) — the likelihood ratio fitted on both
 // sides. Model A then has the drifts identified beside the fault, without
 // it: the scan names the fault, and adding it is the user's step, as for any
 // unit.
-struct PlaceholderFaultTest {
+struct FaultAgainstDriftsTest {
   const OnsetFit* fault = nullptr;
   Identification with_fault;  // the drifts identified beside it (the fault in the model)
   std::vector<std::string> notes;
@@ -384,9 +402,10 @@ struct PlaceholderFaultTest {
   bool tested = false;
 };
 
-PlaceholderFaultTest TestPlaceholderFault(const RunContext& c, const Retargeted& retargeted, const OnsetFit& fault,
-                                          const Identification& id, double log_likelihood_without) {
-  PlaceholderFaultTest t;
+FaultAgainstDriftsTest TestFaultAgainstDrifts(const RunContext& c, const Retargeted& retargeted,
+                                              const OnsetFit& fault, const Identification& id,
+                                              double log_likelihood_without) {
+  FaultAgainstDriftsTest t;
   t.fault = &fault;
   t.with_fault.model = id.model;
   t.with_fault.identified = id.identified;
@@ -395,7 +414,7 @@ PlaceholderFaultTest TestPlaceholderFault(const RunContext& c, const Retargeted&
   e.onset_s = fault.onset_s;
   e.prior_sigma[0] = PriorSigmaAroundEstimate(fault.estimate, fault.std_error, c.options);
   t.with_fault.model.effects.push_back(e);
-  IdentifyFinalDrifts(c, retargeted, t.with_fault, t.notes);
+  IdentifyFinalDrifts(c, retargeted, t.with_fault, t.notes, /*fault_in_model=*/true);
   auto with = ProfileLogLikelihood(c.epochs, t.with_fault.model);
   if (!with.ok()) {
     t.notes = {fault.term.Name() + " against the identified drifts: not tested (" +
@@ -410,8 +429,8 @@ PlaceholderFaultTest TestPlaceholderFault(const RunContext& c, const Retargeted&
   return t;
 }
 
-// The faults the drifts identified from an Allan fit's placeholders may have
-// taken in. A bias step inside the static segments raises their Allan curve
+// The faults the drifts identified from a class prior may have taken in. A
+// bias step inside the static segments raises their Allan curve
 // as a rate random walk does (a step's Allan variance grows with the cluster
 // time), so the placeholder drift is already wide and slow, the first scan
 // does not flag the step, and the drifts identified from there keep it (a
@@ -425,27 +444,27 @@ void AddFaultsOfTheIdentifiedDrifts(const RunContext& c, const ErrorModel& model
   const std::vector<OnsetFit> onsets = ScanOnsets(forward, StateLayout(model), c.epochs,
                                                   AbsentFaultTerms(model), c.options.onset_scan);
   const auto not_tested = [&](const OnsetFit& f) {
-    return std::none_of(retargeted.placeholder_faults.begin(), retargeted.placeholder_faults.end(),
+    return std::none_of(retargeted.faults_to_test.begin(), retargeted.faults_to_test.end(),
                         [&](const OnsetFit& g) { return g.term == f.term; });
   };
   for (OnsetFit& f : MostSignificantStepAndRamp(onsets, not_tested)) {
-    retargeted.placeholder_faults.push_back(std::move(f));
+    retargeted.faults_to_test.push_back(std::move(f));
   }
   retargeted.fault_terms_scanned = static_cast<int>(onsets.size());
 }
 
-// The faults found against the placeholders, each against the identified
+// The faults found against the a-priori drifts, each against the identified
 // drifts; model A takes the drifts identified beside the one whose fitted
 // 2Δℓ is largest among those that stand.
-void TestPlaceholderFaults(const RunContext& c, const Retargeted& retargeted,
-                           double log_likelihood_without, Identification& id,
-                           std::vector<std::string>& notes) {
-  PlaceholderFaultTest* best = nullptr;
-  std::vector<PlaceholderFaultTest> tests;
-  for (const OnsetFit& f : retargeted.placeholder_faults) {
-    tests.push_back(TestPlaceholderFault(c, retargeted, f, id, log_likelihood_without));
+void TestFaultsAgainstDrifts(const RunContext& c, const Retargeted& retargeted,
+                             double log_likelihood_without, Identification& id,
+                             std::vector<std::string>& notes) {
+  FaultAgainstDriftsTest* best = nullptr;
+  std::vector<FaultAgainstDriftsTest> tests;
+  for (const OnsetFit& f : retargeted.faults_to_test) {
+    tests.push_back(TestFaultAgainstDrifts(c, retargeted, f, id, log_likelihood_without));
   }
-  for (PlaceholderFaultTest& t : tests) {
+  for (FaultAgainstDriftsTest& t : tests) {
     if (!t.tested) {
       notes.insert(notes.end(), t.notes.begin(), t.notes.end());
       continue;
@@ -465,21 +484,21 @@ void TestPlaceholderFaults(const RunContext& c, const Retargeted& retargeted,
   id.identified = std::move(best->with_fault.identified);
 }
 
-// The faults of an Allan fit's placeholders and of the drifts identified
-// from them, each tested against the drifts identified beside it; one
+// The faults of a class prior's drifts and of the drifts identified from
+// them, each tested against the drifts identified beside it; one
 // forward pass of the identified model serves the scan and the likelihood
 // the tests are against.
 void TestFaultsAgainstTheIdentifiedDrifts(const RunContext& c, Retargeted& retargeted,
                                           Identification& id, std::vector<std::string>& notes) {
   auto forward = RunForwardFilter(c.epochs, id.model);
   if (!forward.ok()) {
-    notes.push_back("faults against the drifts identified from the Allan fit: not tested (" +
+    notes.push_back("faults against the drifts identified from a class prior: not tested (" +
                     std::string(forward.status().message()) + ")");
     return;
   }
   AddFaultsOfTheIdentifiedDrifts(c, id.model, *forward, retargeted);
-  if (retargeted.placeholder_faults.empty()) return;
-  TestPlaceholderFaults(c, retargeted, ProfileLogLikelihood(*forward, id.model), id, notes);
+  if (retargeted.faults_to_test.empty()) return;
+  TestFaultsAgainstDrifts(c, retargeted, ProfileLogLikelihood(*forward, id.model), id, notes);
 }
 
 }  // namespace
@@ -494,10 +513,11 @@ absl::StatusOr<Identification> IdentifyModel(const RunContext& c, const std::opt
   if (!retargeted.ok()) return retargeted.status();
   if (c.options.identify_drifts_by_likelihood && !retargeted->deferred) {
     IdentifyFinalDrifts(c, *retargeted, id, notes);
-    // Only an Allan fit's placeholders have faults to test against the drifts identified from them.
-    if (c.a_priori.from_allan) TestFaultsAgainstTheIdentifiedDrifts(c, *retargeted, id, notes);
+    // Drifts re-tuned from the unit's own specification keep what the scan finds beside them.
+    if (retargeted->DriftsFromAClassPrior(c.a_priori))
+      TestFaultsAgainstTheIdentifiedDrifts(c, *retargeted, id, notes);
   }
-  if (c.a_priori.from_allan && !retargeted->deferred) {
+  if (retargeted->DriftsFromAClassPrior(c.a_priori) && !retargeted->deferred) {
     if (auto matched = MatchReferenceNoiseToTheIdentifiedModel(c, id, notes); !matched.ok()) return matched;
   }
   return id;

@@ -103,8 +103,13 @@ absl::StatusOr<StaticConstants> MeasureStaticConstants(const BenchRun& run,
     c.std_error = std::max(std::sqrt(MeanVariance(triad.white_noise_density[c.term.axis], drift, static_s)),
                            batch_se[i]);
     c.drift_sigma = drift.sigma;
+    c.weakest_batch_bias = std::abs(c.bias);
+    for (const Vector6d& m : batch_means) {
+      c.weakest_batch_bias = std::min(c.weakest_batch_bias, std::copysign(1.0, c.bias) * m[i]);
+    }
     c.dominant = std::abs(c.bias) > options.drift_sigmas * c.drift_sigma &&
-                 std::abs(c.bias) > options.standard_errors * c.std_error;
+                 std::abs(c.bias) > options.standard_errors * c.std_error &&
+                 c.weakest_batch_bias > options.batch_share * std::abs(c.bias);
   }
   return out;
 }

@@ -24,7 +24,13 @@
 // inflates the drift σ and the noise to absorb it, and the scan's one-step
 // estimates leave their linear range (a 100 % scale factor on a static run).
 // Such a bias is dominant: beyond `drift_sigmas` a-priori drift σ and beyond
-// `standard_errors` of its own standard error. The analysis removes the
+// `standard_errors` of its own standard error — and every batch of the
+// static time holds at least `batch_share` of it, on the same side. A
+// constant is there from turn-on; a bias step inside the run moves the mean
+// of the static samples as far (a 0.5 °/h step of a gyro labelled with a type
+// whose drift is 0.01 °/h put it at 30 drift σ) while the batches before the
+// step sit near zero, and removing that mean leaves two levels that neither
+// the drift nor the step explains. The analysis removes the
 // dominant biases from the samples and reports them as identified turn-on
 // biases; everything after (identification, scan, comparison) works on the
 // remainder, where the a-priori model is again a starting point.
@@ -55,6 +61,11 @@ struct DominantConstantOptions {
   // Batches for the data's own standard error of the means: the larger of it
   // and the a-priori model's is reported.
   int batches = 20;
+  // The share of the constant every batch mean must hold. A step at a share
+  // f of the static time moves the mean to (1 − f) of its size and leaves the
+  // batches before it at zero; a constant of 20 drift σ scatters by about 1.5
+  // σ a batch.
+  double batch_share = 0.5;
 };
 
 // One sensor axis' measured constant bias.
@@ -63,6 +74,9 @@ struct StaticConstant {
   double bias = 0.0;          // in term.family->unit (rad/s | m/s²)
   double std_error = 0.0;
   double drift_sigma = 0.0;   // the a-priori drift σ it is weighed against
+  // The batch mean nearest zero, signed positive on the bias's side (the
+  // bias itself when the static time is too short to batch).
+  double weakest_batch_bias = 0.0;
   bool dominant = false;
 };
 
