@@ -189,12 +189,6 @@ absl::StatusOr<ident::DriftLikelihoodResult> DriftsFromStarts(const RunContext& 
   return ml;
 }
 
-// The Gauss–Markov drifts of `from` in `to`, nothing else.
-void TakeDrifts(const ErrorModel& from, ErrorModel& to) {
-  to.gyro.bias = from.gyro.bias;
-  to.acc.bias = from.acc.bias;
-}
-
 // Whether the drifts of a class prior are off beside the best candidate as
 // well: the drifts identified with the candidate in the model, against the
 // model with the candidate alone (χ² at the family-wise level, as
@@ -202,13 +196,11 @@ void TakeDrifts(const ErrorModel& from, ErrorModel& to) {
 // bias step has both; the candidate winning the comparison of the two
 // explanations alone left its drifts at the type's nominal, and the scan
 // against them named walks and steps on every sensor (a 0.5 °/h gyro step
-// came fifth behind an accelerometer walk). Where true, `drifts` holds the
-// drifts identified beside the candidate, without it: the scan names it.
+// came fifth behind an accelerometer walk).
 bool DriftsOffBesideTheCandidate(const RunContext& c, const ModelPass& pass, const Findings& found,
-                                 const EffectCandidate& best, double log_n, ErrorModel& drifts,
-                                 std::vector<ParameterEstimate>& identified,
+                                 const EffectCandidate& best, const ErrorModel& base, double log_n,
                                  std::vector<std::string>& notes) {
-  auto with_candidate = ExtendModel(c.run, drifts, {best.name}, pass, found, c.options);
+  auto with_candidate = ExtendModel(c.run, base, {best.name}, pass, found, c.options);
   if (!with_candidate.ok()) return false;
   std::vector<std::string> fit_notes;
   auto ml = DriftsFromStarts(c, *with_candidate, log_n, fit_notes);
@@ -217,18 +209,11 @@ bool DriftsOffBesideTheCandidate(const RunContext& c, const ModelPass& pass, con
   const auto dof = static_cast<int>(ml->identified.size());
   if (!(statistic > stats::ChiSquareQuantile(1.0 - c.options.monitor.family_wise_alpha, dof)))
     return false;
-  notes.insert(notes.end(), fit_notes.begin(), fit_notes.end());
-  TakeDrifts(ml->model, drifts);
-  for (const ParameterEstimate& p : ml->identified) {
-    std::erase_if(identified, [&](const ParameterEstimate& q) { return q.name == p.name; });
-    identified.push_back(p);
-  }
   notes.push_back(
       absl::StrFormat("the drifts' σ and τ identified beside %s (%d parameters, EM %d iterations, "
-                      "%d filter passes) raise the "
-                      "likelihood by 2Δℓ = %.1f, beyond χ²(%d) at %.2g: the a-priori model's "
-                      "misfit is both; the model takes the "
-                      "drifts identified beside it and is scanned again",
+                      "%d filter passes) still raise "
+                      "the likelihood by 2Δℓ = %.1f, beyond χ²(%d) at %.2g: the a-priori model's "
+                      "misfit is its drifts as well",
                       best.name, dof, ml->iterations, ml->filter_passes, statistic, dof,
                       c.options.monitor.family_wise_alpha));
   return true;
@@ -269,6 +254,21 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
                                     drift_bic, best.predicted_delta_bic));
     return true;
   }
+  // A unit far from its type can be faulty too. The model then takes the
+  // drifts' own estimates, not those beside the candidate (a walk beside a
+  // drift takes its slow part: that drift alone would be left too narrow),
+  // and the candidate is scanned again against them; a fault among the
+  // candidates is tested against the drifts identified beside it.
+  if (!c.a_priori.from_datasheet &&
+      DriftsOffBesideTheCandidate(c, pass, found, best, base, log_n, notes) &&
+      ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, c.a_priori.from_allan, base,
+                           identified, notes)) {
+    notes.push_back(absl::StrFormat(
+        "the model takes the drifts' own estimates (ΔBIC %.1f; the best candidate's "
+        "%.1f) and is scanned again",
+        drift_bic, best.predicted_delta_bic));
+    return true;
+  }
   // The drifts stay as the a-priori model has them, but what the likelihood
   // measured of them is reported: a drift far from its nominal is evidence
   // for the diagnosis whichever explanation wins.
@@ -280,8 +280,7 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
                                   "%.1f against the best candidate's %.1f: the candidates stand, and the drift "
                                   "estimates are reported beside the a-priori model's values",
                                   ml->identified.size(), drift_bic, best.predicted_delta_bic));
-  return !c.a_priori.from_datasheet &&
-         DriftsOffBesideTheCandidate(c, pass, found, best, log_n, base, identified, notes);
+  return false;
 }
 
 // Retargeting: a pass, correlation processing of its smoothed drifts, a
