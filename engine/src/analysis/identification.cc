@@ -204,10 +204,16 @@ bool DriftsOffBesideTheCandidate(const RunContext& c, const ModelPass& pass, con
                                  const EffectCandidate& best, const ErrorModel& base, double log_n,
                                  std::vector<std::string>& notes) {
   auto with_candidate = ExtendModel(c.run, base, {best.name}, pass, found, c.options);
-  if (!with_candidate.ok()) return false;
   std::vector<std::string> fit_notes;
-  auto ml = DriftsFromStarts(c, *with_candidate, log_n, fit_notes);
-  if (!ml.ok() || ml->identified.empty()) return false;
+  absl::StatusOr<ident::DriftLikelihoodResult> ml =
+      with_candidate.ok() ? DriftsFromStarts(c, *with_candidate, log_n, fit_notes)
+                          : with_candidate.status();
+  if (!ml.ok()) {
+    notes.push_back("the drifts were not identified beside " + best.name + ": " +
+                    std::string(ml.status().message()));
+    return false;
+  }
+  if (ml->identified.empty()) return false;
   const double statistic = DriftStatistic(*ml);
   const auto dof = static_cast<int>(ml->identified.size());
   if (!(statistic > stats::ChiSquareQuantile(1.0 - c.options.monitor.family_wise_alpha, dof)))
