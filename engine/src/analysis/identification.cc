@@ -46,6 +46,13 @@ double DriftStatistic(const ident::DriftLikelihoodResult& ml) {
 // A model whose values are placeholders (an Allan-fit a-priori model: its τ
 // a bound of the static segments) has nothing the data must overturn: it
 // takes the estimates whatever the statistic.
+// Whether the drift estimates reject the model's values: 2Δℓ beyond χ²(m)
+// at α for m identified parameters.
+bool RejectsTheModelsValues(const ident::DriftLikelihoodResult& ml, double alpha) {
+  return DriftStatistic(ml) >
+         stats::ChiSquareQuantile(1.0 - alpha, static_cast<int>(ml.identified.size()));
+}
+
 bool ApplyDriftLikelihood(const ident::DriftLikelihoodResult& ml, double alpha, bool placeholders, ErrorModel& base,
                           std::vector<ParameterEstimate>& identified, std::vector<std::string>& notes) {
   if (!ml.not_identifiable.empty()) {
@@ -67,7 +74,7 @@ bool ApplyDriftLikelihood(const ident::DriftLikelihoodResult& ml, double alpha, 
   }
   const double statistic = DriftStatistic(ml);
   const auto dof = static_cast<int>(ml.identified.size());
-  const bool rejects = statistic > stats::ChiSquareQuantile(1.0 - alpha, dof);
+  const bool rejects = RejectsTheModelsValues(ml, alpha);
   const bool takes = rejects || placeholders;
   if (takes) base = ml.model;
   std::string names;
@@ -158,6 +165,21 @@ struct Retargeted {
   bool DriftsFromAClassPrior(const APriori& a_priori) const {
     return a_priori.from_allan || (drifts_by_likelihood && !a_priori.from_datasheet);
   }
+
+  // Whether the final identification holds the drifts back because faults
+  // were flagged: a wider drift would hide the fault the diagnosis is for.
+  // An Allan fit's placeholders are not held: what they flag says how far
+  // they are from the unit, not that it failed.
+  bool HoldsDriftsForFlaggedFaults(const APriori& a_priori) const {
+    return faults_flagged && !a_priori.from_allan;
+  }
+
+  // Whether both sides of a fault's test identify drifts the model's own
+  // final identification left: the set the misfit's competition took, or
+  // the drifts held for flagged faults.
+  bool FaultTestIdentifiesMoreDrifts(const APriori& a_priori) const {
+    return drifts_by_likelihood || HoldsDriftsForFlaggedFaults(a_priori);
+  }
 };
 
 // The most significant bias step and the most significant ramp among the
@@ -213,11 +235,10 @@ bool DriftsOffBesideTheCandidate(const RunContext& c, const ModelPass& pass, con
                     std::string(ml.status().message()));
     return false;
   }
-  if (ml->identified.empty()) return false;
+  if (ml->identified.empty() || !RejectsTheModelsValues(*ml, c.options.monitor.family_wise_alpha))
+    return false;
   const double statistic = DriftStatistic(*ml);
   const auto dof = static_cast<int>(ml->identified.size());
-  if (!(statistic > stats::ChiSquareQuantile(1.0 - c.options.monitor.family_wise_alpha, dof)))
-    return false;
   notes.push_back(
       absl::StrFormat("the drifts' σ and τ identified beside %s (%d parameters, EM %d iterations, "
                       "%d filter passes) still raise "
@@ -398,14 +419,10 @@ absl::StatusOr<ident::DriftLikelihoodResult> IdentifyDriftSet(const RunContext& 
   const DriftSelection resolved = ResolvedDrifts(retargeted.drifts);
   DriftSelection selection, tau_too;
   for (const DriftAxis d : DriftAxis::All()) {
-    // A run whose monitoring flags faults (a drift that jumped, say) is
-    // not re-tuned: a wider drift would hide the fault the diagnosis is for.
-    // Unless the model is an Allan fit's placeholders (what they flag says
-    // how far they are from the unit, not that it failed), or on either
-    // side of a fault's test against the drifts (the fault is in the model
-    // on one side).
+    // Not on either side of a fault's test against the drifts: the fault is
+    // in the model on one side.
     const bool keep_for_faults =
-        retargeted.faults_flagged && !c.a_priori.from_allan && !both_sides_of_a_fault_test;
+        !both_sides_of_a_fault_test && retargeted.HoldsDriftsForFlaggedFaults(c.a_priori);
     selection.Set(d, !keep_for_faults && resolved.Contains(d) == resolved_set);
     tau_too.Set(d, selection.Contains(d) && (resolved_set || c.a_priori.from_allan));
   }
@@ -569,11 +586,10 @@ void TestFaultsAgainstTheIdentifiedDrifts(const RunContext& c, Retargeted& retar
   if (retargeted.faults_to_test.empty()) return;
   double log_likelihood_without = ProfileLogLikelihood(*forward, id.model);
   // Where the fault's side identifies drifts the model's own identification
-  // left (the set the misfit's competition took, the drifts held for
-  // flagged faults), the side without the fault is fitted alike: else the
-  // statistic counts what those drifts gain as the fault's (a healthy run's
-  // ramp stood at 2Δℓ = 20.2, 17.4 of it the drifts').
-  if (retargeted.drifts_by_likelihood || (retargeted.faults_flagged && !c.a_priori.from_allan)) {
+  // left, the side without the fault is fitted alike: else the statistic
+  // counts what those drifts gain as the fault's (a healthy run's ramp
+  // stood at 2Δℓ = 20.2, 17.4 of it the drifts').
+  if (retargeted.FaultTestIdentifiesMoreDrifts(c.a_priori)) {
     Identification without;
     without.model = id.model;
     without.identified = id.identified;
