@@ -8,7 +8,8 @@
 #  3. checks that the three ports listen on 127.0.0.1 only;
 #  4. with the insdiag CLI of BUILD_DIR and the admin token the containerised
 #     insdiagd wrote: simulates a faulty unit (gyro x bias step), uploads it,
-#     analyses it (REST, POST /v1/analyses, polled until SUCCEEDED: verdict
+#     analyses it walking the loop (REST, POST /v1/analyses with discover, as
+#     `insdiag diagnose` does; polled until SUCCEEDED: verdict
 #     FAULTY), diagnoses the analysis (gyro.x first), and finds the run, the
 #     analysis and the diagnosis in the containerised PostgreSQL;
 #  5. runs one of the project's own `db` test programs against the
@@ -135,7 +136,7 @@ run=$("$cli" upload "$work/run.csv" --request-id "container-test-$$")
 [[ $run == runs/* ]] || fail "upload printed '$run', not a run's name"
 say "uploaded $serial: $run"
 curl -sS --fail-with-body -H "Authorization: Bearer $token" -H 'Content-Type: application/json' \
-  -d "{\"run\": \"$run\"}" "$http/v1/analyses" >"$work/analysis.json" ||
+  -d "{\"run\": \"$run\", \"discover\": true}" "$http/v1/analyses" >"$work/analysis.json" ||
   fail "POST /v1/analyses: $(cat "$work/analysis.json")"
 analysis=$(json_field name <"$work/analysis.json")
 [[ $analysis == analyses/* ]] || fail "POST /v1/analyses returned no analysis: $(cat "$work/analysis.json")"

@@ -138,6 +138,49 @@ TEST(DiagnosisTest, EvidenceNoModeExplainsGoesToUnknown) {
   EXPECT_EQ(DiagnoseReport(report).candidates(0).module(), "unknown") << DiagnoseReport(report).DebugString();
 }
 
+// A bias jump added to the model at its onset scores its estimate over its
+// error, which grows with the jump and with what the run measures of it (a
+// 60-drift-σ gyro jump scored 75 in an hour at 20 Hz): the jump's mode must
+// stay first however strong the detection, not fall behind `unknown` once
+// the score passes the signature's typical change.
+TEST(DiagnosisTest, AJumpInTheModelPointsAtItsModeHoweverStronglyItIsMeasured) {
+  double previous = 0.0;
+  for (const double z : {6.0, 12.0, 75.0, 600.0, 5000.0}) {
+    v1::AnalysisReport report = NominalReport();
+    report.set_verdict(v1::AnalysisReport::FAULTY);
+    auto* jump = report.add_identified();
+    jump->set_name("gyro_bias_step.x");
+    jump->set_std_error(4e-8);
+    jump->set_value(-z * jump->std_error());
+    jump->set_unit("rad/s");
+    jump->set_method(v1::IdentifiedParameter::FILTER);
+    const v1::Diagnosis d = DiagnoseReport(report);
+    EXPECT_EQ(d.hypotheses(0).failure_mode(), "failureModes/dtg-rotor-mass-shift.x")
+        << "z " << z << d.DebugString();
+    const double p = ProbabilityOf(d, "failureModes/dtg-rotor-mass-shift.x");
+    EXPECT_GE(p, previous - 0.02) << "a stronger detection counted against the mode at z " << z;
+    previous = p;
+  }
+}
+
+// Several significant candidates of one scan are each tested beside the
+// analysed model alone; the diagnosis says so, and where to look instead.
+TEST(DiagnosisTest, SaysWhenTheAnalysedModelLeavesSeveralSignificantEffects) {
+  v1::AnalysisReport report = NominalReport();
+  const auto& f = Ins2000();
+  const auto notes_of = [&] {
+    return EvidenceFromReport(report, f.unit_type, f.catalogue.settings()).notes;
+  };
+  v1::EffectCandidate* x = Candidate(report, "gyro_scale_factor.x");
+  v1::EffectCandidate* y = Candidate(report, "gyro_scale_factor.y");
+  ASSERT_TRUE(x != nullptr && y != nullptr);
+  x->set_p_value_holm(1e-6);
+  EXPECT_THAT(notes_of(),
+              ::testing::Not(::testing::Contains(HasSubstr("significant missing effects"))));
+  y->set_p_value_holm(1e-4);
+  EXPECT_THAT(notes_of(), ::testing::Contains(HasSubstr("leaves 2 significant missing effects")));
+}
+
 // The engine lists every random structure the model lacks: one no test
 // measured is no evidence, and one below its test's screen (no standard
 // error) weighs as the z of its p-value, not as √χ² on three degrees of freedom.
