@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
+#include <string>
 
 #include "analysis/model_change.h"
 #include "insdiag/engine/ident/correlation.h"
@@ -214,39 +216,28 @@ absl::StatusOr<ident::DriftLikelihoodResult> DriftsFromStarts(const RunContext& 
   return ml;
 }
 
+// The drifts' σ and τ identified with the best candidate in the model.
+absl::StatusOr<ident::DriftLikelihoodResult> DriftsBesideTheCandidate(
+    const RunContext& c, const ModelPass& pass, const Findings& found, const EffectCandidate& best,
+    const ErrorModel& base, double log_n) {
+  auto with_candidate = ExtendModel(c.run, base, {best.name}, pass, found, c.options);
+  if (!with_candidate.ok()) return with_candidate.status();
+  std::vector<std::string> fit_notes;
+  return DriftsFromStarts(c, *with_candidate, log_n, fit_notes);
+}
+
 // Whether the drifts of a class prior are off beside the best candidate as
-// well: the drifts identified with the candidate in the model, against the
-// model with the candidate alone (χ² at the family-wise level, as
+// well: the drifts identified with the candidate in the model (`beside`),
+// against the model with the candidate alone (χ² at the family-wise level, as
 // ApplyDriftLikelihood). A unit of ten times its type's nominal drift with a
 // bias step has both; the candidate winning the comparison of the two
 // explanations alone left its drifts at the type's nominal, and the scan
 // against them named walks and steps on every sensor (a 0.5 °/h gyro step
 // came fifth behind an accelerometer walk).
-bool DriftsOffBesideTheCandidate(const RunContext& c, const ModelPass& pass, const Findings& found,
-                                 const EffectCandidate& best, const ErrorModel& base, double log_n,
-                                 std::vector<std::string>& notes) {
-  auto with_candidate = ExtendModel(c.run, base, {best.name}, pass, found, c.options);
-  std::vector<std::string> fit_notes;
-  absl::StatusOr<ident::DriftLikelihoodResult> ml =
-      with_candidate.ok() ? DriftsFromStarts(c, *with_candidate, log_n, fit_notes)
-                          : with_candidate.status();
-  if (!ml.ok()) {
-    notes.push_back("the drifts were not identified beside " + best.name + ": " +
-                    std::string(ml.status().message()));
-    return false;
-  }
-  if (ml->identified.empty() || !RejectsTheModelsValues(*ml, c.options.monitor.family_wise_alpha))
-    return false;
-  const double statistic = DriftStatistic(*ml);
-  const auto dof = static_cast<int>(ml->identified.size());
-  notes.push_back(
-      absl::StrFormat("the drifts' σ and τ identified beside %s (%d parameters, EM %d iterations, "
-                      "%d filter passes) still raise "
-                      "the likelihood by 2Δℓ = %.1f, beyond χ²(%d) at %.2g: the a-priori model's "
-                      "misfit is its drifts as well",
-                      best.name, dof, ml->iterations, ml->filter_passes, statistic, dof,
-                      c.options.monitor.family_wise_alpha));
-  return true;
+bool DriftsOffBesideTheCandidate(const RunContext& c,
+                                 const absl::StatusOr<ident::DriftLikelihoodResult>& beside) {
+  return beside.ok() && !beside->identified.empty() &&
+         RejectsTheModelsValues(*beside, c.options.monitor.family_wise_alpha);
 }
 
 // The a-priori model's misfit against its best missing effect: a drift whose
@@ -284,32 +275,67 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
                                     drift_bic, best.predicted_delta_bic));
     return true;
   }
+  // What the likelihood measures of the drifts beside the candidate: a
+  // deterministic candidate (a constant, a jump, a ramp, a g-sensitivity)
+  // is not random variance, and drifts identified without it take its
+  // signature (a gyro's jump of 60 drift σ became that gyro's drift at 40 ×
+  // its σ and τ 3·10⁵ s, and its knock-on tilt another gyro's at 8 ×).
+  const EffectFamily* family = FindEffectFamily(best.family.empty() ? best.name : best.family);
+  const bool random_structure = family != nullptr && family->kind == EffectKind::kRandom;
+  std::optional<absl::StatusOr<ident::DriftLikelihoodResult>> beside;
+  if (!c.a_priori.from_datasheet || !random_structure) {
+    beside = DriftsBesideTheCandidate(c, pass, found, best, base, log_n);
+    if (!beside->ok()) {
+      notes.push_back("the drifts were not identified beside " + best.name + ": " +
+                      std::string(beside->status().message()));
+    }
+  }
   // A unit far from its type can be faulty too. The model then takes the
   // drifts' own estimates, not those beside the candidate (a walk beside a
   // drift takes its slow part: that drift alone would be left too narrow),
   // and the candidate is scanned again against them; a fault among the
   // candidates is tested against the drifts identified beside it.
-  if (!c.a_priori.from_datasheet &&
-      DriftsOffBesideTheCandidate(c, pass, found, best, base, log_n, notes) &&
-      ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, c.a_priori.from_allan, base,
-                           identified, notes)) {
+  if (!c.a_priori.from_datasheet && DriftsOffBesideTheCandidate(c, *beside)) {
+    const double statistic = DriftStatistic(**beside);
+    const auto dof = static_cast<int>((*beside)->identified.size());
     notes.push_back(absl::StrFormat(
-        "the model takes the drifts' own estimates (ΔBIC %.1f; the best candidate's "
-        "%.1f) and is scanned again",
-        drift_bic, best.predicted_delta_bic));
-    return true;
+        "the drifts' σ and τ identified beside %s (%d parameters, EM %d iterations, "
+        "%d filter passes) still raise the likelihood by 2Δℓ = %.1f, beyond χ²(%d) at %.2g: "
+        "the a-priori model's misfit is its drifts as well",
+        best.name, dof, (*beside)->iterations, (*beside)->filter_passes, statistic, dof,
+        options.monitor.family_wise_alpha));
+    if (ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, c.a_priori.from_allan, base,
+                             identified, notes)) {
+      notes.push_back(absl::StrFormat(
+          "the model takes the drifts' own estimates (ΔBIC %.1f; the best candidate's "
+          "%.1f) and is scanned again",
+          drift_bic, best.predicted_delta_bic));
+      return true;
+    }
   }
   // The drifts stay as the a-priori model has them, but what the likelihood
   // measured of them is reported: a drift far from its nominal is evidence
-  // for the diagnosis whichever explanation wins.
-  for (const ParameterEstimate& p : ml->identified) {
+  // for the diagnosis whichever explanation wins. Beside a deterministic
+  // candidate, the drifts identified with it in the model; beside a walk
+  // or second-order structure, which shares the drift's slow variance, the
+  // drifts' own estimates.
+  const ident::DriftLikelihoodResult* reported = random_structure ? &*ml
+                                                 : beside->ok()   ? &**beside
+                                                                  : nullptr;
+  if (reported == nullptr) return false;
+  const std::string whose = random_structure ? "" : " identified beside " + best.name;
+  for (const ParameterEstimate& p : reported->identified) {
     std::erase_if(identified, [&](const ParameterEstimate& q) { return q.name == p.name; });
     identified.push_back(p);
   }
-  notes.push_back(absl::StrFormat("the drifts' σ and τ by likelihood (%zu parameters worth their cost) reach ΔBIC "
-                                  "%.1f against the best candidate's %.1f: the candidates stand, and the drift "
-                                  "estimates are reported beside the a-priori model's values",
-                                  ml->identified.size(), drift_bic, best.predicted_delta_bic));
+  notes.push_back(
+      absl::StrFormat("the drifts' σ and τ by likelihood (%zu parameters worth their cost) reach "
+                      "ΔBIC %.1f against the best "
+                      "candidate's %.1f: the candidates stand, and the drift estimates%s (%zu "
+                      "worth their cost) are reported "
+                      "beside the a-priori model's values",
+                      ml->identified.size(), drift_bic, best.predicted_delta_bic, whose,
+                      reported->identified.size()));
   return false;
 }
 
