@@ -15,6 +15,11 @@ simulator how often the first-ranked module is the right one.
   drift_sigma_x3_8h    the same over 8 h (cpp: the whole `drift` profile;
                        py: `positions`), as the eight-hour runs of the
                        report that opened the faults issue.
+  gyro_step, acc_step  a bias jump on one sensor axis (axis, sign and onset
+                       in 30–80 % of the run from the seed) of 5 to 100 drift
+                       σ (log-uniform: faults come in every size), 1 h,
+                       datasheet, rates and profiles as `healthy`. Right: the
+                       first module is that sensor axis's (gyro.x, acc.z, …).
   healthy              1 h, datasheet, rates 10/50/100 Hz, three profiles a
                        simulator (the project's ramps its rate changes, the
                        independent one makes them instantaneous). Right: the
@@ -92,6 +97,18 @@ def make_run(simulator, scenario, index, path):
         if simulator == "cpp":
             matrix.truncate(path, 3600.0)
         return dict(axis=None, rate_hz=rate, profile=profile)
+    if scenario in ("gyro_step", "acc_step"):
+        sensor = scenario.split("_")[0]
+        rate = matrix.RATES_HZ[index % 3]
+        profile = matrix.PROFILES[simulator][(index // 3) % 3]
+        fault = matrix.step(sensor)(rng, 3600.0)
+        fault["value"] *= math.exp(rng.uniform(0.0, math.log(20.0)))  # 5 to 100 drift σ
+        matrix.simulate(simulator, fault, rate, profile, seed, 3600.0, path)
+        if simulator == "cpp":
+            matrix.truncate(path, 3600.0)
+        size = abs(fault["value"]) / matrix.drift_sigma(sensor, fault["axis"])
+        return dict(axis=fault["axis"], sensor=sensor, rate_hz=rate, profile=profile,
+                    fault=f"{fault['name']} of {size:.0f} drift σ at {fault['onset_s']:.0f} s")
     axis = rng.choice(matrix.AXES)
     rate = [10.0, 50.0][index % 2]
     name = f"gyro_bias_gm.{axis}.sigma"
@@ -129,7 +146,7 @@ def modules(diagnosis):
 def judge(scenario, hidden, diagnosis):
     ranked = modules(diagnosis)
     first, probability = ranked[0] if ranked else (None, 0.0)
-    right_module = "healthy" if scenario == "healthy" else f"gyro.{hidden['axis']}"
+    right_module = "healthy" if scenario == "healthy" else f"{hidden.get('sensor', 'gyro')}.{hidden['axis']}"
     return dict(first=first, probability=probability, right=first == right_module,
                 right_probability=dict(ranked).get(right_module, 0.0), ranked=ranked[:4],
                 evidence=diagnosis.get("evidence", []))
