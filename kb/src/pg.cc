@@ -104,7 +104,10 @@ absl::StatusOr<Result> Connection::Check(PGresult* raw, std::string_view sql) {
   // while PostgreSQL restarts, before libpq marks the connection bad.
   if (sqlstate == nullptr || *sqlstate == '\0') {
     lost_ = true;
-    return absl::UnavailableError(std::move(message));
+    return absl::UnavailableError(absl::StrCat(
+        "PostgreSQL closed the connection during the request (it stopped or restarted: a full disk "
+        "or a crash, see its log): ",
+        FirstLine(PQresultErrorMessage(raw))));
   }
   return StatusFromSqlState(sqlstate, std::move(message));
 }
