@@ -31,6 +31,9 @@ mixture (1 − ε₀) N(0, s_h² + s_m²) + ε₀ Cauchy(0, √(b² + s_m²)) of
 docs/DIAGNOSIS.md, with its 95 % profile-likelihood interval. The catalogue's
 `incidentalContamination` is that estimate.
 
+The binaries are the build's, or $INSDIAG_CLI and $INSDIAGD (copies, so that
+a rebuild during a sweep does not pull them from under it).
+
 Usage:
   scripts/diagnosis_sweep.py [--runs N] [--first-index I] [--scenarios a,b] [--simulators cpp,py] [--out results.json]
 The figures in docs/FAULT_SCENARIOS.md come from
@@ -54,7 +57,7 @@ spec = importlib.util.spec_from_file_location("fault_matrix", os.path.join(HERE,
 matrix = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(matrix)
 
-SERVER = os.path.join(matrix.ROOT, "build", "server", "insdiagd")
+SERVER = os.environ.get("INSDIAGD", os.path.join(matrix.ROOT, "build", "server", "insdiagd"))
 # The drift scenarios' durations.
 LONG_S = {"drift_sigma_x3_long": 4 * 3600.0, "drift_sigma_x3_8h": 8 * 3600.0}
 
