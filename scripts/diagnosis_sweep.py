@@ -20,6 +20,9 @@ simulator how often the first-ranked module is the right one.
                        σ (log-uniform: faults come in every size), 1 h,
                        datasheet, rates and profiles as `healthy`. Right: the
                        first module is that sensor axis's (gyro.x, acc.z, …).
+  gyro_ramp, acc_ramp  a bias ramp from an onset in 20–60 % of the run,
+                       reaching 5 to 100 drift σ in 1000 s; otherwise as the
+                       jumps.
   healthy              1 h, datasheet, rates 10/50/100 Hz, three profiles a
                        simulator (the project's ramps its rate changes, the
                        independent one makes them instantaneous). Right: the
@@ -100,16 +103,17 @@ def make_run(simulator, scenario, index, path):
         if simulator == "cpp":
             matrix.truncate(path, 3600.0)
         return dict(axis=None, rate_hz=rate, profile=profile)
-    if scenario in ("gyro_step", "acc_step"):
-        sensor = scenario.split("_")[0]
+    if scenario in ("gyro_step", "acc_step", "gyro_ramp", "acc_ramp"):
+        sensor, shape = scenario.split("_")
         rate = matrix.RATES_HZ[index % 3]
         profile = matrix.PROFILES[simulator][(index // 3) % 3]
-        fault = matrix.step(sensor)(rng, 3600.0)
+        fault = (matrix.step if shape == "step" else matrix.ramp)(sensor)(rng, 3600.0)
         fault["value"] *= math.exp(rng.uniform(0.0, math.log(20.0)))  # 5 to 100 drift σ
         matrix.simulate(simulator, fault, rate, profile, seed, 3600.0, path)
         if simulator == "cpp":
             matrix.truncate(path, 3600.0)
-        size = abs(fault["value"]) / matrix.drift_sigma(sensor, fault["axis"])
+        # A ramp's size: what it reaches in 1000 s.
+        size = abs(fault["value"]) * (1.0 if shape == "step" else 1000.0) / matrix.drift_sigma(sensor, fault["axis"])
         return dict(axis=fault["axis"], sensor=sensor, rate_hz=rate, profile=profile,
                     fault=f"{fault['name']} of {size:.0f} drift σ at {fault['onset_s']:.0f} s")
     axis = rng.choice(matrix.AXES)
