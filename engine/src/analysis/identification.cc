@@ -323,19 +323,27 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
                                                  : beside->ok()   ? &**beside
                                                                   : nullptr;
   if (reported == nullptr) return false;
-  const std::string whose = random_structure ? "" : " identified beside " + best.name;
   for (const ParameterEstimate& p : reported->identified) {
     std::erase_if(identified, [&](const ParameterEstimate& q) { return q.name == p.name; });
     identified.push_back(p);
   }
-  notes.push_back(
-      absl::StrFormat("the drifts' σ and τ by likelihood (%zu parameters worth their cost) reach "
-                      "ΔBIC %.1f against the best "
-                      "candidate's %.1f: the candidates stand, and the drift estimates%s (%zu "
-                      "worth their cost) are reported "
-                      "beside the a-priori model's values",
-                      ml->identified.size(), drift_bic, best.predicted_delta_bic, whose,
-                      reported->identified.size()));
+  const std::string standing = absl::StrFormat(
+      "the drifts' σ and τ by likelihood (%zu parameters worth their cost) reach ΔBIC %.1f "
+      "against the best candidate's %.1f: the candidates stand",
+      ml->identified.size(), drift_bic, best.predicted_delta_bic);
+  if (random_structure) {
+    notes.push_back(standing +
+                    ", and the drift estimates are reported beside the a-priori model's values");
+  } else if (reported->identified.empty()) {
+    notes.push_back(standing + "; beside " + best.name +
+                    " no drift's σ and τ are worth their parameters");
+  } else {
+    notes.push_back(
+        standing +
+        absl::StrFormat(", and the drift estimates identified beside %s (%zu parameters) "
+                        "are reported beside the a-priori model's values",
+                        best.name, reported->identified.size()));
+  }
   return false;
 }
 
