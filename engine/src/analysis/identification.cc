@@ -275,15 +275,15 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
                                     drift_bic, best.predicted_delta_bic));
     return true;
   }
-  // What the likelihood measures of the drifts beside the candidate: a
-  // deterministic candidate (a constant, a jump, a ramp, a g-sensitivity)
-  // is not random variance, and drifts identified without it take its
-  // signature (a gyro's jump of 60 drift σ became that gyro's drift at 40 ×
-  // its σ and τ 3·10⁵ s, and its knock-on tilt another gyro's at 8 ×).
+  // What the likelihood measures of the drifts beside a fault: a jump or a
+  // ramp from an onset is not a stationary drift's variance, and drifts
+  // identified without it take it on (a gyro's jump of 60 drift σ became
+  // that gyro's drift at 40 × its σ and τ 3·10⁵ s, and its knock-on tilt
+  // another gyro's at 8 ×).
   const EffectFamily* family = FindEffectFamily(best.family.empty() ? best.name : best.family);
-  const bool random_structure = family != nullptr && family->kind == EffectKind::kRandom;
+  const bool fault = family != nullptr && family->kind == EffectKind::kFault;
   std::optional<absl::StatusOr<ident::DriftLikelihoodResult>> beside;
-  if (!c.a_priori.from_datasheet || !random_structure) {
+  if (!c.a_priori.from_datasheet || fault) {
     beside = DriftsBesideTheCandidate(c, pass, found, best, base, log_n);
     if (!beside->ok()) {
       notes.push_back("the drifts were not identified beside " + best.name + ": " +
@@ -315,13 +315,13 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
   }
   // The drifts stay as the a-priori model has them, but what the likelihood
   // measured of them is reported: a drift far from its nominal is evidence
-  // for the diagnosis whichever explanation wins. Beside a deterministic
-  // candidate, the drifts identified with it in the model; beside a walk
-  // or second-order structure, which shares the drift's slow variance, the
-  // drifts' own estimates.
-  const ident::DriftLikelihoodResult* reported = random_structure ? &*ml
-                                                 : beside->ok()   ? &**beside
-                                                                  : nullptr;
+  // for the diagnosis whichever explanation wins. Beside a fault, the
+  // drifts identified with it in the model. Beside any other candidate, the
+  // drifts' own estimates: a term that follows the table's motion is how a
+  // wider drift shows (a gyro-x drift σ × 3 on a multi-position test scored
+  // as a g-sensitivity, and beside it the drift looked nominal), and a walk
+  // shares the drift's slow variance.
+  const ident::DriftLikelihoodResult* reported = !fault ? &*ml : beside->ok() ? &**beside : nullptr;
   if (reported == nullptr) return false;
   for (const ParameterEstimate& p : reported->identified) {
     std::erase_if(identified, [&](const ParameterEstimate& q) { return q.name == p.name; });
@@ -331,7 +331,7 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
       "the drifts' σ and τ by likelihood (%zu parameters worth their cost) reach ΔBIC %.1f "
       "against the best candidate's %.1f: the candidates stand",
       ml->identified.size(), drift_bic, best.predicted_delta_bic);
-  if (random_structure) {
+  if (!fault) {
     notes.push_back(standing +
                     ", and the drift estimates are reported beside the a-priori model's values");
   } else if (reported->identified.empty()) {
