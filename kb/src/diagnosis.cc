@@ -415,10 +415,12 @@ Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType
                     v1::IdentifiedParameter::Method_Name(p.method()) , ")");
     evidence.terms.push_back(std::move(t));
   }
+  int significant_candidates = 0;
   for (const auto& c : report.effect_candidates()) {
     // A candidate no test measured is no evidence either way.
     if (!c.identifiable() || c.not_tested() || !seen.insert(c.name()).second) continue;
     const bool significant = c.p_value_holm() < settings.significance_level();
+    significant_candidates += significant ? 1 : 0;
     const std::string verdict =
         significant ? absl::StrFormat(", significant (Holm p = %.2g)", c.p_value_holm())
                     : absl::StrFormat(", not significant (Holm p = %.2g)", c.p_value_holm());
@@ -459,20 +461,13 @@ Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType
   // other gyros' and the accelerometers' terms score) read as evidence of
   // their own, which only `unknown` explains. The loop's end has them in
   // or out of its model.
-  const auto significant_candidates =
-      std::count_if(report.effect_candidates().begin(), report.effect_candidates().end(),
-                    [&](const v1::EffectCandidate& c) {
-                      return c.identifiable() && !c.not_tested() &&
-                             c.p_value_holm() < settings.significance_level();
-                    });
   if (significant_candidates > 1) {
-    evidence.notes.push_back(
-        absl::StrFormat("the analysed model leaves %d significant missing effects, each tested "
-                        "against that model alone: the "
-                        "knock-on effects of one fault count as evidence of others; diagnose the "
-                        "analysis that walks the loop "
-                        "(discover) to read them with the first effect in the model",
-                        significant_candidates));
+    evidence.notes.push_back(absl::StrFormat(
+        "the analysed model leaves %d significant missing effects, each tested against that model "
+        "alone: the knock-on effects of one fault count as evidence of others; diagnose the "
+        "analysis "
+        "that walks the loop (discover) to read them with the first effect in the model",
+        significant_candidates));
   }
   if (!unknown_names.empty()) {
     evidence.notes.push_back(absl::StrCat("identified parameters without a nominal value in ", unit_type.name(),

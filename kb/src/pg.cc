@@ -97,8 +97,6 @@ absl::StatusOr<Result> Connection::Check(PGresult* raw, std::string_view sql) {
     return absl::UnavailableError(FirstLine(PQerrorMessage(conn_.get())));
   }
   const char* sqlstate = PQresultErrorField(raw, PG_DIAG_SQLSTATE);
-  std::string message = absl::StrCat(FirstLine(PQresultErrorMessage(raw)), " [",
-                                     FirstLine(sql.substr(0, 80)), "]");
   // Every error of the server carries a SQLSTATE; one without is libpq's
   // own, about the connection: "server closed the connection unexpectedly"
   // while PostgreSQL restarts, before libpq marks the connection bad.
@@ -109,7 +107,8 @@ absl::StatusOr<Result> Connection::Check(PGresult* raw, std::string_view sql) {
         "or a crash, see its log): ",
         FirstLine(PQresultErrorMessage(raw))));
   }
-  return StatusFromSqlState(sqlstate, std::move(message));
+  return StatusFromSqlState(sqlstate, absl::StrCat(FirstLine(PQresultErrorMessage(raw)), " [",
+                                                   FirstLine(sql.substr(0, 80)), "]"));
 }
 
 absl::StatusOr<Result> Connection::Exec(std::string_view sql, const std::vector<Param>& params,

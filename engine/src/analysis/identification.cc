@@ -39,6 +39,13 @@ double DriftStatistic(const ident::DriftLikelihoodResult& ml) {
   return 2.0 * (ml.log_likelihood_after - ml.log_likelihood_before);
 }
 
+// Whether the drift estimates reject the model's values: 2Δℓ beyond χ²(m)
+// at α for m identified parameters.
+bool RejectsTheModelsValues(const ident::DriftLikelihoodResult& ml, double alpha) {
+  return DriftStatistic(ml) >
+         stats::ChiSquareQuantile(1.0 - alpha, static_cast<int>(ml.identified.size()));
+}
+
 // The likelihood's drift estimates (drift_likelihood.h) are reported; the
 // model takes them when they raise the innovations' log-likelihood beyond
 // the likelihood-ratio test of the model's values, χ²(m) at α for m
@@ -48,13 +55,6 @@ double DriftStatistic(const ident::DriftLikelihoodResult& ml) {
 // A model whose values are placeholders (an Allan-fit a-priori model: its τ
 // a bound of the static segments) has nothing the data must overturn: it
 // takes the estimates whatever the statistic.
-// Whether the drift estimates reject the model's values: 2Δℓ beyond χ²(m)
-// at α for m identified parameters.
-bool RejectsTheModelsValues(const ident::DriftLikelihoodResult& ml, double alpha) {
-  return DriftStatistic(ml) >
-         stats::ChiSquareQuantile(1.0 - alpha, static_cast<int>(ml.identified.size()));
-}
-
 bool ApplyDriftLikelihood(const ident::DriftLikelihoodResult& ml, double alpha, bool placeholders, ErrorModel& base,
                           std::vector<ParameterEstimate>& identified, std::vector<std::string>& notes) {
   if (!ml.not_identifiable.empty()) {
@@ -280,7 +280,7 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
   // identified without it take it on (a gyro's jump of 60 drift σ became
   // that gyro's drift at 40 × its σ and τ 3·10⁵ s, and its knock-on tilt
   // another gyro's at 8 ×).
-  const EffectFamily* family = FindEffectFamily(best.family.empty() ? best.name : best.family);
+  const EffectFamily* family = FindEffectFamily(best.family);
   const bool fault = family != nullptr && family->kind == EffectKind::kFault;
   std::optional<absl::StatusOr<ident::DriftLikelihoodResult>> beside;
   if (!c.a_priori.from_datasheet || fault) {
