@@ -23,6 +23,8 @@ run_samples=360000
 
 say() { echo "full disk test: $(date +%T) $*"; }
 fail() { echo "full disk test: FAILED: $*" >&2; exit 1; }
+# shellcheck source=wait_until.sh
+source "$(dirname "${BASH_SOURCE[0]}")/wait_until.sh"
 skip() { echo "full disk test: SKIPPED: $*"; exit 77; }
 
 [[ $(id -u) -eq 0 ]] || skip "mounting a tmpfs of a fixed size needs root"
@@ -57,16 +59,6 @@ http_port=$((grpc_port + 1))
   --workers 0 --fleet-refresh-seconds 0 >"$work/server.log" 2>&1 &
 server_pid=$!
 healthy() { [[ $(curl -s -o /dev/null -w '%{http_code}' "http://127.0.0.1:$http_port/healthz") == 200 ]]; }
-wait_until() {  # SECONDS WHAT COMMAND...
-  local seconds=$1 what=$2
-  shift 2
-  for ((i = 0; i < seconds * 10; i++)); do
-    "$@" && return 0
-    kill -0 "$server_pid" 2>/dev/null || fail "insdiagd exited while waiting until $what"
-    sleep 0.1
-  done
-  fail "not $what after $seconds s"
-}
 wait_until 120 "insdiagd serves" healthy
 export INSDIAG_SERVER=127.0.0.1:$grpc_port INSDIAG_TOKEN
 INSDIAG_TOKEN=$(cat "$disk/data/admin-token")

@@ -23,6 +23,8 @@ cli=$build_dir/clients/insdiag
 
 say() { echo "read replica test: $(date +%T) $*"; }
 fail() { echo "read replica test: FAILED: $*" >&2; exit 1; }
+# shellcheck source=wait_until.sh
+source "$(dirname "${BASH_SOURCE[0]}")/wait_until.sh"
 
 work=$(mktemp -d /tmp/insdiag-replica.XXXXXX)
 chmod 0755 "$work"
@@ -51,15 +53,6 @@ start_cluster() {  # NAME PORT
 psql_at() {  # PORT SQL
   "${as_owner[@]}" "$pg_bin/psql" -X -q -A -t -h "$work" -p "$1" -U postgres -d insdiag -c "$2"
 }
-wait_until() {  # SECONDS WHAT COMMAND...
-  local seconds=$1 what=$2
-  shift 2
-  for ((i = 0; i < seconds * 10; i++)); do
-    "$@" && return 0
-    sleep 0.1
-  done
-  fail "$what (after ${seconds} s)"
-}
 
 "${as_owner[@]}" "$pg_bin/initdb" -D "$work/primary" --no-sync -A trust -U postgres -E UTF8 >/dev/null
 start_cluster primary "$primary_port"
@@ -78,7 +71,7 @@ mkdir -p "$work/data"
   >"$work/insdiagd.out" 2>"$work/insdiagd.err" &
 server_pid=$!
 listening() { grep -qs "insdiagd: listening" "$work/insdiagd.out"; }
-wait_until 60 "insdiagd did not come up (its log: $work/insdiagd.err)" listening
+wait_until 60 "insdiagd listens (its log: $work/insdiagd.err)" listening
 grep -q "reads=replica" "$work/insdiagd.out" || fail "insdiagd does not say it reads from the replica"
 grpc=$(sed -n 's/.*grpc=[^ ]*:\([0-9]*\) .*/\1/p' "$work/insdiagd.out")
 http=$(sed -n 's/.*http=[^ ]*:\([0-9]*\) .*/\1/p' "$work/insdiagd.out")
@@ -102,15 +95,15 @@ upload() {
 }
 
 upload REPLICA-1 1
-wait_until 30 "the primary's fleet views never counted the first run" primary_is 1
-wait_until 30 "the statistics served never counted the first run" served_is 1
+wait_until 30 "the primary's fleet views count the first run" primary_is 1
+wait_until 30 "the statistics served count the first run" served_is 1
 say "one run, counted on the primary and served from the replica"
 
 psql_at "$replica_port" "SELECT pg_wal_replay_pause()" >/dev/null
 paused() { [[ $(psql_at "$replica_port" "SELECT pg_get_wal_replay_pause_state()") == paused ]]; }
-wait_until 10 "the replica's replay did not pause" paused
+wait_until 10 "the replica's replay pauses" paused
 upload REPLICA-2 2
-wait_until 30 "the primary's fleet views never counted the second run" primary_is 2
+wait_until 30 "the primary's fleet views count the second run" primary_is 2
 for _ in 1 2 3; do
   served_is 1 || fail "the statistics served counted the second run while the replica's replay was paused: they are not read from the replica"
   [[ $(listed_runs) == 1 ]] || fail "the run listing showed the second run while the replica's replay was paused: it is not read from the replica"
@@ -119,9 +112,9 @@ done
 say "replay paused: the primary counts 2 runs, the statistics and the listing served still 1"
 
 psql_at "$replica_port" "SELECT pg_wal_replay_resume()" >/dev/null
-wait_until 30 "the statistics served never counted the second run after replay resumed" served_is 2
+wait_until 30 "the statistics served count the second run after replay resumed" served_is 2
 listed_is() { [[ $(listed_runs) == "$1" ]]; }
-wait_until 30 "the run listing never showed the second run after replay resumed" listed_is 2
+wait_until 30 "the run listing shows the second run after replay resumed" listed_is 2
 say "replay resumed: the statistics served count 2 runs"
 
 # The replica down: fleet queries are refused as unavailable, the rest goes on.
@@ -132,10 +125,10 @@ for attempt in 1 2; do
   [[ $code == 503 ]] || fail "with the replica down, GET /v1/fleetStatistics (attempt $attempt) answered $code, not 503: $(cat "$work/answer.json")"
 done
 upload REPLICA-3 3
-wait_until 30 "with the replica down, the primary's fleet views never counted the third run" primary_is 3
+wait_until 30 "with the replica down, the primary's fleet views count the third run" primary_is 3
 say "replica down: fleet statistics 503, uploads stored on the primary"
 start_cluster replica "$replica_port"
-wait_until 60 "the replica is back, and the statistics served never counted the third run" served_is 3
+wait_until 60 "the replica is back and the statistics served count the third run" served_is 3
 say "replica back: the statistics served count 3 runs"
 
 kill -TERM "$server_pid"

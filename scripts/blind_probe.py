@@ -1,0 +1,168 @@
+#!/usr/bin/env python3
+"""A blind probe: every condition of a bench run drawn at random, on the independent simulator.
+
+The fault matrix (scripts/fault_matrix.py) holds the rate, profile, duration
+and fault size to a grid. This probe draws each run's conditions from its own
+seeded generator instead, the way an outside check would pick cases nobody
+tuned for:
+
+  unit      navigation grade (INS-2000) with its datasheet, or labelled
+            INS-2000 without one; a 0.1 °/h or a 1 °/h tactical unit with
+            its class's datasheet
+  table     profile (turns, positions, mixed, static), rate changes
+            instantaneous or ramped, holds jittered
+  sampling  10, 20, 25, 50, 100 or 200 Hz
+  run       30 to 90 minutes, latitude −70° to 70°
+  fault     none (about a third of the runs), or a gyro or accelerometer
+            bias step of 5 to 50 drift σ (log-uniform) at 10–90 % of the
+            run, or a bias ramp reaching 5 to 50 drift σ in 1000 s from
+            10–70 % of the run; axis and sign at random
+
+Each run goes through `insdiag analyze --json` and is judged as the fault
+matrix judges it (its `judge`): detected, right effect (the significant term
+with the lowest predicted ΔBIC, which `--discover` adds first), right
+module, onset error. A step's onset counts as found when it is within 60 s.
+Runs where the fault cannot be seen are counted apart: a z gyro fault on a
+table that never tilts z (turns, static), whose only trace is the heading.
+
+Usage:
+  scripts/blind_probe.py [--runs N] [--first-index I] [--jobs J] [--out results.json]
+INSDIAG_CLI names the CLI (default build/clients/insdiag).
+"""
+import argparse
+import concurrent.futures
+import json
+import math
+import os
+import random
+import subprocess
+import sys
+import tempfile
+import threading
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+import fault_matrix  # noqa: E402
+from fault_matrix import BENCHSIM, CLI, PYTHON  # noqa: E402
+
+UNITS = [  # (preset, datasheet, unit type)
+    ("nav", "yes", "INS-2000"),
+    ("nav", "no", "INS-2000"),
+    ("tactical-0.1", "yes", "none"),
+    ("tactical", "yes", "none"),
+]
+PROFILES = ["turns", "positions", "mixed", "static"]
+RATES_HZ = [10, 20, 25, 50, 100, 200]
+SENSORS = ["gyro", "acc"]
+# The fault matrix's judge reads its module-level unit class.
+JUDGE_LOCK = threading.Lock()
+
+
+def draw(index):
+    """The run's conditions, from its own generator."""
+    rng = random.Random(f"blind/{index}")
+    preset, datasheet, unit_type = rng.choice(UNITS)
+    conditions = dict(index=index, seed=7000 + index, preset=preset, datasheet=datasheet, unit_type=unit_type,
+                      profile=rng.choice(PROFILES), rate_hz=rng.choice(RATES_HZ),
+                      duration_s=round(rng.uniform(1800.0, 5400.0)), latitude_deg=round(rng.uniform(-70, 70), 2),
+                      ramp_accel_deg_s2=rng.choice([None, None, 5.0, 20.0]))
+    kind = rng.choice(["healthy", "step", "ramp"])
+    if kind == "healthy":
+        conditions["fault"] = dict(kind=None, name=None, expected=None)
+        return conditions
+    sensor, axis, sign = rng.choice(SENSORS), rng.choice("xyz"), rng.choice([-1, 1])
+    sigma = fault_matrix.unit_classes.PRESETS[preset]()[f"{sensor}_bias_gm.{axis}.sigma"]
+    size_sigma = math.exp(rng.uniform(math.log(5.0), math.log(50.0)))
+    duration = conditions["duration_s"]
+    if kind == "step":
+        onset, value = rng.uniform(0.1, 0.9) * duration, sign * size_sigma * sigma
+    else:
+        onset, value = rng.uniform(0.1, 0.7) * duration, sign * size_sigma * sigma / 1000.0
+    name = f"{sensor}_bias_{kind}.{axis}"
+    conditions["fault"] = dict(kind="effect", name=name, value=value, onset_s=round(onset, 3), sensor=sensor, axis=axis,
+                               expected=name, size_drift_sigma=round(size_sigma, 2))
+    return conditions
+
+
+def heading_only(conditions):
+    """A z gyro fault on a table that never tilts z shows only through the heading."""
+    fault = conditions["fault"]
+    return fault.get("sensor") == "gyro" and fault.get("axis") == "z" and conditions["profile"] in ("turns", "static")
+
+
+def run_one(index):
+    c = draw(index)
+    fault = c["fault"]
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "run.csv")
+        cmd = [PYTHON, BENCHSIM, "--out", path, "--preset", c["preset"], "--profile", c["profile"], "--rate-hz",
+               str(c["rate_hz"]), "--duration", str(c["duration_s"]), "--seed", str(c["seed"]), "--datasheet",
+               c["datasheet"], "--unit-type", c["unit_type"], "--latitude-deg", str(c["latitude_deg"])]
+        if c["ramp_accel_deg_s2"]:
+            cmd += ["--ramp-accel", str(c["ramp_accel_deg_s2"])]
+        if fault["kind"]:
+            cmd += ["--fault", f"{fault['name']}={fault['value']:.9g}@{fault['onset_s']}"]
+        subprocess.run(cmd, check=True, capture_output=True, text=True)
+        done = subprocess.run([CLI, "analyze", path, "--json"], capture_output=True, text=True)
+    if done.returncode != 0:
+        return dict(c, error=done.stderr.strip()[-300:])
+    with JUDGE_LOCK:
+        fault_matrix.use_unit_class(c["preset"])
+        verdict = fault_matrix.judge(fault, json.loads(done.stdout))
+    return dict(c, heading_only=heading_only(c), **verdict)
+
+
+def summarise(results):
+    done = [r for r in results if "error" not in r]
+    lines = [f"runs: {len(results)}, failed to analyse: {len(results) - len(done)}", "",
+             "| runs | count | detected | right effect | right module | step onset within 60 s | FAULTY |",
+             "|---|---|---|---|---|---|---|"]
+
+    def row(label, rs):
+        steps = [r for r in rs if r["fault"].get("name", "") and "_step." in r["fault"]["name"]]
+        onset_ok = sum(1 for r in steps if r["right_effect"] and (r.get("onset_error_s") or 1e9) <= 60.0)
+        count = lambda key: sum(1 for r in rs if r.get(key))
+        faulty = sum(1 for r in rs if r.get("verdict") == "FAULTY")
+        lines.append(f"| {label} | {len(rs)} | {count('detected')} | {count('right_effect')} | {count('right_module')} "
+                     f"| {onset_ok} of {len(steps)} | {faulty} |")
+
+    healthy = [r for r in done if r["fault"]["kind"] is None]
+    faulty = [r for r in done if r["fault"]["kind"]]
+    row("healthy", healthy)
+    row("faulty, every run", faulty)
+    row("faulty, the fault visible beyond the heading", [r for r in faulty if not r["heading_only"]])
+    for kind in ("gyro_bias_step", "acc_bias_step", "gyro_bias_ramp", "acc_bias_ramp"):
+        row(kind, [r for r in faulty if r["fault"]["name"].startswith(kind)])
+    misses = [r for r in faulty if not r["right_module"]] + [r for r in healthy if r["detected"]]
+    if misses:
+        lines += ["", "Misses and false alarms:"]
+        for r in misses:
+            f = r["fault"]
+            what = f"{f['name']} {f['size_drift_sigma']} σ @ {f['onset_s']:.0f} s" if f["kind"] else "healthy"
+            lines.append(f"- {r['index']}: {r['preset']} datasheet {r['datasheet']}, {r['profile']} {r['rate_hz']} Hz, "
+                         f"{r['duration_s']} s, lat {r['latitude_deg']}: {what} → {r['verdict']}, {r['top']}"
+                         f"{' (heading only)' if r['heading_only'] else ''}")
+    return "\n".join(lines)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--runs", type=int, default=40)
+    parser.add_argument("--first-index", type=int, default=0)
+    parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--out", default=None)
+    args = parser.parse_args()
+    indices = range(args.first_index, args.first_index + args.runs)
+    results = []
+    with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
+        for r in pool.map(run_one, indices):
+            results.append(r)
+            print(json.dumps(r), file=sys.stderr, flush=True)
+    if args.out:
+        with open(args.out, "w") as f:
+            json.dump(results, f, indent=1)
+    print(summarise(results))
+
+
+if __name__ == "__main__":
+    main()
