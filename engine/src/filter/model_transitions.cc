@@ -32,11 +32,50 @@ GramMatrix InverseGram(const GramMatrix& gram, int degree) {
 
 }  // namespace
 
+namespace {
+
+// A fault's weight on each sample of an interval whose onset lies u seconds
+// after the interval's start, summed against the sample grid's powers:
+// g_p = Σ_j s_j^p ω_j, s_j = (j − 1)Δt. A step's ω_j is the share of sample
+// j after the onset; a ramp's is the sample's mean of t − t₀ over that share,
+// (1/Δt) ∫ (t − t₀) dt, so that a fault a sample grid straddles is weighed as
+// the samples themselves carry it (interval means, bench-run format).
+Eigen::Vector3d FaultGridSums(int samples, double dt, double u, Regressor fault) {
+  Eigen::Vector3d g = Eigen::Vector3d::Zero();
+  for (int j = 0; j < samples; ++j) {
+    const double start = j * dt;
+    const double end = start + dt;
+    if (end <= u) continue;
+    const double from = std::max(start, u);
+    const double weight = fault == Regressor::kStep
+                              ? (end - from) / dt
+                              : 0.5 * ((end - u) * (end - u) - (from - u) * (from - u)) / dt;
+    g += weight * Eigen::Vector3d(1.0, start, start * start);
+  }
+  return g;
+}
+
+}  // namespace
+
 Eigen::Matrix<double, 9, 1> FaultColumn(const EpochInterval& e, int sensor_axis, Regressor fault, double onset_s) {
   const auto a = static_cast<Eigen::Index>(sensor_axis);
-  if (0.5 * (e.start_s + e.time_s) < onset_s) return Eigen::Matrix<double, 9, 1>::Zero();
-  if (fault == Regressor::kStep) return e.moments[0].col(a);
-  return e.moments[1].col(a) + (e.start_s + 0.5 * e.sample_interval_s - onset_s) * e.moments[0].col(a);
+  const double u = onset_s - e.start_s;
+  if (u <= 0.0) {
+    if (fault == Regressor::kStep) return e.moments[0].col(a);
+    return e.moments[1].col(a) +
+           (e.start_s + 0.5 * e.sample_interval_s - onset_s) * e.moments[0].col(a);
+  }
+  if (onset_s >= e.time_s) return Eigen::Matrix<double, 9, 1>::Zero();
+  // The onset inside the interval: the coupling's quadratic in s (header of
+  // epoch_run.h, b_j ≈ Σ_p c_p s_j^p, c = μ S⁻¹) summed against the fault's
+  // weights. Exact at either end of the interval, where it is μ_0 (or the
+  // ramp's column) and 0.
+  const int degree = std::min(kCouplingDegree, e.samples - 1);
+  const Eigen::Vector3d g = FaultGridSums(e.samples, e.sample_interval_s, u, fault);
+  const Eigen::Vector3d x = InverseGram(e.gram, degree) * g;
+  Eigen::Matrix<double, 9, 1> column = Eigen::Matrix<double, 9, 1>::Zero();
+  for (int p = 0; p <= degree; ++p) column += x[p] * e.moments[static_cast<size_t>(p)].col(a);
+  return column;
 }
 
 StateGridWeights GridWeights(const Eigen::Matrix2d& d_full, int size, double q, int samples, double dt,

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include "insdiag/engine/filter/observation.h"
 #include "insdiag/engine/stats/distributions.h"
@@ -54,11 +55,19 @@ struct OnsetSums {
   std::vector<Eigen::Matrix<double, kColumns, 1>> score;
   std::vector<MatrixCc> information;
   std::vector<std::array<Eigen::Matrix2d, kSensorAxisCount>> successive;  // Cov(s(θ), s(θ+1))
+  // The adjoint's navigation part at each epoch, for an onset inside its
+  // interval (OnsetInsideInterval): λ_k, Γ_k and m_k of the header.
+  std::vector<Eigen::Matrix<double, 9, 1>> lambda;
+  std::vector<Matrix9d> gamma;
+  std::vector<Matrix9c> cross;
 
   explicit OnsetSums(int epochs)
       : score(static_cast<size_t>(epochs)),
         information(static_cast<size_t>(epochs)),
-        successive(static_cast<size_t>(epochs)) {}
+        successive(static_cast<size_t>(epochs)),
+        lambda(static_cast<size_t>(epochs)),
+        gamma(static_cast<size_t>(epochs)),
+        cross(static_cast<size_t>(epochs)) {}
 };
 
 OnsetSums BackwardSweep(const ForwardPass& fw, const StateLayout& layout, const EpochRun& run,
@@ -99,6 +108,9 @@ OnsetSums BackwardSweep(const ForwardPass& fw, const StateLayout& layout, const 
     const auto at = static_cast<size_t>(k);
     out.score[at] = score;
     out.information[at] = information;
+    out.lambda[at] = lambda.head<9>();
+    out.gamma[at] = Gamma.topLeftCorner<9, 9>();
+    out.cross[at] = adjoint_columns.topRows<9>();
     for (int a = 0; a < kSensorAxisCount; ++a) {
       out.successive[at][static_cast<size_t>(a)] = successive.block<2, 2>(2 * a, 2 * a);
     }
@@ -123,6 +135,66 @@ Eigen::Matrix<double, kColumns, 1> ColumnDirection(const EffectTerm& term, const
   e.segment<2>(2 * SensorAxisIndex(term.family->sensor, term.axis)) =
       PairDirection(term, run, theta, centre_s);
   return e;
+}
+
+// The likelihood ratio of a fault whose onset t₀ lies inside interval k:
+// the interval's samples after t₀ (FaultColumn, w) and every later interval
+// whole, so by the header's recursion with w in place of W_k:
+//   s = eᵀ s(k+1) + wᵀ λ_k,   I = eᵀ I(k+1) e + wᵀ Γ_k w + 2 wᵀ m_k e
+// with e the fault's direction among the columns for onset t₀.
+struct OnsetTrial {
+  double onset_s = 0.0;
+  double statistic = 0.0;
+  double estimate = 0.0;
+  double std_error = 0.0;
+};
+
+std::optional<OnsetTrial> TryOnsetInsideInterval(const EffectTerm& term, const OnsetSums& sums,
+                                                 const EpochRun& run, int k, double onset_s,
+                                                 double centre_s) {
+  const int axis = SensorAxisIndex(term.family->sensor, term.axis);
+  Eigen::Matrix<double, kColumns, 1> e = Eigen::Matrix<double, kColumns, 1>::Zero();
+  e.segment<2>(2 * axis) = term.family->regressor == Regressor::kRamp
+                               ? Eigen::Vector2d(centre_s - onset_s, 1.0)
+                               : Eigen::Vector2d(1.0, 0.0);
+  const auto at = static_cast<size_t>(k);
+  double score = 0.0, information = 0.0;
+  if (k + 1 < run.size()) {
+    score = e.dot(sums.score[at + 1]);
+    information = e.dot(sums.information[at + 1] * e);
+  }
+  const Eigen::Matrix<double, 9, 1> w =
+      FaultColumn(run.epochs[at], axis, term.family->regressor, onset_s);
+  score += w.dot(sums.lambda[at]);
+  information += w.dot(sums.gamma[at] * w) + 2.0 * w.dot(sums.cross[at] * e);
+  if (!(information > 0.0) || !std::isfinite(information)) return std::nullopt;
+  return OnsetTrial{onset_s, score * score / information, score / information,
+                    1.0 / std::sqrt(information)};
+}
+
+// Moves the fit's onset from the start of its interval to the sample where
+// the fault most likely began, in that interval or the one before: an onset
+// between two updates puts only part of the fault into its first interval,
+// and taking all of it there biases the magnitude (towards half of it where
+// the first seconds carry the evidence, as for an accelerometer step).
+void PlaceOnsetAtItsSample(const OnsetSums& sums, const EpochRun& run, int first, double centre_s,
+                           OnsetFit& fit) {
+  std::optional<OnsetTrial> best;
+  for (int k = std::max({0, first - 1, fit.onset_epoch - 1}); k <= fit.onset_epoch; ++k) {
+    const EpochInterval& e = run.epochs[static_cast<size_t>(k)];
+    for (int j = 1; j < e.samples; ++j) {
+      const auto trial = TryOnsetInsideInterval(fit.term, sums, run, k,
+                                                e.start_s + j * e.sample_interval_s, centre_s);
+      if (trial.has_value() && (!best.has_value() || trial->statistic > best->statistic))
+        best = trial;
+    }
+  }
+  const double at_interval_start = fit.estimate * fit.estimate / (fit.std_error * fit.std_error);
+  if (!best.has_value() || best->statistic <= at_interval_start) return;
+  fit.onset_s = best->onset_s;
+  fit.estimate = best->estimate;
+  fit.std_error = best->std_error;
+  fit.statistic = std::max(fit.statistic, best->statistic);
 }
 
 // The statistic profile of one term over the onsets, and its best onset.
@@ -213,6 +285,7 @@ OnsetFit FitTerm(const EffectTerm& term, const OnsetSums& sums, const EpochRun& 
   fit.onset_s = run.epochs[static_cast<size_t>(fit.onset_epoch)].start_s;
   fit.onset_low_s = run.epochs[static_cast<size_t>(quantile(options.interval_tail))].start_s;
   fit.onset_high_s = run.epochs[static_cast<size_t>(quantile(1.0 - options.interval_tail))].start_s;
+  PlaceOnsetAtItsSample(sums, run, first, centre_s, fit);
   fit.p_value = OnsetPValue(fit.statistic, fit.path_length);
   return fit;
 }

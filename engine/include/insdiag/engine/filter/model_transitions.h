@@ -6,7 +6,9 @@
 //   constant effect      B column = the interval's catalogue column K[:, i]
 //   fault effect         B column = 0 before the onset; after it, the step's
 //                        μ_0 or the ramp's μ_1 + (t_start + Δt/2 − t₀) μ_0 of
-//                        its sensor axis (the sample means of 1 and t − t₀)
+//                        its sensor axis (the sample means of 1 and t − t₀);
+//                        in the interval the onset falls in, the samples
+//                        after it (FaultColumn)
 //   drift, walk, pair    B, Q_ns, Q_nn from the coupling's quadratic
 //                        reconstruction and the state's per-sample transition
 //                        d and noise q (epoch_run.h, header)
@@ -49,8 +51,10 @@ StateGridWeights GridWeights(const Eigen::Matrix2d& d, int size, double q, int s
                              const Eigen::Matrix<double, kCouplingMoments, kCouplingMoments>& gram);
 
 // A fault effect's column over interval `e` for a unit value of its
-// parameter on `sensor_axis` (SensorAxisIndex): zero while the interval's
-// middle is before `onset_s`.
+// parameter on `sensor_axis` (SensorAxisIndex): zero before `onset_s`, the
+// whole interval's after it, and for the interval the onset falls in, the
+// share of its samples after the onset (the coupling's quadratic summed
+// against them).
 Eigen::Matrix<double, 9, 1> FaultColumn(const EpochInterval& e, int sensor_axis, Regressor fault, double onset_s);
 
 class ModelTransitions {
