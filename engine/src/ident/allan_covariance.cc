@@ -1,11 +1,11 @@
 // The covariance of the overlapping Allan variance estimator under a noise
 // model (allan.h: the phase's generalised autocovariance, summed over lags).
 #include <Eigen/Dense>
-
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <vector>
 
 #include "ident/allan_model.h"
 
@@ -69,61 +69,76 @@ constexpr double kTap[3] = {1.0, -2.0, 1.0};
 // short pieces, by 4-point Gauss–Legendre (exact up to degree 7: N and K
 // pieces are polynomials of degree ≤ 7) with the Euler–Maclaurin endpoint
 // terms on long ones. The quantisation δ adds only at the meeting lags.
-double LagSum(const PhaseCovariance& g, double tau0, int64_t mi, int64_t mj, int64_t Mi, int64_t Mj) {
-  const int64_t lo = std::max(-2 * mj, -(Mi - 1));
-  const int64_t hi = std::min(2 * mi, Mj - 1);
-  if (lo > hi) return 0.0;
-  auto n_of = [&](double d) {
-    return std::max(0.0, std::min(static_cast<double>(Mi), static_cast<double>(Mj) - d) - std::max(0.0, -d));
-  };
-  auto c_of = [&](double d) {
+class LagSum {
+ public:
+  LagSum(const PhaseCovariance& g, double tau0, int64_t mi, int64_t mj, int64_t Mi, int64_t Mj)
+      : g_(g), tau0_(tau0), mi_(mi), mj_(mj), Mi_(Mi), Mj_(Mj) {}
+
+  double Total() const {
+    const int64_t lo = std::max(-2 * mj_, -(Mi_ - 1));
+    const int64_t hi = std::min(2 * mi_, Mj_ - 1);
+    if (lo > hi) return 0.0;
+    std::vector<int64_t> breaks = {lo, hi};
+    for (int p = 0; p < 3; ++p) {
+      for (int q = 0; q < 3; ++q) breaks.push_back(p * mi_ - q * mj_);
+    }
+    breaks.push_back(0);
+    breaks.push_back(Mj_ - Mi_);
+    std::sort(breaks.begin(), breaks.end());
+    breaks.erase(std::unique(breaks.begin(), breaks.end()), breaks.end());
+    std::map<int64_t, double> break_value;
+    auto at_break = [&](int64_t d) {
+      auto [it, fresh] = break_value.try_emplace(d, 0.0);
+      if (fresh) it->second = Term(static_cast<double>(d));
+      return it->second;
+    };
+    double sum = 0.0;
+    for (size_t b = 0; b + 1 < breaks.size(); ++b) {
+      const int64_t u = std::max(breaks[b], lo);
+      const int64_t v = std::min(breaks[b + 1], hi);
+      if (u >= v) continue;
+      if (v - u <= kExactPiece) {
+        for (int64_t d = u; d < v; ++d) sum += Term(static_cast<double>(d));
+        continue;
+      }
+      // Σ_{d=u}^{v−1} f(d) = ∫_u^v f + (f(u) − f(v))/2 + (f′(v) − f′(u))/12 + …
+      // The derivative term is O(1/len²) of the piece: left out.
+      sum += LongPieceIntegral(u, v) + 0.5 * (at_break(u) - at_break(v));
+    }
+    sum += at_break(hi);
+    if (g_.q2 > 0.0) AddQuantisationAtMeetingLags(lo, hi, sum);
+    return sum;
+  }
+
+ private:
+  static constexpr int64_t kExactPiece = 48;
+
+  // How many difference pairs lie d apart.
+  double Count(double d) const {
+    return std::max(
+        0.0, std::min(static_cast<double>(Mi_), static_cast<double>(Mj_) - d) - std::max(0.0, -d));
+  }
+  double Covariance(double d) const {
     double c = 0.0;
     for (int p = 0; p < 3; ++p) {
-      for (int q = 0; q < 3; ++q) {
-        c += kTap[p] * kTap[q] * g.Smooth(tau0 * (d + static_cast<double>(q * mj - p * mi)));
-      }
+      for (int q = 0; q < 3; ++q)
+        c += kTap[p] * kTap[q] * g_.Smooth(tau0_ * (d + static_cast<double>(q * mj_ - p * mi_)));
     }
     return c;
-  };
-  auto term = [&](double d) {
-    const double c = c_of(d);
-    return n_of(d) * c * c;
-  };
-
-  std::vector<int64_t> breaks = {lo, hi};
-  for (int p = 0; p < 3; ++p) {
-    for (int q = 0; q < 3; ++q) breaks.push_back(p * mi - q * mj);
   }
-  breaks.push_back(0);
-  breaks.push_back(Mj - Mi);
-  std::sort(breaks.begin(), breaks.end());
-  breaks.erase(std::unique(breaks.begin(), breaks.end()), breaks.end());
-  std::map<int64_t, double> break_value;
-  auto at_break = [&](int64_t d) {
-    auto [it, fresh] = break_value.try_emplace(d, 0.0);
-    if (fresh) it->second = term(static_cast<double>(d));
-    return it->second;
-  };
+  double Term(double d) const {
+    const double c = Covariance(d);
+    return Count(d) * c * c;
+  }
 
-  // Subintervals for Gauss–Legendre: fine enough for the Markov exponential.
-  const double markov_scale = g.markov > 0.0 ? g.markov_tau_s / tau0 : 0.0;
-  static const double kNode[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563,
-                                  0.8611363115940526};
-  static const double kWeight[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461,
-                                    0.3478548451374538};
-  constexpr int64_t kExactPiece = 48;
-  std::vector<double> cuts;
-
-  double sum = 0.0;
-  for (size_t b = 0; b + 1 < breaks.size(); ++b) {
-    const int64_t u = std::max(breaks[b], lo);
-    const int64_t v = std::min(breaks[b + 1], hi);
-    if (u >= v) continue;
-    if (v - u <= kExactPiece) {
-      for (int64_t d = u; d < v; ++d) sum += term(static_cast<double>(d));
-      continue;
-    }
-    // Σ_{d=u}^{v−1} f(d) = ∫_u^v f + (f(u) − f(v))/2 + (f′(v) − f′(u))/12 + …
+  // ∫_u^v n(d) c(d)² dd over a piece between two meeting lags.
+  double LongPieceIntegral(int64_t u, int64_t v) const {
+    // Subintervals for Gauss–Legendre: fine enough for the Markov exponential.
+    const double markov_scale = g_.markov > 0.0 ? g_.markov_tau_s / tau0_ : 0.0;
+    static const double kNode[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563,
+                                    0.8611363115940526};
+    static const double kWeight[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461,
+                                      0.3478548451374538};
     // The Markov exponential and the flicker logarithm vary fast only next to
     // the piece's ends (their kinks): sub-intervals grow geometrically from
     // both ends, from T/2 (Markov) or len/32 (flicker), for six doublings.
@@ -131,8 +146,8 @@ double LagSum(const PhaseCovariance& g, double tau0, int64_t mi, int64_t mj, int
     double first = len;
     // Where T is below 1/1000 of the piece, its exponential fills an O(T/len) sliver: not resolved.
     if (markov_scale > 1e-3 * len) first = std::min(first, 0.5 * markov_scale);
-    if (g.flicker > 0.0) first = std::min(first, len / 32.0);
-    cuts.assign(1, 0.0);
+    if (g_.flicker > 0.0) first = std::min(first, len / 32.0);
+    std::vector<double> cuts(1, 0.0);
     for (double w = first; w < 0.5 * len && w < 64.0 * first; w *= 2.0) cuts.push_back(w);
     const size_t half = cuts.size();
     for (size_t k = half; k-- > 0;) cuts.push_back(len - cuts[k]);
@@ -141,11 +156,11 @@ double LagSum(const PhaseCovariance& g, double tau0, int64_t mi, int64_t mj, int
     // ea·e^{−(d−u)/T} + eb·e^{−(v−d)/T} (all exponents ≤ 0).
     double ea = 0.0;
     double eb = 0.0;
-    if (g.markov > 0.0) {
+    if (g_.markov > 0.0) {
       const double mid = 0.5 * static_cast<double>(u + v);
       for (int p = 0; p < 3; ++p) {
         for (int q = 0; q < 3; ++q) {
-          const auto o = static_cast<double>(q * mj - p * mi);
+          const auto o = static_cast<double>(q * mj_ - p * mi_);
           const double w = kTap[p] * kTap[q];
           if (mid + o >= 0.0) {
             ea += w * std::exp(-(static_cast<double>(u) + o) / markov_scale);
@@ -159,14 +174,15 @@ double LagSum(const PhaseCovariance& g, double tau0, int64_t mi, int64_t mj, int
       double c = 0.0;
       for (int p = 0; p < 3; ++p) {
         for (int q = 0; q < 3; ++q) {
-          c += kTap[p] * kTap[q] * g.Polynomial(tau0 * (d + static_cast<double>(q * mj - p * mi)));
+          c += kTap[p] * kTap[q] *
+               g_.Polynomial(tau0_ * (d + static_cast<double>(q * mj_ - p * mi_)));
         }
       }
-      if (g.markov > 0.0) {
-        c -= g.markov * (ea * std::exp(-(d - static_cast<double>(u)) / markov_scale) +
-                         eb * std::exp(-(static_cast<double>(v) - d) / markov_scale));
+      if (g_.markov > 0.0) {
+        c -= g_.markov * (ea * std::exp(-(d - static_cast<double>(u)) / markov_scale) +
+                          eb * std::exp(-(static_cast<double>(v) - d) / markov_scale));
       }
-      return n_of(d) * c * c;
+      return Count(d) * c * c;
     };
     double integral = 0.0;
     for (size_t k = 0; k + 1 < cuts.size(); ++k) {
@@ -175,27 +191,28 @@ double LagSum(const PhaseCovariance& g, double tau0, int64_t mi, int64_t mj, int
       const double mid = static_cast<double>(u) + 0.5 * (cuts[k] + cuts[k + 1]);
       for (int q = 0; q < 4; ++q) integral += 0.5 * width * kWeight[q] * inner(mid + 0.5 * width * kNode[q]);
     }
-    // The derivative term is O(1/len²) of the piece: left out.
-    sum += integral + 0.5 * (at_break(u) - at_break(v));
+    return integral;
   }
-  sum += at_break(hi);
 
-  if (g.q2 > 0.0) {
-    // The δ of white phase noise at the lags where taps meet.
+  // The δ of white phase noise at the lags where taps meet.
+  void AddQuantisationAtMeetingLags(int64_t lo, int64_t hi, double& sum) const {
     std::map<int64_t, double> meet;
     for (int p = 0; p < 3; ++p) {
       for (int q = 0; q < 3; ++q) {
-        const int64_t d = p * mi - q * mj;
-        if (d >= lo && d <= hi) meet[d] += kTap[p] * kTap[q] * g.q2;
+        const int64_t d = p * mi_ - q * mj_;
+        if (d >= lo && d <= hi) meet[d] += kTap[p] * kTap[q] * g_.q2;
       }
     }
     for (const auto& [d, cq] : meet) {
-      const double cs = c_of(static_cast<double>(d));
-      sum += n_of(static_cast<double>(d)) * ((cs + cq) * (cs + cq) - cs * cs);
+      const double cs = Covariance(static_cast<double>(d));
+      sum += Count(static_cast<double>(d)) * ((cs + cq) * (cs + cq) - cs * cs);
     }
   }
-  return sum;
-}
+
+  const PhaseCovariance& g_;
+  const double tau0_;
+  const int64_t mi_, mj_, Mi_, Mj_;
+};
 
 }  // namespace
 
@@ -219,7 +236,7 @@ Eigen::MatrixXd EstimatorCovarianceMatrix(const AllanNoiseTerms& terms, double t
         const int64_t Mi = Differences(len, m[i]);
         const int64_t Mj = Differences(len, m[j]);
         if (Mi < 1 || Mj < 1) continue;
-        s += count * LagSum(g, tau0, m[i], m[j], Mi, Mj);
+        s += count * LagSum(g, tau0, m[i], m[j], Mi, Mj).Total();
       }
       const double ti = tau0 * static_cast<double>(m[i]);
       const double tj = tau0 * static_cast<double>(m[j]);
