@@ -114,6 +114,41 @@ absl::StatusOr<grpc::SslServerCredentialsOptions::PemKeyCertPair> ReadKeyCertPai
   return grpc::SslServerCredentialsOptions::PemKeyCertPair{*key, *cert};
 }
 
+// Counts each request's duration for the metrics, and keeps brotli out of
+// what a client accepts. Browsers accept "gzip, deflate, br, zstd", and
+// Debian's compiled cpp-httplib then answers with brotli at its default
+// quality 11: seconds of CPU for a few hundred kB of JSON or JavaScript, where
+// gzip takes milliseconds. (The request is httplib's own non-const object,
+// handed over as const.) httplib runs the pre-routing handler and the logger
+// on the request's own thread.
+void InstrumentHttp(httplib::Server& http, Metrics& metrics) {
+  static thread_local std::chrono::steady_clock::time_point request_start;
+  http.set_logger([metrics = &metrics](const httplib::Request& request,
+                                       const httplib::Response& response) {
+    const std::chrono::duration<double> elapsed = std::chrono::steady_clock::now() - request_start;
+    metrics->CountHttpRequest(request.method, response.status, elapsed.count());
+  });
+  http.set_pre_routing_handler([](const httplib::Request& request, httplib::Response&) {
+    request_start = std::chrono::steady_clock::now();
+    auto& headers = const_cast<httplib::Request&>(request).headers;
+    for (auto& [name, value] : headers) {
+      if (!absl::EqualsIgnoreCase(name, "Accept-Encoding") || !absl::StrContains(value, "br"))
+        continue;
+      std::vector<std::string> kept;
+      for (absl::string_view coding : absl::StrSplit(value, ',')) {
+        coding = absl::StripAsciiWhitespace(coding);
+        if (!absl::StartsWith(coding, "br")) kept.emplace_back(coding);
+      }
+      value = absl::StrJoin(kept, ", ");
+    }
+    return httplib::Server::HandlerResponse::Unhandled;
+  });
+}
+
+bool UsesTls(const InsdiagServer::Options& options) {
+  return !options.tls_cert_file.empty() || !options.tls_key_file.empty();
+}
+
 }  // namespace
 
 absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::ConnectionPool& pool, Options options) {
@@ -135,13 +170,19 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
     if (!made.ok()) return made.status();
     server->wrote_first_admin_token_ = *made;
   }
+  if (auto grpc = server->StartGrpc(options); !grpc.ok()) return grpc;
+  if (auto http = server->StartHttp(options, service_names); !http.ok()) return http;
+  server->StartHealthWatch(pool, options.health_poll);
+  server->services_->workers.Start();
+  return server;
+}
 
+absl::Status InsdiagServer::StartGrpc(const Options& options) {
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
-  const bool tls = !options.tls_cert_file.empty() || !options.tls_key_file.empty();
   std::shared_ptr<grpc::ServerCredentials> credentials = grpc::InsecureServerCredentials();
-  if (tls) {
+  if (UsesTls(options)) {
     auto pair = ReadKeyCertPair(options);
     if (!pair.ok()) return pair.status();
     grpc::SslServerCredentialsOptions ssl;
@@ -149,98 +190,78 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
     credentials = grpc::SslServerCredentials(ssl);
   }
   builder.AddListeningPort(absl::StrCat(options.bind_address, ":", options.grpc_port), credentials,
-                           &server->grpc_port_);
+                           &grpc_port_);
   std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> interceptors;
-  interceptors.push_back(MetricsInterceptorFactory(server->services_->metrics));
+  interceptors.push_back(MetricsInterceptorFactory(services_->metrics));
   builder.experimental().SetInterceptorCreators(std::move(interceptors));
-  builder.RegisterService(&server->services_->runs_grpc);
-  builder.RegisterService(&server->services_->analyses_grpc);
-  builder.RegisterService(&server->services_->knowledge_grpc);
-  builder.RegisterService(&server->services_->fleet_grpc);
-  builder.RegisterService(&server->services_->access_grpc);
-  builder.RegisterService(&server->services_->live_grpc);
-  server->grpc_ = builder.BuildAndStart();
-  if (!server->grpc_ || server->grpc_port_ == 0) {
+  builder.RegisterService(&services_->runs_grpc);
+  builder.RegisterService(&services_->analyses_grpc);
+  builder.RegisterService(&services_->knowledge_grpc);
+  builder.RegisterService(&services_->fleet_grpc);
+  builder.RegisterService(&services_->access_grpc);
+  builder.RegisterService(&services_->live_grpc);
+  grpc_ = builder.BuildAndStart();
+  if (!grpc_ || grpc_port_ == 0) {
     return absl::UnavailableError(absl::StrCat("cannot serve gRPC on ", options.bind_address, ":", options.grpc_port));
   }
+  return absl::OkStatus();
+}
 
-  auto gateway = RestGateway::Create(server->grpc_->InProcessChannel(grpc::ChannelArguments()), service_names,
-                                     server->services_->guard.gateway_key());
+absl::Status InsdiagServer::StartHttp(const Options& options,
+                                      const std::vector<std::string>& service_names) {
+  auto gateway = RestGateway::Create(grpc_->InProcessChannel(grpc::ChannelArguments()),
+                                     service_names, services_->guard.gateway_key());
   if (!gateway.ok()) return gateway.status();
-  server->gateway_ = std::move(*gateway);
-  server->gateway_->ServeMetrics([services = server->services_.get()] { return services->RenderMetrics(); });
-  if (tls) {
+  gateway_ = std::move(*gateway);
+  gateway_->ServeMetrics([services = services_.get()] { return services->RenderMetrics(); });
+  if (UsesTls(options)) {
     auto https = std::make_unique<httplib::SSLServer>(options.tls_cert_file.c_str(), options.tls_key_file.c_str());
     if (!https->is_valid()) {
       return absl::InvalidArgumentError(absl::StrCat("--tls-cert ", options.tls_cert_file, ", --tls-key ",
                                                      options.tls_key_file, ": HTTPS cannot use them"));
     }
-    server->http_ = std::move(https);
+    http_ = std::move(https);
   } else {
-    server->http_ = std::make_unique<httplib::Server>();
+    http_ = std::make_unique<httplib::Server>();
   }
   // The page's files first: the gateway's routes take every path.
-  server->serves_page_ = ServeWebPage(*server->http_, options.web_dir);
-  server->gateway_->Register(*server->http_);
+  serves_page_ = ServeWebPage(*http_, options.web_dir);
+  gateway_->Register(*http_);
   // A thread serves one connection for as long as the client keeps it open: a
   // browser keeps up to six per page, and a watched analysis holds one while
   // it runs. httplib's default (a thread per core, at least 8) would queue a
   // page's requests behind idle keep-alive connections for seconds.
-  server->http_->new_task_queue = [] { return new httplib::ThreadPool(64); };
-  // Browsers accept "gzip, deflate, br, zstd", and Debian's compiled
-  // cpp-httplib then answers with brotli at its default quality 11: seconds of
-  // CPU for a few hundred kB of JSON or JavaScript, where gzip takes
-  // milliseconds. Leaving br out of what the client accepts gets them gzip.
-  // (The request is httplib's own non-const object, handed over as const.)
-  // Each request's duration for the metrics: httplib runs the pre-routing
-  // handler and the logger on the request's own thread.
-  static thread_local std::chrono::steady_clock::time_point request_start;
-  server->http_->set_logger([metrics = &server->services_->metrics](const httplib::Request& request,
-                                                                    const httplib::Response& response) {
-    const std::chrono::duration<double> elapsed = std::chrono::steady_clock::now() - request_start;
-    metrics->CountHttpRequest(request.method, response.status, elapsed.count());
-  });
-  server->http_->set_pre_routing_handler([](const httplib::Request& request, httplib::Response&) {
-    request_start = std::chrono::steady_clock::now();
-    auto& headers = const_cast<httplib::Request&>(request).headers;
-    for (auto& [name, value] : headers) {
-      if (!absl::EqualsIgnoreCase(name, "Accept-Encoding") || !absl::StrContains(value, "br")) continue;
-      std::vector<std::string> kept;
-      for (absl::string_view coding : absl::StrSplit(value, ',')) {
-        coding = absl::StripAsciiWhitespace(coding);
-        if (!absl::StartsWith(coding, "br")) kept.emplace_back(coding);
-      }
-      value = absl::StrJoin(kept, ", ");
-    }
-    return httplib::Server::HandlerResponse::Unhandled;
-  });
+  http_->new_task_queue = [] { return new httplib::ThreadPool(64); };
+  InstrumentHttp(*http_, services_->metrics);
   // A 1-hour 50 Hz run is ~20 MB of CSV; give slow links time.
-  server->http_->set_read_timeout(std::chrono::seconds(60));
-  server->http_port_ = options.http_port == 0 ? server->http_->bind_to_any_port(options.bind_address)
-                                              : (server->http_->bind_to_port(options.bind_address, options.http_port)
-                                                     ? options.http_port
-                                                     : -1);
-  if (server->http_port_ <= 0) {
-    server->http_port_ = 0;
+  http_->set_read_timeout(std::chrono::seconds(60));
+  http_port_ =
+      options.http_port == 0
+          ? http_->bind_to_any_port(options.bind_address)
+          : (http_->bind_to_port(options.bind_address, options.http_port) ? options.http_port : -1);
+  if (http_port_ <= 0) {
+    http_port_ = 0;
     return absl::UnavailableError(absl::StrCat("cannot serve HTTP on ", options.bind_address, ":", options.http_port));
   }
-  server->http_thread_ = std::thread([http = server->http_.get()] { http->listen_after_bind(); });
-  // The health service answers for the database too: a load balancer must
-  // not send uploads to a server that can store nothing.
-  server->health_thread_ = std::thread([s = server.get(), &pool, poll = options.health_poll] {
-    auto* health = s->grpc_->GetHealthCheckService();
-    std::unique_lock lock(s->health_mutex_);
-    while (!s->stopping_) {
+  http_thread_ = std::thread([http = http_.get()] { http->listen_after_bind(); });
+  return absl::OkStatus();
+}
+
+// The health service answers for the database too: a load balancer must not
+// send uploads to a server that can store nothing.
+void InsdiagServer::StartHealthWatch(kb::ConnectionPool& pool, std::chrono::milliseconds poll) {
+  health_thread_ = std::thread([this, &pool, poll] {
+    auto* health = grpc_->GetHealthCheckService();
+    std::unique_lock lock(health_mutex_);
+    while (!stopping_) {
       lock.unlock();
       bool answers = false;
       if (auto db = pool.Acquire(); db.ok()) answers = (*db)->Exec("SELECT 1").ok();
       health->SetServingStatus(answers);
       lock.lock();
-      s->health_wake_.wait_for(lock, poll, [s] { return s->stopping_; });
+      health_wake_.wait_for(lock, poll, [this] { return stopping_; });
     }
   });
-  server->services_->workers.Start();
-  return server;
 }
 
 void InsdiagServer::Shutdown() {

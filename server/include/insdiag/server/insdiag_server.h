@@ -82,6 +82,11 @@ class InsdiagServer {
 
  private:
   InsdiagServer();
+  // Start's steps, in order: the gRPC server, then the REST gateway and the
+  // page over HTTP(S) (through gRPC in process), then the database's health.
+  absl::Status StartGrpc(const Options& options);
+  absl::Status StartHttp(const Options& options, const std::vector<std::string>& service_names);
+  void StartHealthWatch(kb::ConnectionPool& pool, std::chrono::milliseconds poll);
   struct Services;
   std::unique_ptr<Services> services_;
   std::unique_ptr<grpc::Server> grpc_;
