@@ -176,83 +176,100 @@ std::vector<std::string> SegmentMotion(const BenchRun& run, const ForwardPass& f
   return labels;
 }
 
-RankedEffects RankMissingEffects(const ScoreTestObserver& scan, const ForwardPass& fw, const BenchRun& run,
-                                 const std::vector<std::string>& motion, const FinderOptions& options) {
-  RankedEffects out;
-  const RunExcitation excitation = MeasureExcitation(run);
-  const double g = wgs84::NormalGravityMps2(run.metadata.site.latitude_rad, run.metadata.site.height_m);
-  const Eigen::VectorXd& s = scan.score();
-  const Eigen::MatrixXd& I = scan.information();
-  const std::vector<TermColumns> terms = GroupByTerm(scan.columns());
-  const double log_n = std::log(static_cast<double>(std::max(1, fw.scalar_updates)));
+namespace {
 
-  struct Scored {
-    EffectCandidate candidate;
-    Eigen::VectorXd beta;
-    const TermColumns* columns;
-  };
-  std::vector<Scored> scored;
-  std::set<std::string> outside_linear_range;
-  for (const TermColumns& t : terms) {
-    Scored sc;
-    sc.columns = &t;
-    EffectCandidate& c = sc.candidate;
-    c.name = t.term.Name();
-    c.family = std::string(t.term.family->name);
-    c.source = "SCORE";
-    c.unit = std::string(t.term.family->unit);
-    c.dof = static_cast<int>(t.columns.size());
-    std::string why;
-    const Eigen::VectorXd st = Select(s, t.columns);
-    const Eigen::MatrixXd It = Select(I, t.columns);
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(It);
-    const bool full_rank = eig.eigenvalues().minCoeff() > kRankTolerance * std::max(eig.eigenvalues().maxCoeff(), 0.0) &&
-                           eig.eigenvalues().minCoeff() > 0.0;
-    c.identifiable = Excites(excitation, t.term, options.excitation, g, &why) && full_rank;
-    if (!c.identifiable) {
-      if (why.empty()) why = "its signature vanishes in this run";
-      c.std_error = std::numeric_limits<double>::infinity();
-      c.p_value = c.p_value_holm = 1.0;
-      c.note = "not identifiable with this profile: " + why;
-      scored.push_back(std::move(sc));
-      continue;
-    }
-    const Eigen::MatrixXd cov = It.inverse();
-    sc.beta = cov * st;
-    c.statistic = st.dot(sc.beta);
-    c.p_value = stats::ChiSquareSurvival(c.statistic, c.dof);
-    if (c.dof == 1) {
-      c.estimate = sc.beta[0];
-      c.std_error = std::sqrt(cov(0, 0));
-    } else {
-      // Yaw harmonic magnitude √(a² + b²), delta method.
-      const double mag = sc.beta.norm();
-      c.estimate = mag;
-      const Eigen::VectorXd grad = mag > 0.0 ? Eigen::VectorXd(sc.beta / mag) : Eigen::VectorXd::Ones(c.dof) / std::sqrt(c.dof);
-      c.std_error = std::sqrt(grad.dot(cov * grad));
-    }
-    c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
-    c.predicted_delta_bic = -c.statistic + c.dof * log_n;
-    const double attitude_error_rad = ImpliedPeakAttitudeError(sc.beta, scan.peak_attitude_sensitivity(), t.columns);
-    const double linearisation_error = 0.5 * attitude_error_rad;  // relative, of β̂
-    if (linearisation_error > kLinearModelBreakdown) {
-      c.identifiable = false;
-      c.note = absl::StrFormat(
-          "far outside the linear range: the estimate would put the filter %.2g rad off in attitude, where the "
-          "first-order error model is %.0f %% wrong; not a finding (a larger error elsewhere in the model is the "
-          "likelier cause)",
-          attitude_error_rad, 100.0 * linearisation_error);
-      outside_linear_range.insert(c.name);
-    } else if (linearisation_error > c.std_error / std::abs(c.estimate)) {
-      c.note = absl::StrFormat(
-          "beyond the linear range: the estimate would put the filter %.2g rad off in attitude; its error is "
-          "the first-order model's (about %.0f %%) more than its standard error (%.0f %%): add it to measure it",
-          attitude_error_rad, 100.0 * linearisation_error, 100.0 * c.std_error / std::abs(c.estimate));
-    }
-    scored.push_back(std::move(sc));
+// One term's score test, before the ranking.
+struct ScoredTerm {
+  EffectCandidate candidate;
+  Eigen::VectorXd beta;
+  const TermColumns* columns = nullptr;
+  bool outside_linear_range = false;
+};
+
+// What the run and the scan need to score a term.
+struct ScanContext {
+  const ScoreTestObserver& scan;
+  const RunExcitation& excitation;
+  double gravity_mps2;
+  double log_updates;
+  const FinderOptions& options;
+};
+
+// The term's one-step estimate and statistic, or why the run cannot test it;
+// and whether its estimate is within the first-order model's range
+// (docs/IDENTIFICATION.md, "The scan's linear range").
+ScoredTerm ScoreTerm(const TermColumns& t, const ScanContext& context) {
+  ScoredTerm sc;
+  sc.columns = &t;
+  EffectCandidate& c = sc.candidate;
+  c.name = t.term.Name();
+  c.family = std::string(t.term.family->name);
+  c.source = "SCORE";
+  c.unit = std::string(t.term.family->unit);
+  c.dof = static_cast<int>(t.columns.size());
+  std::string why;
+  const Eigen::VectorXd st = Select(context.scan.score(), t.columns);
+  const Eigen::MatrixXd It = Select(context.scan.information(), t.columns);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(It);
+  const bool full_rank =
+      eig.eigenvalues().minCoeff() > kRankTolerance * std::max(eig.eigenvalues().maxCoeff(), 0.0) &&
+      eig.eigenvalues().minCoeff() > 0.0;
+  c.identifiable =
+      Excites(context.excitation, t.term, context.options.excitation, context.gravity_mps2, &why) &&
+      full_rank;
+  if (!c.identifiable) {
+    if (why.empty()) why = "its signature vanishes in this run";
+    c.std_error = std::numeric_limits<double>::infinity();
+    c.p_value = c.p_value_holm = 1.0;
+    c.note = "not identifiable with this profile: " + why;
+    return sc;
   }
+  const Eigen::MatrixXd cov = It.inverse();
+  sc.beta = cov * st;
+  c.statistic = st.dot(sc.beta);
+  c.p_value = stats::ChiSquareSurvival(c.statistic, c.dof);
+  if (c.dof == 1) {
+    c.estimate = sc.beta[0];
+    c.std_error = std::sqrt(cov(0, 0));
+  } else {
+    // Yaw harmonic magnitude √(a² + b²), delta method.
+    const double mag = sc.beta.norm();
+    c.estimate = mag;
+    const Eigen::VectorXd grad = mag > 0.0 ? Eigen::VectorXd(sc.beta / mag)
+                                           : Eigen::VectorXd::Ones(c.dof) / std::sqrt(c.dof);
+    c.std_error = std::sqrt(grad.dot(cov * grad));
+  }
+  c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
+  c.predicted_delta_bic = -c.statistic + c.dof * context.log_updates;
+  const double attitude_error_rad =
+      ImpliedPeakAttitudeError(sc.beta, context.scan.peak_attitude_sensitivity(), t.columns);
+  const double linearisation_error = 0.5 * attitude_error_rad;  // relative, of β̂
+  if (linearisation_error > kLinearModelBreakdown) {
+    c.identifiable = false;
+    c.note = absl::StrFormat(
+        "far outside the linear range: the estimate would put the filter %.2g rad off in attitude, "
+        "where the "
+        "first-order error model is %.0f %% wrong; not a finding (a larger error elsewhere in the "
+        "model is the "
+        "likelier cause)",
+        attitude_error_rad, 100.0 * linearisation_error);
+    sc.outside_linear_range = true;
+  } else if (linearisation_error > c.std_error / std::abs(c.estimate)) {
+    c.note = absl::StrFormat(
+        "beyond the linear range: the estimate would put the filter %.2g rad off in attitude; its "
+        "error is "
+        "the first-order model's (about %.0f %%) more than its standard error (%.0f %%): add it to "
+        "measure it",
+        attitude_error_rad, 100.0 * linearisation_error,
+        100.0 * c.std_error / std::abs(c.estimate));
+  }
+  return sc;
+}
 
-  // Holm over the identifiable terms.
+// Holm over the identifiable terms, and the signatures too alike to tell
+// apart in this run.
+void AdjustAndNameLookAlikes(std::vector<ScoredTerm>& scored, const Eigen::MatrixXd& I,
+                             double ambiguity_threshold) {
   std::vector<size_t> tested;
   std::vector<double> p;
   for (size_t i = 0; i < scored.size(); ++i) {
@@ -263,8 +280,6 @@ RankedEffects RankMissingEffects(const ScoreTestObserver& scan, const ForwardPas
   std::vector<double> adjusted(p.size());
   stats::HolmAdjust(p, adjusted);
   for (size_t j = 0; j < tested.size(); ++j) scored[tested[j]].candidate.p_value_holm = adjusted[j];
-
-  // Signatures too alike to tell apart in this run.
   for (size_t a = 0; a < tested.size(); ++a) {
     for (size_t b = 0; b < tested.size(); ++b) {
       if (a == b) continue;
@@ -274,58 +289,68 @@ RankedEffects RankMissingEffects(const ScoreTestObserver& scan, const ForwardPas
       for (Eigen::Index i : ta.columns) {
         for (Eigen::Index j : tb.columns) best = std::max(best, std::abs(I(i, j)) / std::sqrt(I(i, i) * I(j, j)));
       }
-      if (best >= options.ambiguity_threshold) scored[tested[a]].candidate.correlated_with.push_back(tb.term.Name());
+      if (best >= ambiguity_threshold)
+        scored[tested[a]].candidate.correlated_with.push_back(tb.term.Name());
     }
   }
+}
 
-  std::stable_sort(scored.begin(), scored.end(), [](const Scored& a, const Scored& b) {
-    if (a.candidate.identifiable != b.candidate.identifiable) return a.candidate.identifiable;
-    if (a.candidate.p_value_holm != b.candidate.p_value_holm) return a.candidate.p_value_holm < b.candidate.p_value_holm;
-    return a.candidate.statistic > b.candidate.statistic;
-  });
-
-  // Where the top candidates show: their share of the score per channel and segment.
+// Where a candidate shows: its share of the score per channel and segment,
+// the largest first.
+std::vector<SegmentContribution> WhereItShows(const ScoredTerm& sc, const ScoreTestObserver& scan,
+                                              const ForwardPass& fw,
+                                              const std::vector<std::string>& motion,
+                                              int segments_per_candidate) {
   const int E = scan.segment_epochs();
   const double interval = fw.epochs() > 1 ? (fw.epoch_time_s.back() - fw.epoch_time_s.front()) / (fw.epochs() - 1) : 1.0;
-  for (int rank = 0; rank < options.top_candidates_with_segments && rank < static_cast<int>(scored.size()); ++rank) {
-    Scored& sc = scored[static_cast<size_t>(rank)];
-    if (!sc.candidate.identifiable || sc.candidate.statistic <= 0.0) continue;
-    std::vector<SegmentContribution> pieces;
-    for (int c = 0; c < kChannelCount; ++c) {
-      const Eigen::MatrixXd& by_segment = scan.score_by_segment()[static_cast<size_t>(c)];
-      for (Eigen::Index segment = 0; segment < by_segment.cols(); ++segment) {
-        double contribution = 0.0;
-        for (size_t k = 0; k < sc.columns->columns.size(); ++k) {
-          contribution += by_segment(sc.columns->columns[k], segment) * sc.beta[static_cast<Eigen::Index>(k)];
-        }
-        const double share = contribution / sc.candidate.statistic;
-        if (share <= 0.0) continue;
-        const int first = static_cast<int>(segment) * E;
-        const int last = std::min(fw.epochs(), first + E) - 1;
-        pieces.push_back({std::string(kChannelNames[static_cast<size_t>(c)]),
-                          fw.epoch_time_s[static_cast<size_t>(first)] - interval,
-                          fw.epoch_time_s[static_cast<size_t>(last)],
-                          static_cast<size_t>(segment) < motion.size() ? motion[static_cast<size_t>(segment)] : "",
-                          share});
+  std::vector<SegmentContribution> pieces;
+  for (int c = 0; c < kChannelCount; ++c) {
+    const Eigen::MatrixXd& by_segment = scan.score_by_segment()[static_cast<size_t>(c)];
+    for (Eigen::Index segment = 0; segment < by_segment.cols(); ++segment) {
+      double contribution = 0.0;
+      for (size_t k = 0; k < sc.columns->columns.size(); ++k) {
+        contribution +=
+            by_segment(sc.columns->columns[k], segment) * sc.beta[static_cast<Eigen::Index>(k)];
       }
+      const double share = contribution / sc.candidate.statistic;
+      if (share <= 0.0) continue;
+      const int first = static_cast<int>(segment) * E;
+      const int last = std::min(fw.epochs(), first + E) - 1;
+      pieces.push_back(
+          {std::string(kChannelNames[static_cast<size_t>(c)]),
+           fw.epoch_time_s[static_cast<size_t>(first)] - interval,
+           fw.epoch_time_s[static_cast<size_t>(last)],
+           static_cast<size_t>(segment) < motion.size() ? motion[static_cast<size_t>(segment)] : "",
+           share});
     }
-    std::sort(pieces.begin(), pieces.end(), [](const auto& a, const auto& b) { return a.share > b.share; });
-    if (static_cast<int>(pieces.size()) > options.segments_per_candidate) pieces.resize(static_cast<size_t>(options.segments_per_candidate));
-    sc.candidate.where = std::move(pieces);
   }
-  for (Scored& sc : scored) out.terms.push_back(std::move(sc.candidate));
+  std::sort(pieces.begin(), pieces.end(),
+            [](const auto& a, const auto& b) { return a.share > b.share; });
+  if (static_cast<int>(pieces.size()) > segments_per_candidate)
+    pieces.resize(static_cast<size_t>(segments_per_candidate));
+  return pieces;
+}
 
-  // Families: the joint test of their identifiable terms.
+// Families: the joint test of their terms that the run excites and that are
+// within the linear range, Holm-adjusted, most significant first.
+std::vector<EffectCandidate> FamilyCandidates(const std::vector<TermColumns>& terms,
+                                              const std::set<std::string>& outside_linear_range,
+                                              const ScanContext& context) {
   std::map<std::string, std::vector<Eigen::Index>> family_columns;
   std::vector<std::string> family_order;
   for (const TermColumns& t : terms) {
     std::string why;
-    if (!Excites(excitation, t.term, options.excitation, g, &why) || outside_linear_range.count(t.term.Name())) continue;
+    if (!Excites(context.excitation, t.term, context.options.excitation, context.gravity_mps2,
+                 &why) ||
+        outside_linear_range.count(t.term.Name())) {
+      continue;
+    }
     const std::string name(t.term.family->name);
     if (!family_columns.count(name)) family_order.push_back(name);
     auto& cols = family_columns[name];
     cols.insert(cols.end(), t.columns.begin(), t.columns.end());
   }
+  std::vector<EffectCandidate> families;
   std::vector<double> family_p;
   for (const std::string& name : family_order) {
     const auto& cols = family_columns[name];
@@ -333,22 +358,62 @@ RankedEffects RankMissingEffects(const ScoreTestObserver& scan, const ForwardPas
     c.name = name;
     c.family = name;
     c.source = "SCORE";
-    c.statistic = PseudoInverseStatistic(Select(s, cols), Select(I, cols), &c.dof);
+    c.statistic = PseudoInverseStatistic(Select(context.scan.score(), cols),
+                                         Select(context.scan.information(), cols), &c.dof);
     c.identifiable = c.dof > 0;
     c.p_value = c.dof > 0 ? stats::ChiSquareSurvival(c.statistic, c.dof) : 1.0;
     c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
-    c.predicted_delta_bic = -c.statistic + c.dof * log_n;
+    c.predicted_delta_bic = -c.statistic + c.dof * context.log_updates;
     c.unit = std::string(FindEffectFamily(name)->unit);
     family_p.push_back(c.p_value);
-    out.families.push_back(std::move(c));
+    families.push_back(std::move(c));
   }
   std::vector<double> family_adjusted(family_p.size());
   stats::HolmAdjust(family_p, family_adjusted);
-  for (size_t i = 0; i < out.families.size(); ++i) out.families[i].p_value_holm = family_adjusted[i];
-  std::stable_sort(out.families.begin(), out.families.end(), [](const EffectCandidate& a, const EffectCandidate& b) {
-    if (a.p_value_holm != b.p_value_holm) return a.p_value_holm < b.p_value_holm;
-    return a.statistic > b.statistic;
+  for (size_t i = 0; i < families.size(); ++i) families[i].p_value_holm = family_adjusted[i];
+  std::stable_sort(families.begin(), families.end(),
+                   [](const EffectCandidate& a, const EffectCandidate& b) {
+                     if (a.p_value_holm != b.p_value_holm) return a.p_value_holm < b.p_value_holm;
+                     return a.statistic > b.statistic;
+                   });
+  return families;
+}
+
+}  // namespace
+
+RankedEffects RankMissingEffects(const ScoreTestObserver& scan, const ForwardPass& fw,
+                                 const BenchRun& run, const std::vector<std::string>& motion,
+                                 const FinderOptions& options) {
+  const RunExcitation excitation = MeasureExcitation(run);
+  const ScanContext context{
+      scan, excitation,
+      wgs84::NormalGravityMps2(run.metadata.site.latitude_rad, run.metadata.site.height_m),
+      std::log(static_cast<double>(std::max(1, fw.scalar_updates))), options};
+  const std::vector<TermColumns> terms = GroupByTerm(scan.columns());
+  std::vector<ScoredTerm> scored;
+  std::set<std::string> outside_linear_range;
+  for (const TermColumns& t : terms) {
+    scored.push_back(ScoreTerm(t, context));
+    if (scored.back().outside_linear_range)
+      outside_linear_range.insert(scored.back().candidate.name);
+  }
+  AdjustAndNameLookAlikes(scored, scan.information(), options.ambiguity_threshold);
+  std::stable_sort(scored.begin(), scored.end(), [](const ScoredTerm& a, const ScoredTerm& b) {
+    if (a.candidate.identifiable != b.candidate.identifiable) return a.candidate.identifiable;
+    if (a.candidate.p_value_holm != b.candidate.p_value_holm)
+      return a.candidate.p_value_holm < b.candidate.p_value_holm;
+    return a.candidate.statistic > b.candidate.statistic;
   });
+  for (int rank = 0;
+       rank < options.top_candidates_with_segments && rank < static_cast<int>(scored.size());
+       ++rank) {
+    ScoredTerm& sc = scored[static_cast<size_t>(rank)];
+    if (!sc.candidate.identifiable || sc.candidate.statistic <= 0.0) continue;
+    sc.candidate.where = WhereItShows(sc, scan, fw, motion, options.segments_per_candidate);
+  }
+  RankedEffects out;
+  for (ScoredTerm& sc : scored) out.terms.push_back(std::move(sc.candidate));
+  out.families = FamilyCandidates(terms, outside_linear_range, context);
   return out;
 }
 
