@@ -510,9 +510,28 @@ double ModeRatePerHour(const v1::FailureMode& mode, std::int64_t confirmed_failu
   return (static_cast<double>(confirmed_failures) + expert_per_hour * h0) / (std::max(fleet_exposure_hours, 0.0) + h0);
 }
 
-v1::Diagnosis Diagnose(const Evidence& evidence, std::span<const v1::FailureMode> modes,
-                       const v1::DiagnosisSettings& settings, const PriorInputs& prior) {
-  v1::Diagnosis out;
+namespace {
+
+// A hypothesis with its log-posterior and the lines that say why.
+struct ScoredHypothesis {
+  v1::Hypothesis hypothesis;
+  std::vector<std::string> evidence;
+  double log_posterior = 0.0;
+};
+
+ScoredHypothesis Hypothesis(const std::string& name, const std::string& module, double prior,
+                            double log_likelihood, std::vector<std::string> lines) {
+  ScoredHypothesis s;
+  s.hypothesis.set_failure_mode(name);
+  s.hypothesis.set_module(module);
+  s.hypothesis.set_prior(prior);
+  s.hypothesis.set_log_likelihood(log_likelihood);
+  s.evidence = std::move(lines);
+  s.log_posterior = std::log(prior) + log_likelihood;
+  return s;
+}
+
+void CopyEvidence(const Evidence& evidence, v1::Diagnosis& out) {
   for (const auto& note : evidence.notes) out.add_notes(note);
   for (const auto& t : evidence.terms) {
     v1::EvidenceItem* item = out.add_evidence();
@@ -523,6 +542,79 @@ v1::Diagnosis Diagnose(const Evidence& evidence, std::span<const v1::FailureMode
     item->set_healthy_sd(t.healthy_sd);
     item->set_significant(t.significant);
   }
+}
+
+// Per evidence term, its log-likelihood when it is off as a fault's knock-on
+// and when it is off by chance (docs/DIAGNOSIS.md, "Hypotheses").
+struct Contamination {
+  std::vector<double> knock_on, incidental;
+};
+
+// A failure mode's log-likelihood: its signature's terms, its trends, and
+// every other term as a knock-on on the sensor axes the signature reads and
+// as incidental elsewhere, so that a mode's odds against `healthy` do not
+// fall with the number of terms it does not read.
+double ModeLogLikelihood(const v1::FailureMode& mode, const Evidence& evidence,
+                         const Contamination& contamination, const v1::DiagnosisSettings& settings,
+                         std::vector<std::string>& trend_lines) {
+  std::vector<bool> covered(evidence.terms.size(), false);
+  std::set<std::string> own_sensor_axes;  // the sensor axes the signature reads
+  double ll = 0.0;
+  for (const auto& term : mode.signature()) {
+    const auto members = Members(term, evidence);
+    for (const auto* t : members) {
+      covered[static_cast<std::size_t>(t - evidence.terms.data())] = true;
+      own_sensor_axes.insert(SensorAxisOf(t->name));
+    }
+    if (!members.empty()) ll += LogSignatureTerm(term, members, settings);
+  }
+  ll += LogTrendTerms(mode, evidence, settings, covered, trend_lines);
+  for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
+    if (covered[i]) continue;
+    ll += own_sensor_axes.contains(SensorAxisOf(evidence.terms[i].name))
+              ? contamination.knock_on[i]
+              : contamination.incidental[i];
+  }
+  return ll;
+}
+
+// The hypotheses normalised (log-sum-exp), most probable first, and the
+// modules ranked by the sum over their modes; a module's most probable mode
+// speaks for it.
+void RankHypothesesAndModules(std::vector<ScoredHypothesis>& scored, v1::Diagnosis& out) {
+  double log_total = -INFINITY;
+  for (const auto& s : scored) log_total = LogAddExp(log_total, s.log_posterior);
+  for (auto& s : scored) s.hypothesis.set_probability(std::exp(s.log_posterior - log_total));
+  std::stable_sort(scored.begin(), scored.end(),
+                   [](const ScoredHypothesis& a, const ScoredHypothesis& b) {
+                     return a.hypothesis.probability() > b.hypothesis.probability();
+                   });
+  std::map<std::string, std::pair<double, const ScoredHypothesis*>> modules;
+  for (const auto& s : scored) {
+    *out.add_hypotheses() = s.hypothesis;
+    auto& [p, best] = modules[ModuleOfHypothesis(s.hypothesis)];
+    p += s.hypothesis.probability();
+    if (best == nullptr) best = &s;
+  }
+  std::vector<std::pair<std::string, std::pair<double, const ScoredHypothesis*>>> ranked(
+      modules.begin(), modules.end());
+  std::stable_sort(ranked.begin(), ranked.end(),
+                   [](const auto& a, const auto& b) { return a.second.first > b.second.first; });
+  for (const auto& [module, entry] : ranked) {
+    v1::Candidate* c = out.add_candidates();
+    c->set_module(module);
+    c->set_failure_mode(entry.second->hypothesis.failure_mode());
+    c->set_probability(entry.first);
+    for (const auto& line : entry.second->evidence) c->add_evidence(line);
+  }
+}
+
+}  // namespace
+
+v1::Diagnosis Diagnose(const Evidence& evidence, std::span<const v1::FailureMode> modes,
+                       const v1::DiagnosisSettings& settings, const PriorInputs& prior) {
+  v1::Diagnosis out;
+  CopyEvidence(evidence, out);
 
   // Priors.
   std::vector<double> rates;
@@ -537,103 +629,46 @@ v1::Diagnosis Diagnose(const Evidence& evidence, std::span<const v1::FailureMode
   const double u = settings.unknown_prior();
   const double p_any = -std::expm1(-total_rate * exposure);
 
-  struct Scored {
-    v1::Hypothesis hypothesis;
-    std::vector<std::string> evidence;
-    double log_posterior = 0.0;
-  };
-  std::vector<Scored> scored;
-  const auto add = [&](const std::string& name, const std::string& module, double p, double log_likelihood,
-                       std::vector<std::string> lines) {
-    Scored s;
-    s.hypothesis.set_failure_mode(name);
-    s.hypothesis.set_module(module);
-    s.hypothesis.set_prior(p);
-    s.hypothesis.set_log_likelihood(log_likelihood);
-    s.evidence = std::move(lines);
-    s.log_posterior = std::log(p) + log_likelihood;
-    scored.push_back(std::move(s));
-  };
-
+  std::vector<ScoredHypothesis> scored;
   if (evidence.terms.empty()) {
     // Without evidence the modes cannot be told apart: healthy or unknown, by the verdict.
     const bool good = evidence.verdict == v1::AnalysisReport::GOOD;
     // A finite stand-in for log 0 (JSON has no infinities).
-    add(kHealthy, kHealthy, (1.0 - u), good ? 0.0 : -1e300,
-        {good ? "verdict GOOD: the model fits the run" : "the verdict is not GOOD"});
-    add(kUnknown, kUnknown, u, 0.0,
-        {absl::StrCat("verdict ", v1::AnalysisReport::Verdict_Name(evidence.verdict),
-                      ", and no identified parameter or effect candidate to say why")});
+    scored.push_back(
+        Hypothesis(kHealthy, kHealthy, (1.0 - u), good ? 0.0 : -1e300,
+                   {good ? "verdict GOOD: the model fits the run" : "the verdict is not GOOD"}));
+    scored.push_back(
+        Hypothesis(kUnknown, kUnknown, u, 0.0,
+                   {absl::StrCat("verdict ", v1::AnalysisReport::Verdict_Name(evidence.verdict),
+                                 ", and no identified parameter or effect candidate to say why")}));
   } else {
     double healthy_ll = 0.0, unknown_ll = 0.0;
-    std::vector<double> knock_on, incidental;  // per term: off as a fault's knock-on, off by chance
+    Contamination contamination;
     for (const auto& t : evidence.terms) {
       healthy_ll += HealthyLog(t);
-      knock_on.push_back(ContaminatedLog(t, settings.contamination(), settings));
-      incidental.push_back(ContaminatedLog(t, settings.incidental_contamination(), settings));
-      unknown_ll += knock_on.back();
+      contamination.knock_on.push_back(ContaminatedLog(t, settings.contamination(), settings));
+      contamination.incidental.push_back(
+          ContaminatedLog(t, settings.incidental_contamination(), settings));
+      unknown_ll += contamination.knock_on.back();
     }
     std::vector<std::string> healthy_lines = {absl::StrCat(evidence.terms.size(), " evidence terms; furthest from nominal:")};
     for (auto& l : LargestDeviations(evidence, 3)) healthy_lines.push_back(std::move(l));
-    add(kHealthy, kHealthy, (1.0 - u) * (1.0 - p_any), healthy_ll, healthy_lines);
+    scored.push_back(
+        Hypothesis(kHealthy, kHealthy, (1.0 - u) * (1.0 - p_any), healthy_ll, healthy_lines));
     std::vector<std::string> unknown_lines = {"evidence no failure mode of this unit type explains:"};
     for (auto& l : LargestDeviations(evidence, 3)) unknown_lines.push_back(std::move(l));
-    add(kUnknown, kUnknown, u, unknown_ll, unknown_lines);
+    scored.push_back(Hypothesis(kUnknown, kUnknown, u, unknown_ll, unknown_lines));
     for (std::size_t m = 0; m < modes.size(); ++m) {
       const auto& mode = modes[m];
-      std::vector<bool> covered(evidence.terms.size(), false);
-      std::set<std::string> own_sensor_axes;  // the sensor axes the signature reads
-      double ll = 0.0;
-      for (const auto& term : mode.signature()) {
-        const auto members = Members(term, evidence);
-        for (const auto* t : members) {
-          covered[static_cast<std::size_t>(t - evidence.terms.data())] = true;
-          own_sensor_axes.insert(SensorAxisOf(t->name));
-        }
-        if (!members.empty()) ll += LogSignatureTerm(term, members, settings);
-      }
       std::vector<std::string> trend_lines;
-      ll += LogTrendTerms(mode, evidence, settings, covered, trend_lines);
-      // A fault moves other terms of its own sensor axes too; elsewhere a term
-      // is off only as often as on a healthy unit, so that a mode's odds
-      // against `healthy` do not fall with the number of terms it does not read.
-      for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
-        if (covered[i]) continue;
-        ll += own_sensor_axes.contains(SensorAxisOf(evidence.terms[i].name)) ? knock_on[i] : incidental[i];
-      }
+      const double ll = ModeLogLikelihood(mode, evidence, contamination, settings, trend_lines);
       const double p = total_rate > 0 ? (1.0 - u) * p_any * rates[m] / total_rate : 0.0;
       std::vector<std::string> lines = ModeEvidenceLines(mode, evidence);
       for (auto& line : trend_lines) lines.push_back(std::move(line));
-      add(mode.name(), mode.module_role(), p, ll, std::move(lines));
+      scored.push_back(Hypothesis(mode.name(), mode.module_role(), p, ll, std::move(lines)));
     }
   }
-
-  // Normalise (log-sum-exp).
-  double log_total = -INFINITY;
-  for (const auto& s : scored) log_total = LogAddExp(log_total, s.log_posterior);
-  for (auto& s : scored) s.hypothesis.set_probability(std::exp(s.log_posterior - log_total));
-  std::stable_sort(scored.begin(), scored.end(), [](const Scored& a, const Scored& b) {
-    return a.hypothesis.probability() > b.hypothesis.probability();
-  });
-
-  // Modules: the sum over their modes; the most probable mode speaks for them.
-  std::map<std::string, std::pair<double, const Scored*>> modules;
-  for (const auto& s : scored) {
-    *out.add_hypotheses() = s.hypothesis;
-    auto& [p, best] = modules[ModuleOfHypothesis(s.hypothesis)];
-    p += s.hypothesis.probability();
-    if (best == nullptr) best = &s;
-  }
-  std::vector<std::pair<std::string, std::pair<double, const Scored*>>> ranked(modules.begin(), modules.end());
-  std::stable_sort(ranked.begin(), ranked.end(),
-                   [](const auto& a, const auto& b) { return a.second.first > b.second.first; });
-  for (const auto& [module, entry] : ranked) {
-    v1::Candidate* c = out.add_candidates();
-    c->set_module(module);
-    c->set_failure_mode(entry.second->hypothesis.failure_mode());
-    c->set_probability(entry.first);
-    for (const auto& line : entry.second->evidence) c->add_evidence(line);
-  }
+  RankHypothesesAndModules(scored, out);
   return out;
 }
 
