@@ -191,12 +191,9 @@ Datasheet DatasheetOf(const SensorTriadModel& gyro, const SensorTriadModel& acc)
   return d;
 }
 
-absl::StatusOr<SimulatedRun> Simulate(const SimulatedUnit& unit, const TableProfile& profile,
-                                      const SimulationOptions& options) {
-  if (!(options.sample_rate_hz > 0.0)) return absl::InvalidArgumentError("the sample rate must be positive");
-  auto motion_or = TableMotion::Compile(profile);
-  if (!motion_or.ok()) return motion_or.status();
-  const TableMotion& motion = *motion_or;
+namespace {
+
+absl::Status CheckDrifts(const SimulatedUnit& unit) {
   for (const auto* triad : {&unit.gyro, &unit.acc}) {
     for (const auto& b : triad->bias) {
       if (b.sigma > 0.0 && !(b.tau_s > 0.0)) {
@@ -204,6 +201,93 @@ absl::StatusOr<SimulatedRun> Simulate(const SimulatedUnit& unit, const TableProf
       }
     }
   }
+  return absl::OkStatus();
+}
+
+// The random effects' processes at the first sample, and how many columns
+// their states take in SimulatedRun::random_effect_states.
+std::vector<RandomEffectState> InitialRandomEffects(const SimulatedUnit& unit, std::mt19937_64& rng,
+                                                    std::normal_distribution<double>& normal,
+                                                    int& columns) {
+  std::vector<RandomEffectState> states;
+  columns = 0;
+  for (const TrueEffect& e : unit.effects) {
+    if (e.term.family->process == RandomProcess::kNone) continue;
+    RandomEffectState s{&e};
+    if (e.term.family->process == RandomProcess::kSecondOrderMarkov) {
+      s.x = e.second_order_sigma * Eigen::Vector2d(normal(rng), normal(rng));
+      columns += 2;
+    } else {
+      columns += 1;  // a rate random walk starts at zero at the first sample
+    }
+    states.push_back(s);
+  }
+  return states;
+}
+
+void WriteMetadata(const SimulatedUnit& unit, const TableProfile& profile,
+                   const SimulationOptions& options, BenchRunMetadata& metadata) {
+  metadata.format = "insdiag-bench-run/1";
+  metadata.unit_serial = unit.serial;
+  metadata.unit_type = unit.type;
+  metadata.site = options.site;
+  metadata.extra = {{"bench", "simulated two-axis rotary table"},
+                    {"notes", "insdiag simulate: profile " + profile.name + ", seed " +
+                                  std::to_string(options.seed)}};
+  if (options.write_datasheet) {
+    metadata.datasheet =
+        options.datasheet.has_value() ? *options.datasheet : DatasheetOf(unit.gyro, unit.acc);
+  }
+}
+
+// The deterministic and random sensor errors of sample k over [t0, t1]: the
+// constant effects and faults, the random effects' states, the test unit's
+// bias steps and spikes. A sample sees every drift as it stands at the start
+// of its interval (the error model's convention); the caller adds the base
+// drifts.
+void AddEffectErrors(const SimulatedUnit& unit, const std::vector<RandomEffectState>& random_states,
+                     size_t k, double t0, double t1, const RegressorInputs& sample_inputs,
+                     Eigen::Vector3d& gyro_error, Eigen::Vector3d& acc_error,
+                     Eigen::MatrixXd& random_effect_states) {
+  RegressorInputs inputs = sample_inputs;
+  for (const TrueEffect& e : unit.effects) {
+    if (e.term.family->process != RandomProcess::kNone) continue;
+    // A fault's regressor at the sample's middle: its mean over the sample
+    // once the onset is past (a step within the sample counts from its middle).
+    inputs.time_since_onset_s = 0.5 * (t0 + t1) - e.onset_s;
+    const Eigen::Vector3d err = ConstantEffectError(e.term, inputs, e.value);
+    (e.term.family->sensor == Sensor::kGyro ? gyro_error : acc_error) += err;
+  }
+  int column = 0;
+  for (const RandomEffectState& s : random_states) {
+    const TrueEffect& e = *s.effect;
+    random_effect_states(static_cast<Eigen::Index>(k), column++) = s.x[0];
+    if (e.term.family->process == RandomProcess::kSecondOrderMarkov) {
+      random_effect_states(static_cast<Eigen::Index>(k), column++) = s.x[1];
+    }
+    (e.term.family->sensor == Sensor::kGyro ? gyro_error : acc_error)[e.term.axis] += s.x[0];
+  }
+  for (const BiasStep& step : unit.bias_steps) {
+    if (t1 > step.time_s)
+      (step.sensor == Sensor::kGyro ? gyro_error : acc_error)[step.axis] += step.size;
+  }
+  for (const Spike& spike : unit.spikes) {
+    if (spike.time_s > t0 && spike.time_s <= t1) {
+      (spike.sensor == Sensor::kGyro ? gyro_error : acc_error)[spike.axis] += spike.size;
+    }
+  }
+}
+
+}  // namespace
+
+absl::StatusOr<SimulatedRun> Simulate(const SimulatedUnit& unit, const TableProfile& profile,
+                                      const SimulationOptions& options) {
+  if (!(options.sample_rate_hz > 0.0))
+    return absl::InvalidArgumentError("the sample rate must be positive");
+  auto motion_or = TableMotion::Compile(profile);
+  if (!motion_or.ok()) return motion_or.status();
+  const TableMotion& motion = *motion_or;
+  if (absl::Status drifts = CheckDrifts(unit); !drifts.ok()) return drifts;
 
   const double dt = 1.0 / options.sample_rate_hz;
   const auto n = static_cast<size_t>(std::floor(motion.DurationS() * options.sample_rate_hz + 1e-9));
@@ -221,32 +305,13 @@ absl::StatusOr<SimulatedRun> Simulate(const SimulatedUnit& unit, const TableProf
     gyro_gm[i] = perfect ? 0.0 : unit.gyro.bias[i].sigma * normal(rng);
     acc_gm[i] = perfect ? 0.0 : unit.acc.bias[i].sigma * normal(rng);
   }
-  std::vector<RandomEffectState> random_states;
   int random_columns = 0;
-  for (const TrueEffect& e : unit.effects) {
-    if (e.term.family->process == RandomProcess::kNone) continue;
-    RandomEffectState s{&e};
-    if (e.term.family->process == RandomProcess::kSecondOrderMarkov) {
-      s.x = e.second_order_sigma * Eigen::Vector2d(normal(rng), normal(rng));
-      random_columns += 2;
-    } else {
-      random_columns += 1;  // a rate random walk starts at zero at the first sample
-    }
-    random_states.push_back(s);
-  }
+  std::vector<RandomEffectState> random_states =
+      InitialRandomEffects(unit, rng, normal, random_columns);
 
   SimulatedRun out;
   BenchRun& run = out.run;
-  run.metadata.format = "insdiag-bench-run/1";
-  run.metadata.unit_serial = unit.serial;
-  run.metadata.unit_type = unit.type;
-  run.metadata.site = options.site;
-  run.metadata.extra = {{"bench", "simulated two-axis rotary table"},
-                        {"notes", "insdiag simulate: profile " + profile.name + ", seed " +
-                                      std::to_string(options.seed)}};
-  if (options.write_datasheet) {
-    run.metadata.datasheet = options.datasheet.has_value() ? *options.datasheet : DatasheetOf(unit.gyro, unit.acc);
-  }
+  WriteMetadata(unit, profile, options, run.metadata);
   run.has_temperature = true;
   run.samples.resize(n);
   out.truth.resize(n);
@@ -281,47 +346,22 @@ absl::StatusOr<SimulatedRun> Simulate(const SimulatedUnit& unit, const TableProf
       continue;
     }
 
-    // A sample sees every drift as it stands at the start of its interval; the
-    // drifts then advance over the interval (the error model's convention).
     Eigen::Vector3d gyro_error = gyro_gm;
     Eigen::Vector3d acc_error = acc_gm;
-
     RegressorInputs inputs;
     inputs.gyro_rad_s = true_rate;
     inputs.acc_mps2 = true_force;
     inputs.temperature_delta_degc = sample.temp_degc - temperature0;
     inputs.yaw_rad = std::atan2(integrals.sin_yaw_s, integrals.cos_yaw_s);
-    for (const TrueEffect& e : unit.effects) {
-      if (e.term.family->process != RandomProcess::kNone) continue;
-      // A fault's regressor at the sample's middle: its mean over the sample
-      // once the onset is past (a step within the sample counts from its middle).
-      inputs.time_since_onset_s = 0.5 * (t0 + t1) - e.onset_s;
-      const Eigen::Vector3d err = ConstantEffectError(e.term, inputs, e.value);
-      (e.term.family->sensor == Sensor::kGyro ? gyro_error : acc_error) += err;
-    }
-    int column = 0;
-    for (const RandomEffectState& s : random_states) {
-      const TrueEffect& e = *s.effect;
-      out.random_effect_states(static_cast<Eigen::Index>(k), column++) = s.x[0];
-      if (e.term.family->process == RandomProcess::kSecondOrderMarkov) {
-        out.random_effect_states(static_cast<Eigen::Index>(k), column++) = s.x[1];
-      }
-      (e.term.family->sensor == Sensor::kGyro ? gyro_error : acc_error)[e.term.axis] += s.x[0];
-    }
-    for (const BiasStep& step : unit.bias_steps) {
-      if (t1 > step.time_s) (step.sensor == Sensor::kGyro ? gyro_error : acc_error)[step.axis] += step.size;
-    }
-    for (const Spike& spike : unit.spikes) {
-      if (spike.time_s > t0 && spike.time_s <= t1) {
-        (spike.sensor == Sensor::kGyro ? gyro_error : acc_error)[spike.axis] += spike.size;
-      }
-    }
+    AddEffectErrors(unit, random_states, k, t0, t1, inputs, gyro_error, acc_error,
+                    out.random_effect_states);
 
     SampleTruth& truth = out.truth[k];
     truth.gyro_gm = gyro_gm;
     truth.acc_gm = acc_gm;
     truth.gyro_error = gyro_error;
     truth.acc_error = acc_error;
+    // The drifts then advance over the interval.
     AdvanceDrifts(unit, dt, gyro_gm, acc_gm, random_states, rng, normal);
 
     Eigen::Vector3d gyro_noise, acc_noise;
