@@ -578,68 +578,51 @@ FamilyFit ProfiledAlternative(const Problem& pb, CorrelationFamily family, const
 
 }  // namespace
 
-absl::StatusOr<CorrelationAnalysis> AnalyseCorrelation(std::span<const double> series,
-                                                       std::span<const double> series_error_acf, double epoch_dt,
-                                                       const CorrelationOptions& options) {
-  if (auto st = options.Validate(); !st.ok()) return st;
-  if (!(epoch_dt > 0.0)) return absl::InvalidArgumentError("correlation processing: epoch interval must be positive");
-  // Work at an epoch spacing of about τ/20 (τ from where the ACF falls by e):
-  // the estimator is the same at any spacing, and lags finer than that add
-  // little about a drift but cost every evaluation of the fit.
-  int decimation = 1;
-  {
-    const int fall = EFoldingLag(
-        series, series_error_acf,
-        static_cast<int>(options.max_lag_fraction * static_cast<double>(series.size())));
-    if (fall > 0) decimation = std::max(1, fall / kEpochsPerCorrelationTime);
-    // Keep enough epochs for the lag grid (see the minimum below).
-    const int most = static_cast<int>(series.size()) / (8 * options.grid_lags);
-    decimation = std::max(1, std::min(decimation, most));
-  }
-  std::vector<double> smoothed;
-  for (size_t i = 0; i < series.size(); i += static_cast<size_t>(decimation)) smoothed.push_back(series[i]);
+namespace {
+
+// The series and its smoother's error autocovariance taken at every
+// `decimation`-th epoch.
+struct DecimatedSeries {
+  std::vector<double> series;
   std::vector<double> error_acf;
-  for (size_t j = 0; j < series_error_acf.size(); j += static_cast<size_t>(decimation)) {
-    error_acf.push_back(series_error_acf[j]);
-  }
-  const double dt = epoch_dt * decimation;
-  const int N = static_cast<int>(smoothed.size());
-  if (N < 4 * options.grid_lags) {
-    return absl::FailedPreconditionError("correlation processing needs at least " +
-                                         std::to_string(4 * options.grid_lags) + " epochs");
-  }
-  CorrelationAnalysis out;
-  out.dt_s = dt;
-  out.n = N;
-  const int capacity = static_cast<int>(options.max_lag_fraction * N);
-  const std::vector<double> acf_full = SampleAutocovariance(smoothed, capacity);
-  for (double v : smoothed) out.mean += v / N;
-  auto error_at = [&](int j) { return j < static_cast<int>(error_acf.size()) ? error_acf[static_cast<size_t>(j)] : 0.0; };
+  int decimation = 1;
+};
 
-  // Start: σ² from the corrected zero lag, τ where the corrected ACF falls by e.
-  const double r0 = acf_full[0] + error_at(0);
-  if (!(r0 > 0.0)) return absl::FailedPreconditionError("correlation processing: the series has no variance");
-  int fall = capacity;
-  for (int j = 1; j <= capacity; ++j) {
-    if (acf_full[static_cast<size_t>(j)] + error_at(j) <= r0 / std::numbers::e) {
-      fall = j;
-      break;
-    }
-  }
-  double sigma = std::sqrt(r0);
-  double tau = std::max(1.0, static_cast<double>(fall)) * dt;
+// Works at an epoch spacing of about τ/20 (τ from where the ACF falls by e):
+// the estimator is the same at any spacing, and lags finer than that add
+// little about a drift but cost every evaluation of the fit.
+DecimatedSeries DecimateToCorrelationTime(std::span<const double> series,
+                                          std::span<const double> series_error_acf,
+                                          const CorrelationOptions& options) {
+  DecimatedSeries out;
+  const int fall =
+      EFoldingLag(series, series_error_acf,
+                  static_cast<int>(options.max_lag_fraction * static_cast<double>(series.size())));
+  if (fall > 0) out.decimation = std::max(1, fall / kEpochsPerCorrelationTime);
+  // Keep enough epochs for the lag grid (see the minimum in AnalyseCorrelation).
+  const int most = static_cast<int>(series.size()) / (8 * options.grid_lags);
+  out.decimation = std::max(1, std::min(out.decimation, most));
+  const auto step = static_cast<size_t>(out.decimation);
+  for (size_t i = 0; i < series.size(); i += step) out.series.push_back(series[i]);
+  for (size_t j = 0; j < series_error_acf.size(); j += step)
+    out.error_acf.push_back(series_error_acf[j]);
+  return out;
+}
 
-  Problem pb;
-  pb.N = N;
-  pb.dt = dt;
-  pb.mean = out.mean;
-  pb.T = N * dt;
-  pb.error_acf.assign(error_acf.begin(), error_acf.end());
-  std::vector<double> stationary;
+// The exponential family's fit, iterated with the lag range and Bartlett's
+// covariance that follow it: sets the problem's lags, data and covariance
+// factor, and the stationary autocovariance Bartlett's formula took; σ and τ
+// start at their given values and end at the fit's.
+absl::StatusOr<FamilyFit> FitExponentialWithItsCovariance(Problem& pb,
+                                                          const std::vector<double>& acf_full,
+                                                          int capacity,
+                                                          const CorrelationOptions& options,
+                                                          double& sigma, double& tau,
+                                                          std::vector<double>& stationary) {
   FamilyFit exponential;
-  // Iterate: the lag range and Bartlett's covariance follow the exponential fit.
   for (int pass = 0; pass < 3; ++pass) {
-    const int max_lag = std::clamp(static_cast<int>(options.max_lag_in_tau * tau / dt), options.grid_lags, capacity);
+    const int max_lag = std::clamp(static_cast<int>(options.max_lag_in_tau * tau / pb.dt),
+                                   options.grid_lags, capacity);
     pb.lags = LagGrid(max_lag, options.grid_lags);
     pb.data.resize(static_cast<Eigen::Index>(pb.lags.size()));
     for (size_t i = 0; i < pb.lags.size(); ++i) pb.data[static_cast<Eigen::Index>(i)] = acf_full[static_cast<size_t>(pb.lags[i])];
@@ -655,7 +638,7 @@ absl::StatusOr<CorrelationAnalysis> AnalyseCorrelation(std::span<const double> s
       // largest (the nearest such matrix: Higham, Linear Algebra Appl. 103,
       // 1988).
       stationary.assign(acf_full.begin(), acf_full.end());
-      const int M = std::min(capacity, pb.lags.back() + static_cast<int>(6.0 * tau / dt) + 1);
+      const int M = std::min(capacity, pb.lags.back() + static_cast<int>(6.0 * tau / pb.dt) + 1);
       const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(BartlettOnGrid(pb, stationary, M));
       const double floor = 1e-6 * eig.eigenvalues().cwiseAbs().maxCoeff();
       if (!(floor > 0.0)) return absl::InternalError("correlation processing: covariance not positive definite");
@@ -673,22 +656,15 @@ absl::StatusOr<CorrelationAnalysis> AnalyseCorrelation(std::span<const double> s
     tau = new_tau;
     if (settled && pass > 0) break;
   }
-  out.acf.assign(acf_full.begin(), acf_full.begin() + pb.lags.back() + 1);
-  out.error_acf.resize(out.acf.size());
-  for (size_t j = 0; j < out.acf.size(); ++j) out.error_acf[j] = error_at(static_cast<int>(j));
-  {
-    const int M = std::min(N - 1, pb.lags.back() + static_cast<int>(6.0 * tau / dt) + 1);
-    out.acf_band.resize(out.acf.size());
-    for (size_t j = 0; j < out.acf.size(); ++j) {
-      out.acf_band[j] = 1.96 * std::sqrt(std::max(0.0, Bartlett(stationary, N, static_cast<int>(j), static_cast<int>(j), M)));
-    }
-  }
+  return exponential;
+}
 
-  // Every family against the same data and covariance.
-  out.fits.push_back(FitFamily(pb, CorrelationFamily::kWhite, {std::sqrt(r0)}));
-  out.fits.push_back(exponential);
+// The families beside the exponential, against the same data and covariance,
+// each with its likelihood-ratio test against the exponential.
+void FitAlternatives(const Problem& pb, const FamilyFit& exponential, double sigma, double tau,
+                     double mean, std::vector<FamilyFit>& fits) {
   const double T = pb.T;
-  const double lag_span = pb.lags.back() * dt;
+  const double lag_span = pb.lags.back() * pb.dt;
   {
     // Cosine term: a damped oscillation the lags show at least three times —
     // periods from four grid spacings (what the grid resolves) to a third of
@@ -700,38 +676,113 @@ absl::StatusOr<CorrelationAnalysis> AnalyseCorrelation(std::span<const double> s
     for (double period : LogSpaced(4.0 * grid_spacing, std::min(T / 4.0, lag_span / 3.0), 8)) {
       for (double decay : {0.5, kMaxDecayInPeriods}) grid.push_back({sigma, tau, 0.5 * sigma, decay * period, period});
     }
-    out.fits.push_back(ProfiledAlternative(pb, CorrelationFamily::kExponentialCosine, exponential, grid, {3, 4}));
+    fits.push_back(
+        ProfiledAlternative(pb, CorrelationFamily::kExponentialCosine, exponential, grid, {3, 4}));
   }
   {
     // A second, longer correlation time from 3τ to a hundred runs; σ₂ free.
     std::vector<std::vector<double>> grid;
     for (double tau2 : LogSpaced(3.0 * tau, 100.0 * T, 6)) grid.push_back({sigma, tau, 0.5 * sigma, tau2});
-    out.fits.push_back(ProfiledAlternative(pb, CorrelationFamily::kTwoExponentials, exponential, grid, {3}));
+    fits.push_back(
+        ProfiledAlternative(pb, CorrelationFamily::kTwoExponentials, exponential, grid, {3}));
   }
   {
     FamilyFit walk = FitFamily(pb, CorrelationFamily::kRandomWalk, {sigma, tau, sigma / std::sqrt(2.0 * T)});
     walk.lr_statistic = std::max(0.0, exponential.chi2 - walk.chi2);
     walk.lr_dof = 1;
     walk.lr_p_value = stats::ChiSquareSurvival(walk.lr_statistic, 1.0);
-    out.fits.push_back(walk);
+    fits.push_back(walk);
   }
   {
     // Exponential plus constant: the constant frees the mean, whose term leaves χ².
     FamilyFit constant = exponential;
     constant.family = CorrelationFamily::kExponentialPlusConstant;
     const double p[2] = {exponential.parameters[0].value, exponential.parameters[1].value};
-    const double mean_sd = std::sqrt(std::max(MeanVariance(CovarianceOf(CorrelationFamily::kExponential, p, N, dt,
-                                                                        pb.error_acf), N), 0.0));
-    const double mean_term = mean_sd > 0.0 ? out.mean / mean_sd : 0.0;
+    const double mean_sd = std::sqrt(std::max(
+        MeanVariance(CovarianceOf(CorrelationFamily::kExponential, p, pb.N, pb.dt, pb.error_acf),
+                     pb.N),
+        0.0));
+    const double mean_term = mean_sd > 0.0 ? mean / mean_sd : 0.0;
     constant.chi2 = exponential.chi2 - mean_term * mean_term;
     constant.parameter_count = exponential.parameter_count + 1;
-    constant.parameters.push_back({CorrelationParameter::kConstant, out.mean, mean_sd,
-                                   out.mean - 1.96 * mean_sd, out.mean + 1.96 * mean_sd});
+    constant.parameters.push_back({CorrelationParameter::kConstant, mean, mean_sd,
+                                   mean - 1.96 * mean_sd, mean + 1.96 * mean_sd});
     constant.lr_statistic = mean_term * mean_term;
     constant.lr_dof = 1;
     constant.lr_p_value = stats::ChiSquareSurvival(constant.lr_statistic, 1.0);
-    out.fits.push_back(constant);
+    fits.push_back(constant);
   }
+}
+
+}  // namespace
+
+absl::StatusOr<CorrelationAnalysis> AnalyseCorrelation(std::span<const double> series,
+                                                       std::span<const double> series_error_acf,
+                                                       double epoch_dt,
+                                                       const CorrelationOptions& options) {
+  if (auto st = options.Validate(); !st.ok()) return st;
+  if (!(epoch_dt > 0.0))
+    return absl::InvalidArgumentError("correlation processing: epoch interval must be positive");
+  const DecimatedSeries decimated = DecimateToCorrelationTime(series, series_error_acf, options);
+  const std::vector<double>& smoothed = decimated.series;
+  const std::vector<double>& error_acf = decimated.error_acf;
+  const double dt = epoch_dt * decimated.decimation;
+  const int N = static_cast<int>(smoothed.size());
+  if (N < 4 * options.grid_lags) {
+    return absl::FailedPreconditionError("correlation processing needs at least " +
+                                         std::to_string(4 * options.grid_lags) + " epochs");
+  }
+  CorrelationAnalysis out;
+  out.dt_s = dt;
+  out.n = N;
+  const int capacity = static_cast<int>(options.max_lag_fraction * N);
+  const std::vector<double> acf_full = SampleAutocovariance(smoothed, capacity);
+  for (double v : smoothed) out.mean += v / N;
+  auto error_at = [&](int j) {
+    return j < static_cast<int>(error_acf.size()) ? error_acf[static_cast<size_t>(j)] : 0.0;
+  };
+
+  // Start: σ² from the corrected zero lag, τ where the corrected ACF falls by e.
+  const double r0 = acf_full[0] + error_at(0);
+  if (!(r0 > 0.0))
+    return absl::FailedPreconditionError("correlation processing: the series has no variance");
+  int fall = capacity;
+  for (int j = 1; j <= capacity; ++j) {
+    if (acf_full[static_cast<size_t>(j)] + error_at(j) <= r0 / std::numbers::e) {
+      fall = j;
+      break;
+    }
+  }
+  double sigma = std::sqrt(r0);
+  double tau = std::max(1.0, static_cast<double>(fall)) * dt;
+
+  Problem pb;
+  pb.N = N;
+  pb.dt = dt;
+  pb.mean = out.mean;
+  pb.T = N * dt;
+  pb.error_acf.assign(error_acf.begin(), error_acf.end());
+  std::vector<double> stationary;
+  auto fitted =
+      FitExponentialWithItsCovariance(pb, acf_full, capacity, options, sigma, tau, stationary);
+  if (!fitted.ok()) return fitted.status();
+  const FamilyFit exponential = std::move(*fitted);
+  out.acf.assign(acf_full.begin(), acf_full.begin() + pb.lags.back() + 1);
+  out.error_acf.resize(out.acf.size());
+  for (size_t j = 0; j < out.acf.size(); ++j) out.error_acf[j] = error_at(static_cast<int>(j));
+  {
+    const int M = std::min(N - 1, pb.lags.back() + static_cast<int>(6.0 * tau / dt) + 1);
+    out.acf_band.resize(out.acf.size());
+    for (size_t j = 0; j < out.acf.size(); ++j) {
+      out.acf_band[j] = 1.96 * std::sqrt(std::max(0.0, Bartlett(stationary, N, static_cast<int>(j),
+                                                                static_cast<int>(j), M)));
+    }
+  }
+
+  // Every family against the same data and covariance.
+  out.fits.push_back(FitFamily(pb, CorrelationFamily::kWhite, {std::sqrt(r0)}));
+  out.fits.push_back(exponential);
+  FitAlternatives(pb, exponential, sigma, tau, out.mean, out.fits);
   const double log_n = std::log(static_cast<double>(pb.lags.size() + 1));
   double best_aic = std::numeric_limits<double>::infinity();
   for (FamilyFit& f : out.fits) {
@@ -747,7 +798,7 @@ absl::StatusOr<CorrelationAnalysis> AnalyseCorrelation(std::span<const double> s
   // narrower than kMaxTauIntervalRatio, below half the run.
   out.unresolved_fraction = error_at(0) / (acf_full[0] + error_at(0));
   const FittedParameter& tau_fit = exponential.parameters[1];
-  const bool tau_bounded = std::isfinite(tau_fit.std_error) && tau_fit.ci95_high < 0.5 * T &&
+  const bool tau_bounded = std::isfinite(tau_fit.std_error) && tau_fit.ci95_high < 0.5 * pb.T &&
                            tau_fit.ci95_high < kMaxTauIntervalRatio * tau_fit.ci95_low;
   out.resolved = exponential.usable && tau_bounded &&
                  out.unresolved_fraction <= options.max_unresolved_fraction;
