@@ -562,36 +562,30 @@ std::vector<ParameterEstimate> ReportedParameters(const StructureKind& kind, Dri
   return out;
 }
 
-// Fits a structure of `kind` on each selected axis with its drift σ (header:
-// Walks, Second-order pairs): the screen's first EM step from each start,
-// the kept axes jointly from their best starts, each tested against the
-// model without it.
-absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const ErrorModel& model,
-                                                    const ErrorModel& a_priori, const DriftSelection& axes,
-                                                    const StructureKind& kind, double screen_alpha,
-                                                    const DriftLikelihoodOptions& options) {
-  if (auto st = ValidateOptions(options); !st.ok()) return st;
-  DriftLikelihoodResult out;
-  out.model = model;
-  out.converged = true;
+// The drift a structure's start is scaled to: the a-priori model's where it
+// has one, else the model's.
+const GaussMarkov& SpecifiedDrift(const ErrorModel& model, const ErrorModel& a_priori,
+                                  DriftAxis d) {
+  return HasDrift(a_priori, d) ? DriftOf(a_priori, d) : DriftOf(model, d);
+}
+
+// The axes whose structure the screen keeps, each with its best start.
+struct ScreenedStructures {
+  std::vector<DriftAxis> kept_axes;
+  std::array<size_t, DriftAxis::kCount> best_start{};  // by DriftAxis::Index
+};
+
+// The screen: from each start, every candidate at the structure hypothesis
+// (the drift at its a-priori σ, not wider: a widened drift took the slow
+// variance the structure would explain), one EM step; an axis keeps the
+// start whose step lets the magnitude grow most. The starts' steps are
+// independent passes: on every core, read in order.
+absl::StatusOr<ScreenedStructures> ScreenStructureStarts(
+    const EpochRun& run, const ErrorModel& model, const ErrorModel& a_priori,
+    const std::vector<DriftAxis>& candidates, const StructureKind& kind,
+    const DriftLikelihoodOptions& options, DriftLikelihoodResult& out) {
   const std::vector<Kind> kinds = kind.Kinds();
-  const auto per_axis = static_cast<Eigen::Index>(kinds.size()) + 1;  // the drift σ, then the structure's
-
-  std::vector<DriftAxis> candidates;
-  for (const DriftAxis d : DriftAxis::All()) {
-    if (axes.Contains(d) && HasDrift(model, d) && EffectOf(model, kind.Name(d)) < 0) {
-      candidates.push_back(d);
-      out.screened.Set(d);
-    }
-  }
-  if (candidates.empty()) return out;
-  auto specified = [&](DriftAxis d) { return HasDrift(a_priori, d) ? DriftOf(a_priori, d) : DriftOf(model, d); };
-
-  // The screen: from each start, every candidate at the structure hypothesis
-  // (the drift at its a-priori σ, not wider: a widened drift took the slow
-  // variance the structure would explain), one EM step; an axis keeps the
-  // start whose step lets the magnitude grow most.
-  // The starts' steps are independent passes: on every core, read in order.
+  const auto per_axis = static_cast<Eigen::Index>(kinds.size()) + 1;
   struct ScreenStep {
     Eigen::VectorXd theta;
     Maximiser::Step step;
@@ -601,10 +595,10 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
     ErrorModel trial = model;
     std::vector<Parameter> parameters;
     for (const DriftAxis d : candidates) {
-      auto effect = kind.At(d, start, specified(d), options);
+      auto effect = kind.At(d, start, SpecifiedDrift(model, a_priori, d), options);
       if (!effect.ok()) return effect.status();
       GaussMarkov& drift = DriftOf(trial, d);
-      drift.sigma = std::min(drift.sigma, specified(d).sigma);
+      drift.sigma = std::min(drift.sigma, SpecifiedDrift(model, a_priori, d).sigma);
       trial.effects.push_back(*effect);
       parameters.push_back({Kind::kSigma, d});
       for (Kind k : kinds) parameters.push_back({k, d});
@@ -618,10 +612,9 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
     out_step.filter_passes = passes.filter_passes;
     return out_step;
   });
-  // By DriftAxis::Index.
+  ScreenedStructures result;
   std::array<double, DriftAxis::kCount> best_growth;
   best_growth.fill(0.0);
-  std::array<size_t, DriftAxis::kCount> best_start{};
   for (size_t start = 0; start < screened.size(); ++start) {
     if (!screened[start].ok()) return screened[start].status();
     const ScreenStep& s_step = *screened[start];
@@ -633,43 +626,25 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
       const auto d = static_cast<size_t>(candidates[c].Index());
       if (growth > best_growth[d]) {
         best_growth[d] = growth;
-        best_start[d] = start;
+        result.best_start[d] = start;
       }
     }
   }
-  std::vector<DriftAxis> kept_axes;
   for (const DriftAxis d : candidates) {
-    if (best_growth[static_cast<size_t>(d.Index())] > 0.0) kept_axes.push_back(d);
+    if (best_growth[static_cast<size_t>(d.Index())] > 0.0) result.kept_axes.push_back(d);
   }
-  if (kept_axes.empty()) return out;
+  return result;
+}
 
-  // The kept structures with their drifts, jointly, each from its best start.
-  ErrorModel joint = model;
-  std::vector<Parameter> kept;
-  for (const DriftAxis d : kept_axes) {
-    auto effect = kind.At(d, best_start[static_cast<size_t>(d.Index())], specified(d), options);
-    if (!effect.ok()) return effect.status();
-    joint.effects.push_back(*effect);
-    kept.push_back({Kind::kSigma, d});
-    for (Kind k : kinds) kept.push_back({k, d});
-  }
-  // A pair's joint fit is capped (options): past the cap its statistic is a
-  // lower bound. A structure significant at the cap is fitted on to
-  // convergence before its errors are taken: the information is that of
-  // the maximum, not of a point on the way to it.
-  DriftLikelihoodOptions capped = options;
-  if (kind.second_order) capped.max_iterations = std::min(options.max_iterations, options.second_order_max_iterations);
-  Maximiser em(run, joint, kept, capped, out);
-  auto theta = FitInto(em, out, nullptr);
-  if (!theta.ok()) return theta.status();
-
-  std::vector<StructureEstimate> fits;
-  auto significant = [&](const StructureEstimate& w) { return NestedPValue(w) < screen_alpha; };
-  // ℓ̂₀ of each kept structure: the joint model without it, its drift σ
-  // re-fitted alone. EM for σ alone starts from the model's σ, not the joint
-  // fit's: from a σ the structure has relieved, EM crawls up and would stop
-  // below ℓ̂₀ (its steps fall under the tolerance long before it gets there),
-  // which inflates the statistic. The fits are independent: on every core.
+// Each kept structure's nested test: ℓ̂₀ is the joint model's without it, its
+// drift σ re-fitted alone. EM for σ alone starts from the model's σ, not the
+// joint fit's: from a σ the structure has relieved, EM crawls up and would
+// stop below ℓ̂₀ (its steps fall under the tolerance long before it gets
+// there), which inflates the statistic. The fits are independent: on every
+// core.
+absl::StatusOr<std::vector<StructureEstimate>> TestEachWithoutIt(
+    const EpochRun& run, const ErrorModel& model, const std::vector<DriftAxis>& kept_axes,
+    const StructureKind& kind, const DriftLikelihoodOptions& options, DriftLikelihoodResult& out) {
   auto without_each = numerics::ParallelMap(kept_axes.size(), [&](std::size_t c) {
     const DriftAxis d = kept_axes[c];
     ErrorModel without = out.model;
@@ -680,6 +655,7 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
     absl::Status fitted = FitInto(alone, alone_result, nullptr).status();
     return std::pair{fitted, alone_result};
   });
+  std::vector<StructureEstimate> fits;
   for (size_t c = 0; c < kept_axes.size(); ++c) {
     const auto& [fitted_alone, alone_result] = without_each[c];
     if (!fitted_alone.ok()) return fitted_alone;
@@ -687,13 +663,72 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
     StructureEstimate w;
     w.drift = d;
     w.effect = kind.Name(d);
-    w.dof = static_cast<int>(kinds.size());
+    w.dof = static_cast<int>(kind.Kinds().size());
     w.starts = static_cast<int>(kind.Starts(options));
     out.filter_passes += alone_result.filter_passes;
     w.log_likelihood_without = alone_result.log_likelihood_after;
     w.statistic = std::max(0.0, 2.0 * (out.log_likelihood_after - w.log_likelihood_without));
     fits.push_back(std::move(w));
   }
+  return fits;
+}
+
+// Fits a structure of `kind` on each selected axis with its drift σ (header:
+// Walks, Second-order pairs): the screen's first EM step from each start,
+// the kept axes jointly from their best starts, each tested against the
+// model without it.
+absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const ErrorModel& model,
+                                                    const ErrorModel& a_priori,
+                                                    const DriftSelection& axes,
+                                                    const StructureKind& kind, double screen_alpha,
+                                                    const DriftLikelihoodOptions& options) {
+  if (auto st = ValidateOptions(options); !st.ok()) return st;
+  DriftLikelihoodResult out;
+  out.model = model;
+  out.converged = true;
+  const std::vector<Kind> kinds = kind.Kinds();
+  const auto per_axis =
+      static_cast<Eigen::Index>(kinds.size()) + 1;  // the drift σ, then the structure's
+
+  std::vector<DriftAxis> candidates;
+  for (const DriftAxis d : DriftAxis::All()) {
+    if (axes.Contains(d) && HasDrift(model, d) && EffectOf(model, kind.Name(d)) < 0) {
+      candidates.push_back(d);
+      out.screened.Set(d);
+    }
+  }
+  if (candidates.empty()) return out;
+  auto screen = ScreenStructureStarts(run, model, a_priori, candidates, kind, options, out);
+  if (!screen.ok()) return screen.status();
+  const std::vector<DriftAxis>& kept_axes = screen->kept_axes;
+  if (kept_axes.empty()) return out;
+
+  // The kept structures with their drifts, jointly, each from its best start.
+  ErrorModel joint = model;
+  std::vector<Parameter> kept;
+  for (const DriftAxis d : kept_axes) {
+    auto effect = kind.At(d, screen->best_start[static_cast<size_t>(d.Index())],
+                          SpecifiedDrift(model, a_priori, d), options);
+    if (!effect.ok()) return effect.status();
+    joint.effects.push_back(*effect);
+    kept.push_back({Kind::kSigma, d});
+    for (Kind k : kinds) kept.push_back({k, d});
+  }
+  // A pair's joint fit is capped (options): past the cap its statistic is a
+  // lower bound. A structure significant at the cap is fitted on to
+  // convergence before its errors are taken: the information is that of
+  // the maximum, not of a point on the way to it.
+  DriftLikelihoodOptions capped = options;
+  if (kind.second_order)
+    capped.max_iterations = std::min(options.max_iterations, options.second_order_max_iterations);
+  Maximiser em(run, joint, kept, capped, out);
+  auto theta = FitInto(em, out, nullptr);
+  if (!theta.ok()) return theta.status();
+
+  auto tested = TestEachWithoutIt(run, model, kept_axes, kind, options, out);
+  if (!tested.ok()) return tested.status();
+  std::vector<StructureEstimate> fits = std::move(*tested);
+  auto significant = [&](const StructureEstimate& w) { return NestedPValue(w) < screen_alpha; };
   if (!out.converged && std::any_of(fits.begin(), fits.end(), significant)) {
     const int capped_iterations = out.iterations;
     Maximiser on(run, out.model, kept, options, out);
