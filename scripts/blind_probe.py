@@ -21,12 +21,15 @@ tuned for:
 Each run goes through `insdiag analyze --json` and is judged as the fault
 matrix judges it (its `judge`): detected, right effect (the significant term
 with the lowest predicted ΔBIC, which `--discover` adds first), right
-module, onset error. A step's onset counts as found when it is within 60 s.
+module, onset error. A step's onset counts as found when it is within 60 s,
+its size when the right effect's estimate is within 3 standard errors of it.
 Runs where the fault cannot be seen are counted apart: a z gyro fault on a
 table that never tilts z (turns, static), whose only trace is the heading.
 
 Usage:
-  scripts/blind_probe.py [--runs N] [--first-index I] [--jobs J] [--out results.json]
+  scripts/blind_probe.py [--runs N] [--first-index I] [--kinds healthy,step,ramp] [--jobs J]
+                         [--out results.json]
+(--kinds keeps the drawn runs of those kinds: the draws stay those of their index.)
 INSDIAG_CLI names the CLI (default build/clients/insdiag).
 """
 import argparse
@@ -84,6 +87,11 @@ def draw(index):
     return conditions
 
 
+def kind_of(conditions):
+    name = conditions["fault"]["name"]
+    return "healthy" if name is None else "step" if "_step." in name else "ramp"
+
+
 def heading_only(conditions):
     """A z gyro fault on a table that never tilts z shows only through the heading."""
     fault = conditions["fault"]
@@ -115,16 +123,19 @@ def run_one(index):
 def summarise(results):
     done = [r for r in results if "error" not in r]
     lines = [f"runs: {len(results)}, failed to analyse: {len(results) - len(done)}", "",
-             "| runs | count | detected | right effect | right module | step onset within 60 s | FAULTY |",
-             "|---|---|---|---|---|---|---|"]
+             "| runs | count | detected | right effect | right module | step onset within 60 s | size within 3 SE "
+             "| FAULTY |",
+             "|---|---|---|---|---|---|---|---|"]
 
     def row(label, rs):
         steps = [r for r in rs if r["fault"].get("name", "") and "_step." in r["fault"]["name"]]
         onset_ok = sum(1 for r in steps if r["right_effect"] and (r.get("onset_error_s") or 1e9) <= 60.0)
         count = lambda key: sum(1 for r in rs if r.get(key))
         faulty = sum(1 for r in rs if r.get("verdict") == "FAULTY")
+        sized = [r for r in rs if r["right_effect"] and r.get("estimate") is not None and r.get("std_error")]
+        size_ok = sum(1 for r in sized if abs(r["estimate"] - r["fault"]["value"]) <= 3.0 * r["std_error"])
         lines.append(f"| {label} | {len(rs)} | {count('detected')} | {count('right_effect')} | {count('right_module')} "
-                     f"| {onset_ok} of {len(steps)} | {faulty} |")
+                     f"| {onset_ok} of {len(steps)} | {size_ok} of {len(sized)} | {faulty} |")
 
     healthy = [r for r in done if r["fault"]["kind"] is None]
     faulty = [r for r in done if r["fault"]["kind"]]
@@ -149,10 +160,12 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--runs", type=int, default=40)
     parser.add_argument("--first-index", type=int, default=0)
+    parser.add_argument("--kinds", default="healthy,step,ramp")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--out", default=None)
     args = parser.parse_args()
-    indices = range(args.first_index, args.first_index + args.runs)
+    kinds = set(args.kinds.split(","))
+    indices = [i for i in range(args.first_index, args.first_index + args.runs) if kind_of(draw(i)) in kinds]
     results = []
     with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
         for r in pool.map(run_one, indices):

@@ -287,6 +287,8 @@ def judge(fault, report):
     result["right_effect"] = named is not None and (named == expected or named.startswith(expected + "."))
     want_module = module_of(expected)
     result["right_module"] = named is not None and want_module is not None and module_of(named) == want_module
+    if top is not None and named == top["name"]:
+        result["estimate"], result["std_error"] = top.get("estimate"), top.get("stdError")
     if top is not None and "onset_s" in fault and "onsetS" in top:
         result["onset_error_s"] = abs(top["onsetS"] - fault["onset_s"])
         result["onset_interval_s"] = [top.get("onsetLowS"), top.get("onsetHighS")]
