@@ -185,6 +185,72 @@ EffectCandidate UntestedStructure(const EffectTerm& term, const std::string& why
   return c;
 }
 
+// What one likelihood test of structures said: the structures it keeps,
+// as proposals; into `outcomes`, those its screen shrank and those below the
+// screen.
+void ReadStructureTest(const ident::DriftLikelihoodResult& fitted,
+                       std::string (*structure_name)(DriftAxis), const ModelPass& pass,
+                       double screen_alpha, double log_n, StructureOutcomes& outcomes,
+                       std::vector<StructureProposal>& out) {
+  // The axes the screen tried: a structure its first EM step shrank (not
+  // among `structures`) is one this run does not tell from the axis' drift.
+  for (const DriftAxis d : DriftAxis::All()) {
+    const std::string name = structure_name(d);
+    auto terms = ParseEffectSelector(name);
+    if (!fitted.screened.Contains(d) || !terms.ok()) continue;
+    EffectCandidate c = StructureCandidate(terms->front(), "LIKELIHOOD");
+    c.note = std::string(
+                 "likelihood of the innovations: the first EM step from the structure hypothesis "
+                 "shrank it — this run does not tell it from a wider ") +
+             DriftName(d) + " drift";
+    outcomes.insert_or_assign(name, c);
+  }
+  for (const ident::StructureEstimate& w : fitted.structures) {
+    auto terms = ParseEffectSelector(w.effect);
+    if (!terms.ok()) continue;
+    if (!(ident::NestedPValue(w) < screen_alpha)) {
+      EffectCandidate c = StructureCandidate(terms->front(), "LIKELIHOOD");
+      c.estimate = w.parameters.front().value;
+      c.statistic = w.statistic;
+      c.p_value = ident::NestedPValue(w);
+      c.note = absl::StrFormat(
+          "likelihood of the innovations: 2Δℓ = %.1f beyond the drift σ re-fitted "
+          "alone, p = %.2g (%d starts) — below the screen; no standard error computed",
+          w.statistic, c.p_value, w.starts);
+      outcomes.insert_or_assign(w.effect, c);
+      continue;
+    }
+    StructureProposal p;
+    p.effect = w.fitted;
+    p.fitted = w;
+    p.candidate = StructureCandidate(p.effect.term, "LIKELIHOOD");
+    EffectCandidate& c = p.candidate;
+    c.estimate = w.parameters.front().value;
+    c.std_error = w.parameters.front().std_error;
+    c.dof = w.dof + 1;
+    // With several structures kept, the joint gain less the others' own.
+    double others = 0.0;
+    for (const ident::StructureEstimate& o : fitted.structures)
+      others += o.drift == w.drift ? 0.0 : o.statistic;
+    c.statistic =
+        std::max(w.statistic, 2.0 * (fitted.log_likelihood_after - pass.log_likelihood) - others);
+    // χ² for a parameter on its boundary is conservative (drift_likelihood.h).
+    c.p_value = ident::StructurePValue(c.statistic, c.dof, w.starts);
+    c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
+    c.predicted_delta_bic = -c.statistic + c.dof * log_n;
+    std::string parameters;
+    for (const ParameterEstimate& e : w.parameters) {
+      parameters += absl::StrFormat("%s%s %.3g %s", parameters.empty() ? "" : ", ",
+                                    FieldSuffix(SplitParameterName(e.name).field), e.value, e.unit);
+    }
+    c.note = "likelihood of the innovations with " + parameters + " and the drift σ re-fitted (" +
+             DriftName(w.drift) + ".sigma " +
+             absl::StrFormat("%.3g %s", w.drift_sigma.value, w.drift_sigma.unit) + " with it); " +
+             absl::StrFormat("2Δℓ = %.1f beyond the drift σ re-fitted alone", w.statistic);
+    out.push_back(std::move(p));
+  }
+}
+
 // Bias random walks and second-order pairs by the innovations' likelihood
 // (drift_likelihood.h), on every drift axis the model has none on. Also on a
 // run whose monitoring flags faults: a walk that has wandered far trips the
@@ -288,58 +354,7 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
       }
       continue;
     }
-    // The axes the screen tried: a structure its first EM step shrank (not
-    // among `structures`) is one this run does not tell from the axis' drift.
-    for (const DriftAxis d : DriftAxis::All()) {
-      const std::string name = test.structure_name(d);
-      auto terms = ParseEffectSelector(name);
-      if (!fitted->screened.Contains(d) || !terms.ok()) continue;
-      EffectCandidate c = StructureCandidate(terms->front(), "LIKELIHOOD");
-      c.note = std::string("likelihood of the innovations: the first EM step from the structure hypothesis "
-                           "shrank it — this run does not tell it from a wider ") + DriftName(d) + " drift";
-      outcomes.insert_or_assign(name, c);
-    }
-    for (const ident::StructureEstimate& w : fitted->structures) {
-      auto terms = ParseEffectSelector(w.effect);
-      if (!terms.ok()) continue;
-      if (!(ident::NestedPValue(w) < screen_alpha)) {
-        EffectCandidate c = StructureCandidate(terms->front(), "LIKELIHOOD");
-        c.estimate = w.parameters.front().value;
-        c.statistic = w.statistic;
-        c.p_value = ident::NestedPValue(w);
-        c.note = absl::StrFormat("likelihood of the innovations: 2Δℓ = %.1f beyond the drift σ re-fitted "
-                                 "alone, p = %.2g (%d starts) — below the screen; no standard error computed",
-                                 w.statistic, c.p_value, w.starts);
-        outcomes.insert_or_assign(w.effect, c);
-        continue;
-      }
-      StructureProposal p;
-      p.effect = w.fitted;
-      p.fitted = w;
-      p.candidate = StructureCandidate(p.effect.term, "LIKELIHOOD");
-      EffectCandidate& c = p.candidate;
-      c.estimate = w.parameters.front().value;
-      c.std_error = w.parameters.front().std_error;
-      c.dof = w.dof + 1;
-      // With several structures kept, the joint gain less the others' own.
-      double others = 0.0;
-      for (const ident::StructureEstimate& o : fitted->structures) others += o.drift == w.drift ? 0.0 : o.statistic;
-      c.statistic = std::max(w.statistic, 2.0 * (fitted->log_likelihood_after - pass.log_likelihood) - others);
-      // χ² for a parameter on its boundary is conservative (drift_likelihood.h).
-      c.p_value = ident::StructurePValue(c.statistic, c.dof, w.starts);
-      c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
-      c.predicted_delta_bic = -c.statistic + c.dof * log_n;
-      std::string parameters;
-      for (const ParameterEstimate& e : w.parameters) {
-        parameters +=
-            absl::StrFormat("%s%s %.3g %s", parameters.empty() ? "" : ", ",
-                            FieldSuffix(SplitParameterName(e.name).field), e.value, e.unit);
-      }
-      c.note = "likelihood of the innovations with " + parameters + " and the drift σ re-fitted (" +
-               DriftName(w.drift) + ".sigma " + absl::StrFormat("%.3g %s", w.drift_sigma.value, w.drift_sigma.unit) +
-               " with it); " + absl::StrFormat("2Δℓ = %.1f beyond the drift σ re-fitted alone", w.statistic);
-      out.push_back(std::move(p));
-    }
+    ReadStructureTest(*fitted, test.structure_name, pass, screen_alpha, log_n, outcomes, out);
   }
   return out;
 }
