@@ -244,16 +244,10 @@ struct Group {
   double max_scale = 1.0;
 };
 
-}  // namespace
-
-absl::StatusOr<NoiseScaleResult> ScaleUnresolvedNoise(const EpochRun& run, const ErrorModel& model,
-                                                      const UnresolvedNoise& which, const NoiseScaleOptions& options) {
-  if (!(options.min_scale > 0.0 && options.max_scale > options.min_scale && options.log_tolerance > 0.0)) {
-    return absl::InvalidArgumentError("noise scale options out of range");
-  }
-  NoiseScaleResult out;
-  out.model = model;
-  ErrorModel& m = out.model;
+// The groups of noise terms whose common scale is searched: the white noises
+// and drifts `which` names, each group's terms pointing into `m`.
+std::vector<Group> GroupsToScale(ErrorModel& m, const UnresolvedNoise& which,
+                                 const NoiseScaleOptions& options) {
   std::vector<Group> groups;
   auto add_group = [&](const char* name, const std::array<bool, 3>& flags, Sensor sensor,
                        bool drift, double max_scale) {
@@ -281,11 +275,60 @@ absl::StatusOr<NoiseScaleResult> ScaleUnresolvedNoise(const EpochRun& run, const
   add_group("acc drift", which.acc_drift, Sensor::kAccelerometer, true, bound);
   add_group("gyro drift seed", which.gyro_drift_seed, Sensor::kGyro, true, seed);
   add_group("acc drift seed", which.acc_drift_seed, Sensor::kAccelerometer, true, seed);
+  return groups;
+}
 
-  auto apply = [](Group& g, double log_scale) {
-    g.log_scale = log_scale;
-    for (ScaledTerm& t : g.terms) *t.value = t.bound * std::exp(log_scale);
-  };
+void ApplyScale(Group& g, double log_scale) {
+  g.log_scale = log_scale;
+  for (ScaledTerm& t : g.terms) *t.value = t.bound * std::exp(log_scale);
+}
+
+// Golden-section search for the maximum of ℓ(log scale) over [lo, hi] (ℓ is
+// unimodal in a variance scale when the structure is right): the bracket's
+// best point, or the ends of the range when ℓ still rises there, or the start
+// (whose ℓ is `best`) when nothing beats it; as (ℓ, log scale).
+template <typename LogLikelihoodAt>
+std::pair<double, double> GoldenSectionMaximum(double lo_limit, double hi_limit, double start,
+                                               double best, double log_tolerance,
+                                               LogLikelihoodAt at) {
+  const double inv_phi = (std::sqrt(5.0) - 1.0) / 2.0;  // 1/φ, the golden section
+  double lo = lo_limit, hi = hi_limit;
+  double x1 = hi - inv_phi * (hi - lo), x2 = lo + inv_phi * (hi - lo);
+  double f1 = at(x1), f2 = at(x2);
+  while (hi - lo > log_tolerance) {
+    if (f1 > f2) {
+      hi = x2;
+      x2 = x1;
+      f2 = f1;
+      x1 = hi - inv_phi * (hi - lo);
+      f1 = at(x1);
+    } else {
+      lo = x1;
+      x1 = x2;
+      f1 = f2;
+      x2 = lo + inv_phi * (hi - lo);
+      f2 = at(x2);
+    }
+  }
+  std::array<std::pair<double, double>, 3> tried = {{{f1, x1}, {f2, x2}, {best, start}}};
+  if (hi >= hi_limit - log_tolerance) tried[0] = {at(hi_limit), hi_limit};
+  if (lo <= lo_limit + log_tolerance) tried[1] = {at(lo_limit), lo_limit};
+  return *std::max_element(tried.begin(), tried.end());
+}
+
+}  // namespace
+
+absl::StatusOr<NoiseScaleResult> ScaleUnresolvedNoise(const EpochRun& run, const ErrorModel& model,
+                                                      const UnresolvedNoise& which,
+                                                      const NoiseScaleOptions& options) {
+  if (!(options.min_scale > 0.0 && options.max_scale > options.min_scale &&
+        options.log_tolerance > 0.0)) {
+    return absl::InvalidArgumentError("noise scale options out of range");
+  }
+  NoiseScaleResult out;
+  out.model = model;
+  ErrorModel& m = out.model;
+  std::vector<Group> groups = GroupsToScale(m, which, options);
   absl::Status failure = absl::OkStatus();
   auto log_likelihood = [&]() {
     auto fw = RunForwardFilter(run, m);
@@ -300,44 +343,17 @@ absl::StatusOr<NoiseScaleResult> ScaleUnresolvedNoise(const EpochRun& run, const
   if (!failure.ok()) return failure;
   double best = out.log_likelihood_before;
   const double lo_limit = std::log(options.min_scale);
-  const double inv_phi = (std::sqrt(5.0) - 1.0) / 2.0;  // 1/φ, the golden section
   for (int sweep = 0; sweep < options.sweeps && !groups.empty(); ++sweep) {
     for (Group& g : groups) {
-      const double start = g.log_scale;
-      const double hi_limit = std::log(g.max_scale);
       auto at = [&](double log_scale) {
-        apply(g, log_scale);
+        ApplyScale(g, log_scale);
         return log_likelihood();
       };
-      // Golden-section search for the maximum of ℓ over [lo, hi] (ℓ is
-      // unimodal in a variance scale when the structure is right).
-      double lo = lo_limit, hi = hi_limit;
-      double x1 = hi - inv_phi * (hi - lo), x2 = lo + inv_phi * (hi - lo);
-      double f1 = at(x1), f2 = at(x2);
-      while (hi - lo > options.log_tolerance) {
-        if (f1 > f2) {
-          hi = x2;
-          x2 = x1;
-          f2 = f1;
-          x1 = hi - inv_phi * (hi - lo);
-          f1 = at(x1);
-        } else {
-          lo = x1;
-          x1 = x2;
-          f1 = f2;
-          x2 = lo + inv_phi * (hi - lo);
-          f2 = at(x2);
-        }
-      }
+      const auto top = GoldenSectionMaximum(lo_limit, std::log(g.max_scale), g.log_scale, best,
+                                            options.log_tolerance, at);
       if (!failure.ok()) return failure;
-      // The bracket's best point, or the ends of the range when ℓ still rises
-      // there, or the start when nothing beats it.
-      std::array<std::pair<double, double>, 3> tried = {{{f1, x1}, {f2, x2}, {best, start}}};
-      if (hi >= hi_limit - options.log_tolerance) tried[0] = {at(hi_limit), hi_limit};
-      if (lo <= lo_limit + options.log_tolerance) tried[1] = {at(lo_limit), lo_limit};
-      const auto top = *std::max_element(tried.begin(), tried.end());
       best = top.first;
-      apply(g, top.second);
+      ApplyScale(g, top.second);
     }
   }
   // Standard errors of ln ŝ from the curvature of ℓ (observed information),
@@ -350,11 +366,11 @@ absl::StatusOr<NoiseScaleResult> ScaleUnresolvedNoise(const EpochRun& run, const
     const double x = g.log_scale;
     const double hi_limit = std::log(g.max_scale);
     r.at_limit = x <= lo_limit + options.log_tolerance || x >= hi_limit - options.log_tolerance;
-    apply(g, x + h);
+    ApplyScale(g, x + h);
     const double up = log_likelihood();
-    apply(g, x - h);
+    ApplyScale(g, x - h);
     const double down = log_likelihood();
-    apply(g, x);
+    ApplyScale(g, x);
     const double curvature = (up - 2.0 * best + down) / (h * h);
     if (curvature < 0.0 && !r.at_limit) r.log_std_error = 1.0 / std::sqrt(-curvature);
     for (const ScaledTerm& t : g.terms) {
