@@ -268,9 +268,12 @@ std::string_view CorrelationParameterName(CorrelationParameter p) {
   return kNames.at(static_cast<size_t>(p));
 }
 
+bool IsCorrelationTime(CorrelationParameter p) {
+  return p == CorrelationParameter::kTau || p == CorrelationParameter::kTau2;
+}
+
 bool IsTimeS(CorrelationParameter p) {
-  return p == CorrelationParameter::kTau || p == CorrelationParameter::kTau2 ||
-         p == CorrelationParameter::kPeriod;
+  return IsCorrelationTime(p) || p == CorrelationParameter::kPeriod;
 }
 
 const FamilyFit* CorrelationAnalysis::Fit(CorrelationFamily f) const {
@@ -516,9 +519,7 @@ void ErrorsUnderAlternative(const Problem& pb, const std::vector<int>& fixed, Fa
   const FamilySpec& spec = SpecOf(fit.family);
   for (size_t i = 0; i < fit.parameters.size(); ++i) {
     p.push_back(fit.parameters[i].value);
-    if (spec.parameters[i] == CorrelationParameter::kTau ||
-        spec.parameters[i] == CorrelationParameter::kTau2)
-      longest_s = std::max(longest_s, p.back());
+    if (IsCorrelationTime(spec.parameters[i])) longest_s = std::max(longest_s, p.back());
   }
   const std::vector<double> stationary = CovarianceOf(fit.family, p.data(), pb.N, pb.dt, pb.error_acf).stationary;
   const int M = std::min(pb.N - 1, pb.lags.back() + static_cast<int>(6.0 * longest_s / pb.dt) + 1);

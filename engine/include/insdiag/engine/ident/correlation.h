@@ -78,6 +78,8 @@ std::string_view CorrelationParameterName(CorrelationParameter p);
 // True for the times [s] (τ, τ₂, the period); the others are in the drift's
 // unit, the density per √s.
 bool IsTimeS(CorrelationParameter p);
+// A correlation time of the family (τ or τ₂), not its period.
+bool IsCorrelationTime(CorrelationParameter p);
 
 struct FittedParameter {
   CorrelationParameter id = CorrelationParameter::kSigma;
