@@ -358,6 +358,65 @@ EvidenceTerm StandardScoreTerm(const std::string& name, double estimate, double 
 
 }  // namespace
 
+namespace {
+
+// A value against its nominal, on the scale the nominal calls for.
+EvidenceTerm AgainstNominal(const std::string& name, double value, double std_error,
+                            const v1::NominalParameter& n, const std::string& unit,
+                            const v1::DiagnosisSettings& settings) {
+  EvidenceTerm t;
+  t.name = name;
+  t.tolerance_units = (value - n.value()) / n.tolerance();
+  const double se = std::isfinite(std_error) && std_error > 0 ? std_error : 0.0;
+  const std::string u = unit.empty() ? n.unit() : unit;
+  const std::string se_text = se > 0 ? absl::StrCat(" ± ", Format(se)) : "";
+  if (n.value() > 0 && value > 0) {
+    t.scale = Scale::kLogRatio;
+    t.x = std::log(value / n.value());
+    t.measurement_sd = se / value;
+    t.healthy_sd = settings.healthy_log_ratio_fraction() * std::log1p(n.tolerance() / n.value());
+    t.line =
+        absl::StrCat(name, " = ", Format(value), se_text, " ", u, ", ",
+                     absl::StrFormat("%.2g", value / n.value()), "× nominal ", Format(n.value()),
+                     " (", SignedFormat(t.tolerance_units), " tolerance units)");
+  } else {
+    t.scale = Scale::kTolerance;
+    t.x = t.tolerance_units;
+    t.measurement_sd = se / n.tolerance();
+    t.healthy_sd = settings.healthy_tolerance_sd();
+    t.line = absl::StrCat(name, " = ", SignedFormat(value), se_text, (u.empty() ? "" : " "), u,
+                          " (", SignedFormat(t.tolerance_units), " tolerance units, tolerance ",
+                          Format(n.tolerance()), ")");
+  }
+  return t;
+}
+
+// A candidate's standard score as evidence.
+// A random structure (a walk, a second-order pair): its magnitude is
+// bounded at zero, so estimate over SE is positive whatever the unit and
+// no standard score (a pair whose own test gave p = 1 had 6.6 SE, and
+// named the wrong gyro); the z of its likelihood-ratio test's p-value is.
+// Without a standard error, the z of the same two-sided p-value: √χ² on
+// one degree of freedom, and on more not an inflated √χ² (a pair's 2Δℓ
+// has three). A fault from the onset scan: its estimate over its SE is
+// the best onset's, inflated by the search over onsets; the z of its
+// p-value (Davies' bound over the onsets) is what a healthy unit
+// scatters like N(0, 1).
+double CandidateStandardScore(const v1::EffectCandidate& c) {
+  const auto z_of_p = [&] {
+    return std::copysign(-engine::stats::NormalQuantile(0.5 * std::clamp(c.p_value(), 1e-300, 1.0)),
+                         c.estimate());
+  };
+  const bool structure = c.source() == "STRUCTURE" || c.source() == "LIKELIHOOD";
+  return c.source() == "GLR" || structure ? z_of_p()
+         : c.std_error() > 0              ? c.estimate() / c.std_error()
+         : c.degrees_of_freedom() <= 1
+             ? std::copysign(std::sqrt(std::max(c.statistic(), 0.0)), c.estimate())
+             : z_of_p();
+}
+
+}  // namespace
+
 Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType& unit_type,
                             const v1::DiagnosisSettings& settings) {
   Evidence evidence;
@@ -366,35 +425,6 @@ Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType
   for (const auto& p : unit_type.nominal()) nominal[p.name()] = &p;
   std::set<std::string> seen;
   std::vector<std::string> unknown_names;
-
-  // A value against its nominal, on the scale the nominal calls for.
-  const auto against_nominal = [&](const std::string& name, double value, double std_error,
-                                   const v1::NominalParameter& n, const std::string& unit) {
-    EvidenceTerm t;
-    t.name = name;
-    t.tolerance_units = (value - n.value()) / n.tolerance();
-    const double se = std::isfinite(std_error) && std_error > 0 ? std_error : 0.0;
-    const std::string u = unit.empty() ? n.unit() : unit;
-    const std::string se_text = se > 0 ? absl::StrCat(" ± ", Format(se)) : "";
-    if (n.value() > 0 && value > 0) {
-      t.scale = Scale::kLogRatio;
-      t.x = std::log(value / n.value());
-      t.measurement_sd = se / value;
-      t.healthy_sd = settings.healthy_log_ratio_fraction() * std::log1p(n.tolerance() / n.value());
-      t.line = absl::StrCat(name, " = ", Format(value), se_text, " ", u, ", ",
-                            absl::StrFormat("%.2g", value / n.value()), "× nominal ", Format(n.value()), " (",
-                            SignedFormat(t.tolerance_units), " tolerance units)");
-    } else {
-      t.scale = Scale::kTolerance;
-      t.x = t.tolerance_units;
-      t.measurement_sd = se / n.tolerance();
-      t.healthy_sd = settings.healthy_tolerance_sd();
-      t.line = absl::StrCat(name, " = ", SignedFormat(value), se_text, (u.empty() ? "" : " "), u, " (",
-                            SignedFormat(t.tolerance_units), " tolerance units, tolerance ", Format(n.tolerance()),
-                            ")");
-    }
-    return t;
-  };
 
   for (const auto& p : report.identified()) {
     const auto it = nominal.find(p.name());
@@ -410,7 +440,8 @@ Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType
       continue;
     }
     if (!seen.insert(p.name()).second) continue;
-    EvidenceTerm t = against_nominal(p.name(), p.value(), p.std_error(), *it->second, p.unit());
+    EvidenceTerm t =
+        AgainstNominal(p.name(), p.value(), p.std_error(), *it->second, p.unit(), settings);
     absl::StrAppend(&t.line, ", identified (",
                     v1::IdentifiedParameter::Method_Name(p.method()) , ")");
     evidence.terms.push_back(std::move(t));
@@ -426,31 +457,14 @@ Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType
                     : absl::StrFormat(", not significant (Holm p = %.2g)", c.p_value_holm());
     const auto it = nominal.find(c.name());
     if (it != nominal.end()) {
-      EvidenceTerm t = against_nominal(c.name(), c.estimate(), c.std_error(), *it->second, c.unit());
+      EvidenceTerm t =
+          AgainstNominal(c.name(), c.estimate(), c.std_error(), *it->second, c.unit(), settings);
       t.significant = significant;
       absl::StrAppend(&t.line, verdict);
       evidence.terms.push_back(std::move(t));
       continue;
     }
-    // A random structure (a walk, a second-order pair): its magnitude is
-    // bounded at zero, so estimate over SE is positive whatever the unit and
-    // no standard score (a pair whose own test gave p = 1 had 6.6 SE, and
-    // named the wrong gyro); the z of its likelihood-ratio test's p-value is.
-    // Without a standard error, the z of the same two-sided p-value: √χ² on
-    // one degree of freedom, and on more not an inflated √χ² (a pair's 2Δℓ
-    // has three). A fault from the onset scan: its estimate over its SE is
-    // the best onset's, inflated by the search over onsets; the z of its
-    // p-value (Davies' bound over the onsets) is what a healthy unit
-    // scatters like N(0, 1).
-    const auto z_of_p = [&] {
-      return std::copysign(-engine::stats::NormalQuantile(0.5 * std::clamp(c.p_value(), 1e-300, 1.0)),
-                           c.estimate());
-    };
-    const bool structure = c.source() == "STRUCTURE" || c.source() == "LIKELIHOOD";
-    const double z = c.source() == "GLR" || structure ? z_of_p()
-                     : c.std_error() > 0            ? c.estimate() / c.std_error()
-                     : c.degrees_of_freedom() <= 1 ? std::copysign(std::sqrt(std::max(c.statistic(), 0.0)), c.estimate())
-                                                    : z_of_p();
+    const double z = CandidateStandardScore(c);
     std::string where;
     if (c.has_onset_s()) where = absl::StrFormat(" from %.0f ± %.0f s", c.onset_s(), c.onset_std_s());
     evidence.terms.push_back(StandardScoreTerm(c.name(), c.estimate(), c.std_error(), c.unit(), z, significant,
