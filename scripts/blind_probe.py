@@ -33,7 +33,6 @@ Usage:
 INSDIAG_CLI names the CLI (default build/clients/insdiag).
 """
 import argparse
-import concurrent.futures
 import json
 import math
 import os
@@ -166,15 +165,7 @@ def main():
     args = parser.parse_args()
     kinds = set(args.kinds.split(","))
     indices = [i for i in range(args.first_index, args.first_index + args.runs) if kind_of(draw(i)) in kinds]
-    results = []
-    with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
-        for r in pool.map(run_one, indices):
-            results.append(r)
-            print(json.dumps(r), file=sys.stderr, flush=True)
-    if args.out:
-        with open(args.out, "w") as f:
-            json.dump(results, f, indent=1)
-    print(summarise(results))
+    print(summarise(fault_matrix.run_all(run_one, indices, args.jobs, args.out)))
 
 
 if __name__ == "__main__":

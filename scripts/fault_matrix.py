@@ -352,15 +352,21 @@ def main():
         sys.exit(f"{BENCHSIM} is missing")
     work = [(sim, sc, i, args.duration) for sim in simulators for sc in args.scenarios.split(",")
             for i in range(args.runs)]
+    print(summarise(run_all(run_one, work, args.jobs, args.out)))
+
+
+def run_all(run, work, jobs, out_path):
+    """Runs `run` over `work` on `jobs` threads, each result to stderr as it comes (a JSON line),
+    all of them to `out_path` if given; returns them in order."""
     results = []
-    with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
-        for r in pool.map(run_one, work):
+    with concurrent.futures.ThreadPoolExecutor(max_workers=jobs) as pool:
+        for r in pool.map(run, work):
             results.append(r)
             print(json.dumps(r), file=sys.stderr, flush=True)
-    if args.out:
-        with open(args.out, "w") as f:
+    if out_path:
+        with open(out_path, "w") as f:
             json.dump(results, f, indent=1)
-    print(summarise(results))
+    return results
 
 
 if __name__ == "__main__":
