@@ -56,7 +56,7 @@ struct OnsetSums {
   std::vector<MatrixCc> information;
   std::vector<std::array<Eigen::Matrix2d, kSensorAxisCount>> successive;  // Cov(s(θ), s(θ+1))
   // The adjoint's navigation part at each epoch, for an onset inside its
-  // interval (OnsetInsideInterval): λ_k, Γ_k and m_k of the header.
+  // interval (TryOnsetInsideInterval): λ_k, Γ_k and m_k of the header.
   std::vector<Eigen::Matrix<double, 9, 1>> lambda;
   std::vector<Matrix9d> gamma;
   std::vector<Matrix9c> cross;
@@ -119,22 +119,32 @@ OnsetSums BackwardSweep(const ForwardPass& fw, const StateLayout& layout, const 
   return out;
 }
 
-// A fault's direction in its axis pair for onset θ: a step is μ_0, a ramp
-// from t₀ is Z (t_c − t₀, 1) (header).
-Eigen::Vector2d PairDirection(const EffectTerm& term, const EpochRun& run, int theta,
-                              double centre_s) {
-  return term.family->regressor == Regressor::kRamp
-             ? Eigen::Vector2d(centre_s - run.epochs[static_cast<size_t>(theta)].start_s, 1.0)
-             : Eigen::Vector2d(1.0, 0.0);
+// A fault's direction in its axis pair for an onset at t₀: a step is μ_0, a
+// ramp from t₀ is Z (t_c − t₀, 1) (header).
+Eigen::Vector2d PairDirectionFrom(const EffectTerm& term, double onset_s, double centre_s) {
+  return term.family->regressor == Regressor::kRamp ? Eigen::Vector2d(centre_s - onset_s, 1.0)
+                                                    : Eigen::Vector2d(1.0, 0.0);
 }
 
-// A fault's direction among all columns for onset θ.
-Eigen::Matrix<double, kColumns, 1> ColumnDirection(const EffectTerm& term, const EpochRun& run,
-                                                   int theta, double centre_s) {
+// The same for the onset at the start of interval θ.
+Eigen::Vector2d PairDirection(const EffectTerm& term, const EpochRun& run, int theta,
+                              double centre_s) {
+  return PairDirectionFrom(term, run.epochs[static_cast<size_t>(theta)].start_s, centre_s);
+}
+
+// A fault's direction among all columns for an onset at t₀.
+Eigen::Matrix<double, kColumns, 1> ColumnDirectionFrom(const EffectTerm& term, double onset_s,
+                                                       double centre_s) {
   Eigen::Matrix<double, kColumns, 1> e = Eigen::Matrix<double, kColumns, 1>::Zero();
   e.segment<2>(2 * SensorAxisIndex(term.family->sensor, term.axis)) =
-      PairDirection(term, run, theta, centre_s);
+      PairDirectionFrom(term, onset_s, centre_s);
   return e;
+}
+
+// The same for the onset at the start of interval θ.
+Eigen::Matrix<double, kColumns, 1> ColumnDirection(const EffectTerm& term, const EpochRun& run,
+                                                   int theta, double centre_s) {
+  return ColumnDirectionFrom(term, run.epochs[static_cast<size_t>(theta)].start_s, centre_s);
 }
 
 // The likelihood ratio of a fault whose onset t₀ lies inside interval k:
@@ -153,10 +163,7 @@ std::optional<OnsetTrial> TryOnsetInsideInterval(const EffectTerm& term, const O
                                                  const EpochRun& run, int k, double onset_s,
                                                  double centre_s) {
   const int axis = SensorAxisIndex(term.family->sensor, term.axis);
-  Eigen::Matrix<double, kColumns, 1> e = Eigen::Matrix<double, kColumns, 1>::Zero();
-  e.segment<2>(2 * axis) = term.family->regressor == Regressor::kRamp
-                               ? Eigen::Vector2d(centre_s - onset_s, 1.0)
-                               : Eigen::Vector2d(1.0, 0.0);
+  const Eigen::Matrix<double, kColumns, 1> e = ColumnDirectionFrom(term, onset_s, centre_s);
   const auto at = static_cast<size_t>(k);
   double score = 0.0, information = 0.0;
   if (k + 1 < run.size()) {
