@@ -30,10 +30,6 @@ GramMatrix InverseGram(const GramMatrix& gram, int degree) {
   return inverse;
 }
 
-}  // namespace
-
-namespace {
-
 // A fault's weight on each sample of an interval whose onset lies u seconds
 // after the interval's start, summed against the sample grid's powers:
 // g_p = Σ_j s_j^p ω_j, s_j = (j − 1)Δt. A step's ω_j is the share of sample
