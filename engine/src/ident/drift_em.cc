@@ -1,0 +1,383 @@
+#include "ident/drift_em.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <string>
+
+#include "insdiag/engine/filter/smoother.h"
+#include "insdiag/engine/model/effect_catalogue.h"
+#include "insdiag/engine/model/parameter_field.h"
+#include "insdiag/engine/model/state_layout.h"
+#include "insdiag/engine/numerics/parallel_map.h"
+#include "insdiag/engine/stats/distributions.h"
+
+namespace insdiag::engine::ident::drift_em {
+namespace {
+
+// The M-step of a second-order pair (header: Second-order pairs) from its
+// smoothed means (columns i, i+1 of x) and moments; false when the
+// regression leaves the stationary region (ρ ≥ 1) or has no variance.
+struct PairStep {
+  double sigma = 0.0, alpha_per_s = 0.0, beta_rad_s = 0.0;
+};
+bool PairMStep(const Eigen::MatrixXd& x, int i,
+               const Eigen::Matrix<double, Eigen::Dynamic, 7>& moments, double dt, PairStep& out) {
+  const auto K = x.rows();
+  Eigen::Matrix2d S00 = Eigen::Matrix2d::Zero(), S11 = Eigen::Matrix2d::Zero(),
+                  S10 = Eigen::Matrix2d::Zero();
+  auto second_moment = [&](Eigen::Index k) {
+    const Eigen::Vector2d m = x.block<1, 2>(k, i).transpose();
+    Eigen::Matrix2d P;
+    P << moments(k, 0), moments(k, 1), moments(k, 1), moments(k, 2);
+    return Eigen::Matrix2d(m * m.transpose() + P);
+  };
+  for (Eigen::Index k = 0; k + 1 < K; ++k) {
+    const Eigen::Vector2d m0 = x.block<1, 2>(k, i).transpose();
+    const Eigen::Vector2d m1 = x.block<1, 2>(k + 1, i).transpose();
+    Eigen::Matrix2d L;
+    L << moments(k, 3), moments(k, 4), moments(k, 5), moments(k, 6);
+    S00 += second_moment(k);
+    S11 += second_moment(k + 1);
+    S10 += m1 * m0.transpose() + L;
+  }
+  const double tr00 = S00.trace(), tr10 = S10.trace(), skew = S10(1, 0) - S10(0, 1);
+  if (!(tr00 > 0.0)) return false;
+  const double a = tr10 / tr00, b = skew / tr00;
+  const double rho2 = a * a + b * b;
+  const double q = (S11.trace() - 2.0 * (a * tr10 + b * skew) + rho2 * tr00) /
+                   (2.0 * static_cast<double>(K - 1));
+  if (!(rho2 > 0.0 && rho2 < 1.0 && q > 0.0)) return false;
+  out.sigma = std::sqrt(q / (1.0 - rho2));
+  out.alpha_per_s = -0.5 * std::log(rho2) / dt;
+  out.beta_rad_s = std::abs(std::atan2(b, a)) / dt;
+  return out.beta_rad_s > 0.0;
+}
+
+// Whether a cycle's likelihood gain `gain`, after `last_gain` (NaN: none
+// yet), leaves less than `tolerance` to gain (DriftLikelihoodOptions::
+// likelihood_tolerance): EM's gains shrink geometrically near the maximum,
+// by r = gain / last_gain a cycle, so what remains is gain · r / (1 − r).
+// A gain that does not shrink (r ≥ 1) is EM crawling, not converging.
+bool LikelihoodSettled(double gain, double last_gain, double tolerance) {
+  if (!(gain < tolerance)) return false;
+  if (gain <= 0.0) return true;
+  if (!(last_gain > 0.0)) return false;
+  const double r = gain / last_gain;
+  return r < 1.0 && gain * r / (1.0 - r) < tolerance;
+}
+
+}  // namespace
+
+int EffectOf(const ErrorModel& m, const std::string& name) {
+  auto terms = ParseEffectSelector(name);
+  return terms.ok() ? m.FindEffect(terms->front()) : -1;
+}
+
+std::string NameOf(const Parameter& p) {
+  switch (p.kind) {
+    case Kind::kSigma:
+      return DriftSigmaName(p.drift);
+    case Kind::kTau:
+      return DriftTauName(p.drift);
+    case Kind::kWalk:
+      return ParameterName(WalkName(p.drift), ParameterField::kDensity);
+    case Kind::kPairSigma:
+      return ParameterName(SecondOrderName(p.drift), ParameterField::kSigma);
+    case Kind::kPairDecayRate:
+      return ParameterName(SecondOrderName(p.drift), ParameterField::kDecayRate);
+    case Kind::kPairFrequency:
+      break;
+  }
+  return ParameterName(SecondOrderName(p.drift), ParameterField::kFrequency);
+}
+
+std::string_view UnitOf(const Parameter& p) {
+  switch (p.kind) {
+    case Kind::kSigma:
+    case Kind::kPairSigma:
+      return UnitsOf(p.drift.sensor).rate;
+    case Kind::kTau:
+      return "s";
+    case Kind::kWalk:
+      return UnitsOf(p.drift.sensor).rate_walk;
+    case Kind::kPairDecayRate:
+      return "1/s";
+    case Kind::kPairFrequency:
+      break;
+  }
+  return "rad/s";
+}
+
+Maximiser::Maximiser(const EpochRun& run, ErrorModel model, std::vector<Parameter> parameters,
+                     const DriftLikelihoodOptions& options, DriftLikelihoodResult& out)
+    : run_(run),
+      model_(std::move(model)),
+      layout_(model_),
+      parameters_(std::move(parameters)),
+      options_(options),
+      out_(out) {
+  for (const Parameter& p : parameters_) {
+    if (p.kind == Kind::kTau) tau_free_.Set(p.drift);
+    if (p.kind == Kind::kPairSigma) {
+      pair_slot_[static_cast<size_t>(p.drift.Index())] =
+          static_cast<int>(smoother_.pair_states.size());
+      smoother_.pair_states.push_back(layout_.EffectOffset(PairEffectOf(model_, p.drift)));
+    }
+  }
+}
+
+Eigen::VectorXd Maximiser::Start() const {
+  Eigen::VectorXd theta(static_cast<Eigen::Index>(parameters_.size()));
+  for (size_t j = 0; j < parameters_.size(); ++j)
+    theta[static_cast<Eigen::Index>(j)] = std::log(ValueOf(model_, parameters_[j]));
+  return theta;
+}
+
+ErrorModel Maximiser::ModelOf(const Eigen::VectorXd& theta) const {
+  ErrorModel m = model_;
+  for (size_t j = 0; j < parameters_.size(); ++j)
+    ValueOf(m, parameters_[j]) = std::exp(theta[static_cast<Eigen::Index>(j)]);
+  return m;
+}
+
+absl::StatusOr<double> Maximiser::LogLikelihood(const ErrorModel& m) {
+  ++out_.filter_passes;
+  auto fw = RunForwardFilter(run_, m);
+  if (!fw.ok()) return fw.status();
+  return fw->log_likelihood;
+}
+
+absl::StatusOr<std::vector<double>> Maximiser::LogLikelihoods(
+    const std::vector<Eigen::VectorXd>& probes) {
+  out_.filter_passes += static_cast<int>(probes.size());
+  const auto values =
+      numerics::ParallelMap(probes.size(), [&](std::size_t i) -> absl::StatusOr<double> {
+        auto fw = RunForwardFilter(run_, ModelOf(probes[i]));
+        if (!fw.ok()) return fw.status();
+        return fw->log_likelihood;
+      });
+  std::vector<double> out;
+  out.reserve(values.size());
+  for (const absl::StatusOr<double>& v : values) {
+    if (!v.ok()) return v.status();
+    out.push_back(*v);
+  }
+  return out;
+}
+
+absl::StatusOr<Maximiser::Step> Maximiser::EmStep(const Eigen::VectorXd& theta) {
+  ++out_.filter_passes;
+  auto fw = RunForwardFilter(run_, ModelOf(theta));
+  if (!fw.ok()) return fw.status();
+  const int K = fw->epochs();
+  if (K < 3)
+    return absl::InvalidArgumentError("drift likelihood: the run has fewer than three epochs");
+  auto sm = RunSmoother(*fw, smoother_);
+  if (!sm.ok()) return sm.status();
+  const double dt = (fw->epoch_time_s.back() - fw->epoch_time_s.front()) / (K - 1);
+  Step step{fw->log_likelihood, theta};
+  for (size_t j = 0; j < parameters_.size(); ++j) {
+    const Parameter& p = parameters_[j];
+    const auto i = static_cast<Eigen::Index>(j);
+    if (IsPair(p.kind)) {
+      const int slot = pair_slot_[static_cast<size_t>(p.drift.Index())];
+      PairStep pair;
+      if (!PairMStep(sm->x, smoother_.pair_states[static_cast<size_t>(slot)],
+                     sm->pair_moments[static_cast<size_t>(slot)], dt, pair)) {
+        continue;
+      }
+      step.next[i] = std::log(p.kind == Kind::kPairSigma       ? pair.sigma
+                              : p.kind == Kind::kPairDecayRate ? pair.alpha_per_s
+                                                               : pair.beta_rad_s);
+      continue;
+    }
+    const bool walk = p.kind == Kind::kWalk;
+    const int bias = p.drift.sensor == Sensor::kGyro ? layout_.gyro_bias() : layout_.acc_bias();
+    const int state =
+        walk ? layout_.EffectOffset(WalkEffectOf(model_, p.drift)) : bias + p.drift.axis;
+    double a_from = 0.0, a_to = 0.0, b = 0.0;
+    for (int k = 0; k + 1 < K; ++k) {
+      const double x0 = sm->x(k, state), x1 = sm->x(k + 1, state);
+      a_from += x0 * x0 + sm->variance(k, state);
+      a_to += x1 * x1 + sm->variance(k + 1, state);
+      b += x1 * x0 + sm->lag_one_covariance(k, state);
+    }
+    const double a0 = sm->x(0, state) * sm->x(0, state) + sm->variance(0, state);
+    if (walk) {
+      const double k2 = (a_to - 2.0 * b + a_from) / ((K - 1) * dt);  // K̂²
+      if (k2 > 0.0) step.next[i] = 0.5 * std::log(k2);
+    } else if (tau_free_.Contains(p.drift)) {
+      // σ and τ together: the AR(1) regression of the header, φ̂ = Σb / Σa,
+      // q̂ = Σ E[(x_{k+1} − φ̂ x_k)²] / (n − 1), σ̂² = q̂ / (1 − φ̂²) (the
+      // initial state's term, one of n, left out of the φ step).
+      const double phi = b / a_from;
+      if (!(phi > 0.0 && phi < 1.0)) continue;
+      const double q = (a_to - 2.0 * phi * b + phi * phi * a_from) / (K - 1);
+      if (p.kind == Kind::kTau) {
+        step.next[i] = std::log(-dt / std::log(phi));
+      } else if (q > 0.0) {
+        step.next[i] = 0.5 * std::log(q / (1.0 - phi * phi));
+      }
+    } else {
+      const double phi = std::exp(-dt / DriftOf(model_, p.drift).tau_s);
+      const double sigma2 =
+          (a0 + (a_to - 2.0 * phi * b + phi * phi * a_from) / (1.0 - phi * phi)) / K;  // σ̂²
+      if (sigma2 > 0.0) step.next[i] = 0.5 * std::log(sigma2);
+    }
+  }
+  return step;
+}
+
+absl::StatusOr<Eigen::VectorXd> Maximiser::Maximise(Eigen::VectorXd theta,
+                                                    double* first_likelihood) {
+  const Eigen::Index m = theta.size();
+  double cycle_start_likelihood = 0.0;
+  double last_gain = std::numeric_limits<double>::quiet_NaN();
+  for (int cycle = 0, iterations = 0; iterations < options_.max_iterations; ++cycle) {
+    auto first = EmStep(theta);
+    if (!first.ok()) return first.status();
+    if (cycle == 0 && first_likelihood != nullptr) *first_likelihood = first->log_likelihood;
+    if (cycle > 0) {
+      const double gain = first->log_likelihood - cycle_start_likelihood;
+      if (LikelihoodSettled(gain, last_gain, options_.likelihood_tolerance)) {
+        converged_ = true;
+        iterations_ = iterations + 1;
+        return first->next;
+      }
+      last_gain = gain;
+    }
+    cycle_start_likelihood = first->log_likelihood;
+    auto second = EmStep(first->next);
+    if (!second.ok()) return second.status();
+    iterations += 2;
+    const Eigen::VectorXd r = first->next - theta;
+    const Eigen::VectorXd v = second->next - first->next - r;
+    Eigen::VectorXd next = second->next;
+    Eigen::VectorXd extrapolated = second->next;
+    bool extrapolates = false;
+    for (Eigen::Index j = 0; j < m; ++j) {
+      if (!(std::abs(v[j]) > 0.0)) continue;
+      const double alpha = std::min(-1.0, -std::abs(r[j]) / std::abs(v[j]));
+      extrapolated[j] = theta[j] - 2.0 * alpha * r[j] + alpha * alpha * v[j];
+      extrapolates = extrapolates || alpha < -1.0;
+    }
+    if (extrapolates) {
+      // An extrapolation far out along a ridge can leave a model whose
+      // smoother fails (two states the run cannot tell apart, their
+      // covariance singular): that step is refused, as one whose
+      // likelihood falls is.
+      auto third = EmStep(extrapolated);
+      ++iterations;
+      if (third.ok() && third->log_likelihood >= second->log_likelihood) next = third->next;
+    }
+    const double largest_step = (next - theta).cwiseAbs().maxCoeff();
+    theta = next;
+    if (largest_step < options_.log_tolerance) {
+      converged_ = true;
+      iterations_ = iterations;
+      return theta;
+    }
+    iterations_ = iterations;
+  }
+  return theta;
+}
+
+absl::StatusOr<double> Maximiser::Information(const Eigen::VectorXd& theta, Eigen::Index j,
+                                              double l0) {
+  const double h = options_.curvature_step;
+  std::vector<Eigen::VectorXd> probes(2, theta);
+  probes[0][j] += h;
+  probes[1][j] -= h;
+  auto shifted = LogLikelihoods(probes);
+  if (!shifted.ok()) return shifted.status();
+  return -((*shifted)[0] - 2.0 * l0 + (*shifted)[1]) / (h * h);
+}
+
+absl::StatusOr<Eigen::MatrixXd> Maximiser::BlockInformation(const Eigen::VectorXd& theta,
+                                                            const std::vector<Eigen::Index>& at,
+                                                            double l0) {
+  const double h = options_.curvature_step;
+  const auto r = static_cast<Eigen::Index>(at.size());
+  // The probes: each parameter up and down, then each pair up together and
+  // down together.
+  std::vector<Eigen::VectorXd> probes;
+  auto probe = [&](Eigen::Index a, double da, Eigen::Index b, double db) {
+    Eigen::VectorXd p = theta;
+    p[at[static_cast<size_t>(a)]] += da;
+    p[at[static_cast<size_t>(b)]] += db;
+    probes.push_back(std::move(p));
+  };
+  for (Eigen::Index a = 0; a < r; ++a) {
+    probe(a, h, a, 0.0);
+    probe(a, -h, a, 0.0);
+  }
+  for (Eigen::Index a = 0; a < r; ++a) {
+    for (Eigen::Index b = a + 1; b < r; ++b) {
+      probe(a, h, b, h);
+      probe(a, -h, b, -h);
+    }
+  }
+  auto values = LogLikelihoods(probes);
+  if (!values.ok()) return values.status();
+  const std::vector<double>& l = *values;
+  const auto up = [&](Eigen::Index a) { return l[static_cast<size_t>(2 * a)]; };
+  const auto down = [&](Eigen::Index a) { return l[static_cast<size_t>(2 * a + 1)]; };
+  Eigen::MatrixXd information(r, r);
+  size_t pair = static_cast<size_t>(2 * r);
+  for (Eigen::Index a = 0; a < r; ++a) {
+    information(a, a) = -(up(a) - 2.0 * l0 + down(a)) / (h * h);
+    for (Eigen::Index b = a + 1; b < r; ++b, pair += 2) {
+      information(a, b) = information(b, a) =
+          -(l[pair] + l[pair + 1] - up(a) - down(a) - up(b) - down(b) + 2.0 * l0) / (2.0 * h * h);
+    }
+  }
+  return information;
+}
+
+absl::Status ValidateOptions(const DriftLikelihoodOptions& options) {
+  if (!(options.max_iterations > 0 && options.second_order_max_iterations > 0 &&
+        options.log_tolerance > 0.0 && options.likelihood_tolerance > 0.0 &&
+        options.curvature_step > 0.0)) {
+    return absl::InvalidArgumentError("drift likelihood options out of range");
+  }
+  return absl::OkStatus();
+}
+
+bool HasDrift(const ErrorModel& m, DriftAxis drift) {
+  return DriftOf(m, drift).sigma > 0.0 && DriftOf(m, drift).tau_s > 0.0;
+}
+
+// Maximises from the model's values into `out` (model, iterations,
+// convergence, ℓ at the estimate); `first_likelihood` gets ℓ at the start.
+absl::StatusOr<Eigen::VectorXd> FitInto(Maximiser& em, DriftLikelihoodResult& out,
+                                        double* first_likelihood) {
+  auto theta = em.Maximise(em.Start(), first_likelihood);
+  if (!theta.ok()) return theta.status();
+  out.iterations = em.iterations();
+  out.converged = em.converged();
+  out.model = em.ModelOf(*theta);
+  auto l = em.LogLikelihood(out.model);
+  if (!l.ok()) return l.status();
+  out.log_likelihood_after = *l;
+  return theta;
+}
+
+ParameterEstimate EstimateOf(const Parameter& p, double value, double log_se,
+                             const ErrorModel& a_priori) {
+  ParameterEstimate e;
+  e.name = NameOf(p);
+  e.value = value;
+  e.std_error = value * log_se;
+  e.ci95_low = value * std::exp(-1.96 * log_se);
+  e.ci95_high = value * std::exp(1.96 * log_se);
+  e.method = EstimationMethod::kMaximumLikelihood;
+  e.unit = std::string(UnitOf(p));
+  if (p.kind == Kind::kSigma || p.kind == Kind::kTau) e.a_priori = ValueOf(a_priori, p);
+  return e;
+}
+}  // namespace insdiag::engine::ident::drift_em

@@ -1,0 +1,135 @@
+// The drift likelihood's expectation–maximisation, shared by the
+// identification of drifts and the structure tests on top of it (both in
+// drift_likelihood.cc). Private to the engine; the equations are in
+// drift_likelihood.h.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "insdiag/engine/filter/smoother.h"
+#include "insdiag/engine/ident/drift_likelihood.h"
+#include "insdiag/engine/model/state_layout.h"
+
+namespace insdiag::engine::ident::drift_em {
+
+// The model's index of the effect a selector names; −1 where it has none.
+int EffectOf(const ErrorModel& m, const std::string& name);
+inline int WalkEffectOf(const ErrorModel& m, DriftAxis drift) {
+  return EffectOf(m, WalkName(drift));
+}
+inline int PairEffectOf(const ErrorModel& m, DriftAxis drift) {
+  return EffectOf(m, SecondOrderName(drift));
+}
+
+// One parameter of the likelihood: a drift's σ or τ, a walk's density K, or
+// a second-order pair's σ₂, α or β.
+enum class Kind { kSigma, kTau, kWalk, kPairSigma, kPairDecayRate, kPairFrequency };
+struct Parameter {
+  Kind kind = Kind::kSigma;
+  DriftAxis drift;
+};
+inline bool IsPair(Kind k) {
+  return k == Kind::kPairSigma || k == Kind::kPairDecayRate || k == Kind::kPairFrequency;
+}
+
+// The parameter's value in a model: a reference into it (const for a const model).
+template <typename Model>
+auto& ValueOf(Model& m, const Parameter& p) {
+  switch (p.kind) {
+    case Kind::kSigma:
+      return DriftOf(m, p.drift).sigma;
+    case Kind::kTau:
+      return DriftOf(m, p.drift).tau_s;
+    case Kind::kWalk:
+      return m.effects[static_cast<size_t>(WalkEffectOf(m, p.drift))].random_walk_density;
+    case Kind::kPairSigma:
+      return m.effects[static_cast<size_t>(PairEffectOf(m, p.drift))].second_order_sigma;
+    case Kind::kPairDecayRate:
+      return m.effects[static_cast<size_t>(PairEffectOf(m, p.drift))].second_order_alpha_per_s;
+    case Kind::kPairFrequency:
+      break;
+  }
+  return m.effects[static_cast<size_t>(PairEffectOf(m, p.drift))].second_order_beta_rad_s;
+}
+
+std::string NameOf(const Parameter& p);
+std::string_view UnitOf(const Parameter& p);
+
+// EM over θ = ln of each parameter (header), with the pass count of `out`.
+class Maximiser {
+ public:
+  Maximiser(const EpochRun& run, ErrorModel model, std::vector<Parameter> parameters,
+            const DriftLikelihoodOptions& options, DriftLikelihoodResult& out);
+
+  // θ at the model's values; the model at θ; ℓ of a model (one forward pass).
+  Eigen::VectorXd Start() const;
+  ErrorModel ModelOf(const Eigen::VectorXd& theta) const;
+  absl::StatusOr<double> LogLikelihood(const ErrorModel& m);
+
+  // ℓ at each of `probes`: independent passes, on every core.
+  absl::StatusOr<std::vector<double>> LogLikelihoods(const std::vector<Eigen::VectorXd>& probes);
+
+  // ℓ(θ) and the M-step's θ.
+  struct Step {
+    double log_likelihood;
+    Eigen::VectorXd next;
+  };
+  absl::StatusOr<Step> EmStep(const Eigen::VectorXd& theta);
+
+  // SQUAREM, scheme S3 (Varadhan & Roland 2008): two EM steps give
+  // r = θ₁ − θ₀ and v = θ₂ − 2θ₁ + θ₀; with α = −‖r‖/‖v‖ (at most −1, which
+  // is θ₂ itself) θ′ = θ₀ − 2αr + α²v, whose EM step continues the cycle when
+  // its likelihood is not below θ₂'s. A step length per parameter: they are
+  // near-independent, and one that crawls must not wait for the others.
+  // Returns the maximiser; `first_likelihood` gets ℓ at the start.
+  absl::StatusOr<Eigen::VectorXd> Maximise(Eigen::VectorXd theta, double* first_likelihood);
+
+  // Observed information in θ_j at θ (ℓ(θ) = l0): the second difference.
+  absl::StatusOr<double> Information(const Eigen::VectorXd& theta, Eigen::Index j, double l0);
+
+  // Observed information of the block of parameters `at` at θ (ℓ(θ) = l0):
+  // second differences, the mixed ones from the diagonal shifts
+  // (Abramowitz & Stegun 25.3.27); r(r + 1) passes for r parameters.
+  absl::StatusOr<Eigen::MatrixXd> BlockInformation(const Eigen::VectorXd& theta,
+                                                   const std::vector<Eigen::Index>& at, double l0);
+
+  const std::vector<Parameter>& parameters() const { return parameters_; }
+  bool converged() const { return converged_; }
+  int iterations() const { return iterations_; }
+
+ private:
+  const EpochRun& run_;
+  ErrorModel model_;
+  StateLayout layout_;
+  std::vector<Parameter> parameters_;
+  const DriftLikelihoodOptions& options_;
+  DriftLikelihoodResult& out_;
+  DriftSelection tau_free_;   // drifts whose τ is a parameter too
+  SmootherOptions smoother_;  // with the moments of each fitted pair
+  std::array<int, DriftAxis::kCount>
+      pair_slot_{};  // by DriftAxis::Index: its pair's index among smoother_.pair_states
+  bool converged_ = false;
+  int iterations_ = 0;
+};
+
+absl::Status ValidateOptions(const DriftLikelihoodOptions& options);
+
+// Whether the model carries the drift as a state (σ and τ both positive).
+bool HasDrift(const ErrorModel& m, DriftAxis drift);
+
+// Maximises from the model's values into `out` (model, iterations,
+// convergence, ℓ at the estimate); `first_likelihood` gets ℓ at the start.
+absl::StatusOr<Eigen::VectorXd> FitInto(Maximiser& em, DriftLikelihoodResult& out,
+                                        double* first_likelihood);
+
+// The report's estimate of a parameter at `value`, with its SE from the log's.
+ParameterEstimate EstimateOf(const Parameter& p, double value, double log_se,
+                             const ErrorModel& a_priori);
+
+}  // namespace insdiag::engine::ident::drift_em
