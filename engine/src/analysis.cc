@@ -141,7 +141,18 @@ std::optional<ident::AllanResult> AllanOfStaticSegments(const BenchRun& run, con
                                                         std::vector<std::string>& notes) {
   if (!options.identify) return std::nullopt;
   auto allan = ident::AllanAnalysis(run, options.allan);
-  if (allan.ok()) return *std::move(allan);
+  if (allan.ok()) {
+    for (const ident::AllanChannel& ch : allan->channels) {
+      for (const ident::RateJump& j : ch.jumps) {
+        notes.push_back(
+            absl::StrFormat("the Allan analysis cut %s's static segment at %.1f s, where its "
+                            "rate's mean jumps by %.3g %s (z %.1f): "
+                            "a step is not noise, and the curve leaves it out",
+                            ch.name, j.time_s, j.size, ch.unit, j.z));
+      }
+    }
+    return *std::move(allan);
+  }
   notes.push_back("no Allan analysis: " + std::string(allan.status().message()));
   return std::nullopt;
 }

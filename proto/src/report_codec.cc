@@ -167,6 +167,7 @@ void Fill(const engine::ident::AllanChannel& ch, const std::vector<engine::Param
     out->add_deviation_high(p.ci_high);
     out->add_fitted(Finite(p.fitted_adev));
   }
+  for (const engine::ident::RateJump& j : ch.jumps) out->add_jump_times_s(j.time_s);
   // The channel's terms: "{gyro|acc}_<term>.<axis>[.<parameter>]".
   const std::string_view sensor = ch.sensor == engine::Sensor::kGyro ? "gyro_" : "acc_";
   const char axis = "xyz"[ch.axis];

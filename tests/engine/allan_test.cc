@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -584,6 +585,107 @@ TEST(AllanAnalysisTest, TheAPrioriDriftOfARisingCurveCarriesItsRampAndTheLargerO
   gm = drift_of(ExactFitOfEveryChannel(N, 1e-4, 1e-9, 0.0));
   EXPECT_LT(gm.tau_s, T);
   EXPECT_GT(gm.sigma, 1e-9 * std::sqrt(T / 2.0) * 1e3);
+}
+
+// --- jumps in a static segment's mean (allan.h: Jumps) ----------------------
+
+// One hour at 10 Hz of white noise and a first-order Gauss–Markov drift of
+// τ 300 s, the 1 °/h tactical class's shape in units of the drift's σ.
+constexpr int kJumpSeriesSamples = 36000;
+constexpr double kJumpSeriesDtS = 0.1;
+constexpr double kDriftTauS = 300.0;
+constexpr double kWhiteOverDrift = 0.5;  // σ of one sample's white noise over the drift's σ
+
+std::vector<double> NoiseSeries(std::mt19937_64& rng) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  const double phi = std::exp(-kJumpSeriesDtS / kDriftTauS);
+  std::vector<double> y(kJumpSeriesSamples);
+  double drift = n(rng);
+  for (double& v : y) {
+    v = drift + kWhiteOverDrift * n(rng);
+    drift = phi * drift + std::sqrt(1.0 - phi * phi) * n(rng);
+  }
+  return y;
+}
+
+// A step of 5 drift σ (the faults issue's smallest) is found at its sample
+// in every segment of twenty, wherever it falls between 10 % and 90 %.
+TEST(AllanJumpTest, FindsAStepOfFiveDriftSigmaAtItsSample) {
+  constexpr int kSeeds = 20;
+  std::mt19937_64 rng(2024);
+  std::uniform_int_distribution<int> where(kJumpSeriesSamples / 10, 9 * kJumpSeriesSamples / 10);
+  int found = 0;
+  for (int seed = 0; seed < kSeeds; ++seed) {
+    std::vector<double> y = NoiseSeries(rng);
+    const int onset = where(rng);
+    const double size = seed % 2 == 0 ? 5.0 : -5.0;
+    for (size_t k = static_cast<size_t>(onset); k < y.size(); ++k) y[k] += size;
+    const std::optional<RateJump> jump = FindRateJump(y, AllanOptions{});
+    if (!jump.has_value()) continue;
+    std::printf("onset %d: jump at %zu, size %.2f (true %.1f), z %.1f, window %lld\n", onset,
+                jump->sample, jump->size, size, jump->z, static_cast<long long>(jump->window));
+    found += std::abs(static_cast<int>(jump->sample) - onset) <= 4 ? 1 : 0;
+  }
+  EXPECT_EQ(found, kSeeds);
+}
+
+// Healthy segments are cut at the test's family-wise level: at α = 1e-3,
+// 400 segments would see 0.4 false cuts; four or more (P < 1e-3 under the
+// level) fail the test.
+TEST(AllanJumpTest, CutsAHealthySegmentAtItsLevel) {
+  constexpr int kSeeds = 400;
+  std::mt19937_64 rng(7);
+  int cut = 0;
+  for (int seed = 0; seed < kSeeds; ++seed) {
+    const std::vector<double> y = NoiseSeries(rng);
+    const std::optional<RateJump> jump = FindRateJump(y, AllanOptions{});
+    if (jump.has_value()) {
+      ++cut;
+      std::printf("seed %d: false cut at %zu, z %.2f, window %lld\n", seed, jump->sample, jump->z,
+                  static_cast<long long>(jump->window));
+    }
+  }
+  std::printf("false cuts: %d of %d\n", cut, kSeeds);
+  EXPECT_LE(cut, 3);
+}
+
+// A static run whose accelerometer steps by 36 drift σ (the blind probe's
+// 1 °/h tactical run that ended out of its NIS band: accelerometer drift 1 mg
+// with τ 300 s, VRW 50 µg/√Hz, 10 Hz). With the segment cut at the jump the
+// VRW is the unit's; without the cut the fit made room for the step's rise
+// with a VRW several standard errors off.
+TEST(AllanAnalysisTest, AStepInAStaticRunIsCutOutOfTheCurve) {
+  constexpr double kMilliG = 1e3 * kMicroG;
+  sim::SimulatedUnit unit = testing::NavigationGradeUnit();
+  for (auto& bias : unit.acc.bias) bias = {kMilliG, 300.0};
+  unit.acc.white_noise_density.setConstant(50.0 * kMicroG);
+  constexpr double kOnsetS = 1800.3;
+  const double size = 36.0 * kMilliG;
+  unit.bias_steps.push_back({Sensor::kAccelerometer, 0, kOnsetS, size});
+  const sim::SimulatedRun s = testing::SimulateOrDie(unit, StaticProfile(3600.0), 10.0, 11);
+  AllanOptions uncut;
+  uncut.jump_alpha = 0.0;
+  const absl::StatusOr<AllanResult> with_cut = AllanAnalysis(s.run, AllanOptions{});
+  const absl::StatusOr<AllanResult> without = AllanAnalysis(s.run, uncut);
+  ASSERT_TRUE(with_cut.ok()) << with_cut.status();
+  ASSERT_TRUE(without.ok()) << without.status();
+  const double truth = unit.acc.white_noise_density[0];
+  const AllanChannel& acc_x = with_cut->channels[3];
+  ASSERT_EQ(acc_x.jumps.size(), 1u);
+  EXPECT_NEAR(acc_x.jumps[0].time_s, kOnsetS, 0.1);
+  EXPECT_NEAR(acc_x.jumps[0].size, size, 0.05 * size);
+  for (size_t c = 0; c < with_cut->channels.size(); ++c) {
+    if (c != 3) {
+      EXPECT_TRUE(with_cut->channels[c].jumps.empty()) << with_cut->channels[c].name;
+    }
+  }
+  const AllanTermEstimate& n = acc_x.fit[AllanParameter::kWhiteDensity];
+  const AllanTermEstimate& n_uncut = without->channels[3].fit[AllanParameter::kWhiteDensity];
+  std::printf("acc_x VRW %.4g ± %.2g with the cut, %.4g ± %.2g without (truth %.4g)\n", n.value,
+              n.std_error, n_uncut.value, n_uncut.std_error, truth);
+  EXPECT_LT(std::abs(n.value - truth), 3.0 * n.std_error) << Describe(acc_x);
+  EXPECT_GT(std::abs(n_uncut.value - truth), 3.0 * n_uncut.std_error)
+      << Describe(without->channels[3]);
 }
 
 }  // namespace

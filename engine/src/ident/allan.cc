@@ -137,6 +137,10 @@ absl::Status AllanOptions::Validate() const {
   if (!(adequacy_alpha > 0.0 && adequacy_alpha < 1.0)) {
     return absl::InvalidArgumentError("Allan: the adequacy level must be in (0, 1)");
   }
+  if (!(jump_alpha >= 0.0 && jump_alpha < 1.0))
+    return absl::InvalidArgumentError("Allan: the jump level must be in [0, 1)");
+  if (jump_min_windows < 8)
+    return absl::InvalidArgumentError("Allan: the jump test needs at least 8 windows");
   if (max_solver_iterations < 1) return absl::InvalidArgumentError("Allan: the solver needs at least one iteration");
   return absl::OkStatus();
 }
@@ -322,6 +326,48 @@ std::vector<AllanPoint> OverlappingAllanCurve(std::span<const std::vector<double
   return curve;
 }
 
+namespace {
+
+// One channel's rates in the static segments, cut at their jumps: the
+// pieces at least min_segment_s long, their lengths and the longest.
+struct ChannelPieces {
+  std::vector<std::vector<double>> rates;
+  std::vector<size_t> lengths;
+  size_t longest = 0;
+};
+
+ChannelPieces PiecesBetweenJumps(const BenchRun& run, const std::vector<StaticSegment>& segments,
+                                 int channel, double tau0, const AllanOptions& options,
+                                 std::vector<RateJump>& jumps) {
+  const auto min_samples = static_cast<size_t>(std::ceil(options.min_segment_s / tau0 - 1e-6));
+  const auto axis = static_cast<size_t>(channel % 3);
+  ChannelPieces out;
+  std::vector<double> rates;
+  for (const StaticSegment& seg : segments) {
+    rates.resize(seg.Samples());
+    for (size_t k = 0; k < seg.Samples(); ++k) {
+      const ImuSample& sample = run.samples[seg.first_sample + k];
+      rates[k] = channel < 3 ? sample.gyro_rad_s[axis] : sample.acc_mps2[axis];
+    }
+    std::vector<RateJump> in_segment;
+    for (const RatePiece& piece : CutAtRateJumps(rates, options, &in_segment)) {
+      const size_t length = piece.end - piece.begin;
+      if (length < min_samples) continue;
+      out.rates.emplace_back(rates.begin() + static_cast<std::ptrdiff_t>(piece.begin),
+                             rates.begin() + static_cast<std::ptrdiff_t>(piece.end));
+      out.lengths.push_back(length);
+      out.longest = std::max(out.longest, length);
+    }
+    for (RateJump& j : in_segment) {
+      j.time_s = run.samples[seg.first_sample + j.sample - 1].t_s;
+      jumps.push_back(j);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 absl::StatusOr<AllanResult> AllanAnalysis(const BenchRun& run, const AllanOptions& options) {
   auto segments = FindStaticSegments(run, options);
   if (!segments.ok()) return segments.status();
@@ -336,33 +382,27 @@ absl::StatusOr<AllanResult> AllanAnalysis(const BenchRun& run, const AllanOption
   AllanResult result;
   result.tau0_s = tau0;
   result.segments = *std::move(segments);
-  std::vector<size_t> lengths;
-  size_t longest = 0;
-  for (const StaticSegment& s : result.segments) {
-    lengths.push_back(s.Samples());
-    longest = std::max(longest, s.Samples());
-    result.samples_used += s.Samples();
-  }
-  const std::vector<int64_t> m = AllanClusterSizes(longest, options);
-  if (m.empty()) return absl::FailedPreconditionError("Allan: the static segments are too short for any cluster");
-
-  std::vector<std::vector<double>> rates(result.segments.size());
+  for (const StaticSegment& s : result.segments) result.samples_used += s.Samples();
   for (int c = 0; c < 6; ++c) {
     AllanChannel ch;
     ch.name = std::string(kSensorChannelNames[c]);
     ch.sensor = c < 3 ? Sensor::kGyro : Sensor::kAccelerometer;
     ch.axis = c % 3;
     ch.unit = std::string(UnitsOf(ch.sensor).rate);
-    for (size_t s = 0; s < result.segments.size(); ++s) {
-      const StaticSegment& seg = result.segments[s];
-      rates[s].resize(seg.Samples());
-      for (size_t k = 0; k < seg.Samples(); ++k) {
-        const ImuSample& sample = run.samples[seg.first_sample + k];
-        rates[s][k] = c < 3 ? sample.gyro_rad_s[ch.axis] : sample.acc_mps2[ch.axis];
-      }
+    const ChannelPieces pieces =
+        PiecesBetweenJumps(run, result.segments, c, tau0, options, ch.jumps);
+    if (pieces.rates.empty()) {
+      ch.fit.notes.push_back("no piece of the static segments between the rate's jumps lasts " +
+                             FormatG(options.min_segment_s) + " s");
+      result.channels.push_back(std::move(ch));
+      continue;
     }
-    ch.curve = OverlappingAllanCurve(rates, tau0, m, options);
-    auto fit = FitAllanCurve(ch.curve, tau0, lengths, options);
+    const std::vector<int64_t> m = AllanClusterSizes(pieces.longest, options);
+    if (m.empty())
+      return absl::FailedPreconditionError(
+          "Allan: the static segments are too short for any cluster");
+    ch.curve = OverlappingAllanCurve(pieces.rates, tau0, m, options);
+    auto fit = FitAllanCurve(ch.curve, tau0, pieces.lengths, options);
     if (fit.ok()) {
       ch.fit = *std::move(fit);
     } else {

@@ -26,6 +26,26 @@
 //   −¾ ≤ μ < −¼: white rate α = 0;  −¼ ≤ μ < ¼: flicker α = −1;  μ ≥ ¼: random-walk rate α = −2.
 //   σ²_low = ν σ̂²/χ²_ν((1+c)/2),  σ²_high = ν σ̂²/χ²_ν((1−c)/2)   (c = `confidence`)
 //
+// Jumps. The estimator assumes the rate's increments are stationary; a step
+// Δ in the mean of a segment's rate (a bias step) is not, and σ̂²(τ) would
+// rise by about Δ² τ / (2 T_s) over a segment of T_s: a rate random walk the
+// unit does not have, and a white level pulled down to make room for it. With
+// the difference of adjacent window means at sample k,
+//   d_w(k) = ȳ[k, k+w) − ȳ[k−w, k),   E d_w(k)² = 2 σ²(w τ₀)
+// for stationary noise (the Allan variance's own definition; IEEE 952
+// Annex C), a step at k shows as d_w(k) ≈ Δ. The largest |d_w(k)| over the
+// windows w = 4, 16, 64, … samples that fit `jump_min_windows` times in the
+// segment is scaled by s_w, the root mean of d_w² at the samples at least w
+// away from it: z = |d_w(k)| / s_w. It is a jump when z exceeds
+// Φ⁻¹(1 − α / 2J), J = Σ_w (n − 2w + 1): Bonferroni over every position of
+// every window (α = `jump_alpha`; d is Gaussian for Gaussian noise). Over
+// n / w positions only it is not a bound: neighbouring d_w(k) decorrelate
+// as 1 − 3|h| / 2w, and their maximum exceeds the independent positions'
+// (Pickands, Trans. AMS 145, 1969). Each
+// channel's segments are cut at their jumps, the pieces tested again (binary
+// segmentation: Vostrikova, Soviet Math. Dokl. 24, 1981); pieces shorter
+// than `min_segment_s` are left out of that channel's curve.
+//
 // Noise model (IEEE 952 Annex C, the Markov term as its exponentially correlated noise):
 //   σ²(τ) = 3Q²/τ² + N²/τ + (2 ln2/π) B² + K²τ/3 + R²τ²/2
 //         + σ_m² (T/τ)² (2τ/T − 3 + 4e^{−τ/T} − e^{−2τ/T})
@@ -88,6 +108,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -112,6 +133,11 @@ struct AllanOptions {
   double motion_guard_s = 1.0;
   // A step t[k] − t[k−1] above gap_factor · τ₀ ends a segment.
   double gap_factor = 1.5;
+  // Family-wise level of the jump test (above) in one segment of one channel.
+  double jump_alpha = 1e-3;
+  // A window is tested where the segment holds at least this many of it: the
+  // scale s_w comes from them, to about ± √(2 / this) in s_w².
+  int jump_min_windows = 64;
   int points_per_decade = 10;
   // Largest cluster: this fraction of the longest segment's samples.
   double max_cluster_fraction = 1.0 / 3.0;
@@ -240,11 +266,33 @@ struct AllanPoint {
   double log_residual = std::numeric_limits<double>::quiet_NaN();  // (y − ln σ²_fit)/√V_jj
 };
 
+// A jump in the mean of a rate series (above: Jumps).
+struct RateJump {
+  size_t sample = 0;    // the first sample after the jump, within the series tested
+  double size = 0.0;    // d_w there: the later window's mean less the earlier's [rad/s | m/s²]
+  double z = 0.0;       // |size| / s_w
+  int64_t window = 0;   // w, samples
+  double time_s = 0.0;  // in the run (AllanAnalysis): the end of the last sample before the jump
+};
+
+// The most significant jump in the mean of `rates`, if any is significant.
+std::optional<RateJump> FindRateJump(std::span<const double> rates, const AllanOptions& options);
+
+// The pieces [begin, end) of `rates` between its significant jumps, in
+// order; each jump, in order, into `jumps` when given.
+struct RatePiece {
+  size_t begin = 0;
+  size_t end = 0;
+};
+std::vector<RatePiece> CutAtRateJumps(std::span<const double> rates, const AllanOptions& options,
+                                      std::vector<RateJump>* jumps);
+
 struct AllanChannel {
   std::string name;  // "gyro_x", …, "acc_z" (kSensorChannelNames)
   Sensor sensor = Sensor::kGyro;
   int axis = 0;
   std::string unit;  // of adev: "rad/s" | "m/s^2"
+  std::vector<RateJump> jumps;  // where its static segments were cut, in time order
   std::vector<AllanPoint> curve;
   AllanFit fit;
 };
