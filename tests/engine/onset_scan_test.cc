@@ -1,17 +1,19 @@
 // The bias step and ramp scan over onsets (finder/onset_scan.h): its
 // one-sweep sums against the sensitivity propagated forward from each onset,
 // its false-alarm rate on healthy units, and what it finds of a step.
+#include "insdiag/engine/finder/onset_scan.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <random>
 
 #include "insdiag/engine/filter/forward_filter.h"
 #include "insdiag/engine/filter/model_transitions.h"
 #include "insdiag/engine/filter/observation.h"
 #include "insdiag/engine/finder/fault_findings.h"
-#include "insdiag/engine/finder/onset_scan.h"
 #include "scenarios.h"
 
 namespace insdiag::engine {
@@ -113,8 +115,10 @@ TEST(OnsetScan, EqualsTheFaultPropagatedForwardFromEveryOnset) {
 // step from an accelerometer's ramp — on one still attitude their
 // signatures coincide), filtered with its true base model, scanned for
 // every fault term.
-std::vector<OnsetFit> ScanOfRun(const sim::SimulatedUnit& unit, uint64_t seed) {
-  const auto sim = testing::SimulateOrDie(unit, testing::BuiltinProfileOrDie("positions"), 10.0, seed);
+std::vector<OnsetFit> ScanOfRun(const sim::SimulatedUnit& unit, uint64_t seed,
+                                const std::function<void(BenchRun&)>& edit = nullptr) {
+  auto sim = testing::SimulateOrDie(unit, testing::BuiltinProfileOrDie("positions"), 10.0, seed);
+  if (edit) edit(sim.run);
   const ErrorModel model = testing::TrueBaseModel(unit);
   auto run = CondenseRun(sim.run, model, 1.0);
   EXPECT_TRUE(run.ok()) << run.status();
@@ -192,6 +196,47 @@ TEST(OnsetScan, FindsAStepOfFiveDriftSigmaAtItsOnsetOnEverySensorAxis) {
   EXPECT_GE(covered, 10);
 }
 
+// An accelerometer step of 20 drift σ at t₀ on the axis and with the sign
+// that `run` picks: the step's own fit, and the step's size.
+struct AccelerometerStep {
+  OnsetFit fit;
+  double size = 0.0;
+};
+// A step that begins inside a sample gives that sample's interval mean its
+// share (the bench-run format; a real sensor's increment does the same). The
+// project's simulator gives the whole step to the sample that ends after t₀,
+// so the test gives that sample its share: f of the step for a share f after t₀.
+void ShareTheStepsSample(BenchRun& run, int axis, double onset_s, double size) {
+  for (size_t j = 1; j < run.samples.size(); ++j) {
+    const double end_s = run.samples[j].t_s;
+    if (end_s <= onset_s) continue;
+    const double share = (end_s - onset_s) / (end_s - run.samples[j - 1].t_s);
+    run.samples[j].acc_mps2[axis] -= (1.0 - share) * size;
+    return;
+  }
+}
+
+AccelerometerStep AccelerometerStepFit(int run, double t0, uint64_t seed, bool share_its_sample) {
+  auto unit = testing::NavigationGradeUnit();
+  const int axis = run % 3;
+  AccelerometerStep out;
+  out.size = (run % 2 == 0 ? 20.0 : -20.0) * unit.acc.bias[static_cast<size_t>(axis)].sigma;
+  unit.bias_steps.push_back({Sensor::kAccelerometer, axis, t0, out.size});
+  std::function<void(BenchRun&)> edit;
+  if (share_its_sample) edit = [&](BenchRun& r) { ShareTheStepsSample(r, axis, t0, out.size); };
+  const auto fits = ScanOfRun(unit, seed, edit);
+  const std::string expected = std::string("acc_bias_step.") + "xyz"[axis];
+  const auto fit = std::find_if(fits.begin(), fits.end(),
+                                [&](const OnsetFit& f) { return f.term.Name() == expected; });
+  EXPECT_NE(fit, fits.end());
+  if (fit == fits.end()) return out;
+  out.fit = *fit;
+  std::printf("%s at %.4f s: onset %.4f s (%.4f … %.4f), size %.4g ± %.2g (true %.4g)\n",
+              expected.c_str(), t0, fit->onset_s, fit->onset_low_s, fit->onset_high_s,
+              fit->estimate, fit->std_error, out.size);
+  return out;
+}
+
 TEST(OnsetScan, AStepBetweenTwoUpdatesIsMeasuredWholeAtItsSample) {
   // An accelerometer step shows within seconds of its onset, so an onset
   // taken at the update before it would put the whole step into an interval
@@ -200,23 +245,34 @@ TEST(OnsetScan, AStepBetweenTwoUpdatesIsMeasuredWholeAtItsSample) {
   constexpr int kRuns = 8;
   int placed = 0, covered = 0;
   for (int run = 0; run < kRuns; ++run) {
-    auto unit = testing::NavigationGradeUnit();
-    const int axis = run % 3;
-    const double size =
-        (run % 2 == 0 ? 20.0 : -20.0) * unit.acc.bias[static_cast<size_t>(axis)].sigma;
     const double t0 = 1500.0 + 0.125 * run + 0.03;
-    unit.bias_steps.push_back({Sensor::kAccelerometer, axis, t0, size});
-    auto fits = ScanOfRun(unit, 1300 + static_cast<uint64_t>(run));
-    const std::string expected = std::string("acc_bias_step.") + "xyz"[axis];
-    const auto fit = std::find_if(fits.begin(), fits.end(),
-                                  [&](const OnsetFit& f) { return f.term.Name() == expected; });
-    ASSERT_NE(fit, fits.end());
-    std::printf("%s at %.3f s: onset %.3f s, size %.4g ± %.2g (true %.4g)\n", expected.c_str(), t0,
-                fit->onset_s, fit->estimate, fit->std_error, size);
-    // The simulator starts a step with the first sample whose middle is past
-    // the onset: within one sample interval (0.1 s) of it.
-    placed += std::abs(fit->onset_s - t0) <= 0.1 + 1e-9 ? 1 : 0;
-    covered += std::abs(fit->estimate - size) <= 3.0 * fit->std_error ? 1 : 0;
+    const AccelerometerStep step =
+        AccelerometerStepFit(run, t0, 1300 + static_cast<uint64_t>(run), false);
+    // The simulator gives the whole step to the sample that ends after the
+    // onset: within one sample interval (0.1 s) of it.
+    placed += std::abs(step.fit.onset_s - t0) <= 0.1 + 1e-9 ? 1 : 0;
+    covered += std::abs(step.fit.estimate - step.size) <= 3.0 * step.fit.std_error ? 1 : 0;
+  }
+  EXPECT_GE(placed, kRuns - 1);
+  EXPECT_GE(covered, kRuns - 1);
+}
+
+TEST(OnsetScan, AStepInsideASampleIsPlacedWithinThatSample) {
+  // Placed at a sample boundary, such a step leaves up to half of itself in
+  // one sample: at 20 drift σ, a velocity innovation tens of σ wide at that
+  // update. Shares from 1/16 to 15/16 of the sample.
+  constexpr int kRuns = 8;
+  constexpr double kSampleS = 0.1;
+  int placed = 0, covered = 0;
+  for (int run = 0; run < kRuns; ++run) {
+    const double share = (2.0 * run + 1.0) / (2.0 * kRuns);
+    const double t0 = 1500.1 - share * kSampleS;
+    const AccelerometerStep step =
+        AccelerometerStepFit(run, t0, 1400 + static_cast<uint64_t>(run), true);
+    EXPECT_LE(step.fit.onset_low_s, step.fit.onset_s);
+    EXPECT_GE(step.fit.onset_high_s, step.fit.onset_s);
+    placed += std::abs(step.fit.onset_s - t0) <= 0.25 * kSampleS ? 1 : 0;
+    covered += std::abs(step.fit.estimate - step.size) <= 3.0 * step.fit.std_error ? 1 : 0;
   }
   EXPECT_GE(placed, kRuns - 1);
   EXPECT_GE(covered, kRuns - 1);

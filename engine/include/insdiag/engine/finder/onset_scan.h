@@ -38,10 +38,13 @@
 // over the magnitude; Smith, "A Bayesian approach to inference about a
 // change-point in a sequence of random variables", Biometrika 62(2), 1975),
 // with its standard deviation and central interval. The onset is then
-// placed at the sample, in that interval or the one before, where the
-// likelihood ratio of a fault whose first interval holds only the samples
-// after it is largest (the same recursion with that share of the interval's
-// column, model_transitions.h FaultColumn); the magnitude is the one there. Where a still stretch
+// placed where, in that interval or the one before, the likelihood ratio of
+// a fault whose first interval holds only its share after the onset is
+// largest (the same recursion with that share of the interval's column,
+// model_transitions.h FaultColumn): at the sample boundaries, then at 1/16
+// of a sample either side of the best, since a fault that begins inside a
+// sample gives that sample's interval mean its share. The magnitude is the
+// one there, and the interval is widened to hold the onset. Where a still stretch
 // hides the sensor axis the likelihood is flat in the onset, and the interval says so. Two faults
 // whose innovation signatures from one fault's onset are nearly parallel in the S⁻¹ metric,
 // |I_ab(θ)|/√(I_aa(θ) I_bb(θ)) above a threshold, cannot be told apart by the run (on a still,
@@ -74,7 +77,7 @@ struct OnsetFit {
   EffectTerm term;           // gyro_bias_step.x, acc_bias_ramp.z, …
   bool identifiable = false;  // false: the run carries no information on it
   int onset_epoch = -1;       // the first update interval with the fault (posterior median)
-  double onset_s = 0.0;       // the onset: the sample in or before that interval (header)
+  double onset_s = 0.0;       // the onset: within a sample, in or before that interval (header)
   double onset_std_s = 0.0;   // the posterior's standard deviation
   double onset_low_s = 0.0, onset_high_s = 0.0;  // its central interval
   double statistic = 0.0;     // max over onsets of T = 2Δℓ
