@@ -620,7 +620,7 @@ TEST(AllanJumpTest, FindsAStepOfFiveDriftSigmaAtItsSample) {
     const int onset = where(rng);
     const double size = seed % 2 == 0 ? 5.0 : -5.0;
     for (size_t k = static_cast<size_t>(onset); k < y.size(); ++k) y[k] += size;
-    const std::optional<RateJump> jump = FindRateJump(y, AllanOptions{});
+    const std::optional<RateJump> jump = FindRateJump(y, kJumpSeriesDtS, AllanOptions{});
     if (!jump.has_value()) continue;
     std::printf("onset %d: jump at %zu, size %.2f (true %.1f), z %.1f, window %lld\n", onset,
                 jump->sample, jump->size, size, jump->z, static_cast<long long>(jump->window));
@@ -638,7 +638,7 @@ TEST(AllanJumpTest, CutsAHealthySegmentAtItsLevel) {
   int cut = 0;
   for (int seed = 0; seed < kSeeds; ++seed) {
     const std::vector<double> y = NoiseSeries(rng);
-    const std::optional<RateJump> jump = FindRateJump(y, AllanOptions{});
+    const std::optional<RateJump> jump = FindRateJump(y, kJumpSeriesDtS, AllanOptions{});
     if (jump.has_value()) {
       ++cut;
       std::printf("seed %d: false cut at %zu, z %.2f, window %lld\n", seed, jump->sample, jump->z,

@@ -350,7 +350,7 @@ ChannelPieces PiecesBetweenJumps(const BenchRun& run, const std::vector<StaticSe
       rates[k] = channel < 3 ? sample.gyro_rad_s[axis] : sample.acc_mps2[axis];
     }
     std::vector<RateJump> in_segment;
-    for (const RatePiece& piece : CutAtRateJumps(rates, options, &in_segment)) {
+    for (const RatePiece& piece : CutAtRateJumps(rates, tau0, options, &in_segment)) {
       const size_t length = piece.end - piece.begin;
       if (length < min_samples) continue;
       out.rates.emplace_back(rates.begin() + static_cast<std::ptrdiff_t>(piece.begin),

@@ -1,4 +1,5 @@
 // Jumps in the mean of a static segment's rate (allan.h: Jumps).
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -55,26 +56,43 @@ RateJump LargestAtWindow(const std::vector<double>& sum, int64_t w) {
   return best;
 }
 
-void CutInto(std::span<const double> rates, size_t offset, const AllanOptions& options,
-             std::vector<RatePiece>& pieces, std::vector<RateJump>* jumps) {
-  const std::optional<RateJump> jump = FindRateJump(rates, options);
+// Whether a jump of d_w(k) = `size` persists: the means of `span` samples
+// on either side, beyond w samples from k, differ by at least half of it
+// with its sign. A transient (a spike, a knock on the table, a start-up
+// settling) moves d_w near it as a step does, and leaves the means over a
+// segment's length alone.
+bool Persists(const std::vector<double>& sum, int64_t k, int64_t w, int64_t span, double size) {
+  const auto n = static_cast<int64_t>(sum.size()) - 1;
+  if (k - w - span < 0 || k + w + span > n) return false;
+  const auto at = [&](int64_t i) { return sum[static_cast<size_t>(i)]; };
+  const double after = (at(k + w + span) - at(k + w)) / static_cast<double>(span);
+  const double before = (at(k - w) - at(k - w - span)) / static_cast<double>(span);
+  return (after - before) * size >= 0.5 * size * size;
+}
+
+void CutInto(std::span<const double> rates, size_t offset, double tau0_s,
+             const AllanOptions& options, std::vector<RatePiece>& pieces,
+             std::vector<RateJump>* jumps) {
+  const std::optional<RateJump> jump = FindRateJump(rates, tau0_s, options);
   if (!jump.has_value()) {
     pieces.push_back({offset, offset + rates.size()});
     return;
   }
-  CutInto(rates.first(jump->sample), offset, options, pieces, jumps);
+  CutInto(rates.first(jump->sample), offset, tau0_s, options, pieces, jumps);
   if (jumps != nullptr) {
     RateJump in_whole = *jump;
     in_whole.sample += offset;
     jumps->push_back(in_whole);
   }
-  CutInto(rates.subspan(jump->sample), offset + jump->sample, options, pieces, jumps);
+  CutInto(rates.subspan(jump->sample), offset + jump->sample, tau0_s, options, pieces, jumps);
 }
 
 }  // namespace
 
-std::optional<RateJump> FindRateJump(std::span<const double> rates, const AllanOptions& options) {
+std::optional<RateJump> FindRateJump(std::span<const double> rates, double tau0_s,
+                                     const AllanOptions& options) {
   const auto n = static_cast<int64_t>(rates.size());
+  const auto span = static_cast<int64_t>(std::ceil(options.min_segment_s / tau0_s - 1e-6));
   const std::vector<int64_t> windows = JumpWindows(n, options.jump_min_windows);
   if (windows.empty() || !(options.jump_alpha > 0.0)) return std::nullopt;
   double positions = 0.0;  // J: every position of every window
@@ -88,15 +106,18 @@ std::optional<RateJump> FindRateJump(std::span<const double> rates, const AllanO
   std::optional<RateJump> best;
   for (int64_t w : windows) {
     const RateJump at_w = LargestAtWindow(sum, w);
-    if (at_w.z > z_bound && (!best.has_value() || at_w.z > best->z)) best = at_w;
+    if (at_w.z > z_bound && (!best.has_value() || at_w.z > best->z) &&
+        Persists(sum, static_cast<int64_t>(at_w.sample), w, span, at_w.size)) {
+      best = at_w;
+    }
   }
   return best;
 }
 
-std::vector<RatePiece> CutAtRateJumps(std::span<const double> rates, const AllanOptions& options,
-                                      std::vector<RateJump>* jumps) {
+std::vector<RatePiece> CutAtRateJumps(std::span<const double> rates, double tau0_s,
+                                      const AllanOptions& options, std::vector<RateJump>* jumps) {
   std::vector<RatePiece> pieces;
-  CutInto(rates, 0, options, pieces, jumps);
+  CutInto(rates, 0, tau0_s, options, pieces, jumps);
   return pieces;
 }
 

@@ -38,7 +38,11 @@
 // segment is scaled by s_w, the root mean of d_w² at the samples at least w
 // away from it: z = |d_w(k)| / s_w. It is a jump when z exceeds
 // Φ⁻¹(1 − α / 2J), J = Σ_w (n − 2w + 1): Bonferroni over every position of
-// every window (α = `jump_alpha`; d is Gaussian for Gaussian noise). Over
+// every window (α = `jump_alpha`; d is Gaussian for Gaussian noise), and
+// when it persists: the means over `min_segment_s` either side, beyond w
+// samples from k, differ by at least half of d_w(k) with its sign (a
+// transient — a spike, a knock on the table, a start-up settling — moves
+// d_w near it as a step does, and is not a change of the mean). Over
 // n / w positions only it is not a bound: neighbouring d_w(k) decorrelate
 // as 1 − 3|h| / 2w, and their maximum exceeds the independent positions'
 // (Pickands, Trans. AMS 145, 1969). Each
@@ -275,8 +279,10 @@ struct RateJump {
   double time_s = 0.0;  // in the run (AllanAnalysis): the end of the last sample before the jump
 };
 
-// The most significant jump in the mean of `rates`, if any is significant.
-std::optional<RateJump> FindRateJump(std::span<const double> rates, const AllanOptions& options);
+// The most significant jump in the mean of `rates` (sampled every τ₀), if
+// any is significant and persists.
+std::optional<RateJump> FindRateJump(std::span<const double> rates, double tau0_s,
+                                     const AllanOptions& options);
 
 // The pieces [begin, end) of `rates` between its significant jumps, in
 // order; each jump, in order, into `jumps` when given.
@@ -284,8 +290,8 @@ struct RatePiece {
   size_t begin = 0;
   size_t end = 0;
 };
-std::vector<RatePiece> CutAtRateJumps(std::span<const double> rates, const AllanOptions& options,
-                                      std::vector<RateJump>* jumps);
+std::vector<RatePiece> CutAtRateJumps(std::span<const double> rates, double tau0_s,
+                                      const AllanOptions& options, std::vector<RateJump>* jumps);
 
 struct AllanChannel {
   std::string name;  // "gyro_x", …, "acc_z" (kSensorChannelNames)
