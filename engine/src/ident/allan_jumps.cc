@@ -2,7 +2,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <limits>
 #include <optional>
 #include <span>
 #include <vector>
@@ -26,7 +25,7 @@ std::vector<int64_t> JumpWindows(int64_t n, int min_windows) {
 }
 
 // The largest |d_w(k)| at window w and its z against the rest of d_w.
-// `sum` holds the prefix sums of the centred series (sum[k] = Σ_{i<k} y_i).
+// `sum` holds the prefix sums of the series less its first value (sum[k] = Σ_{i<k} (y_i − y_0)).
 RateJump LargestAtWindow(const std::vector<double>& sum, int64_t w) {
   const auto n = static_cast<int64_t>(sum.size()) - 1;
   const auto d = [&](int64_t k) {
