@@ -120,6 +120,10 @@ std::vector<StaticSegment> StillSpans(const BenchRun& run, double tau0, const Al
 
 // ---------------------------------------------------------------------------
 
+size_t AllanOptions::MinSegmentSamples(double tau0_s) const {
+  return static_cast<size_t>(std::ceil(min_segment_s / tau0_s - 1e-6));
+}
+
 absl::Status AllanOptions::Validate() const {
   if (!(attitude_tolerance_rad > 0.0)) return absl::InvalidArgumentError("Allan: the attitude tolerance must be positive");
   if (!(min_segment_s > 0.0)) return absl::InvalidArgumentError("Allan: the minimum segment length must be positive");
@@ -210,7 +214,7 @@ absl::StatusOr<std::vector<StaticSegment>> FindStaticSegments(const BenchRun& ru
   const double tau0 = run.NominalIntervalS();
   if (!(tau0 > 0.0)) return absl::InvalidArgumentError("Allan: the run has no positive sample interval");
   const auto guard = static_cast<size_t>(std::ceil(options.motion_guard_s / tau0 - 1e-9));
-  const auto min_samples = static_cast<size_t>(std::ceil(options.min_segment_s / tau0 - 1e-6));
+  const size_t min_samples = options.MinSegmentSamples(tau0);
   const size_t n = run.samples.size();
   std::vector<StaticSegment> out;
   for (StaticSegment s : StillSpans(run, tau0, options)) {
@@ -328,20 +332,16 @@ std::vector<AllanPoint> OverlappingAllanCurve(std::span<const std::vector<double
 
 namespace {
 
-// One channel's rates in the static segments, cut at their jumps: the
-// pieces at least min_segment_s long, their lengths and the longest.
-struct ChannelPieces {
-  std::vector<std::vector<double>> rates;
-  std::vector<size_t> lengths;
-  size_t longest = 0;
-};
-
-ChannelPieces PiecesBetweenJumps(const BenchRun& run, const std::vector<StaticSegment>& segments,
-                                 int channel, double tau0, const AllanOptions& options,
-                                 std::vector<RateJump>& jumps) {
-  const auto min_samples = static_cast<size_t>(std::ceil(options.min_segment_s / tau0 - 1e-6));
+// One channel's rates in the static segments, cut at their jumps (each
+// piece at least min_segment_s long, as the jump test needs that much on
+// either side of a cut).
+std::vector<std::vector<double>> PiecesBetweenJumps(const BenchRun& run,
+                                                    const std::vector<StaticSegment>& segments,
+                                                    int channel, double tau0,
+                                                    const AllanOptions& options,
+                                                    std::vector<RateJump>& jumps) {
   const auto axis = static_cast<size_t>(channel % 3);
-  ChannelPieces out;
+  std::vector<std::vector<double>> out;
   std::vector<double> rates;
   for (const StaticSegment& seg : segments) {
     rates.resize(seg.Samples());
@@ -351,12 +351,8 @@ ChannelPieces PiecesBetweenJumps(const BenchRun& run, const std::vector<StaticSe
     }
     std::vector<RateJump> in_segment;
     for (const RatePiece& piece : CutAtRateJumps(rates, tau0, options, &in_segment)) {
-      const size_t length = piece.end - piece.begin;
-      if (length < min_samples) continue;
-      out.rates.emplace_back(rates.begin() + static_cast<std::ptrdiff_t>(piece.begin),
-                             rates.begin() + static_cast<std::ptrdiff_t>(piece.end));
-      out.lengths.push_back(length);
-      out.longest = std::max(out.longest, length);
+      out.emplace_back(rates.begin() + static_cast<std::ptrdiff_t>(piece.begin),
+                       rates.begin() + static_cast<std::ptrdiff_t>(piece.end));
     }
     for (RateJump& j : in_segment) {
       j.time_s = run.samples[seg.first_sample + j.sample - 1].t_s;
@@ -389,20 +385,20 @@ absl::StatusOr<AllanResult> AllanAnalysis(const BenchRun& run, const AllanOption
     ch.sensor = c < 3 ? Sensor::kGyro : Sensor::kAccelerometer;
     ch.axis = c % 3;
     ch.unit = std::string(UnitsOf(ch.sensor).rate);
-    const ChannelPieces pieces =
+    const std::vector<std::vector<double>> pieces =
         PiecesBetweenJumps(run, result.segments, c, tau0, options, ch.jumps);
-    if (pieces.rates.empty()) {
-      ch.fit.notes.push_back("no piece of the static segments between the rate's jumps lasts " +
-                             FormatG(options.min_segment_s) + " s");
-      result.channels.push_back(std::move(ch));
-      continue;
+    std::vector<size_t> lengths;
+    size_t longest = 0;
+    for (const std::vector<double>& piece : pieces) {
+      lengths.push_back(piece.size());
+      longest = std::max(longest, piece.size());
     }
-    const std::vector<int64_t> m = AllanClusterSizes(pieces.longest, options);
+    const std::vector<int64_t> m = AllanClusterSizes(longest, options);
     if (m.empty())
       return absl::FailedPreconditionError(
           "Allan: the static segments are too short for any cluster");
-    ch.curve = OverlappingAllanCurve(pieces.rates, tau0, m, options);
-    auto fit = FitAllanCurve(ch.curve, tau0, pieces.lengths, options);
+    ch.curve = OverlappingAllanCurve(pieces, tau0, m, options);
+    auto fit = FitAllanCurve(ch.curve, tau0, lengths, options);
     if (fit.ok()) {
       ch.fit = *std::move(fit);
     } else {

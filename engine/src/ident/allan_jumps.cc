@@ -91,7 +91,7 @@ void CutInto(std::span<const double> rates, size_t offset, double tau0_s,
 std::optional<RateJump> FindRateJump(std::span<const double> rates, double tau0_s,
                                      const AllanOptions& options) {
   const auto n = static_cast<int64_t>(rates.size());
-  const auto span = static_cast<int64_t>(std::ceil(options.min_segment_s / tau0_s - 1e-6));
+  const auto span = static_cast<int64_t>(options.MinSegmentSamples(tau0_s));
   const std::vector<int64_t> windows = JumpWindows(n, options.jump_min_windows);
   if (windows.empty() || !(options.jump_alpha > 0.0)) return std::nullopt;
   double positions = 0.0;  // J: every position of every window

@@ -47,8 +47,9 @@
 // as 1 − 3|h| / 2w, and their maximum exceeds the independent positions'
 // (Pickands, Trans. AMS 145, 1969). Each
 // channel's segments are cut at their jumps, the pieces tested again (binary
-// segmentation: Vostrikova, Soviet Math. Dokl. 24, 1981); pieces shorter
-// than `min_segment_s` are left out of that channel's curve.
+// segmentation: Vostrikova, Soviet Math. Dokl. 24, 1981). A cut needs
+// `min_segment_s` and w on either side, so every piece is a segment in
+// its own right.
 //
 // Noise model (IEEE 952 Annex C, the Markov term as its exponentially correlated noise):
 //   σ²(τ) = 3Q²/τ² + N²/τ + (2 ln2/π) B² + K²τ/3 + R²τ²/2
@@ -131,6 +132,8 @@ struct AllanOptions {
   // does not split a hold while any commanded motion is seen.
   double attitude_tolerance_rad = 1e-5;
   double min_segment_s = 60.0;
+  // min_segment_s in samples of τ₀.
+  size_t MinSegmentSamples(double tau0_s) const;
   // Dropped at each end of a hold next to motion: the table's settling and
   // the first instants of a ramp, whose attitude change is still below the
   // tolerance.
