@@ -1,8 +1,9 @@
 #include "report_text.h"
 
+#include <absl/strings/str_format.h>
+
 #include <algorithm>
 #include <charconv>
-#include <cstdio>
 #include <string>
 
 #include "insdiag/engine/filter/observation.h"
@@ -10,12 +11,6 @@
 
 namespace insdiag::cli {
 namespace {
-
-std::string Format(const char* fmt, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, fmt, v);
-  return buf;
-}
 
 void AppendNumber(std::string& line, double v) {
   char buf[32];
@@ -30,39 +25,43 @@ void PrintReport(const engine::AnalysisReport& r, std::ostream& out) {
   out << "model: base";
   for (const auto& e : r.model_effects) out << " + " << e;
   out << "  (" << r.parameter_count << " parameters)\n";
-  out << "run: " << r.samples << " samples over " << Format("%.0f", r.duration_s) << " s at "
-      << Format("%.4g", r.sample_rate_hz) << " Hz, updates every " << Format("%.3g", r.update_interval_s) << " s\n";
-  out << "NIS mean " << Format("%.4f", r.nis_mean) << " (band " << Format("%.4f", r.nis_band_low) << " … "
-      << Format("%.4f", r.nis_band_high) << "), log-likelihood " << Format("%.2f", r.log_likelihood) << ", AIC "
-      << Format("%.2f", r.aic) << ", BIC " << Format("%.2f", r.bic) << "\n\n";
+  out << "run: " << r.samples << " samples over " << absl::StrFormat("%.0f", r.duration_s)
+      << " s at " << absl::StrFormat("%.4g", r.sample_rate_hz) << " Hz, updates every "
+      << absl::StrFormat("%.3g", r.update_interval_s) << " s\n";
+  out << "NIS mean " << absl::StrFormat("%.4f", r.nis_mean) << " (band "
+      << absl::StrFormat("%.4f", r.nis_band_low) << " … "
+      << absl::StrFormat("%.4f", r.nis_band_high) << "), log-likelihood "
+      << absl::StrFormat("%.2f", r.log_likelihood) << ", AIC " << absl::StrFormat("%.2f", r.aic)
+      << ", BIC " << absl::StrFormat("%.2f", r.bic) << "\n\n";
   out << "channel   unit   residual RMS   fit %   NIS mean   whiteness p   β²>γ²\n";
   for (const auto& c : r.channels) {
-    char line[160];
-    std::snprintf(line, sizeof line, "%-8s  %-5s  %12.4g  %6.1f  %9.4f  %12.3g  %5.1f%%\n", c.name.c_str(),
-                  c.unit.c_str(), c.rms, c.fit_percent, c.nis_mean, c.whiteness_p_value,
-                  100.0 * c.fraction_over_gamma2);
-    out << line;
+    out << absl::StrFormat("%-8s  %-5s  %12.4g  %6.1f  %9.4f  %12.3g  %5.1f%%\n", c.name, c.unit,
+                           c.rms, c.fit_percent, c.nis_mean, c.whiteness_p_value,
+                           100.0 * c.fraction_over_gamma2);
   }
   if (!r.faults.empty()) {
-    out << "\nwhere the model fails (γ² = " << Format("%.2f", r.gamma2) << ", η² = " << Format("%.3f", r.eta2)
-        << "):\n";
+    out << "\nwhere the model fails (γ² = " << absl::StrFormat("%.2f", r.gamma2)
+        << ", η² = " << absl::StrFormat("%.3f", r.eta2) << "):\n";
     for (const auto& f : r.faults) {
-      out << "  " << engine::FaultKindName(f.kind) << " " << f.channel << " " << Format("%.2f", f.start_s) << " … "
-          << Format("%.2f", f.end_s) << " s (peak " << Format("%.3g", f.peak_statistic) << ")\n";
+      out << "  " << engine::FaultKindName(f.kind) << " " << f.channel << " "
+          << absl::StrFormat("%.2f", f.start_s) << " … " << absl::StrFormat("%.2f", f.end_s)
+          << " s (peak " << absl::StrFormat("%.3g", f.peak_statistic) << ")\n";
     }
   }
   for (const auto& l : r.localisation) {
     // A ramp's estimate is a rate from its onset, not a jump.
     const bool ramp = l.state.find("_bias_ramp.") != std::string::npos;
-    out << "  failed sensor: " << l.state << (ramp ? " drifting at " : " jumped by ") << Format("%.3g", l.jump)
-        << " ± " << Format("%.2g", l.jump_std_error) << (ramp ? " per s from " : " at ") << Format("%.1f", l.time_s)
-        << " s (p " << Format("%.2g", l.p_value) << ")\n";
+    out << "  failed sensor: " << l.state << (ramp ? " drifting at " : " jumped by ")
+        << absl::StrFormat("%.3g", l.jump) << " ± " << absl::StrFormat("%.2g", l.jump_std_error)
+        << (ramp ? " per s from " : " at ") << absl::StrFormat("%.1f", l.time_s) << " s (p "
+        << absl::StrFormat("%.2g", l.p_value) << ")\n";
   }
   if (!r.discrepancies.empty()) {
     out << "\nforward/backward discrepancies:\n";
     for (const auto& d : r.discrepancies) {
-      out << "  " << d.state << " at " << Format("%.1f", d.time_s) << " s: " << Format("%.1f", d.statistic)
-          << " (p " << Format("%.2g", d.p_value) << ")\n";
+      out << "  " << d.state << " at " << absl::StrFormat("%.1f", d.time_s)
+          << " s: " << absl::StrFormat("%.1f", d.statistic) << " (p "
+          << absl::StrFormat("%.2g", d.p_value) << ")\n";
     }
   }
   if (!r.effect_candidates.empty()) {
@@ -70,10 +69,12 @@ void PrintReport(const engine::AnalysisReport& r, std::ostream& out) {
     int shown = 0;
     for (const auto& c : r.effect_candidates) {
       if (shown++ == 10) break;
-      out << "  " << c.name << "  " << (c.identifiable ? "" : "(not identifiable with this profile) ")
-          << "estimate " << Format("%.3g", c.estimate) << " ± " << Format("%.2g", c.std_error) << " " << c.unit
-          << ", statistic " << Format("%.1f", c.statistic) << ", p " << Format("%.2g", c.p_value_holm)
-          << " (Holm), ΔAIC " << Format("%.1f", c.predicted_delta_aic) << "\n";
+      out << "  " << c.name << "  "
+          << (c.identifiable ? "" : "(not identifiable with this profile) ") << "estimate "
+          << absl::StrFormat("%.3g", c.estimate) << " ± " << absl::StrFormat("%.2g", c.std_error)
+          << " " << c.unit << ", statistic " << absl::StrFormat("%.1f", c.statistic) << ", p "
+          << absl::StrFormat("%.2g", c.p_value_holm) << " (Holm), ΔAIC "
+          << absl::StrFormat("%.1f", c.predicted_delta_aic) << "\n";
       if (!c.correlated_with.empty()) {
         out << "      not told apart in this run from:";
         for (const auto& other : c.correlated_with) out << " " << other;
@@ -85,9 +86,11 @@ void PrintReport(const engine::AnalysisReport& r, std::ostream& out) {
   if (!r.identified.empty()) {
     out << "\nidentified parameters:\n";
     for (const auto& p : r.identified) {
-      out << "  " << p.name << " = " << Format("%.4g", p.value) << " ± " << Format("%.2g", p.std_error) << " "
-          << p.unit << " [" << (p.method.has_value() ? engine::MethodName(*p.method) : "") << "]";
-      if (p.a_priori == p.a_priori) out << " (a priori " << Format("%.4g", p.a_priori) << ")";
+      out << "  " << p.name << " = " << absl::StrFormat("%.4g", p.value) << " ± "
+          << absl::StrFormat("%.2g", p.std_error) << " " << p.unit << " ["
+          << (p.method.has_value() ? engine::MethodName(*p.method) : "") << "]";
+      if (p.a_priori == p.a_priori)
+        out << " (a priori " << absl::StrFormat("%.4g", p.a_priori) << ")";
       out << "\n";
     }
   }
@@ -96,29 +99,35 @@ void PrintReport(const engine::AnalysisReport& r, std::ostream& out) {
     out << "\nbefore → after (added:";
     for (const auto& e : c.added_effects) out << " " << e;
     out << ")\n";
-    out << "  NIS mean " << Format("%.4f", c.nis_mean_before) << " → " << Format("%.4f", c.nis_mean_after)
-        << ", AIC " << Format("%.1f", c.aic_before) << " → " << Format("%.1f", c.aic_after) << ", BIC "
-        << Format("%.1f", c.bic_before) << " → " << Format("%.1f", c.bic_after) << "\n";
-    out << "  2ΔlogL realised " << Format("%.1f", c.realized_lr) << ", predicted by the score test "
-        << Format("%.1f", c.predicted_lr) << "\n";
+    out << "  NIS mean " << absl::StrFormat("%.4f", c.nis_mean_before) << " → "
+        << absl::StrFormat("%.4f", c.nis_mean_after) << ", AIC "
+        << absl::StrFormat("%.1f", c.aic_before) << " → " << absl::StrFormat("%.1f", c.aic_after)
+        << ", BIC " << absl::StrFormat("%.1f", c.bic_before) << " → "
+        << absl::StrFormat("%.1f", c.bic_after) << "\n";
+    out << "  2ΔlogL realised " << absl::StrFormat("%.1f", c.realized_lr)
+        << ", predicted by the score test " << absl::StrFormat("%.1f", c.predicted_lr) << "\n";
     out << "  channel   RMS before → after        NIS before → after   whiteness p before → after\n";
     for (const auto& ch : c.channels) {
       out << "  " << ch.name << std::string(8 - std::min<size_t>(8, ch.name.size()), ' ')
-          << Format("%10.4g", ch.before.rms) << " → " << Format("%-10.4g", ch.after.rms) << "  "
-          << Format("%8.4f", ch.before.nis_mean) << " → " << Format("%-8.4f", ch.after.nis_mean) << "  "
-          << Format("%8.3g", ch.before.whiteness_p_value) << " → " << Format("%.3g", ch.after.whiteness_p_value)
-          << "\n";
+          << absl::StrFormat("%10.4g", ch.before.rms) << " → "
+          << absl::StrFormat("%-10.4g", ch.after.rms) << "  "
+          << absl::StrFormat("%8.4f", ch.before.nis_mean) << " → "
+          << absl::StrFormat("%-8.4f", ch.after.nis_mean) << "  "
+          << absl::StrFormat("%8.3g", ch.before.whiteness_p_value) << " → "
+          << absl::StrFormat("%.3g", ch.after.whiteness_p_value) << "\n";
     }
   }
   if (!r.discovery.empty()) {
     out << "\ndiscovery path:\n";
     for (const auto& d : r.discovery) {
-      out << "  step " << d.step << ": + " << d.effect << " (statistic " << Format("%.1f", d.statistic)
-          << ", Holm p " << Format("%.2g", d.p_value) << ")  → NIS " << Format("%.4f", d.nis_mean) << ", AIC "
-          << Format("%.1f", d.aic) << "\n";
+      out << "  step " << d.step << ": + " << d.effect << " (statistic "
+          << absl::StrFormat("%.1f", d.statistic) << ", Holm p "
+          << absl::StrFormat("%.2g", d.p_value) << ")  → NIS "
+          << absl::StrFormat("%.4f", d.nis_mean) << ", AIC " << absl::StrFormat("%.1f", d.aic)
+          << "\n";
       for (const auto& e : d.estimates) {
-        out << "      " << e.name << " = " << Format("%.4g", e.value) << " ± " << Format("%.2g", e.std_error) << " "
-            << e.unit << "\n";
+        out << "      " << e.name << " = " << absl::StrFormat("%.4g", e.value) << " ± "
+            << absl::StrFormat("%.2g", e.std_error) << " " << e.unit << "\n";
       }
     }
   }

@@ -1,13 +1,13 @@
 // insdiag analyze RUN.csv [--add EFFECT]... [--base REPORT.json] [--json] [--series OUT.csv]
 // Runs the engine locally on a bench-run file, no server needed.
 #include <absl/strings/numbers.h>
+#include <absl/strings/str_format.h>
 
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <fstream>
-#include <sstream>
 #include <ostream>
+#include <sstream>
 
 #include "insdiag/api/json.h"
 #include "insdiag/api/report_codec.h"
@@ -96,10 +96,8 @@ class AnalyzeVerb final : public Verb {
     if (progress_) {
       options.progress = [&err, started](double fraction, std::string_view stage) {
         const std::chrono::duration<double> elapsed = std::chrono::steady_clock::now() - started;
-        char line[160];
-        std::snprintf(line, sizeof line, "%7.1f s  %3.0f %%  %.*s\n", elapsed.count(), 100.0 * fraction,
-                      static_cast<int>(stage.size()), stage.data());
-        err << line << std::flush;
+        err << absl::StrFormat("%7.1f s  %3.0f %%  %s\n", elapsed.count(), 100.0 * fraction, stage)
+            << std::flush;
       };
     }
     auto analysis = engine::Analyze(*run, request, options);

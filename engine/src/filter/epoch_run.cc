@@ -115,14 +115,14 @@ class IntervalCondenser {
     }
     const double inv_dt = 1.0 / dt;
     for (int a = 0; a < kSensorAxisCount; ++a) {
-      const Eigen::Matrix<double, 9, 1> col = b.col(a);
+      const NavigationVector col = b.col(a);
       white_[static_cast<size_t>(a)].noalias() += (inv_dt * col).lazyProduct(col.transpose());
     }
     // Velocity quantisation: the position integrates each sample's carried
     // remainder, white with variance Q² per axis (IEEE Std 952, Annex C).
     const Matrix93d to_position = T_inverse->middleCols<3>(6).lazyProduct(C_mid);
     for (int a = 0; a < 3; ++a) {
-      const Eigen::Matrix<double, 9, 1> col = to_position.col(a) * dt;
+      const NavigationVector col = to_position.col(a) * dt;
       quantisation_[static_cast<size_t>(a)].noalias() += col.lazyProduct(col.transpose());
     }
     double r[2];
@@ -168,11 +168,11 @@ class IntervalCondenser {
   std::array<Matrix96d, kCouplingMoments> moments_;
   std::array<Matrix9d, kSensorAxisCount> white_;
   std::array<Matrix9d, 3> quantisation_;
-  Eigen::Matrix<double, 9, Eigen::Dynamic> constants_;
+  Eigen::Matrix<double, kNavigationStates, Eigen::Dynamic> constants_;
   Eigen::Matrix<double, kCouplingMoments, kCouplingMoments> gram_;
 };
 
-void FeedBackNavigation(const Site& site, const Eigen::Matrix<double, 9, 1>& u, nav::NavState& ins) {
+void FeedBackNavigation(const Site& site, const NavigationVector& u, nav::NavState& ins) {
   // C̃ = (I − [ψ×]) C  ⇒  C ≈ exp([ψ×]) C̃.
   ins.q_b_n = (nav::RotationVectorToQuaternion(u.segment<3>(0)) * ins.q_b_n).normalized();
   ins.v_n_mps -= u.segment<3>(3);

@@ -134,10 +134,10 @@ void EpochFilter::Step(int index, ForwardPass* pass, FilterObserver* observer) {
     pass->x_filt.row(k) = x_.transpose();
     PackSymmetric(P_, pass->P_filt.row(k).data());
   }
-  navigation_estimate_ = x_.head<StateLayout::kNavigationSize>();
+  navigation_estimate_ = x_.head<kNavigationStates>();
 }
 
-void EpochFilter::ApplyFeedback(const Eigen::Matrix<double, 9, 1>& u) { x_.head<StateLayout::kNavigationSize>() -= u; }
+void EpochFilter::ApplyFeedback(const NavigationVector& u) { x_.head<kNavigationStates>() -= u; }
 
 absl::StatusOr<ForwardPass> RunForwardFilter(const EpochRun& run, const ErrorModel& model, FilterObserver* observer) {
   if (auto st = ValidateErrorModel(model); !st.ok()) return st;

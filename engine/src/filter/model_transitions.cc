@@ -53,7 +53,8 @@ Eigen::Vector3d FaultGridSums(int samples, double dt, double u, Regressor fault)
 
 }  // namespace
 
-Eigen::Matrix<double, 9, 1> FaultColumn(const EpochInterval& e, int sensor_axis, Regressor fault, double onset_s) {
+NavigationVector FaultColumn(const EpochInterval& e, int sensor_axis, Regressor fault,
+                             double onset_s) {
   const auto a = static_cast<Eigen::Index>(sensor_axis);
   const double u = onset_s - e.start_s;
   if (u <= 0.0) {
@@ -61,7 +62,7 @@ Eigen::Matrix<double, 9, 1> FaultColumn(const EpochInterval& e, int sensor_axis,
     return e.moments[1].col(a) +
            (e.start_s + 0.5 * e.sample_interval_s - onset_s) * e.moments[0].col(a);
   }
-  if (onset_s >= e.time_s) return Eigen::Matrix<double, 9, 1>::Zero();
+  if (onset_s >= e.time_s) return NavigationVector::Zero();
   // The onset inside the interval: the coupling's quadratic in s (header of
   // epoch_run.h, b_j ≈ Σ_p c_p s_j^p, c = μ S⁻¹) summed against the fault's
   // weights. Exact at either end of the interval, where it is μ_0 (or the
@@ -69,7 +70,7 @@ Eigen::Matrix<double, 9, 1> FaultColumn(const EpochInterval& e, int sensor_axis,
   const int degree = std::min(kCouplingDegree, e.samples - 1);
   const Eigen::Vector3d g = FaultGridSums(e.samples, e.sample_interval_s, u, fault);
   const Eigen::Vector3d x = InverseGram(e.gram, degree) * g;
-  Eigen::Matrix<double, 9, 1> column = Eigen::Matrix<double, 9, 1>::Zero();
+  NavigationVector column = NavigationVector::Zero();
   for (int p = 0; p <= degree; ++p) column += x[p] * e.moments[static_cast<size_t>(p)].col(a);
   return column;
 }
@@ -211,11 +212,11 @@ const IntervalTransition& ModelTransitions::Build(const EpochInterval& e) {
       continue;
     }
     const StateGridWeights& w = weights_[i];
-    Eigen::Matrix<double, 9, kCouplingMoments> mu;
+    Eigen::Matrix<double, kNavigationStates, kCouplingMoments> mu;
     for (int p = 0; p < kCouplingMoments; ++p) mu.col(p) = e.moments[static_cast<size_t>(p)].col(src.axis);
     t_.B.middleCols(src.state, src.size).noalias() = mu * w.w.leftCols(src.size);
     t_.Qns.middleCols(src.state, src.size).noalias() = mu * w.v.leftCols(src.size);
-    const Eigen::Matrix<double, 9, kCouplingMoments> nu = mu * w.L;
+    const Eigen::Matrix<double, kNavigationStates, kCouplingMoments> nu = mu * w.L;
     Qnn.noalias() += nu * nu.transpose();
   }
   if (e.starts_segment) {

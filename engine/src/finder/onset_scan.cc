@@ -14,7 +14,7 @@ namespace {
 
 // Two columns per sensor axis: the step's and the ramp's pair (header).
 constexpr int kColumns = 2 * kSensorAxisCount;
-using Matrix9c = Eigen::Matrix<double, 9, kColumns>;
+using Matrix9c = Eigen::Matrix<double, kNavigationStates, kColumns>;
 using MatrixCc = Eigen::Matrix<double, kColumns, kColumns>;
 
 // Z of one interval, centred on `centre_s`.
@@ -57,7 +57,7 @@ struct OnsetSums {
   std::vector<std::array<Eigen::Matrix2d, kSensorAxisCount>> successive;  // Cov(s(θ), s(θ+1))
   // The adjoint's navigation part at each epoch, for an onset inside its
   // interval (TryOnsetInsideInterval): λ_k, Γ_k and m_k of the header.
-  std::vector<Eigen::Matrix<double, 9, 1>> lambda;
+  std::vector<NavigationVector> lambda;
   std::vector<Matrix9d> gamma;
   std::vector<Matrix9c> cross;
 
@@ -87,7 +87,7 @@ OnsetSums BackwardSweep(const ForwardPass& fw, const StateLayout& layout, const 
     if (k + 1 < K) {
       fw.transitions[static_cast<size_t>(k + 1)].WriteDense(Phi);
       F.noalias() = Phi * L;
-      next_gamma_w.noalias() = Gamma.leftCols<9>() * Z_next;
+      next_gamma_w.noalias() = Gamma.leftCols<kNavigationStates>() * Z_next;
       next_gamma_w += adjoint_columns;
       adjoint_columns.noalias() = F.transpose() * next_gamma_w;
       weighted.noalias() = F.transpose() * lambda;
@@ -101,16 +101,17 @@ OnsetSums BackwardSweep(const ForwardPass& fw, const StateLayout& layout, const 
       Gamma.noalias() += H.row(c).transpose() * (H.row(c) / S);
     }
     const Matrix9c Z = FaultColumns(run.epochs[static_cast<size_t>(k)], centre_s);
-    const MatrixCc cross = Z.transpose() * adjoint_columns.topRows<9>();
+    const MatrixCc cross = Z.transpose() * adjoint_columns.topRows<kNavigationStates>();
     const MatrixCc successive = information + cross;
-    score.noalias() += Z.transpose() * lambda.head<9>();
-    information += Z.transpose() * Gamma.topLeftCorner<9, 9>() * Z + cross + cross.transpose();
+    score.noalias() += Z.transpose() * lambda.head<kNavigationStates>();
+    information += Z.transpose() * Gamma.topLeftCorner<kNavigationStates, kNavigationStates>() * Z +
+                   cross + cross.transpose();
     const auto at = static_cast<size_t>(k);
     out.score[at] = score;
     out.information[at] = information;
-    out.lambda[at] = lambda.head<9>();
-    out.gamma[at] = Gamma.topLeftCorner<9, 9>();
-    out.cross[at] = adjoint_columns.topRows<9>();
+    out.lambda[at] = lambda.head<kNavigationStates>();
+    out.gamma[at] = Gamma.topLeftCorner<kNavigationStates, kNavigationStates>();
+    out.cross[at] = adjoint_columns.topRows<kNavigationStates>();
     for (int a = 0; a < kSensorAxisCount; ++a) {
       out.successive[at][static_cast<size_t>(a)] = successive.block<2, 2>(2 * a, 2 * a);
     }
@@ -170,8 +171,7 @@ std::optional<OnsetTrial> TryOnsetInsideInterval(const EffectTerm& term, const O
     score = e.dot(sums.score[at + 1]);
     information = e.dot(sums.information[at + 1] * e);
   }
-  const Eigen::Matrix<double, 9, 1> w =
-      FaultColumn(run.epochs[at], axis, term.family->regressor, onset_s);
+  const NavigationVector w = FaultColumn(run.epochs[at], axis, term.family->regressor, onset_s);
   score += w.dot(sums.lambda[at]);
   information += w.dot(sums.gamma[at] * w) + 2.0 * w.dot(sums.cross[at] * e);
   if (!(information > 0.0) || !std::isfinite(information)) return std::nullopt;

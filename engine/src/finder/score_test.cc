@@ -29,7 +29,8 @@ void ScoreTestObserver::OnPrediction(int, const EpochInterval& epoch, const Inte
   // A ← Φ A + W: the candidates' inputs over the interval, at the epoch.
   t.PropagateRows(sensitivity_);
   for (size_t i = 0; i < run_columns_.size(); ++i) {
-    sensitivity_.col(static_cast<Eigen::Index>(i)).head<9>() += epoch.constants.col(run_columns_[i]);
+    sensitivity_.col(static_cast<Eigen::Index>(i)).head<kNavigationStates>() +=
+        epoch.constants.col(run_columns_[i]);
   }
   // After prediction, before the updates correct it: the largest the error gets.
   peak_attitude_sensitivity_ = peak_attitude_sensitivity_.cwiseMax(

@@ -5,17 +5,16 @@
 #pragma once
 
 #include <Eigen/Dense>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
 #include <numbers>
 #include <span>
 #include <string>
 #include <vector>
 
+#include "absl/strings/str_format.h"
 #include "insdiag/engine/ident/allan.h"
 
 namespace insdiag::engine::ident::allan_model {
@@ -135,11 +134,7 @@ struct FitData {
 
 inline int ParameterCount(const TermMask& on) { return static_cast<int>(std::count(on.begin(), on.end(), true)); }
 
-inline std::string FormatG(double v, int digits = 3) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.*g", digits, v);
-  return buf;
-}
+inline std::string FormatG(double v, int digits = 3) { return absl::StrFormat("%.*g", digits, v); }
 
 // Differences of cluster size m in a segment of `samples` samples.
 inline int64_t Differences(size_t samples, int64_t m) {

@@ -10,10 +10,7 @@
 #include <string>
 
 #include "ident/drift_em.h"
-#include "insdiag/engine/filter/smoother.h"
-#include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/model/parameter_field.h"
-#include "insdiag/engine/model/state_layout.h"
 #include "insdiag/engine/numerics/parallel_map.h"
 #include "insdiag/engine/stats/distributions.h"
 

@@ -139,10 +139,10 @@ Eigen::MatrixXd SensorBlocks::Dense(int m) const {
 
 void StateTransition::PropagateMean(Eigen::VectorXd& x) const {
   const auto m = B.cols();
-  Eigen::Matrix<double, 9, 1> nav = A * x.head<9>() + B * x.tail(m);
+  NavigationVector nav = A * x.head<kNavigationStates>() + B * x.tail(m);
   Eigen::RowVectorXd sensors = x.tail(m).transpose();
   D.RightMultiplyTranspose(sensors);
-  x.head<9>() = nav;
+  x.head<kNavigationStates>() = nav;
   x.tail(m) = sensors.transpose();
 }
 
@@ -151,11 +151,11 @@ void StateTransition::PropagateRows(Eigen::MatrixXd& M) const {
   // forward and backward pass.
   thread_local Eigen::MatrixXd nav, sensors_t;
   const auto m = B.cols();
-  nav.noalias() = A * M.topRows<9>();
+  nav.noalias() = A * M.topRows<kNavigationStates>();
   nav.noalias() += B * M.bottomRows(m);
   sensors_t = M.bottomRows(m).transpose();
   D.RightMultiplyTranspose(sensors_t);
-  M.topRows<9>() = nav;
+  M.topRows<kNavigationStates>() = nav;
   M.bottomRows(m) = sensors_t.transpose();
 }
 
@@ -168,7 +168,7 @@ void IntervalTransition::PropagateCovariance(Eigen::MatrixXd& P) const {
   PropagateRows(half);   // Φ P Φᵀ (symmetric but for rounding, evened out below)
   P = half;
   const auto m = B.cols();
-  P.topLeftCorner<9, 9>() += Qnn;
+  P.topLeftCorner<kNavigationStates, kNavigationStates>() += Qnn;
   P.topRightCorner(9, m) += Qns;
   P.bottomLeftCorner(m, 9) += Qns.transpose();
   for (const auto& b : Qss.blocks) {
@@ -187,7 +187,7 @@ Eigen::MatrixXd StateTransition::DenseTransition(int n) const {
 
 void StateTransition::WriteDense(Eigen::MatrixXd& phi) const {
   phi.setZero();
-  phi.topLeftCorner<9, 9>() = A;
+  phi.topLeftCorner<kNavigationStates, kNavigationStates>() = A;
   if (B.cols() == 0) return;
   phi.topRightCorner(9, B.cols()) = B;
   for (const SensorBlocks::Block& b : D.blocks) {

@@ -38,7 +38,7 @@ void LiveStepScan::OnPrediction(const EpochInterval& epoch, const IntervalTransi
   for (int back = 0; back < active; ++back) {
     const int s = (epoch_ - back) % window_;  // back ≤ epoch_: never negative
     for (int a = 0; a < kSensorAxisCount; ++a) {
-      A_.col(s * kSensorAxisCount + a).head<9>() +=
+      A_.col(s * kSensorAxisCount + a).head<kNavigationStates>() +=
           FaultColumn(epoch, a, Regressor::kStep, onset_s_[static_cast<size_t>(s)]);
     }
   }

@@ -3,7 +3,6 @@
 // knowledge base's derived state (statistics, signatures, views).
 #include "insdiag/kb/fleet_generator.h"
 
-#include <absl/strings/match.h>
 #include <absl/strings/str_cat.h>
 #include <absl/strings/str_format.h>
 
@@ -12,6 +11,7 @@
 #include "fleet_profile_data.h"
 #include "generator.h"
 #include "insdiag/api/json.h"
+#include "insdiag/api/resource_names.h"
 #include "insdiag/api/unit_types.h"
 #include "insdiag/kb/catalogue_store.h"
 #include "insdiag/kb/diagnosis.h"
@@ -96,7 +96,7 @@ std::vector<v1::FleetProfile> BuiltinFleetProfiles() {
 }
 
 absl::StatusOr<v1::FleetProfile> BuiltinFleetProfile(const std::string& unit_type) {
-  const std::string name = absl::StartsWith(unit_type, "unitTypes/") ? unit_type.substr(10) : unit_type;
+  const std::string name = api::IdOrSelf(unit_type, api::kUnitTypes);
   for (auto& profile : BuiltinFleetProfiles()) {
     if (profile.unit_type() == name) return profile;
   }

@@ -68,7 +68,7 @@ inline int SensorAxisIndex(Sensor sensor, int axis) { return (sensor == Sensor::
 inline constexpr int kCouplingDegree = 2;
 inline constexpr int kCouplingMoments = kCouplingDegree + 1;
 
-using Matrix96d = Eigen::Matrix<double, 9, kSensorAxisCount>;
+using Matrix96d = Eigen::Matrix<double, kNavigationStates, kSensorAxisCount>;
 using PackedSymmetric9d = Eigen::Matrix<double, 45, 1>;
 
 // One update interval of the run, condensed (header).
@@ -83,9 +83,10 @@ struct EpochInterval {
   Eigen::Matrix<double, kCouplingMoments, kCouplingMoments> gram;  // S
   std::array<PackedSymmetric9d, kSensorAxisCount> white;  // W_a (gyro axes, then accelerometer)
   std::array<PackedSymmetric9d, 3> quantisation;          // Q_a of the accelerometer axes
-  Eigen::Matrix<double, 9, Eigen::Dynamic> constants;     // K, columns as EpochRun::constant_columns
+  Eigen::Matrix<double, kNavigationStates, Eigen::Dynamic>
+      constants;  // K, columns as EpochRun::constant_columns
   std::array<double, 6> z{};                              // observations (observation.h) at the epoch
-  Eigen::Matrix<double, 9, 1> feedback = Eigen::Matrix<double, 9, 1>::Zero();  // u_k
+  NavigationVector feedback = NavigationVector::Zero();   // u_k
   Eigen::Matrix3d C_b_n = Eigen::Matrix3d::Identity();    // reference attitude at the epoch
   // The interval is the first of a segment after the first (bench_run.h):
   // the mechanisation started again at its start, from the segment's

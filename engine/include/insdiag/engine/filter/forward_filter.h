@@ -104,9 +104,9 @@ class EpochFilter {
   // records the epoch into `pass` when given.
   void Step(int index, ForwardPass* pass, FilterObserver* observer);
   // The mechanisation was corrected by `u` after the step: x_nav ← x_nav − u.
-  void ApplyFeedback(const Eigen::Matrix<double, 9, 1>& u);
+  void ApplyFeedback(const NavigationVector& u);
   // The navigation errors' estimate after the last step's updates, before the feedback.
-  const Eigen::Matrix<double, 9, 1>& navigation_estimate() const { return navigation_estimate_; }
+  const NavigationVector& navigation_estimate() const { return navigation_estimate_; }
   double log_likelihood() const { return log_likelihood_; }
   int scalar_updates() const { return scalar_updates_; }
   const Eigen::VectorXd& x() const { return x_; }
@@ -120,7 +120,7 @@ class EpochFilter {
   Eigen::VectorXd x_;
   Eigen::MatrixXd P_;
   Eigen::VectorXd PH_, gain_, half_joseph_;
-  Eigen::Matrix<double, 9, 1> navigation_estimate_ = Eigen::Matrix<double, 9, 1>::Zero();
+  NavigationVector navigation_estimate_ = NavigationVector::Zero();
   double log_likelihood_ = 0.0;
   int scalar_updates_ = 0;
 };

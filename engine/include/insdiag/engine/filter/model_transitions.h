@@ -55,7 +55,8 @@ StateGridWeights GridWeights(const Eigen::Matrix2d& d, int size, double q, int s
 // whole interval's after it, and for the interval the onset falls in, the
 // share of its samples after the onset (the coupling's quadratic summed
 // against them).
-Eigen::Matrix<double, 9, 1> FaultColumn(const EpochInterval& e, int sensor_axis, Regressor fault, double onset_s);
+NavigationVector FaultColumn(const EpochInterval& e, int sensor_axis, Regressor fault,
+                             double onset_s);
 
 class ModelTransitions {
  public:

@@ -41,8 +41,11 @@
 
 namespace insdiag::engine {
 
-using Matrix9d = Eigen::Matrix<double, 9, 9>;
-using Matrix93d = Eigen::Matrix<double, 9, 3>;
+// The navigation error states lead the state vector: attitude, velocity, position (StateLayout).
+inline constexpr int kNavigationStates = StateLayout::kNavigationSize;
+using NavigationVector = Eigen::Matrix<double, kNavigationStates, 1>;
+using Matrix9d = Eigen::Matrix<double, kNavigationStates, kNavigationStates>;
+using Matrix93d = Eigen::Matrix<double, kNavigationStates, 3>;
 
 // F_nav at the site (constant over a bench run).
 Matrix9d NavigationErrorMatrix(const Site& site, const StateLayout& layout);
