@@ -6,9 +6,11 @@ and fault size to a grid. This probe draws each run's conditions from its own
 seeded generator instead, the way an outside check would pick cases nobody
 tuned for:
 
-  unit      navigation grade (INS-2000) with its datasheet, or labelled
-            INS-2000 without one; a 0.1 °/h or a 1 °/h tactical unit with
-            its class's datasheet
+  unit      by default navigation grade (INS-2000) with its datasheet, or
+            labelled INS-2000 without one; a 0.1 °/h or a 1 °/h tactical
+            unit with its class's datasheet. --units widens the choice to
+            tactical and 10 °/h MEMS units without a datasheet, labelled
+            INS-2000 or with no unit type
   table     profile (turns, positions, mixed, static), rate changes
             instantaneous or ramped, holds jittered
   sampling  10, 20, 25, 50, 100 or 200 Hz
@@ -28,7 +30,7 @@ table that never tilts z (turns, static), whose only trace is the heading.
 
 Usage:
   scripts/blind_probe.py [--runs N] [--first-index I] [--kinds healthy,step,ramp] [--jobs J]
-                         [--out results.json]
+                         [--units nav,mems-unlabelled,...] [--out results.json]
 (--kinds keeps the drawn runs of those kinds: the draws stay those of their index.)
 INSDIAG_CLI names the CLI (default build/clients/insdiag).
 """
@@ -47,12 +49,18 @@ sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import fault_matrix  # noqa: E402
 from fault_matrix import BENCHSIM, CLI, PYTHON  # noqa: E402
 
-UNITS = [  # (preset, datasheet, unit type)
-    ("nav", "yes", "INS-2000"),
-    ("nav", "no", "INS-2000"),
-    ("tactical-0.1", "yes", "none"),
-    ("tactical", "yes", "none"),
-]
+UNITS = {  # name: (preset, datasheet, unit type)
+    "nav": ("nav", "yes", "INS-2000"),
+    "nav-labelled": ("nav", "no", "INS-2000"),
+    "tactical-0.1": ("tactical-0.1", "yes", "none"),
+    "tactical": ("tactical", "yes", "none"),
+    "tactical-0.1-labelled": ("tactical-0.1", "no", "INS-2000"),
+    "tactical-unlabelled": ("tactical", "no", "none"),
+    "mems-labelled": ("mems", "no", "INS-2000"),
+    "mems-unlabelled": ("mems", "no", "none"),
+}
+# The units of the first draws; a draw's conditions depend on the list it drew from.
+DEFAULT_UNITS = "nav,nav-labelled,tactical-0.1,tactical"
 PROFILES = ["turns", "positions", "mixed", "static"]
 RATES_HZ = [10, 20, 25, 50, 100, 200]
 SENSORS = ["gyro", "acc"]
@@ -60,10 +68,10 @@ SENSORS = ["gyro", "acc"]
 JUDGE_LOCK = threading.Lock()
 
 
-def draw(index):
-    """The run's conditions, from its own generator."""
+def draw(index, units):
+    """The run's conditions, from its own generator, its unit one of `units` (names in UNITS)."""
     rng = random.Random(f"blind/{index}")
-    preset, datasheet, unit_type = rng.choice(UNITS)
+    preset, datasheet, unit_type = UNITS[rng.choice(units)]
     conditions = dict(index=index, seed=7000 + index, preset=preset, datasheet=datasheet, unit_type=unit_type,
                       profile=rng.choice(PROFILES), rate_hz=rng.choice(RATES_HZ),
                       duration_s=round(rng.uniform(1800.0, 5400.0)), latitude_deg=round(rng.uniform(-70, 70), 2),
@@ -97,8 +105,8 @@ def heading_only(conditions):
     return fault.get("sensor") == "gyro" and fault.get("axis") == "z" and conditions["profile"] in ("turns", "static")
 
 
-def run_one(index):
-    c = draw(index)
+def run_one(index, units):
+    c = draw(index, units)
     fault = c["fault"]
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "run.csv")
@@ -162,10 +170,15 @@ def main():
     parser.add_argument("--kinds", default="healthy,step,ramp")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--out", default=None)
+    parser.add_argument("--units", default=DEFAULT_UNITS, help=f"units to draw from, of: {', '.join(UNITS)}")
     args = parser.parse_args()
     kinds = set(args.kinds.split(","))
-    indices = [i for i in range(args.first_index, args.first_index + args.runs) if kind_of(draw(i)) in kinds]
-    print(summarise(fault_matrix.run_all(run_one, indices, args.jobs, args.out)))
+    units = args.units.split(",")
+    unknown = [u for u in units if u not in UNITS]
+    if unknown:
+        parser.error(f"--units: unknown unit {', '.join(unknown)}; known: {', '.join(UNITS)}")
+    indices = [i for i in range(args.first_index, args.first_index + args.runs) if kind_of(draw(i, units)) in kinds]
+    print(summarise(fault_matrix.run_all(lambda i: run_one(i, units), indices, args.jobs, args.out)))
 
 
 if __name__ == "__main__":
