@@ -37,6 +37,7 @@ void ApplyTransition(const StateTransition& t, Eigen::MatrixXd& M) {  // dense D
 // interval the onset falls in.
 struct AtOnset {
   double statistic, estimate, std_error;
+  double peak_attitude_per_unit = 0.0;  // max over epochs of |A_ψ| after prediction, per unit fault
 };
 AtOnset PropagatedFromOnset(const ForwardPass& fw, const StateLayout& layout, const EpochRun& run,
                             const EffectTerm& term, double onset_s) {
@@ -47,10 +48,11 @@ AtOnset PropagatedFromOnset(const ForwardPass& fw, const StateLayout& layout, co
   while (theta + 1 < run.size() && run.epochs[static_cast<size_t>(theta)].time_s <= onset_s)
     ++theta;
   Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, 1), P(n, n);
-  double score = 0.0, information = 0.0;
+  double score = 0.0, information = 0.0, peak = 0.0;
   for (int k = theta; k < fw.epochs(); ++k) {
     if (k > theta) ApplyTransition(fw.transitions[static_cast<size_t>(k)], A);
     A.col(0).head<9>() += FaultColumn(run.epochs[static_cast<size_t>(k)], axis, term.family->regressor, onset_s);
+    peak = std::max(peak, A.col(0).segment<3>(layout.attitude()).norm());
     UnpackSymmetric(fw.P_pred.row(k).data(), n, P);
     for (int c = 0; c < kChannelCount; ++c) {
       const ObservationRow& h = rows[static_cast<size_t>(c)];
@@ -64,7 +66,7 @@ AtOnset PropagatedFromOnset(const ForwardPass& fw, const StateLayout& layout, co
       P -= gain * PH.transpose() + PH * gain.transpose() - S * gain * gain.transpose();
     }
   }
-  return {score * score / information, score / information, 1.0 / std::sqrt(information)};
+  return {score * score / information, score / information, 1.0 / std::sqrt(information), peak};
 }
 
 TEST(OnsetScan, EqualsTheFaultPropagatedForwardFromEveryOnset) {
@@ -106,6 +108,9 @@ TEST(OnsetScan, EqualsTheFaultPropagatedForwardFromEveryOnset) {
     EXPECT_NEAR(fit.std_error, at.std_error, 1e-6 * at.std_error) << name;
     EXPECT_LE(fit.onset_low_s, fit.onset_s);
     EXPECT_GE(fit.onset_high_s, fit.onset_s);
+    EXPECT_NEAR(fit.peak_attitude_error_rad, std::abs(fit.estimate) * at.peak_attitude_per_unit,
+                1e-6 * fit.peak_attitude_error_rad)
+        << name;
     (void)best_theta;
   }
 }
@@ -316,6 +321,63 @@ TEST(OnsetScan, AGyroStepNamesTheAccelerometerRampItsStillLevelTableCannotTellIt
     const OnsetFit tilting =
         GyroStepFit(testing::BuiltinProfileOrDie("positions"), 900.0, seed, terms);
     EXPECT_TRUE(tilting.ambiguous_with.empty()) << tilting.ambiguous_with.front().Name();
+  }
+}
+
+// Adds a bias ramp of `rate_rad_s2` from t₀ to gyro `axis`'s interval-mean rates.
+void AddGyroRamp(BenchRun& run, int axis, double onset_s, double rate_rad_s2) {
+  for (size_t j = 1; j < run.samples.size(); ++j) {
+    const double begin_s = run.samples[j - 1].t_s, end_s = run.samples[j].t_s;
+    if (end_s <= onset_s) continue;
+    const double from_s = std::max(begin_s, onset_s) - onset_s, to_s = end_s - onset_s;
+    run.samples[j].gyro_rad_s[axis] +=
+        rate_rad_s2 * 0.5 * (to_s * to_s - from_s * from_s) / (end_s - begin_s);
+  }
+}
+
+// On a still, level table a y gyro's ramp tilts the unit about y, and so,
+// to first order, does a z gyro's step: it turns the heading, which Earth
+// rate couples into the tilt. The step that matches a tactical unit's ramp
+// of 40 drift σ in 1000 s would turn the heading by radians, far outside the
+// first-order model in which the two are alike: it is reported so, not as a
+// finding, and the ramp is the finding.
+TEST(OnsetScan, AStepThatWouldTurnTheHeadingByRadiansIsNotAFinding) {
+  auto unit = testing::NavigationGradeUnit();
+  for (auto& bias : unit.gyro.bias) bias = {1.0 * testing::kDegPerHour, 300.0};
+  const double rate_rad_s2 = 40.0 * unit.gyro.bias[1].sigma / 1000.0;
+  sim::TableProfile still;
+  still.name = "still";
+  still.angular_acceleration_rad_s2 = 10.0 * testing::kDeg;
+  still.thermal.ambient_degc = 25.0;
+  still.segments = {{sim::TableSegment::Kind::kHold, 3600.0, 0, 0, 0}};
+  for (uint64_t seed : {41u, 42u}) {
+    auto sim = testing::SimulateOrDie(unit, still, 10.0, seed);
+    AddGyroRamp(sim.run, 1, 1500.0, rate_rad_s2);
+    const ErrorModel model = testing::TrueBaseModel(unit);
+    auto run = CondenseRun(sim.run, model, 1.0);
+    ASSERT_TRUE(run.ok()) << run.status();
+    auto fw = RunForwardFilter(*run, model);
+    ASSERT_TRUE(fw.ok()) << fw.status();
+    const auto fits =
+        ScanOnsets(*fw, StateLayout(model), *run,
+                   {Term("gyro_bias_ramp.y"), Term("gyro_bias_step.z")}, OnsetScanOptions{});
+    ASSERT_EQ(fits.size(), 2u);
+    const OnsetFit& ramp = fits[0];
+    const OnsetFit& step = fits[1];
+    std::printf("seed %d: ramp 2Δℓ %.1f, %.2g rad; step 2Δℓ %.1f, %.2g rad\n",
+                static_cast<int>(seed), ramp.statistic, ramp.peak_attitude_error_rad,
+                step.statistic, step.peak_attitude_error_rad);
+    EXPECT_GT(step.statistic,
+              0.5 * ramp.statistic);  // to first order the step explains the run too
+    EXPECT_LT(ramp.peak_attitude_error_rad, 0.1);
+    EXPECT_GT(step.peak_attitude_error_rad, 2.0);
+    const auto candidates = FaultCandidates(fits, 6 * run->size());
+    EXPECT_TRUE(candidates[0].identifiable);
+    EXPECT_LT(candidates[0].p_value, 1e-6);
+    EXPECT_FALSE(candidates[1].identifiable);
+    EXPECT_TRUE(candidates[1].note.starts_with("far outside the linear range"))
+        << candidates[1].note;
+    EXPECT_TRUE(candidates[0].correlated_with.empty());
   }
 }
 

@@ -9,6 +9,7 @@
 #include <set>
 
 #include "absl/strings/str_format.h"
+#include "insdiag/engine/finder/linear_range.h"
 #include "insdiag/engine/nav/rotation.h"
 #include "insdiag/engine/nav/wgs84.h"
 #include "insdiag/engine/stats/distributions.h"
@@ -45,10 +46,6 @@ Eigen::MatrixXd Select(const Eigen::MatrixXd& m, const std::vector<Eigen::Index>
   }
   return out;
 }
-
-// The first-order attitude model's relative error ψ/2 at which it stops
-// describing the filter at all: the dropped term half the kept one (ψ = 1 rad).
-constexpr double kLinearModelBreakdown = 0.5;
 
 // Eigenvalues below this share of the largest count as zero information.
 constexpr double kRankTolerance = 1e-10;
@@ -243,26 +240,14 @@ ScoredTerm ScoreTerm(const TermColumns& t, const ScanContext& context) {
   c.predicted_delta_bic = -c.statistic + c.dof * context.log_updates;
   const double attitude_error_rad =
       ImpliedPeakAttitudeError(sc.beta, context.scan.peak_attitude_sensitivity(), t.columns);
-  const double linearisation_error = 0.5 * attitude_error_rad;  // relative, of β̂
-  if (linearisation_error > kLinearModelBreakdown) {
+  const double relative_std_error = c.std_error / std::abs(c.estimate);
+  const LinearRange range = LinearRangeOf(attitude_error_rad, relative_std_error);
+  if (range == LinearRange::kFarOutside) {
     c.identifiable = false;
-    c.note = absl::StrFormat(
-        "far outside the linear range: the estimate would put the filter %.2g rad off in attitude, "
-        "where the "
-        "first-order error model is %.0f %% wrong; not a finding (a larger error elsewhere in the "
-        "model is the "
-        "likelier cause)",
-        attitude_error_rad, 100.0 * linearisation_error);
     sc.outside_linear_range = true;
-  } else if (linearisation_error > c.std_error / std::abs(c.estimate)) {
-    c.note = absl::StrFormat(
-        "beyond the linear range: the estimate would put the filter %.2g rad off in attitude; its "
-        "error is "
-        "the first-order model's (about %.0f %%) more than its standard error (%.0f %%): add it to "
-        "measure it",
-        attitude_error_rad, 100.0 * linearisation_error,
-        100.0 * c.std_error / std::abs(c.estimate));
   }
+  if (range != LinearRange::kWithin)
+    c.note = LinearRangeNote(range, attitude_error_rad, relative_std_error);
   return sc;
 }
 

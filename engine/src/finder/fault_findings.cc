@@ -1,11 +1,13 @@
 #include "insdiag/engine/finder/fault_findings.h"
 
+#include <absl/strings/str_cat.h>
 #include <absl/strings/str_format.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "insdiag/engine/finder/linear_range.h"
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/stats/distributions.h"
 
@@ -49,6 +51,14 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
     c.onset_high_s = f.onset_high_s;
     c.note = absl::StrFormat("likelihood ratio over %d onsets: max 2Δℓ %.1f; onset %.0f s (±1σ %.0f–%.0f s)",
                              f.onsets_tried, f.statistic, f.onset_s, f.onset_low_s, f.onset_high_s);
+    const double relative_std_error = f.std_error / std::abs(f.estimate);
+    const LinearRange range = LinearRangeOf(f.peak_attitude_error_rad, relative_std_error);
+    // A fault far outside the range is reported so, not ranked (linear_range.h).
+    if (range == LinearRange::kFarOutside) c.identifiable = false;
+    if (range != LinearRange::kWithin) {
+      c.note = absl::StrCat(LinearRangeNote(range, f.peak_attitude_error_rad, relative_std_error),
+                            "; ", c.note);
+    }
     out.push_back(std::move(c));
   }
   // A step and a ramp of one sensor axis whose 2Δℓ are within 2 of each
@@ -60,13 +70,16 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
     for (size_t j = 0; j < out.size(); ++j) {
       const OnsetFit& a = fits[i];
       const OnsetFit& b = fits[j];
-      if (i == j || !a.identifiable || !b.identifiable || a.term.family->sensor != b.term.family->sensor ||
-          a.term.axis != b.term.axis || a.term.family == b.term.family) {
+      if (i == j || !out[i].identifiable || !out[j].identifiable ||
+          a.term.family->sensor != b.term.family->sensor || a.term.axis != b.term.axis ||
+          a.term.family == b.term.family) {
         continue;
       }
       if (std::abs(a.statistic - b.statistic) < kIndistinguishableDeltaBic) out[i].correlated_with.push_back(out[j].name);
     }
     for (const EffectTerm& other : fits[i].ambiguous_with) {
+      const auto named = std::ranges::find(out, other.Name(), &EffectCandidate::name);
+      if (named != out.end() && !named->identifiable) continue;  // far outside the linear range
       if (std::ranges::find(out[i].correlated_with, other.Name()) == out[i].correlated_with.end()) {
         out[i].correlated_with.push_back(other.Name());
       }

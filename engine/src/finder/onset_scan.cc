@@ -348,6 +348,43 @@ void NameAmbiguousFaults(const OnsetSums& sums, const EpochRun& run, double cent
   }
 }
 
+// Each identifiable fit's peak attitude error (header): A_k = Φ_k L_{k−1}
+// A_{k−1} + W_k forward from the start, one column per fit, W_k the fit's
+// column at its placed onset (zero before it).
+void SetPeakAttitudeErrors(const ForwardPass& fw, const StateLayout& layout, const EpochRun& run,
+                           std::vector<OnsetFit>& fits) {
+  std::vector<size_t> swept;
+  for (size_t j = 0; j < fits.size(); ++j) {
+    if (fits[j].identifiable) swept.push_back(j);
+  }
+  if (swept.empty()) return;
+  const int K = fw.epochs();
+  const int n = fw.state_size;
+  const auto m = static_cast<Eigen::Index>(swept.size());
+  const auto rows = ObservationRows(layout);
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, m), updated(n, m), P(n, n), H(kChannelCount, n),
+                  L(n, n);
+  Eigen::VectorXd PH(n), gain(n), peak = Eigen::VectorXd::Zero(m);
+  for (int k = 0; k < K; ++k) {
+    const auto at = static_cast<size_t>(k);
+    fw.transitions[at].PropagateRows(A);
+    for (Eigen::Index j = 0; j < m; ++j) {
+      const EffectTerm& term = fits[swept[static_cast<size_t>(j)]].term;
+      A.col(j).head<kNavigationStates>() +=
+          FaultColumn(run.epochs[at], SensorAxisIndex(term.family->sensor, term.axis),
+                      term.family->regressor, fits[swept[static_cast<size_t>(j)]].onset_s);
+    }
+    peak = peak.cwiseMax(A.middleRows<3>(layout.attitude()).colwise().norm().transpose());
+    UpdateSequence(fw, k, rows, P, PH, gain, H, L);
+    updated.noalias() = L * A;
+    A.swap(updated);
+  }
+  for (Eigen::Index j = 0; j < m; ++j) {
+    OnsetFit& fit = fits[swept[static_cast<size_t>(j)]];
+    fit.peak_attitude_error_rad = std::abs(fit.estimate) * peak[j];
+  }
+}
+
 }  // namespace
 
 double OnsetPValue(double statistic, double path_length) {
@@ -376,6 +413,7 @@ std::vector<OnsetFit> ScanOnsets(const ForwardPass& fw, const StateLayout& layou
   const OnsetSums sums = BackwardSweep(fw, layout, run, centre_s);
   for (const EffectTerm& term : terms) out.push_back(FitTerm(term, sums, run, first, last, centre_s, options));
   NameAmbiguousFaults(sums, run, centre_s, options, out);
+  SetPeakAttitudeErrors(fw, layout, run, out);
   return out;
 }
 

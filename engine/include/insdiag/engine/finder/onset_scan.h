@@ -49,7 +49,12 @@
 // whose innovation signatures from one fault's onset are nearly parallel in the S⁻¹ metric,
 // |I_ab(θ)|/√(I_aa(θ) I_bb(θ)) above a threshold, cannot be told apart by the run (on a still,
 // level table a gyro's step about x tilts the unit as an accelerometer's ramp on y does): the fault
-// names the other, as the score test's look-alikes do.
+// names the other, as the score test's look-alikes do. Each fit also gets the
+// filter's peak attitude error under it, from one forward sweep of A_k for
+// every fit at its onset: on a still table a z gyro's step turns the heading
+// and, through Earth rate, tilts the unit as a y gyro's ramp does, but a step
+// big enough to match the ramp turns the heading by radians, where the
+// first-order model that makes the two alike no longer holds.
 #pragma once
 
 #include <vector>
@@ -86,6 +91,10 @@ struct OnsetFit {
   double std_error = 0.0;
   double path_length = 0.0;   // V
   int onsets_tried = 0;
+  // The filter's peak attitude error under the fault at its estimate and
+  // onset, |β̂| max_k |A_ψ,k| (A_k of the header, after each prediction):
+  // how far the estimate is from the first-order model's range (linear_range.h).
+  double peak_attitude_error_rad = 0.0;
   std::vector<EffectTerm>
       ambiguous_with;  // faults whose signature from this onset is nearly parallel
 };
