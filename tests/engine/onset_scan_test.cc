@@ -285,6 +285,16 @@ TEST(OnsetScan, AStepInsideASampleIsPlacedWithinThatSample) {
 
 // The scan of a gyro-x step of 20 drift σ at `onset_s`, filtered with the
 // unit's true base model: the step's own fit.
+// A table that holds the unit level and still for `duration_s`.
+sim::TableProfile StillTable(double duration_s) {
+  sim::TableProfile still;
+  still.name = "still";
+  still.angular_acceleration_rad_s2 = 10.0 * testing::kDeg;
+  still.thermal.ambient_degc = 25.0;
+  still.segments = {{sim::TableSegment::Kind::kHold, duration_s, 0, 0, 0}};
+  return still;
+}
+
 OnsetFit GyroStepFit(const sim::TableProfile& profile, double onset_s, uint64_t seed,
                      const std::vector<EffectTerm>& terms) {
   auto unit = testing::NavigationGradeUnit();
@@ -308,11 +318,7 @@ OnsetFit GyroStepFit(const sim::TableProfile& profile, double onset_s, uint64_t 
 TEST(OnsetScan, AGyroStepNamesTheAccelerometerRampItsStillLevelTableCannotTellItFrom) {
   const std::vector<EffectTerm> terms = {Term("gyro_bias_step.x"), Term("acc_bias_ramp.y"),
                                          Term("acc_bias_ramp.x"), Term("gyro_bias_step.y")};
-  sim::TableProfile still;
-  still.name = "still";
-  still.angular_acceleration_rad_s2 = 10.0 * testing::kDeg;
-  still.thermal.ambient_degc = 25.0;
-  still.segments = {{sim::TableSegment::Kind::kHold, 1800.0, 0, 0, 0}};
+  const sim::TableProfile still = StillTable(1800.0);
   for (uint64_t seed : {31u, 32u}) {
     const OnsetFit on_still = GyroStepFit(still, 900.0, seed, terms);
     EXPECT_EQ(on_still.ambiguous_with.size(), 1u);
@@ -345,11 +351,7 @@ TEST(OnsetScan, AStepThatWouldTurnTheHeadingByRadiansIsNotAFinding) {
   auto unit = testing::NavigationGradeUnit();
   for (auto& bias : unit.gyro.bias) bias = {1.0 * testing::kDegPerHour, 300.0};
   const double rate_rad_s2 = 40.0 * unit.gyro.bias[1].sigma / 1000.0;
-  sim::TableProfile still;
-  still.name = "still";
-  still.angular_acceleration_rad_s2 = 10.0 * testing::kDeg;
-  still.thermal.ambient_degc = 25.0;
-  still.segments = {{sim::TableSegment::Kind::kHold, 3600.0, 0, 0, 0}};
+  const sim::TableProfile still = StillTable(3600.0);
   for (uint64_t seed : {41u, 42u}) {
     auto sim = testing::SimulateOrDie(unit, still, 10.0, seed);
     AddGyroRamp(sim.run, 1, 1500.0, rate_rad_s2);
