@@ -53,9 +53,13 @@ def mems_gyro_drift_sigma(axis):
     return unit_classes.PRESETS["mems"]()[f"gyro_bias_gm.{axis}.sigma"]
 
 
-def significant(report):
-    return [c for c in report["effectCandidates"]
+def significant_of(candidates):
+    return [c for c in candidates
             if c.get("identifiable") and not c.get("notTested") and c.get("pValueHolm", 1.0) < 0.01]
+
+
+def significant(report):
+    return significant_of(report["effectCandidates"])
 
 
 @unittest.skipUnless(os.path.exists(CLI), f"no insdiag CLI at {CLI}")
@@ -119,6 +123,25 @@ class EngineOnIndependentRuns(unittest.TestCase):
                 report, _ = analyse_mems_without_datasheet(d, profile, 100, seed)
                 self.assertEqual(report["verdict"], "GOOD", report.get("faultIntervals"))
                 self.assertEqual([c["name"] for c in significant(report)], [])
+
+    def test_a_healthy_mems_unit_on_positions_gets_no_scale_factor_the_linear_model_overstates(self):
+        # Two healthy runs of a blind draw (docs/FAULT_SCENARIOS.md, "The third
+        # draw"): the drifts turn the filter's heading by most of a radian
+        # under a one-step gyro scale factor of several per cent, where the
+        # first-order model's error (42 %) dwarfs the noise (14 %). That
+        # scale factor passed for a finding until the test counted both.
+        runs = (("--unit-type", "none", "--rate-hz", "10", "--duration", "4074", "--seed", "7132",
+                 "--latitude-deg", "-3.14"),
+                ("--rate-hz", "25", "--duration", "4115", "--seed", "7146", "--latitude-deg", "-6.67", "--ramp-accel", "20"))
+        beyond = 0
+        for args in runs:
+            with self.subTest(seed=args[args.index("--seed") + 1]), tempfile.TemporaryDirectory() as d:
+                report, _ = analyse(d, "--preset", "mems", "--profile", "positions", "--datasheet", "no", *args)
+                scale_factors = [c for c in report["effectCandidates"] + report.get("familyCandidates", [])
+                                 if "scale_factor" in c.get("family", "")]
+                self.assertEqual([c["name"] for c in scale_factors if c in significant_of(scale_factors)], [])
+                beyond += sum(1 for c in scale_factors if c.get("note", "").startswith("beyond the linear range"))
+        self.assertGreaterEqual(beyond, 1, "no scale factor left the linear range: the test shows nothing")
 
     def test_a_mems_gyro_step_without_datasheet_is_not_taken_for_a_wider_drift(self):
         # With no datasheet and no unit type the drifts are identified from

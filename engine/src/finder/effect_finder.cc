@@ -50,20 +50,38 @@ Eigen::MatrixXd Select(const Eigen::MatrixXd& m, const std::vector<Eigen::Index>
 // Eigenvalues below this share of the largest count as zero information.
 constexpr double kRankTolerance = 1e-10;
 
-// LM = sᵀ 𝓘⁺ s over the numerically non-zero eigen-directions of 𝓘.
-double PseudoInverseStatistic(const Eigen::VectorXd& s, const Eigen::MatrixXd& I, int* rank) {
+// The score test of columns whose one-step estimate β̂ = 𝓘⁺s carries,
+// besides its noise (covariance 𝓘⁺), the first-order model's error: up to
+// ψ/2 of the estimate (linear_range.h), taken as an independent error
+// e_j = relative_error_j |β̂_j| of each column. In the numerically non-zero
+// eigen-directions V of 𝓘 (eigenvalues Λ): b = Vᵀβ̂, C = Λ⁻¹ + Vᵀ diag(e²) V,
+// T = bᵀ C⁻¹ b, which is LM = sᵀ 𝓘⁺ s where e = 0. `covariance`, where
+// given: V C Vᵀ, the estimate's covariance with both errors.
+double StatisticWithLinearisationError(const Eigen::VectorXd& s, const Eigen::MatrixXd& I,
+                                       const Eigen::VectorXd& relative_error, int* rank,
+                                       Eigen::MatrixXd* covariance = nullptr) {
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(I);
   const Eigen::VectorXd& lambda = eig.eigenvalues();
   const double top = lambda.size() > 0 ? lambda.maxCoeff() : 0.0;
-  double lm = 0.0;
-  *rank = 0;
+  std::vector<Eigen::Index> kept;
   for (Eigen::Index i = 0; i < lambda.size(); ++i) {
-    if (!(top > 0.0) || lambda[i] <= kRankTolerance * top) continue;
-    const double proj = eig.eigenvectors().col(i).dot(s);
-    lm += proj * proj / lambda[i];
-    ++*rank;
+    if (top > 0.0 && lambda[i] > kRankTolerance * top) kept.push_back(i);
   }
-  return lm;
+  *rank = static_cast<int>(kept.size());
+  const auto r = static_cast<Eigen::Index>(kept.size());
+  Eigen::MatrixXd V(I.rows(), r);
+  Eigen::VectorXd inverse_lambda(r);
+  for (Eigen::Index k = 0; k < r; ++k) {
+    V.col(k) = eig.eigenvectors().col(kept[static_cast<size_t>(k)]);
+    inverse_lambda[k] = 1.0 / lambda[kept[static_cast<size_t>(k)]];
+  }
+  const Eigen::VectorXd b = inverse_lambda.asDiagonal() * (V.transpose() * s);
+  const Eigen::VectorXd error = relative_error.cwiseProduct((V * b).cwiseAbs());
+  const Eigen::MatrixXd C = Eigen::MatrixXd(inverse_lambda.asDiagonal()) +
+                            V.transpose() * error.cwiseAbs2().asDiagonal() * V;
+  if (covariance != nullptr) *covariance = V * C * V.transpose();
+  if (r == 0) return 0.0;
+  return b.dot(C.ldlt().solve(b));
 }
 
 // The filter's peak attitude error under the estimate β̂ of a term's columns:
@@ -221,13 +239,23 @@ ScoredTerm ScoreTerm(const TermColumns& t, const ScanContext& context) {
     c.note = "not identifiable with this profile: " + why;
     return sc;
   }
-  const Eigen::MatrixXd cov = It.inverse();
-  sc.beta = cov * st;
+  const Eigen::MatrixXd noise_cov = It.inverse();
+  sc.beta = noise_cov * st;
+  const double attitude_error_rad =
+      ImpliedPeakAttitudeError(sc.beta, context.scan.peak_attitude_sensitivity(), t.columns);
+  // 2Δℓ is the linear model's; whether the term is a finding counts the
+  // first-order model's error of β̂ beside its noise (linear_range.h).
   c.statistic = st.dot(sc.beta);
-  c.p_value = stats::ChiSquareSurvival(c.statistic, c.dof);
+  Eigen::MatrixXd cov;
+  int rank = 0;
+  const double tested = StatisticWithLinearisationError(
+      st, It, Eigen::VectorXd::Constant(c.dof, 0.5 * attitude_error_rad), &rank, &cov);
+  c.p_value = stats::ChiSquareSurvival(tested, c.dof);
+  double noise_std_error = 0.0;
   if (c.dof == 1) {
     c.estimate = sc.beta[0];
     c.std_error = std::sqrt(cov(0, 0));
+    noise_std_error = std::sqrt(noise_cov(0, 0));
   } else {
     // Yaw harmonic magnitude √(a² + b²), delta method.
     const double mag = sc.beta.norm();
@@ -235,12 +263,11 @@ ScoredTerm ScoreTerm(const TermColumns& t, const ScanContext& context) {
     const Eigen::VectorXd grad = mag > 0.0 ? Eigen::VectorXd(sc.beta / mag)
                                            : Eigen::VectorXd::Ones(c.dof) / std::sqrt(c.dof);
     c.std_error = std::sqrt(grad.dot(cov * grad));
+    noise_std_error = std::sqrt(grad.dot(noise_cov * grad));
   }
   c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
   c.predicted_delta_bic = -c.statistic + c.dof * context.log_updates;
-  const double attitude_error_rad =
-      ImpliedPeakAttitudeError(sc.beta, context.scan.peak_attitude_sensitivity(), t.columns);
-  const double relative_std_error = c.std_error / std::abs(c.estimate);
+  const double relative_std_error = noise_std_error / std::abs(c.estimate);
   const LinearRange range = LinearRangeOf(attitude_error_rad, relative_std_error);
   if (range == LinearRange::kFarOutside) {
     c.identifiable = false;
@@ -318,10 +345,33 @@ std::vector<SegmentContribution> WhereItShows(const ScoredTerm& sc, const ScoreT
 
 // Families: the joint test of their terms that the run excites and that are
 // within the linear range, Holm-adjusted, most significant first.
+// Each column's relative first-order error ψ/2 under the family's joint
+// estimate, ψ that of the column's term (its own columns of the estimate).
+Eigen::VectorXd FamilyLinearisationErrors(const Eigen::VectorXd& score,
+                                          const Eigen::MatrixXd& information,
+                                          const std::vector<const TermColumns*>& members,
+                                          const ScanContext& context) {
+  Eigen::VectorXd relative_error = Eigen::VectorXd::Zero(score.size());
+  Eigen::MatrixXd pseudo_inverse;
+  int rank = 0;
+  StatisticWithLinearisationError(score, information, relative_error, &rank, &pseudo_inverse);
+  const Eigen::VectorXd beta = pseudo_inverse * score;
+  Eigen::Index offset = 0;
+  for (const TermColumns* t : members) {
+    const auto n = static_cast<Eigen::Index>(t->columns.size());
+    const double attitude_error_rad = ImpliedPeakAttitudeError(
+        beta.segment(offset, n), context.scan.peak_attitude_sensitivity(), t->columns);
+    relative_error.segment(offset, n).setConstant(0.5 * attitude_error_rad);
+    offset += n;
+  }
+  return relative_error;
+}
+
 std::vector<EffectCandidate> FamilyCandidates(const std::vector<TermColumns>& terms,
                                               const std::set<std::string>& outside_linear_range,
                                               const ScanContext& context) {
   std::map<std::string, std::vector<Eigen::Index>> family_columns;
+  std::map<std::string, std::vector<const TermColumns*>> family_terms;
   std::vector<std::string> family_order;
   for (const TermColumns& t : terms) {
     std::string why;
@@ -334,6 +384,7 @@ std::vector<EffectCandidate> FamilyCandidates(const std::vector<TermColumns>& te
     if (!family_columns.count(name)) family_order.push_back(name);
     auto& cols = family_columns[name];
     cols.insert(cols.end(), t.columns.begin(), t.columns.end());
+    family_terms[name].push_back(&t);
   }
   std::vector<EffectCandidate> families;
   std::vector<double> family_p;
@@ -343,10 +394,16 @@ std::vector<EffectCandidate> FamilyCandidates(const std::vector<TermColumns>& te
     c.name = name;
     c.family = name;
     c.source = "SCORE";
-    c.statistic = PseudoInverseStatistic(Select(context.scan.score(), cols),
-                                         Select(context.scan.information(), cols), &c.dof);
+    const Eigen::VectorXd score = Select(context.scan.score(), cols);
+    const Eigen::MatrixXd information = Select(context.scan.information(), cols);
+    const Eigen::VectorXd relative_error =
+        FamilyLinearisationErrors(score, information, family_terms[name], context);
+    c.statistic = StatisticWithLinearisationError(score, information,
+                                                  Eigen::VectorXd::Zero(score.size()), &c.dof);
+    const double tested =
+        StatisticWithLinearisationError(score, information, relative_error, &c.dof);
     c.identifiable = c.dof > 0;
-    c.p_value = c.dof > 0 ? stats::ChiSquareSurvival(c.statistic, c.dof) : 1.0;
+    c.p_value = c.dof > 0 ? stats::ChiSquareSurvival(tested, c.dof) : 1.0;
     c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
     c.predicted_delta_bic = -c.statistic + c.dof * context.log_updates;
     c.unit = std::string(FindEffectFamily(name)->unit);

@@ -39,12 +39,18 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
       out.push_back(std::move(c));
       continue;
     }
+    // 2Δℓ is the linear model's; whether the fault is a finding counts the
+    // first-order model's error of its magnitude beside its noise (linear_range.h).
     c.statistic = f.statistic;
-    c.p_value = f.p_value;
     c.estimate = f.estimate;
-    c.std_error = f.std_error;
-    c.predicted_delta_aic = -f.statistic + 2.0 * c.dof;
-    c.predicted_delta_bic = -f.statistic + c.dof * log_n;
+    c.std_error =
+        StandardErrorWithLinearisation(f.estimate, f.std_error, f.peak_attitude_error_rad);
+    const double noise_share = f.std_error / c.std_error;
+    c.p_value = noise_share == 1.0
+                    ? f.p_value
+                    : OnsetPValue(f.statistic * noise_share * noise_share, f.path_length);
+    c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
+    c.predicted_delta_bic = -c.statistic + c.dof * log_n;
     c.onset_s = f.onset_s;
     c.onset_std_s = f.onset_std_s;
     c.onset_low_s = f.onset_low_s;

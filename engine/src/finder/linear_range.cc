@@ -2,6 +2,8 @@
 
 #include <absl/strings/str_format.h>
 
+#include <cmath>
+
 namespace insdiag::engine {
 namespace {
 
@@ -18,6 +20,11 @@ LinearRange LinearRangeOf(double peak_attitude_error_rad, double relative_std_er
   return LinearRange::kWithin;
 }
 
+double StandardErrorWithLinearisation(double estimate, double std_error,
+                                      double peak_attitude_error_rad) {
+  return std::hypot(std_error, 0.5 * peak_attitude_error_rad * estimate);
+}
+
 std::string LinearRangeNote(LinearRange range, double peak_attitude_error_rad,
                             double relative_std_error) {
   const double linearisation_error = 0.5 * peak_attitude_error_rad;
@@ -25,17 +32,15 @@ std::string LinearRangeNote(LinearRange range, double peak_attitude_error_rad,
     case LinearRange::kFarOutside:
       return absl::StrFormat(
           "far outside the linear range: the estimate would put the filter %.2g rad off in "
-          "attitude, where the "
-          "first-order error model is %.0f %% wrong; not a finding (a larger error elsewhere in "
-          "the model is the "
-          "likelier cause)",
+          "attitude, "
+          "where the first-order error model is %.0f %% wrong; not a finding (a larger error "
+          "elsewhere in the model is the likelier cause)",
           peak_attitude_error_rad, 100.0 * linearisation_error);
     case LinearRange::kBeyond:
       return absl::StrFormat(
           "beyond the linear range: the estimate would put the filter %.2g rad off in attitude; "
-          "its error is the "
-          "first-order model's (about %.0f %%) more than its standard error (%.0f %%): add it to "
-          "measure it",
+          "its error is the first-order model's (about %.0f %%) more than its noise (%.0f %%), "
+          "and its test counts both: add it to measure it",
           peak_attitude_error_rad, 100.0 * linearisation_error, 100.0 * relative_std_error);
     case LinearRange::kWithin:
       break;

@@ -10,6 +10,9 @@
 //   filter and the estimate is an artefact, not a finding;
 // - ψ/2 above the estimate's relative standard error only: the linearisation,
 //   not the noise, limits the estimate.
+// Either way the estimate's test counts ψ/2 of it as an error beside its
+// noise (StandardErrorWithLinearisation), so that a term the linear model
+// overstates is not a finding because of it.
 #pragma once
 
 #include <string>
@@ -24,6 +27,11 @@ enum class LinearRange {
 
 // `relative_std_error`: SE/|β̂|.
 LinearRange LinearRangeOf(double peak_attitude_error_rad, double relative_std_error);
+
+// √(SE² + (ψ/2 · β̂)²): the estimate's standard error with the first-order
+// model's error counted beside its noise SE.
+double StandardErrorWithLinearisation(double estimate, double std_error,
+                                      double peak_attitude_error_rad);
 
 // What a candidate's note says for `range` (empty within it).
 std::string LinearRangeNote(LinearRange range, double peak_attitude_error_rad,
