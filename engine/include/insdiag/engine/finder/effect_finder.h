@@ -1,8 +1,8 @@
 // Ranking the missing effects from one score-test pass (score_test.h).
 //
 // Per term (one or two parameters p): LM = s_tᵀ 𝓘_t⁻¹ s_t ~ χ²(p) without the
-// effect; β̂ = 𝓘_t⁻¹ s_t, Cov β̂ = 𝓘_t⁻¹ (a yaw harmonic's magnitude √(a²+b²)
-// by the delta method). Per family: the joint test of its terms, LM =
+// effect; β̂ = 𝓘_t⁻¹ s_t, Cov β̂ = 𝓘_t⁻¹ from the noise (a yaw harmonic's
+// magnitude √(a²+b²) by the delta method). Per family: the joint test of its terms, LM =
 // s_Fᵀ 𝓘_F⁺ s_F ~ χ²(rank 𝓘_F). p-values are adjusted over all candidates by
 // Holm's step-down method (family-wise error). Adding an effect changes AIC by
 // −LM + 2p and BIC by −LM + p ln N (LM is the likelihood ratio, score_test.h).
@@ -16,14 +16,12 @@
 // not identifiable with this profile, never as absent.
 //
 // Nor is a term whose one-step estimate is far outside the filter's linear
-// range. Under the estimate the filter's attitude error peaks at
-// ψ = |β̂| · max|A_ψ| (score_test.h); the first-order attitude model drops
-// [ψ×]²/2, a relative error of ψ/2 in the innovations' mean and so in β̂.
-// Beyond ψ/2 = 1/2 (ψ = 1 rad) the linear model no longer describes the
-// filter and the estimate is an artefact: the term is reported as far outside
-// the linear range, not ranked as a finding. Where ψ/2 only exceeds the
-// estimate's relative standard error SE/|β̂|, the term stays a finding and
-// its note says that the linearisation, not the noise, limits the estimate.
+// range (linear_range.h): under the estimate the filter's attitude error
+// peaks at ψ = |β̂| · max|A_ψ| (score_test.h), and beyond ψ = 1 rad the
+// estimate is an artefact, reported so and not ranked. Within it the test
+// counts the first-order error ψ/2 · |β̂| beside the noise: Cov β̂ =
+// 𝓘_t⁻¹ + diag((ψ/2 · β̂)²) for the p-value and the SE, while LM, ΔAIC and
+// ΔBIC stay the linear model's.
 #pragma once
 
 #include <string>
