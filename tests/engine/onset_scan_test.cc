@@ -81,6 +81,7 @@ TEST(OnsetScan, EqualsTheFaultPropagatedForwardFromEveryOnset) {
   const StateLayout layout(model);
   OnsetScanOptions options;
   options.min_side_s = 60.0;
+  options.family_wise_alpha = 1.0;  // every fit's peak attitude error, findings or not
   for (const char* name : {"gyro_bias_step.x", "acc_bias_ramp.y", "gyro_bias_ramp.z"}) {
     const EffectTerm& term = Term(name);
     const auto fits = ScanOnsets(*fw, layout, *run, {term}, options);

@@ -348,14 +348,14 @@ void NameAmbiguousFaults(const OnsetSums& sums, const EpochRun& run, double cent
   }
 }
 
-// Each identifiable fit's peak attitude error (header): A_k = Φ_k L_{k−1}
+// The peak attitude error (header) of each fit that could be a finding: A_k = Φ_k L_{k−1}
 // A_{k−1} + W_k forward from the start, one column per fit, W_k the fit's
 // column at its placed onset (zero before it).
 void SetPeakAttitudeErrors(const ForwardPass& fw, const StateLayout& layout, const EpochRun& run,
-                           std::vector<OnsetFit>& fits) {
+                           double family_wise_alpha, std::vector<OnsetFit>& fits) {
   std::vector<size_t> swept;
   for (size_t j = 0; j < fits.size(); ++j) {
-    if (fits[j].identifiable) swept.push_back(j);
+    if (fits[j].identifiable && fits[j].p_value < family_wise_alpha) swept.push_back(j);
   }
   if (swept.empty()) return;
   const int K = fw.epochs();
@@ -413,7 +413,7 @@ std::vector<OnsetFit> ScanOnsets(const ForwardPass& fw, const StateLayout& layou
   const OnsetSums sums = BackwardSweep(fw, layout, run, centre_s);
   for (const EffectTerm& term : terms) out.push_back(FitTerm(term, sums, run, first, last, centre_s, options));
   NameAmbiguousFaults(sums, run, centre_s, options, out);
-  SetPeakAttitudeErrors(fw, layout, run, out);
+  SetPeakAttitudeErrors(fw, layout, run, options.family_wise_alpha, out);
   return out;
 }
 

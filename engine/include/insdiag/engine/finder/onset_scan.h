@@ -49,12 +49,12 @@
 // whose innovation signatures from one fault's onset are nearly parallel in the S⁻¹ metric,
 // |I_ab(θ)|/√(I_aa(θ) I_bb(θ)) above a threshold, cannot be told apart by the run (on a still,
 // level table a gyro's step about x tilts the unit as an accelerometer's ramp on y does): the fault
-// names the other, as the score test's look-alikes do. Each fit also gets the
-// filter's peak attitude error under it, from one forward sweep of A_k for
-// every fit at its onset: on a still table a z gyro's step turns the heading
-// and, through Earth rate, tilts the unit as a y gyro's ramp does, but a step
-// big enough to match the ramp turns the heading by radians, where the
-// first-order model that makes the two alike no longer holds.
+// names the other, as the score test's look-alikes do. Each fit that could be
+// a finding also gets the filter's peak attitude error under it, from one
+// forward sweep of A_k for those fits at their onsets: on a still table a z gyro's step turns the
+// heading and, through Earth rate, tilts the unit as a y gyro's ramp does, but a step big enough to
+// match the ramp turns the heading by radians, where the first-order model that makes the two alike
+// no longer holds.
 #pragma once
 
 #include <vector>
@@ -75,6 +75,10 @@ struct OnsetScanOptions {
   double interval_tail = 0.16;
   // |cos| of two faults' signatures at one's onset above which it names the other.
   double ambiguity_threshold = 0.9;
+  // The family-wise level at which a fault is a finding (as the finder's):
+  // a fit whose p-value is above it is none whatever its linear range, and
+  // its peak attitude error is not swept.
+  double family_wise_alpha = 0.01;
 };
 
 // The best onset of one fault term.
