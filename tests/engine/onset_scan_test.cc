@@ -384,6 +384,54 @@ TEST(OnsetScan, AStepThatWouldTurnTheHeadingByRadiansIsNotAFinding) {
   }
 }
 
+// On a still table a navigation-grade unit's y gyro ramp and the z gyro step
+// that Earth rate makes look like it explain the run equally, well inside
+// the linear range (the step turns the heading by a tenth of a radian). The
+// run cannot tell them apart; the smaller change of the unit in its drift σ
+// comes first, and stands for both as the one failure.
+TEST(OnsetScan, OfLookAlikesTheRunCannotTellApartTheSmallerFaultStandsForBoth) {
+  auto unit = testing::NavigationGradeUnit();
+  const double rate_rad_s2 = 24.0 * unit.gyro.bias[1].sigma / 1000.0;
+  const double run_end_s = 3600.0;
+  auto sim = testing::SimulateOrDie(unit, StillTable(run_end_s), 10.0, 43);
+  AddGyroRamp(sim.run, 1, 1200.0, rate_rad_s2);
+  const ErrorModel model = testing::TrueBaseModel(unit);
+  auto run = CondenseRun(sim.run, model, 1.0);
+  ASSERT_TRUE(run.ok()) << run.status();
+  auto fw = RunForwardFilter(*run, model);
+  ASSERT_TRUE(fw.ok()) << fw.status();
+  const auto fits =
+      ScanOnsets(*fw, StateLayout(model), *run,
+                 {Term("gyro_bias_step.z"), Term("gyro_bias_ramp.y")}, OnsetScanOptions{});
+  FaultScale scale;
+  for (int a = 0; a < 3; ++a) {
+    scale.drift_sigma[static_cast<size_t>(a)] = unit.gyro.bias[static_cast<size_t>(a)].sigma;
+    scale.drift_sigma[static_cast<size_t>(3 + a)] = unit.acc.bias[static_cast<size_t>(a)].sigma;
+  }
+  scale.run_end_s = run->epochs.back().time_s;
+  auto candidates = FaultCandidates(fits, 6 * run->size(), scale);
+  for (EffectCandidate& c : candidates) c.p_value_holm = c.p_value;
+  const EffectCandidate& step = candidates[0];
+  const EffectCandidate& ramp = candidates[1];
+  std::printf("step.z 2Δℓ %.1f, %.0f σ; ramp.y 2Δℓ %.1f, %.0f σ\n", step.statistic,
+              *step.size_in_drift_sigma, ramp.statistic, *ramp.size_in_drift_sigma);
+  ASSERT_TRUE(step.SignificantAt(0.01) && ramp.SignificantAt(0.01));
+  EXPECT_LT(std::abs(step.statistic - ramp.statistic), 2.0);  // to first order alike
+  EXPECT_GT(*step.size_in_drift_sigma, 5.0 * *ramp.size_in_drift_sigma);
+  EXPECT_TRUE(IsSmallerLookAlike(step, ramp, 0.01));
+  EXPECT_FALSE(IsSmallerLookAlike(ramp, step, 0.01));
+  auto ranked = candidates;
+  PutSmallerLookAlikesFirst(ranked, 0.01);
+  EXPECT_EQ(ranked.front().name, "gyro_bias_ramp.y");
+  const auto findings = SignificantFaults(candidates, 0.01);
+  const auto found = [&](const std::string& name) {
+    return std::ranges::any_of(findings,
+                               [&](const FaultFinding& f) { return f.term.Name() == name; });
+  };
+  EXPECT_TRUE(found("gyro_bias_ramp.y"));
+  EXPECT_FALSE(found("gyro_bias_step.z"));
+}
+
 // A step and a ramp on one axis that explain the run equally (2Δℓ within 2)
 // name each other, so the report shows the reader that the shape is open;
 // a step on another axis, or a ramp far behind, is no look-alike.

@@ -366,7 +366,9 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
 // adds them (Schwarz, Ann. Stat. 6(2), 1978). Beyond significance a p-value
 // no longer ranks explanations: a step and a ramp on one axis carry the same
 // evidence, but the bound on the maximum over onsets penalises them unequally.
-// The rest follow by Holm-adjusted p-value.
+// The rest follow by Holm-adjusted p-value. Of look-alike faults the run
+// cannot tell apart, the smaller change of the unit comes first
+// (fault_findings.h, IsSmallerLookAlike).
 std::vector<EffectCandidate> MergeCandidates(std::vector<EffectCandidate> terms,
                                              const std::vector<StructureProposal>& structures,
                                              std::vector<EffectCandidate> other_structures, double alpha) {
@@ -391,6 +393,7 @@ std::vector<EffectCandidate> MergeCandidates(std::vector<EffectCandidate> terms,
     if (a.p_value_holm != b.p_value_holm) return a.p_value_holm < b.p_value_holm;
     return a.statistic > b.statistic;
   });
+  PutSmallerLookAlikesFirst(terms, alpha);
   return terms;
 }
 
@@ -467,7 +470,16 @@ Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const M
     }
   }
   f.structures = ConfirmStructures(epochs, pass, std::move(proposals));
-  for (EffectCandidate& c : FaultCandidates(pass.onsets, pass.forward.scalar_updates)) others.push_back(std::move(c));
+  FaultScale scale;
+  for (int a = 0; a < 3; ++a) {
+    scale.drift_sigma[static_cast<size_t>(SensorAxisIndex(Sensor::kGyro, a))] =
+        pass.model.gyro.bias[static_cast<size_t>(a)].sigma;
+    scale.drift_sigma[static_cast<size_t>(SensorAxisIndex(Sensor::kAccelerometer, a))] =
+        pass.model.acc.bias[static_cast<size_t>(a)].sigma;
+  }
+  if (epochs.size() > 0) scale.run_end_s = epochs.epochs.back().time_s;
+  for (EffectCandidate& c : FaultCandidates(pass.onsets, pass.forward.scalar_updates, scale))
+    others.push_back(std::move(c));
   f.candidates = MergeCandidates(std::move(ranked.terms), f.structures, std::move(others),
                                  options.finder.family_wise_alpha);
   return f;
@@ -505,6 +517,16 @@ const EffectCandidate* LowestBicSignificant(const std::vector<EffectCandidate>& 
     for (const EffectCandidate& c : *list) {
       if (!c.SignificantAt(options.finder.family_wise_alpha)) continue;
       if (best == nullptr || c.predicted_delta_bic < best->predicted_delta_bic) best = &c;
+    }
+  }
+  // Of look-alike faults the run cannot tell apart, the smallest (fault_findings.h).
+  for (bool moved = best != nullptr; moved;) {
+    moved = false;
+    for (const EffectCandidate& c : terms) {
+      if (IsSmallerLookAlike(*best, c, options.finder.family_wise_alpha)) {
+        best = &c;
+        moved = true;
+      }
     }
   }
   return best;

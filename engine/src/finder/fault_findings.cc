@@ -21,7 +21,8 @@ std::string RawChannel(const EffectTerm& term) {
 
 }  // namespace
 
-std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, int scalar_updates) {
+std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, int scalar_updates,
+                                             const std::optional<FaultScale>& scale) {
   std::vector<EffectCandidate> out;
   const double log_n = std::log(static_cast<double>(std::max(1, scalar_updates)));
   for (const OnsetFit& f : fits) {
@@ -52,6 +53,14 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
     c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
     c.predicted_delta_bic = -c.statistic + c.dof * log_n;
     c.onset_s = f.onset_s;
+    if (scale.has_value()) {
+      const double sigma = scale->drift_sigma[static_cast<size_t>(
+          SensorAxisIndex(f.term.family->sensor, f.term.axis))];
+      const double change = f.term.family->regressor == Regressor::kRamp
+                                ? std::abs(f.estimate) * std::max(0.0, scale->run_end_s - f.onset_s)
+                                : std::abs(f.estimate);
+      if (sigma > 0.0) c.size_in_drift_sigma = change / sigma;
+    }
     c.onset_std_s = f.onset_std_s;
     c.onset_low_s = f.onset_low_s;
     c.onset_high_s = f.onset_high_s;
@@ -94,6 +103,28 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
   return out;
 }
 
+bool IsSmallerLookAlike(const EffectCandidate& a, const EffectCandidate& b, double alpha) {
+  constexpr double kIndistinguishableDeltaBic = 2.0;
+  return a.source == "GLR" && b.source == "GLR" && a.SignificantAt(alpha) &&
+         b.SignificantAt(alpha) && a.size_in_drift_sigma.has_value() &&
+         b.size_in_drift_sigma.has_value() && *b.size_in_drift_sigma < *a.size_in_drift_sigma &&
+         std::abs(a.predicted_delta_bic - b.predicted_delta_bic) < kIndistinguishableDeltaBic &&
+         std::ranges::find(a.correlated_with, b.name) != a.correlated_with.end();
+}
+
+void PutSmallerLookAlikesFirst(std::vector<EffectCandidate>& ranked, double alpha) {
+  for (size_t i = 0; i < ranked.size(); ++i) {
+    // Each move puts a strictly smaller fault at i, so this ends.
+    for (size_t j = i + 1; j < ranked.size(); ++j) {
+      if (!IsSmallerLookAlike(ranked[i], ranked[j], alpha)) continue;
+      std::rotate(ranked.begin() + static_cast<std::ptrdiff_t>(i),
+                  ranked.begin() + static_cast<std::ptrdiff_t>(j),
+                  ranked.begin() + static_cast<std::ptrdiff_t>(j) + 1);
+      j = i;
+    }
+  }
+}
+
 std::vector<FaultFinding> SignificantFaults(const std::vector<EffectCandidate>& candidates, double alpha) {
   double best_other_bic = std::numeric_limits<double>::infinity();
   for (const EffectCandidate& c : candidates) {
@@ -112,7 +143,20 @@ std::vector<FaultFinding> SignificantFaults(const std::vector<EffectCandidate>& 
     return a->predicted_delta_bic < b->predicted_delta_bic;
   });
   std::vector<FaultFinding> out;
-  for (const EffectCandidate* c : by_bic) {
+  std::vector<const EffectCandidate*> taken;
+  for (size_t i = 0; i < by_bic.size(); ++i) {
+    const EffectCandidate* c = by_bic[i];
+    // Of look-alikes the run cannot tell apart, the smaller stands for them.
+    const auto smaller =
+        std::find_if(by_bic.begin() + static_cast<std::ptrdiff_t>(i) + 1, by_bic.end(),
+                     [&](const EffectCandidate* d) { return IsSmallerLookAlike(*c, *d, alpha); });
+    // Faults the run cannot tell apart are explanations of one failure.
+    const auto alike = [&](const EffectCandidate* t) {
+      return std::ranges::find(t->correlated_with, c->name) != t->correlated_with.end() ||
+             std::ranges::find(c->correlated_with, t->name) != c->correlated_with.end();
+    };
+    if (smaller != by_bic.end() || std::any_of(taken.begin(), taken.end(), alike)) continue;
+    taken.push_back(c);
     const auto terms = ParseEffectSelector(c->name);
     if (!terms.ok() || terms->size() != 1) continue;
     // One fault per sensor axis: a step and a ramp on the same axis are two

@@ -59,6 +59,10 @@ struct EffectCandidate {
   double onset_std_s = 0.0;
   double onset_low_s = 0.0;
   double onset_high_s = 0.0;
+  // Fault effects: the change of the unit the fault asks for, in its sensor
+  // axis's drift σ (a step's size, a ramp's reach by the run's end), which
+  // orders the look-alikes the run cannot tell apart (fault_findings.h).
+  std::optional<double> size_in_drift_sigma;
 
   // Tested, identifiable and significant at family-wise `alpha` (Holm).
   bool SignificantAt(double alpha) const { return identifiable && tested && p_value_holm < alpha; }

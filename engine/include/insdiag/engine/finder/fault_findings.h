@@ -4,6 +4,7 @@
 // verdict, a fault interval from the onset, and the sensor localised.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <vector>
 
@@ -17,7 +18,27 @@ namespace insdiag::engine {
 // fault changes AIC by −T + 4 and BIC by −T + 2 ln N.
 // A step and a ramp of one sensor axis within 2 of 2Δℓ name each other as
 // look-alikes (correlated_with).
-std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, int scalar_updates);
+// `drift_sigma` (per sensor axis, gyros then accelerometers, in the family's
+// unit) and `run_end_s`, where given, set each fault's size_in_drift_sigma.
+struct FaultScale {
+  std::array<double, kSensorAxisCount> drift_sigma{};
+  double run_end_s = 0.0;
+};
+std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, int scalar_updates,
+                                             const std::optional<FaultScale>& scale = std::nullopt);
+
+// Whether `b` should come before `a`: both significant faults at `alpha`,
+// named look-alikes of each other, their predicted ΔBIC within 2 (Kass &
+// Raftery, JASA 90(430), 1995: the run cannot tell them apart), and `b` the
+// smaller change of the unit in its sensor's drift σ. On a still table a
+// navigation-grade gyro's ramp of 24 σ and the z step of 440 σ that Earth
+// rate makes look like it explain the run equally; the smaller is the
+// likelier failure.
+bool IsSmallerLookAlike(const EffectCandidate& a, const EffectCandidate& b, double alpha);
+
+// Moves each candidate of `ranked` ahead of the look-alikes it is smaller
+// than (IsSmallerLookAlike), keeping the order otherwise.
+void PutSmallerLookAlikesFirst(std::vector<EffectCandidate>& ranked, double alpha);
 
 // A fault the report must show.
 struct FaultFinding {
@@ -34,7 +55,8 @@ struct FaultFinding {
 // ΔBIC): a step that only stands in for a missing constant effect — a scale
 // factor's error appearing when the table starts to turn — is not a fault.
 // One per sensor axis, the lowest ΔBIC: a step and a ramp on one axis are
-// two explanations of one failure.
+// two explanations of one failure, and so are faults named look-alikes of
+// each other; of those within 2 of ΔBIC the smallest (IsSmallerLookAlike).
 std::vector<FaultFinding> SignificantFaults(const std::vector<EffectCandidate>& candidates, double alpha);
 
 // The model's fault effect `term` estimated at β̂ ± SE from `onset_s`: a
