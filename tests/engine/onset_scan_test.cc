@@ -342,6 +342,24 @@ void AddGyroRamp(BenchRun& run, int axis, double onset_s, double rate_rad_s2) {
   }
 }
 
+// A still hour at 10 Hz with a y gyro ramp of `drift_sigma_per_1000_s` from
+// `onset_s`, filtered with the unit's true base model and scanned for a y
+// gyro ramp and a z gyro step (in that order); the run's end in `run_end_s`.
+std::vector<OnsetFit> StillRampScan(const sim::SimulatedUnit& unit, double drift_sigma_per_1000_s,
+                                    double onset_s, uint64_t seed, double* run_end_s = nullptr) {
+  auto sim = testing::SimulateOrDie(unit, StillTable(3600.0), 10.0, seed);
+  AddGyroRamp(sim.run, 1, onset_s, drift_sigma_per_1000_s * unit.gyro.bias[1].sigma / 1000.0);
+  const ErrorModel model = testing::TrueBaseModel(unit);
+  auto run = CondenseRun(sim.run, model, 1.0);
+  EXPECT_TRUE(run.ok()) << run.status();
+  auto fw = RunForwardFilter(*run, model);
+  EXPECT_TRUE(fw.ok()) << fw.status();
+  if (!run.ok() || !fw.ok()) return {};
+  if (run_end_s != nullptr) *run_end_s = run->epochs.back().time_s;
+  return ScanOnsets(*fw, StateLayout(model), *run,
+                    {Term("gyro_bias_ramp.y"), Term("gyro_bias_step.z")}, OnsetScanOptions{});
+}
+
 // On a still, level table a y gyro's ramp tilts the unit about y, and so,
 // to first order, does a z gyro's step: it turns the heading, which Earth
 // rate couples into the tilt. The step that matches a tactical unit's ramp
@@ -351,19 +369,8 @@ void AddGyroRamp(BenchRun& run, int axis, double onset_s, double rate_rad_s2) {
 TEST(OnsetScan, AStepThatWouldTurnTheHeadingByRadiansIsNotAFinding) {
   auto unit = testing::NavigationGradeUnit();
   for (auto& bias : unit.gyro.bias) bias = {1.0 * testing::kDegPerHour, 300.0};
-  const double rate_rad_s2 = 40.0 * unit.gyro.bias[1].sigma / 1000.0;
-  const sim::TableProfile still = StillTable(3600.0);
   for (uint64_t seed : {41u, 42u}) {
-    auto sim = testing::SimulateOrDie(unit, still, 10.0, seed);
-    AddGyroRamp(sim.run, 1, 1500.0, rate_rad_s2);
-    const ErrorModel model = testing::TrueBaseModel(unit);
-    auto run = CondenseRun(sim.run, model, 1.0);
-    ASSERT_TRUE(run.ok()) << run.status();
-    auto fw = RunForwardFilter(*run, model);
-    ASSERT_TRUE(fw.ok()) << fw.status();
-    const auto fits =
-        ScanOnsets(*fw, StateLayout(model), *run,
-                   {Term("gyro_bias_ramp.y"), Term("gyro_bias_step.z")}, OnsetScanOptions{});
+    const auto fits = StillRampScan(unit, 40.0, 1500.0, seed);
     ASSERT_EQ(fits.size(), 2u);
     const OnsetFit& ramp = fits[0];
     const OnsetFit& step = fits[1];
@@ -374,7 +381,7 @@ TEST(OnsetScan, AStepThatWouldTurnTheHeadingByRadiansIsNotAFinding) {
               0.5 * ramp.statistic);  // to first order the step explains the run too
     EXPECT_LT(ramp.peak_attitude_error_rad, 0.1);
     EXPECT_GT(step.peak_attitude_error_rad, 2.0);
-    const auto candidates = FaultCandidates(fits, 6 * run->size());
+    const auto candidates = FaultCandidates(fits, 6 * 3600);
     EXPECT_TRUE(candidates[0].identifiable);
     EXPECT_LT(candidates[0].p_value, 1e-6);
     EXPECT_FALSE(candidates[1].identifiable);
@@ -390,29 +397,20 @@ TEST(OnsetScan, AStepThatWouldTurnTheHeadingByRadiansIsNotAFinding) {
 // run cannot tell them apart; the smaller change of the unit in its drift σ
 // comes first, and stands for both as the one failure.
 TEST(OnsetScan, OfLookAlikesTheRunCannotTellApartTheSmallerFaultStandsForBoth) {
-  auto unit = testing::NavigationGradeUnit();
-  const double rate_rad_s2 = 24.0 * unit.gyro.bias[1].sigma / 1000.0;
-  const double run_end_s = 3600.0;
-  auto sim = testing::SimulateOrDie(unit, StillTable(run_end_s), 10.0, 43);
-  AddGyroRamp(sim.run, 1, 1200.0, rate_rad_s2);
-  const ErrorModel model = testing::TrueBaseModel(unit);
-  auto run = CondenseRun(sim.run, model, 1.0);
-  ASSERT_TRUE(run.ok()) << run.status();
-  auto fw = RunForwardFilter(*run, model);
-  ASSERT_TRUE(fw.ok()) << fw.status();
-  const auto fits =
-      ScanOnsets(*fw, StateLayout(model), *run,
-                 {Term("gyro_bias_step.z"), Term("gyro_bias_ramp.y")}, OnsetScanOptions{});
+  const auto unit = testing::NavigationGradeUnit();
+  double run_end_s = 0.0;
+  const auto fits = StillRampScan(unit, 24.0, 1200.0, 43, &run_end_s);
+  ASSERT_EQ(fits.size(), 2u);
   FaultScale scale;
   for (int a = 0; a < 3; ++a) {
     scale.drift_sigma[static_cast<size_t>(a)] = unit.gyro.bias[static_cast<size_t>(a)].sigma;
     scale.drift_sigma[static_cast<size_t>(3 + a)] = unit.acc.bias[static_cast<size_t>(a)].sigma;
   }
-  scale.run_end_s = run->epochs.back().time_s;
-  auto candidates = FaultCandidates(fits, 6 * run->size(), scale);
+  scale.run_end_s = run_end_s;
+  auto candidates = FaultCandidates(fits, 6 * 3600, scale);
   for (EffectCandidate& c : candidates) c.p_value_holm = c.p_value;
-  const EffectCandidate& step = candidates[0];
-  const EffectCandidate& ramp = candidates[1];
+  const EffectCandidate& ramp = candidates[0];
+  const EffectCandidate& step = candidates[1];
   std::printf("step.z 2Δℓ %.1f, %.0f σ; ramp.y 2Δℓ %.1f, %.0f σ\n", step.statistic,
               *step.size_in_drift_sigma, ramp.statistic, *ramp.size_in_drift_sigma);
   ASSERT_TRUE(step.SignificantAt(0.01) && ramp.SignificantAt(0.01));
