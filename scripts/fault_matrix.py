@@ -268,8 +268,12 @@ def departures(report):
 def judge(fault, report):
     candidates = report.get("effectCandidates", [])
     # The analysis's best explanation, the effect `--discover` adds first: the
-    # significant term or whole family with the lowest predicted ΔBIC.
-    explanations = [c for c in candidates + report.get("familyCandidates", []) if significant(c)]
+    # significant term or whole family with the lowest predicted ΔBIC. Of the
+    # terms, the analysis's first significant one: its order is by ΔBIC, but
+    # puts the smaller of look-alike faults the run cannot tell apart first
+    # (min keeps the first of equal keys, as the analysis does).
+    terms = [c for c in candidates if significant(c)][:1]
+    explanations = terms + [c for c in report.get("familyCandidates", []) if significant(c)]
     top = min(explanations, key=lambda c: c.get("predictedDeltaBic", 0.0), default=None)
     moved = departures(report)
     named = top["name"] if top else (moved[0][1] if moved else None)
