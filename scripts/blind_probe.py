@@ -22,7 +22,8 @@ tuned for:
 
 Each run goes through `insdiag analyze --json` and is judged as the fault
 matrix judges it (its `judge`): detected, right effect (the significant term
-with the lowest predicted ΔBIC, which `--discover` adds first), right
+with the lowest predicted ΔBIC, of look-alike faults the smaller, which
+`--discover` adds first), right
 module, onset error. A step's onset counts as found when it is within 60 s,
 its size when the right effect's estimate is within 3 standard errors of it.
 Runs where the fault cannot be seen are counted apart: a z gyro fault on a

@@ -22,7 +22,8 @@ identified drift parameters are read, and per scenario the script prints:
                 noise parameter whose family-wise 1 % interval (Bonferroni over the
                 parameters compared) excludes the nominal value
   right effect  the analysis's best explanation: the significant term or family with
-                the lowest predicted ΔBIC, which `--discover` adds first (or, for drift and noise
+                the lowest predicted ΔBIC (of look-alike faults within 2 of it, the
+                smaller), which `--discover` adds first (or, for drift and noise
                 changes, the parameter that departs most) is the injected one,
                 on the injected axis
   right module  the failure-mode catalogue (data/failure-modes) maps that
