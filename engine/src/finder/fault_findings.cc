@@ -19,6 +19,11 @@ std::string RawChannel(const EffectTerm& term) {
          AxisLabel(AxisSet::kSingle, term.axis, term.axis);
 }
 
+// Two faults whose 2Δℓ (equal parameter counts) or predicted ΔBIC are within
+// this of each other are not worth telling apart (Kass & Raftery, JASA
+// 90(430), 1995).
+constexpr double kIndistinguishableDeltaBic = 2.0;
+
 }  // namespace
 
 std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, int scalar_updates,
@@ -80,7 +85,6 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
   // other (their parameter counts are equal) are not worth telling apart
   // (Kass & Raftery, JASA 90(430), 1995): each names the other. So do faults
   // whose signatures the scan found nearly parallel (onset_scan.h).
-  constexpr double kIndistinguishableDeltaBic = 2.0;
   for (size_t i = 0; i < out.size(); ++i) {
     for (size_t j = 0; j < out.size(); ++j) {
       const OnsetFit& a = fits[i];
@@ -104,7 +108,6 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
 }
 
 bool IsSmallerLookAlike(const EffectCandidate& a, const EffectCandidate& b, double alpha) {
-  constexpr double kIndistinguishableDeltaBic = 2.0;
   return a.source == "GLR" && b.source == "GLR" && a.SignificantAt(alpha) &&
          b.SignificantAt(alpha) && a.size_in_drift_sigma.has_value() &&
          b.size_in_drift_sigma.has_value() && *b.size_in_drift_sigma < *a.size_in_drift_sigma &&
@@ -132,32 +135,30 @@ std::vector<FaultFinding> SignificantFaults(const std::vector<EffectCandidate>& 
       best_other_bic = std::min(best_other_bic, c.predicted_delta_bic);
     }
   }
-  std::vector<const EffectCandidate*> by_bic;
+  std::vector<EffectCandidate> by_bic;
   for (const EffectCandidate& c : candidates) {
     if (c.source == "GLR" && c.SignificantAt(alpha) && c.onset_s.has_value() &&
         c.predicted_delta_bic < best_other_bic) {
-      by_bic.push_back(&c);
+      by_bic.push_back(c);
     }
   }
-  std::stable_sort(by_bic.begin(), by_bic.end(), [](const EffectCandidate* a, const EffectCandidate* b) {
-    return a->predicted_delta_bic < b->predicted_delta_bic;
-  });
+  std::stable_sort(by_bic.begin(), by_bic.end(),
+                   [](const EffectCandidate& a, const EffectCandidate& b) {
+                     return a.predicted_delta_bic < b.predicted_delta_bic;
+                   });
+  // Of look-alikes the run cannot tell apart, the smaller stands for them.
+  PutSmallerLookAlikesFirst(by_bic, alpha);
   std::vector<FaultFinding> out;
   std::vector<const EffectCandidate*> taken;
-  for (size_t i = 0; i < by_bic.size(); ++i) {
-    const EffectCandidate* c = by_bic[i];
-    // Of look-alikes the run cannot tell apart, the smaller stands for them.
-    const auto smaller =
-        std::find_if(by_bic.begin() + static_cast<std::ptrdiff_t>(i) + 1, by_bic.end(),
-                     [&](const EffectCandidate* d) { return IsSmallerLookAlike(*c, *d, alpha); });
+  for (const EffectCandidate& c : by_bic) {
     // Faults the run cannot tell apart are explanations of one failure.
     const auto alike = [&](const EffectCandidate* t) {
-      return std::ranges::find(t->correlated_with, c->name) != t->correlated_with.end() ||
-             std::ranges::find(c->correlated_with, t->name) != c->correlated_with.end();
+      return std::ranges::find(t->correlated_with, c.name) != t->correlated_with.end() ||
+             std::ranges::find(c.correlated_with, t->name) != c.correlated_with.end();
     };
-    if (smaller != by_bic.end() || std::any_of(taken.begin(), taken.end(), alike)) continue;
-    taken.push_back(c);
-    const auto terms = ParseEffectSelector(c->name);
+    if (std::any_of(taken.begin(), taken.end(), alike)) continue;
+    taken.push_back(&c);
+    const auto terms = ParseEffectSelector(c.name);
     if (!terms.ok() || terms->size() != 1) continue;
     // One fault per sensor axis: a step and a ramp on the same axis are two
     // explanations of one failure; the lower ΔBIC stands.
@@ -166,7 +167,7 @@ std::vector<FaultFinding> SignificantFaults(const std::vector<EffectCandidate>& 
       return f.term.family->sensor == term.family->sensor && f.term.axis == term.axis;
     };
     if (std::any_of(out.begin(), out.end(), same_axis)) continue;
-    out.push_back({term, *c->onset_s, c->statistic, c->p_value_holm, c->estimate, c->std_error});
+    out.push_back({term, *c.onset_s, c.statistic, c.p_value_holm, c.estimate, c.std_error});
   }
   return out;
 }
