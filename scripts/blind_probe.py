@@ -40,6 +40,7 @@ import json
 import math
 import os
 import random
+import re
 import subprocess
 import sys
 import tempfile
@@ -122,10 +123,17 @@ def run_one(index, units):
         done = subprocess.run([CLI, "analyze", path, "--json"], capture_output=True, text=True)
     if done.returncode != 0:
         return dict(c, error=done.stderr.strip()[-300:])
+    report = json.loads(done.stdout)
     with JUDGE_LOCK:
         fault_matrix.use_unit_class(c["preset"])
-        verdict = fault_matrix.judge(fault, json.loads(done.stdout))
-    return dict(c, heading_only=heading_only(c), **verdict)
+        verdict = fault_matrix.judge(fault, report)
+    return dict(c, heading_only=heading_only(c), allan_ramps=allan_ramps(report), **verdict)
+
+
+def allan_ramps(report):
+    """The channels whose Allan curve had a ramp taken out (the analysis's notes)."""
+    found = (re.search(r"took a ramp out of (\w+)'s", note) for note in report.get("notes", []))
+    return [m.group(1) for m in found if m]
 
 
 def summarise(results):
@@ -152,6 +160,10 @@ def summarise(results):
     row("faulty, the fault visible beyond the heading", [r for r in faulty if not r["heading_only"]])
     for kind in ("gyro_bias_step", "acc_bias_step", "gyro_bias_ramp", "acc_bias_ramp"):
         row(kind, [r for r in faulty if r["fault"]["name"].startswith(kind)])
+    for label, rs in (("healthy", healthy), ("faulty", faulty)):
+        ramped = [r for r in rs if r.get("allan_ramps")]
+        lines.append(f"\n{label}: a ramp taken out of the Allan curve in {len(ramped)} of {len(rs)} runs"
+                     + "".join(f"; {r['index']}: {', '.join(r['allan_ramps'])}" for r in ramped))
     misses = [r for r in faulty if not r["right_module"]] + [r for r in healthy if r["detected"]]
     if misses:
         lines += ["", "Misses and false alarms:"]

@@ -150,6 +150,16 @@ std::optional<ident::AllanResult> AllanOfStaticSegments(const BenchRun& run, con
                             "a step is not noise, and the curve leaves it out",
                             ch.name, j.time_s, j.size, ch.unit, j.z));
       }
+      if (ch.ramp_evidence.has_value() && !ch.ramps.empty()) {
+        const auto steepest = std::ranges::max_element(
+            ch.ramps, {}, [](const ident::RateRamp& r) { return std::abs(r.slope); });
+        notes.push_back(absl::StrFormat(
+            "the Allan analysis took a ramp out of %s's static segments: its Allan variance at "
+            "τ %.0f s is %.3g times its Hadamard variance (z %.1f), which no noise of the model "
+            "exceeds twice; the steepest ramps by %.3g %s/s from %.1f s",
+            ch.name, ch.ramp_evidence->tau_s, ch.ramp_evidence->avar_over_hvar, ch.ramp_evidence->z,
+            steepest->slope, ch.unit, steepest->onset_s));
+      }
     }
     return *std::move(allan);
   }

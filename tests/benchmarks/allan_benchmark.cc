@@ -1,7 +1,8 @@
 // Allan analysis of a two-hour, 100 Hz static bench run (720,000 samples,
 // six channels): static segments, overlapping Allan variance on the log τ
 // grid with EDF intervals, and the fit of the IEEE 952 terms with its
-// model-based covariance. The curves and the fits are also timed alone.
+// model-based covariance. The curves, the ramp test and the fits are also
+// timed alone.
 //
 //   build/tests/benchmarks/allan_benchmark --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
@@ -60,6 +61,25 @@ void BM_AllanCurves(benchmark::State& state) {
   state.counters["taus"] = static_cast<double>(m.size());
 }
 BENCHMARK(BM_AllanCurves)->Unit(benchmark::kMillisecond);
+
+// The ramp test of the six curves (allan.h: Ramps), most of it the rate
+// random walks it simulates for its bound.
+void BM_AllanRampTest(benchmark::State& state) {
+  const BenchRun& run = TwoHourRun();
+  const AllanOptions options;
+  std::vector<std::vector<std::vector<double>>> channels;
+  std::vector<std::vector<AllanPoint>> curves;
+  const std::vector<int64_t> m = AllanClusterSizes(run.samples.size(), options);
+  for (int c = 0; c < 6; ++c) {
+    channels.push_back(Channel(run, c));
+    curves.push_back(OverlappingAllanCurve(channels.back(), 0.01, m, options));
+  }
+  for (auto _ : state) {
+    for (size_t c = 0; c < channels.size(); ++c)
+      benchmark::DoNotOptimize(RampBeyondNoise(channels[c], curves[c], options));
+  }
+}
+BENCHMARK(BM_AllanRampTest)->Unit(benchmark::kMillisecond);
 
 void BM_AllanFits(benchmark::State& state) {
   const BenchRun& run = TwoHourRun();

@@ -225,5 +225,28 @@ class EngineOnIndependentRuns(unittest.TestCase):
         self.assertEqual(report["verdict"], "FAULTY")
 
 
+    def test_a_gyro_ramp_inside_a_still_record_is_taken_out_of_the_allan_curve_and_named(self):
+        # A 0.1 °/h unit labelled INS-2000 without a datasheet, its y gyro
+        # ramping from 796 s by 28 drift σ per 1000 s on a still table (the
+        # third blind draw's run 179, at 25 Hz for an hour). Read as the Allan
+        # curve's rate ramp, the ramp became a y drift 37 times the unit's
+        # and a z step was named. Its Allan variance now stands far above its
+        # Hadamard variance, which a ramp leaves alone: the ramp is taken out
+        # of the curve (docs/IDENTIFICATION.md, "Ramps in a static segment").
+        sigma = unit_classes.PRESETS["tactical-0.1"]()["gyro_bias_gm.y.sigma"]
+        slope = -27.66 * sigma / 1000.0
+        with tempfile.TemporaryDirectory() as d:
+            report, _ = analyse(d, "--preset", "tactical-0.1", "--profile", "static", "--rate-hz", "25",
+                                "--duration", "3600", "--seed", "5043", "--datasheet", "no",
+                                "--latitude-deg", "51.44", "--fault", f"gyro_bias_ramp.y={slope}@795.576")
+        self.assertTrue([n for n in report["notes"] if "took a ramp out of gyro_y's" in n], report["notes"])
+        self.assertFalse([n for n in report["notes"] if "took a ramp out of" in n and "gyro_y" not in n])
+        found = significant(report)
+        self.assertTrue(found, f"nothing significant; verdict {report['verdict']}")
+        self.assertEqual(found[0]["name"], "gyro_bias_ramp.y")
+        self.assertLess(abs(found[0]["estimate"] - slope), 4.0 * found[0]["stdError"])
+        self.assertEqual(report["verdict"], "FAULTY")
+
+
 if __name__ == "__main__":
     unittest.main()

@@ -688,5 +688,95 @@ TEST(AllanAnalysisTest, AStepInAStaticRunIsCutOutOfTheCurve) {
       << Describe(without->channels[3]);
 }
 
+// --- ramps in a static segment's rate (allan.h: Ramps) ----------------------
+
+// The noises whose Allan variance rises with τ, one hour at 10 Hz, in units
+// of their σ over the hour: a rate random walk (σ²/σ²_H = 2, the largest of
+// the model's) under white noise, and a Markov drift of τ 3 h (a segment far
+// shorter than its correlation time, whose rise looks like a walk's).
+enum class RisingNoise { kRandomWalk, kSlowMarkov };
+
+std::vector<double> RisingSeries(RisingNoise kind, std::mt19937_64& rng) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  constexpr double kSlowTauS = 3.0 * 3600.0;
+  const double steps = static_cast<double>(kJumpSeriesSamples);
+  const double phi = kind == RisingNoise::kSlowMarkov ? std::exp(-kJumpSeriesDtS / kSlowTauS) : 1.0;
+  const double innovation =
+      kind == RisingNoise::kSlowMarkov ? std::sqrt(1.0 - phi * phi) : 1.0 / std::sqrt(steps);
+  std::vector<double> y(kJumpSeriesSamples);
+  double drift = kind == RisingNoise::kSlowMarkov ? n(rng) : 0.0;
+  for (double& v : y) {
+    v = drift + kWhiteOverDrift * n(rng);
+    drift = phi * drift + innovation * n(rng);
+  }
+  return y;
+}
+
+std::optional<RampEvidence> RampTestOf(const std::vector<double>& y) {
+  const AllanOptions options;
+  const std::vector<std::vector<double>> pieces = {y};
+  const std::vector<AllanPoint> curve =
+      OverlappingAllanCurve(pieces, kJumpSeriesDtS, AllanClusterSizes(y.size(), options), options);
+  return RampBeyondNoise(pieces, curve, options);
+}
+
+// Healthy segments whose curve rises as noise are read as ramps at the
+// test's family-wise level: at α = 1e-3, 200 segments of each noise would
+// see 0.2; three or more (P < 1.2e-3 under the level) fail the test.
+TEST(AllanRampTest, ARiseThatIsNoiseIsNotARampAtTheTestsLevel) {
+  constexpr int kSeeds = 200;
+  for (RisingNoise kind : {RisingNoise::kRandomWalk, RisingNoise::kSlowMarkov}) {
+    std::mt19937_64 rng(kind == RisingNoise::kRandomWalk ? 31 : 37);
+    int ramps = 0;
+    for (int seed = 0; seed < kSeeds; ++seed) {
+      const std::optional<RampEvidence> ramp = RampTestOf(RisingSeries(kind, rng));
+      if (ramp.has_value()) {
+        ++ramps;
+        std::printf("seed %d: ramp at τ %.0f s, ratio %.2f, z %.2f\n", seed, ramp->tau_s,
+                    ramp->avar_over_hvar, ramp->z);
+      }
+    }
+    std::printf("%s: %d ramps of %d\n",
+                kind == RisingNoise::kRandomWalk ? "random walk" : "slow Markov", ramps, kSeeds);
+    EXPECT_LE(ramps, 2);
+  }
+}
+
+// A ramp that begins inside the segment, between 10 % and 60 % of it, and
+// runs to its end 30 drift σ (tactical drift, τ 300 s) is read as a ramp in
+// at least 18 of 20 segments, and the fit finds its onset within 5 % of the
+// segment and its slope within 15 % in as many.
+TEST(AllanRampTest, ARampOfThirtyDriftSigmaIsFoundWithItsOnsetAndSlope) {
+  constexpr int kSeeds = 20;
+  constexpr double kReachInDriftSigma = 30.0;
+  std::mt19937_64 rng(2025);
+  std::uniform_int_distribution<int> where(kJumpSeriesSamples / 10, 6 * kJumpSeriesSamples / 10);
+  int read = 0;
+  int fitted = 0;
+  for (int seed = 0; seed < kSeeds; ++seed) {
+    std::vector<double> y = NoiseSeries(rng);
+    const int onset = where(rng);
+    const double sign = seed % 2 == 0 ? 1.0 : -1.0;
+    const double per_sample =
+        sign * kReachInDriftSigma / static_cast<double>(kJumpSeriesSamples - onset);
+    for (size_t k = static_cast<size_t>(onset); k < y.size(); ++k)
+      y[k] += per_sample * static_cast<double>(k - onset);
+    const std::optional<RampEvidence> ramp = RampTestOf(y);
+    read += ramp.has_value() ? 1 : 0;
+    const std::optional<RateRamp> fit =
+        FitRateRamp(y, kJumpSeriesDtS, AllanOptions{}.MinSegmentSamples(kJumpSeriesDtS));
+    ASSERT_TRUE(fit.has_value());
+    const double slope = per_sample / kJumpSeriesDtS;
+    std::printf("onset %d: read as a ramp %s (z %.1f); fit onset %zu, slope %.4g (true %.4g)\n",
+                onset, ramp.has_value() ? "yes" : "no", ramp.has_value() ? ramp->z : 0.0,
+                fit->onset_sample, fit->slope, slope);
+    const bool onset_near =
+        std::abs(static_cast<int>(fit->onset_sample) - onset) <= kJumpSeriesSamples / 20;
+    fitted += onset_near && std::abs(fit->slope - slope) <= 0.15 * std::abs(slope) ? 1 : 0;
+  }
+  EXPECT_GE(read, 18);
+  EXPECT_GE(fitted, 18);
+}
+
 }  // namespace
 }  // namespace insdiag::engine::ident

@@ -228,6 +228,30 @@ absl::StatusOr<std::vector<StaticSegment>> FindStaticSegments(const BenchRun& ru
   return out;
 }
 
+std::vector<double> allan_model::PhaseOfRates(std::span<const double> y) {
+  // Compensated (Neumaier) sums, so that second differences keep full
+  // precision however far θ wanders.
+  double mean = 0.0;
+  double mean_c = 0.0;
+  for (double v : y) {
+    const double t = mean + v;
+    mean_c += std::abs(mean) >= std::abs(v) ? (mean - t) + v : (v - t) + mean;
+    mean = t;
+  }
+  mean = (mean + mean_c) / static_cast<double>(y.size());
+  std::vector<double> th(y.size() + 1, 0.0);
+  double sum = 0.0;
+  double comp = 0.0;
+  for (size_t k = 0; k < y.size(); ++k) {
+    const double v = y[k] - mean;
+    const double t = sum + v;
+    comp += std::abs(sum) >= std::abs(v) ? (sum - t) + v : (v - t) + sum;
+    sum = t;
+    th[k + 1] = sum + comp;
+  }
+  return th;
+}
+
 std::vector<int64_t> AllanClusterSizes(size_t longest_samples, const AllanOptions& options) {
   const auto m_max = static_cast<int64_t>(std::floor(options.max_cluster_fraction * static_cast<double>(longest_samples)));
   std::vector<int64_t> m;
@@ -241,33 +265,9 @@ std::vector<int64_t> AllanClusterSizes(size_t longest_samples, const AllanOption
 
 std::vector<AllanPoint> OverlappingAllanCurve(std::span<const std::vector<double>> segment_rates, double tau0_s,
                                               std::span<const int64_t> cluster_sizes, const AllanOptions& options) {
-  // Phase θ/τ₀ per segment (rate × samples): cumulative sums of the mean-free
-  // rates, compensated (Neumaier), so that second differences keep full
-  // precision however far θ wanders.
-  std::vector<std::vector<double>> theta(segment_rates.size());
-  for (size_t s = 0; s < segment_rates.size(); ++s) {
-    const std::vector<double>& y = segment_rates[s];
-    double mean = 0.0;
-    double mean_c = 0.0;
-    for (double v : y) {
-      const double t = mean + v;
-      mean_c += std::abs(mean) >= std::abs(v) ? (mean - t) + v : (v - t) + mean;
-      mean = t;
-    }
-    mean = (mean + mean_c) / static_cast<double>(y.size());
-    std::vector<double>& th = theta[s];
-    th.resize(y.size() + 1);
-    th[0] = 0.0;
-    double sum = 0.0;
-    double comp = 0.0;
-    for (size_t k = 0; k < y.size(); ++k) {
-      const double v = y[k] - mean;
-      const double t = sum + v;
-      comp += std::abs(sum) >= std::abs(v) ? (sum - t) + v : (v - t) + sum;
-      sum = t;
-      th[k + 1] = sum + comp;
-    }
-  }
+  std::vector<std::vector<double>> theta;
+  theta.reserve(segment_rates.size());
+  for (const std::vector<double>& y : segment_rates) theta.push_back(PhaseOfRates(y));
 
   std::vector<AllanPoint> curve;
   for (int64_t m : cluster_sizes) {
@@ -335,11 +335,9 @@ namespace {
 // One channel's rates in the static segments, cut at their jumps (each
 // piece at least min_segment_s long, as the jump test needs that much on
 // either side of a cut).
-std::vector<std::vector<double>> PiecesBetweenJumps(const BenchRun& run,
-                                                    const std::vector<StaticSegment>& segments,
-                                                    int channel, double tau0,
-                                                    const AllanOptions& options,
-                                                    std::vector<RateJump>& jumps) {
+std::vector<std::vector<double>> PiecesBetweenJumps(
+    const BenchRun& run, const std::vector<StaticSegment>& segments, int channel, double tau0,
+    const AllanOptions& options, std::vector<RateJump>& jumps, std::vector<size_t>& first_samples) {
   const auto axis = static_cast<size_t>(channel % 3);
   std::vector<std::vector<double>> out;
   std::vector<double> rates;
@@ -353,6 +351,7 @@ std::vector<std::vector<double>> PiecesBetweenJumps(const BenchRun& run,
     for (const RatePiece& piece : CutAtRateJumps(rates, tau0, options, &in_segment)) {
       out.emplace_back(rates.begin() + static_cast<std::ptrdiff_t>(piece.begin),
                        rates.begin() + static_cast<std::ptrdiff_t>(piece.end));
+      first_samples.push_back(seg.first_sample + piece.begin);
     }
     for (RateJump& j : in_segment) {
       j.time_s = run.samples[seg.first_sample + j.sample - 1].t_s;
@@ -360,6 +359,25 @@ std::vector<std::vector<double>> PiecesBetweenJumps(const BenchRun& run,
     }
   }
   return out;
+}
+
+// Each piece less its least-squares ramp (allan.h: Ramps); the ramps, their
+// onsets as times in the run.
+std::vector<RateRamp> TakeOutRamps(const BenchRun& run, std::vector<std::vector<double>>& pieces,
+                                   const std::vector<size_t>& first_samples, double tau0,
+                                   const AllanOptions& options) {
+  std::vector<RateRamp> ramps;
+  for (size_t i = 0; i < pieces.size(); ++i) {
+    std::vector<double>& y = pieces[i];
+    std::optional<RateRamp> ramp = FitRateRamp(y, tau0, options.MinSegmentSamples(tau0));
+    if (!ramp.has_value()) continue;
+    const double per_sample = ramp->slope * tau0;
+    for (size_t k = ramp->onset_sample + 1; k < y.size(); ++k)
+      y[k] -= per_sample * static_cast<double>(k - ramp->onset_sample);
+    ramp->onset_s = run.samples[first_samples[i] + ramp->onset_sample].t_s;
+    ramps.push_back(*ramp);
+  }
+  return ramps;
 }
 
 }  // namespace
@@ -385,8 +403,9 @@ absl::StatusOr<AllanResult> AllanAnalysis(const BenchRun& run, const AllanOption
     ch.sensor = c < 3 ? Sensor::kGyro : Sensor::kAccelerometer;
     ch.axis = c % 3;
     ch.unit = std::string(UnitsOf(ch.sensor).rate);
-    const std::vector<std::vector<double>> pieces =
-        PiecesBetweenJumps(run, result.segments, c, tau0, options, ch.jumps);
+    std::vector<size_t> first_samples;
+    std::vector<std::vector<double>> pieces =
+        PiecesBetweenJumps(run, result.segments, c, tau0, options, ch.jumps, first_samples);
     std::vector<size_t> lengths;
     size_t longest = 0;
     for (const std::vector<double>& piece : pieces) {
@@ -398,6 +417,11 @@ absl::StatusOr<AllanResult> AllanAnalysis(const BenchRun& run, const AllanOption
       return absl::FailedPreconditionError(
           "Allan: the static segments are too short for any cluster");
     ch.curve = OverlappingAllanCurve(pieces, tau0, m, options);
+    ch.ramp_evidence = RampBeyondNoise(pieces, ch.curve, options);
+    if (ch.ramp_evidence.has_value()) {
+      ch.ramps = TakeOutRamps(run, pieces, first_samples, tau0, options);
+      ch.curve = OverlappingAllanCurve(pieces, tau0, m, options);
+    }
     auto fit = FitAllanCurve(ch.curve, tau0, lengths, options);
     if (fit.ok()) {
       ch.fit = *std::move(fit);

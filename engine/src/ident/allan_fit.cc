@@ -19,29 +19,6 @@ namespace {
 
 using namespace allan_model;  // the curve's model, shared with the analysis and the covariance
 
-// ψ(x): recurrence up to x ≥ 6, then the asymptotic series (A&S 6.3.18).
-double Digamma(double x) {
-  double r = 0.0;
-  while (x < 6.0) {
-    r -= 1.0 / x;
-    x += 1.0;
-  }
-  const double f = 1.0 / (x * x);
-  return r + std::log(x) - 0.5 / x -
-         f * (1.0 / 12 - f * (1.0 / 120 - f * (1.0 / 252 - f * (1.0 / 240 - f / 132))));
-}
-
-// ψ′(x): recurrence up to x ≥ 6, then the asymptotic series (A&S 6.4.12).
-double Trigamma(double x) {
-  double r = 0.0;
-  while (x < 6.0) {
-    r += 1.0 / (x * x);
-    x += 1.0;
-  }
-  const double f = 1.0 / (x * x);
-  return r + 1.0 / x + 0.5 * f + f / x * (1.0 / 6 - f * (1.0 / 30 - f * (1.0 / 42 - f / 30)));
-}
-
 // Basis of the linear terms: σ² = Σ_k c_k φ_k(τ), c = e^a.
 double Basis(int k, double tau, double markov_tau_s) {
   switch (k) {
@@ -400,13 +377,12 @@ FitData DataOfCurve(const std::vector<AllanPoint>& curve) {
   for (size_t j = 0; j < curve.size(); ++j) {
     const AllanPoint& p = curve[j];
     if (!(p.adev > 0.0) || !(p.edf >= 1.0)) continue;
-    const double half = 0.5 * p.edf;
     data.point.push_back(j);
     data.m.push_back(p.m);
     data.tau.push_back(p.tau_s);
     data.avar.push_back(p.adev * p.adev);
-    data.y.push_back(std::log(p.adev * p.adev) - (Digamma(half) - std::log(half)));
-    data.s.push_back(std::sqrt(Trigamma(half)));
+    data.y.push_back(std::log(p.adev * p.adev) - stats::LogChiSquareMeanOffset(p.edf));
+    data.s.push_back(std::sqrt(stats::LogChiSquareVariance(p.edf)));
   }
   return data;
 }

@@ -136,6 +136,10 @@ inline int ParameterCount(const TermMask& on) { return static_cast<int>(std::cou
 
 inline std::string FormatG(double v, int digits = 3) { return absl::StrFormat("%.*g", digits, v); }
 
+// θ_k = Σ_{i<k} (y_i − ȳ): the mean-free phase of a piece's rates (rate ×
+// samples), whose differences over m samples are m times window means.
+std::vector<double> PhaseOfRates(std::span<const double> rates);
+
 // Differences of cluster size m in a segment of `samples` samples.
 inline int64_t Differences(size_t samples, int64_t m) {
   return std::max<int64_t>(0, static_cast<int64_t>(samples) + 1 - 2 * m);

@@ -117,6 +117,37 @@ double LjungBoxPValue(std::span<const double> series, int lags) {
   return ChiSquareSurvival(q, lags);
 }
 
+namespace {
+
+// ψ(x).
+double Digamma(double x) {
+  double r = 0.0;
+  while (x < 6.0) {
+    r -= 1.0 / x;
+    x += 1.0;
+  }
+  const double f = 1.0 / (x * x);
+  return r + std::log(x) - 0.5 / x -
+         f * (1.0 / 12 - f * (1.0 / 120 - f * (1.0 / 252 - f * (1.0 / 240 - f / 132))));
+}
+
+// ψ′(x).
+double Trigamma(double x) {
+  double r = 0.0;
+  while (x < 6.0) {
+    r += 1.0 / (x * x);
+    x += 1.0;
+  }
+  const double f = 1.0 / (x * x);
+  return r + 1.0 / x + 0.5 * f + f / x * (1.0 / 6 - f * (1.0 / 30 - f * (1.0 / 42 - f / 30)));
+}
+
+}  // namespace
+
+double LogChiSquareMeanOffset(double dof) { return Digamma(0.5 * dof) - std::log(0.5 * dof); }
+
+double LogChiSquareVariance(double dof) { return Trigamma(0.5 * dof); }
+
 void HolmAdjust(std::span<const double> p, std::span<double> adjusted) {
   const size_t m = p.size();
   std::vector<size_t> order(m);

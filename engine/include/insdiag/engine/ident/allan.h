@@ -51,6 +51,32 @@
 // `min_segment_s` and w on either side, so every piece is a segment in
 // its own right.
 //
+// Ramps. A rate that ramps (a bias ramp: a drift that runs away at a steady
+// rate) is not noise either, yet over a segment it adds R²τ²/2 to σ²(τ), the
+// curve's rate-ramp term, and the drift built from the curve would take it in
+// (a ramp's rise looks like a slow drift's). The Hadamard variance
+//   σ²_H(τ) = ⅙ E (ȳ_{k+2} − 2ȳ_{k+1} + ȳ_k)²      (NIST SP 1065 §5.2.8)
+// takes second differences of adjacent window means, which a linear trend
+// leaves at zero. For each noise of the model σ²/σ²_H is at most 2: 0.9 for
+// quantisation, 1 for white rate, about 1.23 for flicker, 2 for a rate random
+// walk, and from 2 down to 1 for a Markov drift as τ/T grows (from their
+// spectra; docs/IDENTIFICATION.md, "Ramps in a static segment"). A channel's
+// rise is a ramp when ln(σ̂²/σ̂²_H) stands beyond what a rate random walk, the
+// noise of the largest ratio, gives:
+//   z_j = (ln(σ̂²_j/σ̂²_H,j) − μ_j) / s_j at each tested point j (those whose
+//         τ holds from 8 to 64 windows of the longest piece), z = max_j z_j,
+//   μ_j, s_j the mean and standard deviation of the walk's ln ratio there;
+//   a ramp when z exceeds the walk's maximum z at level α = `ramp_alpha`.
+// A walk is self-similar, so the law depends only on the pieces' lengths
+// over m: it is simulated (2000 walks of the pieces at 8 steps to the
+// smallest m tested, from a fixed seed), and the bound is the upper tail of
+// the walks' maxima, exponential beyond their 95th percentile (peaks over a
+// threshold: Pickands, Ann. Stat. 3(1), 1975). The ramp then comes out of
+// every piece of the channel: the least-squares fit of
+//   y(t) = a + c (t − t₀)₊  over every sample t₀ of the piece that leaves
+//   `min_segment_s` after it (t₀ at its start: a line)
+// is subtracted, and the curve computed again from what is left.
+//
 // Noise model (IEEE 952 Annex C, the Markov term as its exponentially correlated noise):
 //   σ²(τ) = 3Q²/τ² + N²/τ + (2 ln2/π) B² + K²τ/3 + R²τ²/2
 //         + σ_m² (T/τ)² (2τ/T − 3 + 4e^{−τ/T} − e^{−2τ/T})
@@ -145,6 +171,8 @@ struct AllanOptions {
   // A window is tested where the segment holds at least this many of it: the
   // scale s_w comes from them, to about ± √(2 / this) in s_w².
   int jump_min_windows = 64;
+  // Family-wise level of the ramp test (above) over one channel's curve.
+  double ramp_alpha = 1e-3;
   int points_per_decade = 10;
   // Largest cluster: this fraction of the longest segment's samples.
   double max_cluster_fraction = 1.0 / 3.0;
@@ -296,12 +324,42 @@ struct RatePiece {
 std::vector<RatePiece> CutAtRateJumps(std::span<const double> rates, double tau0_s,
                                       const AllanOptions& options, std::vector<RateJump>* jumps);
 
+// The evidence that a curve rises as a ramp (above: Ramps), at its most
+// significant point.
+struct RampEvidence {
+  double tau_s = 0.0;
+  double avar_over_hvar = 0.0;  // σ̂² / σ̂²_H there
+  double z = 0.0;
+};
+
+// The point of `curve` where the ramp test is most significant, if it passes;
+// `segment_rates` are the pieces the curve was computed from.
+std::optional<RampEvidence> RampBeyondNoise(std::span<const std::vector<double>> segment_rates,
+                                            std::span<const AllanPoint> curve,
+                                            const AllanOptions& options);
+
+// A ramp fitted to one piece of a channel: y(t) = a + c (t − t₀)₊.
+struct RateRamp {
+  size_t onset_sample = 0;  // t₀'s sample j within the piece: u_k = (k − j)₊ samples
+  double onset_s = 0.0;  // t₀: from the piece's first sample; in the run (AllanChannel) its time
+  double slope = 0.0;    // c [rad/s² | m/s³]
+};
+
+// The least-squares ramp of `rates` (sampled every τ₀) over the onsets that
+// leave `min_samples_after` after them; nullopt when the piece is shorter.
+std::optional<RateRamp> FitRateRamp(std::span<const double> rates, double tau0_s,
+                                    size_t min_samples_after);
+
 struct AllanChannel {
   std::string name;  // "gyro_x", …, "acc_z" (kSensorChannelNames)
   Sensor sensor = Sensor::kGyro;
   int axis = 0;
   std::string unit;  // of adev: "rad/s" | "m/s^2"
   std::vector<RateJump> jumps;  // where its static segments were cut, in time order
+  // The ramps taken out of its pieces, one per piece, when the curve rose as
+  // a ramp (above: Ramps); `ramp_evidence` says why.
+  std::vector<RateRamp> ramps;
+  std::optional<RampEvidence> ramp_evidence;
   std::vector<AllanPoint> curve;
   AllanFit fit;
 };
