@@ -136,11 +136,12 @@ std::optional<RampEvidence> RampBeyondNoise(std::span<const std::vector<double>>
   if (!(options.ramp_alpha > 0.0) || segment_rates.empty()) return std::nullopt;
   std::vector<size_t> piece_samples;
   std::vector<std::vector<double>> phases;
+  int64_t longest = 0;
   for (const std::vector<double>& y : segment_rates) {
     piece_samples.push_back(y.size());
     phases.push_back(PhaseOfRates(y));
+    longest = std::max(longest, static_cast<int64_t>(y.size()));
   }
-  const auto longest = static_cast<int64_t>(std::ranges::max(piece_samples));
   std::vector<int64_t> tested_m;
   std::vector<double> tested_tau_s;
   std::vector<VariancePair> measured;
