@@ -167,6 +167,26 @@ std::optional<ident::AllanResult> AllanOfStaticSegments(const BenchRun& run, con
   return std::nullopt;
 }
 
+// The jumps and ramps the Allan analysis found in the static segments,
+// placed to a jump's window and to a segment's shortest length for a ramp
+// (the least-squares onset of a ramp in noise is looser than a jump's).
+std::vector<RawSampleChange> RawChangesOf(const std::optional<ident::AllanResult>& allan,
+                                          const ident::AllanOptions& options) {
+  std::vector<RawSampleChange> out;
+  if (!allan.has_value()) return out;
+  for (const ident::AllanChannel& ch : allan->channels) {
+    for (const ident::RateJump& j : ch.jumps) {
+      out.push_back({ch.sensor, ch.axis, Regressor::kStep, j.time_s, j.size,
+                     static_cast<double>(j.window) * allan->tau0_s});
+    }
+    for (const ident::RateRamp& r : ch.ramps) {
+      out.push_back(
+          {ch.sensor, ch.axis, Regressor::kRamp, r.onset_s, r.slope, options.min_segment_s});
+    }
+  }
+  return out;
+}
+
 // The unit type's nominal model's departure from the run's Allan deviation
 // when it is beyond the drift search's reach: some channel's curve lies,
 // beyond its confidence interval at the analysis's family-wise level, further
@@ -279,7 +299,8 @@ absl::StatusOr<pipeline::ScannedModel> ScanModelA(const pipeline::RunContext& c,
                     "analysis found a structure or did not test one");
   }
   pipeline::ScannedModel a;
-  a.found = pipeline::FindMissingEffects(c.run, c.epochs, *pass, c.a_priori.model, c.options, &notes, settled);
+  a.found = pipeline::FindMissingEffects(c.run, c.epochs, *pass, c.a_priori.model, c.raw_changes,
+                                         c.options, &notes, settled);
   a.pass = *std::move(pass);
   return a;
 }
@@ -328,7 +349,9 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       });
   notes.insert(notes.end(), allan_notes.begin(), allan_notes.end());
   if (!epochs.ok()) return epochs.status();
-  const pipeline::RunContext context{run, *epochs, reference_measurements, spikes, options, *a_priori};
+  const std::vector<RawSampleChange> raw_changes = RawChangesOf(allan, options.allan);
+  const pipeline::RunContext context{run,       *epochs,    reference_measurements, spikes, options,
+                                     *a_priori, raw_changes};
 
   pipeline::Identification identification;
   identification.model = std::move(base);

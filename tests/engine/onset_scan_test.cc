@@ -391,6 +391,17 @@ TEST(OnsetScan, AStepThatWouldTurnTheHeadingByRadiansIsNotAFinding) {
   }
 }
 
+// The sizes of faults in the unit's own drift σ, for a run ending at `run_end_s`.
+FaultScale ScaleOf(const sim::SimulatedUnit& unit, double run_end_s) {
+  FaultScale scale;
+  for (int a = 0; a < 3; ++a) {
+    scale.drift_sigma[static_cast<size_t>(a)] = unit.gyro.bias[static_cast<size_t>(a)].sigma;
+    scale.drift_sigma[static_cast<size_t>(3 + a)] = unit.acc.bias[static_cast<size_t>(a)].sigma;
+  }
+  scale.run_end_s = run_end_s;
+  return scale;
+}
+
 // On a still table a navigation-grade unit's y gyro ramp and the z gyro step
 // that Earth rate makes look like it explain the run equally, well inside
 // the linear range (the step turns the heading by a tenth of a radian). The
@@ -401,12 +412,7 @@ TEST(OnsetScan, OfLookAlikesTheRunCannotTellApartTheSmallerFaultStandsForBoth) {
   double run_end_s = 0.0;
   const auto fits = StillRampScan(unit, 24.0, 1200.0, 43, &run_end_s);
   ASSERT_EQ(fits.size(), 2u);
-  FaultScale scale;
-  for (int a = 0; a < 3; ++a) {
-    scale.drift_sigma[static_cast<size_t>(a)] = unit.gyro.bias[static_cast<size_t>(a)].sigma;
-    scale.drift_sigma[static_cast<size_t>(3 + a)] = unit.acc.bias[static_cast<size_t>(a)].sigma;
-  }
-  scale.run_end_s = run_end_s;
+  const FaultScale scale = ScaleOf(unit, run_end_s);
   auto candidates = FaultCandidates(fits, 6 * 3600, scale);
   for (EffectCandidate& c : candidates) c.p_value_holm = c.p_value;
   const EffectCandidate& ramp = candidates[0];
@@ -416,10 +422,10 @@ TEST(OnsetScan, OfLookAlikesTheRunCannotTellApartTheSmallerFaultStandsForBoth) {
   ASSERT_TRUE(step.SignificantAt(0.01) && ramp.SignificantAt(0.01));
   EXPECT_LT(std::abs(step.statistic - ramp.statistic), 2.0);  // to first order alike
   EXPECT_GT(*step.size_in_drift_sigma, 5.0 * *ramp.size_in_drift_sigma);
-  EXPECT_TRUE(IsSmallerLookAlike(step, ramp, 0.01));
-  EXPECT_FALSE(IsSmallerLookAlike(ramp, step, 0.01));
+  EXPECT_TRUE(IsLikelierLookAlike(step, ramp, 0.01));
+  EXPECT_FALSE(IsLikelierLookAlike(ramp, step, 0.01));
   auto ranked = candidates;
-  PutSmallerLookAlikesFirst(ranked, 0.01);
+  PutLikelierLookAlikesFirst(ranked, 0.01);
   EXPECT_EQ(ranked.front().name, "gyro_bias_ramp.y");
   const auto findings = SignificantFaults(candidates, 0.01);
   const auto found = [&](const std::string& name) {
@@ -428,6 +434,40 @@ TEST(OnsetScan, OfLookAlikesTheRunCannotTellApartTheSmallerFaultStandsForBoth) {
   };
   EXPECT_TRUE(found("gyro_bias_ramp.y"));
   EXPECT_FALSE(found("gyro_bias_step.z"));
+}
+
+// The same look-alikes, with what the sensors' raw samples show in the
+// still run: the fault whose sensor shows the change comes first, whatever
+// its size, and stands for both; a change of another shape, sign or time
+// shows neither.
+TEST(OnsetScan, OfLookAlikesTheOneItsSensorsRawSamplesShowStandsForBoth) {
+  const auto unit = testing::NavigationGradeUnit();
+  double run_end_s = 0.0;
+  const auto fits = StillRampScan(unit, 24.0, 1200.0, 43, &run_end_s);
+  ASSERT_EQ(fits.size(), 2u);
+  const FaultScale scale = ScaleOf(unit, run_end_s);
+  const OnsetFit& step_fit = fits[1].term.family->regressor == Regressor::kStep ? fits[1] : fits[0];
+  ASSERT_EQ(step_fit.term.Name(), "gyro_bias_step.z");
+  const auto first_with = [&](const std::vector<RawSampleChange>& raw) {
+    auto candidates = FaultCandidates(fits, 6 * 3600, scale, raw);
+    for (EffectCandidate& c : candidates) c.p_value_holm = c.p_value;
+    PutLikelierLookAlikesFirst(candidates, 0.01);
+    const auto findings = SignificantFaults(candidates, 0.01);
+    EXPECT_EQ(findings.size(), 1u);
+    return candidates.front().name;
+  };
+  const RawSampleChange z_jump{Sensor::kGyro,     2,   Regressor::kStep, step_fit.onset_s + 20.0,
+                               step_fit.estimate, 10.0};
+  EXPECT_EQ(first_with({z_jump}), "gyro_bias_step.z");
+  RawSampleChange other_sign = z_jump;
+  other_sign.size = -z_jump.size;
+  RawSampleChange elsewhere = z_jump;
+  elsewhere.time_s = step_fit.onset_s + 3.0 * step_fit.onset_std_s + 600.0;
+  RawSampleChange a_ramp = z_jump;
+  a_ramp.shape = Regressor::kRamp;
+  for (const RawSampleChange& unseen : {other_sign, elsewhere, a_ramp}) {
+    EXPECT_EQ(first_with({unseen}), "gyro_bias_ramp.y");
+  }
 }
 
 // A step and a ramp on one axis that explain the run equally (2Δℓ within 2)

@@ -385,7 +385,8 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std
     Findings found;
     const EffectCandidate* best = nullptr;
     if (scan_a_priori) {
-      found = FindMissingEffects(c.run, c.epochs, *pass, out.drifts, c.a_priori.model, options, &found_notes);
+      found = FindMissingEffects(c.run, c.epochs, *pass, out.drifts, c.a_priori.model,
+                                 c.raw_changes, options, &found_notes);
       best = LowestBicSignificant(found.candidates, found.families, options);
     }
     if (best != nullptr) {
@@ -575,7 +576,9 @@ void AddFaultsOfTheIdentifiedDrifts(const RunContext& c, const ErrorModel& model
 
 // The faults found against the a-priori drifts, each against the identified
 // drifts; model A takes the drifts identified beside the one whose fitted
-// 2Δℓ is largest among those that stand.
+// 2Δℓ is largest among those that stand, or, of those within 2 of it that
+// the run cannot tell apart, the one its sensor's raw samples show
+// (finder/fault_findings.h, IsLikelierLookAlike).
 void TestFaultsAgainstDrifts(const RunContext& c, const Retargeted& retargeted,
                              double log_likelihood_without, Identification& id,
                              std::vector<std::string>& notes) {
@@ -598,6 +601,16 @@ void TestFaultsAgainstDrifts(const RunContext& c, const Retargeted& retargeted,
     if (stands && (best == nullptr || t.statistic > best->statistic)) best = &t;
   }
   if (best == nullptr) return;
+  if (SeenInRawSamples(*best->fault, c.raw_changes) == nullptr) {
+    for (FaultAgainstDriftsTest& t : tests) {
+      if (t.tested && t.p_value < c.options.finder.family_wise_alpha &&
+          best->statistic - t.statistic < kIndistinguishableDeltaBic &&
+          SeenInRawSamples(*t.fault, c.raw_changes) != nullptr) {
+        best = &t;
+        break;
+      }
+    }
+  }
   notes.push_back("model A has the drifts identified beside " + best->fault->term.Name());
   notes.insert(notes.end(), best->notes.begin(), best->notes.end());
   id.model = std::move(best->with_fault.model);

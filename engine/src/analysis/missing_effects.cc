@@ -367,8 +367,8 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
 // no longer ranks explanations: a step and a ramp on one axis carry the same
 // evidence, but the bound on the maximum over onsets penalises them unequally.
 // The rest follow by Holm-adjusted p-value. Of look-alike faults the run
-// cannot tell apart, the smaller change of the unit comes first
-// (fault_findings.h, IsSmallerLookAlike).
+// cannot tell apart, the one its sensor's raw samples show comes first, else
+// the smaller change of the unit (fault_findings.h, IsLikelierLookAlike).
 std::vector<EffectCandidate> MergeCandidates(std::vector<EffectCandidate> terms,
                                              const std::vector<StructureProposal>& structures,
                                              std::vector<EffectCandidate> other_structures, double alpha) {
@@ -393,7 +393,7 @@ std::vector<EffectCandidate> MergeCandidates(std::vector<EffectCandidate> terms,
     if (a.p_value_holm != b.p_value_holm) return a.p_value_holm < b.p_value_holm;
     return a.statistic > b.statistic;
   });
-  PutSmallerLookAlikesFirst(terms, alpha);
+  PutLikelierLookAlikesFirst(terms, alpha);
   return terms;
 }
 
@@ -418,8 +418,10 @@ std::vector<FaultFinding> FaultFindings(const ModelPass& pass, const Findings& f
 }  // namespace
 
 // `drifts`: correlation processing of this pass's smoothed drifts.
-Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass, std::vector<DriftCorrelation> drifts,
-                            const ErrorModel& a_priori, const AnalysisOptions& options, std::vector<std::string>* notes,
+Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass,
+                            std::vector<DriftCorrelation> drifts, const ErrorModel& a_priori,
+                            std::span<const RawSampleChange> raw_changes,
+                            const AnalysisOptions& options, std::vector<std::string>* notes,
                             const SettledStructures& settled) {
   Findings f;
   f.drifts = std::move(drifts);
@@ -478,19 +480,23 @@ Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const M
         pass.model.acc.bias[static_cast<size_t>(a)].sigma;
   }
   if (epochs.size() > 0) scale.run_end_s = epochs.epochs.back().time_s;
-  for (EffectCandidate& c : FaultCandidates(pass.onsets, pass.forward.scalar_updates, scale))
+  for (EffectCandidate& c :
+       FaultCandidates(pass.onsets, pass.forward.scalar_updates, scale, raw_changes))
     others.push_back(std::move(c));
   f.candidates = MergeCandidates(std::move(ranked.terms), f.structures, std::move(others),
                                  options.finder.family_wise_alpha);
   return f;
 }
 
-Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass, const ErrorModel& a_priori,
+Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass,
+                            const ErrorModel& a_priori,
+                            std::span<const RawSampleChange> raw_changes,
                             const AnalysisOptions& options, std::vector<std::string>* notes,
                             const SettledStructures& settled) {
-  return FindMissingEffects(run, epochs, pass,
-                            ident::CorrelateDrifts(pass.forward, pass.smoothed, *pass.layout, options.correlation, notes),
-                            a_priori, options, notes, settled);
+  return FindMissingEffects(
+      run, epochs, pass,
+      ident::CorrelateDrifts(pass.forward, pass.smoothed, *pass.layout, options.correlation, notes),
+      a_priori, raw_changes, options, notes, settled);
 }
 
 bool AddsOnlyDeterministicEffects(const std::vector<std::string>& selectors) {
@@ -519,11 +525,11 @@ const EffectCandidate* LowestBicSignificant(const std::vector<EffectCandidate>& 
       if (best == nullptr || c.predicted_delta_bic < best->predicted_delta_bic) best = &c;
     }
   }
-  // Of look-alike faults the run cannot tell apart, the smallest (fault_findings.h).
+  // Of look-alike faults the run cannot tell apart, the likeliest (fault_findings.h).
   for (bool moved = best != nullptr; moved;) {
     moved = false;
     for (const EffectCandidate& c : terms) {
-      if (IsSmallerLookAlike(*best, c, options.finder.family_wise_alpha)) {
+      if (IsLikelierLookAlike(*best, c, options.finder.family_wise_alpha)) {
         best = &c;
         moved = true;
       }

@@ -11,6 +11,7 @@
 #include "insdiag/engine/analysis.h"
 #include "insdiag/engine/bench_run.h"
 #include "insdiag/engine/filter/epoch_run.h"
+#include "insdiag/engine/finder/fault_findings.h"
 #include "insdiag/engine/ident/drift_likelihood.h"
 #include "insdiag/engine/model/error_model.h"
 #include "insdiag/engine/monitor/sample_screening.h"
@@ -38,6 +39,10 @@ struct RunContext {
   const std::vector<SampleOutlier>& spikes;
   const AnalysisOptions& options;
   const APriori& a_priori;
+  // The jumps and ramps the Allan analysis found in the static segments' raw
+  // samples: evidence of a fault on one sensor axis that needs no navigation
+  // model (finder/fault_findings.h).
+  const std::vector<RawSampleChange>& raw_changes;
 };
 
 inline void Progress(const AnalysisOptions& o, double fraction, std::string_view stage) {

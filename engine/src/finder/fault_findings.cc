@@ -19,15 +19,23 @@ std::string RawChannel(const EffectTerm& term) {
          AxisLabel(AxisSet::kSingle, term.axis, term.axis);
 }
 
-// Two faults whose 2Δℓ (equal parameter counts) or predicted ΔBIC are within
-// this of each other are not worth telling apart (Kass & Raftery, JASA
-// 90(430), 1995).
-constexpr double kIndistinguishableDeltaBic = 2.0;
-
 }  // namespace
 
+const RawSampleChange* SeenInRawSamples(const OnsetFit& f,
+                                        std::span<const RawSampleChange> raw_changes) {
+  for (const RawSampleChange& r : raw_changes) {
+    if (r.sensor == f.term.family->sensor && r.axis == f.term.axis &&
+        r.shape == f.term.family->regressor && r.size * f.estimate > 0.0 &&
+        std::abs(r.time_s - f.onset_s) <= 3.0 * f.onset_std_s + r.tolerance_s) {
+      return &r;
+    }
+  }
+  return nullptr;
+}
+
 std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, int scalar_updates,
-                                             const std::optional<FaultScale>& scale) {
+                                             const std::optional<FaultScale>& scale,
+                                             std::span<const RawSampleChange> raw_changes) {
   std::vector<EffectCandidate> out;
   const double log_n = std::log(static_cast<double>(std::max(1, scalar_updates)));
   for (const OnsetFit& f : fits) {
@@ -71,6 +79,14 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
     c.onset_high_s = f.onset_high_s;
     c.note = absl::StrFormat("likelihood ratio over %d onsets: max 2Δℓ %.1f; onset %.0f s (±1σ %.0f–%.0f s)",
                              f.onsets_tried, f.statistic, f.onset_s, f.onset_low_s, f.onset_high_s);
+    if (const RawSampleChange* raw = SeenInRawSamples(f, raw_changes); raw != nullptr) {
+      c.seen_in_raw_samples = true;
+      absl::StrAppend(
+          &c.note,
+          absl::StrFormat("; seen in the raw samples of a still segment: %s of %.3g %s at %.0f s",
+                          raw->shape == Regressor::kRamp ? "a ramp" : "a jump", raw->size, c.unit,
+                          raw->time_s));
+    }
     const double relative_std_error = f.std_error / std::abs(f.estimate);
     const LinearRange range = LinearRangeOf(f.peak_attitude_error_rad, relative_std_error);
     // A fault far outside the range is reported so, not ranked (linear_range.h).
@@ -107,19 +123,23 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
   return out;
 }
 
-bool IsSmallerLookAlike(const EffectCandidate& a, const EffectCandidate& b, double alpha) {
-  return a.source == "GLR" && b.source == "GLR" && a.SignificantAt(alpha) &&
-         b.SignificantAt(alpha) && a.size_in_drift_sigma.has_value() &&
-         b.size_in_drift_sigma.has_value() && *b.size_in_drift_sigma < *a.size_in_drift_sigma &&
-         std::abs(a.predicted_delta_bic - b.predicted_delta_bic) < kIndistinguishableDeltaBic &&
-         std::ranges::find(a.correlated_with, b.name) != a.correlated_with.end();
+bool IsLikelierLookAlike(const EffectCandidate& a, const EffectCandidate& b, double alpha) {
+  const bool look_alikes =
+      a.source == "GLR" && b.source == "GLR" && a.SignificantAt(alpha) && b.SignificantAt(alpha) &&
+      std::abs(a.predicted_delta_bic - b.predicted_delta_bic) < kIndistinguishableDeltaBic &&
+      std::ranges::find(a.correlated_with, b.name) != a.correlated_with.end();
+  if (!look_alikes) return false;
+  if (a.seen_in_raw_samples != b.seen_in_raw_samples) return b.seen_in_raw_samples;
+  return a.size_in_drift_sigma.has_value() && b.size_in_drift_sigma.has_value() &&
+         *b.size_in_drift_sigma < *a.size_in_drift_sigma;
 }
 
-void PutSmallerLookAlikesFirst(std::vector<EffectCandidate>& ranked, double alpha) {
+void PutLikelierLookAlikesFirst(std::vector<EffectCandidate>& ranked, double alpha) {
   for (size_t i = 0; i < ranked.size(); ++i) {
-    // Each move puts a strictly smaller fault at i, so this ends.
+    // Each move puts a strictly likelier fault at i (seen in the raw samples,
+    // then smaller), so this ends.
     for (size_t j = i + 1; j < ranked.size(); ++j) {
-      if (!IsSmallerLookAlike(ranked[i], ranked[j], alpha)) continue;
+      if (!IsLikelierLookAlike(ranked[i], ranked[j], alpha)) continue;
       std::rotate(ranked.begin() + static_cast<std::ptrdiff_t>(i),
                   ranked.begin() + static_cast<std::ptrdiff_t>(j),
                   ranked.begin() + static_cast<std::ptrdiff_t>(j) + 1);
@@ -146,8 +166,8 @@ std::vector<FaultFinding> SignificantFaults(const std::vector<EffectCandidate>& 
                    [](const EffectCandidate& a, const EffectCandidate& b) {
                      return a.predicted_delta_bic < b.predicted_delta_bic;
                    });
-  // Of look-alikes the run cannot tell apart, the smaller stands for them.
-  PutSmallerLookAlikesFirst(by_bic, alpha);
+  // Of look-alikes the run cannot tell apart, the likelier stands for them.
+  PutLikelierLookAlikesFirst(by_bic, alpha);
   std::vector<FaultFinding> out;
   std::vector<const EffectCandidate*> taken;
   for (const EffectCandidate& c : by_bic) {

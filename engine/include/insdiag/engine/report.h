@@ -63,6 +63,9 @@ struct EffectCandidate {
   // axis's drift σ (a step's size, a ramp's reach by the run's end), which
   // orders the look-alikes the run cannot tell apart (fault_findings.h).
   std::optional<double> size_in_drift_sigma;
+  // Fault effects: the sensor axis's raw samples in the static segments show
+  // the same change near the onset (finder/fault_findings.h, RawSampleChange).
+  bool seen_in_raw_samples = false;
 
   // Tested, identifiable and significant at family-wise `alpha` (Holm).
   bool SignificantAt(double alpha) const { return identifiable && tested && p_value_holm < alpha; }

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "insdiag/engine/finder/onset_scan.h"
@@ -24,21 +25,55 @@ struct FaultScale {
   std::array<double, kSensorAxisCount> drift_sigma{};
   double run_end_s = 0.0;
 };
+
+// A change the raw samples of one sensor axis show in the run's static
+// segments: a jump of the rate's mean (kStep, `size` in the family's unit)
+// or a ramp (kRamp, `size` its slope), as the Allan analysis finds them
+// (ident/allan.h: Jumps, Ramps). `tolerance_s`: how closely its time is
+// placed.
+struct RawSampleChange {
+  Sensor sensor = Sensor::kGyro;
+  int axis = 0;
+  Regressor shape = Regressor::kStep;
+  double time_s = 0.0;
+  double size = 0.0;
+  double tolerance_s = 0.0;
+};
+
+// Two faults whose 2Δℓ (equal parameter counts) or predicted ΔBIC are within
+// this of each other are not worth telling apart (Kass & Raftery, JASA
+// 90(430), 1995).
+inline constexpr double kIndistinguishableDeltaBic = 2.0;
+
+// The change of `raw_changes` that shows the fault `f` in the raw samples:
+// of its sensor axis and shape, of its sign, and within 3 onset standard
+// deviations plus the change's own tolerance of its onset; nullptr if none.
+const RawSampleChange* SeenInRawSamples(const OnsetFit& f,
+                                        std::span<const RawSampleChange> raw_changes);
+
+// A fault candidate is seen in the raw samples (EffectCandidate::
+// seen_in_raw_samples) when SeenInRawSamples finds its change.
 std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, int scalar_updates,
-                                             const std::optional<FaultScale>& scale = std::nullopt);
+                                             const std::optional<FaultScale>& scale = std::nullopt,
+                                             std::span<const RawSampleChange> raw_changes = {});
 
 // Whether `b` should come before `a`: both significant faults at `alpha`,
 // named look-alikes of each other, their predicted ΔBIC within 2 (Kass &
-// Raftery, JASA 90(430), 1995: the run cannot tell them apart), and `b` the
-// smaller change of the unit in its sensor's drift σ. On a still table a
-// navigation-grade gyro's ramp of 24 σ and the z step of 440 σ that Earth
-// rate makes look like it explain the run equally; the smaller is the
-// likelier failure.
-bool IsSmallerLookAlike(const EffectCandidate& a, const EffectCandidate& b, double alpha);
+// Raftery, JASA 90(430), 1995: the run cannot tell them apart through the
+// navigation errors), and
+//   - `b` seen in its sensor's raw samples and `a` not: the samples of a
+//     still segment hold the sensor's own change, which needs no navigation
+//     model (a y accelerometer's ramp and the x gyro step that tilts the
+//     unit alike are told apart by the accelerometer's samples); or
+//   - both alike in that, and `b` the smaller change of the unit in its
+//     sensor's drift σ. On a still table a navigation-grade gyro's ramp of
+//     24 σ and the z step of 440 σ that Earth rate makes look like it
+//     explain the run equally; the smaller is the likelier failure.
+bool IsLikelierLookAlike(const EffectCandidate& a, const EffectCandidate& b, double alpha);
 
-// Moves each candidate of `ranked` ahead of the look-alikes it is smaller
-// than (IsSmallerLookAlike), keeping the order otherwise.
-void PutSmallerLookAlikesFirst(std::vector<EffectCandidate>& ranked, double alpha);
+// Moves each candidate of `ranked` ahead of the look-alikes it is likelier
+// than (IsLikelierLookAlike), keeping the order otherwise.
+void PutLikelierLookAlikesFirst(std::vector<EffectCandidate>& ranked, double alpha);
 
 // A fault the report must show.
 struct FaultFinding {
@@ -56,7 +91,7 @@ struct FaultFinding {
 // factor's error appearing when the table starts to turn — is not a fault.
 // One per sensor axis, the lowest ΔBIC: a step and a ramp on one axis are
 // two explanations of one failure, and so are faults named look-alikes of
-// each other; of those within 2 of ΔBIC the smallest (IsSmallerLookAlike).
+// each other; of those within 2 of ΔBIC the likeliest (IsLikelierLookAlike).
 std::vector<FaultFinding> SignificantFaults(const std::vector<EffectCandidate>& candidates, double alpha);
 
 // The model's fault effect `term` estimated at β̂ ± SE from `onset_s`: a
