@@ -86,6 +86,7 @@ void Fill(const engine::EffectCandidate& in, v1::EffectCandidate* out) {
     out->set_onset_std_s(in.onset_std_s);
     out->set_onset_low_s(in.onset_low_s);
     out->set_onset_high_s(in.onset_high_s);
+    out->set_seen_in_raw_samples(in.seen_in_raw_samples);
   }
   for (const auto& w : in.where) {
     v1::SegmentContribution* s = out->add_where();
@@ -251,6 +252,7 @@ engine::EffectCandidate CandidateOf(const v1::EffectCandidate& in) {
     out.onset_std_s = in.onset_std_s();
     out.onset_low_s = in.onset_low_s();
     out.onset_high_s = in.onset_high_s();
+    out.seen_in_raw_samples = in.seen_in_raw_samples();
   }
   return out;
 }

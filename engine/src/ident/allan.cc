@@ -228,7 +228,7 @@ absl::StatusOr<std::vector<StaticSegment>> FindStaticSegments(const BenchRun& ru
   return out;
 }
 
-std::vector<double> allan_model::PhaseOfRates(std::span<const double> y) {
+void allan_model::PhaseOfRates(std::span<const double> y, std::vector<double>& th) {
   // Compensated (Neumaier) sums, so that second differences keep full
   // precision however far θ wanders.
   double mean = 0.0;
@@ -239,7 +239,7 @@ std::vector<double> allan_model::PhaseOfRates(std::span<const double> y) {
     mean = t;
   }
   mean = (mean + mean_c) / static_cast<double>(y.size());
-  std::vector<double> th(y.size() + 1, 0.0);
+  th.assign(y.size() + 1, 0.0);
   double sum = 0.0;
   double comp = 0.0;
   for (size_t k = 0; k < y.size(); ++k) {
@@ -249,6 +249,11 @@ std::vector<double> allan_model::PhaseOfRates(std::span<const double> y) {
     sum = t;
     th[k + 1] = sum + comp;
   }
+}
+
+std::vector<double> allan_model::PhaseOfRates(std::span<const double> y) {
+  std::vector<double> th;
+  PhaseOfRates(y, th);
   return th;
 }
 

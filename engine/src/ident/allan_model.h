@@ -139,6 +139,8 @@ inline std::string FormatG(double v, int digits = 3) { return absl::StrFormat("%
 // θ_k = Σ_{i<k} (y_i − ȳ): the mean-free phase of a piece's rates (rate ×
 // samples), whose differences over m samples are m times window means.
 std::vector<double> PhaseOfRates(std::span<const double> rates);
+// The same into `phase`, whose storage is reused.
+void PhaseOfRates(std::span<const double> rates, std::vector<double>& phase);
 
 // Differences of cluster size m in a segment of `samples` samples.
 inline int64_t Differences(size_t samples, int64_t m) {

@@ -92,7 +92,7 @@ RandomWalkNull NullOfRandomWalk(std::span<const size_t> piece_samples,
       walks[i].resize(static_cast<size_t>(static_cast<int64_t>(piece_samples[i]) / step));
       double level = 0.0;
       for (double& v : walks[i]) v = level += normal(rng);
-      phases[i] = PhaseOfRates(walks[i]);
+      PhaseOfRates(walks[i], phases[i]);
     }
     for (size_t j = 0; j < points; ++j) {
       const VariancePair v = PooledVariances(phases, coarse_m[j]);
@@ -128,6 +128,25 @@ RandomWalkNull NullOfRandomWalk(std::span<const size_t> piece_samples,
   return null;
 }
 
+// The null is a function of the pieces' lengths, the tested m and α alone,
+// and a run's six channels share their static segments: each thread keeps
+// the last one it simulated.
+const RandomWalkNull& CachedNullOfRandomWalk(const std::vector<size_t>& piece_samples,
+                                             const std::vector<int64_t>& tested_m, double alpha) {
+  struct Memo {
+    std::vector<size_t> piece_samples;
+    std::vector<int64_t> tested_m;
+    double alpha = 0.0;
+    RandomWalkNull null;
+  };
+  thread_local std::optional<Memo> memo;
+  if (!memo.has_value() || memo->piece_samples != piece_samples || memo->tested_m != tested_m ||
+      memo->alpha != alpha) {
+    memo = Memo{piece_samples, tested_m, alpha, NullOfRandomWalk(piece_samples, tested_m, alpha)};
+  }
+  return memo->null;
+}
+
 }  // namespace
 
 std::optional<RampEvidence> RampBeyondNoise(std::span<const std::vector<double>> segment_rates,
@@ -154,7 +173,7 @@ std::optional<RampEvidence> RampBeyondNoise(std::span<const std::vector<double>>
     measured.push_back(v);
   }
   if (tested_m.empty()) return std::nullopt;
-  const RandomWalkNull null = NullOfRandomWalk(piece_samples, tested_m, options.ramp_alpha);
+  const RandomWalkNull& null = CachedNullOfRandomWalk(piece_samples, tested_m, options.ramp_alpha);
   std::optional<RampEvidence> best;
   for (size_t j = 0; j < tested_m.size(); ++j) {
     if (!(null.sd[j] > 0.0)) continue;

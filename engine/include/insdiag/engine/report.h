@@ -61,7 +61,8 @@ struct EffectCandidate {
   double onset_high_s = 0.0;
   // Fault effects: the change of the unit the fault asks for, in its sensor
   // axis's drift σ (a step's size, a ramp's reach by the run's end), which
-  // orders the look-alikes the run cannot tell apart (fault_findings.h).
+  // orders the look-alikes the run cannot tell apart when the raw samples show
+  // neither (fault_findings.h).
   std::optional<double> size_in_drift_sigma;
   // Fault effects: the sensor axis's raw samples in the static segments show
   // the same change near the onset (finder/fault_findings.h, RawSampleChange).
