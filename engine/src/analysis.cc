@@ -151,14 +151,13 @@ std::optional<ident::AllanResult> AllanOfStaticSegments(const BenchRun& run, con
                             ch.name, j.time_s, j.size, ch.unit, j.z));
       }
       if (ch.ramp_evidence.has_value() && !ch.ramps.empty()) {
-        const auto steepest = std::ranges::max_element(
-            ch.ramps, {}, [](const ident::RateRamp& r) { return std::abs(r.slope); });
+        const ident::RateRamp& ramp = ch.ramps.front();
         notes.push_back(absl::StrFormat(
             "the Allan analysis took a ramp out of %s's static segments: its Allan variance at "
             "τ %.0f s is %.3g times its Hadamard variance (z %.1f), which no noise of the model "
-            "exceeds twice; the steepest ramps by %.3g %s/s from %.1f s",
+            "exceeds twice; the rate ramps by %.3g %s/s from %.1f s",
             ch.name, ch.ramp_evidence->tau_s, ch.ramp_evidence->avar_over_hvar, ch.ramp_evidence->z,
-            steepest->slope, ch.unit, steepest->onset_s));
+            ramp.slope, ch.unit, ramp.onset_s));
       }
     }
     return *std::move(allan);

@@ -602,14 +602,17 @@ void TestFaultsAgainstDrifts(const RunContext& c, const Retargeted& retargeted,
   }
   if (best == nullptr) return;
   if (SeenInRawSamples(*best->fault, c.raw_changes) == nullptr) {
+    FaultAgainstDriftsTest* seen = nullptr;
     for (FaultAgainstDriftsTest& t : tests) {
       if (t.tested && t.p_value < c.options.finder.family_wise_alpha &&
           best->statistic - t.statistic < kIndistinguishableDeltaBic &&
-          SeenInRawSamples(*t.fault, c.raw_changes) != nullptr) {
-        best = &t;
-        break;
+          AreLookAlikes(*best->fault, *t.fault) &&
+          SeenInRawSamples(*t.fault, c.raw_changes) != nullptr &&
+          (seen == nullptr || t.statistic > seen->statistic)) {
+        seen = &t;
       }
     }
+    if (seen != nullptr) best = seen;
   }
   notes.push_back("model A has the drifts identified beside " + best->fault->term.Name());
   notes.insert(notes.end(), best->notes.begin(), best->notes.end());

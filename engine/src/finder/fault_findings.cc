@@ -21,6 +21,14 @@ std::string RawChannel(const EffectTerm& term) {
 
 }  // namespace
 
+bool AreLookAlikes(const OnsetFit& a, const OnsetFit& b) {
+  const auto names = [](const OnsetFit& f, const EffectTerm& t) {
+    return std::ranges::find(f.ambiguous_with, t) != f.ambiguous_with.end();
+  };
+  return (a.term.family->sensor == b.term.family->sensor && a.term.axis == b.term.axis) ||
+         names(a, b.term) || names(b, a.term);
+}
+
 const RawSampleChange* SeenInRawSamples(const OnsetFit& f,
                                         std::span<const RawSampleChange> raw_changes) {
   for (const RawSampleChange& r : raw_changes) {

@@ -366,12 +366,12 @@ std::vector<std::vector<double>> PiecesBetweenJumps(
   return out;
 }
 
-// Each piece less its least-squares ramp (allan.h: Ramps); the ramps, their
-// onsets as times in the run.
+// Each piece less its least-squares ramp (allan.h: Ramps); the ramp that
+// removed the most, its onset as a time in the run.
 std::vector<RateRamp> TakeOutRamps(const BenchRun& run, std::vector<std::vector<double>>& pieces,
                                    const std::vector<size_t>& first_samples, double tau0,
                                    const AllanOptions& options) {
-  std::vector<RateRamp> ramps;
+  std::optional<RateRamp> largest;
   for (size_t i = 0; i < pieces.size(); ++i) {
     std::vector<double>& y = pieces[i];
     std::optional<RateRamp> ramp = FitRateRamp(y, tau0, options.MinSegmentSamples(tau0));
@@ -380,9 +380,10 @@ std::vector<RateRamp> TakeOutRamps(const BenchRun& run, std::vector<std::vector<
     for (size_t k = ramp->onset_sample + 1; k < y.size(); ++k)
       y[k] -= per_sample * static_cast<double>(k - ramp->onset_sample);
     ramp->onset_s = run.samples[first_samples[i] + ramp->onset_sample].t_s;
-    ramps.push_back(*ramp);
+    if (!largest.has_value() || ramp->residual_reduction > largest->residual_reduction)
+      largest = ramp;
   }
-  return ramps;
+  return largest.has_value() ? std::vector<RateRamp>{*largest} : std::vector<RateRamp>{};
 }
 
 }  // namespace

@@ -51,6 +51,11 @@ inline constexpr double kIndistinguishableDeltaBic = 2.0;
 const RawSampleChange* SeenInRawSamples(const OnsetFit& f,
                                         std::span<const RawSampleChange> raw_changes);
 
+// Whether two fits name each other as explanations of one signature: a step
+// and a ramp of one sensor axis, or a fault the scan found nearly parallel to
+// the other from its onset (OnsetFit::ambiguous_with).
+bool AreLookAlikes(const OnsetFit& a, const OnsetFit& b);
+
 // A fault candidate is seen in the raw samples (EffectCandidate::
 // seen_in_raw_samples) when SeenInRawSamples finds its change.
 std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, int scalar_updates,

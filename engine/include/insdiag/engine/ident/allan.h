@@ -343,6 +343,7 @@ struct RateRamp {
   size_t onset_sample = 0;  // t₀'s sample j within the piece: u_k = (k − j)₊ samples
   double onset_s = 0.0;  // t₀: from the piece's first sample; in the run (AllanChannel) its time
   double slope = 0.0;    // c [rad/s² | m/s³]
+  double residual_reduction = 0.0;  // Σ y² the ramp removes [(rad/s)² | (m/s²)²]
 };
 
 // The least-squares ramp of `rates` (sampled every τ₀) over the onsets that
@@ -356,8 +357,10 @@ struct AllanChannel {
   int axis = 0;
   std::string unit;  // of adev: "rad/s" | "m/s^2"
   std::vector<RateJump> jumps;  // where its static segments were cut, in time order
-  // The ramps taken out of its pieces, one per piece, when the curve rose as
-  // a ramp (above: Ramps); `ramp_evidence` says why.
+  // When the curve rose as a ramp (above: Ramps; `ramp_evidence` says why),
+  // every piece loses its ramp; this holds the one that removed the most,
+  // the piece that carries the evidence (the others' fits may be their
+  // noise's).
   std::vector<RateRamp> ramps;
   std::optional<RampEvidence> ramp_evidence;
   std::vector<AllanPoint> curve;
