@@ -766,6 +766,7 @@ TEST(AllanRampTest, ARampOfThirtyDriftSigmaIsFoundWithItsOnsetAndSlope) {
     const std::optional<RateRamp> fit =
         FitRateRamp(y, kJumpSeriesDtS, AllanOptions{}.MinSegmentSamples(kJumpSeriesDtS));
     ASSERT_TRUE(fit.has_value());
+    EXPECT_GT(fit->residual_reduction, 0.0);  // what picks a channel's ramp among its pieces
     const double slope = per_sample / kJumpSeriesDtS;
     std::printf("onset %d: read as a ramp %s (z %.1f); fit onset %zu, slope %.4g (true %.4g)\n",
                 onset, ramp.has_value() ? "yes" : "no", ramp.has_value() ? ramp->z : 0.0,

@@ -188,7 +188,7 @@ std::optional<RampEvidence> RampBeyondNoise(std::span<const std::vector<double>>
 std::optional<RateRamp> FitRateRamp(std::span<const double> rates, double tau0_s,
                                     size_t min_samples_after) {
   const size_t n = rates.size();
-  if (n < min_samples_after + 2) return std::nullopt;
+  if (n < min_samples_after + 1) return std::nullopt;
   double mean = 0.0;
   for (double v : rates) mean += v;
   mean /= static_cast<double>(n);
@@ -201,7 +201,6 @@ std::optional<RateRamp> FitRateRamp(std::span<const double> rates, double tau0_s
   double suffix_y = 0.0;
   double suffix_ky = 0.0;
   std::optional<RateRamp> best;
-  double best_reduction = -1.0;
   for (size_t j = n - 1; j-- > 0;) {
     const double y = rates[j + 1] - mean;
     suffix_y += y;
@@ -215,11 +214,11 @@ std::optional<RateRamp> FitRateRamp(std::span<const double> rates, double tau0_s
     const double s_uy = suffix_ky - static_cast<double>(j) * suffix_y;
     if (!(s_uu > 0.0)) continue;
     const double reduction = s_uy * s_uy / s_uu;
-    if (reduction > best_reduction) {
-      best_reduction = reduction;
+    if (!best.has_value() || reduction > best->residual_reduction) {
       best = RateRamp{.onset_sample = j,
                       .onset_s = static_cast<double>(j) * tau0_s,
-                      .slope = s_uy / s_uu / tau0_s};
+                      .slope = s_uy / s_uu / tau0_s,
+                      .residual_reduction = reduction};
     }
   }
   return best;
