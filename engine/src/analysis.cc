@@ -304,6 +304,17 @@ absl::StatusOr<pipeline::ScannedModel> ScanModelA(const pipeline::RunContext& c,
   return a;
 }
 
+// The options with what this run's raw samples tell: the drifts they allow.
+AnalysisOptions OptionsForThisRun(const AnalysisOptions& options,
+                                  const std::optional<ident::AllanResult>& allan) {
+  AnalysisOptions out = options;
+  out.drift_likelihood.raw_sample_ceilings =
+      options.bound_drifts_by_raw_samples && allan.has_value()
+          ? ident::DriftCeilings::FromAllan(*allan, options.monitor.family_wise_alpha)
+          : ident::DriftCeilings{};
+  return out;
+}
+
 }  // namespace
 
 absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& request,
@@ -349,8 +360,9 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   notes.insert(notes.end(), allan_notes.begin(), allan_notes.end());
   if (!epochs.ok()) return epochs.status();
   const std::vector<RawSampleChange> raw_changes = RawChangesOf(allan, options.allan);
-  const pipeline::RunContext context{run,       *epochs,    reference_measurements, spikes, options,
-                                     *a_priori, raw_changes};
+  const AnalysisOptions run_options = OptionsForThisRun(options, allan);
+  const pipeline::RunContext context{
+      run, *epochs, reference_measurements, spikes, run_options, *a_priori, raw_changes};
 
   pipeline::Identification identification;
   identification.model = std::move(base);

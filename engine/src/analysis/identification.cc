@@ -33,6 +33,26 @@ void WidenErrorsOrSay(const EpochRun& epochs, const ErrorModel& reference, ident
                   "the estimate understated how flat the likelihood stays along the σ–τ ridge): " + names);
 }
 
+// The drifts whose likelihood estimates the raw samples refuted: a note on
+// each, and no earlier estimate of them kept (it was fitted as they were).
+void NoteDriftsHeldByRawSamples(const ident::DriftLikelihoodResult& ml,
+                                std::vector<ParameterEstimate>& identified,
+                                std::vector<std::string>& notes) {
+  for (const ident::HeldDrift& h : ml.held_by_raw_samples) {
+    const std::string_view unit = UnitsOf(h.drift.sensor).rate;
+    notes.push_back(
+        absl::StrFormat("%s: the innovations' likelihood peaks at σ %.3g %s, τ %.3g s, whose Allan "
+                        "variance at a cluster time of %.3g s is %.3g "
+                        "times what the static segments' raw samples allow at the family-wise "
+                        "level: the run's motion does not "
+                        "tell this drift, and the model holds it at σ %.3g %s, τ %.3g s",
+                        DriftName(h.drift), h.estimate.sigma, unit, h.estimate.tau_s,
+                        h.excess.cluster_time_s, h.excess.ratio, h.held.sigma, unit, h.held.tau_s));
+    std::erase_if(identified,
+                  [&](const ParameterEstimate& q) { return DriftOfParameter(q.name) == h.drift; });
+  }
+}
+
 // The likelihood-ratio statistic of the drift estimates against the model's
 // values (one degree of freedom per identified parameter, σ or τ).
 double DriftStatistic(const ident::DriftLikelihoodResult& ml) {
@@ -69,6 +89,7 @@ bool ApplyDriftLikelihood(const ident::DriftLikelihoodResult& ml, double alpha, 
       return std::find(ml.not_identifiable.begin(), ml.not_identifiable.end(), q.name) != ml.not_identifiable.end();
     });
   }
+  NoteDriftsHeldByRawSamples(ml, identified, notes);
   if (ml.identified.empty()) return false;
   for (const ParameterEstimate& p : ml.identified) {
     std::erase_if(identified, [&](const ParameterEstimate& q) { return q.name == p.name; });

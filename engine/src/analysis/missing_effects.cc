@@ -208,6 +208,19 @@ void ReadStructureTest(const ident::DriftLikelihoodResult& fitted,
   for (const ident::StructureEstimate& w : fitted.structures) {
     auto terms = ParseEffectSelector(w.effect);
     if (!terms.ok()) continue;
+    if (w.refused_by_raw_samples.has_value()) {
+      outcomes.insert_or_assign(
+          w.effect,
+          UntestedStructure(
+              terms->front(),
+              absl::StrFormat("likelihood of the innovations: 2Δℓ = %.1f beyond the drift σ "
+                              "re-fitted alone, but its Allan variance with the drift at a "
+                              "cluster time of %.3g s is %.3g times what the static "
+                              "segments' raw samples allow: not this unit's",
+                              w.statistic, w.refused_by_raw_samples->cluster_time_s,
+                              w.refused_by_raw_samples->ratio)));
+      continue;
+    }
     if (!(ident::NestedPValue(w) < screen_alpha)) {
       EffectCandidate c = StructureCandidate(terms->front(), "LIKELIHOOD");
       c.estimate = w.parameters.front().value;

@@ -319,6 +319,7 @@ std::vector<AllanPoint> OverlappingAllanCurve(std::span<const std::vector<double
     for (const std::vector<double>& th : theta) {
       const auto N = static_cast<int64_t>(th.size());
       edf += AllanEdf(p.noise, N, p.m);
+      p.edf_reddest += AllanEdf(PowerLawNoise::kRandomWalkRate, N, p.m);
       if (p.noise == PowerLawNoise::kWhitePhase) edf_flicker_phase += AllanEdf(PowerLawNoise::kFlickerPhase, N, p.m);
     }
     // Slope −1: white or flicker phase noise; take the smaller ν.

@@ -25,12 +25,15 @@ double StructurePValue(double statistic, int dof, int starts) {
 
 double NestedPValue(const StructureEstimate& s) { return StructurePValue(s.statistic, s.dof, s.starts); }
 
-absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const EpochRun& run, const ErrorModel& model,
-                                                                 const ErrorModel& a_priori,
-                                                                 const DriftSelection& which,
-                                                                 const DriftSelection& tau_too,
-                                                                 const DriftLikelihoodOptions& options) {
-  if (auto st = ValidateOptions(options); !st.ok()) return st;
+namespace {
+
+// One EM fit of the selected drifts from `model`, with their errors (the
+// header's IdentifyDriftsByLikelihood without the raw samples' ceilings).
+absl::StatusOr<DriftLikelihoodResult> FitDrifts(const EpochRun& run, const ErrorModel& model,
+                                                const ErrorModel& a_priori,
+                                                const DriftSelection& which,
+                                                const DriftSelection& tau_too,
+                                                const DriftLikelihoodOptions& options) {
   DriftLikelihoodResult out;
   out.model = model;
   std::vector<Parameter> parameters;
@@ -92,6 +95,64 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const EpochRun&
     out.log_likelihood_after = *kept;
   }
   return out;
+}
+
+// The fit's drifts the ceilings refuse, each with the value it is held at.
+std::vector<HeldDrift> RefutedByRawSamples(const DriftLikelihoodResult& fit,
+                                           const ErrorModel& a_priori, const DriftSelection& which,
+                                           const DriftCeilings& ceilings) {
+  std::vector<HeldDrift> out;
+  for (const DriftAxis d : DriftAxis::All()) {
+    if (!which.Contains(d)) continue;
+    const GaussMarkov& estimate = DriftOf(fit.model, d);
+    const DriftCeilings::Excess excess = ceilings.ExcessOf(d, estimate);
+    if (excess.ratio <= 1.0) continue;
+    out.push_back({d, estimate, excess, ceilings.Within(d, DriftOf(a_priori, d))});
+  }
+  return out;
+}
+
+}  // namespace
+
+absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(
+    const EpochRun& run, const ErrorModel& model, const ErrorModel& a_priori,
+    const DriftSelection& which, const DriftSelection& tau_too,
+    const DriftLikelihoodOptions& options) {
+  if (auto st = ValidateOptions(options); !st.ok()) return st;
+  auto fit = FitDrifts(run, model, a_priori, which, tau_too, options);
+  if (!fit.ok()) return fit.status();
+  DriftSelection selected = which;
+  std::vector<HeldDrift> held;
+  int iterations = fit->iterations, passes = fit->filter_passes;
+  const double before = fit->log_likelihood_before;
+  // Each round holds what the samples refute and fits the rest again; a
+  // drift is held once, so at most one round per drift.
+  for (auto refuted = RefutedByRawSamples(*fit, a_priori, selected, options.raw_sample_ceilings);
+       !refuted.empty();
+       refuted = RefutedByRawSamples(*fit, a_priori, selected, options.raw_sample_ceilings)) {
+    ErrorModel start = fit->model;
+    for (const HeldDrift& h : refuted) {
+      DriftOf(start, h.drift) = h.held;
+      selected.Set(h.drift, false);
+      held.push_back(h);
+    }
+    fit = FitDrifts(run, start, a_priori, selected, tau_too, options);
+    if (!fit.ok()) return fit.status();
+    if (fit->filter_passes == 0) {
+      // Nothing left to fit: the held model's likelihood still counts.
+      ++fit->filter_passes;
+      auto pass = RunForwardFilter(run, fit->model);
+      if (!pass.ok()) return pass.status();
+      fit->log_likelihood_after = pass->log_likelihood;
+    }
+    iterations += fit->iterations;
+    passes += fit->filter_passes;
+  }
+  fit->held_by_raw_samples = std::move(held);
+  fit->log_likelihood_before = before;
+  fit->iterations = iterations;
+  fit->filter_passes = passes;
+  return fit;
 }
 
 namespace {
@@ -227,6 +288,20 @@ absl::StatusOr<ScreenedStructures> ScreenStructureStarts(
   return result;
 }
 
+// How far a fitted walk, with its axis's drift, stands beyond what the raw
+// samples allow; nothing when within.
+std::optional<DriftCeilings::Excess> WalkRefused(const ErrorModel& fitted,
+                                                 const StructureEstimate& walk,
+                                                 const DriftCeilings& ceilings) {
+  AllanNoiseTerms terms;
+  terms.rate_random_walk = walk.fitted.random_walk_density;
+  terms.markov_sigma = DriftOf(fitted, walk.drift).sigma;
+  terms.markov_tau_s = DriftOf(fitted, walk.drift).tau_s;
+  const DriftCeilings::Excess excess = ceilings.ExcessOf(walk.drift, terms);
+  if (excess.ratio <= 1.0) return std::nullopt;
+  return excess;
+}
+
 // Each kept structure's nested test: ℓ̂₀ is the joint model's without it, its
 // drift σ re-fitted alone. EM for σ alone starts from the model's σ, not the
 // joint fit's: from a σ the structure has relieved, EM crawls up and would
@@ -353,6 +428,8 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
                         a_priori);
     };
     w.drift_sigma = estimate(0);
+    if (!kind.second_order)
+      w.refused_by_raw_samples = WalkRefused(out.model, w, options.raw_sample_ceilings);
     std::vector<ParameterEstimate> fitted;
     for (Eigen::Index k = 1; k < per_axis; ++k) fitted.push_back(estimate(k));
     w.parameters = ReportedParameters(kind, w.drift, fitted);

@@ -41,9 +41,11 @@ struct GridPoint {
 // it is fitted): σ for the drifts of `which`, and τ too for those of
 // `tau_too` (the others keep the model's τ). The grid includes the model's
 // own point for a σ-only drift, and the result is never below the model's
-// likelihood. Counts its passes into `passes`.
+// likelihood. Points the raw samples refuse (`ceilings`) are not tried.
+// Counts its passes into `passes`.
 GridPoint GridStart(const EpochRun& run, const ErrorModel& model, const DriftSelection& which,
-                    const DriftSelection& tau_too, const DriftStartOptions& starts, int& passes) {
+                    const DriftSelection& tau_too, const DriftStartOptions& starts,
+                    const DriftCeilings& ceilings, int& passes) {
   const TauRange range(run);
   GridPoint out{model, LogLikelihoodOrWorst(run, model, passes)};
   double best_ll = out.model_log_likelihood;
@@ -59,7 +61,8 @@ GridPoint GridStart(const EpochRun& run, const ErrorModel& model, const DriftSel
           with_tau ? range.shortest_s * std::pow(range.longest_s / range.shortest_s, fraction) : specified.tau_s;
       for (double factor : starts.grid_sigma_factors) {
         if (!with_tau && factor == 1.0) continue;  // the model's own point, already weighed
-        trials.push_back(GaussMarkov{specified.sigma * factor, tau_s});
+        const GaussMarkov trial{specified.sigma * factor, tau_s};
+        if (ceilings.Allows(d, trial)) trials.push_back(trial);
       }
     }
     // The grid's points are independent passes; the best is taken in grid order.
@@ -101,7 +104,9 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
     }
     start_models.push_back(std::move(start));
   }
-  if (starts.grid_tau_points > 0) start_models.push_back(GridStart(run, model, which, which, starts, passes).model);
+  if (starts.grid_tau_points > 0)
+    start_models.push_back(
+        GridStart(run, model, which, which, starts, options.raw_sample_ceilings, passes).model);
   // EM from each start: independent runs, taken in the starts' order.
   std::vector<absl::StatusOr<DriftLikelihoodResult>> from_starts =
       numerics::ParallelMap(start_models.size(), [&](std::size_t i) {
@@ -167,7 +172,8 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromGrid(const EpochRun& run
     return IdentifyDriftsByLikelihood(run, model, a_priori, which, tau_too, options);
   }
   int passes = 0;
-  const GridPoint start = GridStart(run, model, which, tau_too, starts, passes);
+  const GridPoint start =
+      GridStart(run, model, which, tau_too, starts, options.raw_sample_ceilings, passes);
   auto fit = IdentifyDriftsByLikelihood(run, start.model, a_priori, which, tau_too, options);
   if (!fit.ok()) return fit.status();
   // The improvement is measured from the model as given, not from the grid's point.

@@ -102,6 +102,11 @@ struct AnalysisOptions {
   // structure and gives it none. True: every model tests every axis again.
   bool retest_settled_structures = false;
   ident::DriftLikelihoodOptions drift_likelihood;
+  // Bound every drift the likelihood fits by what the static segments' raw
+  // samples allow (ident/drift_ceiling.h), at the monitor's family-wise α:
+  // a drift the run's motion leaves unobservable otherwise wanders to values
+  // that absorb a fault. Replaces drift_likelihood.raw_sample_ceilings.
+  bool bound_drifts_by_raw_samples = true;
   // Where the a-priori model's misfit competes with its missing effects, its
   // drifts are searched from these starts besides the a-priori values
   // (ident::IdentifyDriftsFromStarts).

@@ -295,6 +295,9 @@ struct AllanPoint {
   double ci_low = 0.0;   // confidence interval of σ(τ)
   double ci_high = 0.0;
   double edf = 0.0;      // ν
+  // ν were the noise at τ a rate random walk, the reddest the model holds:
+  // the smallest ν, for a bound that must hold whatever the noise there.
+  double edf_reddest = 0.0;
   int64_t differences = 0;  // Σ_s M_s
   PowerLawNoise noise = PowerLawNoise::kWhiteRate;  // the type ν was computed for
   double fitted_adev = std::numeric_limits<double>::quiet_NaN();

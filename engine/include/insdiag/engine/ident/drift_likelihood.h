@@ -71,16 +71,18 @@
 // observed information of the four (drift σ, σ₂, α, β) jointly.
 #pragma once
 
-#include <Eigen/Core>
 #include <absl/status/statusor.h>
 
+#include <Eigen/Core>
 #include <array>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "insdiag/engine/bench_run.h"
 #include "insdiag/engine/filter/forward_filter.h"
+#include "insdiag/engine/ident/drift_ceiling.h"
 #include "insdiag/engine/model/drift_axis.h"
 #include "insdiag/engine/model/error_model.h"
 #include "insdiag/engine/parameter_estimate.h"
@@ -114,6 +116,19 @@ struct DriftLikelihoodOptions {
   // statistic is a lower bound (EM's likelihood only rises), which keeps the
   // test conservative, and a pair the screen kept by chance costs no more.
   int second_order_max_iterations = 12;
+  // The drifts the run's raw samples allow (drift_ceiling.h); empty, every
+  // drift. An estimate beyond them is not the drift's: the fit holds that
+  // drift (IdentifyDriftsByLikelihood) and the grid does not try it.
+  DriftCeilings raw_sample_ceilings;
+};
+
+// A drift whose likelihood estimate the raw samples refuted, and the value
+// the model holds instead.
+struct HeldDrift {
+  DriftAxis drift;
+  GaussMarkov estimate;          // the innovations' maximum, beyond the ceiling
+  DriftCeilings::Excess excess;  // how far beyond, and at which cluster time
+  GaussMarkov held;              // the a-priori value, within the ceiling
 };
 
 // A random structure fitted with its axis' drift σ: a bias random walk or a
@@ -131,6 +146,9 @@ struct StructureEstimate {
   double statistic = 0.0;          // 2(ℓ̂ − ℓ̂₀)
   int dof = 1;                     // the structure's own parameters
   int starts = 1;                  // starting points the screen searched (a pair's periods)
+  // A walk whose fit, with its drift, the raw samples refuse (drift_ceiling.h):
+  // how far beyond their ceiling. It is not the unit's, whatever 2Δℓ says.
+  std::optional<DriftCeilings::Excess> refused_by_raw_samples;
 };
 
 // A structure's p-value of `statistic`: χ² with `dof`, Bonferroni over the
@@ -150,6 +168,8 @@ struct DriftLikelihoodResult {
   // Selected drifts whose likelihood is flat in σ (the run cannot tell it);
   // the model keeps their values.
   std::vector<std::string> not_identifiable;
+  // Selected drifts whose estimate the raw samples refuted (in the order found).
+  std::vector<HeldDrift> held_by_raw_samples;
   double log_likelihood_before = 0.0;  // ℓ of the model the identification was given
   double log_likelihood_after = 0.0;   // ℓ of `model`
   int iterations = 0;
@@ -162,8 +182,12 @@ struct DriftLikelihoodResult {
 // states: the joint M-step is the AR(1) regression φ̂ = Σ b_k / Σ a_k,
 // q̂ = Σ (a_{k+1} − 2φ̂ b_k + φ̂² a_k) / (n − 1), σ̂² = q̂ / (1 − φ̂²),
 // τ̂ = −Δt / ln φ̂; Shumway & Stoffer §6.3). `a_priori` gives the values the
-// report lists against the estimates. With nothing to identify it runs no
-// filter pass and returns the model as it is.
+// report lists against the estimates. A drift whose estimate the options'
+// raw-sample ceilings refuse is held at its `a_priori` value (lowered to the
+// ceiling where that too is refused), listed in `held_by_raw_samples`, and
+// the other drifts fitted again beside it: what its wandering absorbed, they
+// must not keep. With nothing to identify it runs no filter pass and returns
+// the model as it is.
 absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const EpochRun& run, const ErrorModel& model,
                                                                  const ErrorModel& a_priori,
                                                                  const DriftSelection& which,
