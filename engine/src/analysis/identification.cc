@@ -227,24 +227,26 @@ std::vector<OnsetFit> MostSignificantStepAndRamp(const std::vector<OnsetFit>& on
 // starts a decade either side, those worth their parameters by BIC, their
 // standard errors checked against the likelihood ratio.
 absl::StatusOr<ident::DriftLikelihoodResult> DriftsFromStarts(const RunContext& c,
-                                                              const ErrorModel& model, double log_n,
+                                                              const ErrorModel& model,
                                                               std::vector<std::string>& notes) {
   auto ml =
       ident::IdentifyDriftsFromStarts(c.epochs, model, c.a_priori.model, DriftSelection::Every(),
                                       c.a_priori.drift_starts, c.options.drift_likelihood);
-  if (ml.ok()) ml = ident::KeepDriftsWorthTheirParameters(c.epochs, model, *std::move(ml), log_n);
+  if (ml.ok()) ml = ident::KeepDriftsWorthTheirParameters(c.epochs, model, *std::move(ml));
   if (ml.ok()) WidenErrorsOrSay(c.epochs, c.a_priori.model, *ml, notes);
   return ml;
 }
 
 // The drifts' σ and τ identified with the best candidate in the model.
-absl::StatusOr<ident::DriftLikelihoodResult> DriftsBesideTheCandidate(
-    const RunContext& c, const ModelPass& pass, const Findings& found, const EffectCandidate& best,
-    const ErrorModel& base, double log_n) {
+absl::StatusOr<ident::DriftLikelihoodResult> DriftsBesideTheCandidate(const RunContext& c,
+                                                                      const ModelPass& pass,
+                                                                      const Findings& found,
+                                                                      const EffectCandidate& best,
+                                                                      const ErrorModel& base) {
   auto with_candidate = ExtendModel(c.run, base, {best.name}, pass, found, c.options);
   if (!with_candidate.ok()) return with_candidate.status();
   std::vector<std::string> fit_notes;
-  return DriftsFromStarts(c, *with_candidate, log_n, fit_notes);
+  return DriftsFromStarts(c, *with_candidate, fit_notes);
 }
 
 // Whether the drifts of a class prior are off beside the best candidate as
@@ -278,7 +280,7 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
                                       std::vector<std::string>& notes) {
   const AnalysisOptions& options = c.options;
   const double log_n = std::log(static_cast<double>(std::max(1, pass.forward.scalar_updates)));
-  auto ml = DriftsFromStarts(c, base, log_n, notes);
+  auto ml = DriftsFromStarts(c, base, notes);
   if (!ml.ok()) {
     notes.push_back("the drifts were not identified against the candidates: " + std::string(ml.status().message()));
     return false;
@@ -305,7 +307,7 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
   const bool fault = family != nullptr && family->kind == EffectKind::kFault;
   std::optional<absl::StatusOr<ident::DriftLikelihoodResult>> beside;
   if (!c.a_priori.from_datasheet || fault) {
-    beside = DriftsBesideTheCandidate(c, pass, found, best, base, log_n);
+    beside = DriftsBesideTheCandidate(c, pass, found, best, base);
     if (!beside->ok()) {
       notes.push_back("the drifts were not identified beside " + best.name + ": " +
                       std::string(beside->status().message()));
@@ -490,6 +492,35 @@ absl::StatusOr<ident::DriftLikelihoodResult> IdentifyDriftSet(const RunContext& 
                                            c.options.drift_likelihood);
 }
 
+// The drifts of `ml` (a fit from `model`) worth their parameters by BIC
+// (ident::KeepDriftsWorthTheirParameters), with a note naming those put
+// back to the model's values. A drift the run's motion leaves unobservable
+// has a likelihood all but flat in it, and EM leaves it wherever it wandered:
+// a level heading gyro's drift at σ 35 times its Allan bound and τ over 100
+// times the run gave the filter a free heading, which a y gyro step then
+// swung by 1.9 rad, and the scan refused the step as outside its linear
+// range.
+absl::StatusOr<ident::DriftLikelihoodResult> KeepDriftsWorthTheirParametersOrSay(
+    const RunContext& c, const ErrorModel& model, ident::DriftLikelihoodResult ml,
+    std::vector<std::string>& notes) {
+  auto kept = ident::KeepDriftsWorthTheirParameters(c.epochs, model, ml);
+  if (!kept.ok()) return kept.status();
+  std::string put_back;
+  for (const DriftAxis d : DriftAxis::All()) {
+    if (DriftOf(ml.model, d) != DriftOf(model, d) && DriftOf(kept->model, d) == DriftOf(model, d)) {
+      put_back += (put_back.empty() ? "" : ", ") + DriftName(d);
+    }
+  }
+  if (!put_back.empty()) {
+    notes.push_back(
+        "not worth their parameters by BIC (a drift's σ and τ must each raise 2ℓ by more than ln "
+        "N), "
+        "kept at the model's values: " +
+        put_back);
+  }
+  return kept;
+}
+
 // The drifts' final values, by likelihood: correlation processing of the
 // smoothed estimates gives the drifts' structure and a start, but the
 // smoother's shrinkage biases its σ and τ low together along the fit's ridge
@@ -503,6 +534,7 @@ void IdentifyFinalDrifts(const RunContext& c, const Retargeted& retargeted, Iden
   for (const bool resolved_set : {false, true}) {
     if (!resolved_set && retargeted.drifts_by_likelihood && !both_sides_of_a_fault_test) continue;
     auto ml = IdentifyDriftSet(c, id.model, retargeted, resolved_set, both_sides_of_a_fault_test);
+    if (ml.ok()) ml = KeepDriftsWorthTheirParametersOrSay(c, id.model, *std::move(ml), notes);
     if (ml.ok()) WidenErrorsOrSay(c.epochs, c.a_priori.model, *ml, notes);
     if (!ml.ok()) {
       notes.push_back("the drifts were not identified by likelihood: " + std::string(ml.status().message()));

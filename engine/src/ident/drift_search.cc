@@ -236,10 +236,14 @@ absl::StatusOr<std::vector<std::string>> WidenErrorsToTheLikelihoodRatio(const E
   return widened;
 }
 
-absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const EpochRun& run, const ErrorModel& model,
-                                                                     DriftLikelihoodResult fit, double log_n) {
-  const auto before = LogLikelihoodOf(run, model, fit.filter_passes);
-  if (!before.ok()) return before.status();
+absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const EpochRun& run,
+                                                                     const ErrorModel& model,
+                                                                     DriftLikelihoodResult fit) {
+  ++fit.filter_passes;
+  const auto model_pass = RunForwardFilter(run, model);
+  if (!model_pass.ok()) return model_pass.status();
+  const absl::StatusOr<double> before = model_pass->log_likelihood;
+  const double log_n = std::log(static_cast<double>(std::max(1, model_pass->scalar_updates)));
   ErrorModel kept = fit.model;
   double kept_ll = fit.log_likelihood_after;
   auto parameters_of = [&](DriftAxis d) {

@@ -255,7 +255,8 @@ absl::StatusOr<std::vector<std::string>> WidenErrorsToTheLikelihoodRatio(const E
 // The drifts of `fit` (a fit from `model`) worth their parameters by BIC,
 // by backward elimination in the joint fit: each drift's σ and τ must raise
 // the log-likelihood of the fit with every other kept drift by more than
-// `log_n` a parameter (2Δℓ > k ln N, Schwarz 1978); the least worth is put
+// ln N a parameter (2Δℓ > k ln N, N the run's scalar updates; Schwarz
+// 1978); the least worth is put
 // back to the model's values and the rest weighed again, until every kept
 // drift is worth its cost. The result holds those drifts only, its
 // identified parameters and likelihood theirs. Weighed in the joint fit, not
@@ -265,8 +266,9 @@ absl::StatusOr<std::vector<std::string>> WidenErrorsToTheLikelihoodRatio(const E
 // run tells some axes' drifts and not others, and a parameter re-tuned
 // without cause costs the competition its ln N. One filter pass per kept
 // drift per round and one for `model`.
-absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const EpochRun& run, const ErrorModel& model,
-                                                                     DriftLikelihoodResult fit, double log_n);
+absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const EpochRun& run,
+                                                                     const ErrorModel& model,
+                                                                     DriftLikelihoodResult fit);
 
 // Fits a bias random walk on each selected axis that has a drift and no walk
 // in `model`, each with its axis' drift σ (header), and tests each against
