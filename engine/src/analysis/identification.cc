@@ -492,15 +492,17 @@ absl::StatusOr<ident::DriftLikelihoodResult> IdentifyDriftSet(const RunContext& 
                                            c.options.drift_likelihood);
 }
 
-// The drifts of `ml` (a fit from `model`) worth their parameters by BIC
-// (ident::KeepDriftsWorthTheirParameters), with a note naming those put
-// back to the model's values. A drift the run's motion leaves unobservable
-// has a likelihood all but flat in it, and EM leaves it wherever it wandered:
-// a level heading gyro's drift at σ 35 times its Allan bound and τ over 100
-// times the run gave the filter a free heading, which a y gyro step then
-// swung by 1.9 rad, and the scan refused the step as outside its linear
-// range.
-absl::StatusOr<ident::DriftLikelihoodResult> KeepDriftsWorthTheirParametersOrSay(
+// `ml` (a fit from `model`) with its model holding only the drifts worth
+// their parameters by BIC (ident::KeepDriftsWorthTheirParameters); the others
+// keep `model`'s values, and a note names them. Their estimates stay listed:
+// an estimate with its interval says what the run tells of a drift, even
+// where that is too little to change the model. A drift the run's motion
+// leaves unobservable has a likelihood all but flat in it, and EM leaves it
+// wherever it wandered: a level heading gyro's drift at σ 35 times its
+// Allan bound and τ over 100 times the run gave the filter a free heading,
+// which a y gyro step then swung by 1.9 rad, and the scan refused the step
+// as outside its linear range.
+absl::StatusOr<ident::DriftLikelihoodResult> ModelKeepsDriftsWorthTheirParameters(
     const RunContext& c, const ErrorModel& model, ident::DriftLikelihoodResult ml,
     std::vector<std::string>& notes) {
   auto kept = ident::KeepDriftsWorthTheirParameters(c.epochs, model, ml);
@@ -514,10 +516,11 @@ absl::StatusOr<ident::DriftLikelihoodResult> KeepDriftsWorthTheirParametersOrSay
   if (!put_back.empty()) {
     notes.push_back(
         "not worth their parameters by BIC (a drift's σ and τ must each raise 2ℓ by more than ln "
-        "N), "
-        "kept at the model's values: " +
-        put_back);
+        "N): "
+        "the model keeps its values for " +
+        put_back + ", and their estimates are listed");
   }
+  kept->identified = std::move(ml.identified);
   return kept;
 }
 
@@ -534,8 +537,9 @@ void IdentifyFinalDrifts(const RunContext& c, const Retargeted& retargeted, Iden
   for (const bool resolved_set : {false, true}) {
     if (!resolved_set && retargeted.drifts_by_likelihood && !both_sides_of_a_fault_test) continue;
     auto ml = IdentifyDriftSet(c, id.model, retargeted, resolved_set, both_sides_of_a_fault_test);
-    if (ml.ok()) ml = KeepDriftsWorthTheirParametersOrSay(c, id.model, *std::move(ml), notes);
+    // The errors against the likelihood ratio first: of the estimates, with each in the model.
     if (ml.ok()) WidenErrorsOrSay(c.epochs, c.a_priori.model, *ml, notes);
+    if (ml.ok()) ml = ModelKeepsDriftsWorthTheirParameters(c, id.model, *std::move(ml), notes);
     if (!ml.ok()) {
       notes.push_back("the drifts were not identified by likelihood: " + std::string(ml.status().message()));
     } else {
