@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 
+#include "allan_model.h"
 #include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::engine::ident {
@@ -15,6 +17,20 @@ double MarkovAllanVariancePerVariance(double tau_s, double cluster_time_s) {
   unit.markov_sigma = 1.0;
   unit.markov_tau_s = tau_s;
   return ModelAllanVariance(unit, cluster_time_s);
+}
+
+// g(u) = (2u − 3 + 4e^{−u} − e^{−2u})/u² at a complex u (the header), by
+// its series where the closed form cancels (as allan_model.h's MarkovShape).
+std::complex<double> MarkovShapeOfComplexRate(std::complex<double> u) {
+  constexpr double kSeriesBelow = 0.1;
+  if (std::abs(u) < kSeriesBelow) {
+    const auto& c = allan_model::kMarkovSeries;
+    std::complex<double> sum(c.back());
+    for (int i = static_cast<int>(c.size()) - 2; i >= 0; --i)
+      sum = sum * u + c[static_cast<size_t>(i)];
+    return sum * u;
+  }
+  return (2.0 * u - 3.0 + 4.0 * std::exp(-u) - std::exp(-2.0 * u)) / (u * u);
 }
 
 }  // namespace
@@ -59,6 +75,20 @@ DriftCeilings::Excess DriftCeilings::ExcessOf(DriftAxis drift, const GaussMarkov
   terms.markov_sigma = value.sigma;
   terms.markov_tau_s = value.tau_s;
   return ExcessOf(drift, terms);
+}
+
+DriftCeilings::Excess DriftCeilings::ExcessOf(DriftAxis drift, const AllanNoiseTerms& terms,
+                                              const SecondOrderPair& pair) const {
+  Excess worst;
+  const std::complex<double> rate(pair.decay_rate_per_s, -pair.frequency_rad_s);
+  for (const Point& p : PointsOf(drift)) {
+    const double pair_variance =
+        pair.sigma * pair.sigma * MarkovShapeOfComplexRate(rate * p.cluster_time_s).real();
+    const double ratio =
+        (ModelAllanVariance(terms, p.cluster_time_s) + pair_variance) / p.allan_variance_bound;
+    if (ratio > worst.ratio) worst = {ratio, p.cluster_time_s};
+  }
+  return worst;
 }
 
 double DriftCeilings::LargestSigma(DriftAxis drift, double tau_s) const {

@@ -13,7 +13,10 @@
 // whose σ² g(T/τ) stands above the channel's measured Allan variance's upper
 // confidence bound at some T is refuted by the samples, whatever the
 // innovations prefer. So is a bias random walk of density K, whose Allan
-// variance is K²T/3 (the same annex).
+// variance is K²T/3 (the same annex), and a second-order pair: its
+// autocovariance σ₂² e^{−α|t|} cos βt is σ₂² Re e^{−λ|t|} with λ = α − iβ, a
+// Gauss–Markov process's of complex rate, and the same integrals give its
+// Allan variance σ₂² Re g(λT).
 //
 // What. Per drift axis, the points (T, upper bound of σ²(T)) of its
 // channel's curve over the static segments (after their jumps and ramps are
@@ -57,6 +60,13 @@ class DriftCeilings {
   // bias random walk as its rate random walk), or of a drift alone.
   Excess ExcessOf(DriftAxis drift, const AllanNoiseTerms& terms) const;
   Excess ExcessOf(DriftAxis drift, const GaussMarkov& value) const;
+  // Of the terms with a second-order pair (σ₂, α, β) beside them.
+  struct SecondOrderPair {
+    double sigma = 0.0;
+    double decay_rate_per_s = 0.0;
+    double frequency_rad_s = 0.0;
+  };
+  Excess ExcessOf(DriftAxis drift, const AllanNoiseTerms& terms, const SecondOrderPair& pair) const;
   bool Allows(DriftAxis drift, const GaussMarkov& value) const;
   // The largest σ the samples allow a drift of correlation time `tau_s`
   // (infinite where the axis has no point).
