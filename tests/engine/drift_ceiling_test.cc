@@ -110,6 +110,66 @@ TEST(DriftCeilingTest, ADriftFarBeyondTheSamplesIsRefused) {
   EXPECT_GE(tenfold_refused, 95);
 }
 
+// The Allan variance the ceiling predicts at one cluster time (a ceiling of
+// one point and bound 1 reads it as the ratio).
+double PredictedAllanVariance(double cluster_time_s, const AllanNoiseTerms& terms,
+                              const DriftCeilings::SecondOrderPair& pair) {
+  DriftCeilings unit_bound;
+  unit_bound.Add(kGyroX, {cluster_time_s, 1.0});
+  return unit_bound.ExcessOf(kGyroX, terms, pair).ratio;
+}
+
+// A second-order pair's Allan variance, σ₂² Re g(λT) with λ = α − iβ: equal
+// to the Gauss–Markov process's where β = 0, and the mean of the measured
+// curve over simulated one-hour channels of a pair (decay 100 s, period
+// 300 s) within 8 % of it at cluster times short and long against the
+// period (the mean of 60 curves: its own error is about 3 % at 150 s).
+TEST(DriftCeilingTest, ASecondOrderPairsAllanVarianceIsTheComplexRateMarkovs) {
+  const DriftCeilings::SecondOrderPair still{1.0, 1.0 / 100.0, 0.0};
+  AllanNoiseTerms markov;
+  markov.markov_sigma = 1.0;
+  markov.markov_tau_s = 100.0;
+  for (double t : {0.5, 10.0, 100.0, 1000.0}) {
+    EXPECT_NEAR(PredictedAllanVariance(t, {}, still), PredictedAllanVariance(t, markov, {}),
+                1e-9 * PredictedAllanVariance(t, markov, {}))
+        << t;
+  }
+  const DriftCeilings::SecondOrderPair pair{1.0, 1.0 / 100.0, 2.0 * 3.141592653589793 / 300.0};
+  const double rho = std::exp(-pair.decay_rate_per_s * kSampleIntervalS);
+  const double angle = pair.frequency_rad_s * kSampleIntervalS;
+  const double innovation = pair.sigma * std::sqrt(1.0 - rho * rho);
+  const std::vector<double> cluster_times_s = {10.0, 50.0, 150.0};
+  std::vector<double> mean(cluster_times_s.size(), 0.0);
+  constexpr int kRuns = 60;
+  std::mt19937_64 rng(4603);
+  std::normal_distribution<double> n(0.0, 1.0);
+  const AllanOptions options;
+  for (int run = 0; run < kRuns; ++run) {
+    std::vector<double> y(kSamples);
+    double a = pair.sigma * n(rng), b = pair.sigma * n(rng);
+    for (double& v : y) {
+      v = a;
+      const double a_next = rho * (std::cos(angle) * a - std::sin(angle) * b) + innovation * n(rng);
+      b = rho * (std::sin(angle) * a + std::cos(angle) * b) + innovation * n(rng);
+      a = a_next;
+    }
+    const std::vector<std::vector<double>> pieces = {y};
+    std::vector<int64_t> sizes;
+    for (double t : cluster_times_s)
+      sizes.push_back(static_cast<int64_t>(std::lround(t / kSampleIntervalS)));
+    const std::vector<AllanPoint> curve =
+        OverlappingAllanCurve(pieces, kSampleIntervalS, sizes, options);
+    ASSERT_EQ(curve.size(), cluster_times_s.size());
+    for (size_t j = 0; j < curve.size(); ++j) mean[j] += curve[j].adev * curve[j].adev / kRuns;
+  }
+  for (size_t j = 0; j < cluster_times_s.size(); ++j) {
+    const double predicted = PredictedAllanVariance(cluster_times_s[j], {}, pair);
+    std::printf("τ %.0f s: measured %.4g, predicted %.4g\n", cluster_times_s[j], mean[j],
+                predicted);
+    EXPECT_NEAR(mean[j], predicted, 0.08 * predicted) << cluster_times_s[j];
+  }
+}
+
 // A run without static segments has no points: every drift is allowed.
 TEST(DriftCeilingTest, WithoutStillSamplesEveryDriftIsAllowed) {
   const DriftCeilings none;
