@@ -492,38 +492,6 @@ absl::StatusOr<ident::DriftLikelihoodResult> IdentifyDriftSet(const RunContext& 
                                            c.options.drift_likelihood);
 }
 
-// `ml` (a fit from `model`) with its model holding only the drifts worth
-// their parameters by BIC (ident::KeepDriftsWorthTheirParameters); the others
-// keep `model`'s values, and a note names them. Their estimates stay listed:
-// an estimate with its interval says what the run tells of a drift, even
-// where that is too little to change the model. A drift the run's motion
-// leaves unobservable has a likelihood all but flat in it, and EM leaves it
-// wherever it wandered: a level heading gyro's drift at σ 35 times its
-// Allan bound and τ over 100 times the run gave the filter a free heading,
-// which a y gyro step then swung by 1.9 rad, and the scan refused the step
-// as outside its linear range.
-absl::StatusOr<ident::DriftLikelihoodResult> ModelKeepsDriftsWorthTheirParameters(
-    const RunContext& c, const ErrorModel& model, ident::DriftLikelihoodResult ml,
-    std::vector<std::string>& notes) {
-  auto kept = ident::KeepDriftsWorthTheirParameters(c.epochs, model, ml);
-  if (!kept.ok()) return kept.status();
-  std::string put_back;
-  for (const DriftAxis d : DriftAxis::All()) {
-    if (DriftOf(ml.model, d) != DriftOf(model, d) && DriftOf(kept->model, d) == DriftOf(model, d)) {
-      put_back += (put_back.empty() ? "" : ", ") + DriftName(d);
-    }
-  }
-  if (!put_back.empty()) {
-    notes.push_back(
-        "not worth their parameters by BIC (a drift's σ and τ must each raise 2ℓ by more than ln "
-        "N): "
-        "the model keeps its values for " +
-        put_back + ", and their estimates are listed");
-  }
-  kept->identified = std::move(ml.identified);
-  return kept;
-}
-
 // The drifts' final values, by likelihood: correlation processing of the
 // smoothed estimates gives the drifts' structure and a start, but the
 // smoother's shrinkage biases its σ and τ low together along the fit's ridge
@@ -537,9 +505,7 @@ void IdentifyFinalDrifts(const RunContext& c, const Retargeted& retargeted, Iden
   for (const bool resolved_set : {false, true}) {
     if (!resolved_set && retargeted.drifts_by_likelihood && !both_sides_of_a_fault_test) continue;
     auto ml = IdentifyDriftSet(c, id.model, retargeted, resolved_set, both_sides_of_a_fault_test);
-    // The errors against the likelihood ratio first: of the estimates, with each in the model.
     if (ml.ok()) WidenErrorsOrSay(c.epochs, c.a_priori.model, *ml, notes);
-    if (ml.ok()) ml = ModelKeepsDriftsWorthTheirParameters(c, id.model, *std::move(ml), notes);
     if (!ml.ok()) {
       notes.push_back("the drifts were not identified by likelihood: " + std::string(ml.status().message()));
     } else {

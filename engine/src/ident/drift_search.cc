@@ -85,30 +85,6 @@ GridPoint GridStart(const EpochRun& run, const ErrorModel& model, const DriftSel
   return out;
 }
 
-// A fit from a start other than `model` keeps the start's value for what
-// the likelihood is flat in (not_identifiable): that is the search's point,
-// not anything the run told. Those parameters go back to `model`'s values,
-// and the fit's likelihood is taken again where that changed it.
-absl::Status PutFlatParametersBack(const EpochRun& run, const ErrorModel& model,
-                                   DriftLikelihoodResult& fit) {
-  bool changed = false;
-  for (const std::string& name : fit.not_identifiable) {
-    const std::optional<DriftAxis> d = DriftOfParameter(name);
-    if (!d.has_value()) continue;
-    GaussMarkov& value = DriftOf(fit.model, *d);
-    const GaussMarkov& given = DriftOf(model, *d);
-    double& field = name == DriftSigmaName(*d) ? value.sigma : value.tau_s;
-    const double wanted = name == DriftSigmaName(*d) ? given.sigma : given.tau_s;
-    changed = changed || field != wanted;
-    field = wanted;
-  }
-  if (!changed) return absl::OkStatus();
-  auto l = LogLikelihoodOf(run, fit.model, fit.filter_passes);
-  if (!l.ok()) return l.status();
-  fit.log_likelihood_after = *l;
-  return absl::OkStatus();
-}
-
 }  // namespace
 
 absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& run, const ErrorModel& model,
@@ -184,7 +160,6 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
   if (before.has_value()) result->log_likelihood_before = *before;
   result->iterations = iterations;
   result->filter_passes = passes;
-  if (auto st = PutFlatParametersBack(run, model, *result); !st.ok()) return st;
   return *std::move(result);
 }
 
@@ -201,7 +176,6 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromGrid(const EpochRun& run
       GridStart(run, model, which, tau_too, starts, options.raw_sample_ceilings, passes);
   auto fit = IdentifyDriftsByLikelihood(run, start.model, a_priori, which, tau_too, options);
   if (!fit.ok()) return fit.status();
-  if (auto st = PutFlatParametersBack(run, model, *fit); !st.ok()) return st;
   // The improvement is measured from the model as given, not from the grid's point.
   fit->log_likelihood_before = start.model_log_likelihood;
   fit->filter_passes += passes;
