@@ -50,10 +50,13 @@ constexpr std::array<double, 9> MarkovSeriesCoefficients() {
 }
 inline constexpr std::array<double, 9> kMarkovSeries = MarkovSeriesCoefficients();
 
+// Also at a complex u: a second-order pair's Allan variance is σ₂² Re g(λT)
+// with λ = α − iβ (drift_ceiling.h).
 template <typename T>
 T MarkovShape(const T& u) {
+  using std::abs;
   using std::exp;
-  if (u < T(0.1)) {
+  if (abs(u) < 0.1) {
     T sum(kMarkovSeries.back());
     for (int i = static_cast<int>(kMarkovSeries.size()) - 2; i >= 0; --i) {
       sum = sum * u + T(kMarkovSeries[static_cast<size_t>(i)]);

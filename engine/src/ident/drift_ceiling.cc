@@ -9,31 +9,6 @@
 #include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::engine::ident {
-namespace {
-
-// σ² g(T/τ) / σ² = g(T/τ): the drift's Allan variance per unit variance.
-double MarkovAllanVariancePerVariance(double tau_s, double cluster_time_s) {
-  AllanNoiseTerms unit;
-  unit.markov_sigma = 1.0;
-  unit.markov_tau_s = tau_s;
-  return ModelAllanVariance(unit, cluster_time_s);
-}
-
-// g(u) = (2u − 3 + 4e^{−u} − e^{−2u})/u² at a complex u (the header), by
-// its series where the closed form cancels (as allan_model.h's MarkovShape).
-std::complex<double> MarkovShapeOfComplexRate(std::complex<double> u) {
-  constexpr double kSeriesBelow = 0.1;
-  if (std::abs(u) < kSeriesBelow) {
-    const auto& c = allan_model::kMarkovSeries;
-    std::complex<double> sum(c.back());
-    for (int i = static_cast<int>(c.size()) - 2; i >= 0; --i)
-      sum = sum * u + c[static_cast<size_t>(i)];
-    return sum * u;
-  }
-  return (2.0 * u - 3.0 + 4.0 * std::exp(-u) - std::exp(-2.0 * u)) / (u * u);
-}
-
-}  // namespace
 
 bool DriftCeilings::Allows(DriftAxis drift, const GaussMarkov& value) const {
   // A drift put on the ceiling (Within) lands on it up to rounding.
@@ -61,12 +36,7 @@ DriftCeilings DriftCeilings::FromAllan(const AllanResult& allan, double family_w
 }
 
 DriftCeilings::Excess DriftCeilings::ExcessOf(DriftAxis drift, const AllanNoiseTerms& terms) const {
-  Excess worst;
-  for (const Point& p : PointsOf(drift)) {
-    const double ratio = ModelAllanVariance(terms, p.cluster_time_s) / p.allan_variance_bound;
-    if (ratio > worst.ratio) worst = {ratio, p.cluster_time_s};
-  }
-  return worst;
+  return ExcessOf(drift, terms, SecondOrderPair{});
 }
 
 DriftCeilings::Excess DriftCeilings::ExcessOf(DriftAxis drift, const GaussMarkov& value) const {
@@ -83,7 +53,7 @@ DriftCeilings::Excess DriftCeilings::ExcessOf(DriftAxis drift, const AllanNoiseT
   const std::complex<double> rate(pair.decay_rate_per_s, -pair.frequency_rad_s);
   for (const Point& p : PointsOf(drift)) {
     const double pair_variance =
-        pair.sigma * pair.sigma * MarkovShapeOfComplexRate(rate * p.cluster_time_s).real();
+        pair.sigma * pair.sigma * allan_model::MarkovShape(rate * p.cluster_time_s).real();
     const double ratio =
         (ModelAllanVariance(terms, p.cluster_time_s) + pair_variance) / p.allan_variance_bound;
     if (ratio > worst.ratio) worst = {ratio, p.cluster_time_s};
@@ -94,7 +64,8 @@ DriftCeilings::Excess DriftCeilings::ExcessOf(DriftAxis drift, const AllanNoiseT
 double DriftCeilings::LargestSigma(DriftAxis drift, double tau_s) const {
   double largest = std::numeric_limits<double>::infinity();
   for (const Point& p : PointsOf(drift)) {
-    const double per_variance = MarkovAllanVariancePerVariance(tau_s, p.cluster_time_s);
+    const double per_variance =
+        allan_model::MarkovShape(p.cluster_time_s / tau_s);  // σ² g(T/τ) / σ²
     if (per_variance > 0.0)
       largest = std::min(largest, std::sqrt(p.allan_variance_bound / per_variance));
   }

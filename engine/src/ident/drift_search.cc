@@ -242,7 +242,7 @@ absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const Epoch
   ++fit.filter_passes;
   const auto model_pass = RunForwardFilter(run, model);
   if (!model_pass.ok()) return model_pass.status();
-  const absl::StatusOr<double> before = model_pass->log_likelihood;
+  const double before = model_pass->log_likelihood;
   const double log_n = std::log(static_cast<double>(std::max(1, model_pass->scalar_updates)));
   ErrorModel kept = fit.model;
   double kept_ll = fit.log_likelihood_after;
@@ -288,7 +288,7 @@ absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const Epoch
     return true;
   });
   fit.model = kept;
-  fit.log_likelihood_before = *before;
+  fit.log_likelihood_before = before;
   fit.log_likelihood_after = kept_ll;
   return fit;
 }
