@@ -206,6 +206,17 @@ std::optional<ident::AllanDeparture> DepartureBeyondSearch(const ident::AllanRes
   return farthest;
 }
 
+// The drifts the static segments' Allan curve gives, where it gives a model.
+std::optional<std::array<GaussMarkov, DriftAxis::kCount>> DriftsOfTheAllanFit(
+    const ident::AllanResult& allan, const ReferenceAccuracy& reference) {
+  auto fitted = ident::ErrorModelFromAllan(allan, reference);
+  if (!fitted.ok()) return std::nullopt;
+  std::array<GaussMarkov, DriftAxis::kCount> drifts;
+  for (const DriftAxis d : DriftAxis::All())
+    drifts[static_cast<std::size_t>(d.Index())] = DriftOf(*fitted, d);
+  return drifts;
+}
+
 // The a-priori model: the datasheet; else the unit type's nominal model,
 // unless the run's Allan deviation puts the unit beyond the drift search's
 // reach from it; else the Allan fit. The Allan analysis, which `allan`
@@ -233,6 +244,8 @@ absl::StatusOr<pipeline::APriori> ChooseAPrioriModel(const BenchRun& run, const 
                                                                   options.monitor.family_wise_alpha)
                                           : std::nullopt;
     if (!beyond.has_value()) {
+      if (allan.has_value())
+        out.drift_starts.raw_sample_drifts = DriftsOfTheAllanFit(*allan, model->reference);
       out.model = *std::move(model);
       return out;
     }

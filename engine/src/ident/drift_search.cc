@@ -104,6 +104,18 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
     }
     start_models.push_back(std::move(start));
   }
+  if (starts.raw_sample_drifts.has_value()) {
+    ErrorModel start = model;
+    for (const DriftAxis d : DriftAxis::All()) {
+      const GaussMarkov& suggested =
+          (*starts.raw_sample_drifts)[static_cast<std::size_t>(d.Index())];
+      if (!which.Contains(d) || !(suggested.sigma > 0.0) || !(DriftOf(model, d).sigma > 0.0))
+        continue;
+      DriftOf(start, d) = {suggested.sigma,
+                           std::clamp(suggested.tau_s, range.shortest_s, range.longest_s)};
+    }
+    start_models.push_back(std::move(start));
+  }
   if (starts.grid_tau_points > 0)
     start_models.push_back(
         GridStart(run, model, which, which, starts, options.raw_sample_ceilings, passes).model);

@@ -207,6 +207,13 @@ struct DriftStartOptions {
   // the far side of the likelihood's ridge; the grid needs no start.
   std::array<double, 6> grid_sigma_factors = {0.1, 0.3, 1.0, 3.0, 10.0, 30.0};
   int grid_tau_points = 5;  // 0: no grid start
+  // And from the drifts the static segments' Allan curve gives
+  // (ErrorModelFromAllan), where the model's are a class prior the run may
+  // be far from: every other start climbs from the prior's side, and the
+  // grid weighs one drift at a time beside the others' prior values (a
+  // tactical unit labelled with a type of a tenth its drift σ ended on a
+  // local maximum 2Δℓ = 20 below its own drifts').
+  std::optional<std::array<GaussMarkov, DriftAxis::kCount>> raw_sample_drifts;
 };
 
 // σ and τ of the selected drifts from several starting points (`starts`),
