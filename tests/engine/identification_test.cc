@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
+#include <numbers>
 #include <optional>
 #include <random>
 #include <sstream>
@@ -528,6 +529,63 @@ TEST(StructureCovarianceTest, OwnBlockOnlyWhenTheDriftSigmaIsFlatAtItsBoundary) 
   const Eigen::MatrixXd unknown = StructureCovariance(saddle);
   EXPECT_TRUE(std::isinf(unknown(0, 0)));
   EXPECT_TRUE(std::isinf(unknown(1, 1))) << "the own block's 1.0 would understate the error";
+}
+
+// A second-order pair whose Allan variance with its axis's drift stands
+// above what the raw samples allow is marked refused (drift_ceiling.h), and
+// one within is not: the same fit of a hidden gyro pair (σ₂ three drift σ,
+// decay 900 s, period 600 s) on the `full` profile, against a ceiling at
+// 300 s between the drift's own Allan variance and the drift's with the
+// pair, then against one above both.
+TEST(StructureCeilingTest, ASecondOrderPairBeyondTheRawSamplesIsNotTheUnits) {
+  constexpr DriftAxis kGyroY{Sensor::kGyro, 1};
+  constexpr double kClusterTimeS = 300.0;
+  sim::SimulatedUnit unit = testing::NavigationGradeUnit();
+  const ErrorModel model = testing::TrueBaseModel(unit);
+  sim::TrueEffect pair;
+  auto terms = ParseEffectSelector(SecondOrderName(kGyroY));
+  ASSERT_TRUE(terms.ok()) << terms.status();
+  pair.term = terms->front();
+  pair.second_order_sigma = 3.0 * DriftOf(model, kGyroY).sigma;
+  pair.second_order_alpha_per_s = 1.0 / 900.0;
+  pair.second_order_beta_rad_s = 2.0 * std::numbers::pi / 600.0;
+  unit.effects.push_back(pair);
+  const sim::SimulatedRun s =
+      testing::SimulateOrDie(unit, testing::BuiltinProfileOrDie("full"), 10.0, 7);
+  const auto epochs = CondenseRun(s.run, model, FilterOptions{}.update_interval_s);
+  ASSERT_TRUE(epochs.ok()) << epochs.status();
+  DriftSelection y;
+  y.Set(kGyroY);
+
+  auto refused = [&](double allan_variance_bound) -> std::optional<bool> {
+    DriftLikelihoodOptions options;
+    options.raw_sample_ceilings.Add(kGyroY, {kClusterTimeS, allan_variance_bound});
+    auto fit = IdentifySecondOrdersByLikelihood(*epochs, model, model, y, 0.01, options);
+    if (!fit.ok() || fit->structures.size() != 1) return std::nullopt;
+    return fit->structures.front().refused_by_raw_samples.has_value();
+  };
+  // The Allan variances at the cluster time: a ceiling of 1 reports them as its excess.
+  DriftCeilings unit_bound;
+  unit_bound.Add(kGyroY, {kClusterTimeS, 1.0});
+  const GaussMarkov drift = DriftOf(model, kGyroY);
+  AllanNoiseTerms drift_terms;
+  drift_terms.markov_sigma = drift.sigma;
+  drift_terms.markov_tau_s = drift.tau_s;
+  const double drift_alone = unit_bound.ExcessOf(kGyroY, drift).ratio;
+  const double with_pair = unit_bound
+                               .ExcessOf(kGyroY, drift_terms,
+                                         {pair.second_order_sigma, pair.second_order_alpha_per_s,
+                                          pair.second_order_beta_rad_s})
+                               .ratio;
+  ASSERT_GT(with_pair, 2.0 * drift_alone);
+  // The fitted pair is near the truth; a bound a tenth of the truth's excess
+  // over the drift refuses it, one ten times the truth's allows it.
+  const std::optional<bool> below = refused(drift_alone + 0.1 * (with_pair - drift_alone));
+  ASSERT_TRUE(below.has_value()) << "the screen did not keep the pair";
+  EXPECT_TRUE(*below);
+  const std::optional<bool> above = refused(10.0 * with_pair);
+  ASSERT_TRUE(above.has_value());
+  EXPECT_FALSE(*above);
 }
 
 TEST(NoiseRetuneTest, RealRecordNisNearOne) {

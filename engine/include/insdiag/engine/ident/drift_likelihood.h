@@ -146,8 +146,9 @@ struct StructureEstimate {
   double statistic = 0.0;          // 2(ℓ̂ − ℓ̂₀)
   int dof = 1;                     // the structure's own parameters
   int starts = 1;                  // starting points the screen searched (a pair's periods)
-  // A walk whose fit, with its drift, the raw samples refuse (drift_ceiling.h):
-  // how far beyond their ceiling. It is not the unit's, whatever 2Δℓ says.
+  // A structure whose fit, with its drift, the raw samples refuse
+  // (drift_ceiling.h): how far beyond their ceiling. It is not the unit's,
+  // whatever 2Δℓ says.
   std::optional<DriftCeilings::Excess> refused_by_raw_samples;
 };
 
