@@ -289,26 +289,20 @@ absl::StatusOr<ScreenedStructures> ScreenStructureStarts(
 }
 
 // How far a fitted structure, with its axis's drift, stands beyond what the
-// raw samples allow; nothing when within. A walk's Allan variance is its
-// drift's rate random walk; a second-order pair's its own term
-// (drift_ceiling.h).
+// raw samples allow; nothing when within. A walk's density is its drift's
+// rate random walk, a pair's (σ₂, α, β) its own term (drift_ceiling.h); the
+// effect holds zero for the other kind's.
 std::optional<DriftCeilings::Excess> StructureRefused(const ErrorModel& fitted,
                                                       const StructureEstimate& structure,
-                                                      bool second_order,
                                                       const DriftCeilings& ceilings) {
+  const ModelEffect& e = structure.fitted;
   AllanNoiseTerms terms;
   terms.markov_sigma = DriftOf(fitted, structure.drift).sigma;
   terms.markov_tau_s = DriftOf(fitted, structure.drift).tau_s;
-  const ModelEffect& e = structure.fitted;
-  DriftCeilings::Excess excess;
-  if (second_order) {
-    excess = ceilings.ExcessOf(
-        structure.drift, terms,
-        {e.second_order_sigma, e.second_order_alpha_per_s, e.second_order_beta_rad_s});
-  } else {
-    terms.rate_random_walk = e.random_walk_density;
-    excess = ceilings.ExcessOf(structure.drift, terms);
-  }
+  terms.rate_random_walk = e.random_walk_density;
+  const DriftCeilings::Excess excess = ceilings.ExcessOf(
+      structure.drift, terms,
+      {e.second_order_sigma, e.second_order_alpha_per_s, e.second_order_beta_rad_s});
   if (excess.ratio <= 1.0) return std::nullopt;
   return excess;
 }
@@ -439,8 +433,7 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
                         a_priori);
     };
     w.drift_sigma = estimate(0);
-    w.refused_by_raw_samples =
-        StructureRefused(out.model, w, kind.second_order, options.raw_sample_ceilings);
+    w.refused_by_raw_samples = StructureRefused(out.model, w, options.raw_sample_ceilings);
     std::vector<ParameterEstimate> fitted;
     for (Eigen::Index k = 1; k < per_axis; ++k) fitted.push_back(estimate(k));
     w.parameters = ReportedParameters(kind, w.drift, fitted);
