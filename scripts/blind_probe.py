@@ -128,7 +128,7 @@ def run_one(index, units):
         fault_matrix.use_unit_class(c["preset"])
         verdict = fault_matrix.judge(fault, report)
     return dict(c, heading_only=heading_only(c), allan_ramps=allan_ramps(report),
-                drifts_held=drifts_held(report), **verdict)
+                drifts_held=drifts_held(report), constants_refuted=constants_refuted(report), **verdict)
 
 
 def drifts_held(report):
@@ -136,6 +136,11 @@ def drifts_held(report):
     found = (re.match(r"(\w+\.[xyz]): the innovations' likelihood peaks at .* the model holds it", note)
              for note in report.get("notes", []))
     return sorted({m.group(1) for m in found if m})
+
+
+def constants_refuted(report):
+    """The constant-bias candidates the still segments' raw samples refuted (their notes)."""
+    return [c["name"] for c in report.get("effectCandidates", []) if "refuted by the raw samples" in c.get("note", "")]
 
 
 def allan_ramps(report):

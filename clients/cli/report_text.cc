@@ -69,10 +69,10 @@ void PrintReport(const engine::AnalysisReport& r, std::ostream& out) {
     int shown = 0;
     for (const auto& c : r.effect_candidates) {
       if (shown++ == 10) break;
-      out << "  " << c.name << "  "
-          << (c.identifiable ? "" : "(not identifiable with this profile) ") << "estimate "
-          << absl::StrFormat("%.3g", c.estimate) << " ± " << absl::StrFormat("%.2g", c.std_error)
-          << " " << c.unit << ", statistic " << absl::StrFormat("%.1f", c.statistic) << ", p "
+      out << "  " << c.name << "  " << (c.identifiable ? "" : "(not ranked: see below) ")
+          << "estimate " << absl::StrFormat("%.3g", c.estimate) << " ± "
+          << absl::StrFormat("%.2g", c.std_error) << " " << c.unit << ", statistic "
+          << absl::StrFormat("%.1f", c.statistic) << ", p "
           << absl::StrFormat("%.2g", c.p_value_holm) << " (Holm), ΔAIC "
           << absl::StrFormat("%.1f", c.predicted_delta_aic) << "\n";
       if (!c.correlated_with.empty()) {

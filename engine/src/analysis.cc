@@ -166,21 +166,31 @@ std::optional<ident::AllanResult> AllanOfStaticSegments(const BenchRun& run, con
   return std::nullopt;
 }
 
-// The jumps and ramps the Allan analysis found in the static segments,
-// placed to a jump's window and to a segment's shortest length for a ramp
-// (the least-squares onset of a ramp in noise is looser than a jump's).
-std::vector<RawSampleChange> RawChangesOf(const std::optional<ident::AllanResult>& allan,
-                                          const ident::AllanOptions& options) {
-  std::vector<RawSampleChange> out;
+// What the static segments' raw samples show (finder/raw_sample_evidence.h):
+// the jumps and ramps the Allan analysis found, placed to a jump's window and
+// to a segment's shortest length for a ramp (the least-squares onset of a
+// ramp in noise is looser than a jump's); and each sensor axis' constant bias
+// over the still samples of `run` as the analysis filters it.
+RawSampleEvidence RawSampleEvidenceOf(const BenchRun& run,
+                                      const std::optional<ident::AllanResult>& allan,
+                                      const ErrorModel& a_priori, const AnalysisOptions& options) {
+  RawSampleEvidence out;
   if (!allan.has_value()) return out;
   for (const ident::AllanChannel& ch : allan->channels) {
     for (const ident::RateJump& j : ch.jumps) {
-      out.push_back({ch.sensor, ch.axis, Regressor::kStep, j.time_s, j.size,
-                     static_cast<double>(j.window) * allan->tau0_s});
+      out.changes.push_back({ch.sensor, ch.axis, Regressor::kStep, j.time_s, j.size,
+                             static_cast<double>(j.window) * allan->tau0_s});
     }
     for (const ident::RateRamp& r : ch.ramps) {
-      out.push_back(
-          {ch.sensor, ch.axis, Regressor::kRamp, r.onset_s, r.slope, options.min_segment_s});
+      out.changes.push_back(
+          {ch.sensor, ch.axis, Regressor::kRamp, r.onset_s, r.slope, options.allan.min_segment_s});
+    }
+  }
+  const auto constants =
+      ident::MeasureStaticConstants(run, allan->segments, a_priori, options.dominant_constants);
+  if (constants.ok()) {
+    for (const ident::StaticConstant& c : constants->axes) {
+      out.constants.push_back({c.term.family->sensor, c.term.axis, c.bias, c.std_error});
     }
   }
   return out;
@@ -311,7 +321,7 @@ absl::StatusOr<pipeline::ScannedModel> ScanModelA(const pipeline::RunContext& c,
                     "analysis found a structure or did not test one");
   }
   pipeline::ScannedModel a;
-  a.found = pipeline::FindMissingEffects(c.run, c.epochs, *pass, c.a_priori.model, c.raw_changes,
+  a.found = pipeline::FindMissingEffects(c.run, c.epochs, *pass, c.a_priori.model, c.raw_samples,
                                          c.options, &notes, settled);
   a.pass = *std::move(pass);
   return a;
@@ -372,10 +382,10 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       });
   notes.insert(notes.end(), allan_notes.begin(), allan_notes.end());
   if (!epochs.ok()) return epochs.status();
-  const std::vector<RawSampleChange> raw_changes = RawChangesOf(allan, options.allan);
+  const RawSampleEvidence raw_samples = RawSampleEvidenceOf(run, allan, a_priori->model, options);
   const AnalysisOptions run_options = OptionsForThisRun(options, allan);
   const pipeline::RunContext context{
-      run, *epochs, reference_measurements, spikes, run_options, *a_priori, raw_changes};
+      run, *epochs, reference_measurements, spikes, run_options, *a_priori, raw_samples};
 
   pipeline::Identification identification;
   identification.model = std::move(base);

@@ -292,6 +292,28 @@ class EngineOnIndependentRuns(unittest.TestCase):
         self.assertNotEqual(report["verdict"], "FAULTY", report.get("faultIntervals"))
         self.assertEqual([c["name"] for c in significant(report)], [])
 
+    def test_an_accelerometer_ramp_on_a_still_table_is_not_taken_for_a_vertical_gyro_bias(self):
+        # The sixth blind draw's run 349: a 0.1 °/h unit with its datasheet,
+        # its x accelerometer ramping from 659 s (24 drift σ by the end) on a
+        # still level table at 100 Hz. Through the navigation errors a z gyro
+        # bias of 3.6 °/h explained it in one parameter, beat the ramp by BIC,
+        # and the verdict was GOOD. The still samples put the z gyro's
+        # constant at 1e-7 ± 2e-7 rad/s: that candidate is refuted
+        # (finder/raw_sample_evidence.h) and the ramp, which the raw samples
+        # show, is named.
+        slope = 1.18110407e-05
+        with tempfile.TemporaryDirectory() as d:
+            report, _ = analyse(d, "--preset", "tactical-0.1", "--profile", "static", "--rate-hz", "100",
+                                "--duration", "2246", "--seed", "7349", "--datasheet", "yes", "--unit-type", "none",
+                                "--latitude-deg", "-58.45", "--fault", f"acc_bias_ramp.x={slope}@658.943")
+        refuted = [c for c in report["effectCandidates"] if c["name"] == "gyro_turn_on_bias.z"]
+        self.assertTrue(refuted and "refuted by the raw samples" in refuted[0].get("note", ""), refuted)
+        found = significant(report)
+        self.assertTrue(found, f"nothing significant; verdict {report['verdict']}")
+        self.assertEqual(found[0]["name"], "acc_bias_ramp.x")
+        self.assertLess(abs(found[0]["estimate"] - slope), 4.0 * found[0]["stdError"])
+        self.assertEqual(report["verdict"], "FAULTY")
+
 
 if __name__ == "__main__":
     unittest.main()

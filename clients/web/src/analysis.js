@@ -494,39 +494,55 @@ function candidatesSection(analysis, state, channelsView) {
   }
   const rows = candidates.map((c, i) => {
     const where = [...(c.where || [])].sort((a, b) => num(b.share) - num(a.share));
-    const row = h('tr.candidate', {
-      dataset: { effect: c.name, rank: i + 1 },
-      onmouseenter: () => highlight(c, false),
-      onmouseleave: () => state.pinned || highlight(null, false),
-      onclick: () => highlight(c, true),
-    },
-    h('td.num', String(i + 1)),
-    h('td', h('strong', c.name), c.source === 'STRUCTURE' ? h('div.small.muted', 'correlation structure')
-      : c.source === 'LIKELIHOOD' ? h('div.small.muted', 'likelihood-ratio test')
-      : c.source === 'GLR' ? h('div.small.muted', `from ${fmt(c.onsetS, 5)} ± ${fmt(c.onsetStdS, 2)} s (likelihood ratio over onsets)`) : null,
-    // Why a candidate has no p-value of its own: not excitable by this run, or left to a later model.
-    c.note && (!c.identifiable || c.notTested) ? h('div.small.muted', c.note) : null),
-    h('td.num', `${fmt(c.estimate)} ± ${fmt(c.stdError, 2)}${c.unit ? ` ${c.unit}` : ''}`),
-    h('td.num', fmt(c.statistic)),
-    h('td.num', fmtP(c.pValueHolm || c.pValue)),
-    h('td.num', fmt(c.predictedDeltaAic)),
-    h('td', c.identifiable ? 'yes' : h('span.worse', 'no')),
-    h('td.where-list', where.length
-      ? where.slice(0, 3).map((w) => h('div', `${w.channel} ${fmt(w.startS, 4)}–${fmt(w.endS, 4)} s ${w.motion} · ${fmt(100 * num(w.share), 2)} %`))
-      : '—',
-    c.correlatedWith?.length ? h('div', `not told apart from ${c.correlatedWith.join(', ')}`) : null),
-    h('td', h('button.add', {
-      disabled: analysis.model.effects.includes(c.name),
-      title: `Re-run with ${c.name} added to the model`,
-      onclick: async (event) => {
-        event.stopPropagation();
-        event.target.disabled = true;
-        // A fault goes in at the onset the scan estimated.
-        const added = c.onsetS !== undefined ? `${c.name}@${num(c.onsetS)}` : c.name;
-        await startAnalysis(analysis.run, [...analysis.model.effects, added], analysis.model.effects, false,
-          analysis.name);
-      },
-    }, 'Add')));
+    const row = h(
+        'tr.candidate', {
+          dataset: {effect: c.name, rank: i + 1},
+          onmouseenter: () => highlight(c, false),
+          onmouseleave: () => state.pinned || highlight(null, false),
+          onclick: () => highlight(c, true),
+        },
+        h('td.num', String(i + 1)),
+        h('td', h('strong', c.name),
+          c.source === 'STRUCTURE'      ? h('div.small.muted', 'correlation structure') :
+              c.source === 'LIKELIHOOD' ? h('div.small.muted', 'likelihood-ratio test') :
+              c.source === 'GLR'        ? h('div.small.muted',
+                                            `from ${fmt(c.onsetS, 5)} ± ${
+                                         fmt(c.onsetStdS, 2)} s (likelihood ratio over onsets)`) :
+                                          null,
+          // Why a candidate is not ranked or has no p-value of its own: not excitable by this run,
+          // far outside the linear range, refuted by the still samples, or left to a later model.
+          c.note && (!c.identifiable || c.notTested) ? h('div.small.muted', c.note) : null),
+        h('td.num', `${fmt(c.estimate)} ± ${fmt(c.stdError, 2)}${c.unit ? ` ${c.unit}` : ''       }`),
+        h('td.num', fmt(c.statistic)), h('td.num', fmtP(c.pValueHolm || c.pValue)),
+        h('td.num', fmt(c.predictedDeltaAic)),
+        h('td', c.identifiable ? 'yes' : h('span.worse', 'no')),
+        h('td.where-list',
+          where.length ? where.slice(0, 3).map(
+                                    (w) =>
+                                        h('div',
+                                          `${w.channel} ${fmt(w.startS, 4)}–${fmt(w.endS, 4)} s ${
+                                       w.motion} · ${fmt(100 * num(w.share), 2)} %`)) :
+                                '—',
+          c.correlatedWith?.length ?
+                     h('div', `not told apart from ${c.correlatedWith.join(', ')}`) :
+                     null),
+               h('td',
+                 h(
+                     'button.add', {
+                       disabled: analysis.model.effects.includes(c.name),
+                       title: `Re-run with ${c.name} added to the model`,
+                onclick:
+                    async (event) => {
+                             event.stopPropagation();
+                      event.target.disabled = true;
+                      // A fault goes in at the onset the scan estimated.
+                      const added = c.onsetS !== undefined ? `${c.name}@${num(c.onsetS)}` : c.name;
+                      await startAnalysis(
+                                 analysis.run, [...analysis.model.effects, added], analysis.model.effects,
+                                 false, analysis.name);
+                    },
+                     },
+                     'Add')));
     return row;
   });
 
@@ -539,12 +555,18 @@ function candidatesSection(analysis, state, channelsView) {
     else channelsView.redraw();
   }
 
-  return section('Missing effects, most significant first',
-    h('p.hint', 'Every catalogue effect the model lacks, scored from this pass. Hover or click a row to see where in the test it shows ',
-      '(highlighted on the plots above); Add re-runs with it and compares.'),
-    table(['#', 'Effect', 'Estimate ± SE', 'Statistic', 'p (Holm)', 'ΔAIC if added', 'Identifiable', 'Where it shows', ''], rows,
-      { id: 'candidate-table' }),
-    addByName(analysis));
+  return section(
+      'Missing effects, most significant first',
+      h('p.hint',
+        'Every catalogue effect the model lacks, scored from this pass. Hover or click a row to see where in the test it shows ',
+        '(highlighted on the plots above); Add re-runs with it and compares.'),
+      table(
+          [
+            '#', 'Effect', 'Estimate ± SE', 'Statistic', 'p (Holm)', 'ΔAIC if added', 'Ranked',
+            'Where it shows', ''
+          ],
+          rows, {id: 'candidate-table'}),
+      addByName(analysis));
 }
 
 function discoverySection(report) {

@@ -409,7 +409,7 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std
     const EffectCandidate* best = nullptr;
     if (scan_a_priori) {
       found = FindMissingEffects(c.run, c.epochs, *pass, out.drifts, c.a_priori.model,
-                                 c.raw_changes, options, &found_notes);
+                                 c.raw_samples, options, &found_notes);
       best = LowestBicSignificant(found.candidates, found.families, options);
     }
     if (best != nullptr) {
@@ -624,13 +624,13 @@ void TestFaultsAgainstDrifts(const RunContext& c, const Retargeted& retargeted,
     if (stands && (best == nullptr || t.statistic > best->statistic)) best = &t;
   }
   if (best == nullptr) return;
-  if (SeenInRawSamples(*best->fault, c.raw_changes) == nullptr) {
+  if (SeenInRawSamples(*best->fault, c.raw_samples.changes) == nullptr) {
     FaultAgainstDriftsTest* seen = nullptr;
     for (FaultAgainstDriftsTest& t : tests) {
       if (t.tested && t.p_value < c.options.finder.family_wise_alpha &&
           best->statistic - t.statistic < kIndistinguishableDeltaBic &&
           AreLookAlikes(*best->fault, *t.fault) &&
-          SeenInRawSamples(*t.fault, c.raw_changes) != nullptr &&
+          SeenInRawSamples(*t.fault, c.raw_samples.changes) != nullptr &&
           (seen == nullptr || t.statistic > seen->statistic)) {
         seen = &t;
       }

@@ -433,12 +433,13 @@ std::vector<FaultFinding> FaultFindings(const ModelPass& pass, const Findings& f
 // `drifts`: correlation processing of this pass's smoothed drifts.
 Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass,
                             std::vector<DriftCorrelation> drifts, const ErrorModel& a_priori,
-                            std::span<const RawSampleChange> raw_changes,
-                            const AnalysisOptions& options, std::vector<std::string>* notes,
-                            const SettledStructures& settled) {
+                            const RawSampleEvidence& raw_samples, const AnalysisOptions& options,
+                            std::vector<std::string>* notes, const SettledStructures& settled) {
   Findings f;
   f.drifts = std::move(drifts);
-  RankedEffects ranked = RankMissingEffects(*pass.scan, pass.forward, run, pass.segment_motion, options.finder);
+  RankedEffects ranked =
+      RankMissingEffects(*pass.scan, pass.forward, run, pass.segment_motion, options.finder,
+                         RawConstantsComparable(raw_samples, pass.model));
   f.families = std::move(ranked.families);
   // Screening level of a structure before the likelihood confirms it: the
   // family-wise α over the drifts and the structural families tried.
@@ -494,7 +495,7 @@ Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const M
   }
   if (epochs.size() > 0) scale.run_end_s = epochs.epochs.back().time_s;
   for (EffectCandidate& c :
-       FaultCandidates(pass.onsets, pass.forward.scalar_updates, scale, raw_changes))
+       FaultCandidates(pass.onsets, pass.forward.scalar_updates, scale, raw_samples.changes))
     others.push_back(std::move(c));
   f.candidates = MergeCandidates(std::move(ranked.terms), f.structures, std::move(others),
                                  options.finder.family_wise_alpha);
@@ -502,14 +503,13 @@ Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const M
 }
 
 Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass,
-                            const ErrorModel& a_priori,
-                            std::span<const RawSampleChange> raw_changes,
+                            const ErrorModel& a_priori, const RawSampleEvidence& raw_samples,
                             const AnalysisOptions& options, std::vector<std::string>* notes,
                             const SettledStructures& settled) {
   return FindMissingEffects(
       run, epochs, pass,
       ident::CorrelateDrifts(pass.forward, pass.smoothed, *pass.layout, options.correlation, notes),
-      a_priori, raw_changes, options, notes, settled);
+      a_priori, raw_samples, options, notes, settled);
 }
 
 bool AddsOnlyDeterministicEffects(const std::vector<std::string>& selectors) {

@@ -62,18 +62,16 @@ struct ScannedModel {
 };
 
 // The missing effects of a scanned pass; `drifts`: correlation processing of
-// this pass's smoothed drifts; `raw_changes`: what the static segments' raw
-// samples show (RunContext::raw_changes). The likelihood does not test again the
+// this pass's smoothed drifts; `raw_samples`: what the static segments' raw
+// samples show (RunContext::raw_samples). The likelihood does not test again the
 // structures `settled` holds; the report takes their outcomes.
 Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass,
                             std::vector<DriftCorrelation> drifts, const ErrorModel& a_priori,
-                            std::span<const RawSampleChange> raw_changes,
-                            const AnalysisOptions& options, std::vector<std::string>* notes,
-                            const SettledStructures& settled = {});
+                            const RawSampleEvidence& raw_samples, const AnalysisOptions& options,
+                            std::vector<std::string>* notes, const SettledStructures& settled = {});
 // The same, correlating the pass's drifts first.
 Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass,
-                            const ErrorModel& a_priori,
-                            std::span<const RawSampleChange> raw_changes,
+                            const ErrorModel& a_priori, const RawSampleEvidence& raw_samples,
                             const AnalysisOptions& options, std::vector<std::string>* notes,
                             const SettledStructures& settled = {});
 

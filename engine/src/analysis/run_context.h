@@ -39,10 +39,10 @@ struct RunContext {
   const std::vector<SampleOutlier>& spikes;
   const AnalysisOptions& options;
   const APriori& a_priori;
-  // The jumps and ramps the Allan analysis found in the static segments' raw
-  // samples: evidence of a fault on one sensor axis that needs no navigation
-  // model (finder/fault_findings.h).
-  const std::vector<RawSampleChange>& raw_changes;
+  // What the static segments' raw samples show, needing no navigation model
+  // (finder/raw_sample_evidence.h): the jumps and ramps the Allan analysis
+  // found, and each sensor axis' constant bias.
+  const RawSampleEvidence& raw_samples;
 };
 
 inline void Progress(const AnalysisOptions& o, double fraction, std::string_view stage) {

@@ -198,7 +198,9 @@ struct ScoredTerm {
   EffectCandidate candidate;
   Eigen::VectorXd beta;
   const TermColumns* columns = nullptr;
-  bool outside_linear_range = false;
+  // Not a finding, and left out of its family's joint test: its estimate is
+  // far outside the linear range, or the raw samples refute it.
+  bool left_out = false;
 };
 
 // What the run and the scan need to score a term.
@@ -208,6 +210,7 @@ struct ScanContext {
   double gravity_mps2;
   double log_updates;
   const FinderOptions& options;
+  std::span<const RawSampleConstant> raw_constants;
 };
 
 // The term's one-step estimate and statistic, or why the run cannot test it;
@@ -271,10 +274,17 @@ ScoredTerm ScoreTerm(const TermColumns& t, const ScanContext& context) {
   const LinearRange range = LinearRangeOf(attitude_error_rad, relative_std_error);
   if (range == LinearRange::kFarOutside) {
     c.identifiable = false;
-    sc.outside_linear_range = true;
+    sc.left_out = true;
   }
   if (range != LinearRange::kWithin)
     c.note = LinearRangeNote(range, attitude_error_rad, relative_std_error);
+  if (std::string refuted;
+      RefutedByRawSamples(t.term, c.estimate, c.std_error, context.raw_constants,
+                          context.options.family_wise_alpha, &refuted)) {
+    c.identifiable = false;
+    sc.left_out = true;
+    c.note = c.note.empty() ? refuted : c.note + "; " + refuted;
+  }
   return sc;
 }
 
@@ -368,7 +378,7 @@ Eigen::VectorXd FamilyLinearisationErrors(const Eigen::VectorXd& score,
 }
 
 std::vector<EffectCandidate> FamilyCandidates(const std::vector<TermColumns>& terms,
-                                              const std::set<std::string>& outside_linear_range,
+                                              const std::set<std::string>& left_out,
                                               const ScanContext& context) {
   std::map<std::string, std::vector<Eigen::Index>> family_columns;
   std::map<std::string, std::vector<const TermColumns*>> family_terms;
@@ -377,7 +387,7 @@ std::vector<EffectCandidate> FamilyCandidates(const std::vector<TermColumns>& te
     std::string why;
     if (!Excites(context.excitation, t.term, context.options.excitation, context.gravity_mps2,
                  &why) ||
-        outside_linear_range.count(t.term.Name())) {
+        left_out.count(t.term.Name())) {
       continue;
     }
     const std::string name(t.term.family->name);
@@ -425,19 +435,22 @@ std::vector<EffectCandidate> FamilyCandidates(const std::vector<TermColumns>& te
 
 RankedEffects RankMissingEffects(const ScoreTestObserver& scan, const ForwardPass& fw,
                                  const BenchRun& run, const std::vector<std::string>& motion,
-                                 const FinderOptions& options) {
+                                 const FinderOptions& options,
+                                 std::span<const RawSampleConstant> raw_constants) {
   const RunExcitation excitation = MeasureExcitation(run);
   const ScanContext context{
-      scan, excitation,
+      scan,
+      excitation,
       wgs84::NormalGravityMps2(run.metadata.site.latitude_rad, run.metadata.site.height_m),
-      std::log(static_cast<double>(std::max(1, fw.scalar_updates))), options};
+      std::log(static_cast<double>(std::max(1, fw.scalar_updates))),
+      options,
+      raw_constants};
   const std::vector<TermColumns> terms = GroupByTerm(scan.columns());
   std::vector<ScoredTerm> scored;
-  std::set<std::string> outside_linear_range;
+  std::set<std::string> left_out;
   for (const TermColumns& t : terms) {
     scored.push_back(ScoreTerm(t, context));
-    if (scored.back().outside_linear_range)
-      outside_linear_range.insert(scored.back().candidate.name);
+    if (scored.back().left_out) left_out.insert(scored.back().candidate.name);
   }
   AdjustAndNameLookAlikes(scored, scan.information(), options.ambiguity_threshold);
   std::stable_sort(scored.begin(), scored.end(), [](const ScoredTerm& a, const ScoredTerm& b) {
@@ -455,7 +468,7 @@ RankedEffects RankMissingEffects(const ScoreTestObserver& scan, const ForwardPas
   }
   RankedEffects out;
   for (ScoredTerm& sc : scored) out.terms.push_back(std::move(sc.candidate));
-  out.families = FamilyCandidates(terms, outside_linear_range, context);
+  out.families = FamilyCandidates(terms, left_out, context);
   return out;
 }
 

@@ -43,7 +43,11 @@ struct EffectCandidate {
   double estimate = 0.0;  // in the family's unit (shared/spec/effects.md)
   double std_error = std::numeric_limits<double>::quiet_NaN();
   std::string unit;
-  bool identifiable = true;  // false: the run's motion or temperature cannot excite it
+  // false: not a finding of this run, and `note` says why: the run's motion
+  // or temperature cannot excite it, its one-step estimate is far outside the
+  // filter's linear range, or the still segments' raw samples refute it
+  // (finder/effect_finder.h).
+  bool identifiable = true;
   // false: no test of it ran on this model (a random structure the scan
   // left for a later model; `note` says why). Its p-value is 1 and it counts
   // in no family-wise correction.

@@ -22,13 +22,18 @@
 // counts the first-order error ψ/2 · |β̂| beside the noise: Cov β̂ =
 // 𝓘_t⁻¹ + diag((ψ/2 · β̂)²) for the p-value and the SE, while LM, ΔAIC and
 // ΔBIC stay the linear model's.
+//
+// Nor is a constant bias whose estimate the still segments' raw samples
+// refute (raw_sample_evidence.h): they measure it with no navigation model.
 #pragma once
 
+#include <span>
 #include <string>
 #include <vector>
 
 #include "insdiag/engine/bench_run.h"
 #include "insdiag/engine/filter/forward_filter.h"
+#include "insdiag/engine/finder/raw_sample_evidence.h"
 #include "insdiag/engine/finder/score_test.h"
 #include "insdiag/engine/report.h"
 
@@ -66,9 +71,14 @@ struct RankedEffects {
   std::vector<EffectCandidate> families;  // most significant first
 };
 
-// `motion`: the table's motion label per score segment ("still", "turning", "tilting").
-RankedEffects RankMissingEffects(const ScoreTestObserver& scan, const ForwardPass& forward, const BenchRun& run,
-                                 const std::vector<std::string>& motion, const FinderOptions& options);
+// `motion`: the table's motion label per score segment ("still", "turning",
+// "tilting"). `raw_constants`: the still segments' constant biases that
+// measure what this model's candidates would (raw_sample_evidence.h); a
+// constant-bias term they refute is not ranked.
+RankedEffects RankMissingEffects(const ScoreTestObserver& scan, const ForwardPass& forward,
+                                 const BenchRun& run, const std::vector<std::string>& motion,
+                                 const FinderOptions& options,
+                                 std::span<const RawSampleConstant> raw_constants = {});
 
 // Labels the run's score segments of `segment_epochs` epochs by the table's motion.
 std::vector<std::string> SegmentMotion(const BenchRun& run, const ForwardPass& forward, int segment_epochs);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "insdiag/engine/finder/onset_scan.h"
+#include "insdiag/engine/finder/raw_sample_evidence.h"
 #include "insdiag/engine/report.h"
 
 namespace insdiag::engine {
@@ -24,20 +25,6 @@ namespace insdiag::engine {
 struct FaultScale {
   std::array<double, kSensorAxisCount> drift_sigma{};
   double run_end_s = 0.0;
-};
-
-// A change the raw samples of one sensor axis show in the run's static
-// segments: a jump of the rate's mean (kStep, `size` in the family's unit)
-// or a ramp (kRamp, `size` its slope), as the Allan analysis finds them
-// (ident/allan.h: Jumps, Ramps). `tolerance_s`: how closely its time is
-// placed.
-struct RawSampleChange {
-  Sensor sensor = Sensor::kGyro;
-  int axis = 0;
-  Regressor shape = Regressor::kStep;
-  double time_s = 0.0;
-  double size = 0.0;
-  double tolerance_s = 0.0;
 };
 
 // Two faults whose 2Δℓ (equal parameter counts) or predicted ΔBIC are within
