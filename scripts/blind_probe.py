@@ -128,7 +128,9 @@ def run_one(index, units):
         fault_matrix.use_unit_class(c["preset"])
         verdict = fault_matrix.judge(fault, report)
     return dict(c, heading_only=heading_only(c), allan_ramps=allan_ramps(report),
-                drifts_held=drifts_held(report), constants_refuted=constants_refuted(report), **verdict)
+                drifts_held=drifts_held(report), constants_refuted=constants_refuted(report),
+                raw_sample_faults=[c["name"] for c in report.get("effectCandidates", []) if c.get("source") == "RAW"],
+                **verdict)
 
 
 def drifts_held(report):
@@ -197,6 +199,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--runs", type=int, default=40)
     parser.add_argument("--first-index", type=int, default=0)
+    parser.add_argument("--indices", default=None,
+                        help="comma-separated draw indices to run instead of --first-index/--runs (a rerun)")
     parser.add_argument("--kinds", default="healthy,step,ramp")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--out", default=None)
@@ -207,7 +211,9 @@ def main():
     unknown = [u for u in units if u not in UNITS]
     if unknown:
         parser.error(f"--units: unknown unit {', '.join(unknown)}; known: {', '.join(UNITS)}")
-    indices = [i for i in range(args.first_index, args.first_index + args.runs) if kind_of(draw(i, units)) in kinds]
+    drawn = ([int(i) for i in args.indices.split(",")] if args.indices
+             else range(args.first_index, args.first_index + args.runs))
+    indices = [i for i in drawn if kind_of(draw(i, units)) in kinds]
     print(summarise(fault_matrix.run_all(lambda i: run_one(i, units), indices, args.jobs, args.out)))
 
 

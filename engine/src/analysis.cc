@@ -182,8 +182,9 @@ RawSampleEvidence RawSampleEvidenceOf(const BenchRun& run,
                              static_cast<double>(j.window) * allan->tau0_s});
     }
     for (const ident::RateRamp& r : ch.ramps) {
-      out.changes.push_back(
-          {ch.sensor, ch.axis, Regressor::kRamp, r.onset_s, r.slope, options.allan.min_segment_s});
+      out.changes.push_back({ch.sensor, ch.axis, Regressor::kRamp, r.onset_s, r.slope,
+                             options.allan.min_segment_s,
+                             ch.ramp_evidence.has_value() ? ch.ramp_evidence->p_value : 1.0});
     }
   }
   const auto constants =

@@ -401,15 +401,17 @@ EvidenceTerm AgainstNominal(const std::string& name, double value, double std_er
 // has three). A fault from the onset scan: its estimate over its SE is
 // the best onset's, inflated by the search over onsets; the z of its
 // p-value (Davies' bound over the onsets) is what a healthy unit
-// scatters like N(0, 1).
+// scatters like N(0, 1); so is that of a ramp the raw samples show (its
+// test picked the channel and the onset).
 double CandidateStandardScore(const v1::EffectCandidate& c) {
   const auto z_of_p = [&] {
     return std::copysign(-engine::stats::NormalQuantile(0.5 * std::clamp(c.p_value(), 1e-300, 1.0)),
                          c.estimate());
   };
   const bool structure = c.source() == "STRUCTURE" || c.source() == "LIKELIHOOD";
-  return c.source() == "GLR" || structure ? z_of_p()
-         : c.std_error() > 0              ? c.estimate() / c.std_error()
+  const bool fault = c.source() == "GLR" || c.source() == "RAW";
+  return fault || structure  ? z_of_p()
+         : c.std_error() > 0 ? c.estimate() / c.std_error()
          : c.degrees_of_freedom() <= 1
              ? std::copysign(std::sqrt(std::max(c.statistic(), 0.0)), c.estimate())
              : z_of_p();

@@ -314,6 +314,27 @@ class EngineOnIndependentRuns(unittest.TestCase):
         self.assertLess(abs(found[0]["estimate"] - slope), 4.0 * found[0]["stdError"])
         self.assertEqual(report["verdict"], "FAULTY")
 
+    def test_an_accelerometer_ramp_only_the_still_samples_show_is_named(self):
+        # The seventh blind draw's run 378: a 1 °/h unit with neither
+        # datasheet nor type, its x accelerometer ramping from 866 s (22
+        # drift σ by the end) on a still table at 100 Hz. Through the
+        # navigation errors the gyro's drift tilts the unit as the ramp does
+        # (2Δℓ 6.4 at its onset): GOOD. The still samples show the ramp
+        # beyond any noise of the model (finder/fault_findings.h,
+        # AddRawSampleFaultCandidates), and it is named from them.
+        slope = -0.0002119753017966682
+        with tempfile.TemporaryDirectory() as d:
+            report, _ = analyse(d, "--preset", "tactical", "--profile", "static", "--rate-hz", "100",
+                                "--duration", "2167", "--seed", "7378", "--datasheet", "no", "--unit-type", "none",
+                                "--latitude-deg", "-25.95", "--fault", f"acc_bias_ramp.x={slope}@865.993")
+        found = significant(report)
+        self.assertTrue(found, f"nothing significant; verdict {report['verdict']}")
+        self.assertEqual(found[0]["name"], "acc_bias_ramp.x")
+        self.assertEqual(found[0]["source"], "RAW")
+        self.assertLess(abs(found[0]["estimate"] - slope), 3.0 * found[0]["stdError"])
+        self.assertLess(abs(found[0]["onsetS"] - 865.993), 60.0)
+        self.assertEqual(report["verdict"], "FAULTY")
+
 
 if __name__ == "__main__":
     unittest.main()

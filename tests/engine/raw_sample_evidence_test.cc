@@ -5,10 +5,13 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "insdiag/engine/filter/epoch_run.h"
+#include "insdiag/engine/finder/fault_findings.h"
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/stats/distributions.h"
 
@@ -106,6 +109,110 @@ TEST(RawSampleConstants, RefuteATrueConstantAtMostAtTheStatedLevel) {
   const double expected = 1.0 - std::pow(1.0 - kAlpha / 6.0, 6.0);
   const double band = 4.0 * std::sqrt(expected * (1.0 - expected) / kRuns);
   EXPECT_NEAR(static_cast<double>(runs_with_a_refutation) / kRuns, expected, band);
+}
+
+// A run of `seconds` one-second update intervals, and the scan's fit of
+// `selector` over its onsets from the 60th with a flat score: the navigation
+// errors see the fault with information `information` at every onset and
+// a likelihood ratio of `statistic` there.
+struct ScannedRun {
+  EpochRun run;
+  OnsetFit fit;
+};
+
+ScannedRun FlatScan(std::string_view selector, int seconds, double statistic, double information,
+                    double p_value) {
+  ScannedRun s;
+  s.run.epochs.resize(static_cast<size_t>(seconds));
+  for (int k = 0; k < seconds; ++k) {
+    s.run.epochs[static_cast<size_t>(k)].start_s = k;
+    s.run.epochs[static_cast<size_t>(k)].time_s = k + 1.0;
+  }
+  s.fit.term = TermOf(selector);
+  s.fit.identifiable = true;
+  s.fit.first_onset_epoch = 60;
+  s.fit.score_by_onset.assign(static_cast<size_t>(seconds - 120),
+                              std::sqrt(statistic * information));
+  s.fit.information_by_onset.assign(static_cast<size_t>(seconds - 120), information);
+  s.fit.statistic = statistic;
+  s.fit.estimate = std::sqrt(statistic / information);
+  s.fit.std_error = 1.0 / std::sqrt(information);
+  s.fit.p_value = p_value;
+  return s;
+}
+
+FaultScale AccelerometerNoise(double white_density, double drift_sigma, double drift_tau_s,
+                              double run_end_s) {
+  FaultScale scale;
+  scale.white_noise_density.fill(white_density);
+  scale.drift_sigma.fill(drift_sigma);
+  scale.drift_tau_s.fill(drift_tau_s);
+  scale.run_end_s = run_end_s;
+  return scale;
+}
+
+TEST(RawSampleRamps, StandInForTheScansTermWhereTheyAreTheStrongerEvidence) {
+  // A still table hides an accelerometer's ramp as a tilt the gyro's drift
+  // explains: the scan's fit is flat (p 1), the samples' test is not.
+  ScannedRun scanned = FlatScan("acc_bias_ramp.x", 2000, 2.0, 1e10, 1.0);
+  std::vector<EffectCandidate> candidates = FaultCandidates({scanned.fit}, 12000);
+  ASSERT_EQ(candidates.size(), 1u);
+  candidates[0].correlated_with = {"gyro_bias_step.y"};
+  const RawSampleChange ramp{
+      Sensor::kAccelerometer, 0, Regressor::kRamp, 829.0, -2.06e-4, 60.0, 1e-6};
+  const FaultScale scale = AccelerometerNoise(5e-4, 1e-2, 300.0, 2000.0);
+  AddRawSampleFaultCandidates(candidates, {scanned.fit}, std::span(&ramp, 1), scanned.run, 12000,
+                              scale, kAlpha);
+  ASSERT_EQ(candidates.size(), 1u) << "one candidate per term";
+  const EffectCandidate& c = candidates[0];
+  EXPECT_EQ(c.source, "RAW");
+  EXPECT_DOUBLE_EQ(c.estimate, -2.06e-4);
+  EXPECT_NEAR(c.p_value, 6e-6, 1e-12) << "Bonferroni over the six channels";
+  EXPECT_NEAR(c.statistic, 2.0, 1e-9) << "the navigation errors' 2Δℓ at the samples' onset";
+  EXPECT_NEAR(c.predicted_delta_bic, -2.0 + std::log(12000.0), 1e-9);
+  ASSERT_TRUE(c.onset_s.has_value());
+  EXPECT_DOUBLE_EQ(*c.onset_s, 829.0);
+  EXPECT_EQ(c.correlated_with, std::vector<std::string>{"gyro_bias_step.y"});
+  EXPECT_TRUE(IsFaultCandidate(c));
+  // The slope's error: white noise over the 1171 s after the onset, and the
+  // drift as the walk K = σ √(2/τ).
+  const double span_s = 2000.0 - 829.0, walk = 1e-2 * std::sqrt(2.0 / 300.0);
+  EXPECT_NEAR(c.std_error,
+              std::sqrt(12.0 * 5e-4 * 5e-4 / std::pow(span_s, 3) + 1.2 * walk * walk / span_s),
+              1e-12);
+}
+
+TEST(RawSampleRamps, LeaveTheScansTermWhereItIsTheStrongerEvidence) {
+  ScannedRun scanned = FlatScan("acc_bias_ramp.y", 3600, 190.0, 1e10, 1e-40);
+  std::vector<EffectCandidate> candidates = FaultCandidates({scanned.fit}, 20000);
+  const RawSampleChange ramp{
+      Sensor::kAccelerometer, 1, Regressor::kRamp, 1319.0, 5.5e-6, 60.0, 1e-4};
+  AddRawSampleFaultCandidates(candidates, {scanned.fit}, std::span(&ramp, 1), scanned.run, 20000,
+                              AccelerometerNoise(5e-4, 1e-2, 300.0, 3600.0), kAlpha);
+  ASSERT_EQ(candidates.size(), 1u);
+  EXPECT_EQ(candidates[0].source, "GLR");
+  // A finding of the scan that places the samples' change keeps its onset,
+  // though the samples' p-value is smaller.
+  std::vector<EffectCandidate> placed =
+      FaultCandidates({FlatScan("acc_bias_ramp.y", 3600, 30.0, 1e10, 1e-5).fit}, 20000);
+  placed[0].seen_in_raw_samples = true;
+  const RawSampleChange clearer = {
+      Sensor::kAccelerometer, 1, Regressor::kRamp, 1319.0, 5.5e-6, 60.0, 1e-9};
+  AddRawSampleFaultCandidates(placed, {scanned.fit}, std::span(&clearer, 1), scanned.run, 20000,
+                              AccelerometerNoise(5e-4, 1e-2, 300.0, 3600.0), kAlpha);
+  EXPECT_EQ(placed[0].source, "GLR");
+  // A jump is not a finding of its own, nor a ramp of another axis.
+  const RawSampleChange jump{Sensor::kAccelerometer, 1, Regressor::kStep, 1319.0, 5.5e-3, 1.0};
+  const RawSampleChange other_axis{
+      Sensor::kAccelerometer, 2, Regressor::kRamp, 1319.0, 5.5e-6, 60.0, 1e-9};
+  for (const RawSampleChange& change : {jump, other_axis}) {
+    std::vector<EffectCandidate> weak =
+        FaultCandidates({FlatScan("acc_bias_ramp.y", 3600, 1.0, 1e10, 1.0).fit}, 20000);
+    AddRawSampleFaultCandidates(weak, {scanned.fit}, std::span(&change, 1), scanned.run, 20000,
+                                AccelerometerNoise(5e-4, 1e-2, 300.0, 3600.0), kAlpha);
+    ASSERT_EQ(weak.size(), 1u);
+    EXPECT_EQ(weak[0].source, "GLR");
+  }
 }
 
 }  // namespace

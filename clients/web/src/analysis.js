@@ -508,6 +508,9 @@ function candidatesSection(analysis, state, channelsView) {
               c.source === 'GLR'        ? h('div.small.muted',
                                             `from ${fmt(c.onsetS, 5)} ± ${
                                          fmt(c.onsetStdS, 2)} s (likelihood ratio over onsets)`) :
+                     c.source === 'RAW' ? h('div.small.muted',
+                                            `from ${fmt(c.onsetS, 5)} ± ${
+                                         fmt(c.onsetStdS, 2)} s (a ramp in the still samples)`) :
                                           null,
           // Why a candidate is not ranked or has no p-value of its own: not excitable by this run,
           // far outside the linear range, refuted by the still samples, or left to a later model.
@@ -541,8 +544,8 @@ function candidatesSection(analysis, state, channelsView) {
                                  analysis.run, [...analysis.model.effects, added], analysis.model.effects,
                                  false, analysis.name);
                     },
-                     },
-                     'Add')));
+              },
+              'Add')));
     return row;
   });
 

@@ -488,15 +488,20 @@ Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const M
   f.structures = ConfirmStructures(epochs, pass, std::move(proposals));
   FaultScale scale;
   for (int a = 0; a < 3; ++a) {
-    scale.drift_sigma[static_cast<size_t>(SensorAxisIndex(Sensor::kGyro, a))] =
-        pass.model.gyro.bias[static_cast<size_t>(a)].sigma;
-    scale.drift_sigma[static_cast<size_t>(SensorAxisIndex(Sensor::kAccelerometer, a))] =
-        pass.model.acc.bias[static_cast<size_t>(a)].sigma;
+    for (const Sensor sensor : {Sensor::kGyro, Sensor::kAccelerometer}) {
+      const SensorTriadModel& triad = sensor == Sensor::kGyro ? pass.model.gyro : pass.model.acc;
+      const auto i = static_cast<size_t>(SensorAxisIndex(sensor, a));
+      scale.drift_sigma[i] = triad.bias[static_cast<size_t>(a)].sigma;
+      scale.drift_tau_s[i] = triad.bias[static_cast<size_t>(a)].tau_s;
+      scale.white_noise_density[i] = triad.white_noise_density[a];
+    }
   }
   if (epochs.size() > 0) scale.run_end_s = epochs.epochs.back().time_s;
-  for (EffectCandidate& c :
-       FaultCandidates(pass.onsets, pass.forward.scalar_updates, scale, raw_samples.changes))
-    others.push_back(std::move(c));
+  std::vector<EffectCandidate> faults =
+      FaultCandidates(pass.onsets, pass.forward.scalar_updates, scale, raw_samples.changes);
+  AddRawSampleFaultCandidates(faults, pass.onsets, raw_samples.changes, epochs,
+                              pass.forward.scalar_updates, scale, options.finder.family_wise_alpha);
+  for (EffectCandidate& c : faults) others.push_back(std::move(c));
   f.candidates = MergeCandidates(std::move(ranked.terms), f.structures, std::move(others),
                                  options.finder.family_wise_alpha);
   return f;

@@ -150,7 +150,8 @@ double PredictedLikelihoodRatio(const ModelPass& a, const std::vector<std::strin
     }
     // A fault: the onset scan's likelihood ratio at its onset.
     for (const EffectCandidate& c : found.candidates) {
-      if (c.source == "GLR" && c.name == name.substr(0, name.find('@'))) structure_lr += c.statistic;
+      if (IsFaultCandidate(c) && c.name == name.substr(0, name.find('@')))
+        structure_lr += c.statistic;
     }
   }
   if (idx.empty()) return structure_lr;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include "insdiag/engine/finder/linear_range.h"
 #include "insdiag/engine/model/effect_catalogue.h"
@@ -131,9 +132,88 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
   return out;
 }
 
+bool IsFaultCandidate(const EffectCandidate& c) { return c.source == "GLR" || c.source == "RAW"; }
+
+namespace {
+
+// The least-squares slope's standard error over `span_s` after the onset
+// (fault_findings.h, AddRawSampleFaultCandidates).
+double RawSlopeStdError(const FaultScale& scale, int sensor_axis, double span_s) {
+  const auto i = static_cast<size_t>(sensor_axis);
+  const double white = scale.white_noise_density[i];
+  const double walk = scale.drift_tau_s[i] > 0.0
+                          ? scale.drift_sigma[i] * std::sqrt(2.0 / scale.drift_tau_s[i])
+                          : 0.0;
+  return std::sqrt(12.0 * white * white / (span_s * span_s * span_s) + 1.2 * walk * walk / span_s);
+}
+
+}  // namespace
+
+void AddRawSampleFaultCandidates(std::vector<EffectCandidate>& candidates,
+                                 const std::vector<OnsetFit>& fits,
+                                 std::span<const RawSampleChange> raw_changes, const EpochRun& run,
+                                 int scalar_updates, const FaultScale& scale,
+                                 double family_wise_alpha) {
+  const double log_n = std::log(static_cast<double>(std::max(1, scalar_updates)));
+  for (const RawSampleChange& raw : raw_changes) {
+    if (raw.shape != Regressor::kRamp || !(raw.p_value < 1.0)) continue;
+    const auto fit = std::ranges::find_if(fits, [&](const OnsetFit& f) {
+      return f.term.family->sensor == raw.sensor && f.term.axis == raw.axis &&
+             f.term.family->regressor == raw.shape;
+    });
+    if (fit == fits.end()) continue;  // the model holds the fault already
+    const std::string name = fit->term.Name();
+    // The scan's fit stands where it is the stronger evidence, or a finding
+    // that places the samples' change: over the whole run it places the onset
+    // better.
+    const double p_value = std::min(1.0, raw.p_value * static_cast<double>(kSensorAxisCount));
+    const auto scanned = std::ranges::find(candidates, name, &EffectCandidate::name);
+    if (scanned != candidates.end() &&
+        (scanned->p_value <= p_value ||
+         (scanned->seen_in_raw_samples && scanned->p_value < family_wise_alpha))) {
+      continue;
+    }
+    const double span_s = scale.run_end_s - raw.time_s;
+    if (!(span_s > 0.0)) continue;
+    EffectCandidate c;
+    c.name = name;
+    c.family = std::string(fit->term.family->name);
+    c.source = "RAW";
+    c.unit = std::string(fit->term.family->unit);
+    c.dof = 1;
+    c.estimate = raw.size;
+    c.std_error = RawSlopeStdError(scale, SensorAxisIndex(raw.sensor, raw.axis), span_s);
+    c.p_value = p_value;
+    const std::optional<FitAtOnset> navigation = FitWithOnsetAt(*fit, run, raw.time_s);
+    c.statistic = navigation.has_value() ? navigation->statistic : 0.0;
+    c.predicted_delta_aic = -c.statistic + 2.0;
+    c.predicted_delta_bic = -c.statistic + log_n;
+    c.onset_s = raw.time_s;
+    c.onset_std_s = raw.tolerance_s;
+    c.onset_low_s = raw.time_s - raw.tolerance_s;
+    c.onset_high_s = raw.time_s + raw.tolerance_s;
+    c.seen_in_raw_samples = true;
+    const double sigma =
+        scale.drift_sigma[static_cast<size_t>(SensorAxisIndex(raw.sensor, raw.axis))];
+    if (sigma > 0.0) c.size_in_drift_sigma = std::abs(raw.size) * span_s / sigma;
+    c.note = absl::StrFormat(
+        "a ramp the still segments' raw samples show from %.0f s (the ramp test's p %.2g over the "
+        "six channels); "
+        "the navigation errors give it 2Δℓ %.1f at that onset",
+        raw.time_s, c.p_value, c.statistic);
+    if (scanned != candidates.end()) {
+      c.correlated_with = scanned->correlated_with;
+      *scanned = std::move(c);
+    } else {
+      candidates.push_back(std::move(c));
+    }
+  }
+}
+
 bool IsLikelierLookAlike(const EffectCandidate& a, const EffectCandidate& b, double alpha) {
   const bool look_alikes =
-      a.source == "GLR" && b.source == "GLR" && a.SignificantAt(alpha) && b.SignificantAt(alpha) &&
+      IsFaultCandidate(a) && IsFaultCandidate(b) && a.SignificantAt(alpha) &&
+      b.SignificantAt(alpha) &&
       std::abs(a.predicted_delta_bic - b.predicted_delta_bic) < kIndistinguishableDeltaBic &&
       std::ranges::find(a.correlated_with, b.name) != a.correlated_with.end();
   if (!look_alikes) return false;
@@ -159,13 +239,13 @@ void PutLikelierLookAlikesFirst(std::vector<EffectCandidate>& ranked, double alp
 std::vector<FaultFinding> SignificantFaults(const std::vector<EffectCandidate>& candidates, double alpha) {
   double best_other_bic = std::numeric_limits<double>::infinity();
   for (const EffectCandidate& c : candidates) {
-    if (c.source != "GLR" && c.SignificantAt(alpha)) {
+    if (!IsFaultCandidate(c) && c.SignificantAt(alpha)) {
       best_other_bic = std::min(best_other_bic, c.predicted_delta_bic);
     }
   }
   std::vector<EffectCandidate> by_bic;
   for (const EffectCandidate& c : candidates) {
-    if (c.source == "GLR" && c.SignificantAt(alpha) && c.onset_s.has_value() &&
+    if (IsFaultCandidate(c) && c.SignificantAt(alpha) && c.onset_s.has_value() &&
         c.predicted_delta_bic < best_other_bic) {
       by_bic.push_back(c);
     }
@@ -195,7 +275,8 @@ std::vector<FaultFinding> SignificantFaults(const std::vector<EffectCandidate>& 
       return f.term.family->sensor == term.family->sensor && f.term.axis == term.axis;
     };
     if (std::any_of(out.begin(), out.end(), same_axis)) continue;
-    out.push_back({term, *c.onset_s, c.statistic, c.p_value_holm, c.estimate, c.std_error});
+    out.push_back(
+        {term, *c.onset_s, c.statistic, c.p_value_holm, c.estimate, c.std_error, c.source});
   }
   return out;
 }
@@ -224,7 +305,7 @@ void ReportFaults(const std::vector<FaultFinding>& findings, double run_end_s, A
     where.time_s = f.onset_s;
     where.statistic = f.statistic;
     where.p_value = f.p_value;
-    where.method = "GLR";
+    where.method = f.method;
     where.jump = f.estimate;
     where.jump_std_error = f.std_error;
     report.localisation.push_back(where);

@@ -255,6 +255,9 @@ OnsetFit FitTerm(const EffectTerm& term, const OnsetSums& sums, const EpochRun& 
   // A run too short for both sides of any onset has no candidate (last < first).
   std::vector<double> T(static_cast<size_t>(std::max(0, last - first + 1)), 0.0);
   fit.identifiable = last >= first;
+  fit.first_onset_epoch = first;
+  fit.score_by_onset.assign(T.size(), 0.0);
+  fit.information_by_onset.assign(T.size(), 0.0);
   for (int theta = first; theta <= last; ++theta) {
     const Eigen::Vector2d v = direction(theta);
     const double s = v.dot(pair(theta).score);
@@ -265,6 +268,8 @@ OnsetFit FitTerm(const EffectTerm& term, const OnsetSums& sums, const EpochRun& 
     }
     const double t = s * s / info;
     T[static_cast<size_t>(theta - first)] = t;
+    fit.score_by_onset[static_cast<size_t>(theta - first)] = s;
+    fit.information_by_onset[static_cast<size_t>(theta - first)] = info;
     if (theta < last) {
       const Eigen::Vector2d w = direction(theta + 1);
       const double next_info = w.dot(pair(theta + 1).information * w);
@@ -386,6 +391,18 @@ void SetPeakAttitudeErrors(const ForwardPass& fw, const StateLayout& layout, con
 }
 
 }  // namespace
+
+std::optional<FitAtOnset> FitWithOnsetAt(const OnsetFit& fit, const EpochRun& run, double onset_s) {
+  const auto first_after = std::ranges::find_if(
+      run.epochs, [&](const EpochInterval& e) { return e.start_s >= onset_s; });
+  const auto theta = static_cast<int>(first_after - run.epochs.begin()) - fit.first_onset_epoch;
+  if (!fit.identifiable || theta < 0 || theta >= static_cast<int>(fit.information_by_onset.size()))
+    return std::nullopt;
+  const double s = fit.score_by_onset[static_cast<size_t>(theta)];
+  const double info = fit.information_by_onset[static_cast<size_t>(theta)];
+  if (!(info > 0.0)) return std::nullopt;
+  return FitAtOnset{s * s / info, s / info, 1.0 / std::sqrt(info)};
+}
 
 double OnsetPValue(double statistic, double path_length) {
   return std::min(1.0, stats::ChiSquareSurvival(statistic, 1) + path_length * std::exp(-0.5 * statistic) / std::numbers::pi);

@@ -73,6 +73,14 @@ struct RandomWalkNull {
   std::vector<double> mean;  // of ln(σ̂²/σ̂²_H) at each tested m
   std::vector<double> sd;
   double bound = 0.0;  // of the largest standardised ln ratio, at level α
+  // The tail: P(max > z) = (1 − q) e^{−(z − threshold)/mean_excess} beyond
+  // the replicates' q-quantile `threshold`.
+  double threshold = 0.0;
+  double mean_excess = 0.0;
+
+  // P(max > z) under the walk; for z within the replicates' bulk, the tail's
+  // share at its threshold (a bound: such z are never a ramp).
+  double PValue(double z) const;
 };
 constexpr double kTailThresholdQuantile = 0.95;
 
@@ -125,7 +133,14 @@ RandomWalkNull NullOfRandomWalk(std::span<const size_t> piece_samples,
   for (size_t r = threshold_index + 1; r < kNullReplicates; ++r) excess += largest[r] - threshold;
   excess /= static_cast<double>(kNullReplicates - threshold_index - 1);
   null.bound = threshold + excess * std::log((1.0 - kTailThresholdQuantile) / alpha);
+  null.threshold = threshold;
+  null.mean_excess = excess;
   return null;
+}
+
+double RandomWalkNull::PValue(double z) const {
+  if (!(mean_excess > 0.0) || z <= threshold) return 1.0 - kTailThresholdQuantile;
+  return (1.0 - kTailThresholdQuantile) * std::exp(-(z - threshold) / mean_excess);
 }
 
 // The null is a function of the pieces' lengths, the tested m and α alone,
@@ -179,7 +194,8 @@ std::optional<RampEvidence> RampBeyondNoise(std::span<const std::vector<double>>
     if (!(null.sd[j] > 0.0)) continue;
     const double ratio = measured[j].avar / measured[j].hvar;
     const double z = (std::log(ratio) - null.mean[j]) / null.sd[j];
-    if (!best.has_value() || z > best->z) best = RampEvidence{tested_tau_s[j], ratio, z};
+    if (!best.has_value() || z > best->z)
+      best = RampEvidence{tested_tau_s[j], ratio, z, null.PValue(z)};
   }
   if (!best.has_value() || best->z <= null.bound) return std::nullopt;
   return best;

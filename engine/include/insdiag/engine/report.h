@@ -33,8 +33,11 @@ struct EffectCandidate {
   std::string family;
   // "SCORE" (Lagrange-multiplier test), "STRUCTURE" (correlation-function
   // family), "LIKELIHOOD" (a bias random walk or second-order pair by the
-  // innovations' likelihood) or "GLR" (a bias step or ramp at an unknown
+  // innovations' likelihood), "GLR" (a bias step or ramp at an unknown
   // onset: the generalised likelihood ratio over onsets, finder/onset_scan.h)
+  // or "RAW" (a ramp the still segments' raw samples show: its p-value is
+  // their test's, its statistic what the navigation errors give it at that
+  // onset; finder/fault_findings.h)
   std::string source;
   double statistic = 0.0;
   int dof = 0;
@@ -57,8 +60,9 @@ struct EffectCandidate {
   std::vector<std::string> correlated_with;  // candidates it cannot be told apart from in this run
   std::vector<SegmentContribution> where;
   std::string note;  // e.g. why it is not identifiable
-  // Fault effects (source "GLR"): the onset [s of run time], its posterior
-  // standard deviation and central interval.
+  // Fault effects (source "GLR" or "RAW"): the onset [s of run time], its
+  // posterior standard deviation and central interval (for "RAW", the
+  // tolerance the raw samples place it to).
   std::optional<double> onset_s;
   double onset_std_s = 0.0;
   double onset_low_s = 0.0;

@@ -22,8 +22,12 @@ namespace insdiag::engine {
 // look-alikes (correlated_with).
 // `drift_sigma` (per sensor axis, gyros then accelerometers, in the family's
 // unit) and `run_end_s`, where given, set each fault's size_in_drift_sigma.
+// The drifts' τ and the white noise's density set the standard error of a
+// ramp the raw samples show (RawSampleFaultCandidates).
 struct FaultScale {
   std::array<double, kSensorAxisCount> drift_sigma{};
+  std::array<double, kSensorAxisCount> drift_tau_s{};
+  std::array<double, kSensorAxisCount> white_noise_density{};  // [unit·√s]
   double run_end_s = 0.0;
 };
 
@@ -48,6 +52,36 @@ bool AreLookAlikes(const OnsetFit& a, const OnsetFit& b);
 std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, int scalar_updates,
                                              const std::optional<FaultScale>& scale = std::nullopt,
                                              std::span<const RawSampleChange> raw_changes = {});
+
+// The ramps the still segments' raw samples show, as fault candidates of
+// source "RAW", each in place of its term's scan candidate unless that one
+// is the stronger evidence (the smaller p-value) or places the samples'
+// change (seen_in_raw_samples) with a p-value below `family_wise_alpha`:
+// the scan's fit, over the whole run, places the onset better. The samples
+// measure the sensor with no navigation model, so their onset and slope
+// stand:
+//   - p-value: the channel's ramp test (ident/allan.h: Ramps) times the six
+//     channels tested (Bonferroni), before the list's Holm correction;
+//   - estimate: the samples' least-squares slope c over the L seconds after
+//     the onset, with the slope's standard error under the axis' white noise
+//     N and its drift taken as the walk it is over times short beside τ,
+//     K = σ √(2/τ) (longer spans wander less: the error is an upper bound):
+//       SE² = 12 N² / L³ + 6 K² / (5 L)
+//     (the least-squares slope's variance over [0, L] for white noise, and
+//     for a Wiener process ∫∫ f(s) f(t) min(s, t) / (∫ f²)² with f = t − L/2);
+//   - statistic: what the navigation errors say of the same fault at that
+//     onset, T = 2Δℓ of its magnitude (FitWithOnsetAt), and the predicted
+//     ΔBIC −T + ln N of adding it there, which ranks it among the others;
+//   - the look-alikes its term's scan named.
+void AddRawSampleFaultCandidates(std::vector<EffectCandidate>& candidates,
+                                 const std::vector<OnsetFit>& fits,
+                                 std::span<const RawSampleChange> raw_changes, const EpochRun& run,
+                                 int scalar_updates, const FaultScale& scale,
+                                 double family_wise_alpha);
+
+// Whether a candidate is a fault at an onset: from the onset scan ("GLR") or
+// the raw samples ("RAW").
+bool IsFaultCandidate(const EffectCandidate& c);
 
 // Whether `b` should come before `a`: both significant faults at `alpha`,
 // named look-alikes of each other, their predicted ΔBIC within 2 (Kass &
@@ -75,6 +109,7 @@ struct FaultFinding {
   double p_value = 1.0;    // family-wise
   double estimate = 0.0;
   double std_error = 0.0;
+  std::string method = "GLR";  // the candidate's source: "GLR" or "RAW"
 };
 
 // The significant fault candidates (Holm p below `alpha`) that explain the

@@ -57,6 +57,7 @@
 // no longer holds.
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "insdiag/engine/filter/epoch_run.h"
@@ -101,7 +102,24 @@ struct OnsetFit {
   double peak_attitude_error_rad = 0.0;
   std::vector<EffectTerm>
       ambiguous_with;  // faults whose signature from this onset is nearly parallel
+  // The fit at every onset tried, from `first_onset_epoch` on: the
+  // magnitude's score s(θ) and information I(θ) there (T = s²/I, β̂ = s/I,
+  // SE = 1/√I).
+  int first_onset_epoch = 0;
+  std::vector<double> score_by_onset;
+  std::vector<double> information_by_onset;
 };
+
+// The fit of one term with its onset given rather than searched.
+struct FitAtOnset {
+  double statistic = 0.0;  // T = 2Δℓ
+  double estimate = 0.0;
+  double std_error = 0.0;
+};
+
+// `fit`'s term with its onset at `onset_s`: the first update interval that
+// starts at or after it. nullopt where no onset was tried there.
+std::optional<FitAtOnset> FitWithOnsetAt(const OnsetFit& fit, const EpochRun& run, double onset_s);
 
 // Davies' bound on P(max over onsets of 2Δℓ ≥ statistic) for a scan whose
 // path length is `path_length` (the p-value of OnsetFit).

@@ -5,7 +5,10 @@
 //
 // Changes. A jump of a still segment's rate or a ramp of it (ident/allan.h:
 // jumps and ramps) is a fault the navigation errors may not tell from a
-// look-alike (fault_findings.h, IsLikelierLookAlike).
+// look-alike (fault_findings.h, IsLikelierLookAlike). A ramp is a finding of
+// its own (fault_findings.h, RawSampleFaultCandidates): its test's null is a
+// rate random walk, the noise of the largest Allan-to-Hadamard ratio, so no
+// noise of the model passes it more often than its level.
 //
 // Constants. The mean of the reading minus the perfect unit's over the still
 // samples measures each axis' constant bias, b̂ ± SE_raw. The navigation
@@ -49,6 +52,10 @@ struct RawSampleChange {
   double time_s = 0.0;
   double size = 0.0;
   double tolerance_s = 0.0;
+  // The channel's test: P(a change this clear | no change), before any
+  // correction over the channels; 1 where the change is not tested as a
+  // finding of its own (a jump).
+  double p_value = 1.0;
 };
 
 // One sensor axis' constant bias over the still samples, in its turn-on

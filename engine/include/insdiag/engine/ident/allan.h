@@ -333,6 +333,9 @@ struct RampEvidence {
   double tau_s = 0.0;
   double avar_over_hvar = 0.0;  // σ̂² / σ̂²_H there
   double z = 0.0;
+  // P(the walk's largest z ≥ z) for this channel: the exponential tail
+  // beyond the walks' 95th percentile (above).
+  double p_value = 1.0;
 };
 
 // The point of `curve` where the ramp test is most significant, if it passes;

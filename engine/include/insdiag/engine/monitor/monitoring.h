@@ -72,8 +72,9 @@ struct Localisation {
   double statistic = 0.0;  // ℓ of the jump, or d_i at its peak
   double p_value = 0.0;    // family-wise
   // "JUMP" (likelihood ratio of a state's jump), "FORWARD_BACKWARD"
-  // (discrepancy) or "GLR" (a fault effect's onset scan, or its estimate in
-  // a model that holds it)
+  // (discrepancy), "GLR" (a fault effect's onset scan, or its estimate in
+  // a model that holds it) or "RAW" (a ramp the still segments' raw samples
+  // show)
   std::string method;
   double jump = 0.0;       // the jump's estimate in the state's unit (JUMP only)
   double jump_std_error = 0.0;
