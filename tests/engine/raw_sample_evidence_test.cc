@@ -131,9 +131,7 @@ ScannedRun FlatScan(std::string_view selector, int seconds, double statistic, do
   s.fit.term = TermOf(selector);
   s.fit.identifiable = true;
   s.fit.first_onset_epoch = 60;
-  s.fit.score_by_onset.assign(static_cast<size_t>(seconds - 120),
-                              std::sqrt(statistic * information));
-  s.fit.information_by_onset.assign(static_cast<size_t>(seconds - 120), information);
+  s.fit.statistic_by_onset.assign(static_cast<size_t>(seconds - 120), statistic);
   s.fit.statistic = statistic;
   s.fit.estimate = std::sqrt(statistic / information);
   s.fit.std_error = 1.0 / std::sqrt(information);

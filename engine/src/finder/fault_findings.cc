@@ -184,8 +184,7 @@ void AddRawSampleFaultCandidates(std::vector<EffectCandidate>& candidates,
     c.estimate = raw.size;
     c.std_error = RawSlopeStdError(scale, SensorAxisIndex(raw.sensor, raw.axis), span_s);
     c.p_value = p_value;
-    const std::optional<FitAtOnset> navigation = FitWithOnsetAt(*fit, run, raw.time_s);
-    c.statistic = navigation.has_value() ? navigation->statistic : 0.0;
+    c.statistic = StatisticWithOnsetAt(*fit, run, raw.time_s).value_or(0.0);
     c.predicted_delta_aic = -c.statistic + 2.0;
     c.predicted_delta_bic = -c.statistic + log_n;
     c.onset_s = raw.time_s;
@@ -198,8 +197,8 @@ void AddRawSampleFaultCandidates(std::vector<EffectCandidate>& candidates,
     if (sigma > 0.0) c.size_in_drift_sigma = std::abs(raw.size) * span_s / sigma;
     c.note = absl::StrFormat(
         "a ramp the still segments' raw samples show from %.0f s (the ramp test's p %.2g over the "
-        "six channels); "
-        "the navigation errors give it 2Δℓ %.1f at that onset",
+        "six "
+        "channels); the navigation errors give it 2Δℓ %.1f at that onset",
         raw.time_s, c.p_value, c.statistic);
     if (scanned != candidates.end()) {
       c.correlated_with = scanned->correlated_with;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 #include <optional>
+#include <utility>
 
 #include "insdiag/engine/filter/observation.h"
 #include "insdiag/engine/stats/distributions.h"
@@ -256,8 +257,6 @@ OnsetFit FitTerm(const EffectTerm& term, const OnsetSums& sums, const EpochRun& 
   std::vector<double> T(static_cast<size_t>(std::max(0, last - first + 1)), 0.0);
   fit.identifiable = last >= first;
   fit.first_onset_epoch = first;
-  fit.score_by_onset.assign(T.size(), 0.0);
-  fit.information_by_onset.assign(T.size(), 0.0);
   for (int theta = first; theta <= last; ++theta) {
     const Eigen::Vector2d v = direction(theta);
     const double s = v.dot(pair(theta).score);
@@ -268,8 +267,6 @@ OnsetFit FitTerm(const EffectTerm& term, const OnsetSums& sums, const EpochRun& 
     }
     const double t = s * s / info;
     T[static_cast<size_t>(theta - first)] = t;
-    fit.score_by_onset[static_cast<size_t>(theta - first)] = s;
-    fit.information_by_onset[static_cast<size_t>(theta - first)] = info;
     if (theta < last) {
       const Eigen::Vector2d w = direction(theta + 1);
       const double next_info = w.dot(pair(theta + 1).information * w);
@@ -329,6 +326,7 @@ OnsetFit FitTerm(const EffectTerm& term, const OnsetSums& sums, const EpochRun& 
   fit.onset_high_s = run.epochs[static_cast<size_t>(quantile(1.0 - options.interval_tail))].start_s;
   PlaceOnsetAtItsSample(sums, run, first, centre_s, fit);
   fit.p_value = OnsetPValue(fit.statistic, fit.path_length);
+  fit.statistic_by_onset = std::move(T);
   return fit;
 }
 
@@ -392,16 +390,15 @@ void SetPeakAttitudeErrors(const ForwardPass& fw, const StateLayout& layout, con
 
 }  // namespace
 
-std::optional<FitAtOnset> FitWithOnsetAt(const OnsetFit& fit, const EpochRun& run, double onset_s) {
+std::optional<double> StatisticWithOnsetAt(const OnsetFit& fit, const EpochRun& run,
+                                           double onset_s) {
   const auto first_after = std::ranges::find_if(
       run.epochs, [&](const EpochInterval& e) { return e.start_s >= onset_s; });
   const auto theta = static_cast<int>(first_after - run.epochs.begin()) - fit.first_onset_epoch;
-  if (!fit.identifiable || theta < 0 || theta >= static_cast<int>(fit.information_by_onset.size()))
+  if (!fit.identifiable || theta < 0 || theta >= static_cast<int>(fit.statistic_by_onset.size())) {
     return std::nullopt;
-  const double s = fit.score_by_onset[static_cast<size_t>(theta)];
-  const double info = fit.information_by_onset[static_cast<size_t>(theta)];
-  if (!(info > 0.0)) return std::nullopt;
-  return FitAtOnset{s * s / info, s / info, 1.0 / std::sqrt(info)};
+  }
+  return fit.statistic_by_onset[static_cast<size_t>(theta)];
 }
 
 double OnsetPValue(double statistic, double path_length) {

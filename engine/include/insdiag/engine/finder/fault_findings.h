@@ -70,7 +70,7 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
 //     (the least-squares slope's variance over [0, L] for white noise, and
 //     for a Wiener process ∫∫ f(s) f(t) min(s, t) / (∫ f²)² with f = t − L/2);
 //   - statistic: what the navigation errors say of the same fault at that
-//     onset, T = 2Δℓ of its magnitude (FitWithOnsetAt), and the predicted
+//     onset, T = 2Δℓ of its magnitude (StatisticWithOnsetAt), and the predicted
 //     ΔBIC −T + ln N of adding it there, which ranks it among the others;
 //   - the look-alikes its term's scan named.
 void AddRawSampleFaultCandidates(std::vector<EffectCandidate>& candidates,

@@ -102,24 +102,17 @@ struct OnsetFit {
   double peak_attitude_error_rad = 0.0;
   std::vector<EffectTerm>
       ambiguous_with;  // faults whose signature from this onset is nearly parallel
-  // The fit at every onset tried, from `first_onset_epoch` on: the
-  // magnitude's score s(θ) and information I(θ) there (T = s²/I, β̂ = s/I,
-  // SE = 1/√I).
+  // The profile the best onset is taken from: T(θ) at every onset tried,
+  // from `first_onset_epoch` on.
   int first_onset_epoch = 0;
-  std::vector<double> score_by_onset;
-  std::vector<double> information_by_onset;
+  std::vector<double> statistic_by_onset;
 };
 
-// The fit of one term with its onset given rather than searched.
-struct FitAtOnset {
-  double statistic = 0.0;  // T = 2Δℓ
-  double estimate = 0.0;
-  double std_error = 0.0;
-};
-
-// `fit`'s term with its onset at `onset_s`: the first update interval that
-// starts at or after it. nullopt where no onset was tried there.
-std::optional<FitAtOnset> FitWithOnsetAt(const OnsetFit& fit, const EpochRun& run, double onset_s);
+// T = 2Δℓ of `fit`'s term with its onset given rather than searched, at
+// `onset_s`: the first update interval that starts at or after it. nullopt
+// where no onset was tried there.
+std::optional<double> StatisticWithOnsetAt(const OnsetFit& fit, const EpochRun& run,
+                                           double onset_s);
 
 // Davies' bound on P(max over onsets of 2Δℓ ≥ statistic) for a scan whose
 // path length is `path_length` (the p-value of OnsetFit).
