@@ -10,6 +10,7 @@
 #include <numbers>
 #include <optional>
 
+#include "analysis/fault_passes.h"
 #include "insdiag/engine/finder/effect_finder.h"
 #include "insdiag/engine/finder/fault_findings.h"
 #include "insdiag/engine/model/parameter_field.h"
@@ -410,11 +411,15 @@ std::vector<EffectCandidate> MergeCandidates(std::vector<EffectCandidate> terms,
   return terms;
 }
 
-// The faults a pass shows: significant fault candidates of its scan, and the
-// fault effects of its model whose estimates differ from zero.
-std::vector<FaultFinding> FaultFindings(const ModelPass& pass, const Findings& found, const AnalysisOptions& options) {
+// The faults a pass shows: significant fault candidates of its scan that
+// stand together, and the fault effects of its model whose estimates differ
+// from zero.
+std::vector<FaultFinding> FaultFindings(const RunContext& c, const ModelPass& pass,
+                                        const Findings& found, std::vector<std::string>& notes) {
+  const AnalysisOptions& options = c.options;
   const double alpha = options.finder.family_wise_alpha;
-  std::vector<FaultFinding> findings = SignificantFaults(found.candidates, alpha);
+  std::vector<FaultFinding> findings =
+      FaultsThatStandTogether(c, pass, SignificantFaults(found.candidates, alpha), notes);
   const int K = pass.forward.epochs();
   if (K == 0) return findings;
   for (const SensorState& s : pass.layout->sensor_states()) {
@@ -499,6 +504,7 @@ Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const M
   if (epochs.size() > 0) scale.run_end_s = epochs.epochs.back().time_s;
   std::vector<EffectCandidate> faults =
       FaultCandidates(pass.onsets, pass.forward.scalar_updates, scale, raw_samples.changes);
+  ConfirmFaultsBeyondTheLinearRange(run, pass, options, faults);
   AddRawSampleFaultCandidates(faults, pass.onsets, raw_samples.changes, epochs,
                               pass.forward.scalar_updates, scale, options.finder.family_wise_alpha);
   for (EffectCandidate& c : faults) others.push_back(std::move(c));
@@ -566,7 +572,8 @@ AnalysisReport ReportOf(const RunContext& c, const ModelPass& pass, const Findin
                         const std::vector<ParameterEstimate>& identified, const std::vector<std::string>& notes) {
   AnalysisReport r;
   FillFit(pass, c.run, c.options, r);
-  ReportFaults(FaultFindings(pass, found, c.options), c.run.samples.back().t_s, r);
+  std::vector<std::string> fault_notes;
+  ReportFaults(FaultFindings(c, pass, found, fault_notes), c.run.samples.back().t_s, r);
   r.effect_candidates = found.candidates;
   r.family_candidates = found.families;
   r.correlation = found.drifts;
@@ -581,6 +588,7 @@ AnalysisReport ReportOf(const RunContext& c, const ModelPass& pass, const Findin
     }
   }
   r.notes = notes;
+  r.notes.insert(r.notes.end(), fault_notes.begin(), fault_notes.end());
   if (!unobservable.empty()) {
     r.notes.push_back("not observable from this run (inseparable from another state, or a standard error above "
                       "half the prior's): " + unobservable +

@@ -25,10 +25,6 @@ std::vector<ParameterEstimate> WithTakenStructures(std::vector<ParameterEstimate
   return identified;
 }
 
-double PriorSigmaAroundEstimate(double estimate, double std_error, const AnalysisOptions& options) {
-  return options.estimated_prior_scale * std::max(std::abs(estimate), 3.0 * std_error);
-}
-
 // Model `base` plus `selectors`, with priors from what model A's scan and
 // correlation processing found; anything not found gets the diffuse prior.
 absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& base,

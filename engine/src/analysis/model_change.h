@@ -39,10 +39,6 @@ absl::StatusOr<Analysis> AddAndCompare(const RunContext& c, const std::vector<st
 std::vector<ParameterEstimate> WithTakenStructures(std::vector<ParameterEstimate> identified,
                                                    const ErrorModel& model, const Findings& found);
 
-// The prior σ of an effect added at a scan's estimate: wide against it,
-// `estimated_prior_scale` × the larger of |estimate| and 3 SE.
-double PriorSigmaAroundEstimate(double estimate, double std_error, const AnalysisOptions& options);
-
 // Model `base` plus `selectors`, with priors from what model A's scan and
 // correlation processing found; anything not found gets the diffuse prior.
 absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& base,

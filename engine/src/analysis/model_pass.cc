@@ -97,6 +97,10 @@ double ProfileLogLikelihood(const ForwardPass& forward, const ErrorModel& model)
   return forward.log_likelihood + ProfileCorrection(forward, model, StateLayout(model));
 }
 
+double PriorSigmaAroundEstimate(double estimate, double std_error, const AnalysisOptions& options) {
+  return options.estimated_prior_scale * std::max(std::abs(estimate), 3.0 * std_error);
+}
+
 void FillFit(const ModelPass& pass, const BenchRun& run, const AnalysisOptions& options, AnalysisReport& r) {
   const MonitorResult& m = pass.monitor;
   r.verdict = m.verdict;

@@ -47,6 +47,10 @@ absl::StatusOr<double> ProfileLogLikelihood(const EpochRun& epochs, const ErrorM
 // The same from a forward pass of `model` already run.
 double ProfileLogLikelihood(const ForwardPass& forward, const ErrorModel& model);
 
+// The prior σ of an effect added at a scan's estimate: wide against it,
+// `estimated_prior_scale` × the larger of |estimate| and 3 SE.
+double PriorSigmaAroundEstimate(double estimate, double std_error, const AnalysisOptions& options);
+
 // The report's fit of a pass: verdict, channels, NIS, likelihood, criteria.
 void FillFit(const ModelPass& pass, const BenchRun& run, const AnalysisOptions& options, AnalysisReport& r);
 

@@ -9,7 +9,7 @@
 #include <set>
 
 #include "absl/strings/str_format.h"
-#include "insdiag/engine/finder/linear_range.h"
+#include "insdiag/engine/filter/linear_range.h"
 #include "insdiag/engine/nav/rotation.h"
 #include "insdiag/engine/nav/wgs84.h"
 #include "insdiag/engine/stats/distributions.h"

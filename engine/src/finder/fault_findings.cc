@@ -8,7 +8,7 @@
 #include <limits>
 #include <string>
 
-#include "insdiag/engine/finder/linear_range.h"
+#include "insdiag/engine/filter/linear_range.h"
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/stats/distributions.h"
 

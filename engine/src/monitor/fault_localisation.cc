@@ -52,16 +52,18 @@ std::vector<JumpHypothesis> LocaliseJump(const ForwardPass& fw, const StateLayou
   for (int i = 0; i < m; ++i) best[static_cast<size_t>(i)].state = layout.sensor_states()[static_cast<size_t>(i)].name;
   int tried = 0;
   Eigen::MatrixXd A(n, m);
-  Eigen::VectorXd score(m), information(m);
+  Eigen::VectorXd score(m), information(m), peak(m);
   for (int onset = first; onset <= last_onset; ++onset) {
     ++tried;
     A.setZero();
     for (int i = 0; i < m; ++i) A(layout.sensor_begin() + i, i) = 1.0;
     score.setZero();
     information.setZero();
+    peak.setZero();
     const int stop = std::min(end, onset + window_epochs);
     for (int k = onset; k < stop; ++k) {
       if (k > onset) fw.transitions[static_cast<size_t>(k)].PropagateRows(A);
+      peak = peak.cwiseMax(A.middleRows<3>(layout.attitude()).colwise().norm().transpose());
       const Eigen::MatrixXd& G = gains[static_cast<size_t>(k - first)];
       for (int c = 0; c < kChannelCount; ++c) {
         const ObservationRow& h = rows[static_cast<size_t>(c)];
@@ -81,6 +83,7 @@ std::vector<JumpHypothesis> LocaliseJump(const ForwardPass& fw, const StateLayou
         b.onset_s = fw.epoch_time_s[static_cast<size_t>(onset - 1)];
         b.jump = score[i] / information[i];
         b.jump_std_error = 1.0 / std::sqrt(information[i]);
+        b.peak_attitude_error_rad = std::abs(b.jump) * peak[i];
       }
     }
   }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "insdiag/engine/filter/linear_range.h"
 #include "insdiag/engine/monitor/innovation_tests.h"
 #include "insdiag/engine/stats/distributions.h"
 
@@ -154,10 +155,15 @@ MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const State
   for (const FaultInterval& f : out.faults) {
     if (f.kind != FaultKind::kGradual || f.start_s <= localised_until) continue;
     if (static_cast<int>(out.localisation.size()) >= options.max_localised_failures) break;
+    // The likeliest jump the first-order model can describe (fault_localisation.h).
     const auto hypotheses = LocaliseJump(fw, layout, f.start_s, options.localisation);
-    if (!hypotheses.empty() && hypotheses.front().p_value < options.family_wise_alpha) {
-      const JumpHypothesis& h = hypotheses.front();
-      out.localisation.push_back({h.state, h.onset_s, h.statistic, h.p_value, "JUMP", h.jump, h.jump_std_error});
+    const auto h = std::ranges::find_if(hypotheses, [](const JumpHypothesis& j) {
+      return LinearRangeOf(j.peak_attitude_error_rad, j.jump_std_error / std::abs(j.jump)) !=
+             LinearRange::kFarOutside;
+    });
+    if (h != hypotheses.end() && h->p_value < options.family_wise_alpha) {
+      out.localisation.push_back(
+          {h->state, h->onset_s, h->statistic, h->p_value, "JUMP", h->jump, h->jump_std_error});
     }
     localised_until = f.end_s;
   }

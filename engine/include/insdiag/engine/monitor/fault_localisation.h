@@ -12,6 +12,9 @@
 // with the jump's estimate ν̂ = Σ X S⁻¹ ν / Σ X S⁻¹ X and σ(ν̂) = (Σ X S⁻¹ X)^{-1/2}.
 // The state and onset of the largest ℓ name the faulty sensor; the gains are
 // rebuilt from the stored covariances (they do not depend on the data).
+// Under ν̂ the filter's attitude error would peak at |ν̂| max_k ‖A_ψ,k‖ over
+// the window (A's attitude rows): a jump that puts it beyond a radian is an
+// artefact of the first-order model, not a localisation (filter/linear_range.h).
 #pragma once
 
 #include <string>
@@ -29,6 +32,7 @@ struct JumpHypothesis {
   double p_value = 0.0;    // family-wise over the states and onsets tried
   double jump = 0.0;       // ν̂ in the state's unit
   double jump_std_error = 0.0;
+  double peak_attitude_error_rad = 0.0;  // under ν̂, over the window
 };
 
 struct LocalisationOptions {

@@ -1,4 +1,4 @@
-#include "insdiag/engine/finder/linear_range.h"
+#include "insdiag/engine/filter/linear_range.h"
 
 #include <absl/strings/str_format.h>
 
