@@ -14,6 +14,7 @@
 #include "failure_mode_data.h"
 #include "insdiag/api/json.h"
 #include "insdiag/api/resource_names.h"
+#include "insdiag/engine/finder/fault_findings.h"
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/stats/distributions.h"
 
@@ -409,7 +410,7 @@ double CandidateStandardScore(const v1::EffectCandidate& c) {
                          c.estimate());
   };
   const bool structure = c.source() == "STRUCTURE" || c.source() == "LIKELIHOOD";
-  const bool fault = c.source() == "GLR" || c.source() == "RAW";
+  const bool fault = engine::IsFaultSource(c.source());
   return fault || structure  ? z_of_p()
          : c.std_error() > 0 ? c.estimate() / c.std_error()
          : c.degrees_of_freedom() <= 1

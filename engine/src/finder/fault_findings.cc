@@ -132,7 +132,9 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
   return out;
 }
 
-bool IsFaultCandidate(const EffectCandidate& c) { return c.source == "GLR" || c.source == "RAW"; }
+bool IsFaultSource(std::string_view source) { return source == "GLR" || source == "RAW"; }
+
+bool IsFaultCandidate(const EffectCandidate& c) { return IsFaultSource(c.source); }
 
 namespace {
 

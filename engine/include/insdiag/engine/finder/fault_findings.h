@@ -7,6 +7,7 @@
 #include <array>
 #include <optional>
 #include <span>
+#include <string_view>
 #include <vector>
 
 #include "insdiag/engine/finder/onset_scan.h"
@@ -79,8 +80,9 @@ void AddRawSampleFaultCandidates(std::vector<EffectCandidate>& candidates,
                                  int scalar_updates, const FaultScale& scale,
                                  double family_wise_alpha);
 
-// Whether a candidate is a fault at an onset: from the onset scan ("GLR") or
-// the raw samples ("RAW").
+// Whether a candidate of `source` (EffectCandidate::source) is a fault at an
+// onset: from the onset scan ("GLR") or the raw samples ("RAW").
+bool IsFaultSource(std::string_view source);
 bool IsFaultCandidate(const EffectCandidate& c);
 
 // Whether `b` should come before `a`: both significant faults at `alpha`,
