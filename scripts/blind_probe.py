@@ -127,7 +127,7 @@ def run_one(index, units):
     with JUDGE_LOCK:
         fault_matrix.use_unit_class(c["preset"])
         verdict = fault_matrix.judge(fault, report)
-    return dict(c, heading_only=heading_only(c), allan_ramps=allan_ramps(report),
+    return dict(c, heading_only=heading_only(c), allan_ramps=allan_ramps(report), allan_jumps=allan_jumps(report),
                 drifts_held=drifts_held(report), constants_refuted=constants_refuted(report),
                 raw_sample_faults=[c["name"] for c in report.get("effectCandidates", []) if c.get("source") == "RAW"],
                 **verdict)
@@ -148,6 +148,12 @@ def constants_refuted(report):
 def allan_ramps(report):
     """The channels whose Allan curve had a ramp taken out (the analysis's notes)."""
     found = (re.search(r"took a ramp out of (\w+)'s", note) for note in report.get("notes", []))
+    return [m.group(1) for m in found if m]
+
+
+def allan_jumps(report):
+    """The channels whose still segments were cut at a jump of their mean (the analysis's notes)."""
+    found = (re.search(r"the Allan analysis cut (\w+)'s", note) for note in report.get("notes", []))
     return [m.group(1) for m in found if m]
 
 
@@ -179,6 +185,10 @@ def summarise(results):
         ramped = [r for r in rs if r.get("allan_ramps")]
         lines.append(f"\n{label}: a ramp taken out of the Allan curve in {len(ramped)} of {len(rs)} runs"
                      + "".join(f"; {r['index']}: {', '.join(r['allan_ramps'])}" for r in ramped))
+    for label, rs in (("healthy", healthy), ("faulty", faulty)):
+        cut = [r for r in rs if r.get("allan_jumps")]
+        lines.append(f"\n{label}: a still segment cut at a jump in {len(cut)} of {len(rs)} runs"
+                     + "".join(f"; {r['index']}: {', '.join(r['allan_jumps'])}" for r in cut))
     for label, rs in (("healthy", healthy), ("faulty", faulty)):
         held = [r for r in rs if r.get("drifts_held")]
         lines.append(f"\n{label}: a drift held within what the raw samples allow in {len(held)} of {len(rs)} runs"

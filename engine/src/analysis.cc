@@ -179,7 +179,8 @@ RawSampleEvidence RawSampleEvidenceOf(const BenchRun& run,
   for (const ident::AllanChannel& ch : allan->channels) {
     for (const ident::RateJump& j : ch.jumps) {
       out.changes.push_back({ch.sensor, ch.axis, Regressor::kStep, j.time_s, j.size,
-                             static_cast<double>(j.window) * allan->tau0_s});
+                             static_cast<double>(j.window) * allan->tau0_s, j.p_value,
+                             j.z > 0.0 ? std::abs(j.size) / j.z : 0.0});
     }
     for (const ident::RateRamp& r : ch.ramps) {
       out.changes.push_back({ch.sensor, ch.axis, Regressor::kRamp, r.onset_s, r.slope,

@@ -378,6 +378,27 @@ class FaultsTheBlindDrawsMissed(unittest.TestCase):
         self.assertEqual(report["verdict"], "FAULTY")
         self.assertOnlySensorLocalised(report, "gyro_", "y")
 
+    def test_a_z_gyro_step_on_a_still_table_is_named_from_its_still_samples(self):
+        # The eighth blind draw's run 439: a 1 °/h unit with its datasheet,
+        # its z gyro stepping by 15 drift σ at 697 s on a still level table
+        # at 100 Hz. The navigation errors see it through the heading alone
+        # (2Δℓ 9.5, not significant): GOOD. The z gyro's still samples jump
+        # there (z 9.8), and the jump is named from them
+        # (finder/fault_findings.h, AddRawSampleFaultCandidates).
+        step = 7.231724922119932e-05
+        with tempfile.TemporaryDirectory() as d:
+            report, _ = analyse(d, "--preset", "tactical", "--profile", "static", "--rate-hz", "100",
+                                "--duration", "4848", "--seed", "7439", "--datasheet", "yes", "--unit-type", "none",
+                                "--latitude-deg", "-49.37", "--fault", f"gyro_bias_step.z={step}@697.195")
+        found = significant(report)
+        self.assertTrue(found, f"nothing significant; verdict {report['verdict']}")
+        self.assertEqual(found[0]["name"], "gyro_bias_step.z")
+        self.assertEqual(found[0]["source"], "RAW")
+        self.assertLess(abs(found[0]["estimate"] - step), 3.0 * found[0]["stdError"])
+        self.assertLess(abs(found[0]["onsetS"] - 697.195), 60.0)
+        self.assertEqual(report["verdict"], "FAULTY")
+        self.assertOnlySensorLocalised(report, "gyro_", "z")
+
 
 if __name__ == "__main__":
     unittest.main()

@@ -622,6 +622,8 @@ TEST(AllanJumpTest, FindsAStepOfFiveDriftSigmaAtItsSample) {
     for (size_t k = static_cast<size_t>(onset); k < y.size(); ++k) y[k] += size;
     const std::optional<RateJump> jump = FindRateJump(y, kJumpSeriesDtS, AllanOptions{});
     if (!jump.has_value()) continue;
+    // The p-value the candidate list takes: below the test's level wherever it cut.
+    EXPECT_LT(jump->p_value, AllanOptions{}.jump_alpha);
     std::printf("onset %d: jump at %zu, size %.2f (true %.1f), z %.1f, window %lld\n", onset,
                 jump->sample, jump->size, size, jump->z, static_cast<long long>(jump->window));
     found += std::abs(static_cast<int>(jump->sample) - onset) <= 4 ? 1 : 0;
@@ -641,6 +643,7 @@ TEST(AllanJumpTest, CutsAHealthySegmentAtItsLevel) {
     const std::optional<RateJump> jump = FindRateJump(y, kJumpSeriesDtS, AllanOptions{});
     if (jump.has_value()) {
       ++cut;
+      EXPECT_LT(jump->p_value, AllanOptions{}.jump_alpha);
       std::printf("seed %d: false cut at %zu, z %.2f, window %lld\n", seed, jump->sample, jump->z,
                   static_cast<long long>(jump->window));
     }

@@ -199,8 +199,9 @@ TEST(RawSampleRamps, LeaveTheScansTermWhereItIsTheStrongerEvidence) {
   AddRawSampleFaultCandidates(placed, {scanned.fit}, std::span(&clearer, 1), scanned.run, 20000,
                               AccelerometerNoise(5e-4, 1e-2, 300.0, 3600.0), kAlpha);
   EXPECT_EQ(placed[0].source, "GLR");
-  // A jump is not a finding of its own, nor a ramp of another axis.
-  const RawSampleChange jump{Sensor::kAccelerometer, 1, Regressor::kStep, 1319.0, 5.5e-3, 1.0};
+  // Nor is a jump of the ramp's axis that ramp, nor a ramp of another axis.
+  const RawSampleChange jump{
+      Sensor::kAccelerometer, 1, Regressor::kStep, 1319.0, 5.5e-3, 1.0, 1e-9, 5e-4};
   const RawSampleChange other_axis{
       Sensor::kAccelerometer, 2, Regressor::kRamp, 1319.0, 5.5e-6, 60.0, 1e-9};
   for (const RawSampleChange& change : {jump, other_axis}) {
@@ -211,6 +212,41 @@ TEST(RawSampleRamps, LeaveTheScansTermWhereItIsTheStrongerEvidence) {
     ASSERT_EQ(weak.size(), 1u);
     EXPECT_EQ(weak[0].source, "GLR");
   }
+}
+
+TEST(RawSampleJumps, StandInForAStepTheNavigationErrorsShowThroughTheHeadingAlone) {
+  // The eighth blind draw's run 439: a 1 °/h unit on a still table, its z
+  // gyro stepping by 7.2e-5 rad/s at 697 s. The navigation errors see it
+  // through the heading alone (2Δℓ 9, p 0.37 after Holm); the z gyro's
+  // still samples jump by 6.4e-5 at 697 s, z 9.8.
+  ScannedRun scanned = FlatScan("gyro_bias_step.z", 4800, 9.0, 1e10, 0.01);
+  std::vector<EffectCandidate> candidates = FaultCandidates({scanned.fit}, 29000);
+  const RawSampleChange jump{Sensor::kGyro, 2,     Regressor::kStep, 696.8, 6.38e-5, 6.4,
+                             2e-16,         6.5e-6};
+  FaultScale scale = AccelerometerNoise(1e-5, 4.85e-6, 300.0, 4800.0);
+  AddRawSampleFaultCandidates(candidates, {scanned.fit}, std::span(&jump, 1), scanned.run, 29000,
+                              scale, kAlpha);
+  ASSERT_EQ(candidates.size(), 1u) << "one candidate per term";
+  const EffectCandidate& c = candidates[0];
+  EXPECT_EQ(c.source, "RAW");
+  EXPECT_DOUBLE_EQ(c.estimate, 6.38e-5);
+  EXPECT_DOUBLE_EQ(c.std_error, 6.5e-6)
+      << "the samples' own scatter of the window means' difference";
+  EXPECT_NEAR(c.p_value, 1.2e-15, 1e-27) << "Bonferroni over the six channels";
+  EXPECT_NEAR(c.statistic, 9.0, 1e-9) << "the navigation errors' 2Δℓ at the samples' onset";
+  ASSERT_TRUE(c.onset_s.has_value());
+  EXPECT_DOUBLE_EQ(*c.onset_s, 696.8);
+  ASSERT_TRUE(c.size_in_drift_sigma.has_value());
+  EXPECT_NEAR(*c.size_in_drift_sigma, 6.38e-5 / 4.85e-6, 1e-9) << "a step's size, not its reach";
+  EXPECT_NE(c.note.find("a jump the still segments' raw samples show at 697 s"), std::string::npos)
+      << c.note;
+  // A jump the test did not find clear of noise (p 1) is no candidate.
+  std::vector<EffectCandidate> untested = FaultCandidates({scanned.fit}, 29000);
+  RawSampleChange unclear = jump;
+  unclear.p_value = 1.0;
+  AddRawSampleFaultCandidates(untested, {scanned.fit}, std::span(&unclear, 1), scanned.run, 29000,
+                              scale, kAlpha);
+  EXPECT_EQ(untested[0].source, "GLR");
 }
 
 }  // namespace

@@ -158,7 +158,7 @@ void AddRawSampleFaultCandidates(std::vector<EffectCandidate>& candidates,
                                  double family_wise_alpha) {
   const double log_n = std::log(static_cast<double>(std::max(1, scalar_updates)));
   for (const RawSampleChange& raw : raw_changes) {
-    if (raw.shape != Regressor::kRamp || !(raw.p_value < 1.0)) continue;
+    if (!(raw.p_value < 1.0)) continue;
     const auto fit = std::ranges::find_if(fits, [&](const OnsetFit& f) {
       return f.term.family->sensor == raw.sensor && f.term.axis == raw.axis &&
              f.term.family->regressor == raw.shape;
@@ -177,6 +177,7 @@ void AddRawSampleFaultCandidates(std::vector<EffectCandidate>& candidates,
     }
     const double span_s = scale.run_end_s - raw.time_s;
     if (!(span_s > 0.0)) continue;
+    const bool ramp = raw.shape == Regressor::kRamp;
     EffectCandidate c;
     c.name = name;
     c.family = std::string(fit->term.family->name);
@@ -184,7 +185,8 @@ void AddRawSampleFaultCandidates(std::vector<EffectCandidate>& candidates,
     c.unit = std::string(fit->term.family->unit);
     c.dof = 1;
     c.estimate = raw.size;
-    c.std_error = RawSlopeStdError(scale, SensorAxisIndex(raw.sensor, raw.axis), span_s);
+    c.std_error = ramp ? RawSlopeStdError(scale, SensorAxisIndex(raw.sensor, raw.axis), span_s)
+                       : raw.std_error;
     c.p_value = p_value;
     c.statistic = StatisticWithOnsetAt(*fit, run, raw.time_s).value_or(0.0);
     c.predicted_delta_aic = -c.statistic + 2.0;
@@ -196,12 +198,12 @@ void AddRawSampleFaultCandidates(std::vector<EffectCandidate>& candidates,
     c.seen_in_raw_samples = true;
     const double sigma =
         scale.drift_sigma[static_cast<size_t>(SensorAxisIndex(raw.sensor, raw.axis))];
-    if (sigma > 0.0) c.size_in_drift_sigma = std::abs(raw.size) * span_s / sigma;
+    if (sigma > 0.0) c.size_in_drift_sigma = std::abs(raw.size) * (ramp ? span_s : 1.0) / sigma;
     c.note = absl::StrFormat(
-        "a ramp the still segments' raw samples show from %.0f s (the ramp test's p %.2g over the "
-        "six "
+        "%s the still segments' raw samples show %s %.0f s (the %s test's p %.2g over the six "
         "channels); the navigation errors give it 2Δℓ %.1f at that onset",
-        raw.time_s, c.p_value, c.statistic);
+        ramp ? "a ramp" : "a jump", ramp ? "from" : "at", raw.time_s, ramp ? "ramp" : "jump",
+        c.p_value, c.statistic);
     if (scanned != candidates.end()) {
       c.correlated_with = scanned->correlated_with;
       *scanned = std::move(c);

@@ -110,6 +110,9 @@ std::optional<RateJump> FindRateJump(std::span<const double> rates, double tau0_
       best = at_w;
     }
   }
+  if (best.has_value()) {
+    best->p_value = std::min(1.0, positions * stats::ChiSquareSurvival(best->z * best->z, 1.0));
+  }
   return best;
 }
 

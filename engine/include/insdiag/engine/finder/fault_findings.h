@@ -54,16 +54,21 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
                                              const std::optional<FaultScale>& scale = std::nullopt,
                                              std::span<const RawSampleChange> raw_changes = {});
 
-// The ramps the still segments' raw samples show, as fault candidates of
-// source "RAW", each in place of its term's scan candidate unless that one
-// is the stronger evidence (the smaller p-value) or places the samples'
-// change (seen_in_raw_samples) with a p-value below `family_wise_alpha`:
-// the scan's fit, over the whole run, places the onset better. The samples
-// measure the sensor with no navigation model, so their onset and slope
-// stand:
-//   - p-value: the channel's ramp test (ident/allan.h: Ramps) times the six
-//     channels tested (Bonferroni), before the list's Holm correction;
-//   - estimate: the samples' least-squares slope c over the L seconds after
+// The jumps and ramps the still segments' raw samples show, as fault
+// candidates of source "RAW", each in place of its term's scan candidate
+// unless that one is the stronger evidence (the smaller p-value) or places
+// the samples' change (seen_in_raw_samples) with a p-value below
+// `family_wise_alpha`: the scan's fit, over the whole run, places the onset
+// better. The samples measure the sensor with no navigation model, so their
+// onset and size stand (a z gyro's jump on a still table, which the
+// navigation errors show through the heading alone):
+//   - p-value: the channel's jump or ramp test (ident/allan.h: Jumps, Ramps)
+//     times the six channels tested (Bonferroni), before the list's Holm
+//     correction;
+//   - a jump's estimate: the difference of the window means either side,
+//     with the samples' own scatter of that difference away from it as its
+//     standard error (RawSampleChange::std_error);
+//   - a ramp's estimate: the samples' least-squares slope c over the L seconds after
 //     the onset, with the slope's standard error under the axis' white noise
 //     N and its drift taken as the walk it is over times short beside τ,
 //     K = σ √(2/τ) (longer spans wander less: the error is an upper bound):

@@ -53,9 +53,12 @@ struct RawSampleChange {
   double size = 0.0;
   double tolerance_s = 0.0;
   // The channel's test: P(a change this clear | no change), before any
-  // correction over the channels; 1 where the change is not tested as a
-  // finding of its own (a jump).
+  // correction over the channels.
   double p_value = 1.0;
+  // A jump's standard error from the samples: s_w, the scatter of the
+  // difference of adjacent window means away from it (ident/allan.h, Jumps).
+  // A ramp's comes from the model's noise (fault_findings.h).
+  double std_error = 0.0;
 };
 
 // One sensor axis' constant bias over the still samples, in its turn-on

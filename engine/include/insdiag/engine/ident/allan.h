@@ -309,6 +309,10 @@ struct RateJump {
   size_t sample = 0;    // the first sample after the jump, within the series tested
   double size = 0.0;    // d_w there: the later window's mean less the earlier's [rad/s | m/s²]
   double z = 0.0;       // |size| / s_w
+  // P(a jump this clear | no jump) over every position of every window
+  // tested (J × 2Φ(−z), the bound the test is held to); before any
+  // correction over the channels or a segment's pieces.
+  double p_value = 1.0;
   int64_t window = 0;   // w, samples
   double time_s = 0.0;  // in the run (AllanAnalysis): the end of the last sample before the jump
 };
