@@ -299,6 +299,30 @@ class FaultsTheBlindDrawsMissed(unittest.TestCase):
     """Faulty runs of the blind draws (scripts/blind_probe.py) an earlier build
     misdiagnosed, each with the draw's own arguments."""
 
+    def analyse_draw(self, preset, profile, rate_hz, duration_s, seed, datasheet, unit_type, latitude_deg,
+                     fault, value, onset_s):
+        """The blind draw's run: its unit, table, rate, length, seed and site, and
+        its fault `fault` of size `value` from `onset_s`."""
+        with tempfile.TemporaryDirectory() as d:
+            report, _ = analyse(d, "--preset", preset, "--profile", profile, "--rate-hz", str(rate_hz),
+                                "--duration", str(duration_s), "--seed", str(seed), "--datasheet", datasheet,
+                                "--unit-type", unit_type, "--latitude-deg", str(latitude_deg),
+                                "--fault", f"{fault}={value}@{onset_s}")
+        return report
+
+    def assertNamedFirst(self, report, fault, value, onset_s=None, source=None, within_se=3.0):
+        """The run is FAULTY and its first significant candidate is `fault`,
+        its size within `within_se` SE of `value` and its onset within 60 s."""
+        found = significant(report)
+        self.assertTrue(found, f"nothing significant; verdict {report['verdict']}")
+        self.assertEqual(found[0]["name"], fault)
+        if source is not None:
+            self.assertEqual(found[0]["source"], source)
+        self.assertLess(abs(found[0]["estimate"] - value), within_se * found[0]["stdError"])
+        if onset_s is not None:
+            self.assertLess(abs(found[0]["onsetS"] - onset_s), 60.0)
+        self.assertEqual(report["verdict"], "FAULTY")
+
     def assertOnlySensorLocalised(self, report, sensor_prefix, axis):
         # Every sensor the report says failed is the faulty one: no second
         # fault that only stood for the first (docs/IDENTIFICATION.md).
@@ -317,17 +341,11 @@ class FaultsTheBlindDrawsMissed(unittest.TestCase):
         # (finder/raw_sample_evidence.h) and the ramp, which the raw samples
         # show, is named.
         slope = 1.18110407e-05
-        with tempfile.TemporaryDirectory() as d:
-            report, _ = analyse(d, "--preset", "tactical-0.1", "--profile", "static", "--rate-hz", "100",
-                                "--duration", "2246", "--seed", "7349", "--datasheet", "yes", "--unit-type", "none",
-                                "--latitude-deg", "-58.45", "--fault", f"acc_bias_ramp.x={slope}@658.943")
+        report = self.analyse_draw("tactical-0.1", "static", 100, 2246, 7349, "yes", "none", -58.45,
+                                   "acc_bias_ramp.x", slope, 658.943)
         refuted = [c for c in report["effectCandidates"] if c["name"] == "gyro_turn_on_bias.z"]
         self.assertTrue(refuted and "refuted by the raw samples" in refuted[0].get("note", ""), refuted)
-        found = significant(report)
-        self.assertTrue(found, f"nothing significant; verdict {report['verdict']}")
-        self.assertEqual(found[0]["name"], "acc_bias_ramp.x")
-        self.assertLess(abs(found[0]["estimate"] - slope), 4.0 * found[0]["stdError"])
-        self.assertEqual(report["verdict"], "FAULTY")
+        self.assertNamedFirst(report, "acc_bias_ramp.x", slope, within_se=4.0)
         # The y gyro ramp that mimics the tilt is no second fault once the
         # accelerometer's ramp is in the model.
         self.assertOnlySensorLocalised(report, "acc_", "x")
@@ -341,17 +359,9 @@ class FaultsTheBlindDrawsMissed(unittest.TestCase):
         # beyond any noise of the model (finder/fault_findings.h,
         # AddRawSampleFaultCandidates), and it is named from them.
         slope = -0.0002119753017966682
-        with tempfile.TemporaryDirectory() as d:
-            report, _ = analyse(d, "--preset", "tactical", "--profile", "static", "--rate-hz", "100",
-                                "--duration", "2167", "--seed", "7378", "--datasheet", "no", "--unit-type", "none",
-                                "--latitude-deg", "-25.95", "--fault", f"acc_bias_ramp.x={slope}@865.993")
-        found = significant(report)
-        self.assertTrue(found, f"nothing significant; verdict {report['verdict']}")
-        self.assertEqual(found[0]["name"], "acc_bias_ramp.x")
-        self.assertEqual(found[0]["source"], "RAW")
-        self.assertLess(abs(found[0]["estimate"] - slope), 3.0 * found[0]["stdError"])
-        self.assertLess(abs(found[0]["onsetS"] - 865.993), 60.0)
-        self.assertEqual(report["verdict"], "FAULTY")
+        report = self.analyse_draw("tactical", "static", 100, 2167, 7378, "no", "none", -25.95,
+                                   "acc_bias_ramp.x", slope, 865.993)
+        self.assertNamedFirst(report, "acc_bias_ramp.x", slope, 865.993, source="RAW")
 
     def test_a_mems_gyro_step_beyond_the_scans_linear_range_is_measured_and_named(self):
         # The seventh blind draw's run 384: a MEMS unit labelled INS-2000,
@@ -360,22 +370,15 @@ class FaultsTheBlindDrawsMissed(unittest.TestCase):
         # sample with 2Δℓ 1073, but its first-order estimate would put the
         # filter 0.7 rad off in attitude, so the linearisation's error counted
         # as noise and an x accelerometer step was named. A pass with the step
-        # in the model (its own pilot) measures it (analysis/missing_effects.h,
+        # in the model (its own pilot) measures it (analysis/fault_passes.h,
         # ConfirmFaultsBeyondTheLinearRange); the accelerometer step and an x
         # gyro ramp are then no further faults, and the monitor's 0.19 rad/s
         # jump of the z gyro, 20 rad beyond the first-order model, is no
         # localisation.
         step = 0.0013328141615191035
-        with tempfile.TemporaryDirectory() as d:
-            report, _ = analyse(d, "--preset", "mems", "--profile", "static", "--rate-hz", "100",
-                                "--duration", "5341", "--seed", "7384", "--datasheet", "no", "--unit-type", "INS-2000",
-                                "--latitude-deg", "9.9", "--fault", f"gyro_bias_step.y={step}@2798.541")
-        found = significant(report)
-        self.assertTrue(found, f"nothing significant; verdict {report['verdict']}")
-        self.assertEqual(found[0]["name"], "gyro_bias_step.y")
-        self.assertLess(abs(found[0]["estimate"] - step), 3.0 * found[0]["stdError"])
-        self.assertLess(abs(found[0]["onsetS"] - 2798.541), 60.0)
-        self.assertEqual(report["verdict"], "FAULTY")
+        report = self.analyse_draw("mems", "static", 100, 5341, 7384, "no", "INS-2000", 9.9,
+                                   "gyro_bias_step.y", step, 2798.541)
+        self.assertNamedFirst(report, "gyro_bias_step.y", step, 2798.541)
         self.assertOnlySensorLocalised(report, "gyro_", "y")
 
     def test_a_z_gyro_step_on_a_still_table_is_named_from_its_still_samples(self):
@@ -386,19 +389,10 @@ class FaultsTheBlindDrawsMissed(unittest.TestCase):
         # there (z 9.8), and the jump is named from them
         # (finder/fault_findings.h, AddRawSampleFaultCandidates).
         step = 7.231724922119932e-05
-        with tempfile.TemporaryDirectory() as d:
-            report, _ = analyse(d, "--preset", "tactical", "--profile", "static", "--rate-hz", "100",
-                                "--duration", "4848", "--seed", "7439", "--datasheet", "yes", "--unit-type", "none",
-                                "--latitude-deg", "-49.37", "--fault", f"gyro_bias_step.z={step}@697.195")
-        found = significant(report)
-        self.assertTrue(found, f"nothing significant; verdict {report['verdict']}")
-        self.assertEqual(found[0]["name"], "gyro_bias_step.z")
-        self.assertEqual(found[0]["source"], "RAW")
-        self.assertLess(abs(found[0]["estimate"] - step), 3.0 * found[0]["stdError"])
-        self.assertLess(abs(found[0]["onsetS"] - 697.195), 60.0)
-        self.assertEqual(report["verdict"], "FAULTY")
+        report = self.analyse_draw("tactical", "static", 100, 4848, 7439, "yes", "none", -49.37,
+                                   "gyro_bias_step.z", step, 697.195)
+        self.assertNamedFirst(report, "gyro_bias_step.z", step, 697.195, source="RAW")
         self.assertOnlySensorLocalised(report, "gyro_", "z")
-
 
 if __name__ == "__main__":
     unittest.main()
