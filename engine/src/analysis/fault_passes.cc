@@ -24,11 +24,8 @@ struct FaultInAPass {
 absl::StatusOr<FaultInAPass> PassWithTheFault(const BenchRun& run, const ErrorModel& model,
                                               const OnsetFit& fit, const AnalysisOptions& options) {
   ErrorModel with_fault = model;
-  ModelEffect e;
-  e.term = fit.term;
-  e.onset_s = fit.onset_s;
-  e.prior_sigma[0] = PriorSigmaAroundEstimate(fit.estimate, fit.std_error, options);
-  with_fault.effects.push_back(e);
+  with_fault.effects.push_back(
+      FaultEffectAt(fit.term, fit.onset_s, fit.estimate, fit.std_error, options));
   // The fault's own pilot keeps the mechanisation within the linear range.
   auto epochs = CondenseRun(run, with_fault, options.filter.update_interval_s);
   if (!epochs.ok()) return epochs.status();
@@ -60,11 +57,7 @@ const OnsetFit* BeyondTheLinearRange(const EffectCandidate& c, const std::vector
 
 // `model` with fault `f` at its onset, its prior wide against its estimate.
 void AddFault(const FaultFinding& f, const AnalysisOptions& options, ErrorModel& model) {
-  ModelEffect e;
-  e.term = f.term;
-  e.onset_s = f.onset_s;
-  e.prior_sigma[0] = PriorSigmaAroundEstimate(f.estimate, f.std_error, options);
-  model.effects.push_back(e);
+  model.effects.push_back(FaultEffectAt(f.term, f.onset_s, f.estimate, f.std_error, options));
 }
 
 // The p-value of `f`'s onset scan on `model` (its term absent from it), by
@@ -149,10 +142,14 @@ std::vector<FaultFinding> FaultsThatStandTogether(const RunContext& c, const Mod
     const FaultFinding& f = findings[k];
     if (f.method == "GLR") {
       const absl::StatusOr<double> p = FaultPValueBeside(c, model, f, fault_terms);
-      if (p.ok() && !(*p < alpha)) {
-        std::string before;
-        for (const FaultFinding& s : standing)
-          absl::StrAppend(&before, before.empty() ? "" : ", ", s.term.Name());
+      std::string before;
+      for (const FaultFinding& s : standing)
+        absl::StrAppend(&before, before.empty() ? "" : ", ", s.term.Name());
+      if (!p.ok()) {
+        notes.push_back(
+            absl::StrFormat("%s at %.0f s could not be tested beside %s (%s): it stands",
+                            f.term.Name(), f.onset_s, before, p.status().message()));
+      } else if (!(*p < alpha)) {
         notes.push_back(absl::StrFormat(
             "%s at %.0f s is not a further fault: with %s in the model its onset scan gives p %.2g "
             "(over the %d fault terms), above %.2g: it stood for what the missing %s left in the "

@@ -553,11 +553,8 @@ FaultAgainstDriftsTest TestFaultAgainstDrifts(const RunContext& c, const Retarge
   t.fault = &fault;
   t.with_fault.model = id.model;
   t.with_fault.identified = id.identified;
-  ModelEffect e;
-  e.term = fault.term;
-  e.onset_s = fault.onset_s;
-  e.prior_sigma[0] = PriorSigmaAroundEstimate(fault.estimate, fault.std_error, c.options);
-  t.with_fault.model.effects.push_back(e);
+  t.with_fault.model.effects.push_back(
+      FaultEffectAt(fault.term, fault.onset_s, fault.estimate, fault.std_error, c.options));
   IdentifyFinalDrifts(c, retargeted, t.with_fault, t.notes, /*both_sides_of_a_fault_test=*/true);
   auto with = ProfileLogLikelihood(c.epochs, t.with_fault.model);
   if (!with.ok()) {

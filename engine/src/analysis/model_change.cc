@@ -51,11 +51,7 @@ absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& ba
           fallback.push_back(onset_s.has_value() ? term.Name() + "@" + std::to_string(*onset_s) : term.Name());
           continue;
         }
-        ModelEffect e;
-        e.term = term;
-        e.onset_s = *onset_s;
-        e.prior_sigma[0] = PriorSigmaAroundEstimate(c->estimate, c->std_error, options);
-        model.effects.push_back(e);
+        model.effects.push_back(FaultEffectAt(term, *onset_s, c->estimate, c->std_error, options));
         continue;
       }
       auto structure = std::find_if(found.structures.begin(), found.structures.end(),

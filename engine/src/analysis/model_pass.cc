@@ -101,6 +101,15 @@ double PriorSigmaAroundEstimate(double estimate, double std_error, const Analysi
   return options.estimated_prior_scale * std::max(std::abs(estimate), 3.0 * std_error);
 }
 
+ModelEffect FaultEffectAt(const EffectTerm& term, double onset_s, double estimate, double std_error,
+                          const AnalysisOptions& options) {
+  ModelEffect e;
+  e.term = term;
+  e.onset_s = onset_s;
+  e.prior_sigma[0] = PriorSigmaAroundEstimate(estimate, std_error, options);
+  return e;
+}
+
 void FillFit(const ModelPass& pass, const BenchRun& run, const AnalysisOptions& options, AnalysisReport& r) {
   const MonitorResult& m = pass.monitor;
   r.verdict = m.verdict;

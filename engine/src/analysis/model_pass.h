@@ -51,6 +51,11 @@ double ProfileLogLikelihood(const ForwardPass& forward, const ErrorModel& model)
 // `estimated_prior_scale` × the larger of |estimate| and 3 SE.
 double PriorSigmaAroundEstimate(double estimate, double std_error, const AnalysisOptions& options);
 
+// A fault effect `term` from `onset_s`, its prior wide against a scan's
+// estimate and SE of it (PriorSigmaAroundEstimate).
+ModelEffect FaultEffectAt(const EffectTerm& term, double onset_s, double estimate, double std_error,
+                          const AnalysisOptions& options);
+
 // The report's fit of a pass: verdict, channels, NIS, likelihood, criteria.
 void FillFit(const ModelPass& pass, const BenchRun& run, const AnalysisOptions& options, AnalysisReport& r);
 
