@@ -27,9 +27,7 @@ absl::StatusOr<FaultInAPass> PassWithTheFault(const BenchRun& run, const ErrorMo
   with_fault.effects.push_back(
       FaultEffectAt(fit.term, fit.onset_s, fit.estimate, fit.std_error, options));
   // The fault's own pilot keeps the mechanisation within the linear range.
-  auto epochs = CondenseRun(run, with_fault, options.filter.update_interval_s);
-  if (!epochs.ok()) return epochs.status();
-  auto forward = RunForwardFilter(*epochs, with_fault);
+  auto forward = RunForwardFilter(run, with_fault, options.filter);
   if (!forward.ok()) return forward.status();
   if (forward->epochs() == 0) return absl::FailedPreconditionError("the run has no update epochs");
   const StateLayout layout(with_fault);
@@ -103,6 +101,7 @@ void ConfirmFaultsBeyondTheLinearRange(const BenchRun& run, const ModelPass& a,
       continue;
     }
     const FaultInAPass& measured = *passes[i];
+    const double statistic = std::max(0.0, 2.0 * (measured.log_likelihood - a.log_likelihood));
     // The linear-range note gives way to what the pass measured.
     const std::string range_note =
         LinearRangeNote(LinearRange::kBeyond, fit.peak_attitude_error_rad,
@@ -113,13 +112,13 @@ void ConfirmFaultsBeyondTheLinearRange(const BenchRun& run, const ModelPass& a,
         absl::StrFormat("measured by a pass with it in the model at %.0f s: 2Δℓ %.1f against "
                         "the model without it (the scan's first-order estimate %.3g ± %.2g would "
                         "have put the filter %.2g rad off in attitude, beyond its linear range); ",
-                        fit.onset_s, 2.0 * (measured.log_likelihood - a.log_likelihood),
-                        fit.estimate, fit.std_error, fit.peak_attitude_error_rad),
+                        fit.onset_s, statistic, fit.estimate, fit.std_error,
+                        fit.peak_attitude_error_rad),
         c.note);
     if (c.size_in_drift_sigma.has_value()) {
       *c.size_in_drift_sigma *= std::abs(measured.estimate) / std::abs(fit.estimate);
     }
-    c.statistic = std::max(0.0, 2.0 * (measured.log_likelihood - a.log_likelihood));
+    c.statistic = statistic;
     c.p_value = OnsetPValue(c.statistic, fit.path_length);
     c.estimate = measured.estimate;
     c.std_error = measured.std_error;

@@ -35,8 +35,8 @@ struct EffectCandidate {
   // family), "LIKELIHOOD" (a bias random walk or second-order pair by the
   // innovations' likelihood), "GLR" (a bias step or ramp at an unknown
   // onset: the generalised likelihood ratio over onsets, finder/onset_scan.h)
-  // or "RAW" (a ramp the still segments' raw samples show: its p-value is
-  // their test's, its statistic what the navigation errors give it at that
+  // or "RAW" (a jump or ramp the still segments' raw samples show: its
+  // p-value is their test's, its statistic what the navigation errors give it at that
   // onset; finder/fault_findings.h)
   std::string source;
   double statistic = 0.0;

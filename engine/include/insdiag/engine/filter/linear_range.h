@@ -4,8 +4,9 @@
 // Under an estimate β̂ the filter's attitude error would peak at ψ (the
 // attitude rows of the candidate's response in the filter, after each
 // prediction: score_test.h for the constant terms, onset_scan.h for the
-// faults, fault_localisation.h for the monitor's jumps). The first-order attitude model C̃ = (I −
-// [ψ×]) C drops [ψ×]²/2, a relative error of ψ/2 in the innovations' mean and so in β̂.
+// faults, fault_localisation.h for the monitor's jumps). The first-order
+// attitude model C̃ = (I − [ψ×]) C drops [ψ×]²/2, a relative error of ψ/2 in
+// the innovations' mean and so in β̂.
 // - ψ/2 above one half (ψ > 1 rad): the linear model no longer describes the
 //   filter and the estimate is an artefact, not a finding;
 // - ψ/2 above the estimate's relative standard error only: the linearisation,

@@ -24,7 +24,7 @@ namespace insdiag::engine {
 // `drift_sigma` (per sensor axis, gyros then accelerometers, in the family's
 // unit) and `run_end_s`, where given, set each fault's size_in_drift_sigma.
 // The drifts' τ and the white noise's density set the standard error of a
-// ramp the raw samples show (RawSampleFaultCandidates).
+// ramp the raw samples show (AddRawSampleFaultCandidates).
 struct FaultScale {
   std::array<double, kSensorAxisCount> drift_sigma{};
   std::array<double, kSensorAxisCount> drift_tau_s{};

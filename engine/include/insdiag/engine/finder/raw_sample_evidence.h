@@ -5,10 +5,11 @@
 //
 // Changes. A jump of a still segment's rate or a ramp of it (ident/allan.h:
 // jumps and ramps) is a fault the navigation errors may not tell from a
-// look-alike (fault_findings.h, IsLikelierLookAlike). A ramp is a finding of
-// its own (fault_findings.h, RawSampleFaultCandidates): its test's null is a
-// rate random walk, the noise of the largest Allan-to-Hadamard ratio, so no
-// noise of the model passes it more often than its level.
+// look-alike (fault_findings.h, IsLikelierLookAlike). Each is a finding of
+// its own (fault_findings.h, AddRawSampleFaultCandidates): a ramp's test's
+// null is a rate random walk, the noise of the largest Allan-to-Hadamard
+// ratio, so no noise of the model passes it more often than its level; a
+// jump's is held to the Bonferroni bound over its window positions.
 //
 // Constants. The mean of the reading minus the perfect unit's over the still
 // samples measures each axis' constant bias, b̂ ± SE_raw. The navigation

@@ -73,8 +73,8 @@ struct Localisation {
   double p_value = 0.0;    // family-wise
   // "JUMP" (likelihood ratio of a state's jump), "FORWARD_BACKWARD"
   // (discrepancy), "GLR" (a fault effect's onset scan, or its estimate in
-  // a model that holds it) or "RAW" (a ramp the still segments' raw samples
-  // show)
+  // a model that holds it) or "RAW" (a jump or ramp the still segments' raw
+  // samples show)
   std::string method;
   double jump = 0.0;       // the jump's estimate in the state's unit (JUMP only)
   double jump_std_error = 0.0;
