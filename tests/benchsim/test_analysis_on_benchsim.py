@@ -394,5 +394,25 @@ class FaultsTheBlindDrawsMissed(unittest.TestCase):
         self.assertNamedFirst(report, "gyro_bias_step.z", step, 697.195, source="RAW")
         self.assertOnlySensorLocalised(report, "gyro_", "z")
 
+    def test_a_mems_gyro_ramp_far_outside_the_scans_linear_range_is_measured_and_named(self):
+        # The seventh blind draw's run 395: a MEMS unit with neither datasheet
+        # nor type, its y gyro ramping from 2074.7 s (5 drift σ by the end)
+        # on a still table at 10 Hz. The scan has the ramp at 2109 s with
+        # 2Δℓ 52, and a z step and a z ramp alike (through Earth rate a
+        # turning heading tilts the unit as the y ramp does), but each
+        # first-order estimate would put the filter 2–3 rad off in attitude,
+        # far outside the linear model: none was a finding, and the run was
+        # GOOD. A pass with each in its pilot measures them
+        # (analysis/fault_passes.h): the y ramp keeps 2Δℓ 36, the z
+        # look-alikes fall to 0.
+        slope = 2.42789991e-07
+        report = self.analyse_draw("mems", "static", 10, 3862, 7395, "no", "none", -4.08,
+                                   "gyro_bias_ramp.y", slope, 2074.685)
+        self.assertNamedFirst(report, "gyro_bias_ramp.y", slope, 2074.685)
+        self.assertOnlySensorLocalised(report, "gyro_", "y")
+        for look_alike in ("gyro_bias_step.z", "gyro_bias_ramp.z"):
+            c = [c for c in report["effectCandidates"] if c["name"] == look_alike]
+            self.assertTrue(c and c[0].get("pValueHolm", 1.0) >= 0.01, c)
+
 if __name__ == "__main__":
     unittest.main()

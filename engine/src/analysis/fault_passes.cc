@@ -40,17 +40,27 @@ absl::StatusOr<FaultInAPass> PassWithTheFault(const BenchRun& run, const ErrorMo
 
 // The scan's fit of fault candidate `c`, where it is one whose noise alone
 // makes it a finding but whose first-order estimate lies beyond the linear
-// range (linear_range.h): only a pass with it in the model measures it.
-const OnsetFit* BeyondTheLinearRange(const EffectCandidate& c, const std::vector<OnsetFit>& fits,
-                                     double alpha) {
-  if (c.source != "GLR" || !c.identifiable) return nullptr;
+// range, or far outside it (linear_range.h): only a pass with it in the
+// model measures it. Far outside, the first-order estimate is an artefact
+// and the candidate was set aside as not identifiable; with the fault in its
+// pilot the pass's mechanisation follows it, and its likelihood says whether
+// the fault or a larger error elsewhere explains the innovations.
+struct OutsideTheRange {
+  const OnsetFit* fit = nullptr;
+  LinearRange range = LinearRange::kWithin;
+};
+
+OutsideTheRange OutsideTheLinearRange(const EffectCandidate& c, const std::vector<OnsetFit>& fits,
+                                      double alpha) {
+  if (c.source != "GLR") return {};
   const auto fit =
       std::ranges::find_if(fits, [&](const OnsetFit& f) { return f.term.Name() == c.name; });
-  if (fit == fits.end() || !(fit->p_value < alpha) || fit->estimate == 0.0) return nullptr;
-  const double relative_std_error = fit->std_error / std::abs(fit->estimate);
-  return LinearRangeOf(fit->peak_attitude_error_rad, relative_std_error) == LinearRange::kBeyond
-             ? &*fit
-             : nullptr;
+  if (fit == fits.end() || !fit->identifiable || !(fit->p_value < alpha) || fit->estimate == 0.0)
+    return {};
+  const LinearRange range =
+      LinearRangeOf(fit->peak_attitude_error_rad, fit->std_error / std::abs(fit->estimate));
+  if (range == LinearRange::kWithin) return {};
+  return {&*fit, range};
 }
 
 // `model` with fault `f` at its onset, its prior wide against its estimate.
@@ -81,20 +91,22 @@ void ConfirmFaultsBeyondTheLinearRange(const BenchRun& run, const ModelPass& a,
                                        const AnalysisOptions& options,
                                        std::vector<EffectCandidate>& faults) {
   const double alpha = options.finder.family_wise_alpha;
-  std::vector<std::pair<EffectCandidate*, const OnsetFit*>> beyond;
+  std::vector<std::pair<EffectCandidate*, OutsideTheRange>> outside;
   for (EffectCandidate& c : faults) {
-    if (const OnsetFit* fit = BeyondTheLinearRange(c, a.onsets, alpha); fit != nullptr) {
-      beyond.emplace_back(&c, fit);
+    if (const OutsideTheRange o = OutsideTheLinearRange(c, a.onsets, alpha); o.fit != nullptr) {
+      outside.emplace_back(&c, o);
     }
   }
   // Each fault's pass is independent of the others'.
-  const std::vector<absl::StatusOr<FaultInAPass>> passes = numerics::ParallelMap(
-      beyond.size(),
-      [&](std::size_t i) { return PassWithTheFault(run, a.model, *beyond[i].second, options); });
+  const std::vector<absl::StatusOr<FaultInAPass>> passes =
+      numerics::ParallelMap(outside.size(), [&](std::size_t i) {
+        return PassWithTheFault(run, a.model, *outside[i].second.fit, options);
+      });
   const double log_n = std::log(static_cast<double>(std::max(1, a.forward.scalar_updates)));
-  for (std::size_t i = 0; i < beyond.size(); ++i) {
-    EffectCandidate& c = *beyond[i].first;
-    const OnsetFit& fit = *beyond[i].second;
+  for (std::size_t i = 0; i < outside.size(); ++i) {
+    EffectCandidate& c = *outside[i].first;
+    const OnsetFit& fit = *outside[i].second.fit;
+    const LinearRange range = outside[i].second.range;
     if (!passes[i].ok()) {
       absl::StrAppend(&c.note,
                       "; a pass with it in the model failed: ", passes[i].status().message());
@@ -103,18 +115,19 @@ void ConfirmFaultsBeyondTheLinearRange(const BenchRun& run, const ModelPass& a,
     const FaultInAPass& measured = *passes[i];
     const double statistic = std::max(0.0, 2.0 * (measured.log_likelihood - a.log_likelihood));
     // The linear-range note gives way to what the pass measured.
-    const std::string range_note =
-        LinearRangeNote(LinearRange::kBeyond, fit.peak_attitude_error_rad,
-                        fit.std_error / std::abs(fit.estimate)) +
-        "; ";
+    const std::string range_note = LinearRangeNote(range, fit.peak_attitude_error_rad,
+                                                   fit.std_error / std::abs(fit.estimate)) +
+                                   "; ";
     if (c.note.starts_with(range_note)) c.note.erase(0, range_note.size());
     c.note = absl::StrCat(
         absl::StrFormat("measured by a pass with it in the model at %.0f s: 2Δℓ %.1f against "
                         "the model without it (the scan's first-order estimate %.3g ± %.2g would "
-                        "have put the filter %.2g rad off in attitude, beyond its linear range); ",
+                        "have put the filter %.2g rad off in attitude, %s its linear range); ",
                         fit.onset_s, statistic, fit.estimate, fit.std_error,
-                        fit.peak_attitude_error_rad),
+                        fit.peak_attitude_error_rad,
+                        range == LinearRange::kFarOutside ? "far outside" : "beyond"),
         c.note);
+    c.identifiable = true;
     if (c.size_in_drift_sigma.has_value()) {
       *c.size_in_drift_sigma *= std::abs(measured.estimate) / std::abs(fit.estimate);
     }

@@ -15,9 +15,11 @@
 
 namespace insdiag::engine::pipeline {
 
-// A fault the onset scan found beyond its linear range (linear_range.h) whose
-// noise alone would make it a finding: the scan's first-order estimate
-// cannot measure it, but the filter with the fault in its pilot can.
+// A fault the onset scan found beyond its linear range, or far outside it
+// (linear_range.h), whose noise alone would make it a finding: the scan's
+// first-order estimate cannot measure it, but the filter with the fault in
+// its pilot can. Far outside, the candidate was not identifiable; measured,
+// it is.
 // Each such candidate of `faults` takes what a pass of `a`'s model plus the
 // fault at the scan's onset measures against `a`: the fitted 2Δℓ as its
 // statistic, Davies' bound over the onsets as the scan's, and the pass's

@@ -13,9 +13,9 @@
 //   not the noise, limits the estimate.
 // Either way the estimate's test counts ψ/2 of it as an error beside its
 // noise (StandardErrorWithLinearisation), so that a term the linear model
-// overstates is not a finding because of it. A fault beyond the range is
-// measured by a pass with it in the model instead (the analysis's
-// ConfirmFaultsBeyondTheLinearRange), whose mechanisation it corrects.
+// overstates is not a finding because of it. A fault beyond the range, or
+// far outside it, is measured by a pass with it in the model instead (the
+// analysis's ConfirmFaultsBeyondTheLinearRange), whose mechanisation it corrects.
 #pragma once
 
 #include <string>
