@@ -2,10 +2,13 @@
 healthy unit with instantaneous rate changes at 10 Hz, an accelerometer step,
 a gyro ramp, gyro steps of a tactical unit on each axis (the short version
 of scripts/fault_matrix.py), and healthy MEMS units whose a-priori model is
-their own Allan fit (of scripts/allan_prior_probe.py). Needs the
-CLI: INSDIAG_CLI, else build/clients/insdiag."""
+their own Allan fit (of scripts/allan_prior_probe.py); the blind draws'
+faults an earlier build missed; and the evidence a run holds for its fault
+(scripts/fault_evidence.py). Needs the CLI: INSDIAG_CLI, else
+build/clients/insdiag."""
 import json
 import os
+import random
 import subprocess
 import sys
 import tempfile
@@ -17,6 +20,10 @@ CLI = os.environ.get("INSDIAG_CLI", os.path.join(ROOT, "build", "clients", "insd
 sys.path.insert(0, HERE)
 import benchsim  # noqa: E402
 import unit_classes  # noqa: E402
+from scipy.stats import chi2  # noqa: E402
+
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+import fault_evidence  # noqa: E402
 
 
 def analyse(directory, *args):
@@ -413,6 +420,47 @@ class FaultsTheBlindDrawsMissed(unittest.TestCase):
         for look_alike in ("gyro_bias_step.z", "gyro_bias_ramp.z"):
             c = [c for c in report["effectCandidates"] if c["name"] == look_alike]
             self.assertTrue(c and c[0].get("pValueHolm", 1.0) >= 0.01, c)
+
+class EvidenceForAFault(unittest.TestCase):
+    """scripts/fault_evidence.py: the likelihood ratio a run holds for its own
+    fault tells a miss the run could not show from the analysis's miss. Two
+    runs of the sweep of a 0.1 °/h unit labelled INS-2000 without a datasheet
+    (scripts/no_datasheet_step_sweep.py), a gyro step of 5 drift σ in each."""
+
+    # The level a fault is tested at, even with its onset known: χ²(1) at
+    # the family-wise 1 % over the twelve step and ramp terms (4 families, 3 axes).
+    LEVEL = chi2.isf(0.01 / 12, 1)
+
+    def evidence_of_sweep_run(self, i):
+        rng = random.Random(5000 + i)
+        axis = rng.choice("xyz")
+        sign = rng.choice((-1, 1))
+        profile = rng.choice(("static", "positions", "turns", "mixed"))
+        rate_hz = rng.choice((10, 50, 100))
+        onset_s = round(rng.uniform(0.3, 0.8) * 1800.0, 2)
+        sigma = unit_classes.PRESETS["tactical-0.1"]()[f"gyro_bias_gm.{axis}.sigma"]
+        with tempfile.TemporaryDirectory() as d:
+            out = os.path.join(d, "run.csv")
+            self.assertEqual(benchsim.main(["--out", out, "--preset", "tactical-0.1", "--profile", profile,
+                                            "--rate-hz", str(rate_hz), "--duration", "1800", "--seed", str(5000 + i),
+                                            "--datasheet", "no", "--unit-type", "INS-2000", "--fault",
+                                            f"gyro_bias_step.{axis}={sign * 5.0 * sigma}@{onset_s}"]), 0)
+            return fault_evidence.evidence(out)
+
+    def test_a_step_the_run_holds_the_evidence_for_is_named(self):
+        # Run 8: an x step on `turns` at 10 Hz.
+        e = self.evidence_of_sweep_run(8)
+        self.assertGreater(e["evidence_2dl"], self.LEVEL, e)
+        self.assertEqual(e["first_significant"], "gyro_bias_step.x", e)
+
+    def test_a_missed_step_is_one_the_run_holds_too_little_evidence_for(self):
+        # Run 6: an x step on a still table at 100 Hz, GOOD: the drifts learned
+        # from the half hour take it in, and the truth's drifts with the step
+        # fit hardly better than they do.
+        e = self.evidence_of_sweep_run(6)
+        self.assertIsNone(e["first_significant"], e)
+        self.assertLess(e["evidence_2dl"], self.LEVEL, e)
+
 
 if __name__ == "__main__":
     unittest.main()
