@@ -35,6 +35,8 @@ import subprocess
 import sys
 import tempfile
 
+from fault_matrix import significant
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CLI = os.environ.get("INSDIAG_CLI", os.path.join(ROOT, "build", "clients", "insdiag"))
 
@@ -84,8 +86,7 @@ def evidence(run_csv):
     true_null, true_fault = log_likelihoods_with_the_fault_added(
         run_csv, with_true_drifts(report, params, keep=lambda n: False), term)
     null = max(report["logLikelihood"], others_null, true_null)
-    named = [c for c in report["effectCandidates"]
-             if c.get("identifiable") and not c.get("notTested") and c.get("pValueHolm", 1.0) < 0.01]
+    named = [c for c in report["effectCandidates"] if significant(c)]
     return {"run": run_csv, "fault": term, "onset_s": fault["onset_s"], "verdict": report["verdict"],
             "first_significant": named[0]["name"] if named else None,
             "null_log_likelihood": {"model_a": report["logLikelihood"], "true_drifts_but_its_axis": others_null,

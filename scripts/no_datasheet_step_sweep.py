@@ -40,7 +40,9 @@ import unit_classes  # noqa: E402
 DURATION_S = 1800.0
 
 
-def run_one(preset, unit_type, i):
+def simulate_run(preset, unit_type, i, path):
+    """Writes the sweep's run i to `path`; returns its step (the term it is,
+    the fault's spec, the profile, rate and onset)."""
     rng = random.Random(5000 + i)
     sensor = ("gyro", "acc")[i % 2]
     axis = rng.choice("xyz")
@@ -50,23 +52,29 @@ def run_one(preset, unit_type, i):
     onset_s = round(rng.uniform(0.3, 0.8) * DURATION_S, 2)
     sigma = unit_classes.PRESETS[preset]()[f"{sensor}_bias_gm.{axis}.sigma"]
     spec = f"{sensor}_bias_step.{axis}={sign * 5.0 * sigma}@{onset_s}"
+    subprocess.run([sys.executable, BENCHSIM, "--out", path, "--preset", preset, "--profile", profile,
+                    "--rate-hz", str(rate_hz), "--duration", str(DURATION_S), "--seed", str(5000 + i),
+                    "--datasheet", "no", "--unit-type", unit_type, "--fault", spec], check=True, capture_output=True)
+    return {"expected": f"{sensor}_bias_step.{axis}", "spec": spec, "profile": profile, "rate_hz": rate_hz,
+            "onset_s": onset_s}
+
+
+def run_one(preset, unit_type, i):
     with tempfile.TemporaryDirectory() as work:
         path = os.path.join(work, "run.csv")
-        subprocess.run([sys.executable, BENCHSIM, "--out", path, "--preset", preset, "--profile", profile,
-                        "--rate-hz", str(rate_hz), "--duration", str(DURATION_S), "--seed", str(5000 + i),
-                        "--datasheet", "no", "--unit-type", unit_type, "--fault", spec], check=True, capture_output=True)
+        step = simulate_run(preset, unit_type, i, path)
         done = subprocess.run([CLI, "analyze", path, "--json"], capture_output=True, text=True, check=True)
     report = json.loads(done.stdout)
     significant = [c for c in report["effectCandidates"]
                    if c.get("identifiable") and not c.get("notTested") and c.get("pValueHolm", 1.0) < 0.01]
     first = significant[0] if significant else None
-    expected = f"{sensor}_bias_step.{axis}"
+    expected = step["expected"]
     right = first is not None and first["name"] == expected
-    return {"run": i, "fault": spec, "profile": profile, "rate_hz": rate_hz, "verdict": report["verdict"],
-            "first": first["name"] if first else None,
+    return {"run": i, "fault": step["spec"], "profile": step["profile"], "rate_hz": step["rate_hz"],
+            "verdict": report["verdict"], "first": first["name"] if first else None,
             "names_it_as_look_alike": first is not None and expected in first.get("correlatedWith", []),
             "significant": len(significant),
-            "onset_error_s": abs(first["onsetS"] - onset_s) if right else None}
+            "onset_error_s": abs(first["onsetS"] - step["onset_s"]) if right else None}
 
 
 def main():

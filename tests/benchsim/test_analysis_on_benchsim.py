@@ -8,7 +8,6 @@ faults an earlier build missed; and the evidence a run holds for its fault
 build/clients/insdiag."""
 import json
 import os
-import random
 import subprocess
 import sys
 import tempfile
@@ -24,6 +23,7 @@ from scipy.stats import chi2  # noqa: E402
 
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import fault_evidence  # noqa: E402
+import no_datasheet_step_sweep  # noqa: E402
 
 
 def analyse(directory, *args):
@@ -378,7 +378,7 @@ class FaultsTheBlindDrawsMissed(unittest.TestCase):
         # filter 0.7 rad off in attitude, so the linearisation's error counted
         # as noise and an x accelerometer step was named. A pass with the step
         # in the model (its own pilot) measures it (analysis/fault_passes.h,
-        # ConfirmFaultsBeyondTheLinearRange); the accelerometer step and an x
+        # ConfirmFaultsOutsideTheLinearRange); the accelerometer step and an x
         # gyro ramp are then no further faults, and the monitor's 0.19 rad/s
         # jump of the z gyro, 20 rad beyond the first-order model, is no
         # localisation.
@@ -432,19 +432,9 @@ class EvidenceForAFault(unittest.TestCase):
     LEVEL = chi2.isf(0.01 / 12, 1)
 
     def evidence_of_sweep_run(self, i):
-        rng = random.Random(5000 + i)
-        axis = rng.choice("xyz")
-        sign = rng.choice((-1, 1))
-        profile = rng.choice(("static", "positions", "turns", "mixed"))
-        rate_hz = rng.choice((10, 50, 100))
-        onset_s = round(rng.uniform(0.3, 0.8) * 1800.0, 2)
-        sigma = unit_classes.PRESETS["tactical-0.1"]()[f"gyro_bias_gm.{axis}.sigma"]
         with tempfile.TemporaryDirectory() as d:
             out = os.path.join(d, "run.csv")
-            self.assertEqual(benchsim.main(["--out", out, "--preset", "tactical-0.1", "--profile", profile,
-                                            "--rate-hz", str(rate_hz), "--duration", "1800", "--seed", str(5000 + i),
-                                            "--datasheet", "no", "--unit-type", "INS-2000", "--fault",
-                                            f"gyro_bias_step.{axis}={sign * 5.0 * sigma}@{onset_s}"]), 0)
+            no_datasheet_step_sweep.simulate_run("tactical-0.1", "INS-2000", i, out)
             return fault_evidence.evidence(out)
 
     def test_a_step_the_run_holds_the_evidence_for_is_named(self):

@@ -85,11 +85,11 @@ absl::StatusOr<double> FaultPValueBeside(const RunContext& c, const ErrorModel& 
 
 }  // namespace
 
-// Faults beyond the scan's linear range, measured by a pass with each in the
-// model at the scan's onset (header).
-void ConfirmFaultsBeyondTheLinearRange(const BenchRun& run, const ModelPass& a,
-                                       const AnalysisOptions& options,
-                                       std::vector<EffectCandidate>& faults) {
+// Faults beyond the scan's linear range or far outside it, measured by a pass
+// with each in the model at the scan's onset (header).
+void ConfirmFaultsOutsideTheLinearRange(const BenchRun& run, const ModelPass& a,
+                                        const AnalysisOptions& options,
+                                        std::vector<EffectCandidate>& faults) {
   const double alpha = options.finder.family_wise_alpha;
   std::vector<std::pair<EffectCandidate*, OutsideTheRange>> outside;
   for (EffectCandidate& c : faults) {

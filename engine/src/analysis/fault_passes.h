@@ -24,9 +24,9 @@ namespace insdiag::engine::pipeline {
 // fault at the scan's onset measures against `a`: the fitted 2Δℓ as its
 // statistic, Davies' bound over the onsets as the scan's, and the pass's
 // estimate and SE. One condensation and forward pass per such fault, in parallel.
-void ConfirmFaultsBeyondTheLinearRange(const BenchRun& run, const ModelPass& a,
-                                       const AnalysisOptions& options,
-                                       std::vector<EffectCandidate>& faults);
+void ConfirmFaultsOutsideTheLinearRange(const BenchRun& run, const ModelPass& a,
+                                        const AnalysisOptions& options,
+                                        std::vector<EffectCandidate>& faults);
 
 // The scan's significant faults (SignificantFaults, most significant first)
 // that stand together: each further fault of the navigation errors is

@@ -504,7 +504,7 @@ Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const M
   if (epochs.size() > 0) scale.run_end_s = epochs.epochs.back().time_s;
   std::vector<EffectCandidate> faults =
       FaultCandidates(pass.onsets, pass.forward.scalar_updates, scale, raw_samples.changes);
-  ConfirmFaultsBeyondTheLinearRange(run, pass, options, faults);
+  ConfirmFaultsOutsideTheLinearRange(run, pass, options, faults);
   AddRawSampleFaultCandidates(faults, pass.onsets, raw_samples.changes, epochs,
                               pass.forward.scalar_updates, scale, options.finder.family_wise_alpha);
   for (EffectCandidate& c : faults) others.push_back(std::move(c));

@@ -15,7 +15,7 @@
 // noise (StandardErrorWithLinearisation), so that a term the linear model
 // overstates is not a finding because of it. A fault beyond the range, or
 // far outside it, is measured by a pass with it in the model instead (the
-// analysis's ConfirmFaultsBeyondTheLinearRange), whose mechanisation it corrects.
+// analysis's ConfirmFaultsOutsideTheLinearRange), whose mechanisation it corrects.
 #pragma once
 
 #include <string>
