@@ -37,6 +37,8 @@ CLI = os.environ.get("INSDIAG_CLI", os.path.join(ROOT, "build", "clients", "insd
 sys.path.insert(0, os.path.join(ROOT, "tests", "benchsim"))
 import unit_classes  # noqa: E402
 
+import fault_matrix  # noqa: E402
+
 DURATION_S = 1800.0
 
 
@@ -65,8 +67,7 @@ def run_one(preset, unit_type, i):
         step = simulate_run(preset, unit_type, i, path)
         done = subprocess.run([CLI, "analyze", path, "--json"], capture_output=True, text=True, check=True)
     report = json.loads(done.stdout)
-    significant = [c for c in report["effectCandidates"]
-                   if c.get("identifiable") and not c.get("notTested") and c.get("pValueHolm", 1.0) < 0.01]
+    significant = [c for c in report["effectCandidates"] if fault_matrix.significant(c)]
     first = significant[0] if significant else None
     expected = step["expected"]
     right = first is not None and first["name"] == expected

@@ -23,6 +23,7 @@ from scipy.stats import chi2  # noqa: E402
 
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import fault_evidence  # noqa: E402
+import fault_matrix  # noqa: E402
 import no_datasheet_step_sweep  # noqa: E402
 
 
@@ -61,8 +62,7 @@ def mems_gyro_drift_sigma(axis):
 
 
 def significant_of(candidates):
-    return [c for c in candidates
-            if c.get("identifiable") and not c.get("notTested") and c.get("pValueHolm", 1.0) < 0.01]
+    return [c for c in candidates if fault_matrix.significant(c)]
 
 
 def significant(report):

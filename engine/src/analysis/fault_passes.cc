@@ -48,6 +48,7 @@ absl::StatusOr<FaultInAPass> PassWithTheFault(const BenchRun& run, const ErrorMo
 struct OutsideTheRange {
   const OnsetFit* fit = nullptr;
   LinearRange range = LinearRange::kWithin;
+  double relative_std_error = 0.0;  // the scan's SE over its estimate
 };
 
 OutsideTheRange OutsideTheLinearRange(const EffectCandidate& c, const std::vector<OnsetFit>& fits,
@@ -57,10 +58,10 @@ OutsideTheRange OutsideTheLinearRange(const EffectCandidate& c, const std::vecto
       std::ranges::find_if(fits, [&](const OnsetFit& f) { return f.term.Name() == c.name; });
   if (fit == fits.end() || !fit->identifiable || !(fit->p_value < alpha) || fit->estimate == 0.0)
     return {};
-  const LinearRange range =
-      LinearRangeOf(fit->peak_attitude_error_rad, fit->std_error / std::abs(fit->estimate));
+  const double relative_std_error = fit->std_error / std::abs(fit->estimate);
+  const LinearRange range = LinearRangeOf(fit->peak_attitude_error_rad, relative_std_error);
   if (range == LinearRange::kWithin) return {};
-  return {&*fit, range};
+  return {&*fit, range, relative_std_error};
 }
 
 // `model` with fault `f` at its onset, its prior wide against its estimate.
@@ -107,6 +108,7 @@ void ConfirmFaultsOutsideTheLinearRange(const BenchRun& run, const ModelPass& a,
     EffectCandidate& c = *outside[i].first;
     const OnsetFit& fit = *outside[i].second.fit;
     const LinearRange range = outside[i].second.range;
+    const double relative_std_error = outside[i].second.relative_std_error;
     if (!passes[i].ok()) {
       absl::StrAppend(&c.note,
                       "; a pass with it in the model failed: ", passes[i].status().message());
@@ -115,9 +117,8 @@ void ConfirmFaultsOutsideTheLinearRange(const BenchRun& run, const ModelPass& a,
     const FaultInAPass& measured = *passes[i];
     const double statistic = std::max(0.0, 2.0 * (measured.log_likelihood - a.log_likelihood));
     // The linear-range note gives way to what the pass measured.
-    const std::string range_note = LinearRangeNote(range, fit.peak_attitude_error_rad,
-                                                   fit.std_error / std::abs(fit.estimate)) +
-                                   "; ";
+    const std::string range_note =
+        LinearRangeNote(range, fit.peak_attitude_error_rad, relative_std_error) + "; ";
     if (c.note.starts_with(range_note)) c.note.erase(0, range_note.size());
     c.note = absl::StrCat(
         absl::StrFormat("measured by a pass with it in the model at %.0f s: 2Δℓ %.1f against "

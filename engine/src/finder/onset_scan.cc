@@ -201,14 +201,18 @@ int IntervalHolding(const EpochRun& run, int first, int k, double onset_s) {
 // the sample boundaries, then positions within the samples either side of
 // the best: a fault that begins inside a sample gives that sample its share
 // (the interval means of the bench-run format), which FaultColumn weighs.
-void PlaceOnsetAtItsSample(const OnsetSums& sums, const EpochRun& run, int first, double centre_s,
-                           OnsetFit& fit) {
+// Returns every onset it tried, for the onset's posterior.
+std::vector<OnsetTrial> PlaceOnsetAtItsSample(const OnsetSums& sums, const EpochRun& run, int first,
+                                              double centre_s, OnsetFit& fit) {
   OnsetTrial best{fit.onset_s, fit.estimate * fit.estimate / (fit.std_error * fit.std_error),
                   fit.estimate, fit.std_error};
   int best_interval = fit.onset_epoch;
+  std::vector<OnsetTrial> tried;
   auto try_at = [&](int k, double onset_s) {
     const auto trial = TryOnsetInsideInterval(fit.term, sums, run, k, onset_s, centre_s);
-    if (trial.has_value() && trial->statistic > best.statistic) {
+    if (!trial.has_value()) return;
+    tried.push_back(*trial);
+    if (trial->statistic > best.statistic) {
       best = *trial;
       best_interval = k;
     }
@@ -229,10 +233,62 @@ void PlaceOnsetAtItsSample(const OnsetSums& sums, const EpochRun& run, int first
   fit.estimate = best.estimate;
   fit.std_error = best.std_error;
   fit.statistic = std::max(fit.statistic, best.statistic);
-  // The posterior's interval is over update epochs; the placed onset lies
-  // within an update of them, and the interval holds it.
-  fit.onset_low_s = std::min(fit.onset_low_s, fit.onset_s);
-  fit.onset_high_s = std::max(fit.onset_high_s, fit.onset_s);
+  return tried;
+}
+
+// The onset's posterior under flat priors on the onset and the magnitude
+// (header), on the onsets tried: each holds the likelihood integrated over
+// the magnitude, ∝ e^{T/2} I^{−1/2}, spread evenly over its cell, from
+// halfway to the onset tried before it to halfway to the one after. The
+// cells weigh by their width (the prior is flat in time), so the update
+// epochs' starts and the samples and fractions of a sample tried about the
+// placed onset make one distribution: an onset the run places within a
+// sample gets an interval that wide, not an epoch's start twice.
+struct OnsetPosterior {
+  double std_s = 0.0;
+  double low_s = 0.0, high_s = 0.0;  // the central interval, `tail` outside it on each side
+};
+
+OnsetPosterior SummariseOnsetPosterior(std::vector<OnsetTrial> trials, double tail) {
+  std::ranges::sort(trials, {}, &OnsetTrial::onset_s);
+  const size_t n = trials.size();
+  if (n == 0) return {};
+  if (n == 1) return {0.0, trials[0].onset_s, trials[0].onset_s};
+  std::vector<double> edge(n + 1);
+  for (size_t i = 1; i < n; ++i) edge[i] = 0.5 * (trials[i - 1].onset_s + trials[i].onset_s);
+  edge[0] = 2.0 * trials[0].onset_s - edge[1];
+  edge[n] = 2.0 * trials[n - 1].onset_s - edge[n - 1];
+  std::vector<double> mass(n, 0.0);
+  double peak_log = -INFINITY;
+  for (size_t i = 0; i < n; ++i) {
+    const double width_s = edge[i + 1] - edge[i];
+    mass[i] = width_s > 0.0 ? 0.5 * trials[i].statistic + std::log(trials[i].std_error * width_s)
+                            : -INFINITY;
+    peak_log = std::max(peak_log, mass[i]);
+  }
+  double total = 0.0, mean_s = 0.0, square_s2 = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    mass[i] = std::exp(mass[i] - peak_log);
+    const double a = edge[i], b = edge[i + 1];  // uniform on [a, b]
+    total += mass[i];
+    mean_s += mass[i] * 0.5 * (a + b);
+    square_s2 += mass[i] * (a * a + a * b + b * b) / 3.0;
+  }
+  mean_s /= total;
+  square_s2 /= total;
+  auto quantile = [&](double q) {
+    double cumulative = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+      const double share = mass[i] / total;
+      if (cumulative + share >= q && share > 0.0) {
+        return edge[i] + (q - cumulative) / share * (edge[i + 1] - edge[i]);
+      }
+      cumulative += share;
+    }
+    return edge[n];
+  };
+  return {std::sqrt(std::max(0.0, square_s2 - mean_s * mean_s)), quantile(tail),
+          quantile(1.0 - tail)};
 }
 
 // The statistic profile of one term over the onsets, and its best onset.
@@ -288,43 +344,44 @@ OnsetFit FitTerm(const EffectTerm& term, const OnsetSums& sums, const EpochRun& 
     return fit;
   }
   // The onset's posterior under a flat prior on onset and magnitude: the
-  // likelihood integrated over the magnitude, ∝ e^{T/2} I^{−1/2}. Its median
-  // is the reported onset, its quantiles the interval: a step where the
-  // run cannot place it (a still stretch that hides the axis) spreads it.
-  std::vector<double> weight(T.size());
+  // likelihood integrated over the magnitude, ∝ e^{T/2} I^{−1/2}. The onset
+  // is placed within a sample about its median epoch, and its spread and
+  // interval come from the epochs and the onsets tried there: a step where
+  // the run cannot place it (a still stretch that hides the axis) spreads it.
+  std::vector<OnsetTrial> trials;
+  trials.reserve(T.size());
   double total = 0.0;
   for (int theta = first; theta <= last; ++theta) {
     const auto j = static_cast<size_t>(theta - first);
     const Eigen::Vector2d v = direction(theta);
     const double info = v.dot(pair(theta).information * v);
-    weight[j] = std::exp(0.5 * (T[j] - fit.statistic)) / std::sqrt(info * fit.std_error * fit.std_error);
-    total += weight[j];
+    trials.push_back({run.epochs[static_cast<size_t>(theta)].start_s, T[j],
+                      v.dot(pair(theta).score) / info, 1.0 / std::sqrt(info)});
+    total += std::exp(0.5 * (T[j] - fit.statistic)) * trials.back().std_error / fit.std_error;
   }
-  auto quantile = [&](double q) {
-    double cumulative = 0.0;
-    for (int theta = first; theta <= last; ++theta) {
-      cumulative += weight[static_cast<size_t>(theta - first)] / total;
-      if (cumulative >= q) return theta;
-    }
-    return last;
-  };
-  double mean_s = 0.0, square_s2 = 0.0;
+  double cumulative = 0.0;
+  fit.onset_epoch = last;
   for (int theta = first; theta <= last; ++theta) {
-    const double t = run.epochs[static_cast<size_t>(theta)].start_s;
-    const double w = weight[static_cast<size_t>(theta - first)] / total;
-    mean_s += w * t;
-    square_s2 += w * t * t;
+    const OnsetTrial& t = trials[static_cast<size_t>(theta - first)];
+    cumulative +=
+        std::exp(0.5 * (t.statistic - fit.statistic)) * t.std_error / fit.std_error / total;
+    if (cumulative >= 0.5) {
+      fit.onset_epoch = theta;
+      break;
+    }
   }
-  fit.onset_std_s = std::sqrt(std::max(0.0, square_s2 - mean_s * mean_s));
-  fit.onset_epoch = quantile(0.5);
   const Eigen::Vector2d v = direction(fit.onset_epoch);
   const double info = v.dot(pair(fit.onset_epoch).information * v);
   fit.estimate = v.dot(pair(fit.onset_epoch).score) / info;
   fit.std_error = 1.0 / std::sqrt(info);
   fit.onset_s = run.epochs[static_cast<size_t>(fit.onset_epoch)].start_s;
-  fit.onset_low_s = run.epochs[static_cast<size_t>(quantile(options.interval_tail))].start_s;
-  fit.onset_high_s = run.epochs[static_cast<size_t>(quantile(1.0 - options.interval_tail))].start_s;
-  PlaceOnsetAtItsSample(sums, run, first, centre_s, fit);
+  const std::vector<OnsetTrial> within = PlaceOnsetAtItsSample(sums, run, first, centre_s, fit);
+  trials.insert(trials.end(), within.begin(), within.end());
+  const OnsetPosterior posterior =
+      SummariseOnsetPosterior(std::move(trials), options.interval_tail);
+  fit.onset_std_s = posterior.std_s;
+  fit.onset_low_s = std::min(posterior.low_s, fit.onset_s);
+  fit.onset_high_s = std::max(posterior.high_s, fit.onset_s);
   fit.p_value = OnsetPValue(fit.statistic, fit.path_length);
   fit.statistic_by_onset = std::move(T);
   return fit;
