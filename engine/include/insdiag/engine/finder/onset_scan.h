@@ -33,18 +33,22 @@
 //   P(max T > u) ≤ P(χ²₁ > u) + V e^{−u/2} / π,
 // with V the length of the path the standardised score traces over the
 // onsets, Σ_θ arccos ρ(θ, θ+1), ρ the correlation of successive scores.
-// The onset: the median of its posterior under flat priors on the onset and
-// the magnitude, weights ∝ e^{T(θ)/2} I(θ)^{−1/2} (the likelihood integrated
-// over the magnitude; Smith, "A Bayesian approach to inference about a
-// change-point in a sequence of random variables", Biometrika 62(2), 1975),
-// with its standard deviation and central interval. The onset is then
-// placed where, in that interval or the one before, the likelihood ratio of
-// a fault whose first interval holds only its share after the onset is
-// largest (the same recursion with that share of the interval's column,
-// model_transitions.h FaultColumn): at the sample boundaries, then at 1/16
-// of a sample either side of the best, since a fault that begins inside a
-// sample gives that sample's interval mean its share. The magnitude is the
-// one there, and the interval is widened to hold the onset. Where a still stretch
+// The onset: the median interval of its posterior under flat priors on the
+// onset and the magnitude, weights ∝ e^{T(θ)/2} I(θ)^{−1/2} (the likelihood
+// integrated over the magnitude; Smith, "A Bayesian approach to inference
+// about a change-point in a sequence of random variables", Biometrika 62(2),
+// 1975). The onset is then placed where, in that interval or the one before,
+// the likelihood ratio of a fault whose first interval holds only its share
+// after the onset is largest (the same recursion with that share of the
+// interval's column, model_transitions.h FaultColumn): at the sample
+// boundaries, then at 1/16 of a sample either side of the best, since a
+// fault that begins inside a sample gives that sample's interval mean its
+// share. The magnitude is the one there. The posterior's standard deviation
+// and central interval are taken over every onset tried, the intervals'
+// starts and the samples and sixteenths about the placed onset, each
+// spread over its cell (halfway to its neighbours): an onset placed within a
+// sample gets an interval as narrow as the run allows, not an epoch's start;
+// the interval is widened to hold the placed onset. Where a still stretch
 // hides the sensor axis the likelihood is flat in the onset, and the interval says so. Two faults
 // whose innovation signatures from one fault's onset are nearly parallel in the S⁻¹ metric,
 // |I_ab(θ)|/√(I_aa(θ) I_bb(θ)) above a threshold, cannot be told apart by the run (on a still,
