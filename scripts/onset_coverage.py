@@ -32,16 +32,11 @@ import math
 import os
 import random
 import subprocess
-import sys
 import tempfile
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-BENCHSIM = os.path.join(ROOT, "tests", "benchsim", "benchsim.py")
-CLI = os.environ.get("INSDIAG_CLI", os.path.join(ROOT, "build", "clients", "insdiag"))
-sys.path.insert(0, os.path.join(ROOT, "tests", "benchsim"))
-import unit_classes  # noqa: E402
-
-import fault_matrix  # noqa: E402
+import fault_matrix
+import unit_classes  # noqa: E402 (fault_matrix puts the simulator's directory on the path)
+from fault_matrix import BENCHSIM, CLI, PYTHON
 
 DURATION_S = 1800.0
 RAMP_SPAN_S = 1000.0  # a ramp reaches its size in drift σ this long after its onset
@@ -69,7 +64,7 @@ def run_one(i, pinned, update_interval_s):
     d = draw(i, pinned)
     with tempfile.TemporaryDirectory() as work:
         path = os.path.join(work, "run.csv")
-        subprocess.run([sys.executable, BENCHSIM, "--out", path, "--preset", d["preset"], "--profile", d["profile"],
+        subprocess.run([PYTHON, BENCHSIM, "--out", path, "--preset", d["preset"], "--profile", d["profile"],
                         "--rate-hz", str(d["rate_hz"]), "--duration", str(DURATION_S), "--seed", str(6000 + i),
                         "--datasheet", "yes", "--fault", f"{d['term']}={d['value']}@{d['onset_s']}"],
                        check=True, capture_output=True)

@@ -350,6 +350,7 @@ OnsetFit FitTerm(const EffectTerm& term, const OnsetSums& sums, const EpochRun& 
   // the run cannot place it (a still stretch that hides the axis) spreads it.
   std::vector<OnsetTrial> trials;
   trials.reserve(T.size());
+  std::vector<double> weight(T.size());
   double total = 0.0;
   for (int theta = first; theta <= last; ++theta) {
     const auto j = static_cast<size_t>(theta - first);
@@ -357,14 +358,13 @@ OnsetFit FitTerm(const EffectTerm& term, const OnsetSums& sums, const EpochRun& 
     const double info = v.dot(pair(theta).information * v);
     trials.push_back({run.epochs[static_cast<size_t>(theta)].start_s, T[j],
                       v.dot(pair(theta).score) / info, 1.0 / std::sqrt(info)});
-    total += std::exp(0.5 * (T[j] - fit.statistic)) * trials.back().std_error / fit.std_error;
+    weight[j] = std::exp(0.5 * (T[j] - fit.statistic)) * trials.back().std_error / fit.std_error;
+    total += weight[j];
   }
   double cumulative = 0.0;
   fit.onset_epoch = last;
   for (int theta = first; theta <= last; ++theta) {
-    const OnsetTrial& t = trials[static_cast<size_t>(theta - first)];
-    cumulative +=
-        std::exp(0.5 * (t.statistic - fit.statistic)) * t.std_error / fit.std_error / total;
+    cumulative += weight[static_cast<size_t>(theta - first)] / total;
     if (cumulative >= 0.5) {
       fit.onset_epoch = theta;
       break;
