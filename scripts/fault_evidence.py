@@ -35,10 +35,7 @@ import subprocess
 import sys
 import tempfile
 
-from fault_matrix import significant
-
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-CLI = os.environ.get("INSDIAG_CLI", os.path.join(ROOT, "build", "clients", "insdiag"))
+from fault_matrix import CLI, significant
 
 
 def analyze(*args):

@@ -31,13 +31,9 @@ import sys
 import tempfile
 from concurrent.futures import ThreadPoolExecutor
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-BENCHSIM = os.path.join(ROOT, "tests", "benchsim", "benchsim.py")
-CLI = os.environ.get("INSDIAG_CLI", os.path.join(ROOT, "build", "clients", "insdiag"))
-sys.path.insert(0, os.path.join(ROOT, "tests", "benchsim"))
-import unit_classes  # noqa: E402
-
-import fault_matrix  # noqa: E402
+import fault_matrix
+import unit_classes  # noqa: E402 (fault_matrix puts the simulator's directory on the path)
+from fault_matrix import BENCHSIM, CLI, PYTHON
 
 DURATION_S = 1800.0
 
@@ -54,7 +50,7 @@ def simulate_run(preset, unit_type, i, path):
     onset_s = round(rng.uniform(0.3, 0.8) * DURATION_S, 2)
     sigma = unit_classes.PRESETS[preset]()[f"{sensor}_bias_gm.{axis}.sigma"]
     spec = f"{sensor}_bias_step.{axis}={sign * 5.0 * sigma}@{onset_s}"
-    subprocess.run([sys.executable, BENCHSIM, "--out", path, "--preset", preset, "--profile", profile,
+    subprocess.run([PYTHON, BENCHSIM, "--out", path, "--preset", preset, "--profile", profile,
                     "--rate-hz", str(rate_hz), "--duration", str(DURATION_S), "--seed", str(5000 + i),
                     "--datasheet", "no", "--unit-type", unit_type, "--fault", spec], check=True, capture_output=True)
     return {"expected": f"{sensor}_bias_step.{axis}", "spec": spec, "profile": profile, "rate_hz": rate_hz,
