@@ -197,6 +197,44 @@ TEST_F(TransitionJacobian, NavigationBlockMatchesTheMechanisation) {
   }
 }
 
+// An interval of one or two samples, where the position's coupling is of
+// third order in Δt: each row group (attitude, velocity, position) of every
+// drift's column against the mechanisation, to 1 % of that group's largest
+// entry. The mechanisation's trapezoidal position integration gives a gyro
+// error g·δω·Δt³/4 of position over one sample, the continuous error
+// equations Δt³/6 (error_dynamics.cc).
+TEST_F(TransitionJacobian, DriftColumnsOfOneAndTwoSampleIntervalsMatchTheMechanisationRowByRow) {
+  ErrorModel model;
+  model.reference = model_.reference;
+  for (auto* triad : {&model.gyro, &model.acc}) {
+    for (auto& b : triad->bias) b = {1e-3, 1e6};
+  }
+  for (int count : {1, 2}) {
+    const nav::NavState nominal =
+        Mechanise(StartState(), count, [](const ImuSample&, auto&, auto&) {});
+    const IntervalTransition t = Transition(model, count);
+    for (int axis = 0; axis < kSensorAxisCount; ++axis) {
+      // Large enough that one sample's position change stands above the
+      // ~1e-9 m resolution of latitude, small enough to stay linear.
+      const double size = 3e-2;
+      const nav::NavState end = Mechanise(
+          StartState(), count,
+          [&](const ImuSample&, auto& g, auto& a) { (axis < 3 ? g : a)[axis % 3] += size; });
+      const Eigen::Matrix<double, 9, 1> numeric = ErrorBetween(end, nominal, site_) / size;
+      const Eigen::Matrix<double, 9, 1> linear = t.B.col(axis);
+      // Entries far below the column's largest (the transport rate's) are not compared.
+      const double floor = 1e-6 * linear.cwiseAbs().maxCoeff();
+      for (int group = 0; group < 3; ++group) {
+        const double scale = linear.segment<3>(3 * group).cwiseAbs().maxCoeff();
+        for (int r = 3 * group; r < 3 * group + 3; ++r) {
+          EXPECT_NEAR(numeric[r], linear[r], 1e-2 * scale + floor)
+              << count << " sample(s), sensor axis " << axis << ", row " << r;
+        }
+      }
+    }
+  }
+}
+
 TEST_F(TransitionJacobian, EveryEffectColumnMatchesTheMechanisation) {
   const int count = 100;
   const nav::NavState nominal = Mechanise(StartState(), count, [](const ImuSample&, auto&, auto&) {});

@@ -218,14 +218,15 @@ double EpochRun::BytesPerEpoch() const {
 
 // Everything the condensation carries from one sample to the next.
 struct RunCondenser::State {
-  State(const BenchRun& run_in, const ErrorModel& pilot_in, double update_interval_s, double nominal_interval_s,
-        FilterObserver* observer_in, const nav::RunCompensations* compensations_in)
+  State(const BenchRun& run_in, const ErrorModel& pilot_in, double update_interval_s,
+        double nominal_interval_s, FilterObserver* observer_in,
+        const nav::RunCompensations* compensations_in)
       : run(run_in),
         pilot(pilot_in),
         layout(pilot),
         out(Header(run_in, update_interval_s, nominal_interval_s)),
         F(NavigationErrorMatrix(run_in.metadata.site, layout)),
-        nominal(DiscretiseNavigation(F, nominal_interval_s)),
+        nominal(DiscretiseNavigation(F, layout, nominal_interval_s)),
         irregular(nominal),
         condenser(nominal, out.samples_per_epoch, static_cast<int>(out.constant_columns.size()),
                   GroupByTerm(out.constant_columns)),
@@ -280,7 +281,8 @@ struct RunCondenser::State {
     const NavigationDiscretisation* disc = &nominal;
     if (std::abs(dt - dt_nominal) > 1e-9 * dt_nominal) {
       // An irregular sample interval (within the format's tolerance): exact maps for it.
-      if (std::abs(dt - irregular.dt_s) > 1e-12 * dt_nominal) irregular = DiscretiseNavigation(F, dt);
+      if (std::abs(dt - irregular.dt_s) > 1e-12 * dt_nominal)
+        irregular = DiscretiseNavigation(F, layout, dt);
       disc = &irregular;
     }
     const nav::ImuIncrement current{s.gyro_rad_s * dt, s.acc_mps2 * dt};

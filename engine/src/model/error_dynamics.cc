@@ -45,12 +45,21 @@ Matrix9d NavigationErrorMatrix(const Site& site, const StateLayout& layout) {
   return F;
 }
 
-NavigationDiscretisation DiscretiseNavigation(const Matrix9d& F, double dt_s) {
+NavigationDiscretisation DiscretiseNavigation(const Matrix9d& F, const StateLayout& layout,
+                                              double dt_s) {
   const auto e = numerics::ExponentialWithIntegral(F, dt_s);
   NavigationDiscretisation d;
   d.A = e.exponential;
-  d.A_inverse = numerics::MatrixExponential(-Eigen::MatrixXd(F) * dt_s);
   d.Gamma = e.integral;
+  // Position rows as the mechanisation integrates them: the trapezoid of the
+  // sample's start and end velocities (header).
+  const int vel = layout.velocity();
+  const int pos = layout.position();
+  d.A.middleRows<3>(pos) = 0.5 * dt_s * d.A.middleRows<3>(vel);
+  d.A.block<3, 3>(pos, vel) += 0.5 * dt_s * Eigen::Matrix3d::Identity();
+  d.A.block<3, 3>(pos, pos) += Eigen::Matrix3d::Identity();
+  d.Gamma.middleRows<3>(pos) = 0.5 * dt_s * d.Gamma.middleRows<3>(vel);
+  d.A_inverse = d.A.inverse();
   d.dt_s = dt_s;
   return d;
 }

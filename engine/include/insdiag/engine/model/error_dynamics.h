@@ -13,7 +13,8 @@
 //      δg_D    = −(∂γ/∂h) δr_D  (the vertical-channel instability; the
 //                 latitude term ∂γ/∂φ·δφ, below 1e−8 m/s² per metre, is left out).
 // Because the bench trajectory is fixed, the 9×9 matrix F_nav is constant for
-// a run, and so are A = e^{F Δt} and Γ = ∫₀^Δt e^{F s} ds per sample interval.
+// a run, and so are A = e^{F Δt} and Γ = ∫₀^Δt e^{F s} ds per sample interval
+// (their position rows as the mechanisation integrates: DiscretiseNavigation).
 //
 // Sensor errors δω^b, δf^b = Σ_s r_s(u)·x_s over the sensor states s of the
 // layout (r_s = 1 for drifts, the catalogue regressor for constant effects),
@@ -50,14 +51,22 @@ using Matrix93d = Eigen::Matrix<double, kNavigationStates, 3>;
 // F_nav at the site (constant over a bench run).
 Matrix9d NavigationErrorMatrix(const Site& site, const StateLayout& layout);
 
-// A = e^{F Δt}, its inverse and Γ = ∫₀^Δt e^{F s} ds.
+// A = e^{F Δt}, its inverse and Γ = ∫₀^Δt e^{F s} ds, with the position rows
+// of the mechanisation's trapezoidal integration (nav/strapdown.h):
+//   δr_k = δr_{k−1} + ½Δt (δv_{k−1} + δv_k),  δv_k the velocity rows' value.
+// The continuous δṙ = δv differs from it in the third order in Δt: a gyro
+// error δω held over a sample moves position by g δω Δt³/4 in the
+// mechanisation and g δω Δt³/6 in the continuous equations — a third of the
+// gyro's position coupling when an update interval is one sample
+// (tests/engine/jacobian_test.cc).
 struct NavigationDiscretisation {
   Matrix9d A;
   Matrix9d A_inverse;
   Matrix9d Gamma;
   double dt_s = 0.0;
 };
-NavigationDiscretisation DiscretiseNavigation(const Matrix9d& F, double dt_s);
+NavigationDiscretisation DiscretiseNavigation(const Matrix9d& F, const StateLayout& layout,
+                                              double dt_s);
 
 // Block-diagonal transition (and process noise) of the sensor states: 1×1
 // blocks for drifts, constants and random walks, 2×2 for second-order pairs.
