@@ -70,12 +70,13 @@ SENSORS = ["gyro", "acc"]
 JUDGE_LOCK = threading.Lock()
 
 
-def draw(index, units):
-    """The run's conditions, from its own generator, its unit one of `units` (names in UNITS)."""
+def draw(index, units, rates_hz=RATES_HZ):
+    """The run's conditions, from its own generator, its unit one of `units`
+    (names in UNITS) and its rate one of `rates_hz`."""
     rng = random.Random(f"blind/{index}")
     preset, datasheet, unit_type = UNITS[rng.choice(units)]
     conditions = dict(index=index, seed=7000 + index, preset=preset, datasheet=datasheet, unit_type=unit_type,
-                      profile=rng.choice(PROFILES), rate_hz=rng.choice(RATES_HZ),
+                      profile=rng.choice(PROFILES), rate_hz=rng.choice(rates_hz),
                       duration_s=round(rng.uniform(1800.0, 5400.0)), latitude_deg=round(rng.uniform(-70, 70), 2),
                       ramp_accel_deg_s2=rng.choice([None, None, 5.0, 20.0]))
     kind = rng.choice(["healthy", "step", "ramp"])
@@ -107,8 +108,8 @@ def heading_only(conditions):
     return fault.get("sensor") == "gyro" and fault.get("axis") == "z" and conditions["profile"] in ("turns", "static")
 
 
-def run_one(index, units):
-    c = draw(index, units)
+def run_one(index, units, rates_hz=RATES_HZ):
+    c = draw(index, units, rates_hz)
     fault = c["fault"]
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "run.csv")
@@ -218,16 +219,19 @@ def main():
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--out", default=None)
     parser.add_argument("--units", default=DEFAULT_UNITS, help=f"units to draw from, of: {', '.join(UNITS)}")
+    parser.add_argument("--rates", default=",".join(map(str, RATES_HZ)),
+                        help="sample rates to draw from, Hz (a draw's conditions depend on the list)")
     args = parser.parse_args()
     kinds = set(args.kinds.split(","))
     units = args.units.split(",")
+    rates_hz = [float(r) if "." in r else int(r) for r in args.rates.split(",")]
     unknown = [u for u in units if u not in UNITS]
     if unknown:
         parser.error(f"--units: unknown unit {', '.join(unknown)}; known: {', '.join(UNITS)}")
     drawn = ([int(i) for i in args.indices.split(",")] if args.indices
              else range(args.first_index, args.first_index + args.runs))
-    indices = [i for i in drawn if kind_of(draw(i, units)) in kinds]
-    print(summarise(fault_matrix.run_all(lambda i: run_one(i, units), indices, args.jobs, args.out)))
+    indices = [i for i in drawn if kind_of(draw(i, units, rates_hz)) in kinds]
+    print(summarise(fault_matrix.run_all(lambda i: run_one(i, units, rates_hz), indices, args.jobs, args.out)))
 
 
 if __name__ == "__main__":

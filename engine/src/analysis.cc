@@ -329,6 +329,26 @@ absl::StatusOr<pipeline::ScannedModel> ScanModelA(const pipeline::RunContext& c,
   return a;
 }
 
+// The options with the update interval this run is filtered at
+// (UpdateIntervalForRun), and a note where it is not the one asked for.
+AnalysisOptions WithTheRunsUpdateInterval(const AnalysisOptions& requested, const BenchRun& run,
+                                          std::vector<std::string>& notes) {
+  AnalysisOptions out = requested;
+  const double sample_interval_s = run.NominalIntervalS();
+  out.filter.update_interval_s =
+      UpdateIntervalForRun(requested.filter.update_interval_s, sample_interval_s);
+  if (out.filter.update_interval_s != requested.filter.update_interval_s) {
+    notes.push_back(
+        absl::StrFormat("updates every %.3g s (two samples) for the %.3g s asked: with one sample "
+                        "an update interval, the "
+                        "position and velocity innovations are multiples of one another and the "
+                        "six channels carry three "
+                        "dimensions",
+                        out.filter.update_interval_s, requested.filter.update_interval_s));
+  }
+  return out;
+}
+
 // The options with what this run's raw samples tell: the drifts they allow.
 AnalysisOptions OptionsForThisRun(const AnalysisOptions& options,
                                   const std::optional<ident::AllanResult>& allan) {
@@ -343,10 +363,11 @@ AnalysisOptions OptionsForThisRun(const AnalysisOptions& options,
 }  // namespace
 
 absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& request,
-                                 const AnalysisOptions& options) {
-  if (auto st = options.Validate(); !st.ok()) return st;
+                                 const AnalysisOptions& requested_options) {
+  if (auto st = requested_options.Validate(); !st.ok()) return st;
   if (input.samples.size() < 2) return absl::InvalidArgumentError("the run has fewer than two samples");
   std::vector<std::string> notes;
+  const AnalysisOptions options = WithTheRunsUpdateInterval(requested_options, input, notes);
 
   Progress(options, 0.0, "screening samples");
   BenchRun run = input;

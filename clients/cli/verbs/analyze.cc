@@ -48,7 +48,8 @@ class AnalyzeVerb final : public Verb {
     options.Option("--unit-type", &unit_type_,
                    "Unit type whose nominal model completes a datasheet the run lacks (default: the run's "
                    "unit_type when insdiag knows it)");
-    options.Option("--update-interval", &update_interval_, "Seconds between filter updates (default 1)");
+    options.Option("--update-interval", &update_interval_,
+                   "Seconds between filter updates (default 1; at least two samples)");
     options.Flag("--progress", &progress_, "Print each stage of the analysis with the seconds elapsed to stderr");
   }
 

@@ -240,8 +240,11 @@ struct RunCondenser::State {
     StartSegment(0);
   }
 
-  static EpochRun Header(const BenchRun& run, double update_interval_s, double nominal_interval_s) {
+  static EpochRun Header(const BenchRun& run, double requested_update_interval_s,
+                         double nominal_interval_s) {
     EpochRun out;
+    const double update_interval_s =
+        UpdateIntervalForRun(requested_update_interval_s, nominal_interval_s);
     out.site = run.metadata.site;
     out.update_interval_s = update_interval_s;
     out.sample_interval_s = nominal_interval_s;
@@ -332,6 +335,13 @@ struct RunCondenser::State {
   bool segment_starts = false;
   size_t next_sample = 1;
 };
+
+double UpdateIntervalForRun(double requested_update_interval_s, double nominal_interval_s) {
+  const double shortest_s = kMinimumSamplesPerUpdate * nominal_interval_s;
+  return std::lround(requested_update_interval_s / nominal_interval_s) < kMinimumSamplesPerUpdate
+             ? shortest_s
+             : requested_update_interval_s;
+}
 
 absl::StatusOr<std::unique_ptr<RunCondenser>> RunCondenser::Create(const BenchRun& run, const ErrorModel& pilot,
                                                                    double update_interval_s,

@@ -113,8 +113,20 @@ struct EpochRun {
   double BytesPerEpoch() const;
 };
 
-// Condenses `run` with `pilot` correcting the mechanisation. Needs at least
-// two samples and a valid model (σ ≥ 0, τ > 0 where σ > 0). `compensations`:
+// The update interval a run is filtered at: the one asked for, lengthened to
+// two samples where it holds fewer. With one sample an interval the
+// mechanisation's position step is ½Δt times its velocity step (the
+// trapezoid, nav/strapdown.h), so against the bench's exact reference (the
+// surveyed site, zero velocity) the position and velocity innovations are
+// multiples of one another: the six channels carry three dimensions, and the
+// NIS counts half its degrees of freedom (a healthy 1 Hz run read 0.43;
+// docs/FAULT_SCENARIOS.md, "A unit sampled at 1 or 2 Hz").
+inline constexpr int kMinimumSamplesPerUpdate = 2;
+double UpdateIntervalForRun(double requested_update_interval_s, double nominal_interval_s);
+
+// Condenses `run` with `pilot` correcting the mechanisation, every
+// UpdateIntervalForRun. Needs at least two samples and a valid model (σ ≥ 0,
+// τ > 0 where σ > 0). `compensations`:
 // the run's motion compensations when the caller has them (else computed
 // sample by sample).
 absl::StatusOr<EpochRun> CondenseRun(const BenchRun& run, const ErrorModel& pilot, double update_interval_s,
