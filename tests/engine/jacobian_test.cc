@@ -14,6 +14,7 @@
 #include "insdiag/engine/nav/strapdown.h"
 #include "insdiag/engine/nav/table_motion.h"
 #include "insdiag/engine/nav/wgs84.h"
+#include "insdiag/engine/numerics/matrix_exponential.h"
 #include "scenarios.h"
 
 namespace insdiag::engine {
@@ -274,6 +275,66 @@ TEST_F(TransitionJacobian, EveryEffectColumnMatchesTheMechanisation) {
   }
 }
 
+// What one sample carries of a drift, a walk and a pair (their means over
+// the sample) against closed forms: a Gauss–Markov drift's (Maybeck,
+// Stochastic Models vol. 1 §4.9, as tests/benchsim/sensors.py writes them),
+// a walk's (Cov(v, n) = K²Δt/2, Var v = K²Δt/3) and a pair's Ψ =
+// (1/Δt) F⁻¹(e^{FΔt} − I).
+TEST(SampleMeans, MatchTheirClosedForms) {
+  struct Drift {
+    double sigma, tau_s, dt_s;
+  };
+  for (const Drift& c :
+       {Drift{1e-3, 300.0, 1.0}, Drift{1e-2, 0.05, 0.01}, Drift{4.8e-8, 1800.0, 0.005}}) {
+    ErrorModel model;
+    model.acc.bias[1] = {c.sigma, c.tau_s};
+    const StateLayout layout(model);
+    const auto means = SensorBlocks::SampleMeans(model, layout, c.dt_s);
+    const SensorBlocks::SampleMean& m =
+        means[static_cast<size_t>(SensorAxisIndex(Sensor::kAccelerometer, 1))];
+    const double beta = 1.0 / c.tau_s, x = beta * c.dt_s, phi = std::exp(-x),
+                 q2 = 2.0 * beta * c.sigma * c.sigma;
+    const double one_minus_phi = -std::expm1(-x);
+    const double g =
+        x < 1e-3 ? x * x * x / 3.0 - x * x * x * x / 4.0 : x - one_minus_phi * (3.0 - phi) / 2.0;
+    const double cross = q2 * one_minus_phi * one_minus_phi / (2.0 * beta * beta) / c.dt_s;
+    const double noise = q2 / (beta * beta * beta) * g / (c.dt_s * c.dt_s);
+    EXPECT_NEAR(m.transition(0, 0), one_minus_phi / x, 1e-12) << c.tau_s;
+    EXPECT_NEAR(m.cross(0, 0), cross, 1e-7 * cross) << c.tau_s;
+    EXPECT_NEAR(m.noise(0, 0), noise, 1e-6 * noise) << c.tau_s;
+  }
+  ErrorModel model;
+  for (const char* selector : {"gyro_bias_rw.z", "acc_bias_second_order.x"}) {
+    ModelEffect e;
+    e.term = ParseEffectSelector(selector)->front();
+    e.random_walk_density = 1e-4;
+    e.second_order_sigma = 1e-3;
+    e.second_order_alpha_per_s = 1.0 / 3.0;
+    e.second_order_beta_rad_s = 2.0 * std::numbers::pi / 0.7;
+    model.effects.push_back(e);
+  }
+  const StateLayout layout(model);
+  const double dt = 0.01;
+  const auto means = SensorBlocks::SampleMeans(model, layout, dt);
+  const SensorBlocks blocks = SensorBlocks::Identity(layout);
+  for (size_t b = 0; b < blocks.blocks.size(); ++b) {
+    const int offset = blocks.blocks[b].offset + StateLayout::kNavigationSize;
+    if (offset == layout.EffectOffset(0)) {
+      const double c = 1e-4 * 1e-4;
+      EXPECT_NEAR(means[b].transition(0, 0), 1.0, 1e-12);
+      EXPECT_NEAR(means[b].cross(0, 0), c * dt / 2.0, 1e-9 * c * dt);
+      EXPECT_NEAR(means[b].noise(0, 0), c * dt / 3.0, 1e-9 * c * dt);
+    } else if (offset == layout.EffectOffset(1)) {
+      const double alpha = 1.0 / 3.0, w = 2.0 * std::numbers::pi / 0.7;
+      Eigen::Matrix2d F;
+      F << -alpha, -w, w, -alpha;
+      const Eigen::Matrix2d psi =
+          F.inverse() * (numerics::MatrixExponential(F * dt) - Eigen::Matrix2d::Identity()) / dt;
+      EXPECT_LT((means[b].transition - psi).cwiseAbs().maxCoeff(), 1e-12);
+    }
+  }
+}
+
 // The condensed interval's B, Q_ns and the process noise's part of Q_nn for
 // drifts, walks and pairs (their coupling reconstructed as a quadratic from
 // three moments, epoch_run.h) against the sums over the samples themselves,
@@ -339,20 +400,32 @@ TEST_F(TransitionJacobian, DecayingStatesMatchTheSumsOverTheirSamples) {
     const int size = d->size;
     const Eigen::MatrixXd D = d->m.topLeftCorner(size, size);
     const double q_sample_var = q->m(0, 0);
-    // Exact sums: B = Σ_j b_j e₀ᵀ D^{j−1}; the noise w_i injected after sample i
-    // reaches the epoch through β_i = Σ_{j>i} b_j e₀ᵀ D^{j−1−i} and the state through D^{M−i}.
+    const std::vector<SensorBlocks::SampleMean> means =
+        SensorBlocks::SampleMeans(model, layout, dt);
+    const SensorBlocks::SampleMean& mean = means[static_cast<size_t>(d - d_sample.blocks.data())];
+    // Exact sums. Sample j carries e₀ᵀ(Ψ x_{j−1} + v_j), v_j = G w_j + r_j:
+    // B = Σ_j b_j e₀ᵀΨ D^{j−1}; the noise w_i of sample i reaches the epoch
+    // through β_i = b_i e₀ᵀG + Σ_{j>i} b_j e₀ᵀΨ D^{j−1−i} and the state through
+    // D^{M−i}; r_i through b_i alone.
     const int a = SensorAxisIndex(c.sensor, c.axis);
     Eigen::MatrixXd B = Eigen::MatrixXd::Zero(9, size), Qns = Eigen::MatrixXd::Zero(9, size);
     Eigen::MatrixXd Qnn = Eigen::MatrixXd::Zero(9, 9);
     Eigen::RowVectorXd e0 = Eigen::RowVectorXd::Zero(size);
     e0[0] = 1.0;
+    const Eigen::RowVectorXd e0_psi = e0 * mean.transition.topLeftCorner(size, size);
+    const Eigen::RowVectorXd e0_g = e0 * mean.cross.topLeftCorner(size, size) / q_sample_var;
+    const double r_var = mean.noise(0, 0) - q_sample_var * e0_g.squaredNorm();
     for (int j = 1; j <= count; ++j) {
-      B += b[static_cast<size_t>(j)].col(a) * (e0 * MatrixPower(D, j - 1));
+      B += b[static_cast<size_t>(j)].col(a) * (e0_psi * MatrixPower(D, j - 1));
     }
     for (int i = 1; i <= count; ++i) {
-      Eigen::MatrixXd beta = Eigen::MatrixXd::Zero(9, size);
-      for (int j = i + 1; j <= count; ++j) beta += b[static_cast<size_t>(j)].col(a) * (e0 * MatrixPower(D, j - 1 - i));
-      Qnn += q_sample_var * beta * beta.transpose();
+      Eigen::MatrixXd beta = b[static_cast<size_t>(i)].col(a) * e0_g;
+      for (int j = i + 1; j <= count; ++j) {
+        beta += b[static_cast<size_t>(j)].col(a) * (e0_psi * MatrixPower(D, j - 1 - i));
+      }
+      Qnn +=
+          q_sample_var * beta * beta.transpose() +
+          r_var * b[static_cast<size_t>(i)].col(a) * b[static_cast<size_t>(i)].col(a).transpose();
       Qns += q_sample_var * beta * MatrixPower(D, count - i).transpose();
     }
     const IntervalTransition t = Transition(model, count);

@@ -75,43 +75,63 @@ NavigationVector FaultColumn(const EpochInterval& e, int sensor_axis, Regressor 
   return column;
 }
 
-StateGridWeights GridWeights(const Eigen::Matrix2d& d_full, int size, double q, int samples, double dt,
+StateGridWeights GridWeights(const Eigen::Matrix2d& d_full, int size, double q,
+                             const SensorBlocks::SampleMean& mean, int samples, double dt,
                              const GramMatrix& gram) {
   const int degree = std::min(kCouplingDegree, samples - 1);
   const Eigen::MatrixXd d = d_full.topLeftCorner(size, size);
-  // w_p = Σ_j s_j^p e₀ᵀ d^{j−1}, s_j = (j − 1)Δt.
-  Eigen::MatrixXd w = Eigen::MatrixXd::Zero(kCouplingMoments, size);
+  // What sample j carries of the block: its first state's mean over the
+  // sample, e₀ᵀ(Ψ x_{j−1} + v_j), v_j = G n_j + r_j with r_j independent of
+  // the state noise n_j (Cov q·I): G = Cov(v, n)/q, Var r = Var v − G Cov(n, v).
   Eigen::RowVectorXd e = Eigen::RowVectorXd::Zero(size);
   e[0] = 1.0;
-  Eigen::RowVectorXd power = e;  // e₀ᵀ d^{j−1}
+  const Eigen::RowVectorXd e_mean = e * mean.transition.topLeftCorner(size, size);
+  Eigen::RowVectorXd e_own = Eigen::RowVectorXd::Zero(size);  // e₀ᵀ G
+  double own_variance = 0.0;                                  // e₀ᵀ Var r e₀
+  if (q > 0.0) {
+    e_own = e * mean.cross.topLeftCorner(size, size) / q;
+    own_variance = std::max(0.0, mean.noise(0, 0) - q * e_own.squaredNorm());
+  }
+  // w_p = Σ_j s_j^p e₀ᵀΨ d^{j−1}, s_j = (j − 1)Δt.
+  Eigen::MatrixXd w = Eigen::MatrixXd::Zero(kCouplingMoments, size);
+  Eigen::RowVectorXd power = e_mean;  // e₀ᵀΨ d^{j−1}
   for (int j = 1; j <= samples; ++j) {
     const double s = (j - 1) * dt;
     double sp = 1.0;
     for (int p = 0; p <= degree; ++p, sp *= s) w.row(p) += sp * power;
     power = power * d;
   }
-  // a_p,i = s_{i+1}^p e₀ᵀ + a_p,i+1 d (a_p,M = 0); v_p = Σ_i a_p,i (d^{M−i})ᵀ; U_pr = Σ_i a_p,i a_r,iᵀ.
-  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(kCouplingMoments, size);
+  // The coefficient of n_i in Σ_j s_j^p (sample j): a_p,i = s_i^p e₀ᵀG + ã_p,i,
+  // ã_p,i = s_{i+1}^p e₀ᵀΨ + ã_p,i+1 d (ã_p,M = 0); v_p = Σ_i a_p,i (d^{M−i})ᵀ;
+  // U_pr = Σ_i a_p,i a_r,iᵀ, and of r_i, Σ_i s_i^p s_i^r.
+  Eigen::MatrixXd a_later = Eigen::MatrixXd::Zero(kCouplingMoments, size);  // ã
   Eigen::MatrixXd v = Eigen::MatrixXd::Zero(kCouplingMoments, size);
   GramMatrix U = GramMatrix::Zero();
+  GramMatrix U_own = GramMatrix::Zero();
   Eigen::MatrixXd tail = Eigen::MatrixXd::Identity(size, size);  // d^{M−i}
+  Eigen::Matrix<double, kCouplingMoments, 1> powers_i;
   for (int i = samples; i >= 1; --i) {
     if (i < samples) {
       const double s = i * dt;  // s_{i+1}
       double sp = 1.0;
-      Eigen::MatrixXd next = a * d;
-      for (int p = 0; p <= degree; ++p, sp *= s) next.row(p) += sp * e;
-      a = next;
+      Eigen::MatrixXd next = a_later * d;
+      for (int p = 0; p <= degree; ++p, sp *= s) next.row(p) += sp * e_mean;
+      a_later = next;
     }
+    powers_i.setZero();
+    double sp = 1.0;
+    for (int p = 0; p <= degree; ++p, sp *= (i - 1) * dt) powers_i[p] = sp;  // s_i^p
+    const Eigen::MatrixXd a = a_later + powers_i * e_own;
     v += a * tail.transpose();
     U += a * a.transpose();
+    U_own += powers_i * powers_i.transpose();
     tail = tail * d;
   }
   const GramMatrix S_inv = InverseGram(gram, degree);
   StateGridWeights out;
   out.w.leftCols(size) = S_inv * w;
   out.v.leftCols(size) = q * (S_inv * v);
-  const GramMatrix U_tilde = q * (S_inv * U * S_inv);
+  const GramMatrix U_tilde = S_inv * (q * U + own_variance * U_own) * S_inv;
   // U is a Gram matrix (positive semidefinite): factor it through its
   // eigenvectors so that tiny negative rounding cannot upset a Cholesky.
   const Eigen::SelfAdjointEigenSolver<GramMatrix> eig(0.5 * (U_tilde + U_tilde.transpose()));
@@ -163,6 +183,8 @@ void ModelTransitions::PrepareGrid(int samples, double dt, const GramMatrix& gra
   grid_gram_ = gram;
   SensorBlocks d_sample, q_sample;
   SensorBlocks::Discretise(model_, layout_, dt, d_sample, q_sample);
+  const std::vector<SensorBlocks::SampleMean> sample_means =
+      SensorBlocks::SampleMeans(model_, layout_, dt);
   SensorBlocks::Discretise(model_, layout_, interval_s, D_, Qs_);
   weights_.assign(sources_.size(), StateGridWeights{});
   for (size_t i = 0; i < sources_.size(); ++i) {
@@ -170,7 +192,8 @@ void ModelTransitions::PrepareGrid(int samples, double dt, const GramMatrix& gra
     if (src.constant_column >= 0 || src.fault != Regressor::kNone) continue;
     const auto b = static_cast<size_t>(src.block);
     // The per-sample noise is isotropic in a pair (error_model.h): q = its (0, 0).
-    weights_[i] = GridWeights(d_sample.blocks[b].m, src.size, q_sample.blocks[b].m(0, 0), samples, dt, gram);
+    weights_[i] = GridWeights(d_sample.blocks[b].m, src.size, q_sample.blocks[b].m(0, 0),
+                              sample_means[b], samples, dt, gram);
   }
 }
 

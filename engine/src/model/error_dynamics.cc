@@ -127,6 +127,90 @@ void SensorBlocks::Discretise(const ErrorModel& model, const StateLayout& layout
   }
 }
 
+namespace {
+
+// A block's continuous dynamics ẋ = F x + w, w of intensity c·I, from the
+// same parameters as SensorBlocks::Discretise (whose exact discretisation
+// over Δt they give).
+struct ContinuousBlock {
+  Eigen::MatrixXd F;
+  double intensity = 0.0;  // c
+};
+
+ContinuousBlock ContinuousDynamics(const ErrorModel& model, const SensorState& s, int size) {
+  ContinuousBlock out{Eigen::MatrixXd::Zero(size, size), 0.0};
+  switch (s.dynamics) {
+    case StateDynamics::kGaussMarkov: {
+      // Seed eq. 5: ḃ = −b/τ + w, intensity 2σ²/τ.
+      const GaussMarkov& gm = (s.sensor == Sensor::kGyro ? model.gyro : model.acc).bias[s.axis];
+      if (gm.tau_s > 0.0) {
+        out.F(0, 0) = -1.0 / gm.tau_s;
+        out.intensity = 2.0 * gm.sigma * gm.sigma / gm.tau_s;
+      }
+      break;
+    }
+    case StateDynamics::kRandomWalk: {
+      const double k = model.effects[static_cast<size_t>(s.effect)].random_walk_density;
+      out.intensity = k * k;
+      break;
+    }
+    case StateDynamics::kSecondOrderPair: {
+      // A damped rotation: F = [−α −β; β −α], isotropic intensity 2ασ².
+      const ModelEffect& e = model.effects[static_cast<size_t>(s.effect)];
+      const double alpha = e.second_order_alpha_per_s, beta = e.second_order_beta_rad_s;
+      out.F << -alpha, -beta, beta, -alpha;
+      out.intensity = 2.0 * alpha * e.second_order_sigma * e.second_order_sigma;
+      break;
+    }
+    case StateDynamics::kConstant:
+    case StateDynamics::kSecondOrderTail:
+      break;
+  }
+  return out;
+}
+
+SensorBlocks::SampleMean SampleMeanOf(const ContinuousBlock& block, double dt) {
+  const auto n = block.F.rows();
+  // The state and its integral: A = [F 0; I 0], noise [I; 0] c [I 0].
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(2 * n, 2 * n);
+  A.topLeftCorner(n, n) = block.F;
+  A.bottomLeftCorner(n, n).setIdentity();
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(2 * n, 2 * n);
+  W.topLeftCorner(n, n).setIdentity();
+  W *= block.intensity;
+  // Van Loan: exp([−A W; 0 Aᵀ] Δt) = [· X12; 0 X22], Φ = X22ᵀ, Q = Φ X12.
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(4 * n, 4 * n);
+  M.topLeftCorner(2 * n, 2 * n) = -A * dt;
+  M.topRightCorner(2 * n, 2 * n) = W * dt;
+  M.bottomRightCorner(2 * n, 2 * n) = A.transpose() * dt;
+  const Eigen::MatrixXd E = numerics::MatrixExponential(M);
+  const Eigen::MatrixXd phi = E.bottomRightCorner(2 * n, 2 * n).transpose();
+  const Eigen::MatrixXd Q = phi * E.topRightCorner(2 * n, 2 * n);
+  SensorBlocks::SampleMean out;
+  out.transition.topLeftCorner(n, n) = phi.bottomLeftCorner(n, n) / dt;
+  out.cross.topLeftCorner(n, n) = Q.bottomLeftCorner(n, n) / dt;
+  out.noise.topLeftCorner(n, n) =
+      0.5 * (Q.bottomRightCorner(n, n) + Q.bottomRightCorner(n, n).transpose()) / (dt * dt);
+  return out;
+}
+
+}  // namespace
+
+std::vector<SensorBlocks::SampleMean> SensorBlocks::SampleMeans(const ErrorModel& model,
+                                                                const StateLayout& layout,
+                                                                double dt) {
+  const SensorBlocks blocks = Identity(layout);
+  const auto& states = layout.sensor_states();
+  std::vector<SampleMean> out(blocks.blocks.size());
+  for (size_t b = 0; b < blocks.blocks.size(); ++b) {
+    const Block& block = blocks.blocks[b];
+    const ContinuousBlock continuous =
+        ContinuousDynamics(model, states[static_cast<size_t>(block.offset)], block.size);
+    if (continuous.intensity > 0.0 || !continuous.F.isZero()) out[b] = SampleMeanOf(continuous, dt);
+  }
+  return out;
+}
+
 void SensorBlocks::RightMultiplyTranspose(Eigen::Ref<Eigen::MatrixXd> M) const {
   for (const Block& b : blocks) {
     if (b.size == 1) {

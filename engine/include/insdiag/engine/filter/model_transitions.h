@@ -10,8 +10,9 @@
 //                        in the interval the onset falls in, the samples
 //                        after it (FaultColumn)
 //   drift, walk, pair    B, Q_ns, Q_nn from the coupling's quadratic
-//                        reconstruction and the state's per-sample transition
-//                        d and noise q (epoch_run.h, header)
+//                        reconstruction, the state's per-sample transition
+//                        d and noise q (epoch_run.h, header), and the
+//                        sample's mean of the state (GridWeights)
 //   D, Q_ss              the exact discretisation over the interval's length
 //                        (SensorBlocks::Discretise): M samples of a linear
 //                        process are one step of M Δt
@@ -44,10 +45,16 @@ struct StateGridWeights {
 };
 
 // The weights for M samples of Δt with per-sample transition `d` (its
-// top-left `size` × `size` block) and per-sample noise q·I, given the
-// interval's moment Gram `gram` (only the moments up to degree min(2, M − 1)
-// are used: with fewer samples the quadratic is not determined).
-StateGridWeights GridWeights(const Eigen::Matrix2d& d, int size, double q, int samples, double dt,
+// top-left `size` × `size` block), per-sample noise q·I and what each sample
+// carries of the block, its mean over the sample (`mean`,
+// SensorBlocks::SampleMeans), given the interval's moment Gram `gram` (only
+// the moments up to degree min(2, M − 1) are used: with fewer samples the
+// quadratic is not determined). A drift's mean over a sample varies less
+// from sample to sample than its value at the sample's start: where a
+// sample is long beside the drift's noise (1 Hz, a 1 mg drift of τ 300 s)
+// the difference is a tenth of the innovations' variance.
+StateGridWeights GridWeights(const Eigen::Matrix2d& d, int size, double q,
+                             const SensorBlocks::SampleMean& mean, int samples, double dt,
                              const Eigen::Matrix<double, kCouplingMoments, kCouplingMoments>& gram);
 
 // A fault effect's column over interval `e` for a unit value of its

@@ -84,6 +84,22 @@ class SensorBlocks {
   // Discrete transition D over Δt and the process noise Qs of the model's sensor states.
   static void Discretise(const ErrorModel& model, const StateLayout& layout, double dt_s, SensorBlocks& D,
                          SensorBlocks& Qs);
+  // Over one sample of Δt, what a block's state x (ẋ = F x + w, w white of
+  // intensity c·I) gives the sample, which carries its mean over the
+  // interval (bench-run format):
+  //   x(Δt) = D x(0) + n,   m = (1/Δt) ∫₀^Δt x dt = Ψ x(0) + v,
+  //   Ψ = (1/Δt) ∫₀^Δt e^{F s} ds,
+  // with n and v jointly Gaussian: the covariance of the state augmented by
+  // its integral, [ẋ; ẏ] = [F 0; I 0] [x; y] + [w; 0] (Van Loan, IEEE TAC
+  // 23(3), 1978). For a random walk of intensity c, Cov(v, n) = cΔt/2 and
+  // Var v = cΔt/3 against Var n = cΔt.
+  struct SampleMean {
+    Eigen::Matrix2d transition = Eigen::Matrix2d::Identity();  // Ψ
+    Eigen::Matrix2d cross = Eigen::Matrix2d::Zero();           // Cov(v, n)
+    Eigen::Matrix2d noise = Eigen::Matrix2d::Zero();           // Cov(v)
+  };
+  static std::vector<SampleMean> SampleMeans(const ErrorModel& model, const StateLayout& layout,
+                                             double dt_s);
 
   // M ← M · thisᵀ (columns of M are sensor states).
   void RightMultiplyTranspose(Eigen::Ref<Eigen::MatrixXd> M) const;
