@@ -307,10 +307,11 @@ class HealthyUnitsSampledSlowly(unittest.TestCase):
     a turning table. At 1 Hz the default one-second update would hold one
     sample, where the position and velocity innovations are multiples of one
     another; and the Allan fit's few short cluster times there read white
-    noise and the drift's rise as quantisation (docs/FAULT_SCENARIOS.md, "A
-    unit sampled at 1 or 2 Hz")."""
+    noise and the drift's rise as quantisation; and a drift's mean over a
+    one-second sample is not its value at the sample's start
+    (docs/FAULT_SCENARIOS.md, "A unit sampled at 1 or 2 Hz")."""
 
-    def test_no_healthy_unit_is_faulty_and_mems_and_navigation_grade_nis_lie_in_their_band(self):
+    def test_no_healthy_unit_is_faulty_and_still_or_2_hz_nis_lie_in_their_band(self):
         runs = [(preset, rate_hz, profile, seed)
                 for seed, (rate_hz, profile) in enumerate([(1, "static"), (1, "mixed"), (2, "mixed")], start=41)
                 for preset in ("mems", "nav", "tactical")]
@@ -323,9 +324,12 @@ class HealthyUnitsSampledSlowly(unittest.TestCase):
             self.assertNotEqual(report["verdict"], "FAULTY", label)
             self.assertEqual([c["name"] for c in significant(report)], [], label)
             # The tactical preset's 1 mg accelerometer drift (τ 300 s) wanders
-            # within one 1 s sample as much as its white noise does there; the
-            # filter's drift, constant over a sample, overstates that (open).
-            if preset != "tactical" and not report["nisBandLow"] <= report["nisMean"] <= report["nisBandHigh"]:
+            # within one 1 s sample as much as its white noise does there: the
+            # filter must take the drift's mean over the sample. On a turning
+            # table at 1 Hz the reference's noise is still raised (open:
+            # docs/FAULT_SCENARIOS.md), and the band is not asserted there.
+            turning_at_one_hertz = rate_hz == 1 and profile != "static"
+            if not turning_at_one_hertz and not report["nisBandLow"] <= report["nisMean"] <= report["nisBandHigh"]:
                 outside_band.append(label)
         # Each band holds a consistent filter's NIS with probability 0.99: two or more
         # of six outside has probability 0.0015.
