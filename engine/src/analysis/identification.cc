@@ -129,69 +129,60 @@ std::vector<ParameterEstimate> ApplyAllanNoise(const RunContext& c, const ident:
   return identified;
 }
 
-// The Allan fit's white noise of one sensor (its density N and its
-// quantisation Q, which the filter adds to every velocity observation)
-// where it departs from what the a-priori model states, kept only where the
-// innovations' likelihood prefers it. At a low rate's short end (at 1 Hz,
-// cluster times of 1, 2 and 4 s) Q's 3Q²/τ² trades against N and the
-// drift's rise, and the Wald tests that adopted them cannot see that: a
-// healthy 1 Hz unit's NIS read 0.86 with an accelerometer Q the run did not
-// have (2Δℓ 340 against the model without it), and a gyro's N came out a
-// third low where the fit gave part of it to Q. Decided against the
-// a-priori drifts before they are identified, so that it does not bend
-// them, and again against the identified drifts, since against drifts far
-// from the unit's it also absorbs their misfit.
-enum class NoiseTest { kBeforeTheDrifts, kAfterTheDrifts };
+// The accelerometers' quantisation the Allan fit found where the a-priori
+// model states none, kept only where the innovations' likelihood prefers it.
+// Over the few cluster times at a low rate's short end (at 1 Hz, τ of 1, 2
+// and 4 s) a quantisation term's 3Q²/τ² trades against the white noise and
+// the drift's rise, and the Wald test cannot see that; in the filter it is
+// white noise on every velocity observation (forward_filter.cc), which made a
+// healthy 1 Hz unit's NIS 0.86 (2Δℓ 340 against the model without it).
+// Decided against the a-priori model before the drifts are identified, so
+// that it does not bend them, and again against the identified model, since
+// against drifts far from the unit's it also absorbs their misfit.
+enum class QuantisationTest { kBeforeTheDrifts, kAfterTheDrifts };
 
-void KeepTheAllanNoiseTheInnovationsSupport(const RunContext& c, NoiseTest when, ErrorModel& model,
-                                            std::vector<ParameterEstimate>& identified,
-                                            std::vector<std::string>& notes) {
-  for (const Sensor sensor : {Sensor::kGyro, Sensor::kAccelerometer}) {
-    const SensorTriadModel& stated =
-        sensor == Sensor::kGyro ? c.a_priori.model.gyro : c.a_priori.model.acc;
-    SensorTriadModel& triad = sensor == Sensor::kGyro ? model.gyro : model.acc;
-    // An Allan-fit prior's quantisation is the fit's own guess; a stated
-    // model (datasheet, unit type) without one says there is none.
-    const Eigen::Vector3d stated_q =
-        c.a_priori.from_allan ? Eigen::Vector3d::Zero() : Eigen::Vector3d(stated.quantization);
-    // The gyros' quantisation is reported, not filtered: only its N counts.
-    const bool q_differs = sensor == Sensor::kAccelerometer && triad.quantization != stated_q;
-    if (triad.white_noise_density == stated.white_noise_density && !q_differs) continue;
-    ErrorModel without = model;
-    SensorTriadModel& reverted = sensor == Sensor::kGyro ? without.gyro : without.acc;
-    reverted.white_noise_density = stated.white_noise_density;
-    if (sensor == Sensor::kAccelerometer) reverted.quantization = stated_q;
-    const auto with_it = ProfileLogLikelihood(c.epochs, model);
-    const auto without_it = ProfileLogLikelihood(c.epochs, without);
-    if (!with_it.ok() || !without_it.ok()) continue;
-    const double statistic = 2.0 * (*with_it - *without_it);
-    const std::string_view sensors = sensor == Sensor::kGyro ? "gyros" : "accelerometers";
-    const std::string against =
-        when == NoiseTest::kBeforeTheDrifts ? "the a-priori drifts" : "the identified drifts";
-    if (statistic > 0.0) {
-      if (when == NoiseTest::kAfterTheDrifts) {
-        notes.push_back(
-            absl::StrFormat("the Allan fit's white noise of the %s is in the model: with %s the "
-                            "innovations' likelihood prefers it to the a-priori one, 2Δℓ = %.1f",
-                            sensors, against, statistic));
-      }
-      continue;
-    }
-    model = std::move(without);
-    for (int axis = 0; axis < 3; ++axis) {
-      const std::string white = WhiteNoiseName({sensor, axis}),
-                        quantisation = QuantizationName({sensor, axis});
-      std::erase_if(identified, [&](const ParameterEstimate& p) {
-        return p.method == EstimationMethod::kAllan && (p.name == white || p.name == quantisation);
-      });
-    }
-    notes.push_back(absl::StrFormat(
-        "the Allan fit's white noise of the %s (its density and quantisation) is not in the "
-        "model: with %s the innovations' likelihood is higher with the a-priori one "
-        "(2Δℓ = %.1f); over the static segments' few short cluster times the fit "
-        "traded the white noise against quantisation and the drift's rise",
-        sensors, against, -statistic));
+void KeepQuantisationTheInnovationsSupport(const RunContext& c, QuantisationTest when,
+                                           ErrorModel& model,
+                                           std::vector<ParameterEstimate>& identified,
+                                           std::vector<std::string>& notes) {
+  const Eigen::Vector3d stated = c.a_priori.from_allan
+                                     ? Eigen::Vector3d::Zero()
+                                     : Eigen::Vector3d(c.a_priori.model.acc.quantization);
+  if (model.acc.quantization == stated) return;
+  ErrorModel without = model;
+  without.acc.quantization = stated;
+  const auto with_it = ProfileLogLikelihood(c.epochs, model);
+  const auto without_it = ProfileLogLikelihood(c.epochs, without);
+  if (!with_it.ok() || !without_it.ok()) return;
+  const double statistic = 2.0 * (*with_it - *without_it);
+  std::string axes;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (model.acc.quantization[axis] == stated[axis]) continue;
+    absl::StrAppendFormat(&axes, "%s%c %.3g m/s", axes.empty() ? "" : ", ", "xyz"[axis],
+                          model.acc.quantization[axis]);
   }
+  const std::string_view against =
+      when == QuantisationTest::kBeforeTheDrifts ? "the a-priori drifts" : "the identified drifts";
+  if (statistic > 0.0) {
+    if (when == QuantisationTest::kAfterTheDrifts) {
+      notes.push_back(
+          absl::StrFormat("the Allan fit's accelerometer quantisation (%s) is in the model: with "
+                          "%s the innovations' "
+                          "likelihood prefers it, 2Δℓ = %.1f",
+                          axes, against, statistic));
+    }
+    return;
+  }
+  model = std::move(without);
+  std::erase_if(identified,
+                [](const ParameterEstimate& p) { return p.name.starts_with("acc_quantization."); });
+  notes.push_back(
+      absl::StrFormat("the Allan fit's accelerometer quantisation (%s) is not in the model: with "
+                      "%s the innovations' "
+                      "likelihood is higher without it (2Δℓ = %.1f); over the static segments' few "
+                      "short cluster times it "
+                      "stood for the white noise and the drift's rise",
+                      axes, against, -statistic));
 }
 
 // Terms the Allan fit left at bounds: nothing else re-tunes them (the ACF
@@ -743,8 +734,8 @@ absl::StatusOr<Identification> IdentifyModel(const RunContext& c, const std::opt
                                              ErrorModel base, std::vector<std::string>& notes) {
   Identification id;
   if (allan.has_value()) id.identified = ApplyAllanNoise(c, *allan, base);
-  KeepTheAllanNoiseTheInnovationsSupport(c, NoiseTest::kBeforeTheDrifts, base, id.identified,
-                                         notes);
+  KeepQuantisationTheInnovationsSupport(c, QuantisationTest::kBeforeTheDrifts, base, id.identified,
+                                        notes);
   RetuneUnresolvedNoise(c, allan, base, id.identified, notes);
   id.model = std::move(base);
   auto retargeted = Retarget(c, id, notes);
@@ -754,8 +745,8 @@ absl::StatusOr<Identification> IdentifyModel(const RunContext& c, const std::opt
     // Drifts re-tuned from the unit's own specification keep what the scan finds beside them.
     if (retargeted->DriftsFromAClassPrior(c.a_priori))
       TestFaultsAgainstTheIdentifiedDrifts(c, *retargeted, id, notes);
-    KeepTheAllanNoiseTheInnovationsSupport(c, NoiseTest::kAfterTheDrifts, id.model, id.identified,
-                                           notes);
+    KeepQuantisationTheInnovationsSupport(c, QuantisationTest::kAfterTheDrifts, id.model,
+                                          id.identified, notes);
   }
   if (retargeted->DriftsFromAClassPrior(c.a_priori) && !retargeted->deferred) {
     if (auto matched = MatchReferenceNoiseToTheIdentifiedModel(c, id, notes); !matched.ok()) return matched;
