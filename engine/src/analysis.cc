@@ -339,11 +339,9 @@ AnalysisOptions WithTheRunsUpdateInterval(const AnalysisOptions& requested, cons
       UpdateIntervalForRun(requested.filter.update_interval_s, sample_interval_s);
   if (out.filter.update_interval_s != requested.filter.update_interval_s) {
     notes.push_back(
-        absl::StrFormat("updates every %.3g s (two samples) for the %.3g s asked: with one sample "
-                        "an update interval, the "
-                        "position and velocity innovations are multiples of one another and the "
-                        "six channels carry three "
-                        "dimensions",
+        absl::StrFormat("updates every %.3g s (two samples) for the %.3g s asked: "
+                        "with one sample an update interval, the position and velocity innovations "
+                        "are multiples of one another and the six channels carry three dimensions",
                         out.filter.update_interval_s, requested.filter.update_interval_s));
   }
   return out;

@@ -166,22 +166,22 @@ void KeepQuantisationTheInnovationsSupport(const RunContext& c, QuantisationTest
   if (statistic > 0.0) {
     if (when == QuantisationTest::kAfterTheDrifts) {
       notes.push_back(
-          absl::StrFormat("the Allan fit's accelerometer quantisation (%s) is in the model: with "
-                          "%s the innovations' "
-                          "likelihood prefers it, 2Δℓ = %.1f",
+          absl::StrFormat("the Allan fit's accelerometer quantisation (%s) is in the model: "
+                          "with %s the innovations' likelihood prefers it, 2Δℓ = %.1f",
                           axes, against, statistic));
     }
     return;
   }
   model = std::move(without);
-  std::erase_if(identified,
-                [](const ParameterEstimate& p) { return p.name.starts_with("acc_quantization."); });
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::string name = QuantizationName({Sensor::kAccelerometer, axis});
+    std::erase_if(identified, [&](const ParameterEstimate& p) { return p.name == name; });
+  }
   notes.push_back(
-      absl::StrFormat("the Allan fit's accelerometer quantisation (%s) is not in the model: with "
-                      "%s the innovations' "
-                      "likelihood is higher without it (2Δℓ = %.1f); over the static segments' few "
-                      "short cluster times it "
-                      "stood for the white noise and the drift's rise",
+      absl::StrFormat("the Allan fit's accelerometer quantisation (%s) is not in the model: "
+                      "with %s the innovations' likelihood is higher without it (2Δℓ = %.1f); "
+                      "over the static segments' few short cluster times it stood for the "
+                      "white noise and the drift's rise",
                       axes, against, -statistic));
 }
 
