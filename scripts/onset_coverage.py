@@ -83,7 +83,7 @@ def run_one(i, pinned, update_interval_s):
             "onset_error_samples": (c["onsetS"] - d["onset_s"]) / sample_s,
             "interval_samples": [(c["onsetLowS"] - d["onset_s"]) / sample_s,
                                  (c["onsetHighS"] - d["onset_s"]) / sample_s],
-            "held": c["onsetLowS"] <= d["onset_s"] <= c["onsetHighS"]}
+            "onset_covered": c["onsetLowS"] <= d["onset_s"] <= c["onsetHighS"]}
 
 
 def summarise(results):
@@ -97,7 +97,7 @@ def summarise(results):
                         ("accelerometer", lambda r: r["term"].startswith("acc"))):
         rs = [r for r in results if keep(r) and "error" not in r]
         found = [r for r in rs if r["found"]]
-        held = sum(1 for r in found if r["held"])
+        held = sum(1 for r in found if r["onset_covered"])
         band = 3.0 * math.sqrt(nominal * (1.0 - nominal) / max(1, len(found)))
         late = sum(1 for r in found if r["onset_error_samples"] > 0)
         early = sum(1 for r in found if r["onset_error_samples"] < 0)

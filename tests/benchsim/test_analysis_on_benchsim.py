@@ -311,7 +311,7 @@ class HealthyUnitsSampledSlowly(unittest.TestCase):
     one-second sample is not its value at the sample's start
     (docs/FAULT_SCENARIOS.md, "A unit sampled at 1 or 2 Hz")."""
 
-    def test_no_healthy_unit_is_faulty_and_still_or_2_hz_nis_lie_in_their_band(self):
+    def test_no_healthy_unit_is_faulty_and_their_nis_lie_in_their_band(self):
         runs = [(preset, rate_hz, profile, seed)
                 for seed, (rate_hz, profile) in enumerate([(1, "static"), (1, "mixed"), (2, "mixed")], start=41)
                 for preset in ("mems", "nav", "tactical")]
@@ -326,13 +326,13 @@ class HealthyUnitsSampledSlowly(unittest.TestCase):
             # The tactical preset's 1 mg accelerometer drift (τ 300 s) wanders
             # within one 1 s sample as much as its white noise does there: the
             # filter must take the drift's mean over the sample. On a turning
-            # table at 1 Hz the reference's noise is still raised (open:
-            # docs/FAULT_SCENARIOS.md), and the band is not asserted there.
-            turning_at_one_hertz = rate_hz == 1 and profile != "static"
-            if not turning_at_one_hertz and not report["nisBandLow"] <= report["nisMean"] <= report["nisBandHigh"]:
+            # table at 1 Hz the innovations exceed their variance in a way a
+            # noise of the bench's reference does not explain; the reference
+            # noise is raised only where the likelihood says so.
+            if not report["nisBandLow"] <= report["nisMean"] <= report["nisBandHigh"]:
                 outside_band.append(label)
         # Each band holds a consistent filter's NIS with probability 0.99: two or more
-        # of six outside has probability 0.0015.
+        # of nine outside has probability 0.0034.
         self.assertLessEqual(len(outside_band), 1, outside_band)
 
 

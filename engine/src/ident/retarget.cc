@@ -1,20 +1,17 @@
 #include "insdiag/engine/ident/retarget.h"
 
-#include <absl/strings/str_format.h>
-
 #include <algorithm>
 #include <cmath>
 
 #include "insdiag/engine/model/drift_axis.h"
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/model/parameter_field.h"
+#include "insdiag/engine/numerics/golden_section.h"
 #include "insdiag/engine/numerics/parallel_map.h"
 #include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::engine::ident {
 namespace {
-
-std::string ThreeFigures(double v) { return absl::StrFormat("%.3g", v); }
 
 double EpochInterval(const ForwardPass& fw) {
   return fw.epochs() > 1 ? (fw.epoch_time_s.back() - fw.epoch_time_s.front()) / (fw.epochs() - 1) : 1.0;
@@ -159,10 +156,11 @@ std::vector<ParameterEstimate> ApplyAllanNoise(const AllanResult& allan, const E
   return used;
 }
 
-bool MatchReferenceNoise(const ForwardPass& fw, double alpha, ErrorModel& model, std::vector<std::string>* notes) {
-  bool changed = false;
+ReferenceNoiseExcess ScreenReferenceNoise(const ForwardPass& fw, double alpha,
+                                          const ErrorModel& model) {
+  ReferenceNoiseExcess out;
   const int K = fw.epochs();
-  if (K == 0) return false;
+  if (K == 0) return out;
   for (int group = 0; group < 2; ++group) {  // position channels, then velocity channels
     double nis = 0.0, excess = 0.0, lag1 = 0.0;
     for (int c = 3 * group; c < 3 * group + 3; ++c) {
@@ -187,20 +185,13 @@ bool MatchReferenceNoise(const ForwardPass& fw, double alpha, ErrorModel& model,
     // covariance matching presumes the model's structure is right).
     const double rho1 = lag1 / nis;
     if (rho1 > stats::NormalQuantile(1.0 - alpha) / std::sqrt(static_cast<double>(n))) continue;
-    double& sigma = group == 0 ? model.reference.position_sigma_m : model.reference.velocity_sigma_mps;
+    const double sigma =
+        group == 0 ? model.reference.position_sigma_m : model.reference.velocity_sigma_mps;
     const double r = sigma * sigma + excess / n;
     if (!(r > sigma * sigma)) continue;
-    const double before = sigma;
-    sigma = std::sqrt(r);
-    changed = true;
-    if (notes != nullptr) {
-      notes->push_back(std::string("the ") + (group == 0 ? "position" : "velocity") +
-                       " innovations exceed their predicted variance: the reference noise was raised from " +
-                       ThreeFigures(before) + " to " + ThreeFigures(sigma) + (group == 0 ? " m" : " m/s") +
-                       " — the unit moved in ways the bench's reference did not record (sway, vibration)");
-    }
+    (group == 0 ? out.position_sigma_m : out.velocity_sigma_mps) = std::sqrt(r);
   }
-  return changed;
+  return out;
 }
 
 bool UnresolvedNoise::Any() const {
@@ -283,39 +274,6 @@ void ApplyScale(Group& g, double log_scale) {
   for (ScaledTerm& t : g.terms) *t.value = t.bound * std::exp(log_scale);
 }
 
-// Golden-section search for the maximum of ℓ(log scale) over [lo, hi] (ℓ is
-// unimodal in a variance scale when the structure is right): the bracket's
-// best point, or the ends of the range when ℓ still rises there, or the start
-// (whose ℓ is `best`) when nothing beats it; as (ℓ, log scale).
-template <typename LogLikelihoodAt>
-std::pair<double, double> GoldenSectionMaximum(double lo_limit, double hi_limit, double start,
-                                               double best, double log_tolerance,
-                                               LogLikelihoodAt at) {
-  const double inv_phi = (std::sqrt(5.0) - 1.0) / 2.0;  // 1/φ, the golden section
-  double lo = lo_limit, hi = hi_limit;
-  double x1 = hi - inv_phi * (hi - lo), x2 = lo + inv_phi * (hi - lo);
-  double f1 = at(x1), f2 = at(x2);
-  while (hi - lo > log_tolerance) {
-    if (f1 > f2) {
-      hi = x2;
-      x2 = x1;
-      f2 = f1;
-      x1 = hi - inv_phi * (hi - lo);
-      f1 = at(x1);
-    } else {
-      lo = x1;
-      x1 = x2;
-      f1 = f2;
-      x2 = lo + inv_phi * (hi - lo);
-      f2 = at(x2);
-    }
-  }
-  std::array<std::pair<double, double>, 3> tried = {{{f1, x1}, {f2, x2}, {best, start}}};
-  if (hi >= hi_limit - log_tolerance) tried[0] = {at(hi_limit), hi_limit};
-  if (lo <= lo_limit + log_tolerance) tried[1] = {at(lo_limit), lo_limit};
-  return *std::max_element(tried.begin(), tried.end());
-}
-
 }  // namespace
 
 absl::StatusOr<NoiseScaleResult> ScaleUnresolvedNoise(const EpochRun& run, const ErrorModel& model,
@@ -349,8 +307,9 @@ absl::StatusOr<NoiseScaleResult> ScaleUnresolvedNoise(const EpochRun& run, const
         ApplyScale(g, log_scale);
         return log_likelihood();
       };
-      const auto top = GoldenSectionMaximum(lo_limit, std::log(g.max_scale), g.log_scale, best,
-                                            options.log_tolerance, at);
+      // ℓ is unimodal in a variance scale when the structure is right.
+      const auto top = numerics::GoldenSectionMaximum(lo_limit, std::log(g.max_scale), g.log_scale,
+                                                      best, options.log_tolerance, at);
       if (!failure.ok()) return failure;
       best = top.first;
       ApplyScale(g, top.second);

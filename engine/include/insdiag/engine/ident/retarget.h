@@ -7,17 +7,19 @@
 //              of its smoothed estimate (correlation.h), where the run resolves it
 //   noise      angle / velocity random walk and quantisation from the Allan fit
 //              of the static segments (allan.h), where resolved
-//   reference  the observation noise r of a channel group is raised when its
-//              innovations are larger than predicted — covariance matching,
-//              r̂ = mean(ν²) − mean(h P hᵀ) (Mehra, "Approaches to adaptive
-//              filtering", IEEE Trans. AC 17(5), 1972): the unit moved in ways the
-//              bench's reference did not record
+//   reference  a channel group whose innovations are larger than predicted —
+//              covariance matching, r̂ = mean(ν²) − mean(h P hᵀ) (Mehra,
+//              "Approaches to adaptive filtering", IEEE Trans. AC 17(5), 1972) —
+//              is flagged for a maximum-likelihood fit of its observation noise
+//              (analysis): the unit moved in ways the bench's reference did not
+//              record
 #pragma once
 
 #include <absl/status/statusor.h>
 
 #include <array>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -61,12 +63,20 @@ RetargetResult RetargetDrifts(const ErrorModel& current, const ErrorModel& a_pri
 std::vector<ParameterEstimate> ApplyAllanNoise(const AllanResult& allan, const ErrorModel& a_priori,
                                                ErrorModel& model, double alpha);
 
-// Raises the reference's position / velocity noise when a channel group's
-// innovations exceed their predicted variance beyond the χ² band at
-// `alpha` and are not positively correlated (a missing effect, not a
-// missing noise); true when it changed the model (a note says by how much).
-bool MatchReferenceNoise(const ForwardPass& forward, double alpha, ErrorModel& model,
-                         std::vector<std::string>* notes);
+// The channel groups whose innovations exceed their predicted variance
+// beyond the χ² band at `alpha` and are not positively correlated (a missing
+// effect, not a missing noise), each with the reference σ covariance
+// matching gives it: σ² + mean(ν² − S) (Mehra, IEEE Trans. AC-15(2), 1970).
+// That moment estimate is biased high where the filter's gain on the
+// reference is near one (a jitter enters two successive innovations), so the
+// analysis takes it as the upper end of a likelihood search, not as the value.
+struct ReferenceNoiseExcess {
+  std::optional<double> position_sigma_m;
+  std::optional<double> velocity_sigma_mps;
+  bool Any() const { return position_sigma_m.has_value() || velocity_sigma_mps.has_value(); }
+};
+ReferenceNoiseExcess ScreenReferenceNoise(const ForwardPass& forward, double alpha,
+                                          const ErrorModel& model);
 
 // Noise terms of an Allan-based a-priori model (ErrorModelFromAllan) that the
 // Allan fit did not resolve and that were set from bounds: the white density
