@@ -3,17 +3,15 @@
 #include <absl/strings/str_format.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
-#include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
 
 #include "analysis/model_change.h"
+#include "analysis/noise_identification.h"
 #include "insdiag/engine/ident/correlation.h"
 #include "insdiag/engine/ident/retarget.h"
-#include "insdiag/engine/numerics/golden_section.h"
 #include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::engine::pipeline {
@@ -114,197 +112,6 @@ bool ApplyDriftLikelihood(const ident::DriftLikelihoodResult& ml, double alpha, 
                    : placeholders ? "the model's values were the Allan fit's placeholders: it takes the estimates"
                                   : "the data do not reject the model's values, kept"));
   return takes;
-}
-
-
-// The Allan fit's noise terms in the model, and its estimates other than the
-// drifts' (those are identified on the whole run; the Allan Markov term of
-// the static segments only seeds an a-priori model).
-std::vector<ParameterEstimate> ApplyAllanNoise(const RunContext& c, const ident::AllanResult& allan, ErrorModel& base) {
-  std::vector<ParameterEstimate> identified =
-      ident::ApplyAllanNoise(allan, c.a_priori.model, base, c.options.monitor.family_wise_alpha);
-  for (const ParameterEstimate& p : ident::AllanParameterEstimates(allan, &c.a_priori.model)) {
-    if (!DriftOfParameter(p.name).has_value() &&
-        std::none_of(identified.begin(), identified.end(),
-                     [&](const ParameterEstimate& q) { return q.name == p.name; })) {
-      identified.push_back(p);
-    }
-  }
-  return identified;
-}
-
-// The accelerometers' quantisation the Allan fit found where the a-priori
-// model states none, kept only where the innovations' likelihood prefers it.
-// Over the few cluster times at a low rate's short end (at 1 Hz, τ of 1, 2
-// and 4 s) a quantisation term's 3Q²/τ² trades against the white noise and
-// the drift's rise, and the Wald test cannot see that; in the filter it is
-// white noise on every velocity observation (forward_filter.cc), which made a
-// healthy 1 Hz unit's NIS 0.86 (2Δℓ 340 against the model without it).
-// Decided against the a-priori model before the drifts are identified, so
-// that it does not bend them, and again against the identified model, since
-// against drifts far from the unit's it also absorbs their misfit.
-enum class QuantisationTest { kBeforeTheDrifts, kAfterTheDrifts };
-
-void KeepQuantisationTheInnovationsSupport(const RunContext& c, QuantisationTest when,
-                                           ErrorModel& model,
-                                           std::vector<ParameterEstimate>& identified,
-                                           std::vector<std::string>& notes) {
-  const Eigen::Vector3d stated = c.a_priori.from_allan
-                                     ? Eigen::Vector3d::Zero()
-                                     : Eigen::Vector3d(c.a_priori.model.acc.quantization);
-  if (model.acc.quantization == stated) return;
-  ErrorModel without = model;
-  without.acc.quantization = stated;
-  const auto with_it = ProfileLogLikelihood(c.epochs, model);
-  const auto without_it = ProfileLogLikelihood(c.epochs, without);
-  if (!with_it.ok() || !without_it.ok()) return;
-  const double statistic = 2.0 * (*with_it - *without_it);
-  std::string axes;
-  for (int axis = 0; axis < 3; ++axis) {
-    if (model.acc.quantization[axis] == stated[axis]) continue;
-    absl::StrAppendFormat(&axes, "%s%s %.3g m/s", axes.empty() ? "" : ", ",
-                          AxisLabel(AxisSet::kSingle, axis, axis), model.acc.quantization[axis]);
-  }
-  const std::string_view against =
-      when == QuantisationTest::kBeforeTheDrifts ? "the a-priori drifts" : "the identified drifts";
-  if (statistic > 0.0) {
-    if (when == QuantisationTest::kAfterTheDrifts) {
-      notes.push_back(
-          absl::StrFormat("the Allan fit's accelerometer quantisation (%s) is in the model: "
-                          "with %s the innovations' likelihood prefers it, 2Δℓ = %.1f",
-                          axes, against, statistic));
-    }
-    return;
-  }
-  model = std::move(without);
-  for (int axis = 0; axis < 3; ++axis) {
-    const std::string name = QuantizationName({Sensor::kAccelerometer, axis});
-    std::erase_if(identified, [&](const ParameterEstimate& p) { return p.name == name; });
-  }
-  notes.push_back(
-      absl::StrFormat("the Allan fit's accelerometer quantisation (%s) is not in the model: "
-                      "with %s the innovations' likelihood is higher without it (2Δℓ = %.1f); "
-                      "over the static segments' few short cluster times it stood for the "
-                      "white noise and the drift's rise",
-                      axes, against, -statistic));
-}
-
-// The bench's reference noise, where the innovations reject its stated
-// accuracy. Covariance matching (ident::ScreenReferenceNoise) flags the
-// channel groups whose innovations exceed their predicted variance and gives
-// an upper end; each flagged group's σ is then the innovations' maximum-
-// likelihood value between the model's and twice that end (golden section on
-// ln σ, the groups in turn; prediction-error likelihood, Schweppe, IEEE
-// Trans. IT-11(1), 1965). The model takes them where 2Δℓ exceeds χ²(groups)
-// at α, as the drifts' estimates (Wilks 1938). Matching alone misreads an
-// excess of another kind — a healthy MEMS unit turned at 1 Hz had its
-// position noise raised to 0.86 mm at 2Δℓ = −677 — and overstates a real one
-// (a bench swaying 1 mm, matched at 1.5–1.9 mm: tests/engine/
-// identification_test.cc). `passed` is the model `forward` ran; `model`
-// takes the fitted reference. True when it did.
-bool FitReferenceNoiseTheInnovationsReject(const RunContext& c, const ForwardPass& forward,
-                                           const ErrorModel& passed, ErrorModel& model,
-                                           std::vector<std::string>& notes) {
-  const double alpha = c.options.monitor.family_wise_alpha;
-  const ident::ReferenceNoiseExcess excess = ident::ScreenReferenceNoise(forward, alpha, passed);
-  if (!excess.Any()) return false;
-  struct Group {
-    std::string_view name, unit;
-    double ReferenceAccuracy::*sigma;
-    std::optional<double> matched;
-  };
-  const std::array<Group, 2> groups = {
-      {{"position", "m", &ReferenceAccuracy::position_sigma_m, excess.position_sigma_m},
-       {"velocity", "m/s", &ReferenceAccuracy::velocity_sigma_mps, excess.velocity_sigma_mps}}};
-  ErrorModel fitted = passed;
-  const double before = ProfileLogLikelihood(forward, passed);
-  double best = before;
-  int fitted_groups = 0;
-  absl::Status failure = absl::OkStatus();
-  for (const Group& g : groups) {
-    if (!g.matched.has_value()) continue;
-    ++fitted_groups;
-    double& sigma = fitted.reference.*g.sigma;
-    const double lowest = std::log(sigma);
-    const auto log_likelihood_at = [&](double log_sigma) {
-      sigma = std::exp(log_sigma);
-      auto l = ProfileLogLikelihood(c.epochs, fitted);
-      if (!l.ok()) failure = l.status();
-      return l.ok() ? *l : -std::numeric_limits<double>::infinity();
-    };
-    const auto [top, log_sigma] =
-        numerics::GoldenSectionMaximum(lowest, std::log(2.0 * *g.matched), lowest, best,
-                                       c.options.noise_scale.log_tolerance, log_likelihood_at);
-    best = top;
-    sigma = std::exp(log_sigma);
-  }
-  if (!failure.ok()) {
-    notes.push_back("the reference noise was not fitted: " + std::string(failure.message()));
-    return false;
-  }
-  std::string changes;
-  for (const Group& g : groups) {
-    const double from = passed.reference.*g.sigma, to = fitted.reference.*g.sigma;
-    if (to != from) {
-      absl::StrAppendFormat(&changes, "%s%s %.3g → %.3g %s", changes.empty() ? "" : ", ", g.name,
-                            from, to, g.unit);
-    }
-  }
-  const double statistic = 2.0 * (best - before);
-  const double critical = stats::ChiSquareQuantile(1.0 - alpha, fitted_groups);
-  if (statistic > critical) {
-    model.reference = fitted.reference;
-    notes.push_back(absl::StrFormat(
-        "the innovations exceed their predicted variance: the reference noise was raised by "
-        "maximum "
-        "likelihood (%s; 2Δℓ = %.1f against χ²(%d) at %.2g) — the unit moved in ways the bench's "
-        "reference did not record (sway, vibration)",
-        changes, statistic, fitted_groups, alpha));
-    return true;
-  }
-  notes.push_back(absl::StrFormat(
-      "the innovations exceed their predicted variance, but not as a noise of the bench's "
-      "reference: "
-      "its likelihood's best value%s gains 2Δℓ = %.1f against χ²(%d) at %.2g; the reference "
-      "accuracy is kept",
-      changes.empty() ? "" : " (" + changes + ")", statistic, fitted_groups, alpha));
-  return false;
-}
-
-// Terms the Allan fit left at bounds: nothing else re-tunes them (the ACF
-// retargeting needs a resolved drift, the Allan fit a resolved density), and
-// a bound over-predicts the innovations. Their common scale per group by
-// maximum likelihood (retarget.h).
-void RetuneUnresolvedNoise(const RunContext& c, const std::optional<ident::AllanResult>& allan, ErrorModel& base,
-                           std::vector<ParameterEstimate>& identified, std::vector<std::string>& notes) {
-  const ident::UnresolvedNoise unresolved =
-      c.a_priori.from_allan && allan.has_value() ? ident::UnresolvedAllanTerms(*allan) : ident::UnresolvedNoise{};
-  if (!c.options.retune_unresolved_noise || !unresolved.Any()) return;
-  Progress(c.options, 0.08, "maximum-likelihood noise scale");
-  auto scaled = ident::ScaleUnresolvedNoise(c.epochs, base, unresolved, c.options.noise_scale);
-  if (!scaled.ok()) {
-    notes.push_back("the noise terms set from Allan bounds were not re-tuned: " +
-                    std::string(scaled.status().message()));
-    return;
-  }
-  base = scaled->model;
-  for (const ident::NoiseScaleGroup& g : scaled->groups) {
-    std::string terms;
-    for (const std::string& t : g.terms) terms += (terms.empty() ? "" : ", ") + t;
-    const bool seeded = g.name.ends_with("seed");
-    notes.push_back("re-tuned by maximum likelihood of the innovations, " + g.name + " (" + terms +
-                    (seeded ? ", seeded by the Allan fit, not resolved by correlation processing): "
-                            : ", set from Allan bounds): ") +
-                    absl::StrFormat("× %.3g (SE of ln: %.2g)%s", g.scale, g.log_std_error,
-                                    g.at_limit ? ", at the search range's limit" : ""));
-  }
-  notes.push_back(absl::StrFormat("the innovations' log-likelihood rose by %.1f after %d filter passes",
-                                  scaled->log_likelihood_after - scaled->log_likelihood_before,
-                                  scaled->filter_passes));
-  for (const ParameterEstimate& p : scaled->identified) {
-    std::erase_if(identified, [&](const ParameterEstimate& q) { return q.name == p.name; });
-    identified.push_back(p);
-  }
 }
 
 // Where the retargeting loop stopped.
@@ -656,17 +463,6 @@ void IdentifyFinalDrifts(const RunContext& c, const Retargeted& retargeted, Iden
   }
 }
 
-// The reference noise of a model whose drifts were identified from a class
-// prior, against one pass of the identified model.
-absl::Status FitReferenceNoiseToTheIdentifiedModel(const RunContext& c, Identification& id,
-                                                   std::vector<std::string>& notes) {
-  auto pass = RunForwardFilter(c.epochs, id.model);
-  if (!pass.ok()) return pass.status();
-  const ErrorModel passed = id.model;
-  FitReferenceNoiseTheInnovationsReject(c, *pass, passed, id.model, notes);
-  return absl::OkStatus();
-}
-
 // A bias step or ramp found against a class prior's drifts, tested against
 // the drifts identified without it. Drifts identified from decades take a
 // step as a slower, wider drift (a 50 °/h MEMS gyro step became a drift σ × 6
@@ -835,7 +631,7 @@ absl::StatusOr<Identification> IdentifyModel(const RunContext& c, const std::opt
                                           id.identified, notes);
   }
   if (retargeted->DriftsFromAClassPrior(c.a_priori) && !retargeted->deferred) {
-    if (auto fitted = FitReferenceNoiseToTheIdentifiedModel(c, id, notes); !fitted.ok())
+    if (auto fitted = FitReferenceNoiseToTheIdentifiedModel(c, id.model, notes); !fitted.ok())
       return fitted;
   }
   return id;

@@ -1,7 +1,7 @@
-// The identification stage: the a-priori model's noise from the Allan fit,
-// the terms the Allan fit left at bounds re-tuned, then the retargeting loop —
-// a pass, correlation processing of the smoothed drifts, a re-tuned model —
-// until the parameters settle, and the drifts' final values by the
+// The identification stage: the a-priori model's noise from the Allan fit and
+// the terms it left at bounds re-tuned (noise_identification.h), then the
+// retargeting loop — a pass, correlation processing of the smoothed drifts, a
+// re-tuned model — until the parameters settle, and the drifts' final values by the
 // innovations' likelihood. On its first pass the a-priori model is scanned:
 // when it lacks significant effects, its misfit and those effects compete
 // (BIC), and either the drifts are re-tuned or the model is left for the
