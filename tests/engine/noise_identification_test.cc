@@ -121,7 +121,7 @@ bool SaysTheReferenceNoiseWasRaised(const AnalysisReport& report) {
 
 // The reference noise is raised where the innovations exceed their
 // predicted variance, to its maximum-likelihood value, and only where the
-// likelihood rejects the bench's stated accuracy (analysis/identification.cc).
+// likelihood rejects the bench's stated accuracy (analysis/noise_identification.cc).
 // A unit on a bench that sways by 1 mm gets its position reference noise
 // raised to that within 30 % (covariance matching alone gave 1.45–1.9 mm on
 // these runs); the same unit on a steady bench keeps the bench's accuracy and
