@@ -50,9 +50,9 @@ void KeepQuantisationTheInnovationsSupport(const RunContext& c, QuantisationTest
 // at α, as the drifts' estimates (Wilks 1938). Matching alone misreads an
 // excess of another kind — a healthy MEMS unit turned at 1 Hz had its
 // position noise raised to 0.86 mm at 2Δℓ = −1355 — and overstates a real one
-// (a bench swaying 1 mm, matched at 1.5–1.9 mm: tests/engine/noise_
-// identification_test.cc). `passed` is the model `forward` ran; `model`
-// takes the fitted reference. True when it did.
+// (a bench swaying 1 mm, matched at 1.5–1.9 mm:
+// tests/engine/noise_identification_test.cc). `passed` is the model
+// `forward` ran; `model` takes the fitted reference. True when it did.
 bool FitReferenceNoiseTheInnovationsReject(const RunContext& c, const ForwardPass& forward,
                                            const ErrorModel& passed, ErrorModel& model,
                                            std::vector<std::string>& notes);
