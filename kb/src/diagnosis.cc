@@ -340,6 +340,18 @@ bool IsFaultEffect(const std::string& name) {
   return f != nullptr && f->kind == engine::EffectKind::kFault;
 }
 
+// A random structure (a walk, a second-order pair): states with process
+// noise, whose size is a variance, not a signed estimate.
+bool IsRandomStructure(const std::string& name) {
+  const engine::EffectFamily* f = engine::FindEffectFamily(name.substr(0, name.find('.')));
+  return f != nullptr && f->kind == engine::EffectKind::kRandom;
+}
+
+// The z of a two-sided p-value, the standard score a healthy unit scatters as N(0, 1).
+double StandardScoreOfPValue(double p_value) {
+  return -engine::stats::NormalQuantile(0.5 * std::clamp(p_value, 1e-300, 1.0));
+}
+
 // An evidence term on the standard-score scale: a healthy unit scatters as N(0, 1).
 EvidenceTerm StandardScoreTerm(const std::string& name, double estimate, double std_error, const std::string& unit,
                                double z, bool significant, const std::string& suffix,
@@ -406,8 +418,7 @@ EvidenceTerm AgainstNominal(const std::string& name, double value, double std_er
 // test picked the channel and the onset).
 double CandidateStandardScore(const v1::EffectCandidate& c) {
   const auto z_of_p = [&] {
-    return std::copysign(-engine::stats::NormalQuantile(0.5 * std::clamp(c.p_value(), 1e-300, 1.0)),
-                         c.estimate());
+    return std::copysign(StandardScoreOfPValue(c.p_value()), c.estimate());
   };
   const bool structure = c.source() == "STRUCTURE" || c.source() == "LIKELIHOOD";
   const bool fault = engine::IsFaultSource(c.source());
@@ -416,6 +427,27 @@ double CandidateStandardScore(const v1::EffectCandidate& c) {
          : c.degrees_of_freedom() <= 1
              ? std::copysign(std::sqrt(std::max(c.statistic(), 0.0)), c.estimate())
              : z_of_p();
+}
+
+// A random structure the loop added (a walk, a second-order pair) is in the
+// model, so no candidate scores it and the model lists only its density; the
+// test that added it does score it, as it scored the candidate before
+// (z of its Holm-adjusted p-value: a conservative score).
+void AddStructuresTheLoopAdded(const v1::AnalysisReport& report,
+                               const v1::DiagnosisSettings& settings, std::set<std::string>& seen,
+                               Evidence& evidence) {
+  const auto& effects = report.model().effects();
+  for (const auto& step : report.discovery()) {
+    const std::string& name = step.effect();
+    const bool in_model = std::find(effects.begin(), effects.end(), name) != effects.end();
+    if (!IsRandomStructure(name) || !in_model || !seen.insert(name).second) continue;
+    evidence.terms.push_back(StandardScoreTerm(
+        name, step.estimate(), step.std_error(), step.unit(), StandardScoreOfPValue(step.p_value()),
+        true,
+        absl::StrFormat(", in the model (added by the loop at step %d, Holm p = %.2g)", step.step(),
+                        step.p_value()),
+        settings));
+  }
 }
 
 }  // namespace
@@ -449,6 +481,7 @@ Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType
                     v1::IdentifiedParameter::Method_Name(p.method()) , ")");
     evidence.terms.push_back(std::move(t));
   }
+  AddStructuresTheLoopAdded(report, settings, seen, evidence);
   int significant_candidates = 0;
   for (const auto& c : report.effect_candidates()) {
     // A candidate no test measured is no evidence either way.

@@ -3,14 +3,16 @@
 // built-in INS-2000 unit type and failure modes.
 #include "insdiag/kb/diagnosis.h"
 
+#include <absl/strings/str_cat.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-
-#include <absl/strings/str_cat.h>
 
 #include <cmath>
 #include <random>
 #include <set>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "evidence_reports.h"
 
@@ -47,9 +49,10 @@ double ProbabilityOf(const v1::Diagnosis& d, const std::string& mode) {
   return 0.0;
 }
 
-TEST(FailureModeCatalogueTest, Ins2000HasSixteenArguedModesWhoseTermsTheUnitTypeOrTheEngineNames) {
+TEST(FailureModeCatalogueTest,
+     Ins2000HasSeventeenArguedModesWhoseTermsTheUnitTypeOrTheEngineNames) {
   const auto& f = Ins2000();
-  EXPECT_EQ(f.catalogue.modes_size(), 16);
+  EXPECT_EQ(f.catalogue.modes_size(), 17);
   std::set<std::string> roles;
   std::set<std::string> nominal;
   for (const auto& p : f.unit_type.nominal()) nominal.insert(p.name());
@@ -160,6 +163,46 @@ TEST(DiagnosisTest, AJumpInTheModelPointsAtItsModeHoweverStronglyItIsMeasured) {
     const double p = ProbabilityOf(d, "failureModes/dtg-rotor-mass-shift.x");
     EXPECT_GE(p, previous - 0.02) << "a stronger detection counted against the mode at z " << z;
     previous = p;
+  }
+}
+
+// A bias that wanders without returning is its own sensor's fault, whether
+// the scan found the walk or the loop put it in the model (where only the
+// test that added it scores it).
+TEST(DiagnosisTest, AWalkInTheBiasPointsAtThatSensorsWanderingBiasModeFoundOrInTheModel) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"gyro_bias_rw.y", "failureModes/dtg-flexure-hinge-creep.y"},
+      {"acc_bias_rw.z", "failureModes/acc-hysteresis.z"}};
+  for (const auto& [walk, mode] : cases) {
+    for (const bool in_model : {false, true}) {
+      v1::AnalysisReport report = NominalReport();
+      report.set_verdict(v1::AnalysisReport::FAULTY);
+      constexpr double kPValue = 1e-9;
+      if (in_model) {
+        report.mutable_model()->add_effects(walk);
+        auto* step = report.add_discovery();
+        step->set_step(1);
+        step->set_effect(walk);
+        step->set_estimate(3e-9);
+        step->set_p_value(kPValue);
+      } else {
+        auto* c = report.add_effect_candidates();
+        c->set_name(walk);
+        c->set_family(walk.substr(0, walk.find('.')));
+        c->set_source("LIKELIHOOD");
+        c->set_degrees_of_freedom(1);
+        c->set_estimate(3e-9);
+        c->set_p_value(kPValue);
+        c->set_p_value_holm(kPValue);
+        c->set_identifiable(true);
+      }
+      const v1::Diagnosis d = DiagnoseReport(report);
+      ASSERT_GT(d.candidates_size(), 0);
+      EXPECT_EQ(d.hypotheses(0).failure_mode(), mode)
+          << walk << (in_model ? " in the model" : " found") << "\n"
+          << d.DebugString();
+      EXPECT_EQ(d.candidates(0).module(), d.hypotheses(0).module());
+    }
   }
 }
 
