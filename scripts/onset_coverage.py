@@ -40,7 +40,10 @@ from fault_matrix import BENCHSIM, CLI, PYTHON
 
 DURATION_S = 1800.0
 RAMP_SPAN_S = 1000.0  # a ramp reaches its size in drift σ this long after its onset
-TAIL = 0.16  # each tail of the posterior outside the reported interval
+# Each tail of the onset posterior outside the reported interval: the report
+# carries the interval, not its level, which is OnsetScanOptions::interval_tail
+# (engine/include/insdiag/engine/finder/onset_scan.h).
+TAIL = 0.16
 
 
 def draw(i, pinned):

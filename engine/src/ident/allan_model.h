@@ -16,6 +16,7 @@
 
 #include "absl/strings/str_format.h"
 #include "insdiag/engine/ident/allan.h"
+#include "insdiag/engine/numerics/golden_section.h"
 
 namespace insdiag::engine::ident::allan_model {
 
@@ -73,20 +74,11 @@ struct MarkovPeak {
 };
 inline const MarkovPeak& MarkovShapePeak() {
   static const MarkovPeak peak = [] {
-    double lo = 0.5;
-    double hi = 6.0;
-    const double r = 0.5 * (std::sqrt(5.0) - 1.0);
-    for (int i = 0; i < 200; ++i) {
-      const double a = hi - r * (hi - lo);
-      const double b = lo + r * (hi - lo);
-      if (MarkovShape(a) > MarkovShape(b)) {
-        hi = b;
-      } else {
-        lo = a;
-      }
-    }
-    const double u = 0.5 * (lo + hi);
-    return MarkovPeak{u, MarkovShape(u)};
+    constexpr double kLo = 0.5, kHi = 6.0, kTolerance = 1e-12;  // g peaks near u = 1.89
+    const auto shape = [](double u) { return MarkovShape(u); };
+    const auto [g, u] =
+        numerics::GoldenSectionMaximum(kLo, kHi, kLo, MarkovShape(kLo), kTolerance, shape);
+    return MarkovPeak{u, g};
   }();
   return peak;
 }

@@ -1,5 +1,6 @@
 #include "insdiag/engine/nav/table_motion.h"
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -7,11 +8,10 @@
 #include <optional>
 #include <utility>
 
-#include <Eigen/LU>
-
 #include "insdiag/engine/nav/rotation.h"
 #include "insdiag/engine/nav/strapdown.h"
 #include "insdiag/engine/nav/wgs84.h"
+#include "insdiag/engine/numerics/golden_section.h"
 #include "insdiag/engine/numerics/parallel_map.h"
 
 namespace insdiag::engine::nav {
@@ -156,13 +156,13 @@ Shape Reconstruct(const BenchRun& run_, size_t k, const Reference& reference, Pi
     for (int i = 1; i <= kGrid; ++i) {
       if (gap(h * i / kGrid) < gap(h * best / kGrid)) best = i;
     }
-    double lo = h * std::max(0, best - 1) / kGrid, hi = h * std::min(kGrid, best + 1) / kGrid;
-    const double inv_phi = (std::sqrt(5.0) - 1.0) / 2.0;
-    for (int it = 0; it < 60; ++it) {
-      const double a = hi - inv_phi * (hi - lo), b = lo + inv_phi * (hi - lo);
-      (gap(a) < gap(b) ? hi : lo) = gap(a) < gap(b) ? b : a;
-    }
-    const double s = 0.5 * (lo + hi);
+    const double lo = h * std::max(0, best - 1) / kGrid, hi = h * std::min(kGrid, best + 1) / kGrid;
+    constexpr double kBracketShare =
+        1e-13;  // of the interval: far below the reference's resolution
+    const double s =
+        numerics::GoldenSectionMaximum(lo, hi, h * best / kGrid, -gap(h * best / kGrid),
+                                       kBracketShare * h, [&](double x) { return -gap(x); })
+            .second;
     // A true change inside the interval: the sides meet to within the
     // reference's resolution, far closer than either misses the other end.
     if (std::sqrt(gap(s)) <= 1e-9 + 1e-4 * r[3].norm()) {
