@@ -79,101 +79,71 @@ SensorBlocks StructureOf(const StateLayout& layout, const Eigen::Matrix2d& fill)
   return b;
 }
 
-}  // namespace
-
-SensorBlocks SensorBlocks::Identity(const StateLayout& layout) {
-  return StructureOf(layout, Eigen::Matrix2d::Identity());
-}
-
-SensorBlocks SensorBlocks::Zero(const StateLayout& layout) { return StructureOf(layout, Eigen::Matrix2d::Zero()); }
-
-void SensorBlocks::Discretise(const ErrorModel& model, const StateLayout& layout, double dt, SensorBlocks& D,
-                              SensorBlocks& Qs) {
-  D = Identity(layout);
-  Qs = Zero(layout);
-  const auto& states = layout.sensor_states();
-  for (size_t b = 0; b < D.blocks.size(); ++b) {
-    const SensorState& s = states[static_cast<size_t>(D.blocks[b].offset)];
-    Eigen::Matrix2d& phi = D.blocks[b].m;
-    Eigen::Matrix2d& q = Qs.blocks[b].m;
-    switch (s.dynamics) {
-      case StateDynamics::kGaussMarkov: {
-        // Seed eq. 5, exact: φ = e^{−Δt/τ}, q = σ²(1 − φ²).
-        const GaussMarkov& gm = (s.sensor == Sensor::kGyro ? model.gyro : model.acc).bias[s.axis];
-        const double f = gm.tau_s > 0.0 ? std::exp(-dt / gm.tau_s) : 0.0;
-        phi(0, 0) = f;
-        q(0, 0) = gm.sigma * gm.sigma * (1.0 - f * f);
-        break;
-      }
-      case StateDynamics::kConstant:
-        break;
-      case StateDynamics::kRandomWalk: {
-        const double k = model.effects[static_cast<size_t>(s.effect)].random_walk_density;
-        q(0, 0) = k * k * dt;
-        break;
-      }
-      case StateDynamics::kSecondOrderPair: {
-        const ModelEffect& e = model.effects[static_cast<size_t>(s.effect)];
-        const double decay = std::exp(-e.second_order_alpha_per_s * dt);
-        const double c = std::cos(e.second_order_beta_rad_s * dt);
-        const double sn = std::sin(e.second_order_beta_rad_s * dt);
-        phi << decay * c, -decay * sn, decay * sn, decay * c;
-        q = Eigen::Matrix2d::Identity() * e.second_order_sigma * e.second_order_sigma * (1.0 - decay * decay);
-        break;
-      }
-      case StateDynamics::kSecondOrderTail:
-        break;
-    }
-  }
-}
-
-namespace {
-
-// A block's continuous dynamics ẋ = F x + w, w of intensity c·I, from the
-// same parameters as SensorBlocks::Discretise (whose exact discretisation
-// over Δt they give).
+// Every sensor block's continuous dynamics, ẋ = F x + w with w white of
+// intensity c·I, is a damped rotation F = −α I + β J (J = [0 −1; 1 0]; a
+// 1×1 block has β = 0):
+//   Gauss–Markov drift (seed eq. 5)  ḃ = −b/τ + w     α = 1/τ, c = 2σ²/τ
+//   random walk                      ḃ = w            α = 0,   c = K²
+//   second-order pair                                 α, β,    c = 2ασ²
+//   constant                                          α = 0,   c = 0
+// so that both the discrete transition and the sample means follow from one
+// description of the model's parameters.
 struct ContinuousBlock {
-  Eigen::MatrixXd F;
+  double alpha_per_s = 0.0;
+  double beta_rad_s = 0.0;
   double intensity = 0.0;  // c
 };
 
-ContinuousBlock ContinuousDynamics(const ErrorModel& model, const SensorState& s, int size) {
-  ContinuousBlock out{Eigen::MatrixXd::Zero(size, size), 0.0};
+ContinuousBlock ContinuousDynamics(const ErrorModel& model, const SensorState& s) {
   switch (s.dynamics) {
     case StateDynamics::kGaussMarkov: {
-      // Seed eq. 5: ḃ = −b/τ + w, intensity 2σ²/τ.
       const GaussMarkov& gm = (s.sensor == Sensor::kGyro ? model.gyro : model.acc).bias[s.axis];
-      if (gm.tau_s > 0.0) {
-        out.F(0, 0) = -1.0 / gm.tau_s;
-        out.intensity = 2.0 * gm.sigma * gm.sigma / gm.tau_s;
-      }
-      break;
+      if (!(gm.tau_s > 0.0))
+        return {};  // σ = 0 too (ErrorModel::Validate): a state that stays zero
+      return {1.0 / gm.tau_s, 0.0, 2.0 * gm.sigma * gm.sigma / gm.tau_s};
     }
     case StateDynamics::kRandomWalk: {
       const double k = model.effects[static_cast<size_t>(s.effect)].random_walk_density;
-      out.intensity = k * k;
-      break;
+      return {0.0, 0.0, k * k};
     }
     case StateDynamics::kSecondOrderPair: {
-      // A damped rotation: F = [−α −β; β −α], isotropic intensity 2ασ².
       const ModelEffect& e = model.effects[static_cast<size_t>(s.effect)];
-      const double alpha = e.second_order_alpha_per_s, beta = e.second_order_beta_rad_s;
-      out.F << -alpha, -beta, beta, -alpha;
-      out.intensity = 2.0 * alpha * e.second_order_sigma * e.second_order_sigma;
-      break;
+      const double alpha = e.second_order_alpha_per_s;
+      return {alpha, e.second_order_beta_rad_s,
+              2.0 * alpha * e.second_order_sigma * e.second_order_sigma};
     }
     case StateDynamics::kConstant:
     case StateDynamics::kSecondOrderTail:
       break;
   }
-  return out;
+  return {};
 }
 
-SensorBlocks::SampleMean SampleMeanOf(const ContinuousBlock& block, double dt) {
-  const auto n = block.F.rows();
+Eigen::Matrix2d DriftMatrix(const ContinuousBlock& c) {
+  Eigen::Matrix2d F;
+  F << -c.alpha_per_s, -c.beta_rad_s, c.beta_rad_s, -c.alpha_per_s;
+  return F;
+}
+
+// The exact discretisation over Δt: φ = e^{FΔt} = e^{−αΔt} R(βΔt) and,
+// since F + Fᵀ = −2αI, q = ∫₀^Δt e^{Fs} c e^{Fᵀs} ds = c (1 − e^{−2αΔt})/(2α) I
+// (c Δt where α = 0).
+void DiscretiseBlock(const ContinuousBlock& c, double dt, Eigen::Matrix2d& phi,
+                     Eigen::Matrix2d& q) {
+  const double decay = std::exp(-c.alpha_per_s * dt);
+  const double cosine = std::cos(c.beta_rad_s * dt), sine = std::sin(c.beta_rad_s * dt);
+  phi << decay * cosine, -decay * sine, decay * sine, decay * cosine;
+  const double variance =
+      c.alpha_per_s > 0.0
+          ? c.intensity * -std::expm1(-2.0 * c.alpha_per_s * dt) / (2.0 * c.alpha_per_s)
+          : c.intensity * dt;
+  q = variance * Eigen::Matrix2d::Identity();
+}
+
+SensorBlocks::SampleMean SampleMeanOf(const ContinuousBlock& block, int n, double dt) {
   // The state and its integral: A = [F 0; I 0], noise [I; 0] c [I 0].
   Eigen::MatrixXd A = Eigen::MatrixXd::Zero(2 * n, 2 * n);
-  A.topLeftCorner(n, n) = block.F;
+  A.topLeftCorner(n, n) = DriftMatrix(block).topLeftCorner(n, n);
   A.bottomLeftCorner(n, n).setIdentity();
   Eigen::MatrixXd W = Eigen::MatrixXd::Zero(2 * n, 2 * n);
   W.topLeftCorner(n, n).setIdentity();
@@ -196,6 +166,25 @@ SensorBlocks::SampleMean SampleMeanOf(const ContinuousBlock& block, double dt) {
 
 }  // namespace
 
+SensorBlocks SensorBlocks::Identity(const StateLayout& layout) {
+  return StructureOf(layout, Eigen::Matrix2d::Identity());
+}
+
+SensorBlocks SensorBlocks::Zero(const StateLayout& layout) {
+  return StructureOf(layout, Eigen::Matrix2d::Zero());
+}
+
+void SensorBlocks::Discretise(const ErrorModel& model, const StateLayout& layout, double dt,
+                              SensorBlocks& D, SensorBlocks& Qs) {
+  D = Identity(layout);
+  Qs = Zero(layout);
+  const auto& states = layout.sensor_states();
+  for (size_t b = 0; b < D.blocks.size(); ++b) {
+    const SensorState& s = states[static_cast<size_t>(D.blocks[b].offset)];
+    DiscretiseBlock(ContinuousDynamics(model, s), dt, D.blocks[b].m, Qs.blocks[b].m);
+  }
+}
+
 std::vector<SensorBlocks::SampleMean> SensorBlocks::SampleMeans(const ErrorModel& model,
                                                                 const StateLayout& layout,
                                                                 double dt) {
@@ -205,8 +194,10 @@ std::vector<SensorBlocks::SampleMean> SensorBlocks::SampleMeans(const ErrorModel
   for (size_t b = 0; b < blocks.blocks.size(); ++b) {
     const Block& block = blocks.blocks[b];
     const ContinuousBlock continuous =
-        ContinuousDynamics(model, states[static_cast<size_t>(block.offset)], block.size);
-    if (continuous.intensity > 0.0 || !continuous.F.isZero()) out[b] = SampleMeanOf(continuous, dt);
+        ContinuousDynamics(model, states[static_cast<size_t>(block.offset)]);
+    const bool moves =
+        continuous.intensity > 0.0 || continuous.alpha_per_s != 0.0 || continuous.beta_rad_s != 0.0;
+    if (moves) out[b] = SampleMeanOf(continuous, block.size, dt);
   }
   return out;
 }
