@@ -73,7 +73,8 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
                     ? f.p_value
                     : OnsetPValue(f.statistic * noise_share * noise_share, f.path_length);
     c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
-    c.predicted_delta_bic = -c.statistic + c.dof * log_n;
+    // The magnitude a regular parameter; the onset at what searching it costs.
+    c.predicted_delta_bic = -c.statistic + log_n + f.onset_search_cost;
     c.onset_s = f.onset_s;
     if (scale.has_value()) {
       const double sigma = scale->drift_sigma[static_cast<size_t>(
@@ -86,8 +87,11 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
     c.onset_std_s = f.onset_std_s;
     c.onset_low_s = f.onset_low_s;
     c.onset_high_s = f.onset_high_s;
-    c.note = absl::StrFormat("likelihood ratio over %d onsets: max 2Δℓ %.1f; onset %.0f s (±1σ %.0f–%.0f s)",
-                             f.onsets_tried, f.statistic, f.onset_s, f.onset_low_s, f.onset_high_s);
+    c.note = absl::StrFormat(
+        "likelihood ratio over %d onsets: max 2Δℓ %.1f; onset %.0f s (±1σ %.0f–%.0f s); the "
+        "onset's search costs "
+        "%.1f in BIC",
+        f.onsets_tried, f.statistic, f.onset_s, f.onset_low_s, f.onset_high_s, f.onset_search_cost);
     if (const RawSampleChange* raw = SeenInRawSamples(f, raw_changes); raw != nullptr) {
       c.seen_in_raw_samples = true;
       absl::StrAppend(
