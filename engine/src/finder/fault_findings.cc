@@ -111,7 +111,7 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
     out.push_back(std::move(c));
   }
   // A step and a ramp of one sensor axis whose 2Δℓ are within 2 of each
-  // other (their parameter counts are equal) are not worth telling apart
+  // other are not worth telling apart
   // (Kass & Raftery, JASA 90(430), 1995): each names the other. So do faults
   // whose signatures the scan found nearly parallel (onset_scan.h).
   for (size_t i = 0; i < out.size(); ++i) {
@@ -218,11 +218,10 @@ void AddRawSampleFaultCandidates(std::vector<EffectCandidate>& candidates,
 }
 
 bool IsLikelierLookAlike(const EffectCandidate& a, const EffectCandidate& b, double alpha) {
-  const bool look_alikes =
-      IsFaultCandidate(a) && IsFaultCandidate(b) && a.SignificantAt(alpha) &&
-      b.SignificantAt(alpha) &&
-      std::abs(a.predicted_delta_bic - b.predicted_delta_bic) < kIndistinguishableDeltaBic &&
-      std::ranges::find(a.correlated_with, b.name) != a.correlated_with.end();
+  const bool look_alikes = IsFaultCandidate(a) && IsFaultCandidate(b) && a.SignificantAt(alpha) &&
+                           b.SignificantAt(alpha) &&
+                           std::abs(a.statistic - b.statistic) < kIndistinguishableDeltaBic &&
+                           std::ranges::find(a.correlated_with, b.name) != a.correlated_with.end();
   if (!look_alikes) return false;
   if (a.seen_in_raw_samples != b.seen_in_raw_samples) return b.seen_in_raw_samples;
   return a.size_in_drift_sigma.has_value() && b.size_in_drift_sigma.has_value() &&
