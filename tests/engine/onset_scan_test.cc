@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
-#include <numbers>
 #include <random>
 
 #include "insdiag/engine/filter/forward_filter.h"
@@ -439,38 +438,6 @@ TEST(OnsetScan, AStepThatWouldTurnTheHeadingByRadiansIsNotAFinding) {
         << candidates[1].note;
     EXPECT_TRUE(candidates[0].correlated_with.empty());
   }
-}
-
-// The onset is integrated out of a fault's predicted ΔBIC under a uniform
-// prior over the onsets tried: a jump the run places to an update pays
-// about 2 ln N, the whole prior; a ramp whose onset the run spreads over
-// minutes pays about 2 ln(N Δt / (√(2π) σ_onset)), the share of the prior
-// its posterior leaves out — less than BIC's ln n for a regular parameter.
-TEST(OnsetScan, SearchingTheOnsetCostsMostWhereTheRunPlacesItAndLittleWhereItCannot) {
-  const AccelerometerStep jump = AccelerometerStepFit(0, 1500.3, 7, false);
-  const double whole_prior = 2.0 * std::log(static_cast<double>(jump.fit.onsets_tried));
-  std::printf("jump: onset ±%.2f s, cost %.2f of 2 ln N %.2f\n", jump.fit.onset_std_s,
-              jump.fit.onset_search_cost, whole_prior);
-  EXPECT_LE(jump.fit.onset_search_cost, whole_prior + 1e-9);
-  EXPECT_GT(jump.fit.onset_search_cost,
-            whole_prior - 2.0 * std::log(3.0));  // within about three updates
-
-  auto unit = testing::NavigationGradeUnit();
-  double run_end_s = 0.0;
-  const auto fits = StillRampScan(unit, 10.0, 1500.0, 43, &run_end_s);
-  ASSERT_FALSE(fits.empty());
-  const OnsetFit& ramp = fits[0];
-  constexpr double kUpdateS = 1.0;
-  const double gaussian_share =
-      2.0 * std::log(ramp.onsets_tried * kUpdateS /
-                     (std::sqrt(2.0 * std::numbers::pi) * ramp.onset_std_s));
-  const double log_n = std::log(6.0 * ramp.onsets_tried);
-  std::printf("ramp: 2Δℓ %.1f, onset ±%.0f s, cost %.2f (Gaussian posterior %.2f, ln n %.2f)\n",
-              ramp.statistic, ramp.onset_std_s, ramp.onset_search_cost, gaussian_share, log_n);
-  ASSERT_GT(ramp.onset_std_s, 60.0) << "the run placed the ramp's onset: no spread to measure";
-  EXPECT_GE(ramp.onset_search_cost, 0.0);
-  EXPECT_NEAR(ramp.onset_search_cost, gaussian_share, 1.5);
-  EXPECT_LT(ramp.onset_search_cost, log_n);
 }
 
 // The sizes of faults in the unit's own drift σ, for a run ending at `run_end_s`.

@@ -137,7 +137,7 @@ void ConfirmFaultsOutsideTheLinearRange(const BenchRun& run, const ModelPass& a,
     c.estimate = measured.estimate;
     c.std_error = measured.std_error;
     c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
-    c.predicted_delta_bic = -c.statistic + log_n + fit.onset_search_cost;
+    c.predicted_delta_bic = -c.statistic + c.dof * log_n;
   }
 }
 

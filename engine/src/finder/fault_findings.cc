@@ -73,8 +73,7 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
                     ? f.p_value
                     : OnsetPValue(f.statistic * noise_share * noise_share, f.path_length);
     c.predicted_delta_aic = -c.statistic + 2.0 * c.dof;
-    // The magnitude a regular parameter; the onset at what searching it costs.
-    c.predicted_delta_bic = -c.statistic + log_n + f.onset_search_cost;
+    c.predicted_delta_bic = -c.statistic + c.dof * log_n;
     c.onset_s = f.onset_s;
     if (scale.has_value()) {
       const double sigma = scale->drift_sigma[static_cast<size_t>(
@@ -87,11 +86,8 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
     c.onset_std_s = f.onset_std_s;
     c.onset_low_s = f.onset_low_s;
     c.onset_high_s = f.onset_high_s;
-    c.note = absl::StrFormat(
-        "likelihood ratio over %d onsets: max 2Δℓ %.1f; onset %.0f s (±1σ %.0f–%.0f s); the "
-        "onset's search costs "
-        "%.1f in BIC",
-        f.onsets_tried, f.statistic, f.onset_s, f.onset_low_s, f.onset_high_s, f.onset_search_cost);
+    c.note = absl::StrFormat("likelihood ratio over %d onsets: max 2Δℓ %.1f; onset %.0f s (±1σ %.0f–%.0f s)",
+                             f.onsets_tried, f.statistic, f.onset_s, f.onset_low_s, f.onset_high_s);
     if (const RawSampleChange* raw = SeenInRawSamples(f, raw_changes); raw != nullptr) {
       c.seen_in_raw_samples = true;
       absl::StrAppend(
@@ -111,7 +107,7 @@ std::vector<EffectCandidate> FaultCandidates(const std::vector<OnsetFit>& fits, 
     out.push_back(std::move(c));
   }
   // A step and a ramp of one sensor axis whose 2Δℓ are within 2 of each
-  // other are not worth telling apart
+  // other (their parameter counts are equal) are not worth telling apart
   // (Kass & Raftery, JASA 90(430), 1995): each names the other. So do faults
   // whose signatures the scan found nearly parallel (onset_scan.h).
   for (size_t i = 0; i < out.size(); ++i) {
@@ -218,10 +214,11 @@ void AddRawSampleFaultCandidates(std::vector<EffectCandidate>& candidates,
 }
 
 bool IsLikelierLookAlike(const EffectCandidate& a, const EffectCandidate& b, double alpha) {
-  const bool look_alikes = IsFaultCandidate(a) && IsFaultCandidate(b) && a.SignificantAt(alpha) &&
-                           b.SignificantAt(alpha) &&
-                           std::abs(a.statistic - b.statistic) < kIndistinguishableDeltaBic &&
-                           std::ranges::find(a.correlated_with, b.name) != a.correlated_with.end();
+  const bool look_alikes =
+      IsFaultCandidate(a) && IsFaultCandidate(b) && a.SignificantAt(alpha) &&
+      b.SignificantAt(alpha) &&
+      std::abs(a.predicted_delta_bic - b.predicted_delta_bic) < kIndistinguishableDeltaBic &&
+      std::ranges::find(a.correlated_with, b.name) != a.correlated_with.end();
   if (!look_alikes) return false;
   if (a.seen_in_raw_samples != b.seen_in_raw_samples) return b.seen_in_raw_samples;
   return a.size_in_drift_sigma.has_value() && b.size_in_drift_sigma.has_value() &&

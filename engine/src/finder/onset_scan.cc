@@ -343,10 +343,6 @@ OnsetFit FitTerm(const EffectTerm& term, const OnsetSums& sums, const EpochRun& 
     fit.p_value = 1.0;
     return fit;
   }
-  double mean_ratio = 0.0;  // (1/N) Σ e^{(T − T̂)/2}
-  for (const double t : T) mean_ratio += std::exp(0.5 * (t - fit.statistic));
-  mean_ratio /= static_cast<double>(T.size());
-  fit.onset_search_cost = -2.0 * std::log(mean_ratio);
   // The onset's posterior under a flat prior on onset and magnitude: the
   // likelihood integrated over the magnitude, ∝ e^{T/2} I^{−1/2}. The onset
   // is placed within a sample about its median epoch, and its spread and

@@ -91,10 +91,9 @@ bool IsFaultSource(std::string_view source);
 bool IsFaultCandidate(const EffectCandidate& c);
 
 // Whether `b` should come before `a`: both significant faults at `alpha`,
-// named look-alikes of each other, their 2Δℓ within 2 (Kass & Raftery,
-// JASA 90(430), 1995: the run cannot tell them apart through the navigation
-// errors; their predicted ΔBIC adds what searching each onset costs, a
-// prior that says nothing of which failure is likelier), and
+// named look-alikes of each other, their predicted ΔBIC within 2 (Kass &
+// Raftery, JASA 90(430), 1995: the run cannot tell them apart through the
+// navigation errors), and
 //   - `b` seen in its sensor's raw samples and `a` not: the samples of a
 //     still segment hold the sensor's own change, which needs no navigation
 //     model (a y accelerometer's ramp and the x gyro step that tilts the

@@ -100,15 +100,6 @@ struct OnsetFit {
   double std_error = 0.0;
   double path_length = 0.0;   // V
   int onsets_tried = 0;
-  // What searching the onset costs, in the units of BIC's ln n:
-  //   −2 ln( (1/N) Σ_θ e^{(T(θ) − T̂)/2} ),
-  // the onset integrated out under a uniform prior over the N onsets tried
-  // (the Bayes factor's Occam factor; Kass & Raftery, JASA 90(430), 1995,
-  // §4.1). Schwarz's ln n is the price of a regular parameter, and a change
-  // point is not one (Zhang & Siegmund, Biometrics 63(1), 2007): a jump the
-  // run places to one update pays 2 ln N, a ramp whose onset the run cannot
-  // place pays little. Between 0 and 2 ln N.
-  double onset_search_cost = 0.0;
   // The filter's peak attitude error under the fault at its estimate and
   // onset, |β̂| max_k |A_ψ,k| (A_k of the header, after each prediction):
   // how far the estimate is from the first-order model's range (linear_range.h).
