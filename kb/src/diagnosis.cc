@@ -334,17 +334,12 @@ absl::StatusOr<std::vector<v1::FailureMode>> ExpandCatalogue(const v1::FailureMo
 
 namespace {
 
-// A fault effect (bias step or ramp): nominally absent in every unit type.
-bool IsFaultEffect(const std::string& name) {
+// Whether catalogue term `name` (family.axis) is of `kind`: a fault effect
+// (bias step or ramp, nominally absent in every unit type) or a random
+// structure (a walk or a second-order pair, whose size is a variance).
+bool IsEffectOfKind(const std::string& name, engine::EffectKind kind) {
   const engine::EffectFamily* f = engine::FindEffectFamily(name.substr(0, name.find('.')));
-  return f != nullptr && f->kind == engine::EffectKind::kFault;
-}
-
-// A random structure (a walk, a second-order pair): states with process
-// noise, whose size is a variance, not a signed estimate.
-bool IsRandomStructure(const std::string& name) {
-  const engine::EffectFamily* f = engine::FindEffectFamily(name.substr(0, name.find('.')));
-  return f != nullptr && f->kind == engine::EffectKind::kRandom;
+  return f != nullptr && f->kind == kind;
 }
 
 // The z of a two-sided p-value, the standard score a healthy unit scatters as N(0, 1).
@@ -440,7 +435,9 @@ void AddStructuresTheLoopAdded(const v1::AnalysisReport& report,
   for (const auto& step : report.discovery()) {
     const std::string& name = step.effect();
     const bool in_model = std::find(effects.begin(), effects.end(), name) != effects.end();
-    if (!IsRandomStructure(name) || !in_model || !seen.insert(name).second) continue;
+    if (!IsEffectOfKind(name, engine::EffectKind::kRandom) || !in_model ||
+        !seen.insert(name).second)
+      continue;
     evidence.terms.push_back(StandardScoreTerm(
         name, step.estimate(), step.std_error(), step.unit(), StandardScoreOfPValue(step.p_value()),
         true,
@@ -463,7 +460,8 @@ Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType
 
   for (const auto& p : report.identified()) {
     const auto it = nominal.find(p.name());
-    if (it == nominal.end() && IsFaultEffect(p.name()) && p.std_error() > 0 && seen.insert(p.name()).second) {
+    if (it == nominal.end() && IsEffectOfKind(p.name(), engine::EffectKind::kFault) &&
+        p.std_error() > 0 && seen.insert(p.name()).second) {
       // A fault the model holds (added at its onset): nominally absent, its
       // estimate in standard errors.
       evidence.terms.push_back(StandardScoreTerm(p.name(), p.value(), p.std_error(), p.unit(),

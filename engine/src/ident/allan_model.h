@@ -75,9 +75,8 @@ struct MarkovPeak {
 inline const MarkovPeak& MarkovShapePeak() {
   static const MarkovPeak peak = [] {
     constexpr double kLo = 0.5, kHi = 6.0, kTolerance = 1e-12;  // g peaks near u = 1.89
-    const auto shape = [](double u) { return MarkovShape(u); };
-    const auto [g, u] =
-        numerics::GoldenSectionMaximum(kLo, kHi, kLo, MarkovShape(kLo), kTolerance, shape);
+    const auto [g, u] = numerics::GoldenSectionMaximum(kLo, kHi, kLo, MarkovShape(kLo), kTolerance,
+                                                       MarkovShape<double>);
     return MarkovPeak{u, g};
   }();
   return peak;

@@ -153,15 +153,20 @@ Shape Reconstruct(const BenchRun& run_, size_t k, const Reference& reference, Pi
     auto gap = [&](double s) { return (left->At(s) - right->At(s)).squaredNorm(); };
     constexpr int kGrid = 32;
     int best = 0;
+    double best_gap = gap(0.0);
     for (int i = 1; i <= kGrid; ++i) {
-      if (gap(h * i / kGrid) < gap(h * best / kGrid)) best = i;
+      const double g = gap(h * i / kGrid);
+      if (g < best_gap) {
+        best = i;
+        best_gap = g;
+      }
     }
     const double lo = h * std::max(0, best - 1) / kGrid, hi = h * std::min(kGrid, best + 1) / kGrid;
-    constexpr double kBracketShare =
-        1e-13;  // of the interval: far below the reference's resolution
+    // The bracket's share of the interval: far below the reference's resolution.
+    constexpr double kBracketShare = 1e-13;
     const double s =
-        numerics::GoldenSectionMaximum(lo, hi, h * best / kGrid, -gap(h * best / kGrid),
-                                       kBracketShare * h, [&](double x) { return -gap(x); })
+        numerics::GoldenSectionMaximum(lo, hi, h * best / kGrid, -best_gap, kBracketShare * h,
+                                       [&](double x) { return -gap(x); })
             .second;
     // A true change inside the interval: the sides meet to within the
     // reference's resolution, far closer than either misses the other end.
