@@ -47,9 +47,10 @@ double ProbabilityOf(const v1::Diagnosis& d, const std::string& mode) {
   return 0.0;
 }
 
-TEST(FailureModeCatalogueTest, Ins2000HasSixteenArguedModesWhoseTermsTheUnitTypeOrTheEngineNames) {
+TEST(FailureModeCatalogueTest,
+     Ins2000HasSeventeenArguedModesWhoseTermsTheUnitTypeOrTheEngineNames) {
   const auto& f = Ins2000();
-  EXPECT_EQ(f.catalogue.modes_size(), 16);
+  EXPECT_EQ(f.catalogue.modes_size(), 17);
   std::set<std::string> roles;
   std::set<std::string> nominal;
   for (const auto& p : f.unit_type.nominal()) nominal.insert(p.name());
@@ -167,35 +168,40 @@ TEST(DiagnosisTest, AJumpInTheModelPointsAtItsModeHoweverStronglyItIsMeasured) {
 // the scan found the walk or the loop put it in the model (where only the
 // test that added it scores it).
 TEST(DiagnosisTest, AWalkInTheBiasPointsAtThatSensorsWanderingBiasModeFoundOrInTheModel) {
-  const std::string walk = "acc_bias_rw.z";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"gyro_bias_rw.y", "dtg-flexure-hinge-creep.y"}, {"acc_bias_rw.z", "acc-hysteresis.z"}};
   constexpr double kPValue = 1e-9;
-  for (const bool in_model : {false, true}) {
-    v1::AnalysisReport report = NominalReport();
-    report.set_verdict(v1::AnalysisReport::FAULTY);
-    if (in_model) {
-      report.mutable_model()->add_effects(walk);
-      auto* step = report.add_discovery();
-      step->set_step(1);
-      step->set_effect(walk);
-      step->set_estimate(3e-9);
-      step->set_p_value(kPValue);
-    } else {
-      auto* c = report.add_effect_candidates();
-      c->set_name(walk);
-      c->set_family("acc_bias_rw");
-      c->set_source("LIKELIHOOD");
-      c->set_degrees_of_freedom(1);
-      c->set_estimate(3e-9);
-      c->set_p_value(kPValue);
-      c->set_p_value_holm(kPValue);
-      c->set_identifiable(true);
+  for (const auto& [walk, mode] : cases) {
+    const std::string family = walk.substr(0, walk.find('.'));
+    const std::string module = walk.substr(0, walk.find('_')) + walk.substr(walk.find('.'));
+    for (const bool in_model : {false, true}) {
+      v1::AnalysisReport report = NominalReport();
+      report.set_verdict(v1::AnalysisReport::FAULTY);
+      if (in_model) {
+        report.mutable_model()->add_effects(walk);
+        auto* step = report.add_discovery();
+        step->set_step(1);
+        step->set_effect(walk);
+        step->set_estimate(3e-9);
+        step->set_p_value(kPValue);
+      } else {
+        auto* c = report.add_effect_candidates();
+        c->set_name(walk);
+        c->set_family(family);
+        c->set_source("LIKELIHOOD");
+        c->set_degrees_of_freedom(1);
+        c->set_estimate(3e-9);
+        c->set_p_value(kPValue);
+        c->set_p_value_holm(kPValue);
+        c->set_identifiable(true);
+      }
+      const v1::Diagnosis d = DiagnoseReport(report);
+      ASSERT_GT(d.candidates_size(), 0);
+      EXPECT_EQ(d.hypotheses(0).failure_mode(), "failureModes/" + mode)
+          << walk << (in_model ? " in the model" : " found") << "\n"
+          << d.DebugString();
+      EXPECT_EQ(d.candidates(0).module(), module) << walk;
     }
-    const v1::Diagnosis d = DiagnoseReport(report);
-    ASSERT_GT(d.candidates_size(), 0);
-    EXPECT_EQ(d.hypotheses(0).failure_mode(), "failureModes/acc-hysteresis.z")
-        << (in_model ? "in the model" : "found") << "\n"
-        << d.DebugString();
-    EXPECT_EQ(d.candidates(0).module(), "acc.z");
   }
 }
 

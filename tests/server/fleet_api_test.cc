@@ -389,7 +389,10 @@ TEST_F(FleetApiTest, StatisticsParetoAndRankingAgreeWithTheRecords) {
 
   // The ranking puts first the units whose parts are failing now (their
   // signatures are moving in their latest analysis): the area under the ROC
-  // curve of the fault probability as a detector of them.
+  // curve of the fault probability as a detector of them. One fleet's AUC
+  // is a draw: over the fleets of seeds 1–8 it was 0.77–0.88 (mean 0.82,
+  // docs/FLEET.md), as Hanley & McNeil's standard error of one fleet's AUC
+  // (about 0.03 here) says; the bound sits two of those below the mean.
   v1::RankUnitsRequest rank_request;
   rank_request.set_unit_type(kUnitType);
   rank_request.set_page_size(10);
@@ -420,8 +423,8 @@ TEST_F(FleetApiTest, StatisticsParetoAndRankingAgreeWithTheRecords) {
     ++confident;
     confident_failing += truth().units_about_to_fail.contains(u.unit().substr(std::string("units/").size())) ? 1 : 0;
   }
-  EXPECT_GT(auc, 0.85) << failing.size() << " units show a failure coming; " << confident_failing << " of the "
-                      << confident << " units ranked P(fault) ≥ 0.99 are among them";
+  EXPECT_GT(auc, 0.76) << failing.size() << " units show a failure coming; " << confident_failing
+                       << " of the " << confident << " units ranked P(fault) ≥ 0.99 are among them";
 }
 
 }  // namespace
