@@ -78,56 +78,56 @@ std::vector<ParameterEstimate> RemoveDominantConstants(BenchRun& run, const std:
 
 absl::Status AddEffects(const BenchRun& run, const std::vector<std::string>& selectors, double update_interval_s,
                         double diffuse_prior_scale, ErrorModel& model) {
-  for (const std::string& selector : selectors) {
-    auto terms = ParseEffectSelector(selector);
-    if (!terms.ok()) return terms.status();
-    auto onset = ParseOnset(selector);
-    if (!onset.ok()) return onset.status();
-    for (const EffectTerm& term : *terms) {
-      if (model.FindEffect(term) >= 0) continue;
-      ModelEffect e;
-      e.term = term;
-      if (term.family->kind == EffectKind::kFault) {
-        if (!onset->has_value()) {
-          return absl::InvalidArgumentError("effect '" + selector + "' is a fault: name its onset, " + term.Name() +
-                                            "@SECONDS, or add it after a scan has estimated the onset");
-        }
-        e.onset_s = **onset;
+  auto selected = ParseEffectSelectors(selectors);
+  if (!selected.ok()) return selected.status();
+  for (const auto& [selector, term, onset_s] : *selected) {
+    if (model.FindEffect(term) >= 0) continue;
+    ModelEffect e;
+    e.term = term;
+    if (term.family->kind == EffectKind::kFault) {
+      if (!onset_s.has_value()) {
+        return absl::InvalidArgumentError(
+            "effect '" + selector + "' is a fault: name its onset, " + term.Name() +
+            "@SECONDS, or add it after a scan has estimated the onset");
       }
-      const SensorTriadModel& triad = term.family->sensor == Sensor::kGyro ? model.gyro : model.acc;
-      // The sensor's white noise averaged over one update interval: the size of
-      // error the data resolve in one step.
-      const double noise = triad.white_noise_density.maxCoeff() / std::sqrt(update_interval_s);
-      const double drift = std::max({triad.bias[0].sigma, triad.bias[1].sigma, triad.bias[2].sigma});
-      const double scale = diffuse_prior_scale * std::max(noise, drift);
-      if (term.family->kind == EffectKind::kFault) {
-        // A step on the scale of a turn-on bias; a ramp that reaches it over the run.
-        e.prior_sigma[0] = term.family->regressor == Regressor::kRamp ? scale / std::max(run.DurationS(), 1.0) : scale;
-        model.effects.push_back(e);
-        continue;
-      }
-      switch (term.family->process) {
-        case RandomProcess::kNone: {
-          const auto rms = pipeline::RegressorRms(run, term);
-          for (int p = 0; p < term.family->parameters_per_term; ++p) {
-            // An effect the run cannot excite keeps a prior on the scale of the drift itself.
-            const double r = rms[static_cast<size_t>(p)];
-            e.prior_sigma[static_cast<size_t>(p)] = r > 0.0 ? scale / r : scale;
-          }
-          break;
-        }
-        case RandomProcess::kRandomWalk:
-          // A walk that reaches the drift's σ over the drift's own correlation time.
-          e.random_walk_density = drift / std::sqrt(std::max(triad.bias[term.axis].tau_s, update_interval_s));
-          break;
-        case RandomProcess::kSecondOrderMarkov:
-          e.second_order_sigma = triad.bias[term.axis].sigma;
-          e.second_order_alpha_per_s = 1.0 / std::max(triad.bias[term.axis].tau_s, update_interval_s);
-          e.second_order_beta_rad_s = 2.0 * std::numbers::pi * e.second_order_alpha_per_s;
-          break;
-      }
-      model.effects.push_back(e);
+      e.onset_s = *onset_s;
     }
+    const SensorTriadModel& triad = term.family->sensor == Sensor::kGyro ? model.gyro : model.acc;
+    // The sensor's white noise averaged over one update interval: the size of
+    // error the data resolve in one step.
+    const double noise = triad.white_noise_density.maxCoeff() / std::sqrt(update_interval_s);
+    const double drift = std::max({triad.bias[0].sigma, triad.bias[1].sigma, triad.bias[2].sigma});
+    const double scale = diffuse_prior_scale * std::max(noise, drift);
+    if (term.family->kind == EffectKind::kFault) {
+      // A step on the scale of a turn-on bias; a ramp that reaches it over the run.
+      e.prior_sigma[0] = term.family->regressor == Regressor::kRamp
+                             ? scale / std::max(run.DurationS(), 1.0)
+                             : scale;
+      model.effects.push_back(e);
+      continue;
+    }
+    switch (term.family->process) {
+      case RandomProcess::kNone: {
+        const auto rms = pipeline::RegressorRms(run, term);
+        for (int p = 0; p < term.family->parameters_per_term; ++p) {
+          // An effect the run cannot excite keeps a prior on the scale of the drift itself.
+          const double r = rms[static_cast<size_t>(p)];
+          e.prior_sigma[static_cast<size_t>(p)] = r > 0.0 ? scale / r : scale;
+        }
+        break;
+      }
+      case RandomProcess::kRandomWalk:
+        // A walk that reaches the drift's σ over the drift's own correlation time.
+        e.random_walk_density =
+            drift / std::sqrt(std::max(triad.bias[term.axis].tau_s, update_interval_s));
+        break;
+      case RandomProcess::kSecondOrderMarkov:
+        e.second_order_sigma = triad.bias[term.axis].sigma;
+        e.second_order_alpha_per_s = 1.0 / std::max(triad.bias[term.axis].tau_s, update_interval_s);
+        e.second_order_beta_rad_s = 2.0 * std::numbers::pi * e.second_order_alpha_per_s;
+        break;
+    }
+    model.effects.push_back(e);
   }
   return absl::OkStatus();
 }

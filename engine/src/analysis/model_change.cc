@@ -32,62 +32,62 @@ absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& ba
                                        const Findings& found, const AnalysisOptions& options) {
   ErrorModel model = base;
   std::vector<std::string> fallback;
-  for (const std::string& selector : selectors) {
-    auto terms = ParseEffectSelector(selector);
-    if (!terms.ok()) return terms.status();
-    auto onset = ParseOnset(selector);
-    if (!onset.ok()) return onset.status();
-    for (const EffectTerm& term : *terms) {
-      if (model.FindEffect(term) >= 0) continue;
-      if (term.family->kind == EffectKind::kFault) {
-        // At the onset named, else at the scan's: prior wide against the scan's estimate.
-        const auto c = std::find_if(found.candidates.begin(), found.candidates.end(), [&](const EffectCandidate& x) {
-          return x.name == term.Name() && x.onset_s.has_value();
-        });
-        const std::optional<double> onset_s = onset->has_value() ? *onset
-                                              : c != found.candidates.end() ? c->onset_s
-                                                                            : std::nullopt;
-        if (c == found.candidates.end() || !onset_s.has_value()) {
-          fallback.push_back(onset_s.has_value() ? term.Name() + "@" + std::to_string(*onset_s) : term.Name());
-          continue;
-        }
-        model.effects.push_back(FaultEffectAt(term, *onset_s, c->estimate, c->std_error, options));
+  auto selected = ParseEffectSelectors(selectors);
+  if (!selected.ok()) return selected.status();
+  for (const SelectedTerm& named : *selected) {
+    const EffectTerm& term = named.term;
+    if (model.FindEffect(term) >= 0) continue;
+    if (term.family->kind == EffectKind::kFault) {
+      // At the onset named, else at the scan's: prior wide against the scan's estimate.
+      const auto c = std::find_if(
+          found.candidates.begin(), found.candidates.end(),
+          [&](const EffectCandidate& x) { return x.name == term.Name() && x.onset_s.has_value(); });
+      const std::optional<double> onset_s = named.onset_s.has_value()     ? named.onset_s
+                                            : c != found.candidates.end() ? c->onset_s
+                                                                          : std::nullopt;
+      if (c == found.candidates.end() || !onset_s.has_value()) {
+        fallback.push_back(onset_s.has_value() ? term.Name() + "@" + std::to_string(*onset_s)
+                                               : term.Name());
         continue;
       }
-      auto structure = std::find_if(found.structures.begin(), found.structures.end(),
-                                    [&](const StructureProposal& p) { return p.effect.term == term; });
-      if (structure != found.structures.end()) {
-        model.effects.push_back(structure->effect);
-        if (structure->fitted.has_value()) {
-          DriftOf(model, structure->fitted->drift).sigma = structure->fitted->drift_sigma.value;
-        }
-        continue;
-      }
-      // A constant the scan estimated: prior wide against its estimate.
-      bool placed = false;
-      if (term.family->kind == EffectKind::kConstant && a.scan != nullptr) {
-        ModelEffect e;
-        e.term = term;
-        const auto& cols = a.scan->columns();
-        const Eigen::MatrixXd& I = a.scan->information();
-        const Eigen::VectorXd& s = a.scan->score();
-        placed = true;
-        for (int p = 0; p < term.family->parameters_per_term; ++p) {
-          auto it = std::find_if(cols.begin(), cols.end(),
-                                 [&](const CandidateColumn& c) { return c.term == term && c.parameter == p; });
-          const auto i = static_cast<Eigen::Index>(it - cols.begin());
-          if (it == cols.end() || !(I(i, i) > 0.0)) {
-            placed = false;
-            break;
-          }
-          const double beta = s[i] / I(i, i);
-          const double se = 1.0 / std::sqrt(I(i, i));
-          e.prior_sigma[static_cast<size_t>(p)] = PriorSigmaAroundEstimate(beta, se, options);
-        }
-        if (placed) model.effects.push_back(e);
-      }
-      if (!placed) fallback.push_back(term.Name());
+      model.effects.push_back(FaultEffectAt(term, *onset_s, c->estimate, c->std_error, options));
+      continue;
     }
+    auto structure =
+        std::find_if(found.structures.begin(), found.structures.end(),
+                     [&](const StructureProposal& p) { return p.effect.term == term; });
+    if (structure != found.structures.end()) {
+      model.effects.push_back(structure->effect);
+      if (structure->fitted.has_value()) {
+        DriftOf(model, structure->fitted->drift).sigma = structure->fitted->drift_sigma.value;
+      }
+      continue;
+    }
+    // A constant the scan estimated: prior wide against its estimate.
+    bool placed = false;
+    if (term.family->kind == EffectKind::kConstant && a.scan != nullptr) {
+      ModelEffect e;
+      e.term = term;
+      const auto& cols = a.scan->columns();
+      const Eigen::MatrixXd& I = a.scan->information();
+      const Eigen::VectorXd& s = a.scan->score();
+      placed = true;
+      for (int p = 0; p < term.family->parameters_per_term; ++p) {
+        auto it = std::find_if(cols.begin(), cols.end(), [&](const CandidateColumn& c) {
+          return c.term == term && c.parameter == p;
+        });
+        const auto i = static_cast<Eigen::Index>(it - cols.begin());
+        if (it == cols.end() || !(I(i, i) > 0.0)) {
+          placed = false;
+          break;
+        }
+        const double beta = s[i] / I(i, i);
+        const double se = 1.0 / std::sqrt(I(i, i));
+        e.prior_sigma[static_cast<size_t>(p)] = PriorSigmaAroundEstimate(beta, se, options);
+      }
+      if (placed) model.effects.push_back(e);
+    }
+    if (!placed) fallback.push_back(term.Name());
   }
   if (auto st = AddEffects(run, fallback, options.filter.update_interval_s, options.diffuse_prior_scale, model); !st.ok()) {
     return st;

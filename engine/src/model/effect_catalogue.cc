@@ -162,6 +162,19 @@ absl::StatusOr<std::vector<EffectTerm>> ParseEffectSelector(std::string_view ful
                                     std::string(axis) + "'; its axes are: " + labels);
 }
 
+absl::StatusOr<std::vector<SelectedTerm>> ParseEffectSelectors(
+    const std::vector<std::string>& selectors) {
+  std::vector<SelectedTerm> out;
+  for (const std::string& selector : selectors) {
+    auto terms = ParseEffectSelector(selector);
+    if (!terms.ok()) return terms.status();
+    auto onset = ParseOnset(selector);
+    if (!onset.ok()) return onset.status();
+    for (const EffectTerm& term : *terms) out.push_back({selector, term, *onset});
+  }
+  return out;
+}
+
 void EvaluateRegressor(const EffectTerm& term, const RegressorInputs& in, double* out) {
   const Eigen::Vector3d& own = term.family->sensor == Sensor::kGyro ? in.gyro_rad_s : in.acc_mps2;
   switch (term.family->regressor) {

@@ -144,6 +144,18 @@ absl::StatusOr<std::vector<EffectTerm>> ParseEffectSelector(std::string_view sel
 // INVALID_ARGUMENT when the onset does not parse as a finite number.
 absl::StatusOr<std::optional<double>> ParseOnset(std::string_view selector);
 
+// One term a selector names, with the onset the selector gives it (faults).
+struct SelectedTerm {
+  std::string selector;  // as the user wrote it, for messages
+  EffectTerm term;
+  std::optional<double> onset_s;
+};
+
+// Every term of every selector, in order, with its onset; the first
+// selector that does not parse refuses the whole list.
+absl::StatusOr<std::vector<SelectedTerm>> ParseEffectSelectors(
+    const std::vector<std::string>& selectors);
+
 // The inputs a constant effect's regressor reads, for one sample interval.
 struct RegressorInputs {
   Eigen::Vector3d gyro_rad_s = Eigen::Vector3d::Zero();  // ω (measured or true)
