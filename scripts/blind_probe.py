@@ -26,8 +26,10 @@ with the lowest predicted ΔBIC, of look-alike faults the smaller, which
 `--discover` adds first), right
 module, onset error. A step's onset counts as found when it is within 60 s,
 its size when the right effect's estimate is within 3 standard errors of it.
-Runs where the fault cannot be seen are counted apart: a z gyro fault on a
-table that never tilts z (turns, static), whose only trace is the heading.
+Runs where the fault cannot be seen are counted apart: a gyro fault whose
+axis the table holds vertical from the onset to the end (a z gyro on a
+table that never tilts z; any gyro turned vertical before its fault), whose
+only trace is the heading.
 
 Usage:
   scripts/blind_probe.py [--runs N] [--first-index I] [--kinds healthy,step,ramp] [--jobs J]
@@ -45,6 +47,8 @@ import subprocess
 import sys
 import tempfile
 import threading
+
+import numpy
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
@@ -102,10 +106,30 @@ def kind_of(conditions):
     return "healthy" if name is None else "step" if "_step." in name else "ramp"
 
 
-def heading_only(conditions):
-    """A z gyro fault on a table that never tilts z shows only through the heading."""
+# An axis within this angle of the vertical senses no component of a tilt.
+VERTICAL_WITHIN_DEG = 1.0
+
+
+def heading_only(conditions, path):
+    """A gyro fault whose axis the table holds vertical from the onset to the
+    end shows only through the heading (a z gyro on a table that never tilts,
+    or any gyro turned vertical before its fault and kept so)."""
     fault = conditions["fault"]
-    return fault.get("sensor") == "gyro" and fault.get("axis") == "z" and conditions["profile"] in ("turns", "static")
+    if fault.get("sensor") != "gyro":
+        return False
+    with open(path) as f:
+        lines = f.read().splitlines()
+    header = next(i for i, line in enumerate(lines) if line.startswith("t,"))
+    columns = lines[header].split(",")
+    rows = numpy.loadtxt(lines[header + 1:], delimiter=",", usecols=[columns.index(c) for c in
+                                                                      ("t", "ref_roll", "ref_pitch")])
+    after = rows[rows[:, 0] >= fault["onset_s"]]
+    roll, pitch = after[:, 1], after[:, 2]
+    # The down component of the body axis in NED: the third row of
+    # C_b^n = Rz(yaw)·Ry(pitch)·Rx(roll) (shared/spec/bench-run-format.md).
+    down = {"x": -numpy.sin(pitch), "y": numpy.cos(pitch) * numpy.sin(roll),
+            "z": numpy.cos(pitch) * numpy.cos(roll)}[fault["axis"]]
+    return bool(numpy.all(numpy.abs(down) >= math.cos(math.radians(VERTICAL_WITHIN_DEG))))
 
 
 def run_one(index, units, rates_hz=RATES_HZ):
@@ -121,6 +145,7 @@ def run_one(index, units, rates_hz=RATES_HZ):
         if fault["kind"]:
             cmd += ["--fault", f"{fault['name']}={fault['value']:.9g}@{fault['onset_s']}"]
         subprocess.run(cmd, check=True, capture_output=True, text=True)
+        only_heading = fault["kind"] is not None and heading_only(c, path)
         done = subprocess.run([CLI, "analyze", path, "--json"], capture_output=True, text=True)
     if done.returncode != 0:
         return dict(c, error=done.stderr.strip()[-300:])
@@ -128,7 +153,7 @@ def run_one(index, units, rates_hz=RATES_HZ):
     with JUDGE_LOCK:
         fault_matrix.use_unit_class(c["preset"])
         verdict = fault_matrix.judge(fault, report)
-    return dict(c, heading_only=heading_only(c), allan_ramps=allan_ramps(report), allan_jumps=allan_jumps(report),
+    return dict(c, heading_only=only_heading, allan_ramps=allan_ramps(report), allan_jumps=allan_jumps(report),
                 drifts_held=drifts_held(report), constants_refuted=constants_refuted(report),
                 raw_sample_faults=[c["name"] for c in report.get("effectCandidates", []) if c.get("source") == "RAW"],
                 **verdict)
