@@ -278,8 +278,11 @@ void FillTruth(const Model& m, const Plan& plan, GeneratedFleet& out) {
       if (f.realised) {
         const auto month = MicrosOfMonthStart(MonthOf(f.time_us));
         ++truth.failures[{m.mode_models[static_cast<std::size_t>(f.mode)].id, batch, month}];
-      } else if (!u.retired && !u.tests.empty() && f.time_us - u.tests.back().time_us < m.precursor_us &&
+      } else if (!u.retired && !u.tests.empty() && !f.shifts.empty() &&
+                 f.time_us - u.tests.back().time_us < m.precursor_us &&
                  PrecursorShare(m, f.time_us - u.tests.back().time_us) >= 0.5) {
+        // A failure whose mode moves nothing the analyses measure (a jump
+        // with no precursor) is not one the latest analysis can show.
         truth.units_about_to_fail.insert(u.serial);
       }
     }

@@ -106,7 +106,8 @@ struct FleetTruth {
   std::map<std::string, std::int64_t> parts_by_role;
   // Units in service whose latest analysis shows a part's signature at
   // least half-way to its failure, which lies ahead (the failing parts a
-  // diagnosis can see now).
+  // diagnosis can see now; a failure whose signature moves nothing the
+  // analyses measure is not among them).
   std::set<std::string> units_about_to_fail;
   std::map<std::string, std::string> batch_of_unit;  // serial → batch
   std::map<std::string, std::int64_t> analyses_of_unit;  // serial → analyses
