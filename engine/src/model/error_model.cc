@@ -1,6 +1,6 @@
 #include "insdiag/engine/model/error_model.h"
 
-#include <cstdio>
+#include <absl/strings/str_format.h>
 
 namespace insdiag::engine {
 
@@ -34,9 +34,7 @@ std::vector<std::string> ErrorModel::EffectNames() const {
       continue;
     }
     // A fault's name carries its onset, so that the name adds it back (effect_catalogue.h, ParseOnset).
-    char onset[32];
-    std::snprintf(onset, sizeof onset, "@%.10g", e.onset_s);
-    names.push_back(e.term.Name() + onset);
+    names.push_back(e.term.Name() + absl::StrFormat("@%.10g", e.onset_s));
   }
   return names;
 }
