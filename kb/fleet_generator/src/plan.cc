@@ -266,6 +266,17 @@ bool Diagnosed(const UnitPlan& u, std::size_t test) {
   return test + 1 == u.tests.size() || kind == TestKind::kFailure || kind == TestKind::kNoFaultFound;
 }
 
+// Whether the unit's latest analysis shows its coming failure `f`: the
+// unit is in service, `f` lies within the precursor window after that
+// analysis with at least half its signature grown, and its mode moves
+// something the analyses measure (a jump or a drifting bias has no
+// precursor term in them).
+bool LatestAnalysisShows(const Model& m, const UnitPlan& u, const Failure& f) {
+  if (u.retired || u.tests.empty() || f.shifts.empty()) return false;
+  const std::int64_t ahead_us = f.time_us - u.tests.back().time_us;
+  return ahead_us < m.precursor_us && PrecursorShare(m, ahead_us) >= 0.5;
+}
+
 void FillTruth(const Model& m, const Plan& plan, GeneratedFleet& out) {
   FleetTruth& truth = out.truth;
   truth.test_interval_days = static_cast<double>(plan.interval_us) / static_cast<double>(kMicrosPerDay);
@@ -278,11 +289,7 @@ void FillTruth(const Model& m, const Plan& plan, GeneratedFleet& out) {
       if (f.realised) {
         const auto month = MicrosOfMonthStart(MonthOf(f.time_us));
         ++truth.failures[{m.mode_models[static_cast<std::size_t>(f.mode)].id, batch, month}];
-      } else if (!u.retired && !u.tests.empty() && !f.shifts.empty() &&
-                 f.time_us - u.tests.back().time_us < m.precursor_us &&
-                 PrecursorShare(m, f.time_us - u.tests.back().time_us) >= 0.5) {
-        // A failure whose mode moves nothing the analyses measure (a jump
-        // with no precursor) is not one the latest analysis can show.
+      } else if (LatestAnalysisShows(m, u, f)) {
         truth.units_about_to_fail.insert(u.serial);
       }
     }
