@@ -80,7 +80,12 @@ absl::Status AddEffects(const BenchRun& run, const std::vector<std::string>& sel
                         double diffuse_prior_scale, ErrorModel& model) {
   auto selected = ParseEffectSelectors(selectors);
   if (!selected.ok()) return selected.status();
-  for (const auto& [selector, term, onset_s] : *selected) {
+  return AddEffects(run, *selected, update_interval_s, diffuse_prior_scale, model);
+}
+
+absl::Status AddEffects(const BenchRun& run, const std::vector<SelectedTerm>& selected,
+                        double update_interval_s, double diffuse_prior_scale, ErrorModel& model) {
+  for (const auto& [selector, term, onset_s] : selected) {
     if (model.FindEffect(term) >= 0) continue;
     ModelEffect e;
     e.term = term;

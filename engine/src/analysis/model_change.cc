@@ -31,7 +31,7 @@ absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& ba
                                        const std::vector<std::string>& selectors, const ModelPass& a,
                                        const Findings& found, const AnalysisOptions& options) {
   ErrorModel model = base;
-  std::vector<std::string> fallback;
+  std::vector<SelectedTerm> fallback;  // terms nothing found: the diffuse prior
   auto selected = ParseEffectSelectors(selectors);
   if (!selected.ok()) return selected.status();
   for (const SelectedTerm& named : *selected) {
@@ -46,8 +46,7 @@ absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& ba
                                             : c != found.candidates.end() ? c->onset_s
                                                                           : std::nullopt;
       if (c == found.candidates.end() || !onset_s.has_value()) {
-        fallback.push_back(onset_s.has_value() ? term.Name() + "@" + std::to_string(*onset_s)
-                                               : term.Name());
+        fallback.push_back({term.Name(), term, onset_s});
         continue;
       }
       model.effects.push_back(FaultEffectAt(term, *onset_s, c->estimate, c->std_error, options));
@@ -87,7 +86,7 @@ absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& ba
       }
       if (placed) model.effects.push_back(e);
     }
-    if (!placed) fallback.push_back(term.Name());
+    if (!placed) fallback.push_back({term.Name(), term, std::nullopt});
   }
   if (auto st = AddEffects(run, fallback, options.filter.update_interval_s, options.diffuse_prior_scale, model); !st.ok()) {
     return st;

@@ -40,10 +40,11 @@
 #include "insdiag/engine/finder/effect_finder.h"
 #include "insdiag/engine/finder/onset_scan.h"
 #include "insdiag/engine/ident/allan.h"
-#include "insdiag/engine/ident/retarget.h"
-#include "insdiag/engine/ident/static_constants.h"
 #include "insdiag/engine/ident/correlation.h"
 #include "insdiag/engine/ident/drift_likelihood.h"
+#include "insdiag/engine/ident/retarget.h"
+#include "insdiag/engine/ident/static_constants.h"
+#include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/model/error_model.h"
 #include "insdiag/engine/monitor/monitoring.h"
 #include "insdiag/engine/monitor/sample_screening.h"
@@ -171,5 +172,8 @@ absl::StatusOr<ErrorModel> APrioriModel(const BenchRun& run, const std::optional
 // Adds catalogue terms to `model` with diffuse priors scaled to the run.
 absl::Status AddEffects(const BenchRun& run, const std::vector<std::string>& selectors, double update_interval_s,
                         double diffuse_prior_scale, ErrorModel& model);
+// The same for terms already parsed.
+absl::Status AddEffects(const BenchRun& run, const std::vector<SelectedTerm>& selected,
+                        double update_interval_s, double diffuse_prior_scale, ErrorModel& model);
 
 }  // namespace insdiag::engine
