@@ -2,7 +2,8 @@
 // either form gives the same run and is refused naming its line and key; the
 // join refuses a file of another unit; and `--upload` sends the real record to
 // a real insdiagd on the test's database, where the stored run is the
-// imported one, sample for sample (its SHA-256).
+// imported one, sample for sample (its SHA-256). And `insdiag report` of the
+// server's analysis shows which identified parameters the run tells.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -12,6 +13,7 @@
 #include <map>
 #include <regex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <absl/strings/str_cat.h>
@@ -20,6 +22,7 @@
 #include "insdiag/benchrun/bench_run_csv.h"
 #include "insdiag/client/run_client.h"
 #include "insdiag/importers/bench_run_import.h"
+#include "insdiag/v1/analyses.grpc.pb.h"
 #include "insdiag/v1/runs.grpc.pb.h"
 #include "support/insdiagd_fixture.h"
 #include "support/subprocess.h"
@@ -176,6 +179,7 @@ class ImportUploadTest : public ServerProcessTest {
     StartServer(INSDIAGD_PATH, "insdiag-import-upload");
   }
 };
+using ReportCliTest = ImportUploadTest;
 
 TEST_F(ImportUploadTest, TheStoredRunIsTheImportedRealRecordSampleForSample) {
   const std::vector<std::string> import = {"import", kRealRecord, "--preset", "psins-imu", "--serial",
@@ -229,6 +233,59 @@ TEST_F(ImportUploadTest, TheStoredRunIsTheImportedRealRecordSampleForSample) {
   v1::ListRunsResponse listed;
   ASSERT_TRUE(stub->ListRuns(&list_context, list, &listed).ok());
   EXPECT_EQ(listed.runs_size(), 1);
+}
+
+// A level, still run analysed by the server with the accelerometers' scale
+// factors in the model: the stored report carries each one's observability,
+// and `insdiag report` prints it — x and y saw no force.
+TEST_F(ReportCliTest, TheReportSaysWhichIdentifiedParametersTheRunTells) {
+  const auto file = dir_ / "still.csv";
+  const Completed simulated = Insdiag({"simulate", file.string(), "--profile", "static", "--rate", "10", "--seed", "5",
+                                       "--serial", "INS-OBS-1"},
+                                      dir_);
+  ASSERT_EQ(simulated.exit_status, 0) << simulated.stderr_text;
+  const Completed uploaded = Insdiag({"upload", file.string(), "--server", address_, "--token", token_}, dir_);
+  ASSERT_EQ(uploaded.exit_status, 0) << uploaded.stderr_text;
+  const std::string run = uploaded.stdout_text.substr(0, uploaded.stdout_text.find('\n'));
+
+  auto stub = v1::AnalysisService::NewStub(client::Connect(address_, token_));
+  v1::CreateAnalysisRequest create;
+  create.mutable_analysis()->set_run(run);
+  create.mutable_analysis()->mutable_model()->add_effects("acc_scale_factor");
+  v1::Analysis analysis;
+  {
+    grpc::ClientContext context;
+    const grpc::Status created = stub->CreateAnalysis(&context, create, &analysis);
+    ASSERT_TRUE(created.ok()) << created.error_message();
+  }
+  // Poll with a deadline until the server's worker has run it.
+  const auto deadline = std::chrono::steady_clock::now() + 240s;
+  while (analysis.state() != v1::Analysis::SUCCEEDED && analysis.state() != v1::Analysis::FAILED &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(500ms);
+    grpc::ClientContext context;
+    v1::GetAnalysisRequest get;
+    get.set_name(analysis.name());
+    ASSERT_TRUE(stub->GetAnalysis(&context, get, &analysis).ok());
+  }
+  ASSERT_EQ(analysis.state(), v1::Analysis::SUCCEEDED) << analysis.error().message();
+  std::map<std::string, v1::IdentifiedParameter::Observability> verdicts;
+  for (const v1::IdentifiedParameter& p : analysis.report().identified()) verdicts[p.name()] = p.observability();
+  for (const char* name : {"acc_scale_factor.x", "acc_scale_factor.y", "gyro_arw.x"}) {
+    ASSERT_TRUE(verdicts.contains(name)) << name << " is not in the report";
+  }
+  EXPECT_EQ(verdicts["acc_scale_factor.x"], v1::IdentifiedParameter::NOT_EXCITED);
+  EXPECT_EQ(verdicts["acc_scale_factor.y"], v1::IdentifiedParameter::NOT_EXCITED);
+  EXPECT_EQ(verdicts["gyro_arw.x"], v1::IdentifiedParameter::OBSERVABILITY_UNSPECIFIED) << "an Allan term is not judged";
+
+  const Completed text = Insdiag({"report", analysis.name(), "--server", address_, "--token", token_}, dir_);
+  ASSERT_EQ(text.exit_status, 0) << text.stderr_text;
+  EXPECT_THAT(text.stdout_text, HasSubstr("observability"));
+  EXPECT_THAT(text.stdout_text, ::testing::ContainsRegex("acc_scale_factor\\.x .*NOT observable: not excited, the test "
+                                                         "never excited it"));
+  const Completed json = Insdiag({"report", analysis.name(), "--json", "--server", address_, "--token", token_}, dir_);
+  ASSERT_EQ(json.exit_status, 0) << json.stderr_text;
+  EXPECT_THAT(json.stdout_text, HasSubstr("\"observability\": \"NOT_EXCITED\""));
 }
 
 }  // namespace
