@@ -221,8 +221,8 @@ class FlatJsonReader {
       Advance();
       Advance();
       const std::optional<std::uint32_t> low = hex4();
-      cp = low.has_value() && *low >= 0xDC00 && *low < 0xE000 ? std::optional(0x10000 + ((*cp - 0xD800) << 10) + (*low - 0xDC00))
-                                                              : std::nullopt;
+      const bool paired = low.has_value() && *low >= 0xDC00 && *low < 0xE000;
+      cp = paired ? std::optional(0x10000 + ((*cp - 0xD800) << 10) + (*low - 0xDC00)) : std::nullopt;
     }
     if (!cp.has_value() || (*cp >= 0xD800 && *cp < 0xE000)) {
       return Refusal(where, "\\u is followed by four hexadecimal digits of a character");
