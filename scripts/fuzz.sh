@@ -28,7 +28,7 @@ seed() {  # seed FUZZER NAME CONTENT
   printf '%b' "$3" >"$build/corpus/$1/$2"
 }
 mkdir -p "$build/corpus/bench_run_csv_fuzzer"
-head -n 40 "$root/../shared/data/real/rlg-static-psins.csv" >"$build/corpus/bench_run_csv_fuzzer/real-record" 2>/dev/null || true
+head -n 40 "${INSDIAG_BUILD_DIR:-$root/build}/data/real/rlg-static-psins.csv" >"$build/corpus/bench_run_csv_fuzzer/real-record" 2>/dev/null || true
 seed bench_run_csv_fuzzer spec-example '# format: insdiag-bench-run/1\n# unit_serial: INS-2000-0042\n# unit_type: INS-2000\n# site_latitude_deg: 55.5672\n# site_longitude_deg: 38.1500\n# site_height_m: 125.0\nt,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,ref_roll,ref_pitch,ref_yaw,temp\n0.0,1e-5,2e-5,-3e-5,0.01,-0.02,-9.81,0,0,0,25.0\n0.01,1e-5,2e-5,-3e-5,0.01,-0.02,-9.81,0,0,0,25.0\n'
 seed json_request_fuzzer create-analysis '\x05{"analysis":{"run":"runs/7c1e0000-0000-4000-8000-000000000000","model":{"effects":["gyro_scale_factor.z"]}},"requestId":"x"}'
 seed json_request_fuzzer list-runs '\x01{"pageSize":5,"pageToken":"abc","unitSerial":"INS-1"}'

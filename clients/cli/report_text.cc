@@ -6,6 +6,7 @@
 #include <charconv>
 #include <string>
 
+#include "insdiag/api/report_codec.h"
 #include "insdiag/engine/filter/observation.h"
 #include "insdiag/engine/ident/correlation.h"
 
@@ -19,6 +20,16 @@ void AppendNumber(std::string& line, double v) {
 }
 
 }  // namespace
+
+std::string ObservabilityText(v1::IdentifiedParameter::Observability verdict, const std::string& note) {
+  switch (verdict) {
+    case v1::IdentifiedParameter::OBSERVABLE: return "observable";
+    case v1::IdentifiedParameter::NOT_EXCITED: return "NOT observable: not excited, " + note;
+    case v1::IdentifiedParameter::INSEPARABLE: return "NOT observable: inseparable, " + note;
+    case v1::IdentifiedParameter::WEAKLY_DETERMINED: return "NOT observable: weakly determined, " + note;
+    default: return "";
+  }
+}
 
 void PrintReport(const engine::AnalysisReport& r, std::ostream& out) {
   out << "verdict: " << engine::VerdictName(r.verdict) << "\n";
@@ -91,6 +102,10 @@ void PrintReport(const engine::AnalysisReport& r, std::ostream& out) {
           << (p.method.has_value() ? engine::MethodName(*p.method) : "") << "]";
       if (p.a_priori == p.a_priori)
         out << " (a priori " << absl::StrFormat("%.4g", p.a_priori) << ")";
+      const api::Observability observability = api::ObservabilityOf(p);
+      if (const std::string text = ObservabilityText(observability.verdict, observability.note); !text.empty()) {
+        out << " " << text;
+      }
       out << "\n";
     }
   }

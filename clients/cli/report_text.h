@@ -3,12 +3,20 @@
 #pragma once
 
 #include <ostream>
+#include <string>
 
 #include "insdiag/engine/report.h"
+#include "insdiag/v1/analyses.pb.h"
 
 namespace insdiag::cli {
 
 void PrintReport(const engine::AnalysisReport& report, std::ostream& out);
+
+// Whether the run tells an identified parameter, as the text reports show it:
+// "observable", "NOT observable: inseparable, only with acc_turn_on_bias.z
+// (correlation +1.000)", …; empty when not judged (other methods, or a report
+// stored before the field).
+std::string ObservabilityText(v1::IdentifiedParameter::Observability verdict, const std::string& note);
 
 // CSV: t, then per channel <ch>_measured, <ch>_predicted, <ch>_residual, <ch>_sigma3.
 void WriteSeriesCsv(const engine::AnalysisSeries& series, std::ostream& out);

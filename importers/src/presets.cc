@@ -102,16 +102,21 @@ absl::StatusOr<ImportSettings> PsinsImu(std::string_view log, std::string_view s
   return s;
 }
 
-ImportSettings NovatelRawImuSa() {
+// NovAtel's short-header raw IMU logs: `%RAWIMUSA,week,seconds;` then the
+// body; the extended RAWIMUSXA body starts with two more fields (IMU info,
+// IMU type).
+ImportSettings NovatelRawImu(std::string_view preset_name, std::string_view log_name, bool extended) {
   ImportSettings s;
-  const InputLocation preset{"preset novatel-rawimusa", 0, 0, ""};
-  s.Set("source", "a NovAtel RAWIMUSA log (novatel-rawimusa preset)", preset);
-  s.Set("line_prefix", "%RAWIMUSA,", preset);
+  const InputLocation preset{absl::StrFormat("preset %s", preset_name), 0, 0, ""};
+  s.Set("source", absl::StrFormat("a NovAtel %s log (%s preset)", log_name, preset_name), preset);
+  s.Set("line_prefix", absl::StrFormat("%%%s,", log_name), preset);
   s.Set("checksum", "novatel-crc32", preset);
   s.Set("delimiters", ",;", preset);
-  // %RAWIMUSA, log week, log seconds; week, seconds, status, then the
-  // increments in the order and signs NovAtel writes them.
-  s.Set("columns", "-,-,-,gps_week,t,-,acc_z,-acc_y,acc_x,gyro_z,-gyro_y,gyro_x", preset);
+  // %LOG, log week, log seconds; [IMU info, IMU type;] week, seconds, status,
+  // then the increments in the order and signs NovAtel writes them.
+  s.Set("columns",
+        absl::StrCat("-,-,-,", extended ? "-,-," : "", "gps_week,t,-,acc_z,-acc_y,acc_x,gyro_z,-gyro_y,gyro_x"),
+        preset);
   s.Set("axes", std::string(kRightForwardUpToBody), preset);
   s.Set("attitude", "level", preset);
   s.Require("units",
@@ -122,14 +127,15 @@ ImportSettings NovatelRawImuSa() {
 
 }  // namespace
 
-std::vector<std::string> PresetNames() { return {"psins-imu", "novatel-rawimusa"}; }
+std::vector<std::string> PresetNames() { return {"psins-imu", "novatel-rawimusa", "novatel-rawimusxa"}; }
 
 absl::StatusOr<ImportSettings> PresetSettings(std::string_view preset, std::string_view log_bytes,
                                               std::string_view source_name) {
   if (preset == "psins-imu") return PsinsImu(log_bytes, source_name);
-  if (preset == "novatel-rawimusa") return NovatelRawImuSa();
+  if (preset == "novatel-rawimusa") return NovatelRawImu(preset, "RAWIMUSA", /*extended=*/false);
+  if (preset == "novatel-rawimusxa") return NovatelRawImu(preset, "RAWIMUSXA", /*extended=*/true);
   return absl::InvalidArgumentError(
-      absl::StrFormat("preset: '%s' is not a preset (psins-imu, novatel-rawimusa)", preset));
+      absl::StrFormat("preset: '%s' is not a preset (psins-imu, novatel-rawimusa, novatel-rawimusxa)", preset));
 }
 
 }  // namespace insdiag::importers

@@ -1,6 +1,7 @@
 #include "insdiag/api/report_codec.h"
 
 #include <absl/strings/str_cat.h>
+#include <absl/strings/str_format.h>
 
 #include <cmath>
 #include <limits>
@@ -53,6 +54,25 @@ std::optional<engine::EstimationMethod> MethodOf(v1::IdentifiedParameter::Method
 // JSON has no NaN or infinity: an unknown uncertainty is written as 0 and the
 // field's comment says so.
 double Finite(double v) { return std::isfinite(v) ? v : 0.0; }
+
+}  // namespace
+
+Observability ObservabilityOf(const engine::ParameterEstimate& p) {
+  // The filter's constants carry the prior and the correlation they are
+  // judged by; other estimates carry neither.
+  if (std::isnan(p.prior_std) && std::isnan(p.max_correlation)) return {};
+  if (engine::ObservableByRun(p)) return {v1::IdentifiedParameter::OBSERVABLE, ""};
+  // Why not, in the order ObservableByRun tests.
+  if (std::abs(p.max_correlation) > engine::kSeparableCorrelation) {
+    return {v1::IdentifiedParameter::INSEPARABLE,
+            absl::StrFormat("only with %s (correlation %+.3f)", p.correlated_with, p.max_correlation)};
+  }
+  if (std::isinf(p.prior_std)) return {v1::IdentifiedParameter::NOT_EXCITED, "the test never excited it"};
+  return {v1::IdentifiedParameter::WEAKLY_DETERMINED,
+          absl::StrFormat("standard error %.2g of the prior's", p.std_error / p.prior_std)};
+}
+
+namespace {
 
 void Fill(const engine::Localisation& in, v1::Localisation* out) {
   out->set_state(in.state);
@@ -117,6 +137,9 @@ void Fill(const engine::ParameterEstimate& p, v1::IdentifiedParameter* ip) {
   ip->set_method(MethodOf(p.method));
   ip->set_unit(p.unit);
   if (std::isfinite(p.a_priori)) ip->set_a_priori(p.a_priori);
+  const Observability o = ObservabilityOf(p);
+  ip->set_observability(o.verdict);
+  ip->set_observability_note(o.note);
 }
 
 // Unit of a correlation fit's parameter for a drift of `sensor`.

@@ -186,10 +186,11 @@ constexpr ReadmeRow kReadme[] = {
     {300.0, {0.89, 0.87, 0.078}, {0.01, 0.01, 0.001}},
 };
 
-// The real ring-laser-gyro record (shared/data/real): the analysis completes
-// on its one segment; numpy reproduces every deviation to 1e-9 (inside the
-// engine's intervals by far); scipy's fit of the independent curve agrees with
-// the engine's fitted terms within their standard errors — the selected terms
+// The real ring-laser-gyro record (data/real, imported from its PSINS log by
+// the build: tests/CMakeLists.txt): the analysis completes on its one
+// segment; numpy reproduces every deviation to 1e-9 (inside the engine's
+// intervals by far); scipy's fit of the independent curve agrees with the
+// engine's fitted terms within their standard errors — the selected terms
 // and, on the gyros, a fit of Q and N alone (the selection resolves neither:
 // the record is dominated by the dither and by the vehicle's sway, see
 // docs/IDENTIFICATION.md).
@@ -201,7 +202,7 @@ constexpr ReadmeRow kReadme[] = {
 // lower — a rounding or a slightly different sample span on their side, far
 // inside the interval (ν ≈ 3.5 there). Asserted: within 1% and inside the CIs.
 TEST(AllanCrossCheckTest, RealRingLaserGyroRecord) {
-  const std::string path = std::string(INSDIAG_SHARED_DIR) + "/data/real/rlg-static-psins.csv";
+  const std::string path = INSDIAG_REAL_RECORD_CSV;
   auto run = benchrun::ReadBenchRunFile(path);
   ASSERT_TRUE(run.ok()) << run.status();
   // The estimator against numpy's on the same samples, so without the jump

@@ -1,19 +1,29 @@
 // A multi-position test: six static positions and three turns recorded as
-// separate files with unrecorded moves between them, joined into one run of
-// segments (bench_run.h). The joint analysis aligns each segment anew and
-// shares the sensor errors, so that it recovers what no single position
-// tells: the accelerometer scale factors and biases and the gyro biases,
-// within 3 standard errors. The same effects on one level static file alone
-// are reported as not observable.
+// separate bench-run files with unrecorded moves between them, joined as
+// `insdiag join` joins them (benchrun::JoinBenchRunFiles) into one file of
+// segments, read back and analysed. The joint analysis aligns each segment
+// anew and shares the sensor errors, so that it recovers what no single
+// position tells: the accelerometer scale factors and biases and the gyro
+// biases, within 3 standard errors. One file alone leaves unobservable what
+// its geometry cannot tell, and the report says exactly which and why
+// (docs/MULTI_POSITION.md, "What one position or one turn tells").
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <random>
 #include <string>
 
 #include <absl/strings/str_format.h>
 
+#include "insdiag/api/report_codec.h"
+#include "insdiag/benchrun/bench_run_csv.h"
+#include "insdiag/benchrun/bench_run_join.h"
 #include "insdiag/engine/analysis.h"
 #include "insdiag/engine/nav/rotation.h"
 #include "insdiag/engine/sim/simulator.h"
@@ -55,41 +65,49 @@ sim::TableProfile SixPositionsAndThreeTurns() {
   return p;
 }
 
+// By the matrices' difference, about √2 times the angle between them: the
+// angle from acos of the trace resolves no better than 2e-8 rad.
 bool SameAttitude(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  const Eigen::Matrix3d d = nav::EulerToDcm(a).transpose() * nav::EulerToDcm(b);
-  return std::acos(std::clamp((d.trace() - 1.0) / 2.0, -1.0, 1.0)) < 1e-9;
+  return (nav::EulerToDcm(a) - nav::EulerToDcm(b)).norm() < 1e-9;
 }
 
-// The recorded files joined: the samples of every move (a motion that ends
-// in another attitude than it started from) are dropped, each file after a
-// move is a segment, and the files follow one another in time.
-BenchRun RecordedFilesJoined(const BenchRun& run) {
-  BenchRun joined;
-  joined.metadata = run.metadata;
-  joined.has_temperature = run.has_temperature;
-  const auto& s = run.samples;
-  const double dt = run.NominalIntervalS();
+// What the bench records of the simulated session: one file per position or
+// turn, from the end of one move (a motion that ends in another attitude than
+// it started from) to the start of the next, each on the session's clock.
+std::vector<BenchRun> RecordedFiles(const BenchRun& session) {
+  std::vector<BenchRun> files(1);
+  const auto& s = session.samples;
   size_t k = 0;
-  bool after_move = false;
   while (k < s.size()) {
+    // A still sample, or the first of a motion from sample k−1's attitude.
+    size_t end = k;
     if (k > 0 && !SameAttitude(s[k].ref_rpy_rad, s[k - 1].ref_rpy_rad)) {
-      // A motion from sample k−1's attitude: find where it stops.
-      size_t end = k;
       while (end + 1 < s.size() && !SameAttitude(s[end + 1].ref_rpy_rad, s[end].ref_rpy_rad)) ++end;
       if (!SameAttitude(s[end].ref_rpy_rad, s[k - 1].ref_rpy_rad)) {
         k = end + 1;  // a move: not recorded
-        after_move = true;
+        if (!files.back().samples.empty()) files.emplace_back();
         continue;
       }
     }
-    if (after_move) joined.metadata.segment_starts.push_back(joined.samples.size());
-    after_move = false;
-    ImuSample sample = s[k];
-    sample.t_s = static_cast<double>(joined.samples.size() + 1) * dt;
-    joined.samples.push_back(sample);
-    ++k;
+    // Still, or a turn back to where it started: recorded.
+    files.back().samples.insert(files.back().samples.end(), s.begin() + static_cast<std::ptrdiff_t>(k),
+                                s.begin() + static_cast<std::ptrdiff_t>(end + 1));
+    k = end + 1;
   }
-  return joined;
+  for (BenchRun& f : files) {
+    f.metadata = session.metadata;
+    f.has_temperature = session.has_temperature;
+  }
+  return files;
+}
+
+// A fresh directory for this process's files.
+std::filesystem::path FilesDirectory(const std::string& name) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / absl::StrFormat("insdiag-%s-%d", name, static_cast<int>(getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
 }
 
 struct Truth {
@@ -131,41 +149,139 @@ AnalysisRequest WithCalibrationEffects() {
   return request;
 }
 
-TEST(MultiPosition, TheJoinedFilesRecoverTheCalibrationAndOneFileAloneCannot) {
+// The simulated session as the bench records it: nine files under `dir`.
+struct RecordedTest {
+  std::vector<Truth> truth;
+  std::vector<std::filesystem::path> files;
+};
+RecordedTest RecordSession(uint64_t seed, const std::filesystem::path& dir) {
+  RecordedTest test;
+  const sim::SimulatedUnit unit = UnitWithCalibrationErrors(seed, test.truth);
+  const sim::SimulatedRun simulated = SimulateOrDie(unit, SixPositionsAndThreeTurns(), kRateHz, seed);
+  const std::vector<BenchRun> recorded = RecordedFiles(simulated.run);
+  EXPECT_EQ(recorded.size(), 9u) << "six positions and three turns are nine files";
+  for (size_t i = 0; i < recorded.size(); ++i) {
+    test.files.push_back(dir / absl::StrFormat("file-%d.csv", i + 1));
+    EXPECT_TRUE(benchrun::WriteBenchRunFile(recorded[i], test.files.back()).ok());
+  }
+  return test;
+}
+
+AnalysisOptions EveryConstantInTheFilter() {
+  AnalysisOptions options;
+  options.identify = false;
+  options.remove_dominant_constants = false;  // every constant estimated by the joint filter
+  return options;
+}
+
+std::string Described(const ParameterEstimate& p) {
+  const api::Observability o = api::ObservabilityOf(p);
+  return absl::StrFormat("%s = %.3g ± %.3g (prior %.3g, correlation %+.3f with %s): %s %s", p.name, p.value,
+                         p.std_error, p.prior_std, p.max_correlation, p.correlated_with,
+                         v1::IdentifiedParameter::Observability_Name(o.verdict), o.note);
+}
+
+TEST(MultiPosition, TheJoinedFilesRecoverTheCalibrationWithin3StandardErrors) {
   for (uint64_t seed : {31u, 32u}) {
-    std::vector<Truth> truth;
-    const sim::SimulatedUnit unit = UnitWithCalibrationErrors(seed, truth);
-    const sim::SimulatedRun simulated = SimulateOrDie(unit, SixPositionsAndThreeTurns(), kRateHz, seed);
-    const BenchRun joined = RecordedFilesJoined(simulated.run);
-    ASSERT_EQ(joined.metadata.segment_starts.size(), 8u) << "six positions and three turns are nine files";
-    AnalysisOptions options;
-    options.identify = false;
-    options.remove_dominant_constants = false;  // every constant estimated by the joint filter
-    auto analysis = Analyze(joined, WithCalibrationEffects(), options);
+    const std::filesystem::path dir = FilesDirectory(absl::StrFormat("multi-position-joined-%d", seed));
+    const RecordedTest recorded = RecordSession(seed, dir);
+    ASSERT_EQ(recorded.files.size(), 9u);
+    // As `insdiag join file-1.csv … file-9.csv -o test.csv`, then `insdiag analyze test.csv`.
+    auto joined = benchrun::JoinBenchRunFiles(recorded.files);
+    ASSERT_TRUE(joined.ok()) << joined.status();
+    ASSERT_TRUE(benchrun::WriteBenchRunFile(*joined, dir / "test.csv").ok());
+    auto test = benchrun::ReadBenchRunFile(dir / "test.csv");
+    ASSERT_TRUE(test.ok()) << test.status();
+    EXPECT_EQ(test->metadata.format, benchrun::kFormatV2);
+    ASSERT_EQ(test->metadata.segment_starts.size(), 8u);
+    auto analysis = Analyze(*test, WithCalibrationEffects(), EveryConstantInTheFilter());
     ASSERT_TRUE(analysis.ok()) << analysis.status();
-    for (const Truth& t : truth) {
+    for (const Truth& t : recorded.truth) {
       const ParameterEstimate* p = Find(analysis->report, t.name);
       ASSERT_NE(p, nullptr) << t.name;
+      std::printf("seed %d %s, true %.3g\n", static_cast<int>(seed), Described(*p).c_str(), t.value);
       EXPECT_LT(std::abs(p->value - t.value), 3.0 * p->std_error)
           << "seed " << seed << " " << t.name << ": " << p->value << " ± " << p->std_error << ", true " << t.value;
-      EXPECT_TRUE(ObservableByRun(*p)) << t.name << ": SE " << p->std_error << ", prior " << p->prior_std;
+      EXPECT_EQ(api::ObservabilityOf(*p).verdict, v1::IdentifiedParameter::OBSERVABLE) << Described(*p);
     }
+    for (const std::string& note : analysis->report.notes) {
+      EXPECT_EQ(note.find("not observable from this run"), std::string::npos) << note;
+    }
+    std::filesystem::remove_all(dir);
+  }
+}
 
-    // The first file alone: level, still, one attitude.
-    BenchRun first = joined;
-    first.samples.resize(joined.metadata.segment_starts.front());
-    first.metadata.segment_starts.clear();
-    auto alone = Analyze(first, WithCalibrationEffects(), options);
-    ASSERT_TRUE(alone.ok()) << alone.status();
-    for (const char* name : {"acc_scale_factor.x", "acc_scale_factor.y", "acc_scale_factor.z", "acc_turn_on_bias.z"}) {
-      const ParameterEstimate* p = Find(alone->report, name);
-      ASSERT_NE(p, nullptr) << name;
-      EXPECT_FALSE(ObservableByRun(*p)) << name << ": SE " << p->std_error << ", prior " << p->prior_std
-                                        << ", correlation " << p->max_correlation << " with " << p->correlated_with;
+// What one file tells, from its geometry (docs/MULTI_POSITION.md): a position
+// shows each accelerometer one force f, so only s·f + b is known — s and b
+// apart where f ≠ 0 (inseparable), b alone where f = 0 (s never excited);
+// against the reference attitude (known to an arc-second) a gyro's bias
+// tilts the unit and shows in the velocities within seconds, except along
+// the vertical, where it turns the heading and reaches them only through the
+// Earth's rate (∝ gΩ cos L·b·t³/6): weakly, so that over a 97-s turn file the
+// heading gyro is weakly determined, and on a tilted position the x and y
+// gyros, which share the vertical, are inseparable. A turn about the
+// vertical leaves the forces on the body's axes as they were.
+using Verdict = v1::IdentifiedParameter::Observability;
+constexpr Verdict kObservable = v1::IdentifiedParameter::OBSERVABLE;
+constexpr Verdict kNotExcited = v1::IdentifiedParameter::NOT_EXCITED;
+constexpr Verdict kInseparable = v1::IdentifiedParameter::INSEPARABLE;
+constexpr Verdict kWeak = v1::IdentifiedParameter::WEAKLY_DETERMINED;
+
+struct OneFile {
+  int file;  // 1-based, in recording order
+  const char* what;
+  // acc_scale_factor, acc_turn_on_bias, gyro_turn_on_bias, each x, y, z
+  std::array<std::array<Verdict, 3>, 3> verdicts;
+};
+constexpr OneFile kOneFileAlone[] = {
+    {1, "level, z down, still 300 s",
+     {{{kNotExcited, kNotExcited, kInseparable}, {kObservable, kObservable, kInseparable},
+       {kObservable, kObservable, kObservable}}}},
+    {3, "tilted: x and y at 45° to gravity, z level; still 300 s",
+     {{{kInseparable, kInseparable, kNotExcited}, {kInseparable, kInseparable, kObservable},
+       {kInseparable, kInseparable, kObservable}}}},
+    {7, "level, one turn about the vertical, 97 s",
+     {{{kNotExcited, kNotExcited, kInseparable}, {kObservable, kObservable, kInseparable},
+       {kObservable, kObservable, kWeak}}}},
+    {8, "tilted, one turn about the vertical, 97 s",
+     {{{kInseparable, kInseparable, kNotExcited}, {kInseparable, kInseparable, kObservable},
+       {kInseparable, kInseparable, kObservable}}}},
+};
+
+TEST(MultiPosition, OneFileAloneLeavesUnobservableWhatItsGeometryCannotTell) {
+  constexpr const char* kFamilies[] = {"acc_scale_factor", "acc_turn_on_bias", "gyro_turn_on_bias"};
+  constexpr const char* kAxes[] = {"x", "y", "z"};
+  for (uint64_t seed : {31u, 32u}) {
+    const std::filesystem::path dir = FilesDirectory(absl::StrFormat("multi-position-alone-%d", seed));
+    const RecordedTest recorded = RecordSession(seed, dir);
+    ASSERT_EQ(recorded.files.size(), 9u);
+    for (const OneFile& one : kOneFileAlone) {
+      auto run = benchrun::ReadBenchRunFile(recorded.files[static_cast<size_t>(one.file - 1)]);
+      ASSERT_TRUE(run.ok()) << run.status();
+      auto alone = Analyze(*run, WithCalibrationEffects(), EveryConstantInTheFilter());
+      ASSERT_TRUE(alone.ok()) << alone.status();
+      std::string note;
+      for (const std::string& n : alone->report.notes) {
+        if (n.starts_with("not observable from this run")) note = n;
+      }
+      std::printf("seed %d, file %d (%s):\n", static_cast<int>(seed), one.file, one.what);
+      for (size_t f = 0; f < 3; ++f) {
+        for (size_t a = 0; a < 3; ++a) {
+          const std::string name = absl::StrFormat("%s.%s", kFamilies[f], kAxes[a]);
+          const ParameterEstimate* p = Find(alone->report, name);
+          ASSERT_NE(p, nullptr) << name;
+          std::printf("  %s\n", Described(*p).c_str());
+          const Verdict expected = one.verdicts[f][a];
+          EXPECT_EQ(api::ObservabilityOf(*p).verdict, expected)
+              << "file " << one.file << " (" << one.what << "), expected "
+              << v1::IdentifiedParameter::Observability_Name(expected) << ": " << Described(*p);
+          // The report's note lists exactly the parameters it cannot tell.
+          EXPECT_EQ(note.find(name) != std::string::npos, expected != kObservable)
+              << "file " << one.file << ": " << name << " in the note \"" << note << "\"";
+        }
+      }
     }
-    bool noted = false;
-    for (const std::string& note : alone->report.notes) noted |= note.find("not observable from this run") == 0;
-    EXPECT_TRUE(noted);
+    std::filesystem::remove_all(dir);
   }
 }
 

@@ -22,7 +22,8 @@ namespace insdiag::engine::ident {
 namespace {
 
 TEST(NoiseRetuneTest, RealRecordNisNearOne) {
-  const std::string path = std::string(INSDIAG_SHARED_DIR) + "/data/real/rlg-static-psins.csv";
+  // The real ring-laser-gyro record (data/real), imported by the build (tests/CMakeLists.txt).
+  const std::string path = INSDIAG_REAL_RECORD_CSV;
   auto run = benchrun::ReadBenchRunFile(path);
   ASSERT_TRUE(run.ok()) << run.status();
   auto a = Analyze(*run, AnalysisRequest{}, AnalysisOptions{});

@@ -4,9 +4,11 @@
 The real ring-laser-gyro record (data/real/rlg-static-psins.imu, the PSINS
 toolbox's SIMU layout) is read here with numpy, independently of the C++:
 its counts become body-axis rates by the header's scales and the interval.
-The same samples are written in two more layouts: NovAtel RAWIMUSA records
-(their CRC from zlib, other logs interleaved) and little-endian binary
-records. `insdiag import` turns each into a bench run, and then:
+The same samples are re-encoded in two more layouts — NovAtel RAWIMUSA
+records (their CRC from zlib, other logs interleaved) and little-endian
+binary records — because no real RAWIMUSA series with a licence that allows
+it was found (docs/IMPORT.md, "Real data"). `insdiag import` turns each into a
+bench run, and then:
 
   1. every imported sample equals numpy's conversion within 1e-8 of the
      channel's largest value (the writer's round trip, and the 5.8e-11 s
@@ -21,6 +23,12 @@ records. `insdiag import` turns each into a bench run, and then:
      difference without it is printed too. Where the report's Allan curve
      names a jump of the channel's mean (`jumpTimesS`), numpy pools the
      pieces between the jumps, as the engine does (allan.h, "Jumps").
+  3. A record a NovAtel receiver wrote (data/real/novatel-rawimusxa-edie.asc:
+     one RAWIMUSXA record, MIT licence, data/real/README.md) through the
+     novatel-rawimusxa preset: its CRC checked by zlib here, its sample equal
+     to numpy's conversion of its counts within 1e-8 (the interval from
+     4.8e5-s times, as in 1.), and its specific force gravity's size and
+     pointing down (body z). One record has no Allan curve.
 
 Usage: import_real_check.py INSDIAG_BINARY SOURCE_DIR WORK_DIR
 Exit status 0 when every check holds.
@@ -206,7 +214,47 @@ def main():
                   "%.2g over every tau (%.2g without the repair): %s"
                   % (name, channel, len(spikes.get(channel, [])), cut, rel, worst_raw[channel],
                      "ok" if ok else "FAILED"))
+    failures += check_receiver_record(insdiag, source, work)
     sys.exit(1 if failures else 0)
+
+
+# The HG1700-AG58's counts (NovAtel's raw IMU scale factors): 2^-33 rad and
+# 2^-27 ft/s, at 100 Hz. They give this record a specific force of 9.79 m/s²:
+# gravity, so they are its IMU's.
+AG58_GYRO_RAD = 2.0 ** -33
+AG58_ACC_MPS = 0.3048 * 2.0 ** -27
+AG58_RATE_HZ = 100.0
+
+
+def check_receiver_record(insdiag, source, work):
+    """The real RAWIMUSXA record against numpy's reading of its fields."""
+    path = os.path.join(source, "data/real/novatel-rawimusxa-edie.asc")
+    with open(path, encoding="ascii") as f:
+        line = f.read().strip()
+    body, crc = line[1:].split("*")
+    crc_ok = (zlib.crc32(body.encode(), 0xFFFFFFFF) ^ 0xFFFFFFFF) & 0xFFFFFFFF == int(crc, 16)
+    fields = body.split(";")[1].split(",")
+    z_acc, minus_y_acc, x_acc, z_gyro, minus_y_gyro, x_gyro = (int(v) for v in fields[5:11])
+    dt = 1.0 / AG58_RATE_HZ
+    # Sensor X-right, Y-forward, Z-up to body x-forward, y-right, z-down.
+    acc = np.array([-minus_y_acc, x_acc, -z_acc]) * AG58_ACC_MPS / dt
+    gyro = np.array([-minus_y_gyro, x_gyro, -z_gyro]) * AG58_GYRO_RAD / dt
+    out = os.path.join(work, "receiver-record.csv")
+    run([insdiag, "import", path, "--preset", "novatel-rawimusxa", "--serial", "EDIE-RAWIMUSXA",
+         "--site", "51.0762,-114.1363,1100", "--rate-hz", "%g" % AG58_RATE_HZ,
+         "--units", "gyro=%.17g*rad,acc=%.17g*m/s" % (AG58_GYRO_RAD, AG58_ACC_MPS), "-o", out])
+    sample = read_run(out)
+    # As for the re-encoded RAWIMUSA: the interval is the difference of two
+    # 4.8e5-s times, which hold 5.8e-11 s.
+    acc_err = np.max(np.abs(sample[0, 4:7] - acc)) / np.max(np.abs(acc))
+    gyro_err = np.max(np.abs(sample[0, 1:4] - gyro)) / np.max(np.abs(gyro))
+    ok = (crc_ok and len(sample) == 1 and acc_err < 1e-8 and gyro_err < 1e-8
+          and abs(np.linalg.norm(acc) - 9.8) < 0.05 and acc[2] < -9.7)
+    print("novatel-rawimusxa NovAtel's EDIE record: CRC %s; numpy acc %s m/s^2 (|f| %.4f), gyro %s rad/s; "
+          "|imported - numpy| / max |numpy|: gyro %.2g, acc %.2g: %s"
+          % ("ok" if crc_ok else "BAD", np.array2string(acc, precision=5), np.linalg.norm(acc),
+             np.array2string(gyro, precision=6), gyro_err, acc_err, "ok" if ok else "FAILED"))
+    return 0 if ok else 1
 
 
 if __name__ == "__main__":

@@ -33,7 +33,8 @@ class ImportVerb final : public Verb {
     std::string presets;
     for (const std::string& name : importers::PresetNames()) presets += (presets.empty() ? "" : ", ") + name;
     options.Option("--preset", &preset_, "A vendor layout: " + presets);
-    options.Option("--settings", &settings_file_, "A side file of `key: value` lines (docs/IMPORT.md)");
+    options.Option("--settings", &settings_file_,
+                   "A side file of settings: flat YAML `key: value` lines or a flat JSON object (docs/IMPORT.md)");
     for (const FlagSetting& f : kFlagSettings) options.Option(f.flag, &flag_values_[&f - kFlagSettings], f.help);
     options.Option("--site", &site_, "Site latitude and longitude [deg] and ellipsoidal height [m]: LAT,LON,HEIGHT");
     options.Option("--ref-rpy-deg", &ref_rpy_, "A constant reference attitude [deg]: ROLL,PITCH,YAW");
@@ -45,9 +46,18 @@ class ImportVerb final : public Verb {
 
   int Run(std::ostream& out, std::ostream& err) override {
     if (output_.empty() == !upload_) return Usage(err, "give exactly one of --output RUN.csv and --upload");
-    auto settings = Settings();
-    if (!settings.ok()) return Usage(err, std::string(settings.status().message()));
-    auto run = importers::ImportBenchRunFile(log_, *settings);
+    importers::ImportSettings settings;
+    if (!settings_file_.empty()) {
+      // A side file refused names its line and key: a refused input, not usage.
+      auto file = importers::ReadSettingsFile(settings_file_);
+      if (!file.ok()) {
+        err << file.status().message() << "\n";
+        return kExitRefused;
+      }
+      settings = *std::move(file);
+    }
+    if (absl::Status added = AddOptionSettings(settings); !added.ok()) return Usage(err, std::string(added.message()));
+    auto run = importers::ImportBenchRunFile(log_, settings);
     if (!run.ok()) {
       err << run.status().message() << "\n";
       return kExitRefused;
@@ -89,13 +99,8 @@ class ImportVerb final : public Verb {
       {"--unit-type", "unit_type", "The unit's type, e.g. INS-2000"},
   };
 
-  absl::StatusOr<importers::ImportSettings> Settings() const {
-    importers::ImportSettings settings;
-    if (!settings_file_.empty()) {
-      auto file = importers::ReadSettingsFile(settings_file_);
-      if (!file.ok()) return file.status();
-      settings.Merge(*file);
-    }
+  // The options' settings, over the side file's.
+  absl::Status AddOptionSettings(importers::ImportSettings& settings) const {
     const auto set = [&](std::string key, std::string value, const std::string& flag) {
       settings.Set(std::move(key), std::move(value), {"command line", 0, 0, flag});
     };
@@ -127,7 +132,7 @@ class ImportVerb final : public Verb {
       if (eq == std::string::npos) return absl::InvalidArgumentError("--set: '" + kv + "' is not KEY=VALUE");
       set(kv.substr(0, eq), kv.substr(eq + 1), "--set " + kv.substr(0, eq));
     }
-    return settings;
+    return absl::OkStatus();
   }
 
   static std::vector<std::string> SplitList(const std::string& text) {

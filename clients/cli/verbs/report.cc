@@ -9,6 +9,7 @@
 
 #include "insdiag/client/unary.h"
 #include "insdiag/v1/analyses.grpc.pb.h"
+#include "report_text.h"
 #include "server_output.h"
 #include "verb.h"
 
@@ -36,10 +37,11 @@ void PrintReportText(const v1::Analysis& analysis, std::ostream& out) {
   }
   if (r.identified_size() > 0) {
     out << "\n";
-    Table identified({"identified", "value", "± std error", "unit", "method"});
+    Table identified({"identified", "value", "± std error", "unit", "method", "observability"});
     for (const auto& p : r.identified()) {
       identified.Add({p.name(), Number(p.value()), Number(p.std_error(), 2), p.unit(),
-                      v1::IdentifiedParameter::Method_Name(p.method())});
+                      v1::IdentifiedParameter::Method_Name(p.method()),
+                      ObservabilityText(p.observability(), p.observability_note())});
     }
     identified.Print(out);
   }

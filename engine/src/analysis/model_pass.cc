@@ -135,7 +135,7 @@ void FillFit(const ModelPass& pass, const BenchRun& run, const AnalysisOptions& 
 }
 
 std::array<double, 2> RegressorRms(const BenchRun& run, const EffectTerm& term,
-                                   const std::vector<std::array<double, 6>>* reference_inputs) {
+                                   const std::vector<std::array<double, 6>>* reference_inputs, bool full_scale) {
   std::array<double, 2> sum = {0.0, 0.0};
   double values[2];
   const double t0 = run.samples.front().temp_degc;
@@ -148,6 +148,10 @@ std::array<double, 2> RegressorRms(const BenchRun& run, const EffectTerm& term,
       const auto& r = (*reference_inputs)[k];
       in.gyro_rad_s = {r[0], r[1], r[2]};
       in.acc_mps2 = {r[3], r[4], r[5]};
+      if (full_scale) {
+        in.gyro_rad_s.setConstant(in.gyro_rad_s.norm());
+        in.acc_mps2.setConstant(in.acc_mps2.norm());
+      }
     } else {
       in.gyro_rad_s = s.gyro_rad_s;
       in.acc_mps2 = s.acc_mps2;
@@ -162,6 +166,15 @@ std::array<double, 2> RegressorRms(const BenchRun& run, const EffectTerm& term,
   return {std::sqrt(sum[0] / n), std::sqrt(sum[1] / n)};
 }
 
+// The reference inputs are known to within the input vector turned by the
+// reference attitude's uncertainty (σ_att·|input|), and come from its
+// trigonometry and the table motion's shape: an axis the table holds at right
+// angles to gravity (z up: sin π; a turn about the vertical) reads 1e-16 to
+// 1e-9 of g there, not 0. A reference excitation within either, as a fraction
+// of the regressor's full scale (the inputs' whole magnitude on its axis), is
+// no excitation.
+constexpr double kReferenceRoundingFraction = 1e-9;
+
 std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass, const BenchRun& run,
                                                        const std::vector<std::array<double, 6>>& reference_measurements) {
   std::vector<ParameterEstimate> out;
@@ -171,7 +184,7 @@ std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass, co
   // regressor's RMS over the measured and over the reference inputs.
   struct EffectRms {
     int effect = -1;
-    std::array<double, 2> measured{}, reference{};
+    std::array<double, 2> measured{}, reference{}, full_scale{};
   };
   EffectRms rms;
   // A constant's filtered covariance at the end is its smoothed one.
@@ -187,14 +200,18 @@ std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass, co
     p.method = EstimationMethod::kFilterState;
     p.unit = std::string(e.term.family->unit);
     if (rms.effect != s.effect) {
-      rms = {s.effect, RegressorRms(run, e.term), RegressorRms(run, e.term, &reference_measurements)};
+      rms = {s.effect, RegressorRms(run, e.term), RegressorRms(run, e.term, &reference_measurements),
+             RegressorRms(run, e.term, &reference_measurements, /*full_scale=*/true)};
     }
     const auto& measured_rms = rms.measured;
     const auto& reference_rms = rms.reference;
     const auto k = static_cast<size_t>(s.parameter);
     // prior σ = scale / measured RMS (AddEffects): the same scale over what the table excited.
     const double scale = measured_rms[k] > 0.0 ? e.prior_sigma[k] * measured_rms[k] : e.prior_sigma[k];
-    p.prior_std = reference_rms[k] > 0.0 ? scale / reference_rms[k] : std::numeric_limits<double>::infinity();
+    const double resolved =
+        std::max(pass.model.reference.attitude_sigma_rad, kReferenceRoundingFraction) * rms.full_scale[k];
+    const bool excited = reference_rms[k] > resolved;
+    p.prior_std = excited ? scale / reference_rms[k] : std::numeric_limits<double>::infinity();
     p.max_correlation = 0.0;
     for (const SensorState& other : pass.layout->sensor_states()) {
       // Among the constants: a slow drift state shares a constant's

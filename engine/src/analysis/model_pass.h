@@ -64,10 +64,13 @@ void FillFit(const ModelPass& pass, const BenchRun& run, const AnalysisOptions& 
 // RMS over the run of a constant term's regressor, per parameter, on the
 // measured inputs (what the filter's columns use), or, given them, on what a
 // perfect unit would have measured on the table (ReferenceMeasurements): what
-// the test excited. A run's segment starts are left out (their samples
-// cover unrecorded moves).
+// the test excited; with `full_scale`, on the reference inputs' magnitudes
+// (each sensor's |ω| and |f| on every axis): what the regressor would be with
+// the whole input along its axis. A run's segment starts are left out (their
+// samples cover unrecorded moves).
 std::array<double, 2> RegressorRms(const BenchRun& run, const EffectTerm& term,
-                                   const std::vector<std::array<double, 6>>* reference_inputs = nullptr);
+                                   const std::vector<std::array<double, 6>>* reference_inputs = nullptr,
+                                   bool full_scale = false);
 
 // The constant effects' estimates at the end of the pass, each with its
 // observability (parameter_estimate.h): the prior it is judged against is the

@@ -2,8 +2,8 @@
 // (shared/spec/bench-run-format.md; the import contract is docs/IMPORT.md).
 //
 // Settings are `key: value` pairs from three layers, later ones winning: a
-// named preset (presets.h), a side file (a flat YAML file of `key: value`
-// lines), then the command line. Each setting remembers where it came from,
+// named preset (presets.h), a side file (flat YAML `key: value` lines, or a
+// flat JSON object of the same keys), then the command line. Each setting remembers where it came from,
 // so that a refusal names the side file's line or the option, as the bench-run
 // reader names a file's line and column.
 #pragma once
@@ -46,8 +46,14 @@ class ImportSettings {
   std::vector<Setting> settings_;  // in order of arrival; the last of a key wins
 };
 
-// Reads a side file: `key: value` lines, blank lines and `#` comments; keys
-// are lower-case ASCII with '_' and '.'. Refusals name the file and line.
+// Reads a side file, one level of keys (lower-case ASCII with '_' and '.'),
+// each given once; refusals name the file, line and key.
+//   YAML: `key: value` lines, blank lines, `#` comments (whole lines, or after
+//         a value and a space), values optionally quoted; indented lines
+//         (nested mappings) and flow collections are refused.
+//   JSON: a text whose first character is '{': one object (RFC 8259) whose
+//         values are strings, numbers (kept as written) or true/false;
+//         objects, arrays and null are refused.
 absl::StatusOr<ImportSettings> ReadSettingsFile(const std::filesystem::path& path);
 absl::StatusOr<ImportSettings> ParseSettingsText(std::string_view text, std::string_view source_name);
 

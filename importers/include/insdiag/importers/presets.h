@@ -15,6 +15,8 @@
 //                     IMU: give them as units (gyro=SCALE*rad,acc=SCALE*m/s).
 //                     The CRC of every record is checked; other logs in the
 //                     file are skipped.
+//   novatel-rawimusxa the extended RAWIMUSXA log: the same, with the IMU info
+//                     and IMU type fields before the week.
 #pragma once
 
 #include <absl/status/statusor.h>

@@ -5,6 +5,8 @@
 
 #include <absl/status/statusor.h>
 
+#include <string>
+
 #include "insdiag/engine/analysis.h"
 #include "insdiag/engine/model/error_model.h"
 #include "insdiag/engine/report.h"
@@ -16,6 +18,15 @@ v1::AnalysisReport ToProto(const engine::AnalysisReport& report, const engine::E
 v1::ErrorModel ToProto(const engine::ErrorModel& model);
 v1::AnalysisReport::Verdict ToProto(engine::Verdict verdict);
 v1::FaultInterval ToProto(const engine::FaultInterval& interval);  // a non-finite statistic as 0
+
+// Whether the run tells a parameter (engine::ObservableByRun), and why not:
+// OBSERVABILITY_UNSPECIFIED (and no note) for an estimate that carries
+// nothing to judge it by (other methods than the filter's constants).
+struct Observability {
+  v1::IdentifiedParameter::Observability verdict = v1::IdentifiedParameter::OBSERVABILITY_UNSPECIFIED;
+  std::string note;  // empty when observable
+};
+Observability ObservabilityOf(const engine::ParameterEstimate& estimate);
 
 // The model a report was computed with, as that analysis identified it, and
 // the parameters it identified: what a later analysis of the same run starts
