@@ -448,5 +448,67 @@ TEST_F(WorkerKillTest, AJobWhoseWorkerWasKilledIsCompletedByAnotherProcess) {
   second.Wait(20s);
 }
 
+// SIGTERM while a worker runs a job: the server stops claiming, finishes or
+// releases the job, and exits 0. The job is never left RUNNING under a
+// lease nobody holds; released, another process completes it.
+TEST_F(WorkerKillTest, SigtermWhileAJobRunsEndsTheJobFinishedOrReleasedAndTheServerExitsCleanly) {
+  kb::RunStore runs(pool());
+  const engine::BenchRun run = SimulatedRun("INS-TERM-1", "full", 20.0);
+  auto stored = runs.Create(run, {.sha256 = "x", .request_id = "", .request_fingerprint = ""});
+  ASSERT_TRUE(stored.ok()) << stored.status();
+  kb::AnalysisStore analyses(pool());
+  auto created = analyses.Create(stored->id, v1::AnalysisSpec(), "");
+  ASSERT_TRUE(created.ok());
+  const std::string id = created->name().substr(9);
+  const auto dir = MakeTempDir("insdiag-term");
+  const auto start = [&](const std::string& tag) {
+    std::filesystem::create_directories(dir / tag);
+    auto process = Subprocess::Start({INSDIAGD_PATH, "--database-url", database_url(), "--data-dir",
+                                      (dir / tag / "data").string(), "--grpc-port", "0", "--http-port", "0",
+                                      "--bind", "127.0.0.1", "--workers", "1", "--lease-seconds", "30",
+                                      "--fleet-refresh-seconds", "0"},
+                                     dir / tag);
+    EXPECT_TRUE(process.ok()) << process.status();
+    return std::move(*process);
+  };
+  auto first = start("first");
+  const auto deadline = std::chrono::steady_clock::now() + 60s;
+  for (;;) {
+    auto a = analyses.Get(id, false);
+    ASSERT_TRUE(a.ok());
+    if (a->state() == v1::Analysis::RUNNING) break;
+    ASSERT_NE(a->state(), v1::Analysis::SUCCEEDED) << "the job finished before SIGTERM could reach it";
+    ASSERT_LT(std::chrono::steady_clock::now(), deadline) << first.Stderr();
+    std::this_thread::sleep_for(10ms);
+  }
+  first.Signal(SIGTERM);
+  // The worker may finish the analysis first: the whole of it, on a slow machine.
+  const std::optional<int> exit_status = first.Wait(480s);
+  ASSERT_TRUE(exit_status.has_value()) << "insdiagd did not stop on SIGTERM while a job ran\n" << first.Stderr();
+  EXPECT_EQ(*exit_status, 0) << first.Stderr();
+  EXPECT_THAT(first.Stderr(), HasSubstr("SIGTERM, shutting down"));
+
+  auto after = analyses.Get(id, true);
+  ASSERT_TRUE(after.ok());
+  EXPECT_TRUE(after->state() == v1::Analysis::SUCCEEDED || after->state() == v1::Analysis::QUEUED)
+      << "after SIGTERM the job is " << v1::Analysis::State_Name(after->state());
+  if (after->state() == v1::Analysis::QUEUED) {
+    // Released: another process takes it up at once (no lease to wait out).
+    auto second = start("second");
+    const auto analysed_by = std::chrono::steady_clock::now() + 480s;
+    while (after->state() != v1::Analysis::SUCCEEDED && after->state() != v1::Analysis::FAILED) {
+      ASSERT_LT(std::chrono::steady_clock::now(), analysed_by) << second.Stderr();
+      std::this_thread::sleep_for(50ms);
+      after = analyses.Get(id, true);
+      ASSERT_TRUE(after.ok());
+    }
+    second.Signal(SIGTERM);
+    EXPECT_EQ(second.Wait(480s), std::optional<int>(0));
+  }
+  EXPECT_EQ(after->state(), v1::Analysis::SUCCEEDED) << after->error().message();
+  EXPECT_EQ(after->report().channels_size(), 6);
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace insdiag::testing
