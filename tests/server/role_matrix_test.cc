@@ -27,6 +27,7 @@
 #include <thread>
 
 #include "generic_call.h"
+#include "rest_form.h"
 #include "google/api/annotations.pb.h"
 #include "insdiag/api/json.h"
 #include "insdiag/api/run_codec.h"
@@ -85,91 +86,6 @@ std::string GrpcPath(const MethodDescriptor* method) {
   return "/" + method->service()->full_name() + "/" + method->name();
 }
 
-// A request as the REST face takes it: the http rule's verb and path with
-// its variables filled from the request, the body the rule names as JSON,
-// every other set scalar field as a query parameter (JSON names).
-struct RestRequest {
-  std::string verb;
-  std::string path;
-  std::string body;
-  std::string content_type = "application/json";
-};
-
-std::string QueryValue(const Message& message, const FieldDescriptor* field, int index) {
-  const auto* r = message.GetReflection();
-  const bool repeated = field->is_repeated();
-  switch (field->cpp_type()) {
-    case FieldDescriptor::CPPTYPE_STRING:
-      return repeated ? r->GetRepeatedString(message, field, index) : r->GetString(message, field);
-    case FieldDescriptor::CPPTYPE_INT32:
-      return absl::StrCat(repeated ? r->GetRepeatedInt32(message, field, index) : r->GetInt32(message, field));
-    case FieldDescriptor::CPPTYPE_INT64:
-      return absl::StrCat(repeated ? r->GetRepeatedInt64(message, field, index) : r->GetInt64(message, field));
-    case FieldDescriptor::CPPTYPE_DOUBLE:
-      return absl::StrCat(repeated ? r->GetRepeatedDouble(message, field, index) : r->GetDouble(message, field));
-    case FieldDescriptor::CPPTYPE_BOOL:
-      return (repeated ? r->GetRepeatedBool(message, field, index) : r->GetBool(message, field)) ? "true" : "false";
-    case FieldDescriptor::CPPTYPE_ENUM:
-      return (repeated ? r->GetRepeatedEnum(message, field, index) : r->GetEnum(message, field))->name();
-    default:
-      ADD_FAILURE() << field->full_name() << ": a query parameter of a type this test does not write";
-      return "";
-  }
-}
-
-std::optional<RestRequest> RestFormOf(const MethodDescriptor* method, const Message& request) {
-  if (!method->options().HasExtension(google::api::http)) return std::nullopt;
-  const auto& rule = method->options().GetExtension(google::api::http);
-  RestRequest rest;
-  std::string path_template;
-  switch (rule.pattern_case()) {
-    case google::api::HttpRule::kGet: rest.verb = "GET", path_template = rule.get(); break;
-    case google::api::HttpRule::kPost: rest.verb = "POST", path_template = rule.post(); break;
-    case google::api::HttpRule::kDelete: rest.verb = "DELETE", path_template = rule.delete_(); break;
-    default: ADD_FAILURE() << method->full_name() << ": a verb this test does not send"; return std::nullopt;
-  }
-  std::unique_ptr<Message> rest_of(request.New());
-  rest_of->CopyFrom(request);
-  const auto* reflection = rest_of->GetReflection();
-  // {name=runs/*} → the request's name, "runs/<id>".
-  const std::regex variable(R"(\{([^}=]+)(=[^}]*)?\})");
-  std::size_t last = 0;
-  for (std::sregex_iterator it(path_template.begin(), path_template.end(), variable), end; it != end; ++it) {
-    rest.path += path_template.substr(last, static_cast<std::size_t>(it->position()) - last);
-    const FieldDescriptor* field = rest_of->GetDescriptor()->FindFieldByName((*it)[1].str());
-    EXPECT_NE(field, nullptr) << method->full_name() << ": path variable " << (*it)[1];
-    if (field != nullptr) {
-      rest.path += reflection->GetString(*rest_of, field);
-      reflection->ClearField(rest_of.get(), field);
-    }
-    last = static_cast<std::size_t>(it->position() + it->length());
-  }
-  rest.path += path_template.substr(last);
-  if (rule.body() == "*") {
-    rest.body = api::ToJson(*rest_of).value_or("{}");
-    return rest;
-  }
-  if (!rule.body().empty()) {
-    const FieldDescriptor* field = rest_of->GetDescriptor()->FindFieldByName(rule.body());
-    EXPECT_NE(field, nullptr) << method->full_name() << ": body " << rule.body();
-    if (field == nullptr) return std::nullopt;
-    rest.body = api::ToJson(reflection->GetMessage(*rest_of, field)).value_or("{}");
-    reflection->ClearField(rest_of.get(), field);
-  }
-  std::vector<const FieldDescriptor*> set;
-  reflection->ListFields(*rest_of, &set);
-  std::string query;
-  for (const FieldDescriptor* field : set) {
-    const int count = field->is_repeated() ? reflection->FieldSize(*rest_of, field) : 1;
-    for (int i = 0; i < count; ++i) {
-      absl::StrAppend(&query, query.empty() ? "?" : "&", field->json_name(), "=",
-                      httplib::detail::encode_query_param(QueryValue(*rest_of, field, i)));
-    }
-  }
-  rest.path += query;
-  return rest;
-}
-
 // One valid call of a method, made afresh for each caller: the requests
 // (one for a unary method, the stream's messages in order for a streaming
 // one), its REST form, and what its audit event must name.
@@ -180,6 +96,22 @@ struct Call {
   // the request names it; else the collection of the resource it creates.
   std::string resource;
   std::string resource_collection;
+};
+
+// Builds a Call of one method from its request message.
+struct CallBuilder {
+  const MethodDescriptor* method;
+  Call call;
+  // A unary request, and its REST form from the method's http rule.
+  void Unary(const Message& request) {
+    call.requests = {request.SerializeAsString()};
+    call.rest = RestFormOf(method, request);
+  }
+  // A writing request that names the resource it acts on: its audit event must name it.
+  void Named(const Message& request, const std::string& resource) {
+    Unary(request);
+    call.resource = resource;
+  }
 };
 
 class RoleMatrixTest : public ServerTest {
@@ -343,147 +275,168 @@ class RoleMatrixTest : public ServerTest {
   // A valid call of `method`, made now (resources it consumes are fresh);
   // nullopt when this test has no case for it.
   std::optional<Call> CallOf(const MethodDescriptor* method) {
+    CallBuilder b{method, {}};
+    const std::string& service = method->service()->name();
     const std::string& name = method->name();
-    Call call;
-    const auto unary = [&](Message&& request) {
-      call.requests = {request.SerializeAsString()};
-      call.rest = RestFormOf(method, request);
-    };
-    // Requests that name the resource they act on.
-    const auto named = [&](Message&& request, const std::string& resource, bool writes_it) {
-      unary(std::move(request));
-      if (writes_it) call.resource = resource;
-    };
+    const bool known = service == "RunService"         ? RunServiceCall(name, b)
+                       : service == "AnalysisService"  ? AnalysisServiceCall(name, b)
+                       : service == "KnowledgeService" ? KnowledgeServiceCall(name, b)
+                       : service == "FleetService"     ? FleetServiceCall(name, b)
+                       : service == "AccessService"    ? AccessServiceCall(name, b)
+                       : service == "LiveRunService"   ? LiveRunServiceCall(name, b)
+                                                       : false;
+    if (!known) return std::nullopt;
+    return b.call;
+  }
+
+  // RunService's methods.
+  bool RunServiceCall(const std::string& name, CallBuilder& b) {
     if (name == "UploadRun") {
       const engine::BenchRun run = SyntheticStaticRun(200, 50.0, next_seed_++);
       api::ForEachUploadRequest(run, "", 100, [&](const v1::UploadRunRequest& r) {
-        call.requests.push_back(r.SerializeAsString());
+        b.call.requests.push_back(r.SerializeAsString());
         return true;
       });
-      call.rest = RestRequest{"POST", "/v1/runs:upload", benchrun::FormatBenchRun(run), "text/csv"};
-      call.resource_collection = "runs/";
+      b.call.rest = RestRequest{"POST", "/v1/runs:upload", benchrun::FormatBenchRun(run), "text/csv"};
+      b.call.resource_collection = "runs/";
     } else if (name == "GetRun") {
       v1::GetRunRequest r;
       r.set_name(run_);
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "ListRuns") {
       v1::ListRunsRequest r;
       r.set_page_size(10);
       r.set_unit_serial("INS-2000-0042");
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "DeleteRun") {
       v1::DeleteRunRequest r;
       r.set_name(FreshRun());
       const std::string deleted = r.name();
-      named(std::move(r), deleted, true);
+      b.Named(r, deleted);
     } else if (name == "ReadRunSamples") {
       v1::ReadRunSamplesRequest r;
       r.set_name(run_);
       r.set_chunk_size(100);
-      unary(std::move(r));
-    } else if (name == "CreateAnalysis") {
+      b.Unary(r);
+    } else {
+      return false;
+    }
+    return true;
+  }
+
+  // AnalysisService's methods.
+  bool AnalysisServiceCall(const std::string& name, CallBuilder& b) {
+    if (name == "CreateAnalysis") {
       v1::CreateAnalysisRequest r;
       r.mutable_analysis()->set_run(run_);
       r.mutable_analysis()->mutable_model()->add_effects("gyro_scale_factor.z");
-      unary(std::move(r));
-      call.resource_collection = "analyses/";
+      b.Unary(r);
+      b.call.resource_collection = "analyses/";
     } else if (name == "GetAnalysis") {
       v1::GetAnalysisRequest r;
       r.set_name(analysis_);
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "WatchAnalysis") {
       v1::WatchAnalysisRequest r;
       r.set_name(analysis_);  // succeeded: its state, then the stream ends
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "ListAnalyses") {
       v1::ListAnalysesRequest r;
       r.set_run(run_);
       r.set_include_reports(true);
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "CancelAnalysis") {
       v1::CancelAnalysisRequest r;
       r.set_name(FreshAnalysis());
       const std::string cancelled = r.name();
-      named(std::move(r), cancelled, true);
+      b.Named(r, cancelled);
     } else if (name == "ReadResidualSeries") {
       v1::ReadResidualSeriesRequest r;
       r.set_name(analysis_);
       r.add_channels("vel_n");
       r.set_chunk_size(1000);
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "ReadDisplaySeries") {
       v1::ReadDisplaySeriesRequest r;
       r.set_name(analysis_);
       r.set_columns(100);
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "GetTestReport") {
       v1::GetTestReportRequest r;
       r.set_name(analysis_);
       r.set_diagnosis(diagnosis_);
-      unary(std::move(r));
-    } else if (name == "GetUnitType") {
+      b.Unary(r);
+    } else {
+      return false;
+    }
+    return true;
+  }
+
+  // KnowledgeService's methods.
+  bool KnowledgeServiceCall(const std::string& name, CallBuilder& b) {
+    if (name == "GetUnitType") {
       v1::GetUnitTypeRequest r;
       r.set_name(unit_type_);
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "ListUnitTypes") {
-      unary(v1::ListUnitTypesRequest());
+      b.Unary(v1::ListUnitTypesRequest());
     } else if (name == "GetUnit") {
       v1::GetUnitRequest r;
       r.set_name(kUnit);
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "ListUnits") {
       v1::ListUnitsRequest r;
       r.set_unit_type(unit_type_);
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "ListModules") {
       v1::ListModulesRequest r;
       r.set_parent(kUnit);
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "GetUnitHistory") {
       v1::GetUnitHistoryRequest r;
       r.set_unit(kUnit);
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "ListFailureModes") {
       v1::ListFailureModesRequest r;
       r.set_unit_type(unit_type_);
       r.set_module_role("gyro.x");
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "GetFailureMode") {
       v1::GetFailureModeRequest r;
       r.set_name(failure_mode_);
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "CreateFailureRecord") {
       v1::CreateFailureRecordRequest r;
       *r.mutable_failure_record() = NoFaultFoundRecord(150.0);
-      unary(std::move(r));
-      call.resource_collection = "failureRecords/";
+      b.Unary(r);
+      b.call.resource_collection = "failureRecords/";
     } else if (name == "CorrectFailureRecord") {
       v1::CorrectFailureRecordRequest r;
       r.set_name(record_);
       *r.mutable_failure_record() = NoFaultFoundRecord(125.0);
       r.set_reason("the hours were misread");
-      named(std::move(r), record_, true);
+      b.Named(r, record_);
     } else if (name == "ListFailureRecordRevisions") {
       v1::ListFailureRecordRevisionsRequest r;
       r.set_name(record_);
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "ListFailureRecords") {
       v1::ListFailureRecordsRequest r;
       r.set_unit(kUnit);
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "CreateDiagnosis") {
       v1::CreateDiagnosisRequest r;
       r.set_analysis(analysis_);
-      unary(std::move(r));
-      call.resource_collection = "diagnoses/";
+      b.Unary(r);
+      b.call.resource_collection = "diagnoses/";
     } else if (name == "GetDiagnosis") {
       v1::GetDiagnosisRequest r;
       r.set_name(diagnosis_);
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "ListDiagnoses") {
       v1::ListDiagnosesRequest r;
       r.set_unit(kUnit);
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "ResolveDiagnosis") {
       v1::ResolveDiagnosisRequest r;
       r.set_name(FreshDiagnosis());
@@ -491,70 +444,94 @@ class RoleMatrixTest : public ServerTest {
       r.set_confirmed(false);
       r.set_notes("rejected on the bench");
       const std::string resolved = r.name();
-      named(std::move(r), resolved, true);
-    } else if (name == "GetFleetStatistics") {
+      b.Named(r, resolved);
+    } else {
+      return false;
+    }
+    return true;
+  }
+
+  // FleetService's methods.
+  bool FleetServiceCall(const std::string& name, CallBuilder& b) {
+    if (name == "GetFleetStatistics") {
       v1::GetFleetStatisticsRequest r;
       r.set_unit_type(unit_type_);
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "ListFailureCounts") {
       v1::ListFailureCountsRequest r;
       r.set_period("month");
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "GetFailurePareto") {
       v1::GetFailureParetoRequest r;
       r.set_unit_type(unit_type_);
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "GetWeibullFit") {
       v1::GetWeibullFitRequest r;
       r.set_unit_type(unit_type_);
       r.set_module_role("gyro.x");
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "ListParameterTrends") {
       v1::ListParameterTrendsRequest r;
       r.set_unit_type(unit_type_);
       r.set_parameter(kParameter);
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "GetParameterTrend") {
       v1::GetParameterTrendRequest r;
       r.set_unit_type(unit_type_);
       r.set_parameter(kParameter);
-      unary(std::move(r));
+      b.Unary(r);
     } else if (name == "RankUnits") {
       v1::RankUnitsRequest r;
       r.set_page_size(10);
-      unary(std::move(r));
-    } else if (name == "GetCaller") {
-      unary(v1::GetCallerRequest());
+      b.Unary(r);
+    } else {
+      return false;
+    }
+    return true;
+  }
+
+  // AccessService's methods.
+  bool AccessServiceCall(const std::string& name, CallBuilder& b) {
+    if (name == "GetCaller") {
+      b.Unary(v1::GetCallerRequest());
     } else if (name == "CreateToken") {
       v1::CreateTokenRequest r;
       r.mutable_token()->set_display_name("bench-7 reader");
       r.mutable_token()->set_role(v1::VIEWER);
-      unary(std::move(r));
-      call.resource_collection = "tokens/";
+      b.Unary(r);
+      b.call.resource_collection = "tokens/";
     } else if (name == "ListTokens") {
-      unary(v1::ListTokensRequest());
+      b.Unary(v1::ListTokensRequest());
     } else if (name == "RevokeToken") {
       v1::RevokeTokenRequest r;
       r.set_name(FreshToken());
       const std::string revoked = r.name();
-      named(std::move(r), revoked, true);
+      b.Named(r, revoked);
     } else if (name == "ListAuditEvents") {
       v1::ListAuditEventsRequest r;
       r.set_page_size(5);
-      unary(std::move(r));
-    } else if (name == "MonitorRun") {
-      call.requests = MonitoredTest(next_seed_++);  // no REST form: requests stream in
-      call.resource_collection = "runs/";  // the run the ended test stored
+      b.Unary(r);
+    } else {
+      return false;
+    }
+    return true;
+  }
+
+  // LiveRunService's methods.
+  bool LiveRunServiceCall(const std::string& name, CallBuilder& b) {
+    if (name == "MonitorRun") {
+      b.call.requests = MonitoredTest(next_seed_++);  // no REST form: requests stream in
+      b.call.resource_collection = "runs/";  // the run the ended test stored
     } else if (name == "ListLiveRuns") {
-      unary(v1::ListLiveRunsRequest());
+      b.Unary(v1::ListLiveRunsRequest());
     } else if (name == "WatchLiveRun") {
       v1::WatchLiveRunRequest r;
       r.set_name(live_run_);  // ended: its last state, then the stream ends
-      unary(std::move(r));
+      b.Unary(r);
     } else {
-      return std::nullopt;
+      return false;
     }
-    return call;
+    return true;
   }
 
   // The audit trail's newest event number (0: none yet).
