@@ -90,9 +90,9 @@ struct InsdiagServer::Services {
 InsdiagServer::InsdiagServer() = default;
 
 const std::vector<std::string>& InsdiagServer::ServiceNames() {
-  static const std::vector<std::string> names = {"insdiag.v1.RunService",      "insdiag.v1.AnalysisService",
-                                                 "insdiag.v1.KnowledgeService", "insdiag.v1.FleetService",
-                                                 "insdiag.v1.AccessService",    "insdiag.v1.LiveRunService"};
+  static const std::vector<std::string> names = {
+      "insdiag.v1.RunService",   "insdiag.v1.AnalysisService", "insdiag.v1.KnowledgeService",
+      "insdiag.v1.FleetService", "insdiag.v1.AccessService",   "insdiag.v1.LiveRunService"};
   return names;
 }
 
@@ -170,7 +170,8 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
     if (auto seeded = server->services_->catalogue_store.Seed(unit_types, catalogues); !seeded.ok()) return seeded;
   }
 
-  if (auto guarded = AccessGuard::CheckEveryMethodHasARule(ServiceNames()); !guarded.ok()) return guarded;
+  if (auto guarded = AccessGuard::CheckEveryMethodHasARule(ServiceNames()); !guarded.ok())
+    return guarded;
   if (!options.first_admin_token_file.empty()) {
     auto made = server->services_->access_store.CreateFirstAdminToken(options.first_admin_token_file);
     if (!made.ok()) return made.status();

@@ -143,7 +143,8 @@ absl::StatusOr<std::unique_ptr<RestGateway>> RestGateway::Create(std::shared_ptr
   }
   std::vector<OpenApiExtraRoute> extras;
   for (const OwnRoute& own : kOwnRoutes) {
-    extras.push_back({own.http_method, OpenApiPath(own.path_template), own.summary, own.content_type, own.needs_token});
+    extras.push_back({own.http_method, OpenApiPath(own.path_template), own.summary,
+                      own.content_type, own.needs_token});
   }
   gateway->openapi_json_ = OpenApiDocument(operations, extras);
   // "runs/x:download" must reach the :download route, not GetRun.
@@ -187,7 +188,8 @@ void RestGateway::Register(httplib::Server& http) {
 
 void RestGateway::Handle(const httplib::Request& request, httplib::Response& response) {
   if (request.method == "GET" && request.path == "/healthz") return Health(response);
-  if (request.method == "GET" && request.path == kMetricsPath && render_metrics_) return Metrics(request, response);
+  if (request.method == "GET" && request.path == kMetricsPath && render_metrics_)
+    return Metrics(request, response);
   if (request.method == "GET" && request.path == "/v1/openapi.json") {
     if (!AdmitAnyRole(request, response)) return;
     response.status = 200;

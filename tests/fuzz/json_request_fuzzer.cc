@@ -33,8 +33,9 @@ const std::vector<const google::protobuf::Descriptor*>& RequestTypes() {
       if (file->service_count() == 0) std::abort();
     }
     auto* out = new std::vector<const google::protobuf::Descriptor*>();
-    for (const char* name : {"insdiag.v1.RunService", "insdiag.v1.AnalysisService", "insdiag.v1.KnowledgeService",
-                             "insdiag.v1.FleetService", "insdiag.v1.AccessService", "insdiag.v1.LiveRunService"}) {
+    for (const char* name :
+         {"insdiag.v1.RunService", "insdiag.v1.AnalysisService", "insdiag.v1.KnowledgeService",
+          "insdiag.v1.FleetService", "insdiag.v1.AccessService", "insdiag.v1.LiveRunService"}) {
       const auto* service = google::protobuf::DescriptorPool::generated_pool()->FindServiceByName(name);
       if (service == nullptr) std::abort();
       for (int m = 0; m < service->method_count(); ++m) out->push_back(service->method(m)->input_type());

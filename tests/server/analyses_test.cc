@@ -412,11 +412,12 @@ class WorkerKillTest : public DatabaseTest {
   Subprocess Start(const std::string& tag, const std::string& lease_seconds) {
     if (dir_.empty()) dir_ = MakeTempDir("insdiag-workers");
     std::filesystem::create_directories(dir_ / tag);
-    auto process = Subprocess::Start({INSDIAGD_PATH, "--database-url", database_url(), "--data-dir",
-                                      (dir_ / tag / "data").string(), "--grpc-port", "0", "--http-port", "0",
-                                      "--bind", "127.0.0.1", "--workers", "1", "--lease-seconds", lease_seconds,
-                                      "--fleet-refresh-seconds", "0"},
-                                     dir_ / tag);
+    auto process =
+        Subprocess::Start({INSDIAGD_PATH, "--database-url", database_url(), "--data-dir",
+                           (dir_ / tag / "data").string(), "--grpc-port", "0", "--http-port", "0",
+                           "--bind", "127.0.0.1", "--workers", "1", "--lease-seconds",
+                           lease_seconds, "--fleet-refresh-seconds", "0"},
+                          dir_ / tag);
     EXPECT_TRUE(process.ok()) << process.status();
     return std::move(*process);
   }
@@ -431,20 +432,23 @@ class WorkerKillTest : public DatabaseTest {
   void WaitUntilRunning(const std::string& id, const Subprocess& process) {
     const auto deadline = std::chrono::steady_clock::now() + 60s;
     for (v1::Analysis a = Job(id); a.state() != v1::Analysis::RUNNING; a = Job(id)) {
-      ASSERT_NE(a.state(), v1::Analysis::SUCCEEDED) << "the job finished before it could be reached";
+      ASSERT_NE(a.state(), v1::Analysis::SUCCEEDED)
+          << "the job finished before it could be reached";
       ASSERT_LT(std::chrono::steady_clock::now(), deadline) << process.Stderr();
       std::this_thread::sleep_for(10ms);
     }
   }
 
   // Polls until job `id` has ended (SUCCEEDED or FAILED), within `timeout`.
-  v1::Analysis WaitUntilEnded(const std::string& id, const Subprocess& process, std::chrono::seconds timeout) {
+  v1::Analysis WaitUntilEnded(const std::string& id, const Subprocess& process,
+                              std::chrono::seconds timeout) {
     const auto deadline = std::chrono::steady_clock::now() + timeout;
     for (;;) {
       v1::Analysis a = Job(id, true);
       if (a.state() == v1::Analysis::SUCCEEDED || a.state() == v1::Analysis::FAILED) return a;
       if (std::chrono::steady_clock::now() >= deadline) {
-        ADD_FAILURE() << "job " << id << " did not end within " << timeout.count() << " s\n" << process.Stderr();
+        ADD_FAILURE() << "job " << id << " did not end within " << timeout.count() << " s\n"
+                      << process.Stderr();
         return a;
       }
       std::this_thread::sleep_for(50ms);
@@ -488,7 +492,8 @@ TEST_F(WorkerKillTest, SigtermWhileAJobRunsEndsTheJobFinishedOrReleasedAndTheSer
   first.Signal(SIGTERM);
   // The worker may finish the analysis first: the whole of it, on a slow machine.
   const std::optional<int> exit_status = first.Wait(480s);
-  ASSERT_TRUE(exit_status.has_value()) << "insdiagd did not stop on SIGTERM while a job ran\n" << first.Stderr();
+  ASSERT_TRUE(exit_status.has_value()) << "insdiagd did not stop on SIGTERM while a job ran\n"
+                                       << first.Stderr();
   EXPECT_EQ(*exit_status, 0) << first.Stderr();
   EXPECT_THAT(first.Stderr(), HasSubstr("SIGTERM, shutting down"));
 

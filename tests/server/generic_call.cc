@@ -59,8 +59,8 @@ class Call final : public grpc::ClientBidiReactor<grpc::ByteBuffer, grpc::ByteBu
 
 }  // namespace
 
-GenericAnswer CallGeneric(grpc::GenericStub& stub, const std::string& path, const std::vector<std::string>& requests,
-                          std::chrono::seconds deadline) {
+GenericAnswer CallGeneric(grpc::GenericStub& stub, const std::string& path,
+                          const std::vector<std::string>& requests, std::chrono::seconds deadline) {
   grpc::ClientContext context;
   context.set_deadline(std::chrono::system_clock::now() + deadline);
   Call call(requests);

@@ -18,7 +18,8 @@ struct GenericAnswer {
 
 // Sends `requests` in order to `path` ("/insdiag.v1.RunService/GetRun"),
 // closes the stream, and reads every response until the status.
-GenericAnswer CallGeneric(grpc::GenericStub& stub, const std::string& path, const std::vector<std::string>& requests,
+GenericAnswer CallGeneric(grpc::GenericStub& stub, const std::string& path,
+                          const std::vector<std::string>& requests,
                           std::chrono::seconds deadline = std::chrono::seconds(60));
 
 }  // namespace insdiag::testing

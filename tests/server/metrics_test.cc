@@ -216,8 +216,9 @@ TEST_F(QueueMetricsTest, AQueuedAnalysisMovesTheQueueDepthAndAgeGauges) {
   auto analyses = v1::AnalysisService::NewStub(channel());
   v1::CreateAnalysisRequest create;
   create.mutable_analysis()->set_run(run->name());
-  auto queued = client::CallUnary<v1::Analysis>(
-      [&](grpc::ClientContext* c, v1::Analysis* r) { return analyses->CreateAnalysis(c, create, r); });
+  auto queued = client::CallUnary<v1::Analysis>([&](grpc::ClientContext* c, v1::Analysis* r) {
+    return analyses->CreateAnalysis(c, create, r);
+  });
   ASSERT_TRUE(queued.ok()) << queued.status();
   ASSERT_EQ(queued->state(), v1::Analysis::QUEUED);
 
@@ -240,8 +241,9 @@ TEST_F(QueueMetricsTest, AQueuedAnalysisMovesTheQueueDepthAndAgeGauges) {
 
   v1::CancelAnalysisRequest cancel;
   cancel.set_name(queued->name());
-  auto cancelled = client::CallUnary<v1::Analysis>(
-      [&](grpc::ClientContext* c, v1::Analysis* r) { return analyses->CancelAnalysis(c, cancel, r); });
+  auto cancelled = client::CallUnary<v1::Analysis>([&](grpc::ClientContext* c, v1::Analysis* r) {
+    return analyses->CancelAnalysis(c, cancel, r);
+  });
   ASSERT_TRUE(cancelled.ok()) << cancelled.status();
   EXPECT_EQ(cancelled->state(), v1::Analysis::CANCELLED);
   const Scrape after = Get(viewer);

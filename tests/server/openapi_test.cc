@@ -2,15 +2,15 @@
 // gateway serves from: every route is in the document, and every operation
 // of the document is served (an anonymous request reaches the token check,
 // not the gateway's "no method answers").
-#include <gmock/gmock.h>
-#include <gtest/gtest.h>
+#include "insdiag/server/openapi.h"
 
+#include <absl/strings/ascii.h>
+#include <gmock/gmock.h>
 #include <google/api/annotations.pb.h>
 #include <google/protobuf/descriptor.h>
 #include <google/protobuf/struct.pb.h>
 #include <google/protobuf/util/json_util.h>
-
-#include <absl/strings/ascii.h>
+#include <gtest/gtest.h>
 
 #include <regex>
 #include <set>
@@ -18,7 +18,6 @@
 #include <utility>
 #include <vector>
 
-#include "insdiag/server/openapi.h"
 #include "insdiag/server/path_template.h"
 #include "server_fixture.h"
 
@@ -67,7 +66,8 @@ TEST_F(OpenApiTest, EveryRouteTheGatewayServesIsInTheDocumentAndEveryOperationIs
   EXPECT_EQ(document.fields().at("openapi").string_value(), "3.0.3");
   std::set<std::pair<std::string, std::string>> operations;  // (verb, OpenAPI path)
   for (const auto& [path, methods] : document.fields().at("paths").struct_value().fields()) {
-    for (const auto& [verb, operation] : methods.struct_value().fields()) operations.emplace(verb, path);
+    for (const auto& [verb, operation] : methods.struct_value().fields())
+      operations.emplace(verb, path);
   }
   const std::vector<server::RestRoute> routes = server_->rest_routes();
   std::set<std::pair<std::string, std::string>> served;
@@ -76,23 +76,27 @@ TEST_F(OpenApiTest, EveryRouteTheGatewayServesIsInTheDocumentAndEveryOperationIs
     const std::string verb = absl::AsciiStrToLower(route.http_method);
     const std::string path = server::OpenApiPath(route.path_template);
     EXPECT_TRUE(served.emplace(verb, path).second) << "served twice: " << verb << " " << path;
-    EXPECT_TRUE(operations.contains({verb, path})) << route.method << ": " << verb << " " << path << " is not in the document";
+    EXPECT_TRUE(operations.contains({verb, path}))
+        << route.method << ": " << verb << " " << path << " is not in the document";
     if (!route.method.empty()) methods_served.insert(route.method);
   }
   for (const auto& [verb, path] : operations) {
-    EXPECT_TRUE(served.contains({verb, path})) << verb << " " << path << " is in the document but not served";
+    EXPECT_TRUE(served.contains({verb, path}))
+        << verb << " " << path << " is in the document but not served";
   }
   EXPECT_EQ(served.size(), operations.size());
 
   // Every http rule of every served service is a route, LiveRunService's too.
   int rules = 0;
   for (const std::string& name : server::InsdiagServer::ServiceNames()) {
-    const auto* service = google::protobuf::DescriptorPool::generated_pool()->FindServiceByName(name);
+    const auto* service =
+        google::protobuf::DescriptorPool::generated_pool()->FindServiceByName(name);
     ASSERT_NE(service, nullptr) << name;
     for (int m = 0; m < service->method_count(); ++m) {
       if (!service->method(m)->options().HasExtension(google::api::http)) continue;
       ++rules;
-      EXPECT_TRUE(methods_served.contains(service->method(m)->full_name())) << service->method(m)->full_name();
+      EXPECT_TRUE(methods_served.contains(service->method(m)->full_name()))
+          << service->method(m)->full_name();
     }
   }
   EXPECT_EQ(rules, 43);
@@ -115,7 +119,8 @@ TEST_F(OpenApiTest, EveryRouteTheGatewayServesIsInTheDocumentAndEveryOperationIs
       }
     }
     ASSERT_NE(first, nullptr) << verb << " " << concrete << " matches no route";
-    EXPECT_EQ(server::OpenApiPath(first->path_template), path) << verb << " " << concrete << " reaches another route";
+    EXPECT_EQ(server::OpenApiPath(first->path_template), path)
+        << verb << " " << concrete << " reaches another route";
     auto send = [&]() -> httplib::Result {
       if (verb == "delete") return anonymous.Delete(concrete.c_str());
       if (verb == "post") return anonymous.Post(concrete.c_str(), "{}", "application/json");
@@ -123,9 +128,11 @@ TEST_F(OpenApiTest, EveryRouteTheGatewayServesIsInTheDocumentAndEveryOperationIs
     };
     auto answer = send();
     ASSERT_TRUE(answer) << verb << " " << concrete;
-    EXPECT_THAT(answer->body, ::testing::Not(HasSubstr("no method answers"))) << verb << " " << concrete;
+    EXPECT_THAT(answer->body, ::testing::Not(HasSubstr("no method answers")))
+        << verb << " " << concrete;
     const bool open = path == "/healthz";
-    EXPECT_EQ(answer->status, open ? 200 : 401) << verb << " " << concrete << ": " << answer->body.substr(0, 200);
+    EXPECT_EQ(answer->status, open ? 200 : 401)
+        << verb << " " << concrete << ": " << answer->body.substr(0, 200);
   }
   EXPECT_EQ(operations.size(), 47u);
 }

@@ -27,17 +27,24 @@ std::string QueryValue(const Message& message, const FieldDescriptor* field, int
     case FieldDescriptor::CPPTYPE_STRING:
       return repeated ? r->GetRepeatedString(message, field, index) : r->GetString(message, field);
     case FieldDescriptor::CPPTYPE_INT32:
-      return absl::StrCat(repeated ? r->GetRepeatedInt32(message, field, index) : r->GetInt32(message, field));
+      return absl::StrCat(repeated ? r->GetRepeatedInt32(message, field, index)
+                                   : r->GetInt32(message, field));
     case FieldDescriptor::CPPTYPE_INT64:
-      return absl::StrCat(repeated ? r->GetRepeatedInt64(message, field, index) : r->GetInt64(message, field));
+      return absl::StrCat(repeated ? r->GetRepeatedInt64(message, field, index)
+                                   : r->GetInt64(message, field));
     case FieldDescriptor::CPPTYPE_DOUBLE:
-      return absl::StrCat(repeated ? r->GetRepeatedDouble(message, field, index) : r->GetDouble(message, field));
+      return absl::StrCat(repeated ? r->GetRepeatedDouble(message, field, index)
+                                   : r->GetDouble(message, field));
     case FieldDescriptor::CPPTYPE_BOOL:
-      return (repeated ? r->GetRepeatedBool(message, field, index) : r->GetBool(message, field)) ? "true" : "false";
+      return (repeated ? r->GetRepeatedBool(message, field, index) : r->GetBool(message, field))
+                 ? "true"
+                 : "false";
     case FieldDescriptor::CPPTYPE_ENUM:
-      return (repeated ? r->GetRepeatedEnum(message, field, index) : r->GetEnum(message, field))->name();
+      return (repeated ? r->GetRepeatedEnum(message, field, index) : r->GetEnum(message, field))
+          ->name();
     default:
-      ADD_FAILURE() << field->full_name() << ": a query parameter of a type this test does not write";
+      ADD_FAILURE() << field->full_name()
+                    << ": a query parameter of a type this test does not write";
       return "";
   }
 }
@@ -50,10 +57,18 @@ std::optional<RestRequest> RestFormOf(const MethodDescriptor* method, const Mess
   RestRequest rest;
   std::string path_template;
   switch (rule.pattern_case()) {
-    case google::api::HttpRule::kGet: rest.verb = "GET", path_template = rule.get(); break;
-    case google::api::HttpRule::kPost: rest.verb = "POST", path_template = rule.post(); break;
-    case google::api::HttpRule::kDelete: rest.verb = "DELETE", path_template = rule.delete_(); break;
-    default: ADD_FAILURE() << method->full_name() << ": a verb this test does not send"; return std::nullopt;
+    case google::api::HttpRule::kGet:
+      rest.verb = "GET", path_template = rule.get();
+      break;
+    case google::api::HttpRule::kPost:
+      rest.verb = "POST", path_template = rule.post();
+      break;
+    case google::api::HttpRule::kDelete:
+      rest.verb = "DELETE", path_template = rule.delete_();
+      break;
+    default:
+      ADD_FAILURE() << method->full_name() << ": a verb this test does not send";
+      return std::nullopt;
   }
   std::unique_ptr<Message> rest_of(request.New());
   rest_of->CopyFrom(request);
@@ -61,7 +76,8 @@ std::optional<RestRequest> RestFormOf(const MethodDescriptor* method, const Mess
   // {name=runs/*} → the request's name, "runs/<id>".
   const std::regex variable(R"(\{([^}=]+)(=[^}]*)?\})");
   std::size_t last = 0;
-  for (std::sregex_iterator it(path_template.begin(), path_template.end(), variable), end; it != end; ++it) {
+  for (std::sregex_iterator it(path_template.begin(), path_template.end(), variable), end;
+       it != end; ++it) {
     rest.path += path_template.substr(last, static_cast<std::size_t>(it->position()) - last);
     const FieldDescriptor* field = rest_of->GetDescriptor()->FindFieldByName((*it)[1].str());
     EXPECT_NE(field, nullptr) << method->full_name() << ": path variable " << (*it)[1];

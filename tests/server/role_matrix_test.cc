@@ -7,14 +7,13 @@
 // call of a writing method, admitted or refused, leaves exactly its audit
 // event; a read leaves none. The methods come from the proto files, so a new
 // service or method without a case here fails the test.
-#include <gmock/gmock.h>
-#include <gtest/gtest.h>
-
 #include <absl/strings/numbers.h>
 #include <absl/strings/str_cat.h>
 #include <absl/strings/str_split.h>
+#include <gmock/gmock.h>
 #include <google/protobuf/descriptor.h>
 #include <google/protobuf/message.h>
+#include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
@@ -27,7 +26,6 @@
 #include <thread>
 
 #include "generic_call.h"
-#include "rest_form.h"
 #include "google/api/annotations.pb.h"
 #include "insdiag/api/json.h"
 #include "insdiag/api/run_codec.h"
@@ -37,6 +35,7 @@
 #include "insdiag/v1/fleet.grpc.pb.h"
 #include "insdiag/v1/knowledge.grpc.pb.h"
 #include "insdiag/v1/live.grpc.pb.h"
+#include "rest_form.h"
 #include "server_fixture.h"
 #include "support/synthetic_run.h"
 
@@ -59,7 +58,8 @@ constexpr char kParameter[] = "gyro_bias_gm.x.sigma";
 std::set<std::string> ServicesOfTheProtoFiles() {
   std::set<std::string> services;
   const std::regex service(R"(^service\s+(\w+)\s*\{)");
-  for (const auto& entry : std::filesystem::directory_iterator(INSDIAG_SOURCE_DIR "/proto/insdiag/v1")) {
+  for (const auto& entry :
+       std::filesystem::directory_iterator(INSDIAG_SOURCE_DIR "/proto/insdiag/v1")) {
     if (entry.path().extension() != ".proto") continue;
     std::ifstream in(entry.path());
     std::string line;
@@ -74,7 +74,8 @@ std::set<std::string> ServicesOfTheProtoFiles() {
 std::vector<const MethodDescriptor*> EveryServedMethod() {
   std::vector<const MethodDescriptor*> methods;
   for (const std::string& name : server::InsdiagServer::ServiceNames()) {
-    const auto* service = google::protobuf::DescriptorPool::generated_pool()->FindServiceByName(name);
+    const auto* service =
+        google::protobuf::DescriptorPool::generated_pool()->FindServiceByName(name);
     EXPECT_NE(service, nullptr) << name;
     if (service == nullptr) continue;
     for (int m = 0; m < service->method_count(); ++m) methods.push_back(service->method(m));
@@ -91,7 +92,7 @@ std::string GrpcPath(const MethodDescriptor* method) {
 // one), its REST form, and what its audit event must name.
 struct Call {
   std::vector<std::string> requests;  // serialized
-  std::optional<RestRequest> rest;    // the http rule's form, unless the method's case gives its own
+  std::optional<RestRequest> rest;  // the http rule's form, unless the method's case gives its own
   // The resource the audit event of an admitted call names: exactly, when
   // the request names it; else the collection of the resource it creates.
   std::string resource;
@@ -147,8 +148,9 @@ class RoleMatrixTest : public ServerTest {
       std::this_thread::sleep_for(100ms);
       v1::GetAnalysisRequest get;
       get.set_name(analysis_);
-      auto got = client::CallUnary<v1::Analysis>(
-          [&](grpc::ClientContext* c, v1::Analysis* r) { return analyses->GetAnalysis(c, get, r); });
+      auto got = client::CallUnary<v1::Analysis>([&](grpc::ClientContext* c, v1::Analysis* r) {
+        return analyses->GetAnalysis(c, get, r);
+      });
       ASSERT_TRUE(got.ok()) << got.status();
       analysis = *got;
     } while (analysis.state() == v1::Analysis::QUEUED || analysis.state() == v1::Analysis::RUNNING);
@@ -159,8 +161,10 @@ class RoleMatrixTest : public ServerTest {
     auto knowledge = v1::KnowledgeService::NewStub(channel());
     v1::CreateFailureRecordRequest record;
     *record.mutable_failure_record() = NoFaultFoundRecord(120.0);
-    auto made = client::CallUnary<v1::FailureRecord>(
-        [&](grpc::ClientContext* c, v1::FailureRecord* r) { return knowledge->CreateFailureRecord(c, record, r); });
+    auto made =
+        client::CallUnary<v1::FailureRecord>([&](grpc::ClientContext* c, v1::FailureRecord* r) {
+          return knowledge->CreateFailureRecord(c, record, r);
+        });
     ASSERT_TRUE(made.ok()) << made.status();
     record_ = made->name();
     v1::GetUnitRequest get_unit;
@@ -173,11 +177,15 @@ class RoleMatrixTest : public ServerTest {
     v1::ListFailureModesRequest modes;
     modes.set_unit_type(unit_type_);
     auto listed = client::CallUnary<v1::ListFailureModesResponse>(
-        [&](grpc::ClientContext* c, v1::ListFailureModesResponse* r) { return knowledge->ListFailureModes(c, modes, r); });
+        [&](grpc::ClientContext* c, v1::ListFailureModesResponse* r) {
+          return knowledge->ListFailureModes(c, modes, r);
+        });
     ASSERT_TRUE(listed.ok()) << listed.status();
     modes.set_module_role("gyro.x");
     listed = client::CallUnary<v1::ListFailureModesResponse>(
-        [&](grpc::ClientContext* c, v1::ListFailureModesResponse* r) { return knowledge->ListFailureModes(c, modes, r); });
+        [&](grpc::ClientContext* c, v1::ListFailureModesResponse* r) {
+          return knowledge->ListFailureModes(c, modes, r);
+        });
     ASSERT_TRUE(listed.ok()) << listed.status();
     ASSERT_GT(listed->failure_modes_size(), 0);
     failure_mode_ = listed->failure_modes(0).name();
@@ -186,16 +194,19 @@ class RoleMatrixTest : public ServerTest {
     other_unit.metadata.unit_serial = "INS-2000-0043";
     auto other = client::UploadRun(runs(), other_unit, client::UploadOptions{});
     ASSERT_TRUE(other.ok()) << other.status();
-    for (const auto& [module, hours] : {std::pair(std::string(kModule), 300.0),
-                                        std::pair(std::string("units/INS-2000-0043/modules/gyro.x"), 900.0)}) {
+    for (const auto& [module, hours] :
+         {std::pair(std::string(kModule), 300.0),
+          std::pair(std::string("units/INS-2000-0043/modules/gyro.x"), 900.0)}) {
       v1::CreateFailureRecordRequest failure;
       failure.mutable_failure_record()->set_module(module);
       failure.mutable_failure_record()->set_failure_mode(failure_mode_);
       failure.mutable_failure_record()->set_confirmed(true);
       failure.mutable_failure_record()->set_operating_hours(hours);
       failure.mutable_failure_record()->set_repair_action("module replaced");
-      auto confirmed = client::CallUnary<v1::FailureRecord>(
-          [&](grpc::ClientContext* c, v1::FailureRecord* r) { return knowledge->CreateFailureRecord(c, failure, r); });
+      auto confirmed =
+          client::CallUnary<v1::FailureRecord>([&](grpc::ClientContext* c, v1::FailureRecord* r) {
+            return knowledge->CreateFailureRecord(c, failure, r);
+          });
       ASSERT_TRUE(confirmed.ok()) << confirmed.status();
     }
 
@@ -221,7 +232,8 @@ class RoleMatrixTest : public ServerTest {
 
   // A new stored run of `samples` at 50 Hz: samples differ with the seed.
   std::string FreshRun(std::size_t samples = 200, std::uint32_t seed = 0) {
-    auto run = client::UploadRun(runs(), SyntheticStaticRun(samples, 50.0, seed != 0 ? seed : next_seed_++),
+    auto run = client::UploadRun(runs(),
+                                 SyntheticStaticRun(samples, 50.0, seed != 0 ? seed : next_seed_++),
                                  client::UploadOptions{});
     EXPECT_TRUE(run.ok()) << run.status();
     return run.ok() ? run->name() : "";
@@ -231,8 +243,9 @@ class RoleMatrixTest : public ServerTest {
     auto stub = v1::AnalysisService::NewStub(channel());
     v1::CreateAnalysisRequest create;
     create.mutable_analysis()->set_run(run_);
-    auto made = client::CallUnary<v1::Analysis>(
-        [&](grpc::ClientContext* c, v1::Analysis* r) { return stub->CreateAnalysis(c, create, r); });
+    auto made = client::CallUnary<v1::Analysis>([&](grpc::ClientContext* c, v1::Analysis* r) {
+      return stub->CreateAnalysis(c, create, r);
+    });
     EXPECT_TRUE(made.ok()) << made.status();
     return made.ok() ? made->name() : "";
   }
@@ -241,8 +254,9 @@ class RoleMatrixTest : public ServerTest {
     auto stub = v1::KnowledgeService::NewStub(channel());
     v1::CreateDiagnosisRequest create;
     create.set_analysis(analysis_);
-    auto made = client::CallUnary<v1::Diagnosis>(
-        [&](grpc::ClientContext* c, v1::Diagnosis* r) { return stub->CreateDiagnosis(c, create, r); });
+    auto made = client::CallUnary<v1::Diagnosis>([&](grpc::ClientContext* c, v1::Diagnosis* r) {
+      return stub->CreateDiagnosis(c, create, r);
+    });
     EXPECT_TRUE(made.ok()) << made.status();
     return made.ok() ? made->name() : "";
   }
@@ -297,7 +311,8 @@ class RoleMatrixTest : public ServerTest {
         b.call.requests.push_back(r.SerializeAsString());
         return true;
       });
-      b.call.rest = RestRequest{"POST", "/v1/runs:upload", benchrun::FormatBenchRun(run), "text/csv"};
+      b.call.rest =
+          RestRequest{"POST", "/v1/runs:upload", benchrun::FormatBenchRun(run), "text/csv"};
       b.call.resource_collection = "runs/";
     } else if (name == "GetRun") {
       v1::GetRunRequest r;
@@ -521,7 +536,7 @@ class RoleMatrixTest : public ServerTest {
   bool LiveRunServiceCall(const std::string& name, CallBuilder& b) {
     if (name == "MonitorRun") {
       b.call.requests = MonitoredTest(next_seed_++);  // no REST form: requests stream in
-      b.call.resource_collection = "runs/";  // the run the ended test stored
+      b.call.resource_collection = "runs/";           // the run the ended test stored
     } else if (name == "ListLiveRuns") {
       b.Unary(v1::ListLiveRunsRequest());
     } else if (name == "WatchLiveRun") {
@@ -542,7 +557,8 @@ class RoleMatrixTest : public ServerTest {
 
   static std::int64_t EventNumber(const v1::AuditEvent& event) {
     std::int64_t number = 0;
-    EXPECT_TRUE(absl::SimpleAtoi(event.name().substr(event.name().find('/') + 1), &number)) << event.name();
+    EXPECT_TRUE(absl::SimpleAtoi(event.name().substr(event.name().find('/') + 1), &number))
+        << event.name();
     return number;
   }
 
@@ -552,7 +568,9 @@ class RoleMatrixTest : public ServerTest {
     v1::ListAuditEventsRequest request;
     request.set_page_size(at_most);
     auto listed = client::CallUnary<v1::ListAuditEventsResponse>(
-        [&](grpc::ClientContext* c, v1::ListAuditEventsResponse* r) { return stub->ListAuditEvents(c, request, r); });
+        [&](grpc::ClientContext* c, v1::ListAuditEventsResponse* r) {
+          return stub->ListAuditEvents(c, request, r);
+        });
     EXPECT_TRUE(listed.ok()) << listed.status();
     std::vector<v1::AuditEvent> events;
     if (!listed.ok()) return events;
@@ -565,12 +583,14 @@ class RoleMatrixTest : public ServerTest {
   // After one call of `method` by `role`: a writing method left exactly one
   // event naming the caller, the method, the resource, the peer and the
   // outcome; a read left none.
-  void ExpectAudited(const MethodDescriptor* method, v1::Role role, const Call& call, std::int64_t before,
-                     bool admitted, const std::string& transport) {
-    const std::string what = method->full_name() + " as " + v1::Role_Name(role) + " over " + transport;
+  void ExpectAudited(const MethodDescriptor* method, v1::Role role, const Call& call,
+                     std::int64_t before, bool admitted, const std::string& transport) {
+    const std::string what =
+        method->full_name() + " as " + v1::Role_Name(role) + " over " + transport;
     const auto events = AuditEventsAfter(before);
     if (!method->options().GetExtension(v1::access).writes()) {
-      EXPECT_TRUE(events.empty()) << what << " is a read, yet left " << events.size() << " audit events";
+      EXPECT_TRUE(events.empty()) << what << " is a read, yet left " << events.size()
+                                  << " audit events";
       return;
     }
     ASSERT_EQ(events.size(), 1u) << what;
@@ -614,7 +634,8 @@ TEST(ServedServices, EveryServiceOfTheProtoFilesIsServedAndEveryMethodHasAnAcces
   for (const auto* method : EveryServedMethod()) {
     ++methods;
     ASSERT_TRUE(method->options().HasExtension(v1::access)) << method->full_name();
-    EXPECT_NE(method->options().GetExtension(v1::access).role(), v1::ROLE_UNSPECIFIED) << method->full_name();
+    EXPECT_NE(method->options().GetExtension(v1::access).role(), v1::ROLE_UNSPECIFIED)
+        << method->full_name();
   }
   EXPECT_EQ(methods, 44) << "a method was added or removed: docs/RELIABILITY.md gives the count";
 }
@@ -626,12 +647,18 @@ TEST(ServedServices, EveryServiceOfTheProtoFilesIsServedAndEveryMethodHasAnAcces
 // against this table, and every other method is a read.
 TEST(AccessRules, EachMethodsLeastRoleIsTheOnePromised) {
   const std::map<std::string, v1::Role> promised = {
-      {"UploadRun", v1::OPERATOR},          {"DeleteRun", v1::ADMIN},
-      {"CreateAnalysis", v1::OPERATOR},     {"CancelAnalysis", v1::OPERATOR},
-      {"CreateDiagnosis", v1::OPERATOR},    {"ResolveDiagnosis", v1::ENGINEER},
-      {"CreateFailureRecord", v1::ENGINEER}, {"CorrectFailureRecord", v1::ENGINEER},
-      {"CreateToken", v1::ADMIN},           {"ListTokens", v1::ADMIN},
-      {"RevokeToken", v1::ADMIN},           {"ListAuditEvents", v1::ENGINEER},
+      {"UploadRun", v1::OPERATOR},
+      {"DeleteRun", v1::ADMIN},
+      {"CreateAnalysis", v1::OPERATOR},
+      {"CancelAnalysis", v1::OPERATOR},
+      {"CreateDiagnosis", v1::OPERATOR},
+      {"ResolveDiagnosis", v1::ENGINEER},
+      {"CreateFailureRecord", v1::ENGINEER},
+      {"CorrectFailureRecord", v1::ENGINEER},
+      {"CreateToken", v1::ADMIN},
+      {"ListTokens", v1::ADMIN},
+      {"RevokeToken", v1::ADMIN},
+      {"ListAuditEvents", v1::ENGINEER},
       {"MonitorRun", v1::OPERATOR},
   };
   for (const auto* method : EveryServedMethod()) {
@@ -656,9 +683,11 @@ TEST_F(RoleMatrixTest, EveryMethodRefusesACallerWithoutAValidTokenAndAuditsTheRe
     for (auto* stub : {&anonymous, &forged}) {
       const std::int64_t before = NewestAuditEvent();
       const GenericAnswer answer = CallGeneric(*stub, GrpcPath(method), call->requests);
-      EXPECT_EQ(answer.status.error_code(), grpc::StatusCode::UNAUTHENTICATED) << method->full_name();
+      EXPECT_EQ(answer.status.error_code(), grpc::StatusCode::UNAUTHENTICATED)
+          << method->full_name();
       if (stub == &forged) {
-        EXPECT_THAT(answer.status.error_message(), HasSubstr("unknown bearer token")) << method->full_name();
+        EXPECT_THAT(answer.status.error_message(), HasSubstr("unknown bearer token"))
+            << method->full_name();
       }
       EXPECT_TRUE(answer.responses.empty()) << method->full_name();
       const auto events = AuditEventsAfter(before);
@@ -695,13 +724,14 @@ TEST_F(RoleMatrixTest, EachRoleSucceedsInExactlyTheCallsAtOrBelowItOverGrpcAndEv
         EXPECT_THAT(answer.status.error_message(), HasSubstr(v1::Role_Name(least))) << what;
         EXPECT_TRUE(answer.responses.empty()) << what;
       } else {
-        EXPECT_TRUE(answer.status.ok()) << what << ": " << answer.status.error_code() << " "
-                                        << answer.status.error_message();
+        EXPECT_TRUE(answer.status.ok())
+            << what << ": " << answer.status.error_code() << " " << answer.status.error_message();
         EXPECT_FALSE(answer.responses.empty()) << what << " answered nothing";
         // Each answer is a message of the method's output type.
         for (const std::string& bytes : answer.responses) {
-          std::unique_ptr<Message> response(
-              google::protobuf::MessageFactory::generated_factory()->GetPrototype(method->output_type())->New());
+          std::unique_ptr<Message> response(google::protobuf::MessageFactory::generated_factory()
+                                                ->GetPrototype(method->output_type())
+                                                ->New());
           EXPECT_TRUE(response->ParseFromString(bytes)) << what;
         }
       }
@@ -711,25 +741,29 @@ TEST_F(RoleMatrixTest, EachRoleSucceedsInExactlyTheCallsAtOrBelowItOverGrpcAndEv
   EXPECT_EQ(calls, 44 * 4);
 }
 
-TEST_F(RoleMatrixTest, EachRoleSucceedsInExactlyTheRoutesAtOrBelowItOverRestAndEveryWriteIsAudited) {
+TEST_F(RoleMatrixTest,
+       EachRoleSucceedsInExactlyTheRoutesAtOrBelowItOverRestAndEveryWriteIsAudited) {
   int routes = 0;
   for (const auto* method : EveryServedMethod()) {
     const v1::Role least = method->options().GetExtension(v1::access).role();
     if (!method->options().HasExtension(google::api::http)) {
       // Requests that stream in have no REST form: only MonitorRun.
-      EXPECT_TRUE(method->client_streaming() && method->name() == "MonitorRun") << method->full_name();
+      EXPECT_TRUE(method->client_streaming() && method->name() == "MonitorRun")
+          << method->full_name();
       continue;
     }
     ++routes;
     for (v1::Role role : kRoles) {
       const std::optional<Call> call = CallOf(method);
-      ASSERT_TRUE(call.has_value() && call->rest.has_value()) << method->full_name() << ": no REST case";
+      ASSERT_TRUE(call.has_value() && call->rest.has_value())
+          << method->full_name() << ": no REST case";
       const RestRequest& rest = *call->rest;
       httplib::Client& http = *callers_[role].http;
       const std::int64_t before = NewestAuditEvent();
-      httplib::Result answer = rest.verb == "GET"    ? http.Get(rest.path.c_str())
-                               : rest.verb == "POST" ? http.Post(rest.path.c_str(), rest.body, rest.content_type.c_str())
-                                                     : http.Delete(rest.path.c_str());
+      httplib::Result answer =
+          rest.verb == "GET"    ? http.Get(rest.path.c_str())
+          : rest.verb == "POST" ? http.Post(rest.path.c_str(), rest.body, rest.content_type.c_str())
+                                : http.Delete(rest.path.c_str());
       const std::string what = rest.verb + " " + rest.path + " as " + v1::Role_Name(role);
       ASSERT_TRUE(answer) << what;
       if (role < least) {

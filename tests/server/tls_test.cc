@@ -125,17 +125,21 @@ TEST_F(TlsTest, TheCliTakesACaFileAndRefusesOneItCannotRead) {
 
 // The Python example client over TLS: it verifies the server against
 // --ca-file (or $INSDIAG_CA_FILE) and sends the token of $INSDIAG_TOKEN.
-TEST_F(TlsTest, ThePythonClientVerifiesTheServerAgainstItsCaFileAndTakesItsTokenFromTheEnvironment) {
-  auto simulated = RunToCompletion({INSDIAG_CLI_PATH, "simulate", (dir_ / "run.csv").string(), "--profile", "static",
-                                    "--rate", "10", "--seed", "7", "--serial", "INS-PY-TLS"},
-                                   dir_, 60s);
-  ASSERT_TRUE(simulated.ok() && simulated->exit_status == 0) << (simulated.ok() ? simulated->stderr_text : "");
+TEST_F(TlsTest,
+       ThePythonClientVerifiesTheServerAgainstItsCaFileAndTakesItsTokenFromTheEnvironment) {
+  auto simulated =
+      RunToCompletion({INSDIAG_CLI_PATH, "simulate", (dir_ / "run.csv").string(), "--profile",
+                       "static", "--rate", "10", "--seed", "7", "--serial", "INS-PY-TLS"},
+                      dir_, 60s);
+  ASSERT_TRUE(simulated.ok() && simulated->exit_status == 0)
+      << (simulated.ok() ? simulated->stderr_text : "");
   const std::string operator_token = MakeToken(pool(), v1::OPERATOR, "python over tls");
   const std::string address = "localhost:" + std::to_string(server_->grpc_port());
   const auto python = [&](std::vector<std::string> args, const std::vector<std::string>& env) {
-    args.insert(args.begin(), {"/usr/bin/python3", INSDIAG_SOURCE_DIR "/clients/python/insdiag_client.py",
-                               (dir_ / "run.csv").string(), "--server", address, "--stubs-dir",
-                               (dir_ / "stubs").string()});
+    args.insert(args.begin(),
+                {"/usr/bin/python3", INSDIAG_SOURCE_DIR "/clients/python/insdiag_client.py",
+                 (dir_ / "run.csv").string(), "--server", address, "--stubs-dir",
+                 (dir_ / "stubs").string()});
     auto done = RunToCompletion(args, dir_, 180s, env);
     EXPECT_TRUE(done.ok()) << done.status();
     return done.ok() ? *done : Completed{};
