@@ -6,12 +6,16 @@
 # runs; --no-demo leaves the database empty.
 # Usage: ./run.sh [--no-demo] [insdiagd options...]   e.g. ./run.sh --http-port 8081
 # Environment: INSDIAG_GRPC_PORT (50051), INSDIAG_HTTP_PORT (8080),
-#              INSDIAG_DATA_DIR (<checkout>/.insdiag)
+#              INSDIAG_DATA_DIR (<checkout>/.insdiag), INSDIAG_BUILD_DIR (<checkout>/build),
+#              INSDIAG_RUN_NO_BUILD=1 starts what INSDIAG_BUILD_DIR holds, without
+#              installing or building first (its end-to-end test does so)
 set -euo pipefail
 root=$(cd "$(dirname "$0")" && pwd)
-"$root/scripts/install-deps.sh"
-"$root/scripts/build.sh"
 build_dir=${INSDIAG_BUILD_DIR:-$root/build}
+if [[ ${INSDIAG_RUN_NO_BUILD:-} != 1 ]]; then
+  "$root/scripts/install-deps.sh"
+  "$root/scripts/build.sh"
+fi
 
 data_dir=${INSDIAG_DATA_DIR:-$root/.insdiag}
 grpc_port=${INSDIAG_GRPC_PORT:-50051}
@@ -71,6 +75,9 @@ first_start=false
 server=$!
 trap 'kill -TERM $server 2>/dev/null; wait $server' INT TERM
 
+if ! $demo && $first_start; then
+  echo "run.sh: a new database; --no-demo: it stays empty"
+fi
 if $demo && $first_start; then
   for _ in $(seq 600); do
     curl -sf "http://localhost:$http_port/healthz" >/dev/null 2>&1 && break

@@ -38,8 +38,10 @@ done
 # nodejs/npm may come from outside Debian's packages on some images; accept them on PATH.
 if [[ " ${missing[*]} " == *" nodejs "* ]] && command -v node >/dev/null; then missing=("${missing[@]/nodejs}"); fi
 if [[ " ${missing[*]} " == *" npm "* ]] && command -v npm >/dev/null; then missing=("${missing[@]/npm}"); fi
-# Docker from elsewhere (docker-ce, the compose plugin) conflicts with Debian's docker.io: accept it.
-if $containers && command -v docker >/dev/null; then
+# A Docker engine from elsewhere (docker-ce, the compose plugin) conflicts with
+# Debian's docker.io: accept it. A docker client alone is no engine: without
+# dockerd, docker.io is installed (it brings its own client).
+if $containers && command -v dockerd >/dev/null; then
   missing=("${missing[@]/docker.io}")
   if docker compose version >/dev/null 2>&1 || command -v docker-compose >/dev/null; then missing=("${missing[@]/docker-compose}"); fi
 fi

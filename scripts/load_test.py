@@ -13,23 +13,32 @@ one. For --seconds, --clients threads each loop over:
 Per operation: count, throughput, p50 / p99 latency, errors by HTTP status.
 
 Afterwards:
-  - every acknowledged upload is downloaded as CSV and compared sample by
-    sample with what was sent (exact floats);
+  - every acknowledged upload is stored byte-exact: the server's sha256 of
+    its samples (runs.proto, UploadRunRequest.sha256), in the upload's answer
+    and in GET /v1/runs/{run}, is the digest of the samples sent, and the
+    run downloaded as CSV holds those samples exactly (floats compared);
   - every acknowledged analysis is waited for: it must succeed, taken up by
     exactly one worker (attempts == 1).
 
+It fails (exit 1) when an acknowledged write was lost or changed, an
+analysis did not succeed exactly once, a repeated request id got another
+run, or nothing at all was acknowledged. ctest runs a short load
+(LoadTest.NothingAcknowledgedIsLost, label e2e: 2 clients for 5 s).
+
 Usage:
-  scripts/load_test.py [--seconds 60] [--clients 8] [--workers 1] [--out results.json]
+  scripts/load_test.py [--seconds 60] [--clients 8] [--workers 1] [--insdiagd PATH] [--out results.json]
 The figures in docs/RELIABILITY.md come from
   scripts/load_test.py --seconds 60 --clients 8
 """
 import argparse
+import hashlib
 import http.client
 import json
 import os
 import random
 import socket
 import statistics
+import struct
 import subprocess
 import sys
 import tempfile
@@ -50,12 +59,12 @@ def free_port():
         return s.getsockname()[1]
 
 
-def start_server(tmp, workers):
+def start_server(server, tmp, workers):
     grpc, port = free_port(), free_port()
     data = os.path.join(tmp, "data")
     log = open(os.path.join(tmp, "insdiagd.log"), "w")
     os.chmod(tmp, 0o755)  # as root, the embedded PostgreSQL runs as `postgres`, which must reach its directory
-    proc = subprocess.Popen([SERVER, "--data-dir", data, "--grpc-port", str(grpc), "--http-port", str(port),
+    proc = subprocess.Popen([server, "--data-dir", data, "--grpc-port", str(grpc), "--http-port", str(port),
                              "--bind", "127.0.0.1", "--workers", str(workers), "--fleet-refresh-seconds", "0"],
                             stdout=log, stderr=subprocess.STDOUT)
     for _ in range(600):
@@ -140,10 +149,11 @@ class Load:
                 self.record("upload", time.monotonic() - t0, status)
                 if status != 200:
                     continue
-                name = json.loads(body)["name"]
+                run = json.loads(body)
+                name = run["name"]
                 mine.append(name)
                 with self.lock:
-                    self.uploads.append((name, samples))
+                    self.uploads.append((name, samples, run.get("sha256")))
                 if rng.random() < 0.1:  # the same upload again: the same run
                     t0 = time.monotonic()
                     status, again = client.call("POST", path, text.encode(), "text/csv")
@@ -174,10 +184,24 @@ class Load:
                 self.record(op, time.monotonic() - t0, status)
 
 
+def sample_sha256(samples):
+    """The digest of runs.proto's UploadRunRequest.sha256: each sample's ten
+    fields (no temperature column here) as little-endian binary64, in order."""
+    digest = hashlib.sha256()
+    for row in samples:
+        digest.update(struct.pack("<10d", *row))
+    return digest.hexdigest()
+
+
 def check_uploads(port, token, uploads):
     client = Client(port, token)
     lost = 0
-    for name, sent in uploads:
+    for name, sent, acknowledged_sha256 in uploads:
+        expected = sample_sha256(sent)
+        status, body = client.call("GET", f"/v1/{name}")
+        if status != 200 or acknowledged_sha256 != expected or json.loads(body).get("sha256") != expected:
+            lost += 1
+            continue
         status, body = client.call("GET", f"/v1/{name}:download")
         if status != 200:
             lost += 1
@@ -217,6 +241,7 @@ def main():
     parser.add_argument("--seconds", type=float, default=60.0)
     parser.add_argument("--clients", type=int, default=8)
     parser.add_argument("--workers", type=int, default=1, help="analysis workers of the server this script starts")
+    parser.add_argument("--insdiagd", default=SERVER, help="the server this script starts (default: build/'s)")
     parser.add_argument("--server-http", type=int, help="the HTTP port of a running insdiagd (with --token)")
     parser.add_argument("--token", help="an OPERATOR token of that server")
     parser.add_argument("--seed", type=int, default=1)
@@ -227,7 +252,7 @@ def main():
         if args.server_http:
             port, token = args.server_http, args.token
         else:
-            proc, port, token = start_server(tmp, args.workers)
+            proc, port, token = start_server(args.insdiagd, tmp, args.workers)
         try:
             load = Load(port, token, args.seconds, args.seed)
             threads = [threading.Thread(target=load.worker, args=(i,)) for i in range(args.clients)]
@@ -250,7 +275,7 @@ def main():
         errors = sum(n for (o, _), n in load.errors.items() if o == op)
         print(f"| {op} | {len(values)} | {len(values) / elapsed:.1f} | {1000 * statistics.median(values):.0f} | "
               f"{1000 * percentile(values, 0.99):.0f} | {errors} |")
-    print(f"\nacknowledged uploads: {len(load.uploads)}; not stored byte-exact: {lost}")
+    print(f"\nacknowledged uploads: {len(load.uploads)}; not stored byte-exact (sha256 and samples): {lost}")
     print(f"repeated request ids answered with another run: {load.idempotency_failures}")
     print(f"acknowledged analyses: {len(load.analyses)}; not succeeded exactly once: {len(bad)}; "
           f"unfinished after 600 s: {len(unfinished)}")
@@ -259,6 +284,9 @@ def main():
     if args.out:
         with open(args.out, "w") as f:
             json.dump({"latency": load.latency, "lost": lost, "bad": bad, "unfinished": unfinished}, f)
+    if not load.uploads or not load.analyses:
+        print("nothing was acknowledged: the load proves nothing")
+        return 1
     return 1 if lost or bad or unfinished or load.idempotency_failures else 0
 
 

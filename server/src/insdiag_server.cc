@@ -89,6 +89,15 @@ struct InsdiagServer::Services {
 
 InsdiagServer::InsdiagServer() = default;
 
+const std::vector<std::string>& InsdiagServer::ServiceNames() {
+  static const std::vector<std::string> names = {
+      "insdiag.v1.RunService",   "insdiag.v1.AnalysisService", "insdiag.v1.KnowledgeService",
+      "insdiag.v1.FleetService", "insdiag.v1.AccessService",   "insdiag.v1.LiveRunService"};
+  return names;
+}
+
+std::vector<RestRoute> InsdiagServer::rest_routes() const { return gateway_->routes(); }
+
 namespace {
 
 absl::StatusOr<std::string> ReadPemFile(const std::string& path, const char* flag) {
@@ -161,17 +170,15 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
     if (auto seeded = server->services_->catalogue_store.Seed(unit_types, catalogues); !seeded.ok()) return seeded;
   }
 
-  const std::vector<std::string> service_names = {"insdiag.v1.RunService", "insdiag.v1.AnalysisService",
-                                                   "insdiag.v1.KnowledgeService", "insdiag.v1.FleetService",
-                                                   "insdiag.v1.AccessService", "insdiag.v1.LiveRunService"};
-  if (auto guarded = AccessGuard::CheckEveryMethodHasARule(service_names); !guarded.ok()) return guarded;
+  if (auto guarded = AccessGuard::CheckEveryMethodHasARule(ServiceNames()); !guarded.ok())
+    return guarded;
   if (!options.first_admin_token_file.empty()) {
     auto made = server->services_->access_store.CreateFirstAdminToken(options.first_admin_token_file);
     if (!made.ok()) return made.status();
     server->wrote_first_admin_token_ = *made;
   }
   if (auto grpc = server->StartGrpc(options); !grpc.ok()) return grpc;
-  if (auto http = server->StartHttp(options, service_names); !http.ok()) return http;
+  if (auto http = server->StartHttp(options); !http.ok()) return http;
   server->StartHealthWatch(pool, options.health_poll);
   server->services_->workers.Start();
   return server;
@@ -207,10 +214,9 @@ absl::Status InsdiagServer::StartGrpc(const Options& options) {
   return absl::OkStatus();
 }
 
-absl::Status InsdiagServer::StartHttp(const Options& options,
-                                      const std::vector<std::string>& service_names) {
+absl::Status InsdiagServer::StartHttp(const Options& options) {
   auto gateway = RestGateway::Create(grpc_->InProcessChannel(grpc::ChannelArguments()),
-                                     service_names, services_->guard.gateway_key());
+                                     ServiceNames(), services_->guard.gateway_key());
   if (!gateway.ok()) return gateway.status();
   gateway_ = std::move(*gateway);
   gateway_->ServeMetrics([services = services_.get()] { return services->RenderMetrics(); });

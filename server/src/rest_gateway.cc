@@ -81,6 +81,24 @@ std::string MediaType(const httplib::Request& request) {
   return absl::AsciiStrToLower(type);
 }
 
+// The gateway's own routes, beside the transcoded methods: what the document
+// says of them, and what routes() lists.
+struct OwnRoute {
+  const char* http_method;
+  const char* path_template;
+  const char* summary;
+  const char* content_type;
+  bool needs_token;
+};
+constexpr char kDownloadTemplate[] = "/v1/{name=runs/*}:download";
+constexpr char kMetricsPath[] = "/metrics";
+constexpr OwnRoute kOwnRoutes[] = {
+    {"GET", kDownloadTemplate, "the run as a bench-run CSV file", "text/csv", true},
+    {"GET", "/healthz", "SERVING, or 503 while the database does not answer", "text/plain", false},
+    {"GET", kMetricsPath, "the Prometheus text (docs/API.md, Metrics)", "text/plain", true},
+    {"GET", "/v1/openapi.json", "this document", "application/json", true},
+};
+
 std::string Param(const httplib::Request& request, const char* json_name, const char* proto_name) {
   if (request.has_param(json_name)) return request.get_param_value(json_name);
   return request.get_param_value(proto_name);
@@ -123,16 +141,28 @@ absl::StatusOr<std::unique_ptr<RestGateway>> RestGateway::Create(std::shared_ptr
       }
     }
   }
-  gateway->openapi_json_ = OpenApiDocument(
-      operations,
-      {{"GET", "/v1/runs/{runsId}:download", "the run as a bench-run CSV file", "text/csv", true},
-       {"GET", "/healthz", "SERVING, or 503 while the database does not answer", "text/plain", false},
-       {"GET", "/metrics", "the Prometheus text (docs/API.md, Metrics)", "text/plain", true},
-       {"GET", "/v1/openapi.json", "this document", "application/json", true}});
+  std::vector<OpenApiExtraRoute> extras;
+  for (const OwnRoute& own : kOwnRoutes) {
+    extras.push_back({own.http_method, OpenApiPath(own.path_template), own.summary,
+                      own.content_type, own.needs_token});
+  }
+  gateway->openapi_json_ = OpenApiDocument(operations, extras);
   // "runs/x:download" must reach the :download route, not GetRun.
   std::stable_sort(gateway->routes_.begin(), gateway->routes_.end(),
                    [](const Route& a, const Route& b) { return a.path.has_verb() && !b.path.has_verb(); });
   return gateway;
+}
+
+std::vector<RestRoute> RestGateway::routes() const {
+  std::vector<RestRoute> served;
+  for (const Route& route : routes_) {
+    served.push_back({route.http_method, route.path.text(), route.method->full_name()});
+  }
+  for (const OwnRoute& own : kOwnRoutes) {
+    if (own.path_template == std::string_view(kMetricsPath) && !render_metrics_) continue;
+    served.push_back({own.http_method, own.path_template, ""});
+  }
+  return served;
 }
 
 CallMetadata RestGateway::MetadataOf(const httplib::Request& request) const {
@@ -158,13 +188,14 @@ void RestGateway::Register(httplib::Server& http) {
 
 void RestGateway::Handle(const httplib::Request& request, httplib::Response& response) {
   if (request.method == "GET" && request.path == "/healthz") return Health(response);
-  if (request.method == "GET" && request.path == "/metrics" && render_metrics_) return Metrics(request, response);
+  if (request.method == "GET" && request.path == kMetricsPath && render_metrics_)
+    return Metrics(request, response);
   if (request.method == "GET" && request.path == "/v1/openapi.json") {
     if (!AdmitAnyRole(request, response)) return;
     response.status = 200;
     return response.set_content(openapi_json_, "application/json");
   }
-  static const auto download = *PathTemplate::Parse("/v1/{name=runs/*}:download");
+  static const auto download = *PathTemplate::Parse(kDownloadTemplate);
   if (request.method == "GET") {
     if (auto bindings = download.Match(request.path)) return Download(bindings->at("name"), request, response);
   }

@@ -16,6 +16,7 @@
 #include "insdiag/v1/analyses.pb.h"
 #include "insdiag/v1/fleet.pb.h"
 #include "insdiag/v1/knowledge.pb.h"
+#include "insdiag/v1/live.pb.h"
 #include "insdiag/v1/runs.pb.h"
 
 namespace {
@@ -27,12 +28,14 @@ const std::vector<const google::protobuf::Descriptor*>& RequestTypes() {
                              insdiag::v1::CreateAnalysisRequest::descriptor()->file(),
                              insdiag::v1::GetUnitRequest::descriptor()->file(),
                              insdiag::v1::GetFleetStatisticsRequest::descriptor()->file(),
-                             insdiag::v1::CreateTokenRequest::descriptor()->file()}) {
+                             insdiag::v1::CreateTokenRequest::descriptor()->file(),
+                             insdiag::v1::ListLiveRunsRequest::descriptor()->file()}) {
       if (file->service_count() == 0) std::abort();
     }
     auto* out = new std::vector<const google::protobuf::Descriptor*>();
-    for (const char* name : {"insdiag.v1.RunService", "insdiag.v1.AnalysisService", "insdiag.v1.KnowledgeService",
-                             "insdiag.v1.FleetService", "insdiag.v1.AccessService"}) {
+    for (const char* name :
+         {"insdiag.v1.RunService", "insdiag.v1.AnalysisService", "insdiag.v1.KnowledgeService",
+          "insdiag.v1.FleetService", "insdiag.v1.AccessService", "insdiag.v1.LiveRunService"}) {
       const auto* service = google::protobuf::DescriptorPool::generated_pool()->FindServiceByName(name);
       if (service == nullptr) std::abort();
       for (int m = 0; m < service->method_count(); ++m) out->push_back(service->method(m)->input_type());

@@ -388,64 +388,127 @@ TEST_F(AnalysesTest, ACommonGyroScaleFactorShiftRanksTheInterfaceCardFirst) {
   EXPECT_EQ(d.candidates(0).module(), "interface_card") << d.DebugString();
 }
 
-// A real insdiagd killed mid-job; another one on the same database completes the job.
-class WorkerKillTest : public DatabaseTest {};
+// Real insdiagd processes on the test's database, one analysis job queued
+// for them: killed or stopped mid-job, another completes the job.
+class WorkerKillTest : public DatabaseTest {
+ protected:
+  void TearDown() override {
+    if (!dir_.empty()) std::filesystem::remove_all(dir_);
+    DatabaseTest::TearDown();
+  }
 
-TEST_F(WorkerKillTest, AJobWhoseWorkerWasKilledIsCompletedByAnotherProcess) {
-  kb::RunStore runs(pool());
-  const engine::BenchRun run = SimulatedRun("INS-KILL-1", "full", 100.0);
-  auto stored = runs.Create(run, {.sha256 = "x", .request_id = "", .request_fingerprint = ""});
-  ASSERT_TRUE(stored.ok()) << stored.status();
-  kb::AnalysisStore analyses(pool());
-  auto created = analyses.Create(stored->id, v1::AnalysisSpec(), "");
-  ASSERT_TRUE(created.ok());
-  const std::string id = created->name().substr(9);
-  const auto dir = MakeTempDir("insdiag-kill");
-  const auto start = [&](const std::string& tag) {
-    std::filesystem::create_directories(dir / tag);
-    auto process = Subprocess::Start({INSDIAGD_PATH, "--database-url", database_url(), "--data-dir",
-                                      (dir / tag / "data").string(), "--grpc-port", "0",
-                                      "--http-port", "0", "--bind", "127.0.0.1", "--workers", "1", "--lease-seconds",
-                                      "2", "--fleet-refresh-seconds", "0"},
-                                     dir / tag);
+  // Stores `run` and queues its analysis; the job's id.
+  std::string QueueAnalysis(const engine::BenchRun& run) {
+    kb::RunStore runs(pool());
+    auto stored = runs.Create(run, {.sha256 = "x", .request_id = "", .request_fingerprint = ""});
+    EXPECT_TRUE(stored.ok()) << stored.status();
+    if (!stored.ok()) return "";
+    auto created = kb::AnalysisStore(pool()).Create(stored->id, v1::AnalysisSpec(), "");
+    EXPECT_TRUE(created.ok()) << created.status();
+    return created.ok() ? created->name().substr(9) : "";
+  }
+
+  // An insdiagd with one worker, its files under a directory named `tag`.
+  Subprocess Start(const std::string& tag, const std::string& lease_seconds) {
+    if (dir_.empty()) dir_ = MakeTempDir("insdiag-workers");
+    std::filesystem::create_directories(dir_ / tag);
+    auto process =
+        Subprocess::Start({INSDIAGD_PATH, "--database-url", database_url(), "--data-dir",
+                           (dir_ / tag / "data").string(), "--grpc-port", "0", "--http-port", "0",
+                           "--bind", "127.0.0.1", "--workers", "1", "--lease-seconds",
+                           lease_seconds, "--fleet-refresh-seconds", "0"},
+                          dir_ / tag);
     EXPECT_TRUE(process.ok()) << process.status();
     return std::move(*process);
-  };
-  auto first = start("first");
-  // Kill it as soon as its worker holds the job.
-  const auto deadline = std::chrono::steady_clock::now() + 60s;
-  for (;;) {
-    auto a = analyses.Get(id, false);
-    ASSERT_TRUE(a.ok());
-    if (a->state() == v1::Analysis::RUNNING) break;
-    ASSERT_NE(a->state(), v1::Analysis::SUCCEEDED) << "the job finished before it could be killed";
-    ASSERT_LT(std::chrono::steady_clock::now(), deadline) << first.Stderr();
-    std::this_thread::sleep_for(10ms);
   }
+
+  v1::Analysis Job(const std::string& id, bool with_report = false) {
+    auto a = kb::AnalysisStore(pool()).Get(id, with_report);
+    EXPECT_TRUE(a.ok()) << a.status();
+    return a.ok() ? *a : v1::Analysis();
+  }
+
+  // Polls until `process`'s worker holds job `id` (RUNNING).
+  void WaitUntilRunning(const std::string& id, const Subprocess& process) {
+    const auto deadline = std::chrono::steady_clock::now() + 60s;
+    for (v1::Analysis a = Job(id); a.state() != v1::Analysis::RUNNING; a = Job(id)) {
+      ASSERT_NE(a.state(), v1::Analysis::SUCCEEDED)
+          << "the job finished before it could be reached";
+      ASSERT_LT(std::chrono::steady_clock::now(), deadline) << process.Stderr();
+      std::this_thread::sleep_for(10ms);
+    }
+  }
+
+  // Polls until job `id` has ended (SUCCEEDED or FAILED), within `timeout`.
+  v1::Analysis WaitUntilEnded(const std::string& id, const Subprocess& process,
+                              std::chrono::seconds timeout) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    for (;;) {
+      v1::Analysis a = Job(id, true);
+      if (a.state() == v1::Analysis::SUCCEEDED || a.state() == v1::Analysis::FAILED) return a;
+      if (std::chrono::steady_clock::now() >= deadline) {
+        ADD_FAILURE() << "job " << id << " did not end within " << timeout.count() << " s\n"
+                      << process.Stderr();
+        return a;
+      }
+      std::this_thread::sleep_for(50ms);
+    }
+  }
+
+  std::filesystem::path dir_;
+};
+
+TEST_F(WorkerKillTest, AJobWhoseWorkerWasKilledIsCompletedByAnotherProcess) {
+  const std::string id = QueueAnalysis(SimulatedRun("INS-KILL-1", "full", 100.0));
+  ASSERT_FALSE(id.empty());
+  auto first = Start("first", "2");
+  // Kill it as soon as its worker holds the job.
+  WaitUntilRunning(id, first);
+  if (HasFatalFailure()) return;
   first.Signal(SIGKILL);
   ASSERT_TRUE(first.Wait(10s).has_value());
-  EXPECT_EQ(analyses.Get(id, false)->state(), v1::Analysis::RUNNING) << "killed mid-job, the row still says RUNNING";
+  EXPECT_EQ(Job(id).state(), v1::Analysis::RUNNING) << "killed mid-job, the row still says RUNNING";
 
-  auto second = start("second");
+  auto second = Start("second", "2");
   // The whole analysis of a two-hour 100 Hz run: a minute here, more on a
   // slow machine beside another test (the same allowance as Watch).
-  const auto analysed_by = std::chrono::steady_clock::now() + 480s;
-  v1::Analysis done;
-  for (;;) {
-    auto a = analyses.Get(id, true);
-    ASSERT_TRUE(a.ok());
-    if (a->state() == v1::Analysis::SUCCEEDED || a->state() == v1::Analysis::FAILED) {
-      done = *a;
-      break;
-    }
-    ASSERT_LT(std::chrono::steady_clock::now(), analysed_by) << second.Stderr();
-    std::this_thread::sleep_for(50ms);
-  }
+  const v1::Analysis done = WaitUntilEnded(id, second, 480s);
   EXPECT_EQ(done.state(), v1::Analysis::SUCCEEDED) << done.error().message() << "\n" << second.Stderr();
   EXPECT_EQ(done.attempts(), 2);
   EXPECT_EQ(done.report().channels_size(), 6);
   second.Signal(SIGTERM);
   second.Wait(20s);
+}
+
+// SIGTERM while a worker runs a job: the server stops claiming, finishes or
+// releases the job, and exits 0. The job is never left RUNNING under a
+// lease nobody holds; released, another process completes it.
+TEST_F(WorkerKillTest, SigtermWhileAJobRunsEndsTheJobFinishedOrReleasedAndTheServerExitsCleanly) {
+  const std::string id = QueueAnalysis(SimulatedRun("INS-TERM-1", "full", 20.0));
+  ASSERT_FALSE(id.empty());
+  auto first = Start("first", "30");
+  WaitUntilRunning(id, first);
+  if (HasFatalFailure()) return;
+  first.Signal(SIGTERM);
+  // The worker may finish the analysis first: the whole of it, on a slow machine.
+  const std::optional<int> exit_status = first.Wait(480s);
+  ASSERT_TRUE(exit_status.has_value()) << "insdiagd did not stop on SIGTERM while a job ran\n"
+                                       << first.Stderr();
+  EXPECT_EQ(*exit_status, 0) << first.Stderr();
+  EXPECT_THAT(first.Stderr(), HasSubstr("SIGTERM, shutting down"));
+
+  v1::Analysis after = Job(id, true);
+  EXPECT_TRUE(after.state() == v1::Analysis::SUCCEEDED || after.state() == v1::Analysis::QUEUED)
+      << "after SIGTERM the job is " << v1::Analysis::State_Name(after.state());
+  if (after.state() == v1::Analysis::QUEUED) {
+    // Released: another process takes it up at once (no lease to wait out).
+    auto second = Start("second", "30");
+    after = WaitUntilEnded(id, second, 480s);
+    second.Signal(SIGTERM);
+    EXPECT_EQ(second.Wait(480s), std::optional<int>(0));
+  }
+  EXPECT_EQ(after.state(), v1::Analysis::SUCCEEDED) << after.error().message();
+  EXPECT_EQ(after.report().channels_size(), 6);
 }
 
 }  // namespace

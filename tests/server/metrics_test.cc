@@ -1,6 +1,7 @@
 // GET /metrics through a real server and a real HTTP client: the Prometheus
 // text format, counters that move with the traffic, histograms whose
-// buckets add up, the queue and pool gauges, and the token check.
+// buckets add up, the queue gauges moving with a queued job, the pool
+// gauges, and the token check.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -194,6 +195,60 @@ TEST_F(MetricsTest, AnAnalysisJobCountsByItsOutcomeWithItsDuration) {
   EXPECT_GT(Sample(s, "insdiag_analysis_duration_seconds_sum{outcome=\"" + outcome + "\"}"), 0.0);
   EXPECT_EQ(Sample(s, "insdiag_jobs_queued"), 0.0);
   EXPECT_EQ(Sample(s, "insdiag_jobs_running"), 0.0);
+}
+
+// With no worker to take it, a queued analysis shows in the queue's gauges:
+// one queued, its age growing from scrape to scrape; cancelled, none.
+class QueueMetricsTest : public MetricsTest {
+ protected:
+  void Configure(server::InsdiagServer::Options& options) override { options.workers.workers = 0; }
+};
+
+TEST_F(QueueMetricsTest, AQueuedAnalysisMovesTheQueueDepthAndAgeGauges) {
+  httplib::Client viewer("127.0.0.1", server_->http_port());
+  viewer.set_bearer_token_auth(MakeToken(pool(), v1::VIEWER).c_str());
+  const Scrape idle = Get(viewer);
+  EXPECT_EQ(Sample(idle, "insdiag_jobs_queued"), 0.0);
+  EXPECT_EQ(Sample(idle, "insdiag_jobs_oldest_queued_age_seconds"), 0.0);
+
+  auto run = client::UploadRun(runs(), SyntheticStaticRun(500, 50.0, 6), client::UploadOptions{});
+  ASSERT_TRUE(run.ok()) << run.status();
+  auto analyses = v1::AnalysisService::NewStub(channel());
+  v1::CreateAnalysisRequest create;
+  create.mutable_analysis()->set_run(run->name());
+  auto queued = client::CallUnary<v1::Analysis>([&](grpc::ClientContext* c, v1::Analysis* r) {
+    return analyses->CreateAnalysis(c, create, r);
+  });
+  ASSERT_TRUE(queued.ok()) << queued.status();
+  ASSERT_EQ(queued->state(), v1::Analysis::QUEUED);
+
+  const Scrape first = Get(viewer);
+  EXPECT_EQ(Sample(first, "insdiag_jobs_queued"), 1.0);
+  EXPECT_EQ(Sample(first, "insdiag_jobs_running"), 0.0);
+  const double first_age = Sample(first, "insdiag_jobs_oldest_queued_age_seconds");
+  EXPECT_GE(first_age, 0.0);
+  // The age grows while the job waits: scrape until it has (the database's
+  // clock, in microseconds), with a deadline.
+  Scrape later = Get(viewer);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (Sample(later, "insdiag_jobs_oldest_queued_age_seconds") <= first_age + 0.2 &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    later = Get(viewer);
+  }
+  EXPECT_GT(Sample(later, "insdiag_jobs_oldest_queued_age_seconds"), first_age + 0.2);
+  EXPECT_EQ(Sample(later, "insdiag_jobs_queued"), 1.0);
+
+  v1::CancelAnalysisRequest cancel;
+  cancel.set_name(queued->name());
+  auto cancelled = client::CallUnary<v1::Analysis>([&](grpc::ClientContext* c, v1::Analysis* r) {
+    return analyses->CancelAnalysis(c, cancel, r);
+  });
+  ASSERT_TRUE(cancelled.ok()) << cancelled.status();
+  EXPECT_EQ(cancelled->state(), v1::Analysis::CANCELLED);
+  const Scrape after = Get(viewer);
+  EXPECT_EQ(Sample(after, "insdiag_jobs_queued"), 0.0);
+  EXPECT_EQ(Sample(after, "insdiag_jobs_oldest_queued_age_seconds"), 0.0);
 }
 
 }  // namespace

@@ -23,6 +23,7 @@ void ServerTest::SetUp() {
   options.bind_address = "127.0.0.1";
   options.grpc_port = 0;
   options.http_port = 0;
+  Configure(options);
   auto started = server::InsdiagServer::Start(pool(), options);
   ASSERT_TRUE(started.ok()) << started.status();
   server_ = std::move(*started);

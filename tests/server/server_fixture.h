@@ -26,6 +26,8 @@ class ServerTest : public DatabaseTest {
   // Runs on the fresh database before the server, and so its analysis
   // workers, start: for stores written directly, which a worker would race.
   virtual void BeforeServerStarts() {}
+  // The server's options beyond the fixture's (loopback, ephemeral ports).
+  virtual void Configure(server::InsdiagServer::Options& /*options*/) {}
 
   v1::RunService::Stub& runs() { return *runs_; }
   httplib::Client& http() { return *http_; }

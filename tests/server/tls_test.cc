@@ -1,6 +1,7 @@
 // TLS for both faces, through real clients: a gRPC channel and an HTTPS
 // client that verify the server against a CA file get in; plaintext clients
-// and clients that trust another CA do not; the CLI takes --ca-file.
+// and clients that trust another CA do not; the CLI and the Python client
+// take a CA file.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -46,7 +47,7 @@ class TlsTest : public DatabaseTest {
     server::InsdiagServer::Options options;
     options.grpc_port = 0;
     options.http_port = 0;
-    options.workers.workers = 0;
+    options.workers.workers = 1;  // the Python client's analysis
     options.tls_cert_file = (dir_ / "server.pem").string();
     options.tls_key_file = (dir_ / "server.key").string();
     auto started = server::InsdiagServer::Start(pool(), options);
@@ -120,6 +121,49 @@ TEST_F(TlsTest, TheCliTakesACaFileAndRefusesOneItCannotRead) {
   ASSERT_TRUE(missing.ok());
   EXPECT_EQ(missing->exit_status, 2);
   EXPECT_THAT(missing->stderr_text, HasSubstr("missing.pem"));
+}
+
+// The Python example client over TLS: it verifies the server against
+// --ca-file (or $INSDIAG_CA_FILE) and sends the token of $INSDIAG_TOKEN.
+TEST_F(TlsTest,
+       ThePythonClientVerifiesTheServerAgainstItsCaFileAndTakesItsTokenFromTheEnvironment) {
+  auto simulated =
+      RunToCompletion({INSDIAG_CLI_PATH, "simulate", (dir_ / "run.csv").string(), "--profile",
+                       "static", "--rate", "10", "--seed", "7", "--serial", "INS-PY-TLS"},
+                      dir_, 60s);
+  ASSERT_TRUE(simulated.ok() && simulated->exit_status == 0)
+      << (simulated.ok() ? simulated->stderr_text : "");
+  const std::string operator_token = MakeToken(pool(), v1::OPERATOR, "python over tls");
+  const std::string address = "localhost:" + std::to_string(server_->grpc_port());
+  const auto python = [&](std::vector<std::string> args, const std::vector<std::string>& env) {
+    args.insert(args.begin(),
+                {"/usr/bin/python3", INSDIAG_SOURCE_DIR "/clients/python/insdiag_client.py",
+                 (dir_ / "run.csv").string(), "--server", address, "--stubs-dir",
+                 (dir_ / "stubs").string()});
+    auto done = RunToCompletion(args, dir_, 180s, env);
+    EXPECT_TRUE(done.ok()) << done.status();
+    return done.ok() ? *done : Completed{};
+  };
+  const std::string token_env = "INSDIAG_TOKEN=" + operator_token;
+
+  auto diagnosed = python({"--ca-file", (dir_ / "server.pem").string(), "--json"}, {token_env});
+  EXPECT_EQ(diagnosed.exit_status, 0) << diagnosed.stderr_text;
+  EXPECT_THAT(diagnosed.stderr_text, HasSubstr("uploaded runs/"));
+  EXPECT_THAT(diagnosed.stdout_text, HasSubstr("\"candidates\""));
+
+  // The CA file from the environment; a server its CA did not sign is refused.
+  auto stranger = python({}, {token_env, "INSDIAG_CA_FILE=" + (dir_ / "stranger.pem").string()});
+  EXPECT_EQ(stranger.exit_status, 1);
+  EXPECT_THAT(stranger.stderr_text, HasSubstr("UNAVAILABLE"));
+  auto from_env = python({}, {token_env, "INSDIAG_CA_FILE=" + (dir_ / "server.pem").string()});
+  EXPECT_EQ(from_env.exit_status, 0) << from_env.stderr_text;
+  // Without a token the server refuses; without a CA file the client cannot speak TLS.
+  auto anonymous = python({"--ca-file", (dir_ / "server.pem").string()}, {"INSDIAG_TOKEN="});
+  EXPECT_EQ(anonymous.exit_status, 1);
+  EXPECT_THAT(anonymous.stderr_text, HasSubstr("UNAUTHENTICATED"));
+  auto missing = python({"--ca-file", (dir_ / "missing.pem").string()}, {token_env});
+  EXPECT_EQ(missing.exit_status, 2);
+  EXPECT_THAT(missing.stderr_text, HasSubstr("missing.pem"));
 }
 
 TEST(TlsOptions, AServerWithoutItsKeyOrWithABadCertificateDoesNotStart) {

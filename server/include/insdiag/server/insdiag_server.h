@@ -9,13 +9,15 @@
 #include <chrono>
 #include <condition_variable>
 #include <filesystem>
-#include <mutex>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "insdiag/kb/connection_pool.h"
 #include "insdiag/server/analysis_workers.h"
+#include "insdiag/server/rest_route.h"
 
 namespace grpc {
 class Server;
@@ -69,7 +71,13 @@ class InsdiagServer {
   static absl::StatusOr<std::unique_ptr<InsdiagServer>> Start(kb::ConnectionPool& pool, Options options);
   ~InsdiagServer();  // Shutdown()
 
+  // The services it serves, full names ("insdiag.v1.RunService"): every
+  // method of each carries an access rule, and its http rules are the REST face.
+  static const std::vector<std::string>& ServiceNames();
+
   int grpc_port() const { return grpc_port_; }
+  // Every route the REST face serves (rest_gateway.h).
+  std::vector<RestRoute> rest_routes() const;
   int http_port() const { return http_port_; }
   // Whether this start made the first ADMIN token (Options::first_admin_token_file).
   bool wrote_first_admin_token() const { return wrote_first_admin_token_; }
@@ -85,7 +93,7 @@ class InsdiagServer {
   // Start's steps, in order: the gRPC server, then the REST gateway and the
   // page over HTTP(S) (through gRPC in process), then the database's health.
   absl::Status StartGrpc(const Options& options);
-  absl::Status StartHttp(const Options& options, const std::vector<std::string>& service_names);
+  absl::Status StartHttp(const Options& options);
   void StartHealthWatch(kb::ConnectionPool& pool, std::chrono::milliseconds poll);
   struct Services;
   std::unique_ptr<Services> services_;

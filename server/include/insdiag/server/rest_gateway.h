@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "insdiag/server/path_template.h"
+#include "insdiag/server/rest_route.h"
 
 namespace google::protobuf {
 class MethodDescriptor;
@@ -57,6 +58,10 @@ class RestGateway {
 
   // Installs the handlers; the gateway must outlive `http`'s serving.
   void Register(httplib::Server& http);
+
+  // Every route served: the methods' http rules in matching order, then the
+  // gateway's own (/metrics only once ServeMetrics was called).
+  std::vector<RestRoute> routes() const;
 
   // What GET /metrics answers; unset, 404.
   void ServeMetrics(std::function<std::string()> render) { render_metrics_ = std::move(render); }
