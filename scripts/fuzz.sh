@@ -9,7 +9,7 @@
 # spell out (tests/fuzz/seeds_from_tests.py); the bench runs the reader and
 # server tests build in code (write_fuzz_seeds, built in the ordinary build,
 # $INSDIAG_BUILD_DIR or build/, when it is configured); the real record's
-# first lines ($INSDIAG_SHARED_DIR, else ../shared beside the checkout) and
+# first lines (the build's import of data/real, tests/CMakeLists.txt) and
 # the format's own example; inputs that once found a bug
 # (tests/fuzz/regressions/), run first every time.
 # Usage: scripts/fuzz.sh [SECONDS] [FUZZER...]   (default 60 s each, all four)
