@@ -51,7 +51,8 @@ absl::StatusOr<engine::BenchRun> JoinBenchRunFiles(const std::vector<std::filesy
     if (std::string why = Append(*run, joined); !why.empty()) {
       return absl::InvalidArgumentError(file.string() + ": " + why);
     }
-    sources += (sources.empty() ? "" : " ") + file.string();
+    if (!sources.empty()) sources += ' ';
+    sources += file.string();
   }
   joined.metadata.format = std::string(kFormatV2);
   joined.metadata.extra.emplace_back("joined_from", sources);
