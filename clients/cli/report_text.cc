@@ -204,9 +204,14 @@ void WriteSeriesCsv(const engine::AnalysisSeries& s, std::ostream& out) {
     line.clear();
     AppendNumber(line, s.time_s[k]);
     for (int c = 0; c < engine::kChannelCount; ++c) {
+      const bool observed = s.sigma(e, c) > 0.0;  // the attitude is observed while the table stands still
       for (double v : {s.measured(e, c), s.predicted(e, c), s.residual(e, c), 3.0 * s.sigma(e, c)}) {
         line += ",";
-        AppendNumber(line, v);
+        if (observed) {
+          AppendNumber(line, v);
+        } else {
+          line += "nan";
+        }
       }
     }
     out << line << "\n";

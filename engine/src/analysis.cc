@@ -14,6 +14,7 @@
 #include "analysis/model_change.h"
 #include "analysis/model_pass.h"
 #include "analysis/run_context.h"
+#include "insdiag/engine/nav/reference_readout.h"
 #include "insdiag/engine/numerics/parallel_map.h"
 
 namespace insdiag::engine {
@@ -363,6 +364,18 @@ AnalysisOptions OptionsForThisRun(const AnalysisOptions& options,
   return out;
 }
 
+// The encoders' readout noise, unless the model states it: the attitude
+// channels' noise, and what "the table stands still" tolerates (epoch_run.h).
+void MeasureAttitudeReadout(const BenchRun& run, ErrorModel& model, std::vector<std::string>& notes) {
+  if (!run.metadata.ReferenceAttitudeIsRead() || model.reference.attitude_readout_sigma_rad > 0.0) return;
+  model.reference.attitude_readout_sigma_rad = nav::AttitudeReadoutNoiseRad(run);
+  if (model.reference.attitude_readout_sigma_rad > 0.0) {
+    notes.push_back(absl::StrFormat(
+        "the table's encoders read the attitude with a noise of %.3g rad (from the reference's second differences)",
+        model.reference.attitude_readout_sigma_rad));
+  }
+}
+
 }  // namespace
 
 absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& request,
@@ -385,6 +398,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   std::optional<ident::AllanResult> allan;
   auto a_priori = ChooseAPrioriModel(run, request, allan, options, notes);
   if (!a_priori.ok()) return a_priori.status();
+  MeasureAttitudeReadout(run, a_priori->model, notes);
   const std::vector<ParameterEstimate> removed_constants =
       options.remove_dominant_constants ? RemoveDominantConstants(run, allan, a_priori->model, options, notes)
                                         : std::vector<ParameterEstimate>{};
@@ -402,7 +416,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   absl::StatusOr<EpochRun> epochs;
   std::vector<std::string> allan_notes;
   numerics::InParallel(
-      [&] { epochs = CondenseRun(run, base, options.filter.update_interval_s, &compensations); },
+      [&] { epochs = CondenseRunFor(run, base, options.filter, &compensations); },
       [&] {
         if (a_priori->from_datasheet) allan = AllanOfStaticSegments(run, options, allan_notes);
       });

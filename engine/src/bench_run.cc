@@ -11,6 +11,10 @@ std::optional<std::string> BenchRunMetadata::Extra(const std::string& key) const
   return std::nullopt;
 }
 
+bool BenchRunMetadata::ReferenceAttitudeIsRead() const {
+  return Extra(std::string(kReferenceAttitudeReadoutKey)) != std::string(kAttitudeNotRead);
+}
+
 double MedianSampleIntervalS(std::span<const ImuSample> samples) {
   if (samples.size() < 2) return 0.0;
   // The median is robust to the occasional late sample a logger produces.

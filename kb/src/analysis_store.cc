@@ -459,15 +459,21 @@ absl::Status AnalysisStore::ReadSeries(const std::string& analysis_id, const std
   for (char c : epochs_raw) epochs = (epochs << 8) | static_cast<unsigned char>(c);
   const std::string_view data = rows->Get(0, 1);
   const std::size_t k = epochs;
-  if (data.size() != 8 * k * (1 + 4 * engine::kChannelCount)) return absl::DataLossError("stored series has the wrong size");
+  // Series stored before the attitude channels hold the six position and velocity channels.
+  const std::size_t stored_channels = k > 0 ? (data.size() / (8 * k) - 1) / 4 : 0;
+  if ((stored_channels != engine::kChannelCount && stored_channels != engine::kAttitudeChannel) ||
+      data.size() != 8 * k * (1 + 4 * stored_channels)) {
+    return absl::DataLossError("stored series has the wrong size");
+  }
   const auto value = [&](std::size_t index) { return GetDouble(data.data() + 8 * index); };
   v1::ResidualSeriesChunk chunk;
   chunk_points = std::max<std::size_t>(chunk_points, 1);
-  for (int c = 0; c < engine::kChannelCount; ++c) {
-    const std::string name(engine::kChannelNames[static_cast<std::size_t>(c)]);
+  for (std::size_t c = 0; c < stored_channels; ++c) {
+    const std::string name(engine::kChannelNames[c]);
     if (!wanted.empty() && !wanted.contains(name)) continue;
-    const std::size_t base = k + 4 * k * static_cast<std::size_t>(c);
+    const std::size_t base = k + 4 * k * c;
     for (std::size_t e = 0; e < k; ++e) {
+      if (!(value(base + 3 * k + e) > 0.0)) continue;  // not observed at this epoch (σ = 0)
       v1::ResidualPoint* p = chunk.add_points();
       p->set_channel(name);
       p->set_t(value(e));

@@ -363,6 +363,7 @@ v1::ResidualSeriesChunk ToProto(const engine::AnalysisSeries& s) {
   for (int c = 0; c < engine::kChannelCount; ++c) {
     for (size_t k = 0; k < s.time_s.size(); ++k) {
       const auto e = static_cast<Eigen::Index>(k);
+      if (!(s.sigma(e, c) > 0.0)) continue;  // not observed at this epoch (the attitude while the table turns)
       v1::ResidualPoint* p = out.add_points();
       p->set_channel(std::string(engine::kChannelNames[static_cast<size_t>(c)]));
       p->set_t(s.time_s[k]);

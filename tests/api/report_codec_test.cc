@@ -42,7 +42,7 @@ engine::ParameterEstimate FilterConstant(std::string name, double std_error, dou
   p.value = 1e-4;
   p.std_error = std_error;
   p.method = engine::EstimationMethod::kFilterState;
-  p.unit = std::string(1, '1');  // (the literal assigned trips GCC 12's false -Wrestrict at -O3)
+  p.unit = std::string("1");  // not operator=(const char*): GCC 12 -O3 warns falsely of an overlap there
   p.prior_std = prior_std;
   p.max_correlation = correlation;
   p.correlated_with = std::move(correlated_with);

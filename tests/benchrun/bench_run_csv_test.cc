@@ -114,6 +114,20 @@ TEST(ParseBenchRun, KeepsUnknownAndFreeMetadataInFileOrder) {
   EXPECT_EQ(run->metadata.unit_type, "INS-2000");
 }
 
+// A table's encoders are read unless the file says otherwise (a vehicle, an attitude levelled or given).
+TEST(ParseBenchRun, TheReferenceAttitudeIsReadUnlessTheFileSaysNone) {
+  const absl::StatusOr<engine::BenchRun> table = ParseBenchRun(CsvText().Text(), kSource);
+  ASSERT_TRUE(table.ok()) << table.status();
+  EXPECT_TRUE(table->metadata.ReferenceAttitudeIsRead());
+  for (const auto& [value, read] : {std::pair{"encoders", true}, std::pair{"none", false}}) {
+    CsvText csv;
+    csv.metadata.push_back(std::string("# reference_attitude_readout: ") + value);
+    const absl::StatusOr<engine::BenchRun> run = ParseBenchRun(csv.Text(), kSource);
+    ASSERT_TRUE(run.ok()) << run.status();
+    EXPECT_EQ(run->metadata.ReferenceAttitudeIsRead(), read) << value;
+  }
+}
+
 TEST(ParseBenchRun, ToleratesCrlfLineEnds) {
   const absl::StatusOr<engine::BenchRun> run = ParseBenchRun(CsvText().Text("\r\n"), kSource);
   ASSERT_TRUE(run.ok()) << run.status();
@@ -259,6 +273,15 @@ TEST(ParseBenchRunRefuses, MetadataNumberThatIsNotANumber) {
   const absl::Status status = ParseStatus(csv.Text());
   EXPECT_TRUE(IsRefusalAt(status, At(6, 18, "site_height_m")));
   EXPECT_EQ(MessageOf(status), "run.csv:6:18: site_height_m: '12O.5' is not a number");
+}
+
+TEST(ParseBenchRunRefuses, AReferenceAttitudeReadoutThatIsNeitherEncodersNorNone) {
+  CsvText csv;
+  csv.metadata.push_back("# reference_attitude_readout: sometimes");
+  const absl::Status status = ParseStatus(csv.Text());
+  const int line = static_cast<int>(csv.metadata.size());
+  EXPECT_TRUE(IsRefusalAt(status, At(line, 31, "reference_attitude_readout"))) << status;
+  EXPECT_THAT(MessageOf(status), HasSubstr("expected 'encoders' or 'none', got 'sometimes'"));
 }
 
 // A lone carriage return inside a value is not a line break of the format,

@@ -100,8 +100,9 @@ Eigen::Matrix<double, 9, 1> ErrorBetween(const nav::NavState& perturbed, const n
   const Eigen::Matrix3d E = perturbed.q_b_n.toRotationMatrix() * nominal.q_b_n.toRotationMatrix().transpose();
   e.segment<3>(0) = -0.5 * Eigen::Vector3d(E(2, 1) - E(1, 2), E(0, 2) - E(2, 0), E(1, 0) - E(0, 1));
   e.segment<3>(3) = perturbed.v_n_mps - nominal.v_n_mps;
-  const auto zp = Observe(perturbed, site);
-  const auto zn = Observe(nominal, site);
+  const Eigen::Matrix3d C_ref = nominal.q_b_n.toRotationMatrix();
+  const auto zp = Observe(perturbed, site, C_ref);
+  const auto zn = Observe(nominal, site, C_ref);
   e.segment<3>(6) = Eigen::Vector3d(zp[0] - zn[0], zp[1] - zn[1], -(zp[2] - zn[2]));
   return e;
 }

@@ -4,9 +4,11 @@
 // the filter, are what is measured.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
+#include "insdiag/engine/filter/observation.h"
 #include "insdiag/engine/model/error_model.h"
 #include "insdiag/engine/monitor/monitoring.h"
 #include "insdiag/engine/stats/distributions.h"
@@ -15,11 +17,17 @@ namespace insdiag::engine {
 namespace {
 
 // A forward pass whose innovations are N(0, S) with S fixed per channel,
-// one update per channel per second, and a smoother that adds nothing.
+// one update per channel per second, and a smoother that adds nothing. The
+// attitude channels are observed as on a table that holds each position for
+// half a minute and turns for a minute between them (ν = S = 0 while it
+// turns), with variances as small as an exactly read table's.
 struct HealthyInnovations {
   ForwardPass forward;
   SmoothedPass smoothed;
 };
+
+constexpr int kHoldEpochs = 30;
+constexpr int kPositionCycleEpochs = 90;
 
 HealthyInnovations DrawHealthyInnovations(int epochs, const StateLayout& layout, std::mt19937_64& rng) {
   HealthyInnovations out;
@@ -33,14 +41,17 @@ HealthyInnovations DrawHealthyInnovations(int epochs, const StateLayout& layout,
   for (int k = 0; k < epochs; ++k) {
     fw.epoch_time_s[static_cast<size_t>(k)] = k + 1.0;
     fw.epoch_start_s[static_cast<size_t>(k)] = k;
+    const bool table_still = k % kPositionCycleEpochs < kHoldEpochs;
     for (int c = 0; c < kChannelCount; ++c) {
-      const double variance = std::pow(10.0, -c);  // the channels' units differ
+      const bool observed = !IsAttitudeChannel(c) || table_still;
+      // The channels' units differ.
+      const double variance = !observed ? 0.0 : IsAttitudeChannel(c) ? 1e-20 * std::pow(10.0, -c) : std::pow(10.0, -c);
       fw.innovation_variance(k, c) = variance;
       fw.innovation(k, c) = std::sqrt(variance) * standard(rng);
       fw.z(k, c) = fw.innovation(k, c);
+      if (observed) ++fw.scalar_updates;
     }
   }
-  fw.scalar_updates = epochs * kChannelCount;
   out.smoothed.discrepancy = Eigen::MatrixXd::Zero(epochs, layout.size());
   return out;
 }
@@ -81,6 +92,12 @@ TEST(Monitor, JudgesHealthyInnovationsFaultyNoMoreOftenThanItsFamilyWiseLevel) {
     return cdf;
   }();
   ASSERT_LT(p_at_least, 0.005);
+  const HealthyInnovations sample = DrawHealthyInnovations(kEpochs, layout, rng);
+  const MonitorResult one = Monitor(sample.forward, sample.smoothed, layout, {}, options);
+  const int still_epochs = (kEpochs / kPositionCycleEpochs) * kHoldEpochs +
+                           std::min(kEpochs % kPositionCycleEpochs, kHoldEpochs);
+  EXPECT_EQ(one.channels[kVelocityChannel].count, kEpochs);
+  EXPECT_EQ(one.channels[kAttitudeChannel].count, still_epochs);
   EXPECT_LT(gradual, 15) << gradual << " of " << kRuns << " healthy runs had a GRADUAL interval";
 }
 

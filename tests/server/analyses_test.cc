@@ -149,7 +149,7 @@ TEST_F(AnalysesTest, CreateReturnsAtOnceThenWatchStreamsProgressToTheReportAndSe
   ASSERT_FALSE(seen.empty());
   const v1::Analysis& last = seen.back();
   EXPECT_EQ(last.state(), v1::Analysis::SUCCEEDED) << last.error().message();
-  EXPECT_EQ(last.report().channels_size(), 6);
+  EXPECT_EQ(last.report().channels_size(), 9);  // position, velocity, attitude
   EXPECT_EQ(last.attempts(), 1);
   EXPECT_EQ(last.unit(), "units/INS-E2E-1");
 
@@ -476,7 +476,7 @@ TEST_F(WorkerKillTest, AJobWhoseWorkerWasKilledIsCompletedByAnotherProcess) {
   const v1::Analysis done = WaitUntilEnded(id, second, 480s);
   EXPECT_EQ(done.state(), v1::Analysis::SUCCEEDED) << done.error().message() << "\n" << second.Stderr();
   EXPECT_EQ(done.attempts(), 2);
-  EXPECT_EQ(done.report().channels_size(), 6);
+  EXPECT_EQ(done.report().channels_size(), 9);  // position, velocity, attitude
   second.Signal(SIGTERM);
   second.Wait(20s);
 }
@@ -509,7 +509,7 @@ TEST_F(WorkerKillTest, SigtermWhileAJobRunsEndsTheJobFinishedOrReleasedAndTheSer
     EXPECT_EQ(second.Wait(480s), std::optional<int>(0));
   }
   EXPECT_EQ(after.state(), v1::Analysis::SUCCEEDED) << after.error().message();
-  EXPECT_EQ(after.report().channels_size(), 6);
+  EXPECT_EQ(after.report().channels_size(), 9);  // position, velocity, attitude
 }
 
 }  // namespace

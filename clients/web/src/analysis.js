@@ -11,7 +11,8 @@ import { navigate, startAnalysis, errorCard } from './nav.js';
 import { identificationSection } from './identification.js';
 import { diagnosisSection } from './diagnosis.js';
 
-const CHANNELS = ['lat', 'lon', 'height', 'vel_n', 'vel_e', 'vel_d'];
+// The attitude channels hold the epochs the table stood still at only.
+const CHANNELS = ['lat', 'lon', 'height', 'vel_n', 'vel_e', 'vel_d', 'att_n', 'att_e', 'att_d'];
 const terminal = (state) => ['SUCCEEDED', 'FAILED', 'CANCELLED'].includes(state);
 const effectsKey = (effects) => [...(effects || [])].sort().join('|');
 

@@ -9,7 +9,8 @@ import { plot, line, secondsAxis, valueAxis } from './charts.js';
 import { navigate } from './nav.js';
 
 const LIST_REFRESH_MS = 2000;
-const CHANNEL_COLORS = ['#1f6fd1', '#e07b00', '#2a9d4b', '#b03a9d', '#7a5c2e', '#c0392b'];
+// Position, velocity, then attitude (observed while the table stands still).
+const CHANNEL_COLORS = ['#1f6fd1', '#e07b00', '#2a9d4b', '#b03a9d', '#7a5c2e', '#c0392b', '#17a2b8', '#6c757d', '#8e44ad'];
 
 /** Lists the live runs, refreshed while the view is open. */
 export async function showLiveRuns(view, leaving) {
@@ -50,7 +51,8 @@ export async function showLiveRun(view, name, leaving) {
     h('div.grid2', section('Channels now', channels), section('Fault intervals', faults)),
     section('Moving-window F of each channel (the tolerance η² dashed)', chart));
 
-  const series = { t: [], F: [[], [], [], [], [], []] };
+  // One F series per channel the server reports, made on the first update.
+  const series = { t: [], F: [] };
   let figure = null;
   const controller = new AbortController();
   leaving.push(() => {
@@ -68,7 +70,7 @@ export async function showLiveRun(view, name, leaving) {
     faults.replaceChildren((live.faultIntervals || []).length ? faultTable(live.faultIntervals) : empty('None so far.'));
     if (live.epochCount > 0 && live.channels) {
       series.t.push(num(live.timeS));
-      live.channels.forEach((c, i) => series.F[i].push(Number.isFinite(num(c.windowRatio)) ? num(c.windowRatio) : null));
+      live.channels.forEach((c, i) => (series.F[i] ||= series.t.slice(1).map(() => null)).push(Number.isFinite(num(c.windowRatio)) ? num(c.windowRatio) : null));
       figure = drawChart(chart, figure, series, live);
     }
     if (live.state === 'STORED' || live.state === 'FAILED') ended.replaceChildren(endCard(live));
@@ -79,7 +81,7 @@ function channelTable(live) {
   const eta2 = num(live.eta2);
   const rows = (live.channels || []).map((c) => {
     const F = num(c.windowRatio);
-    return h('tr', h('td', c.name), h('td.num', fmt(c.beta2)),
+    return h('tr', h('td', c.name), h('td.num', Number.isFinite(num(c.beta2)) ? fmt(c.beta2) : '—'),
       h(Number.isFinite(F) && F > eta2 ? 'td.num.worse' : 'td.num', Number.isFinite(F) ? fmt(F) : '—'));
   });
   return h('div',

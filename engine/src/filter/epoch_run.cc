@@ -234,7 +234,9 @@ struct RunCondenser::State {
         motion(run_in),
         compensations(compensations_in),
         observer(observer_in),
-        temperature0(run_in.samples[0].temp_degc) {
+        temperature0(run_in.samples[0].temp_degc),
+        attitude_read(run_in.metadata.ReferenceAttitudeIsRead()),
+        still_tolerance_rad(StillToleranceRad(pilot_in.reference)) {
     const auto per_epoch = static_cast<size_t>(out.samples_per_epoch);
     out.epochs.reserve((run.samples.size() + per_epoch - 1) / per_epoch);
     StartSegment(0);
@@ -265,7 +267,23 @@ struct RunCondenser::State {
     ins.longitude_rad = site.longitude_rad;
     ins.height_m = site.height_m;
     q_ref_previous = ins.q_b_n;
+    StartInterval(k);
+  }
+
+  void StartInterval(size_t k) {
     condenser.Reset(run.samples[k].t_s);
+    interval_start_rpy = run.samples[k].ref_rpy_rad;
+    interval_still = attitude_read;
+  }
+
+  // The reference attitude of sample k still at the interval's start (StillToleranceRad).
+  bool StillAtIntervalStart(const Eigen::Vector3d& rpy) const {
+    for (int i = 0; i < 3; ++i) {
+      if (std::abs(std::remainder(rpy[i] - interval_start_rpy[i], 2.0 * std::numbers::pi)) > still_tolerance_rad) {
+        return false;
+      }
+    }
+    return true;
   }
 
   // Sample k's interval into the current epoch; closes the epoch when it is
@@ -300,6 +318,7 @@ struct RunCondenser::State {
     inputs.yaw_rad = MidAngle(run.samples[k - 1].ref_rpy_rad.z(), s.ref_rpy_rad.z());
     condenser.AddSample(*disc, t_prev, nav::Midway(q_ref_previous, q_ref).toRotationMatrix(), inputs);
     q_ref_previous = q_ref;
+    interval_still = interval_still && StillAtIntervalStart(s.ref_rpy_rad);
     const bool last = run_complete && k + 1 == run.samples.size();
     if (condenser.samples() < out.samples_per_epoch && !last && !run.StartsSegment(k + 1)) return;
 
@@ -308,13 +327,14 @@ struct RunCondenser::State {
     e.starts_segment = std::exchange(segment_starts, false);
     e.time_s = s.t_s;
     e.sample = static_cast<int>(k);
-    e.z = Observe(ins, site);
     e.C_b_n = q_ref.toRotationMatrix();
+    e.z = Observe(ins, site, e.C_b_n);
+    e.attitude_observed = interval_still;
     pilot_filter.Step(out.size() - 1, nullptr, observer);
     e.feedback = pilot_filter.navigation_estimate();
     pilot_filter.ApplyFeedback(e.feedback);
     FeedBackNavigation(site, e.feedback, ins);
-    condenser.Reset(s.t_s);
+    StartInterval(k);
   }
 
   const BenchRun& run;
@@ -334,7 +354,19 @@ struct RunCondenser::State {
   Eigen::Quaterniond q_ref_previous;
   bool segment_starts = false;
   size_t next_sample = 1;
+  const bool attitude_read;
+  const double still_tolerance_rad;
+  Eigen::Vector3d interval_start_rpy = Eigen::Vector3d::Zero();
+  bool interval_still = false;
 };
+
+double StillToleranceRad(const ReferenceAccuracy& reference) {
+  return kStillToleranceReadoutSigmas * std::max(reference.attitude_readout_sigma_rad, kAttitudeRoundingRad);
+}
+
+void ForgoAttitudeObservations(EpochRun& run) {
+  for (EpochInterval& e : run.epochs) e.attitude_observed = false;
+}
 
 double UpdateIntervalForRun(double requested_update_interval_s, double nominal_interval_s) {
   const double shortest_s = kMinimumSamplesPerUpdate * nominal_interval_s;

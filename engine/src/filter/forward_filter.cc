@@ -1,5 +1,6 @@
 #include "insdiag/engine/filter/forward_filter.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -95,17 +96,20 @@ void EpochFilter::Step(int index, ForwardPass* pass, FilterObserver* observer) {
     pass->x_pred.row(k) = x_.transpose();
     PackSymmetric(P_, pass->P_pred.row(k).data());
   }
-  const double r_position = model_.reference.position_sigma_m * model_.reference.position_sigma_m;
-  const double r_velocity = model_.reference.velocity_sigma_mps * model_.reference.velocity_sigma_mps;
-  const Eigen::Vector3d acc_quantization_var = model_.acc.quantization.cwiseAbs2();
+  const ObservationNoise noise = ObservationNoiseAt(e);
   for (int c = 0; c < kChannelCount; ++c) {
-    const ObservationRow& h = rows_[static_cast<size_t>(c)];
-    double r = r_position;
-    if (c >= 3) {
-      // Velocity quantisation: the INS velocity carries the current sub-quantum
-      // remainder of each accelerometer, white with variance Q² (IEEE 952).
-      r = r_velocity + e.C_b_n.row(c - 3).transpose().cwiseAbs2().dot(acc_quantization_var);
+    if (IsAttitudeChannel(c) && !e.attitude_observed) {
+      // Not observed: ν = S = r = 0 in the pass (ForwardPass::Observed).
+      if (pass != nullptr) {
+        pass->z(k, c) = e.z[static_cast<size_t>(c)];
+        pass->innovation(k, c) = 0.0;
+        pass->innovation_variance(k, c) = 0.0;
+        pass->observation_noise(k, c) = 0.0;
+      }
+      continue;
     }
+    const ObservationRow& h = rows_[static_cast<size_t>(c)];
+    const double r = noise[static_cast<size_t>(c)];
     // P is kept in its lower triangle through the updates: column `state`
     // is its row left of the diagonal and its column from the diagonal down.
     const auto s = static_cast<Eigen::Index>(h.state);
@@ -135,6 +139,28 @@ void EpochFilter::Step(int index, ForwardPass* pass, FilterObserver* observer) {
     PackSymmetric(P_, pass->P_filt.row(k).data());
   }
   navigation_estimate_ = x_.head<kNavigationStates>();
+  if (observer != nullptr) observer->OnEpochUpdated(index, e);
+}
+
+EpochFilter::ObservationNoise EpochFilter::ObservationNoiseAt(const EpochInterval& e) const {
+  const ReferenceAccuracy& ref = model_.reference;
+  const double r_position = ref.position_sigma_m * ref.position_sigma_m;
+  const double r_velocity = ref.velocity_sigma_mps * ref.velocity_sigma_mps;
+  const double readout = std::max(ref.attitude_readout_sigma_rad, kAttitudeRoundingRad);
+  const double r_attitude = readout * readout;
+  // The INS velocity and attitude carry the current sub-quantum remainder of
+  // each accelerometer's and gyro's increment, white with variance Q² (IEEE
+  // Std 952, Annex C), rotated to NED by the body attitude.
+  const Eigen::Vector3d acc_quantization_var = model_.acc.quantization.cwiseAbs2();
+  const Eigen::Vector3d gyro_quantization_var = model_.gyro.quantization.cwiseAbs2();
+  ObservationNoise r{};
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d row_squared = e.C_b_n.row(i).transpose().cwiseAbs2();
+    r[static_cast<size_t>(kPositionChannel + i)] = r_position;
+    r[static_cast<size_t>(kVelocityChannel + i)] = r_velocity + row_squared.dot(acc_quantization_var);
+    r[static_cast<size_t>(kAttitudeChannel + i)] = r_attitude + row_squared.dot(gyro_quantization_var);
+  }
+  return r;
 }
 
 void EpochFilter::ApplyFeedback(const NavigationVector& u) { x_.head<kNavigationStates>() -= u; }
@@ -177,10 +203,17 @@ absl::StatusOr<ForwardPass> RunForwardFilter(const EpochRun& run, const ErrorMod
   return out;
 }
 
+absl::StatusOr<EpochRun> CondenseRunFor(const BenchRun& run, const ErrorModel& pilot, const FilterOptions& options,
+                                        const nav::RunCompensations* compensations) {
+  auto condensed = CondenseRun(run, pilot, options.update_interval_s, compensations);
+  if (condensed.ok() && !options.observe_attitude_at_rest) ForgoAttitudeObservations(*condensed);
+  return condensed;
+}
+
 absl::StatusOr<ForwardPass> RunForwardFilter(const BenchRun& run, const ErrorModel& model,
                                              const FilterOptions& options, FilterObserver* observer) {
   if (auto st = options.Validate(); !st.ok()) return st;
-  auto condensed = CondenseRun(run, model, options.update_interval_s);
+  auto condensed = CondenseRunFor(run, model, options);
   if (!condensed.ok()) return condensed.status();
   return RunForwardFilter(*condensed, model, observer);
 }

@@ -30,7 +30,7 @@ Matrix9c FaultColumns(const EpochInterval& e, double centre_s) {
 }
 
 // One epoch's update sequence rebuilt from its prior covariance: the rows
-// H̃ (6 × n) through which a navigation error before the updates reaches each
+// H̃ (channels × n; zero where a channel is not observed) through which a navigation error before the updates reaches each
 // innovation, and the map L (n × n) of the updates on the filter's error.
 void UpdateSequence(const ForwardPass& fw, int k, const std::array<ObservationRow, kChannelCount>& rows,
                     Eigen::MatrixXd& P, Eigen::VectorXd& PH, Eigen::VectorXd& gain, Eigen::MatrixXd& H,
@@ -39,6 +39,10 @@ void UpdateSequence(const ForwardPass& fw, int k, const std::array<ObservationRo
   UnpackSymmetric(fw.P_pred.row(k).data(), n, P);
   L.setIdentity();
   for (int c = 0; c < kChannelCount; ++c) {
+    if (!fw.Observed(k, c)) {
+      H.row(c).setZero();  // no innovation: nothing reaches it, and the update is the identity
+      continue;
+    }
     const ObservationRow& h = rows[static_cast<size_t>(c)];
     PH = h.sign * P.col(h.state);
     const double S = fw.innovation_variance(k, c);
@@ -97,6 +101,7 @@ OnsetSums BackwardSweep(const ForwardPass& fw, const StateLayout& layout, const 
       Gamma.noalias() = FtGamma * F;
     }
     for (int c = 0; c < kChannelCount; ++c) {
+      if (!fw.Observed(k, c)) continue;
       const double S = fw.innovation_variance(k, c);
       lambda.noalias() += H.row(c).transpose() * (fw.innovation(k, c) / S);
       Gamma.noalias() += H.row(c).transpose() * (H.row(c) / S);
@@ -415,7 +420,7 @@ void SetPeakAttitudeErrors(const ForwardPass& fw, const StateLayout& layout, con
                            double family_wise_alpha, std::vector<OnsetFit>& fits) {
   std::vector<size_t> swept;
   for (size_t j = 0; j < fits.size(); ++j) {
-    if (fits[j].identifiable && fits[j].p_value < family_wise_alpha) swept.push_back(j);
+    if (fits[j].identifiable && fits[j].p_value <= family_wise_alpha) swept.push_back(j);  // α = 1: every fit
   }
   if (swept.empty()) return;
   const int K = fw.epochs();

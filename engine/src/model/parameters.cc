@@ -23,11 +23,13 @@ struct ReferenceName {
   double ReferenceAccuracy::*sigma;
   const char* name;
   const char* unit;
+  bool zero_allowed = false;  // 0 is a value: the encoders read exactly
 };
 constexpr ReferenceName kReferences[] = {
     {&ReferenceAccuracy::attitude_sigma_rad, "reference.attitude_sigma", "rad"},
     {&ReferenceAccuracy::position_sigma_m, "reference.position_sigma", "m"},
     {&ReferenceAccuracy::velocity_sigma_mps, "reference.velocity_sigma", "m/s"},
+    {&ReferenceAccuracy::attitude_readout_sigma_rad, "reference.attitude_readout_sigma", "rad", true},
 };
 
 // Sets `field` of parameter `parameter` of effect `e`; false when the
@@ -162,7 +164,9 @@ absl::Status SetParameter(const std::string& name, double value, ErrorModel& mod
   }
   for (const ReferenceName& r : kReferences) {
     if (name != r.name) continue;
-    if (!(value > 0.0)) return absl::InvalidArgumentError("'" + name + "' must be positive");
+    if (r.zero_allowed ? !(value >= 0.0) : !(value > 0.0)) {
+      return absl::InvalidArgumentError("'" + name + (r.zero_allowed ? "' must not be negative" : "' must be positive"));
+    }
     model.reference.*(r.sigma) = value;
     return absl::OkStatus();
   }

@@ -28,7 +28,7 @@ std::vector<JumpHypothesis> LocaliseJump(const ForwardPass& fw, const StateLayou
 
   // The sequential gains of every epoch in the span, rebuilt from P⁻.
   const auto rows = ObservationRows(layout);
-  std::vector<Eigen::MatrixXd> gains(static_cast<size_t>(end - first));  // n × 6 per epoch
+  std::vector<Eigen::MatrixXd> gains(static_cast<size_t>(end - first));  // n × channels per epoch
   Eigen::MatrixXd P;
   Eigen::VectorXd PH(n);
   for (int k = first; k < end; ++k) {
@@ -36,6 +36,10 @@ std::vector<JumpHypothesis> LocaliseJump(const ForwardPass& fw, const StateLayou
     Eigen::MatrixXd& G = gains[static_cast<size_t>(k - first)];
     G.resize(n, kChannelCount);
     for (int c = 0; c < kChannelCount; ++c) {
+      if (!fw.Observed(k, c)) {
+        G.col(c).setZero();
+        continue;
+      }
       const ObservationRow& h = rows[static_cast<size_t>(c)];
       PH = h.sign * P.col(h.state);
       const double S = fw.innovation_variance(k, c);
@@ -66,6 +70,7 @@ std::vector<JumpHypothesis> LocaliseJump(const ForwardPass& fw, const StateLayou
       peak = peak.cwiseMax(A.middleRows<3>(layout.attitude()).colwise().norm().transpose());
       const Eigen::MatrixXd& G = gains[static_cast<size_t>(k - first)];
       for (int c = 0; c < kChannelCount; ++c) {
+        if (!fw.Observed(k, c)) continue;
         const ObservationRow& h = rows[static_cast<size_t>(c)];
         const Eigen::RowVectorXd X = h.sign * A.row(h.state);
         const double S = fw.innovation_variance(k, c);

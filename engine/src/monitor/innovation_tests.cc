@@ -76,31 +76,47 @@ void InnovationTests::Add(double start_s, double time_s, const PerChannel& innov
     const auto ch = static_cast<size_t>(c);
     const double nu = innovation[ch];
     const double S = innovation_variance[ch];
+    const bool observed = S > 0.0;  // else ν = S = 0 (ForwardPass::Observed)
     const double nu2 = nu * nu;
-    beta2_[ch] = nu2 / S;
-    if (beta2_[ch] > gamma2_) ++over_gamma2_[ch];
-    if (beta2_[ch] > outlier_threshold_) AddInterval(c, start_s, time_s, FaultKind::kOutlier, beta2_[ch]);
+    beta2_[ch] = observed ? nu2 / S : std::numeric_limits<double>::quiet_NaN();
+    if (observed) {
+      ++observed_[ch];
+      ++window_observed_[ch];
+      if (beta2_[ch] > gamma2_) ++over_gamma2_[ch];
+      if (beta2_[ch] > outlier_threshold_) AddInterval(c, start_s, time_s, FaultKind::kOutlier, beta2_[ch]);
+    }
     sum_nu2_[ch] += nu2;
     sum_S_[ch] += S;
     sum_S2_[ch] += S * S;
     if (k >= window_) {
       const double nu2_old = window_nu2_[slot][ch];
       const double S_old = window_S_[slot][ch];
+      if (S_old > 0.0) --window_observed_[ch];
       sum_nu2_[ch] -= nu2_old;
       sum_S_[ch] -= S_old;
       sum_S2_[ch] -= S_old * S_old;
     }
     window_nu2_[slot][ch] = nu2;
     window_S_[slot][ch] = S;
+    if (window_observed_[ch] == 0) {
+      // Exactly nothing, not the rounding the moving sums leave behind.
+      sum_nu2_[ch] = sum_S_[ch] = sum_S2_[ch] = 0.0;
+    }
     if (k < window_ - 1) continue;
+    if (window_observed_[ch] == 0) {
+      window_ratio_[ch] = std::numeric_limits<double>::quiet_NaN();
+      continue;
+    }
+    ++windows_[ch];
     const double F = sum_nu2_[ch] / sum_S_[ch];
     window_ratio_[ch] = F;
     if (F > eta2_) ++over_eta2_[ch];
     // F = Σν²/ΣS weighs each β² by its S: where S changes within the
-    // window (the filter's start-up) it is a weighted sum of χ²₁ with
-    // ν = (ΣS)²/ΣS² ≤ W effective degrees of freedom (Satterthwaite,
-    // Biometrics Bull. 2(6), 1946), and its quantile is higher than
-    // χ²_W/W's; checked only past the cheaper W-dof threshold.
+    // window (the filter's start-up) or the channel is observed at some of
+    // its epochs only, it is a weighted sum of χ²₁ with ν = (ΣS)²/ΣS² ≤ W
+    // effective degrees of freedom (Satterthwaite, Biometrics Bull. 2(6),
+    // 1946), and its quantile is higher than χ²_W/W's; checked only past
+    // the cheaper W-dof threshold.
     if (F > gradual_threshold_ &&
         F > GradualThreshold(window_alpha_, sum_S_[ch] * sum_S_[ch] / sum_S2_[ch])) {
       AddInterval(c, window_start_s, time_s, FaultKind::kGradual, F);

@@ -58,6 +58,9 @@ void LiveMonitor::OnPrediction(int /*index*/, const EpochInterval& epoch, const 
   steps_->OnPrediction(epoch, transition);
   epoch_start_s_ = epoch.start_s;
   epoch_time_s_ = epoch.time_s;
+  // A channel the epoch does not observe keeps ν = α² = 0 (InnovationTests).
+  innovation_.fill(0.0);
+  innovation_variance_.fill(0.0);
 }
 
 void LiveMonitor::OnScalarUpdate(int channel, const ObservationRow& h, const Eigen::VectorXd& gain,
@@ -67,11 +70,11 @@ void LiveMonitor::OnScalarUpdate(int channel, const ObservationRow& h, const Eig
   innovation_variance_[static_cast<size_t>(channel)] = innovation_variance;
   nis_sum_ += innovation * innovation / innovation_variance;
   ++updates_;
-  // The channels are processed in order; the last closes the epoch.
-  if (channel == kChannelCount - 1) {
-    tests_->Add(epoch_start_s_, epoch_time_s_, innovation_, innovation_variance_);
-    steps_->CloseEpoch(epoch_time_s_);
-  }
+}
+
+void LiveMonitor::OnEpochUpdated(int /*index*/, const EpochInterval& /*epoch*/) {
+  tests_->Add(epoch_start_s_, epoch_time_s_, innovation_, innovation_variance_);
+  steps_->CloseEpoch(epoch_time_s_);
 }
 
 LiveStatus LiveMonitor::Status() const {

@@ -88,31 +88,43 @@ MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const State
   }
   out.faults = tests.faults();
 
-  std::vector<double> normalised(static_cast<size_t>(K));
+  std::vector<double> normalised;
+  normalised.reserve(static_cast<size_t>(K));
   double nis_total = 0.0;
   for (int c = 0; c < kChannelCount; ++c) {
     ChannelFit fit;
     fit.name = std::string(kChannelNames[static_cast<size_t>(c)]);
     fit.unit = std::string(kChannelUnits[static_cast<size_t>(c)]);
-    fit.count = K;
+    // Over the epochs the channel was observed at (all of them but the
+    // attitude's while the table turns).
+    int observed = 0;
     double nu2 = 0.0, nis = 0.0, z_mean = 0.0;
-    for (int k = 0; k < K; ++k) z_mean += fw.z(k, c) / K;
-    double z_spread = 0.0;
     for (int k = 0; k < K; ++k) {
+      if (!fw.Observed(k, c)) continue;
+      z_mean += fw.z(k, c);
+      ++observed;
+    }
+    fit.count = observed;
+    if (observed > 0) z_mean /= observed;
+    double z_spread = 0.0;
+    normalised.clear();
+    for (int k = 0; k < K; ++k) {
+      if (!fw.Observed(k, c)) continue;
       const double innovation = fw.innovation(k, c);
       const double variance = fw.innovation_variance(k, c);
       nu2 += innovation * innovation;
       nis += innovation * innovation / variance;
       z_spread += (fw.z(k, c) - z_mean) * (fw.z(k, c) - z_mean);
-      normalised[static_cast<size_t>(k)] = innovation / std::sqrt(variance);
+      normalised.push_back(innovation / std::sqrt(variance));
     }
-    fit.rms = K > 0 ? std::sqrt(nu2 / K) : 0.0;
+    fit.rms = observed > 0 ? std::sqrt(nu2 / observed) : 0.0;
     fit.fit_percent = z_spread > 0.0 ? 100.0 * (1.0 - std::sqrt(nu2 / z_spread)) : 0.0;
-    fit.nis_mean = K > 0 ? nis / K : 0.0;
-    fit.whiteness_p_value = stats::LjungBoxPValue(normalised, std::min(options.whiteness_lags, K / 5));
-    fit.fraction_over_gamma2 = K > 0 ? static_cast<double>(tests.over_gamma2(c)) / K : 0.0;
+    fit.nis_mean = observed > 0 ? nis / observed : 0.0;
+    fit.whiteness_p_value = observed > 0 ? stats::LjungBoxPValue(normalised, std::min(options.whiteness_lags, observed / 5))
+                                         : 1.0;
+    fit.fraction_over_gamma2 = observed > 0 ? static_cast<double>(tests.over_gamma2(c)) / observed : 0.0;
     fit.fraction_over_eta2 =
-        tests.windows() > 0 ? static_cast<double>(tests.over_eta2(c)) / tests.windows() : 0.0;
+        tests.windows(c) > 0 ? static_cast<double>(tests.over_eta2(c)) / tests.windows(c) : 0.0;
     nis_total += nis;
     out.channels.push_back(std::move(fit));
   }

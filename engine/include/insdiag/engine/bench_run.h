@@ -14,6 +14,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -40,6 +41,15 @@ struct Datasheet {
   bool operator==(const Datasheet&) const = default;
 };
 
+// Whether the bench reads the unit's attitude: `# reference_attitude_readout:`
+// `encoders` (a rotary table, the default) or `none` (a vehicle at rest, an
+// attitude given, levelled or gyro-compassed by an importer). Where it is not
+// read, the reference attitude is the start of the mechanisation only, and
+// the attitude is not observed (filter/observation.h).
+inline constexpr std::string_view kReferenceAttitudeReadoutKey = "reference_attitude_readout";
+inline constexpr std::string_view kAttitudeReadByEncoders = "encoders";
+inline constexpr std::string_view kAttitudeNotRead = "none";
+
 struct BenchRunMetadata {
   std::string format;       // "insdiag-bench-run/1"
   std::string unit_serial;  // required
@@ -55,6 +65,8 @@ struct BenchRunMetadata {
 
   // Value of a free metadata key, or nullopt.
   std::optional<std::string> Extra(const std::string& key) const;
+  // The bench reads the unit's attitude (kReferenceAttitudeReadoutKey).
+  bool ReferenceAttitudeIsRead() const;
 };
 
 struct ImuSample {

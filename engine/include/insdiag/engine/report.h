@@ -157,11 +157,14 @@ struct AnalysisReport {
 // Per-epoch series for plotting (`insdiag analyze --series`).
 struct AnalysisSeries {
   std::vector<double> time_s;
-  Eigen::MatrixXd measured;   // K × 6: z
-  Eigen::MatrixXd predicted;  // K × 6: h x⁻
-  Eigen::MatrixXd residual;   // K × 6: ν
-  Eigen::MatrixXd sigma;      // K × 6: α = √(h P hᵀ + r)
-  Eigen::MatrixXd window_ratio;  // K × 6: moving F
+  // K × kChannelCount (filter/observation.h); a channel not observed at an
+  // epoch has σ = 0 and ν = 0 there, and its window ratio is NaN where its
+  // window holds no observation.
+  Eigen::MatrixXd measured;   // z
+  Eigen::MatrixXd predicted;  // h x⁻
+  Eigen::MatrixXd residual;   // ν
+  Eigen::MatrixXd sigma;      // α = √(h P hᵀ + r)
+  Eigen::MatrixXd window_ratio;  // moving F
   std::vector<std::string> state_names;  // sensor states
   Eigen::MatrixXd forward, smoothed, smoothed_sigma, backward, discrepancy;  // K × m
 };

@@ -48,11 +48,13 @@
 
 #include <array>
 #include <memory>
+#include <numbers>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "insdiag/engine/bench_run.h"
+#include "insdiag/engine/filter/observation.h"
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/model/error_dynamics.h"
 #include "insdiag/engine/model/error_model.h"
@@ -85,7 +87,10 @@ struct EpochInterval {
   std::array<PackedSymmetric9d, 3> quantisation;          // Q_a of the accelerometer axes
   Eigen::Matrix<double, kNavigationStates, Eigen::Dynamic>
       constants;  // K, columns as EpochRun::constant_columns
-  std::array<double, 6> z{};                              // observations (observation.h) at the epoch
+  std::array<double, kChannelCount> z{};                  // observations (observation.h) at the epoch
+  // The table stood still over the interval and its encoders are read
+  // (bench_run.h): the attitude channels are observed at the epoch.
+  bool attitude_observed = false;
   NavigationVector feedback = NavigationVector::Zero();   // u_k
   Eigen::Matrix3d C_b_n = Eigen::Matrix3d::Identity();    // reference attitude at the epoch
   // The interval is the first of a segment after the first (bench_run.h):
@@ -171,6 +176,16 @@ class RunCondenser {
 
   std::unique_ptr<State> state_;
 };
+
+// The table stands still over an interval when every reference angle of its
+// samples stays within this many readout σ of the angle at its start (a
+// difference of two readouts has σ√2: 5√2σ is a five-σ excursion of it).
+inline constexpr double kStillToleranceReadoutSigmas = 5.0 * std::numbers::sqrt2;
+double StillToleranceRad(const ReferenceAccuracy& reference);
+
+// The attitude channels of every epoch unobserved, as on a bench that does
+// not read the attitude: the six position and velocity channels alone.
+void ForgoAttitudeObservations(EpochRun& run);
 
 // A packed symmetric 9×9 (upper triangle, row by row) unpacked, and back.
 Matrix9d Unpack9(const PackedSymmetric9d& packed);

@@ -4,8 +4,8 @@
 // while the run is condensed to its update epochs (filter/epoch_run.h); the
 // filter propagates the error state over each update interval with the
 // exact interval transition Φ and noise Q of its model
-// (filter/model_transitions.h) and then processes the six observation
-// channels one by one as scalar updates (seed: channel-wise processing),
+// (filter/model_transitions.h) and then processes the observation
+// channels (observation.h) one by one as scalar updates (seed: channel-wise processing),
 // each in Joseph form:
 //
 //   S = h P hᵀ + r,  ν = z − h x,  K = P hᵀ / S
@@ -45,6 +45,9 @@ struct FilterOptions {
   // Interval between observation updates; the run's samples are grouped into
   // intervals of round(update_interval_s / Δt) samples.
   double update_interval_s = 1.0;
+  // Observe the table encoders' attitude at the epochs the table stands still
+  // (observation.h); off, the six position and velocity channels alone.
+  bool observe_attitude_at_rest = true;
 
   absl::Status Validate() const;
 };
@@ -59,6 +62,9 @@ class FilterObserver {
   // After a scalar update of `channel`: row h, gain K, innovation ν, its variance S.
   virtual void OnScalarUpdate(int channel, const ObservationRow& h, const Eigen::VectorXd& gain,
                               double innovation, double innovation_variance) = 0;
+  // After every observed channel of epoch `index` is processed (unobserved
+  // channels have no OnScalarUpdate).
+  virtual void OnEpochUpdated(int /*index*/, const EpochInterval& /*epoch*/) {}
 };
 
 // Upper triangle of a symmetric n×n matrix, row by row.
@@ -76,10 +82,12 @@ struct ForwardPass {
   std::vector<double> epoch_time_s;
   std::vector<double> epoch_start_s;  // the start of the epoch's update interval
   std::vector<int> epoch_sample;  // index of the run's sample at each epoch
-  Eigen::MatrixXd z;                    // K × 6 observations
-  Eigen::MatrixXd innovation;           // K × 6 ν
-  Eigen::MatrixXd innovation_variance;  // K × 6 α²
-  Eigen::MatrixXd observation_noise;    // K × 6 r
+  // K × kChannelCount; a channel not observed at an epoch (the attitude
+  // while the table turns, observation.h) has ν = α² = r = 0 there.
+  Eigen::MatrixXd z;                    // observations
+  Eigen::MatrixXd innovation;           // ν
+  Eigen::MatrixXd innovation_variance;  // α²
+  Eigen::MatrixXd observation_noise;    // r
   Eigen::MatrixXd x_pred, x_filt;       // K × n, before and after the epoch's updates (before the reset)
   PackedCovariances P_pred, P_filt;     // K × PackedSize(n)
   std::vector<StateTransition> transitions;  // transitions[k]: from epoch k−1 (or the start) to k (kept for the smoother)
@@ -90,6 +98,8 @@ struct ForwardPass {
   double duration_s = 0.0;
 
   int epochs() const { return static_cast<int>(epoch_time_s.size()); }
+  // Channel c was observed at epoch k.
+  bool Observed(int k, int c) const { return innovation_variance(k, c) > 0.0; }
   // Bytes held per run sample, for the memory figure in docs/PERFORMANCE.md.
   double BytesPerSample(size_t samples) const;
 };
@@ -116,6 +126,10 @@ class EpochFilter {
   const ErrorModel& model_;
   const EpochRun& run_;
   ModelTransitions transitions_;
+  using ObservationNoise = std::array<double, kChannelCount>;
+  // r of every channel at epoch `e` (the reference's accuracy and the sensors' quantisation).
+  ObservationNoise ObservationNoiseAt(const EpochInterval& e) const;
+
   std::array<ObservationRow, kChannelCount> rows_;
   Eigen::VectorXd x_;
   Eigen::MatrixXd P_;
@@ -124,6 +138,10 @@ class EpochFilter {
   double log_likelihood_ = 0.0;
   int scalar_updates_ = 0;
 };
+
+// CondenseRun with `options`' observations.
+absl::StatusOr<EpochRun> CondenseRunFor(const BenchRun& run, const ErrorModel& pilot, const FilterOptions& options,
+                                        const nav::RunCompensations* compensations = nullptr);
 
 // The forward filter of `model` over a condensed run.
 absl::StatusOr<ForwardPass> RunForwardFilter(const EpochRun& run, const ErrorModel& model,

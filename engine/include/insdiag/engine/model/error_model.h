@@ -69,6 +69,10 @@ struct ReferenceAccuracy {
   double attitude_sigma_rad = 0.0;
   double position_sigma_m = 0.0;
   double velocity_sigma_mps = 0.0;
+  // The encoders' readout noise while the table is at rest, white, per angle
+  // [rad]; 0 when they read exactly (the attitude channels' rounding floor
+  // applies then, filter/observation.h).
+  double attitude_readout_sigma_rad = 0.0;
 
   bool operator==(const ReferenceAccuracy&) const = default;
 };

@@ -46,9 +46,12 @@ class InnovationTests {
   double eta2() const { return eta2_; }
   double outlier_threshold() const { return outlier_threshold_; }
   double gradual_threshold() const { return gradual_threshold_; }
-  // Per channel: epochs with β² > γ², windows tested, windows with F > η².
+  // Per channel: epochs it was observed at, those with β² > γ², windows
+  // tested (those holding an observation of it), windows with F > η².
+  // A channel not observed at an epoch (ν = α² = 0) has β² NaN there.
+  int observed(int channel) const { return observed_[static_cast<size_t>(channel)]; }
   int over_gamma2(int channel) const { return over_gamma2_[static_cast<size_t>(channel)]; }
-  int windows() const { return epochs_ >= window_ ? epochs_ - window_ + 1 : 0; }
+  int windows(int channel) const { return windows_[static_cast<size_t>(channel)]; }
   int over_eta2(int channel) const { return over_eta2_[static_cast<size_t>(channel)]; }
 
  private:
@@ -64,7 +67,7 @@ class InnovationTests {
   std::vector<double> window_start_s_;
   PerChannel sum_nu2_{}, sum_S_{}, sum_S2_{};
   PerChannel beta2_{}, window_ratio_{};
-  std::array<int, kChannelCount> over_gamma2_{}, over_eta2_{};
+  std::array<int, kChannelCount> observed_{}, window_observed_{}, windows_{}, over_gamma2_{}, over_eta2_{};
   std::vector<FaultInterval> faults_;
   bool gradual_found_ = false;
 };

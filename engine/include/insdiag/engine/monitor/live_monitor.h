@@ -89,6 +89,7 @@ class LiveMonitor final : private FilterObserver {
   void OnPrediction(int index, const EpochInterval& epoch, const IntervalTransition& transition) override;
   void OnScalarUpdate(int channel, const ObservationRow& h, const Eigen::VectorXd& gain, double innovation,
                       double innovation_variance) override;
+  void OnEpochUpdated(int index, const EpochInterval& epoch) override;
 
   const BenchRun& run_;
   const ErrorModel model_;
