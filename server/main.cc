@@ -1,10 +1,10 @@
 // insdiagd — the insdiag server. Wires the components together:
 //   embedded PostgreSQL (unless --database-url) → connection pool →
 //   migrations → gRPC + REST server → wait for SIGINT/SIGTERM → shut down.
-#include <CLI/CLI.hpp>
 #include <absl/strings/str_cat.h>
 #include <signal.h>
 
+#include <CLI/CLI.hpp>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
@@ -12,6 +12,7 @@
 #include <optional>
 #include <thread>
 
+#include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/connection_pool.h"
 #include "insdiag/kb/migrations.h"
 #include "insdiag/server/insdiag_server.h"
@@ -113,19 +114,18 @@ bool SetWorkerOptions(DaemonSettings& s) {
 absl::Status MigrateSchema(insdiag::kb::ConnectionPool& pool, const std::string& migrations_dir) {
   std::vector<insdiag::kb::Migration> from_dir;
   if (!migrations_dir.empty()) {
-    auto loaded = insdiag::kb::LoadMigrationsFromDirectory(migrations_dir);
-    if (!loaded.ok()) return loaded.status();
-    from_dir = std::move(*loaded);
+    INSDIAG_ASSIGN_OR_RETURN(auto loaded, insdiag::kb::LoadMigrationsFromDirectory(migrations_dir));
+    from_dir = std::move(loaded);
   }
-  auto lease = pool.Acquire();
-  if (!lease.ok()) return lease.status();
-  auto applied = insdiag::kb::ApplyMigrations(
-      **lease, migrations_dir.empty() ? insdiag::kb::EmbeddedMigrations() : std::span(from_dir));
-  if (!applied.ok()) return applied.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto lease, pool.Acquire());
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto applied, insdiag::kb::ApplyMigrations(*lease, migrations_dir.empty()
+                                                              ? insdiag::kb::EmbeddedMigrations()
+                                                              : std::span(from_dir)));
   insdiag::server::Log(
       insdiag::server::LogLevel::kInfo,
-      absl::StrCat("schema up to date (", applied->applied, " migrations applied now, ",
-                   applied->already_applied, " before)"));
+      absl::StrCat("schema up to date (", applied.applied, " migrations applied now, ",
+                   applied.already_applied, " before)"));
   return absl::OkStatus();
 }
 

@@ -10,6 +10,7 @@
 
 #include "insdiag/benchrun/bench_run_csv.h"
 #include "insdiag/engine/nav/coarse_alignment.h"
+#include "insdiag/engine/status_macros.h"
 #include "insdiag/importers/import_recipe.h"
 #include "insdiag/importers/presets.h"
 #include "raw_records.h"
@@ -169,9 +170,8 @@ absl::Status SetAttitude(const ImportRecipe& recipe, DecodedRecords& records, en
   }
   Eigen::Vector3d initial = recipe.constant_rpy_rad;
   if (recipe.attitude == AttitudeSource::kLevelled) {
-    auto levelled = LevelledAttitude(recipe, samples, metadata);
-    if (!levelled.ok()) return levelled.status();
-    initial = *levelled;
+    INSDIAG_ASSIGN_OR_RETURN(auto levelled, LevelledAttitude(recipe, samples, metadata));
+    initial = levelled;
   } else {
     metadata.extra.emplace_back("reference_attitude", "constant, given");
   }
@@ -191,28 +191,29 @@ absl::Status SetAttitude(const ImportRecipe& recipe, DecodedRecords& records, en
 
 absl::StatusOr<engine::BenchRun> ImportBenchRun(std::string_view bytes, std::string_view source_name,
                                                 const ImportSettings& settings) {
-  auto recipe = RecipeFromSettings(settings);
-  if (!recipe.ok()) return recipe.status();
-  if (absl::Status st = CheckIncrementTriples(*recipe); !st.ok()) return st;
-  auto records = recipe->format == LogFormat::kText ? internal::ReadTextRecords(bytes, source_name, *recipe)
-                                                    : internal::ReadBinaryRecords(bytes, source_name, *recipe);
-  if (!records.ok()) return records.status();
-  const RecordLocator where(std::string(source_name), *records, recipe->format == LogFormat::kBinary);
-  if (records->samples.empty()) return Refusal(where.OfSampleList(), "the log holds no record");
+  INSDIAG_ASSIGN_OR_RETURN(auto recipe, RecipeFromSettings(settings));
+  if (absl::Status st = CheckIncrementTriples(recipe); !st.ok()) return st;
+  INSDIAG_ASSIGN_OR_RETURN(auto records,
+                           recipe.format == LogFormat::kText
+                               ? internal::ReadTextRecords(bytes, source_name, recipe)
+                               : internal::ReadBinaryRecords(bytes, source_name, recipe));
+  const RecordLocator where(std::string(source_name), records, recipe.format == LogFormat::kBinary);
+  if (records.samples.empty()) return Refusal(where.OfSampleList(), "the log holds no record");
 
   engine::BenchRun run;
-  run.metadata = recipe->metadata;
-  run.has_temperature = HasColumn(*recipe, ColumnTarget::kTemp);
-  if (!recipe->source_description.empty()) run.metadata.extra.emplace_back("imported_from", recipe->source_description);
-  if (absl::Status st = SettleTime(*recipe, where, *records, run.metadata); !st.ok()) return st;
-  IncrementsToRates(*recipe, records->samples);
-  if (absl::Status st = SetAttitude(*recipe, *records, run.metadata); !st.ok()) return st;
-  run.samples = std::move(records->samples);
+  run.metadata = recipe.metadata;
+  run.has_temperature = HasColumn(recipe, ColumnTarget::kTemp);
+  if (!recipe.source_description.empty())
+    run.metadata.extra.emplace_back("imported_from", recipe.source_description);
+  if (absl::Status st = SettleTime(recipe, where, records, run.metadata); !st.ok()) return st;
+  IncrementsToRates(recipe, records.samples);
+  if (absl::Status st = SetAttitude(recipe, records, run.metadata); !st.ok()) return st;
+  run.samples = std::move(records.samples);
   // The bench-run rules (units, ranges, gaps, gravity), naming the log's lines.
-  auto validator = benchrun::BenchRunValidator::Create(run.metadata, run.has_temperature, where);
-  if (!validator.ok()) return validator.status();
-  if (absl::Status st = validator->Add(run.samples); !st.ok()) return st;
-  if (absl::Status st = validator->Finish(); !st.ok()) return st;
+  INSDIAG_ASSIGN_OR_RETURN(auto validator, benchrun::BenchRunValidator::Create(
+                                               run.metadata, run.has_temperature, where));
+  if (absl::Status st = validator.Add(run.samples); !st.ok()) return st;
+  if (absl::Status st = validator.Finish(); !st.ok()) return st;
   return run;
 }
 
@@ -224,9 +225,8 @@ absl::StatusOr<engine::BenchRun> ImportBenchRunFile(const std::filesystem::path&
   const std::string log = bytes.str();
   ImportSettings layered;
   if (const Setting* preset = settings.Find("preset")) {
-    auto from_preset = PresetSettings(preset->value, log, path.string());
-    if (!from_preset.ok()) return from_preset.status();
-    layered.Merge(*from_preset);
+    INSDIAG_ASSIGN_OR_RETURN(auto from_preset, PresetSettings(preset->value, log, path.string()));
+    layered.Merge(from_preset);
   }
   layered.Merge(settings);
   return ImportBenchRun(log, path.string(), layered);

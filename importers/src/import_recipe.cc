@@ -1,7 +1,6 @@
 #include "insdiag/importers/import_recipe.h"
 
 #include <absl/strings/str_cat.h>
-#include <absl/strings/str_cat.h>
 #include <absl/strings/str_format.h>
 
 #include <cmath>
@@ -11,6 +10,7 @@
 
 #include "insdiag/benchrun/bench_run_validation.h"
 #include "insdiag/benchrun/numbers.h"
+#include "insdiag/engine/status_macros.h"
 #include "text_fields.h"
 
 namespace insdiag::importers {
@@ -301,9 +301,8 @@ namespace {
 absl::Status ApplyMetadata(const Setting& s, engine::BenchRunMetadata& m, bool& handled) {
   handled = true;
   const auto number = [&](std::optional<double>& into) -> absl::Status {
-    auto v = Number(s);
-    if (!v.ok()) return v.status();
-    into = *v;
+    INSDIAG_ASSIGN_OR_RETURN(auto v, Number(s));
+    into = v;
     return absl::OkStatus();
   };
   const auto degrees = [&](double& into) -> absl::Status {
@@ -318,9 +317,8 @@ absl::Status ApplyMetadata(const Setting& s, engine::BenchRunMetadata& m, bool& 
   else if (k == "site_latitude_deg") return degrees(m.site.latitude_rad);
   else if (k == "site_longitude_deg") return degrees(m.site.longitude_rad);
   else if (k == "site_height_m") {
-    auto v = Number(s);
-    if (!v.ok()) return v.status();
-    m.site.height_m = *v;
+    INSDIAG_ASSIGN_OR_RETURN(auto v, Number(s));
+    m.site.height_m = v;
   } else if (k == "gyro_arw") return number(m.datasheet.gyro_arw_rad_rts);
   else if (k == "gyro_bias_sigma") return number(m.datasheet.gyro_bias_sigma_rad_s);
   else if (k == "gyro_bias_tau") return number(m.datasheet.gyro_bias_tau_s);
@@ -336,9 +334,8 @@ absl::Status ApplyMetadata(const Setting& s, engine::BenchRunMetadata& m, bool& 
 absl::Status ApplyLayout(const Setting& s, ImportRecipe& r, bool& handled) {
   handled = true;
   const auto integer = [&](int& into) -> absl::Status {
-    auto v = NonNegativeInt(s);
-    if (!v.ok()) return v.status();
-    into = *v;
+    INSDIAG_ASSIGN_OR_RETURN(auto v, NonNegativeInt(s));
+    into = v;
     return absl::OkStatus();
   };
   const std::string_view k = s.key;
@@ -367,32 +364,27 @@ absl::Status ApplyTimeAndAttitude(const Setting& s, ImportRecipe& r, bool& handl
   const std::string_view k = s.key;
   auto value = [&]() { return Number(s); };
   if (k == "rate_hz" || k == "interval_s") {
-    auto v = value();
-    if (!v.ok()) return v.status();
-    if (*v <= 0) return Refusal(s.origin, "must be positive");
-    r.interval_s = k == "rate_hz" ? 1.0 / *v : *v;
+    INSDIAG_ASSIGN_OR_RETURN(auto v, value());
+    if (v <= 0) return Refusal(s.origin, "must be positive");
+    r.interval_s = k == "rate_hz" ? 1.0 / v : v;
   } else if (k == "start_time_s") {
-    auto v = value();
-    if (!v.ok()) return v.status();
-    r.start_time_s = *v;
+    INSDIAG_ASSIGN_OR_RETURN(auto v, value());
+    r.start_time_s = v;
   } else if (k == "attitude") {
     if (s.value == "constant") r.attitude = AttitudeSource::kConstant;
     else if (s.value == "level") r.attitude = AttitudeSource::kLevelled;
     else if (s.value == "columns") r.attitude = AttitudeSource::kColumns;
     else return Refusal(s.origin, absl::StrFormat("'%s' is not constant, level or columns", s.value));
   } else if (k == "ref_roll_deg" || k == "ref_pitch_deg" || k == "ref_yaw_deg") {
-    auto v = value();
-    if (!v.ok()) return v.status();
-    r.constant_rpy_rad[k == "ref_roll_deg" ? 0 : k == "ref_pitch_deg" ? 1 : 2] = *v * kRadPerDeg;
+    INSDIAG_ASSIGN_OR_RETURN(auto v, value());
+    r.constant_rpy_rad[k == "ref_roll_deg" ? 0 : k == "ref_pitch_deg" ? 1 : 2] = v * kRadPerDeg;
   } else if (k == "heading_deg") {
-    auto v = value();
-    if (!v.ok()) return v.status();
-    r.heading_rad = *v * kRadPerDeg;
+    INSDIAG_ASSIGN_OR_RETURN(auto v, value());
+    r.heading_rad = v * kRadPerDeg;
   } else if (k == "level_window_s") {
-    auto v = value();
-    if (!v.ok()) return v.status();
-    if (*v <= 0) return Refusal(s.origin, "must be positive");
-    r.level_window_s = *v;
+    INSDIAG_ASSIGN_OR_RETURN(auto v, value());
+    if (v <= 0) return Refusal(s.origin, "must be positive");
+    r.level_window_s = v;
   } else if (k == "g_mps2" || k == "columns" || k == "units" || k == "axes" || k == "binary_type" ||
              k == "source" || k == "preset") {
     // Read in order by RecipeFromSettings: they depend on one another.
@@ -409,9 +401,8 @@ absl::StatusOr<ImportRecipe> RecipeFromSettings(const ImportSettings& settings) 
   recipe.metadata.format = std::string(benchrun::kFormatV1);
   recipe.g_mps2 = kStandardGravityMps2;
   if (const Setting* g = settings.Find("g_mps2")) {
-    auto v = Number(*g);
-    if (!v.ok()) return v.status();
-    recipe.g_mps2 = *v;
+    INSDIAG_ASSIGN_OR_RETURN(auto v, Number(*g));
+    recipe.g_mps2 = v;
   }
   // Settings of one key may come from several layers: only the winner counts.
   std::map<std::string, bool, std::less<>> applied;

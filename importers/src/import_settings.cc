@@ -10,6 +10,7 @@
 #include <optional>
 #include <sstream>
 
+#include "insdiag/engine/status_macros.h"
 #include "text_fields.h"
 
 namespace insdiag::importers {
@@ -140,17 +141,16 @@ class FlatJsonReader {
       first = false;
       InputLocation where = Here("settings");
       if (Peek() != '"') return Refusal(where, "a key is a string in double quotes");
-      auto key = String();
-      if (!key.ok()) return key.status();
-      where.field = *key;
-      if (!IsKeyText(*key)) return Refusal(where, "a key is lower-case ASCII letters, digits, '_' and '.'");
+      INSDIAG_ASSIGN_OR_RETURN(auto key, String());
+      where.field = key;
+      if (!IsKeyText(key))
+        return Refusal(where, "a key is lower-case ASCII letters, digits, '_' and '.'");
       SkipSpace();
-      if (Peek() != ':') return Refusal(Here(*key), "expected ':' after the key");
+      if (Peek() != ':') return Refusal(Here(key), "expected ':' after the key");
       Advance();
       SkipSpace();
-      auto value = Value(*key);
-      if (!value.ok()) return value.status();
-      if (absl::Status st = settings.Add(*key, *std::move(value), where); !st.ok()) return st;
+      INSDIAG_ASSIGN_OR_RETURN(auto value, Value(key));
+      if (absl::Status st = settings.Add(key, std::move(value), where); !st.ok()) return st;
       SkipSpace();
     }
     Advance();

@@ -8,6 +8,7 @@
 
 #include "insdiag/benchrun/bench_run_validation.h"
 #include "insdiag/benchrun/numbers.h"
+#include "insdiag/engine/status_macros.h"
 #include "text_fields.h"
 
 namespace insdiag::importers {
@@ -63,24 +64,23 @@ absl::StatusOr<ImportSettings> PsinsImu(std::string_view log, std::string_view s
   s.Set("comment_prefixes", "%", preset);
   s.Set("axes", std::string(kRightForwardUpToBody), preset);
   s.Set("attitude", "level", preset);
-  auto head = LeadingNumberLines(log, source, 3);
-  if (!head.ok()) return head.status();
-  if (!head->empty() && head->front().values.size() == 7) {
+  INSDIAG_ASSIGN_OR_RETURN(auto head, LeadingNumberLines(log, source, 3));
+  if (!head.empty() && head.front().values.size() == 7) {
     // The toolbox's in-memory layout, saved as text: increments and time.
     s.Set("columns", "gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,t", preset);
     s.Set("units", "gyro=rad,acc=m/s,t=s", preset);
     return s;
   }
-  if (head->size() < 3 || (*head)[0].values.size() != 6 || (*head)[1].values.size() != 6 ||
-      (*head)[2].values.size() != 6) {
-    const int line = head->empty() ? 1 : head->back().line;
+  if (head.size() < 3 || (head)[0].values.size() != 6 || (head)[1].values.size() != 6 ||
+      (head)[2].values.size() != 6) {
+    const int line = head.empty() ? 1 : head.back().line;
     return Refusal(at(line, "header"), "a PSINS SIMU log starts with three lines of six numbers (attitude and "
                                        "velocity; latitude, longitude, height, t0, interval [ms], g; scales), "
                                        "or holds rows of seven (wx wy wz vx vy vz t)");
   }
-  const NumberLine& attitude = (*head)[0];
-  const NumberLine& site = (*head)[1];
-  const NumberLine& scales = (*head)[2];
+  const NumberLine& attitude = (head)[0];
+  const NumberLine& site = (head)[1];
+  const NumberLine& scales = (head)[2];
   s.Set("skip_lines", absl::StrCat(scales.line), preset);
   s.Set("site_latitude_deg", site.texts[0], at(site.line, "site_latitude_deg"));
   s.Set("site_longitude_deg", site.texts[1], at(site.line, "site_longitude_deg"));

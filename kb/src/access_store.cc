@@ -15,6 +15,7 @@
 
 #include "insdiag/api/resource_names.h"
 #include "insdiag/api/run_codec.h"
+#include "insdiag/engine/status_macros.h"
 #include "store_util.h"
 
 namespace insdiag::kb {
@@ -82,21 +83,20 @@ absl::StatusOr<v1::Caller> AccessStore::Authenticate(const std::string& secret) 
   if (!absl::StartsWith(secret, kSecretPrefix)) {
     return absl::UnauthenticatedError("the bearer token is not an insdiag token (they start with insdiag_)");
   }
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
-  auto rows = (*db)->Exec(
-      "SELECT token_id::text, display_name, role, revoke_time IS NOT NULL, "
-      "expire_time IS NOT NULL AND expire_time <= now() FROM access_tokens WHERE secret_sha256 = $1",
-      {Param::Bytes(api::Sha256(secret))});
-  if (!rows.ok()) return rows.status();
-  if (rows->rows() == 0) return absl::UnauthenticatedError("unknown bearer token");
-  const std::string name = absl::StrCat("tokens/", rows->String(0, 0));
-  if (rows->Bool(0, 3)) return absl::UnauthenticatedError(absl::StrCat(name, " has been revoked"));
-  if (rows->Bool(0, 4)) return absl::UnauthenticatedError(absl::StrCat(name, " has expired"));
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto rows, db->Exec("SELECT token_id::text, display_name, role, revoke_time IS NOT NULL, "
+                          "expire_time IS NOT NULL AND expire_time <= now() FROM access_tokens "
+                          "WHERE secret_sha256 = $1",
+                          {Param::Bytes(api::Sha256(secret))}));
+  if (rows.rows() == 0) return absl::UnauthenticatedError("unknown bearer token");
+  const std::string name = absl::StrCat("tokens/", rows.String(0, 0));
+  if (rows.Bool(0, 3)) return absl::UnauthenticatedError(absl::StrCat(name, " has been revoked"));
+  if (rows.Bool(0, 4)) return absl::UnauthenticatedError(absl::StrCat(name, " has expired"));
   v1::Caller caller;
   caller.set_token(name);
-  caller.set_display_name(rows->String(0, 1));
-  caller.set_role(RoleOf(rows->Get(0, 2)));
+  caller.set_display_name(rows.String(0, 1));
+  caller.set_role(RoleOf(rows.Get(0, 2)));
   return caller;
 }
 
@@ -105,82 +105,74 @@ absl::StatusOr<v1::CreatedToken> AccessStore::CreateToken(const v1::Token& token
   if (token.role() == v1::ROLE_UNSPECIFIED || !v1::Role_IsValid(token.role())) {
     return absl::InvalidArgumentError("token.role: one of VIEWER, OPERATOR, ENGINEER, ADMIN");
   }
-  auto secret = NewSecret();
-  if (!secret.ok()) return secret.status();
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
-  auto rows = (*db)->Exec(
-      absl::StrCat("WITH made AS (INSERT INTO access_tokens (display_name, role, secret_sha256, creator, expire_time) "
-                   "SELECT $1, $2, $3, $4, $5::timestamptz WHERE $5::timestamptz IS NULL OR $5::timestamptz > now() "
-                   "RETURNING *) ",
-                   absl::StrReplaceAll(kTokenColumns, {{"access_tokens", "made"}})),
-      {Param::Text(token.display_name()), Param::Text(RoleName(token.role())), Param::Bytes(api::Sha256(*secret)),
-       Param::Text(creator),
-       token.has_expire_time() ? Param::Text(internal::TimestampText(token.expire_time())) : Param::Null()});
+  INSDIAG_ASSIGN_OR_RETURN(auto secret, NewSecret());
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
+  auto rows =
+      db->Exec(absl::StrCat("WITH made AS (INSERT INTO access_tokens (display_name, role, "
+                            "secret_sha256, creator, expire_time) "
+                            "SELECT $1, $2, $3, $4, $5::timestamptz WHERE $5::timestamptz IS NULL "
+                            "OR $5::timestamptz > now() "
+                            "RETURNING *) ",
+                            absl::StrReplaceAll(kTokenColumns, {{"access_tokens", "made"}})),
+               {Param::Text(token.display_name()), Param::Text(RoleName(token.role())),
+                Param::Bytes(api::Sha256(secret)), Param::Text(creator),
+                token.has_expire_time() ? Param::Text(internal::TimestampText(token.expire_time()))
+                                        : Param::Null()});
   if (!rows.ok()) return rows.status();
   if (rows->rows() == 0) return absl::InvalidArgumentError("token.expire_time: must be in the future");
   v1::CreatedToken created;
   *created.mutable_token() = TokenFromRow(*rows, 0);
-  created.set_secret(*secret);
+  created.set_secret(secret);
   return created;
 }
 
 absl::StatusOr<std::pair<std::vector<v1::Token>, std::string>> AccessStore::ListTokens(const PageQuery& page) {
   const int size = internal::ClampPageSize(page.page_size);
-  std::string after_time, after_id;
-  if (!page.page_token.empty()) {
-    auto key = internal::DecodeToken(page.page_token);
-    if (!key.ok()) return key.status();
-    std::tie(after_time, after_id) = *key;
-  }
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
-  auto rows = (*db)->Exec(
-      absl::StrCat(kTokenColumns,
-                   "WHERE $2::bigint IS NULL OR (", Micros("create_time"), ", token_id) < ($2::bigint, $3::uuid) "
-                   "ORDER BY create_time DESC, token_id DESC LIMIT $1"),
-      {Param::Int(size + 1), Param::TextOrNull(after_time), Param::TextOrNull(after_id)});
-  if (!rows.ok()) return rows.status();
+  std::vector<Param> params = {Param::Int(size + 1)};
+  INSDIAG_ASSIGN_OR_RETURN(const std::string after,
+                           internal::KeysetAfter(page.page_token, {{Micros("create_time"), "bigint"}, {"token_id", "uuid"}},
+                                                 internal::KeysetOrder::kNewestFirst, params));
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto rows, db->Exec(absl::StrCat(kTokenColumns, "WHERE ", after, " ORDER BY create_time DESC, token_id DESC LIMIT $1"),
+                          params));
   std::vector<v1::Token> tokens;
-  const int shown = std::min(rows->rows(), size);
-  for (int r = 0; r < shown; ++r) tokens.push_back(TokenFromRow(*rows, r));
+  const int shown = std::min(rows.rows(), size);
+  for (int r = 0; r < shown; ++r) tokens.push_back(TokenFromRow(rows, r));
   std::string next;
-  if (rows->rows() > size) next = internal::EncodeToken(rows->String(shown - 1, 4), rows->String(shown - 1, 0));
+  if (rows.rows() > size)
+    next = internal::EncodeToken(rows.String(shown - 1, 4), rows.String(shown - 1, 0));
   return std::make_pair(std::move(tokens), next);
 }
 
 absl::StatusOr<v1::Token> AccessStore::RevokeToken(const std::string& name) {
-  auto id = internal::UuidOf(name, api::kTokens, "name");
-  if (!id.ok()) return id.status();
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
-  auto rows = (*db)->Exec(
-      absl::StrCat("WITH revoked AS (UPDATE access_tokens SET revoke_time = coalesce(revoke_time, now()) "
-                   "WHERE token_id = $1::uuid RETURNING *) ",
-                   absl::StrReplaceAll(kTokenColumns, {{"access_tokens", "revoked"}})),
-      {Param::Text(*id)});
-  if (!rows.ok()) return rows.status();
-  if (rows->rows() == 0) return absl::NotFoundError(absl::StrCat(name, " does not exist"));
-  return TokenFromRow(*rows, 0);
+  INSDIAG_ASSIGN_OR_RETURN(auto id, internal::UuidOf(name, api::kTokens, "name"));
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto rows,
+      db->Exec(absl::StrCat("WITH revoked AS (UPDATE access_tokens SET revoke_time = "
+                            "coalesce(revoke_time, now()) "
+                            "WHERE token_id = $1::uuid RETURNING *) ",
+                            absl::StrReplaceAll(kTokenColumns, {{"access_tokens", "revoked"}})),
+               {Param::Text(id)}));
+  if (rows.rows() == 0) return absl::NotFoundError(absl::StrCat(name, " does not exist"));
+  return TokenFromRow(rows, 0);
 }
 
 absl::StatusOr<bool> AccessStore::CreateFirstAdminToken(const std::filesystem::path& secret_file) {
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
   bool made = false;
-  const absl::Status status = (*db)->InTransaction([&]() -> absl::Status {
-    auto locked = (*db)->Exec("SELECT pg_advisory_xact_lock($1)", {Param::Int(AdvisoryLockKey("insdiag.first_admin"))});
-    if (!locked.ok()) return locked.status();
-    auto any = (*db)->Exec("SELECT 1 FROM access_tokens LIMIT 1");
-    if (!any.ok()) return any.status();
-    if (any->rows() > 0) return absl::OkStatus();
-    auto secret = NewSecret();
-    if (!secret.ok()) return secret.status();
-    if (auto written = WriteOwnerOnlyFile(secret_file, *secret + "\n"); !written.ok()) return written;
-    auto inserted = (*db)->Exec(
-        "INSERT INTO access_tokens (display_name, role, secret_sha256, creator) VALUES ($1, 'ADMIN', $2, 'first start')",
-        {Param::Text("administrator (first start)"), Param::Bytes(api::Sha256(*secret))});
-    if (!inserted.ok()) return inserted.status();
+  const absl::Status status = db->InTransaction([&]() -> absl::Status {
+    INSDIAG_RETURN_IF_ERROR(db->Exec("SELECT pg_advisory_xact_lock($1)",
+                                     {Param::Int(AdvisoryLockKey("insdiag.first_admin"))}));
+    INSDIAG_ASSIGN_OR_RETURN(auto any, db->Exec("SELECT 1 FROM access_tokens LIMIT 1"));
+    if (any.rows() > 0) return absl::OkStatus();
+    INSDIAG_ASSIGN_OR_RETURN(auto secret, NewSecret());
+    INSDIAG_RETURN_IF_ERROR(WriteOwnerOnlyFile(secret_file, secret + "\n"));
+    INSDIAG_RETURN_IF_ERROR(
+        db->Exec("INSERT INTO access_tokens (display_name, role, secret_sha256, creator) VALUES "
+                 "($1, 'ADMIN', $2, 'first start')",
+                 {Param::Text("administrator (first start)"), Param::Bytes(api::Sha256(secret))}));
     made = true;
     return absl::OkStatus();
   });
@@ -194,61 +186,62 @@ absl::Status AccessStore::RecordAuditEvent(const AuditedCall& call) {
     auto id = internal::UuidOf(call.caller->token(), api::kTokens, "token");
     if (id.ok()) token_id = *id;
   }
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
-  return (*db)
-      ->Exec("INSERT INTO audit_events (token_id, display_name, role, method, resource, peer, code, message) "
-             "VALUES ($1::uuid, $2, $3, $4, $5, $6, $7, $8)",
-             {token_id ? Param::Text(*token_id) : Param::Null(),
-              Param::Text(call.caller ? call.caller->display_name() : ""),
-              Param::Text(call.caller ? RoleName(call.caller->role()) : ""), Param::Text(call.method),
-              Param::Text(call.resource), Param::Text(call.peer),
-              Param::Text(absl::StatusCodeToString(call.outcome.code())), Param::Text(std::string(call.outcome.message()))})
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
+  return (db)
+      ->Exec(
+          "INSERT INTO audit_events (token_id, display_name, role, method, resource, peer, code, "
+          "message) "
+          "VALUES ($1::uuid, $2, $3, $4, $5, $6, $7, $8)",
+          {token_id ? Param::Text(*token_id) : Param::Null(),
+           Param::Text(call.caller ? call.caller->display_name() : ""),
+           Param::Text(call.caller ? RoleName(call.caller->role()) : ""), Param::Text(call.method),
+           Param::Text(call.resource), Param::Text(call.peer),
+           Param::Text(absl::StatusCodeToString(call.outcome.code())),
+           Param::Text(std::string(call.outcome.message()))})
       .status();
 }
 
 absl::StatusOr<std::pair<std::vector<v1::AuditEvent>, std::string>> AccessStore::ListAuditEvents(
     const AuditQuery& query) {
   const int size = internal::ClampPageSize(query.page.page_size);
-  std::string after;
-  if (!query.page.page_token.empty()) {
-    auto key = internal::DecodeToken(query.page.page_token);
-    if (!key.ok()) return key.status();
-    after = key->second;
-  }
   std::optional<std::string> token_id;
   if (!query.token.empty()) {
-    auto id = internal::UuidOf(query.token, api::kTokens, "token");
-    if (!id.ok()) return id.status();
-    token_id = *id;
+    INSDIAG_ASSIGN_OR_RETURN(auto id, internal::UuidOf(query.token, api::kTokens, "token"));
+    token_id = id;
   }
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
-  auto rows = (*db)->Exec(
-      absl::StrCat("SELECT event_id, ", Micros("event_time"), ", coalesce(token_id::text, ''), display_name, role, "
-                   "method, resource, peer, code, message FROM audit_events "
-                   "WHERE ($2::bigint IS NULL OR event_id < $2) AND ($3::text IS NULL OR resource = $3) "
-                   "AND ($4::uuid IS NULL OR token_id = $4) ORDER BY event_id DESC LIMIT $1"),
-      {Param::Int(size + 1), Param::TextOrNull(after), Param::TextOrNull(query.resource),
-       token_id ? Param::Text(*token_id) : Param::Null()});
-  if (!rows.ok()) return rows.status();
+  std::vector<Param> params = {Param::Int(size + 1), Param::TextOrNull(query.resource),
+                               token_id ? Param::Text(*token_id) : Param::Null()};
+  INSDIAG_ASSIGN_OR_RETURN(const std::string after,
+                           internal::KeysetAfter(query.page.page_token, {{"event_id", "bigint"}},
+                                                 internal::KeysetOrder::kDescending, params));
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto rows,
+      db->Exec(
+          absl::StrCat(
+              "SELECT event_id, ", Micros("event_time"),
+              ", coalesce(token_id::text, ''), display_name, role, "
+              "method, resource, peer, code, message FROM audit_events "
+              "WHERE ($2::text IS NULL OR resource = $2) AND ($3::uuid IS NULL OR token_id = $3) AND ",
+              after, " ORDER BY event_id DESC LIMIT $1"),
+          params));
   std::vector<v1::AuditEvent> events;
-  const int shown = std::min(rows->rows(), size);
+  const int shown = std::min(rows.rows(), size);
   for (int r = 0; r < shown; ++r) {
     v1::AuditEvent& e = events.emplace_back();
-    e.set_name(absl::StrCat("auditEvents/", rows->String(r, 0)));
-    *e.mutable_event_time() = TimestampOfMicros(internal::IntOr0(*rows, r, 1));
-    if (!rows->Get(r, 2).empty()) e.set_token(absl::StrCat("tokens/", rows->String(r, 2)));
-    e.set_display_name(rows->String(r, 3));
-    e.set_role(RoleOf(rows->Get(r, 4)));
-    e.set_method(rows->String(r, 5));
-    e.set_resource(rows->String(r, 6));
-    e.set_peer(rows->String(r, 7));
-    e.set_code(rows->String(r, 8));
-    e.set_message(rows->String(r, 9));
+    e.set_name(absl::StrCat("auditEvents/", rows.String(r, 0)));
+    *e.mutable_event_time() = TimestampOfMicros(internal::IntOr0(rows, r, 1));
+    if (!rows.Get(r, 2).empty()) e.set_token(absl::StrCat("tokens/", rows.String(r, 2)));
+    e.set_display_name(rows.String(r, 3));
+    e.set_role(RoleOf(rows.Get(r, 4)));
+    e.set_method(rows.String(r, 5));
+    e.set_resource(rows.String(r, 6));
+    e.set_peer(rows.String(r, 7));
+    e.set_code(rows.String(r, 8));
+    e.set_message(rows.String(r, 9));
   }
   std::string next;
-  if (rows->rows() > size) next = internal::EncodeToken("", rows->String(shown - 1, 0));
+  if (rows.rows() > size) next = internal::EncodeToken("", rows.String(shown - 1, 0));
   return std::make_pair(std::move(events), next);
 }
 

@@ -6,6 +6,7 @@
 
 #include "catalogue_rows.h"
 #include "insdiag/api/resource_names.h"
+#include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/diagnosis.h"
 #include "store_util.h"
 
@@ -25,22 +26,21 @@ const char* DirectionName(v1::Signature::Direction d) {
 // Upserts the unit type and replaces its nominal values.
 absl::Status UpsertUnitType(Connection& db, const v1::UnitType& t) {
   const std::string id = UnitTypeId(t.name());
-  auto upserted = db.Exec(
-      "INSERT INTO unit_types (unit_type, display_name, description) VALUES ($1, $2, $3) "
-      "ON CONFLICT (unit_type) DO UPDATE SET display_name = EXCLUDED.display_name, "
-      "description = EXCLUDED.description, update_time = now()",
-      {Param::Text(id), Param::Text(t.display_name()), Param::Text(t.description())});
-  if (!upserted.ok()) return upserted.status();
-  auto cleared = db.Exec("DELETE FROM nominal_parameters WHERE unit_type = $1", {Param::Text(id)});
-  if (!cleared.ok()) return cleared.status();
+  INSDIAG_RETURN_IF_ERROR(
+      db.Exec("INSERT INTO unit_types (unit_type, display_name, description) VALUES ($1, $2, $3) "
+              "ON CONFLICT (unit_type) DO UPDATE SET display_name = EXCLUDED.display_name, "
+              "description = EXCLUDED.description, update_time = now()",
+              {Param::Text(id), Param::Text(t.display_name()), Param::Text(t.description())}));
+  INSDIAG_RETURN_IF_ERROR(
+      db.Exec("DELETE FROM nominal_parameters WHERE unit_type = $1", {Param::Text(id)}));
   int position = 0;
   for (const auto& p : t.nominal()) {
-    auto inserted = db.Exec(
-        "INSERT INTO nominal_parameters (unit_type, parameter, value, tolerance, unit, position) "
-        "VALUES ($1, $2, $3, $4, $5, $6)",
-        {Param::Text(id), Param::Text(p.name()), Param::Double(p.value()), Param::Double(p.tolerance()),
-         Param::Text(p.unit()), Param::Int(position++)});
-    if (!inserted.ok()) return inserted.status();
+    INSDIAG_RETURN_IF_ERROR(
+        db.Exec("INSERT INTO nominal_parameters (unit_type, parameter, value, tolerance, unit, "
+                "position) "
+                "VALUES ($1, $2, $3, $4, $5, $6)",
+                {Param::Text(id), Param::Text(p.name()), Param::Double(p.value()),
+                 Param::Double(p.tolerance()), Param::Text(p.unit()), Param::Int(position++)}));
   }
   return absl::OkStatus();
 }
@@ -68,26 +68,29 @@ absl::Status UpsertFailureMode(Connection& db, const v1::FailureMode& mode) {
                                   BoolText(s.common()), "|", s.fraction(), "|", s.expert_change(), "|",
                                   s.expert_spread()));
   }
-  auto existing = db.Exec(
-      "SELECT parameter || '|' || direction || '|' || scale || '|' || common::text || '|' || fraction::text "
-      "|| '|' || expert_change::text || '|' || expert_spread::text FROM signature_terms WHERE failure_mode = $1 "
-      "ORDER BY position",
-      {Param::Text(id)});
-  if (!existing.ok()) return existing.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto existing,
+                           db.Exec("SELECT parameter || '|' || direction || '|' || scale || '|' || "
+                                   "common::text || '|' || fraction::text "
+                                   "|| '|' || expert_change::text || '|' || expert_spread::text "
+                                   "FROM signature_terms WHERE failure_mode = $1 "
+                                   "ORDER BY position",
+                                   {Param::Text(id)}));
   std::vector<std::string> have;
-  for (int r = 0; r < existing->rows(); ++r) have.push_back(existing->String(r, 0));
+  for (int r = 0; r < existing.rows(); ++r) have.push_back(existing.String(r, 0));
   if (have == wanted) return absl::OkStatus();
-  auto cleared = db.Exec("DELETE FROM signature_terms WHERE failure_mode = $1", {Param::Text(id)});
-  if (!cleared.ok()) return cleared.status();
+  INSDIAG_RETURN_IF_ERROR(
+      db.Exec("DELETE FROM signature_terms WHERE failure_mode = $1", {Param::Text(id)}));
   int position = 0;
   for (const auto& s : mode.signature()) {
-    auto inserted = db.Exec(
-        "INSERT INTO signature_terms (failure_mode, position, parameter, direction, scale, common, fraction, "
-        "expert_change, expert_spread, change, spread) VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $8, $9)",
-        {Param::Text(id), Param::Int(position++), Param::Text(s.parameter()),
-         Param::Text(DirectionName(s.direction())), Param::Text(s.scale()), Param::Text(BoolText(s.common())),
-         Param::Double(s.fraction()), Param::Double(s.expert_change()), Param::Double(s.expert_spread())});
-    if (!inserted.ok()) return inserted.status();
+    INSDIAG_RETURN_IF_ERROR(
+        db.Exec("INSERT INTO signature_terms (failure_mode, position, parameter, direction, scale, "
+                "common, fraction, "
+                "expert_change, expert_spread, change, spread) VALUES ($1, $2, $3, $4, $5, $6, $7, "
+                "$8, $9, $8, $9)",
+                {Param::Text(id), Param::Int(position++), Param::Text(s.parameter()),
+                 Param::Text(DirectionName(s.direction())), Param::Text(s.scale()),
+                 Param::Text(BoolText(s.common())), Param::Double(s.fraction()),
+                 Param::Double(s.expert_change()), Param::Double(s.expert_spread())}));
   }
   return absl::OkStatus();
 }
@@ -113,19 +116,17 @@ v1::Unit UnitFromRow(const Result& rows, int r) {
 
 absl::Status CatalogueStore::Seed(std::span<const v1::UnitType> unit_types,
                                   std::span<const v1::FailureModeCatalogue> catalogues) {
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
-  return (*db)->InTransaction([&]() -> absl::Status {
-    auto locked = (*db)->Exec("SELECT pg_advisory_xact_lock($1)", {Param::Int(AdvisoryLockKey("insdiag.seed"))});
-    if (!locked.ok()) return locked.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
+  return db->InTransaction([&]() -> absl::Status {
+    INSDIAG_RETURN_IF_ERROR(db->Exec("SELECT pg_advisory_xact_lock($1)",
+                                     {Param::Int(AdvisoryLockKey("insdiag.seed"))}));
     for (const auto& t : unit_types) {
-      if (auto s = UpsertUnitType(**db, t); !s.ok()) return s;
+      INSDIAG_RETURN_IF_ERROR(UpsertUnitType(*db, t));
     }
     for (const auto& catalogue : catalogues) {
-      auto modes = ExpandCatalogue(catalogue);
-      if (!modes.ok()) return modes.status();
-      for (const auto& mode : *modes) {
-        if (auto s = UpsertFailureMode(**db, mode); !s.ok()) return s;
+      INSDIAG_ASSIGN_OR_RETURN(auto modes, ExpandCatalogue(catalogue));
+      for (const auto& mode : modes) {
+        INSDIAG_RETURN_IF_ERROR(UpsertFailureMode(*db, mode));
       }
     }
     return absl::OkStatus();
@@ -133,23 +134,19 @@ absl::Status CatalogueStore::Seed(std::span<const v1::UnitType> unit_types,
 }
 
 absl::StatusOr<v1::UnitType> CatalogueStore::GetUnitType(const std::string& name) {
-  auto id = api::ResourceId(name, api::kUnitTypes, "name");
-  if (!id.ok()) return id.status();
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
-  return LoadUnitType(**db, *id);
+  INSDIAG_ASSIGN_OR_RETURN(auto id, api::ResourceId(name, api::kUnitTypes, "name"));
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
+  return LoadUnitType(*db, id);
 }
 
 absl::StatusOr<std::vector<v1::UnitType>> CatalogueStore::ListUnitTypes() {
-  auto db = list_pool_.Acquire();
-  if (!db.ok()) return db.status();
-  auto rows = (*db)->Exec("SELECT unit_type FROM unit_types ORDER BY unit_type");
-  if (!rows.ok()) return rows.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto db, list_pool_.Acquire());
+  INSDIAG_ASSIGN_OR_RETURN(auto rows,
+                           db->Exec("SELECT unit_type FROM unit_types ORDER BY unit_type"));
   std::vector<v1::UnitType> out;
-  for (int r = 0; r < rows->rows(); ++r) {
-    auto t = LoadUnitType(**db, rows->String(r, 0));
-    if (!t.ok()) return t.status();
-    out.push_back(std::move(*t));
+  for (int r = 0; r < rows.rows(); ++r) {
+    INSDIAG_ASSIGN_OR_RETURN(auto t, LoadUnitType(*db, rows.String(r, 0)));
+    out.push_back(std::move(t));
   }
   return out;
 }
@@ -157,88 +154,84 @@ absl::StatusOr<std::vector<v1::UnitType>> CatalogueStore::ListUnitTypes() {
 absl::StatusOr<v1::Unit> CatalogueStore::GetUnit(const std::string& name) {
   auto serial = api::ResourceId(name, api::kUnits, "name");
   if (!serial.ok()) return serial.status();
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
-  auto rows = (*db)->Exec(absl::StrCat(kUnitColumns, "WHERE serial = $1"), {Param::Text(*serial)});
-  if (!rows.ok()) return rows.status();
-  if (rows->rows() == 0) return absl::NotFoundError(absl::StrCat(name, " does not exist"));
-  return UnitFromRow(*rows, 0);
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto rows, db->Exec(absl::StrCat(kUnitColumns, "WHERE serial = $1"), {Param::Text(*serial)}));
+  if (rows.rows() == 0) return absl::NotFoundError(absl::StrCat(name, " does not exist"));
+  return UnitFromRow(rows, 0);
 }
 
 absl::StatusOr<std::pair<std::vector<v1::Unit>, std::string>> CatalogueStore::ListUnits(const PageQuery& page,
                                                                                          const std::string& unit_type,
                                                                                          const std::string& batch) {
   const int size = internal::ClampPageSize(page.page_size);
-  std::string after_serial;
-  if (!page.page_token.empty()) {
-    auto key = internal::DecodeToken(page.page_token);
-    if (!key.ok()) return key.status();
-    after_serial = key->second;
-  }
-  auto db = list_pool_.Acquire();
-  if (!db.ok()) return db.status();
-  auto rows = (*db)->Exec(
-      absl::StrCat(kUnitColumns,
-                   "WHERE ($2::text IS NULL OR unit_type = $2) AND ($3::text IS NULL OR batch = $3) "
-                   "AND ($4::text IS NULL OR serial > $4) ORDER BY serial LIMIT $1"),
-      {Param::Int(size + 1), Param::TextOrNull(unit_type.empty() ? "" : UnitTypeId(unit_type)),
-       Param::TextOrNull(batch), Param::TextOrNull(after_serial)});
-  if (!rows.ok()) return rows.status();
+  std::vector<Param> params = {Param::Int(size + 1),
+                               Param::TextOrNull(unit_type.empty() ? "" : UnitTypeId(unit_type)),
+                               Param::TextOrNull(batch)};
+  INSDIAG_ASSIGN_OR_RETURN(
+      const std::string after,
+      internal::KeysetAfter(page.page_token, {{"serial", "text"}}, internal::KeysetOrder::kAscending, params));
+  INSDIAG_ASSIGN_OR_RETURN(auto db, list_pool_.Acquire());
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto rows,
+      db->Exec(absl::StrCat(kUnitColumns,
+                            "WHERE ($2::text IS NULL OR unit_type = $2) AND ($3::text IS NULL OR batch = $3) AND ",
+                            after, " ORDER BY serial LIMIT $1"),
+               params));
   std::vector<v1::Unit> units;
-  const int shown = std::min(rows->rows(), size);
-  for (int r = 0; r < shown; ++r) units.push_back(UnitFromRow(*rows, r));
+  const int shown = std::min(rows.rows(), size);
+  for (int r = 0; r < shown; ++r) units.push_back(UnitFromRow(rows, r));
   std::string next;
-  if (rows->rows() > size) next = internal::EncodeToken("", rows->String(shown - 1, 0));
+  if (rows.rows() > size) next = internal::EncodeToken("", rows.String(shown - 1, 0));
   return std::make_pair(std::move(units), next);
 }
 
 absl::StatusOr<std::vector<v1::Module>> CatalogueStore::ListModules(const std::string& unit_name) {
   auto serial = api::ResourceId(unit_name, api::kUnits, "parent");
   if (!serial.ok()) return serial.status();
-  auto db = list_pool_.Acquire();
-  if (!db.ok()) return db.status();
-  auto unit = (*db)->Exec("SELECT unit_id FROM units WHERE serial = $1", {Param::Text(*serial)});
-  if (!unit.ok()) return unit.status();
-  if (unit->rows() == 0) return absl::NotFoundError(absl::StrCat(unit_name, " does not exist"));
-  auto rows = (*db)->Exec(
-      absl::StrCat("SELECT role, part_serial, ", Micros("installed_time"), ", installed_hours, ", Micros("removed_time"),
-                   ", coalesce(removed_hours, 0), coalesce(removal_reason, ''), removed_time IS NULL "
-                   "FROM modules WHERE unit_id = $1 ORDER BY role, installed_hours, module_id"),
-      {Param::Text(unit->String(0, 0))});
-  if (!rows.ok()) return rows.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto db, list_pool_.Acquire());
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto unit, db->Exec("SELECT unit_id FROM units WHERE serial = $1", {Param::Text(*serial)}));
+  if (unit.rows() == 0) return absl::NotFoundError(absl::StrCat(unit_name, " does not exist"));
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto rows,
+      db->Exec(
+          absl::StrCat(
+              "SELECT role, part_serial, ", Micros("installed_time"), ", installed_hours, ",
+              Micros("removed_time"),
+              ", coalesce(removed_hours, 0), coalesce(removal_reason, ''), removed_time IS NULL "
+              "FROM modules WHERE unit_id = $1 ORDER BY role, installed_hours, module_id"),
+          {Param::Text(unit.String(0, 0))}));
   std::vector<v1::Module> out;
-  for (int r = 0; r < rows->rows(); ++r) {
+  for (int r = 0; r < rows.rows(); ++r) {
     v1::Module m;
-    m.set_name(api::ModuleName(*serial, rows->String(r, 0)));
-    m.set_role(rows->String(r, 0));
-    m.set_part_serial(rows->String(r, 1));
-    *m.mutable_installed_time() = internal::TimestampOfMicros(internal::IntOr0(*rows, r, 2));
-    m.set_installed_hours(internal::DoubleOr0(*rows, r, 3));
-    if (!rows->IsNull(r, 4)) *m.mutable_removed_time() = internal::TimestampOfMicros(internal::IntOr0(*rows, r, 4));
-    m.set_removed_hours(internal::DoubleOr0(*rows, r, 5));
-    m.set_removal_reason(rows->String(r, 6));
-    m.set_current(rows->Bool(r, 7));
+    m.set_name(api::ModuleName(*serial, rows.String(r, 0)));
+    m.set_role(rows.String(r, 0));
+    m.set_part_serial(rows.String(r, 1));
+    *m.mutable_installed_time() = internal::TimestampOfMicros(internal::IntOr0(rows, r, 2));
+    m.set_installed_hours(internal::DoubleOr0(rows, r, 3));
+    if (!rows.IsNull(r, 4))
+      *m.mutable_removed_time() = internal::TimestampOfMicros(internal::IntOr0(rows, r, 4));
+    m.set_removed_hours(internal::DoubleOr0(rows, r, 5));
+    m.set_removal_reason(rows.String(r, 6));
+    m.set_current(rows.Bool(r, 7));
     out.push_back(std::move(m));
   }
   return out;
 }
 
 absl::StatusOr<v1::FailureMode> CatalogueStore::GetFailureMode(const std::string& name) {
-  auto id = api::ResourceId(name, api::kFailureModes, "name");
-  if (!id.ok()) return id.status();
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
-  auto modes = LoadModes(**db, "", "", *id);
-  if (!modes.ok()) return modes.status();
-  if (modes->empty()) return absl::NotFoundError(absl::StrCat(name, " does not exist"));
-  return modes->front();
+  INSDIAG_ASSIGN_OR_RETURN(auto id, api::ResourceId(name, api::kFailureModes, "name"));
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
+  INSDIAG_ASSIGN_OR_RETURN(auto modes, LoadModes(*db, "", "", id));
+  if (modes.empty()) return absl::NotFoundError(absl::StrCat(name, " does not exist"));
+  return modes.front();
 }
 
 absl::StatusOr<std::vector<v1::FailureMode>> CatalogueStore::ListFailureModes(const std::string& unit_type,
                                                                               const std::string& module_role) {
-  auto db = list_pool_.Acquire();
-  if (!db.ok()) return db.status();
-  return LoadModes(**db, unit_type.empty() ? "" : UnitTypeId(unit_type), module_role, "");
+  INSDIAG_ASSIGN_OR_RETURN(auto db, list_pool_.Acquire());
+  return LoadModes(*db, unit_type.empty() ? "" : UnitTypeId(unit_type), module_role, "");
 }
 
 }  // namespace insdiag::kb

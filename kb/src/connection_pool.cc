@@ -1,13 +1,14 @@
 #include "insdiag/kb/connection_pool.h"
 
+#include "insdiag/engine/status_macros.h"
+
 namespace insdiag::kb {
 
 absl::StatusOr<std::unique_ptr<ConnectionPool>> ConnectionPool::Create(Options options) {
   if (options.max_connections == 0) options.max_connections = 1;
   std::unique_ptr<ConnectionPool> pool(new ConnectionPool(std::move(options)));
-  auto first = Connection::Open(pool->options_.database_url);
-  if (!first.ok()) return first.status();
-  pool->idle_.push_back(std::make_unique<Connection>(std::move(*first)));
+  INSDIAG_ASSIGN_OR_RETURN(auto first, Connection::Open(pool->options_.database_url));
+  pool->idle_.push_back(std::make_unique<Connection>(std::move(first)));
   pool->open_ = 1;
   return pool;
 }

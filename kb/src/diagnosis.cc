@@ -14,8 +14,9 @@
 #include "failure_mode_data.h"
 #include "insdiag/api/json.h"
 #include "insdiag/api/resource_names.h"
-#include "insdiag/engine/finder/fault_findings.h"
+#include "insdiag/engine/candidate_source.h"
 #include "insdiag/engine/model/effect_catalogue.h"
+#include "insdiag/engine/model/parameter_key.h"
 #include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::kb {
@@ -75,10 +76,8 @@ double ContaminatedLog(const EvidenceTerm& t, double eps, const v1::DiagnosisSet
 // The sensor axis a term reads: "gyro_bias_gm.x.sigma" → "gyro.x"; a
 // misalignment "gyro_misalignment.xy" reads into its first (output) axis.
 std::string SensorAxisOf(const std::string& term_name) {
-  const auto underscore = term_name.find('_');
-  const auto dot = term_name.find('.');
-  if (underscore == std::string::npos || dot == std::string::npos || dot + 1 >= term_name.size()) return "";
-  return absl::StrCat(term_name.substr(0, underscore), ".", term_name.substr(dot + 1, 1));
+  const std::optional<engine::ParameterKey> key = engine::ParseParameterKey(term_name);
+  return key ? key->SensorAxis() : "";
 }
 
 std::vector<double> Signs(v1::Signature::Direction d) {
@@ -208,7 +207,8 @@ std::string FamilyLine(const v1::Signature& term, const std::vector<const Eviden
   bool all_significant = true;
   int positive = 0;
   for (const auto* t : members) {
-    axes.push_back(t->name.substr(t->name.rfind('.') + 1));
+    const std::optional<engine::ParameterKey> key = engine::ParseParameterKey(t->name);
+    axes.push_back(key ? key->axes : t->name);
     values.push_back(SignedFormat(t->x));
     all_significant = all_significant && (t->scale != Scale::kTolerance || t->significant ||
                                           std::abs(t->x) > 3.0 * std::max(t->measurement_sd, 1e-12));
@@ -338,8 +338,8 @@ namespace {
 // (bias step or ramp, nominally absent in every unit type) or a random
 // structure (a walk or a second-order pair, whose size is a variance).
 bool IsEffectOfKind(const std::string& name, engine::EffectKind kind) {
-  const engine::EffectFamily* f = engine::FindEffectFamily(name.substr(0, name.find('.')));
-  return f != nullptr && f->kind == kind;
+  const std::optional<engine::ParameterKey> key = engine::ParseParameterKey(name);
+  return key && key->effect_family != nullptr && key->effect_family->kind == kind;
 }
 
 // The z of a two-sided p-value, the standard score a healthy unit scatters as N(0, 1).
@@ -415,8 +415,9 @@ double CandidateStandardScore(const v1::EffectCandidate& c) {
   const auto z_of_p = [&] {
     return std::copysign(StandardScoreOfPValue(c.p_value()), c.estimate());
   };
-  const bool structure = c.source() == "STRUCTURE" || c.source() == "LIKELIHOOD";
-  const bool fault = engine::IsFaultSource(c.source());
+  const std::optional<engine::CandidateSource> source = engine::CandidateSourceNamed(c.source());
+  const bool structure = source && engine::IsStructureSource(*source);
+  const bool fault = source && engine::IsFaultTestSource(*source);
   return fault || structure  ? z_of_p()
          : c.std_error() > 0 ? c.estimate() / c.std_error()
          : c.degrees_of_freedom() <= 1
@@ -531,8 +532,10 @@ Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType
 
 bool SignatureCovers(const std::string& pattern, const std::string& name) {
   if (!IsFamily(pattern)) return pattern == name;
-  const std::string family = pattern.substr(0, pattern.size() - 1);  // "family."
-  return absl::StartsWith(name, family) && name.find('.', family.size()) == std::string::npos;
+  // "family.*" covers the family's terms themselves, not their fields.
+  const std::optional<engine::ParameterKey> family = engine::ParseParameterKey(pattern);
+  const std::optional<engine::ParameterKey> key = engine::ParseParameterKey(name);
+  return family && key && key->family == family->family && key->IsBareTerm() && !key->axes.empty();
 }
 
 DiagnosisHeadline HeadlineOf(const v1::Diagnosis& diagnosis) {

@@ -9,6 +9,7 @@
 #include "failure_record_writes.h"
 #include "history_rows.h"
 #include "insdiag/api/resource_names.h"
+#include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/diagnosis.h"
 #include "insdiag/kb/unit_history.h"
 #include "report_rows.h"
@@ -32,133 +33,136 @@ using internal::SettingsFor;
 using internal::UnitTypeId;
 
 absl::StatusOr<v1::Diagnosis> LoadDiagnosis(Connection& db, const std::string& id) {
-  auto rows = db.Exec(
-      "SELECT d.body, coalesce(d.record_id::text, ''), coalesce(r.confirmed, false), coalesce(m.role, '') "
-      "FROM diagnoses d LEFT JOIN failure_records r ON r.record_id = d.record_id "
-      "LEFT JOIN modules m ON m.module_id = r.module_id WHERE d.diagnosis_id = $1::uuid",
-      {Param::Text(id)}, ResultFormat::kBinary);
-  if (!rows.ok()) return rows.status();
-  if (rows->rows() == 0)
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto rows,
+      db.Exec("SELECT d.body, coalesce(d.record_id::text, ''), coalesce(r.confirmed, false), "
+              "coalesce(m.role, '') "
+              "FROM diagnoses d LEFT JOIN failure_records r ON r.record_id = d.record_id "
+              "LEFT JOIN modules m ON m.module_id = r.module_id WHERE d.diagnosis_id = $1::uuid",
+              {Param::Text(id)}, ResultFormat::kBinary));
+  if (rows.rows() == 0)
     return absl::NotFoundError(
         absl::StrCat(api::ResourceName(api::kDiagnoses, id), " does not exist"));
   v1::Diagnosis d;
-  d.ParseFromString(std::string(rows->Get(0, 0)));
-  if (!rows->Get(0, 1).empty()) {
-    d.set_failure_record(api::ResourceName(api::kFailureRecords, rows->String(0, 1)));
-    d.set_confirmed(rows->Get(0, 2) == std::string_view("\x01", 1));
-    d.set_resolved_module(rows->String(0, 3));
+  d.ParseFromString(std::string(rows.Get(0, 0)));
+  if (!rows.Get(0, 1).empty()) {
+    d.set_failure_record(api::ResourceName(api::kFailureRecords, rows.String(0, 1)));
+    d.set_confirmed(rows.Get(0, 2) == std::string_view("\x01", 1));
+    d.set_resolved_module(rows.String(0, 3));
   }
   return d;
 }
 
 // The unit's own significant trends, over its runs up to this analysis's
 // (this analysis standing for its run), as evidence (kb/unit_history.h).
-absl::Status AddHistoryEvidence(Connection& db, const std::string& unit_id, const std::string& analysis_id,
-                                const v1::DiagnosisSettings& settings, Evidence& evidence) {
+absl::Status LoadHistoryEvidence(Connection& db, DiagnosisInputs& in) {
   internal::HistoryScope scope;
-  scope.unit_id = unit_id;
-  scope.until_analysis_id = analysis_id;
-  auto history = internal::LoadParameterHistories(db, scope, HistoryOptions());
-  if (!history.ok()) return history.status();
-  std::vector<EvidenceTerm> trends = TrendEvidence(*history, settings);
+  scope.unit_id = in.unit_id;
+  scope.until_analysis_id = in.analysis_id;
+  INSDIAG_ASSIGN_OR_RETURN(auto history,
+                           internal::LoadParameterHistories(db, scope, HistoryOptions()));
+  std::vector<EvidenceTerm> trends = TrendEvidence(history, in.settings);
   int runs = 0;
-  for (const auto& p : *history) runs = std::max(runs, p.statistics().count());
+  for (const auto& p : history) runs = std::max(runs, p.statistics().count());
   if (runs < 3) return absl::OkStatus();  // no trend to test yet
   std::vector<std::string> names;
   for (const auto& t : trends) names.push_back(t.trend_of);
-  evidence.notes.push_back(
+  in.history_note =
       trends.empty() ? absl::StrCat("the unit's history (", runs, " runs): no parameter trends significantly")
                      : absl::StrCat("the unit's history (", runs, " runs): significant trends in ",
-                                    absl::StrJoin(names, ", ")));
-  for (auto& t : trends) evidence.terms.push_back(std::move(t));
+                                    absl::StrJoin(names, ", "));
+  in.history_trends = std::move(trends);
   return absl::OkStatus();
 }
 
 }  // namespace
 
-absl::StatusOr<v1::Diagnosis> DiagnosisStore::Create(const std::string& analysis_name) {
-  auto analysis_id = internal::UuidOf(analysis_name, api::kAnalyses, "analysis");
-  if (!analysis_id.ok()) return analysis_id.status();
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
-  auto unit = (*db)->Exec(
-      "SELECT a.unit_id, u.serial, coalesce(u.unit_type, ''), coalesce(a.unit_hours, u.operating_hours), "
-      "coalesce((SELECT max(p.unit_hours) FROM analyses p WHERE p.unit_id = a.unit_id AND p.state = 'SUCCEEDED' "
-      "AND p.create_time < a.create_time), 0) "
-      "FROM analyses a JOIN units u ON u.unit_id = a.unit_id WHERE a.analysis_id = $1::uuid",
-      {Param::Text(*analysis_id)});
-  if (!unit.ok()) return unit.status();
-  if (unit->rows() == 0) return absl::NotFoundError(absl::StrCat(analysis_name, " does not exist"));
-  const std::string unit_id = unit->String(0, 0);
-  const std::string serial = unit->String(0, 1);
-  const std::string type_id = unit->String(0, 2);
+absl::StatusOr<DiagnosisInputs> DiagnosisStore::LoadInputs(const std::string& analysis_name) {
+  DiagnosisInputs in;
+  in.analysis_name = analysis_name;
+  INSDIAG_ASSIGN_OR_RETURN(in.analysis_id, internal::UuidOf(analysis_name, api::kAnalyses, "analysis"));
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto unit,
+      db->Exec(
+          "SELECT a.unit_id, u.serial, coalesce(u.unit_type, ''), coalesce(a.unit_hours, "
+          "u.operating_hours), "
+          "coalesce((SELECT max(p.unit_hours) FROM analyses p WHERE p.unit_id = a.unit_id AND "
+          "p.state = 'SUCCEEDED' "
+          "AND p.create_time < a.create_time), 0) "
+          "FROM analyses a JOIN units u ON u.unit_id = a.unit_id WHERE a.analysis_id = $1::uuid",
+          {Param::Text(in.analysis_id)}));
+  if (unit.rows() == 0) return absl::NotFoundError(absl::StrCat(analysis_name, " does not exist"));
+  in.unit_id = unit.String(0, 0);
+  in.serial = unit.String(0, 1);
+  const std::string type_id = unit.String(0, 2);
   if (type_id.empty()) {
     return absl::FailedPreconditionError(absl::StrCat(
-        api::ResourceName(api::kUnits, serial), " has no unit type (its runs name none): ",
+        api::ResourceName(api::kUnits, in.serial), " has no unit type (its runs name none): ",
         "there is no nominal model to diagnose against"));
   }
-  auto report = LoadReport(**db, *analysis_id);
-  if (!report.ok()) return report.status();
-  auto unit_type = LoadUnitType(**db, type_id);
+  INSDIAG_ASSIGN_OR_RETURN(in.report, LoadReport(*db, in.analysis_id));
+  auto unit_type = LoadUnitType(*db, type_id);
   if (!unit_type.ok()) {
     if (unit_type.status().code() == absl::StatusCode::kNotFound) {
       return absl::FailedPreconditionError(
-          absl::StrCat(api::ResourceName(api::kUnits, serial), " is of unit type '", type_id,
+          absl::StrCat(api::ResourceName(api::kUnits, in.serial), " is of unit type '", type_id,
                        "', which the knowledge base does not know"));
     }
     return unit_type.status();
   }
-  auto modes = LoadModes(**db, type_id, "", "");
-  if (!modes.ok()) return modes.status();
-  auto fleet = FleetExposure(**db, type_id);
-  if (!fleet.ok()) return fleet.status();
-  auto type_settings = SettingsFor(type_id);
-  if (!type_settings.ok()) return type_settings.status();
-  const v1::DiagnosisSettings& settings = type_settings->settings;
-  PriorInputs prior;
-  const double hours = internal::DoubleOr0(*unit, 0, 3);
-  const double previous = internal::DoubleOr0(*unit, 0, 4);
-  prior.exposure_hours = std::max(hours - previous, 0.0);
-  prior.fleet_exposure_hours = *fleet;
-  for (const auto& m : *modes) prior.confirmed_failures[m.name()] = m.confirmed_failures();
+  in.unit_type = *std::move(unit_type);
+  INSDIAG_ASSIGN_OR_RETURN(in.modes, LoadModes(*db, type_id, "", ""));
+  INSDIAG_ASSIGN_OR_RETURN(auto fleet, FleetExposure(*db, type_id));
+  INSDIAG_ASSIGN_OR_RETURN(auto type_settings, SettingsFor(type_id));
+  in.settings = type_settings.settings;
+  in.settings_note = type_settings.note;
+  const double hours = internal::DoubleOr0(unit, 0, 3);
+  const double previous = internal::DoubleOr0(unit, 0, 4);
+  in.prior.exposure_hours = std::max(hours - previous, 0.0);
+  in.prior.fleet_exposure_hours = fleet;
+  for (const auto& m : in.modes) in.prior.confirmed_failures[m.name()] = m.confirmed_failures();
+  INSDIAG_RETURN_IF_ERROR(LoadHistoryEvidence(*db, in));
+  return in;
+}
 
-  Evidence observed = EvidenceFromReport(*report, *unit_type, settings);
-  if (auto added = AddHistoryEvidence(**db, unit_id, *analysis_id, settings, observed); !added.ok()) return added;
-  if (!type_settings->note.empty()) observed.notes.push_back(type_settings->note);
-  v1::Diagnosis diagnosis = Diagnose(observed, *modes, settings, prior);
-  diagnosis.set_analysis(analysis_name);
-  diagnosis.set_unit(api::ResourceName(api::kUnits, serial));
+
+absl::StatusOr<v1::Diagnosis> DiagnosisStore::Store(const DiagnosisInputs& in, v1::Diagnosis diagnosis) {
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
   std::string id;
-  const absl::Status status = (*db)->InTransaction([&]() -> absl::Status {
-    auto made = (*db)->Exec("SELECT gen_random_uuid()::text, " + Micros("now()"));
-    if (!made.ok()) return made.status();
-    id = made->String(0, 0);
+  const absl::Status status = db->InTransaction([&]() -> absl::Status {
+    INSDIAG_ASSIGN_OR_RETURN(auto made,
+                             db->Exec("SELECT gen_random_uuid()::text, " + Micros("now()")));
+    id = made.String(0, 0);
     diagnosis.set_name(api::ResourceName(api::kDiagnoses, id));
-    *diagnosis.mutable_create_time() = internal::TimestampOfMicros(internal::IntOr0(*made, 0, 1));
+    *diagnosis.mutable_create_time() = internal::TimestampOfMicros(internal::IntOr0(made, 0, 1));
     const DiagnosisHeadline headline = HeadlineOf(diagnosis);
     const v1::Candidate* top = headline.top;
     std::string body;
     diagnosis.SerializeToString(&body);
     std::vector<std::string> notes(diagnosis.notes().begin(), diagnosis.notes().end());
-    auto inserted = (*db)->Exec(
-        "INSERT INTO diagnoses (diagnosis_id, analysis_id, unit_id, fault_probability, top_module, top_failure_mode, "
-        "top_probability, body, notes, create_time) VALUES ($1::uuid, $2::uuid, $3, $4, $5, $6, $7, $8, $9::text[], "
+    auto inserted = db->Exec(
+        "INSERT INTO diagnoses (diagnosis_id, analysis_id, unit_id, fault_probability, top_module, "
+        "top_failure_mode, "
+        "top_probability, body, notes, create_time) VALUES ($1::uuid, $2::uuid, $3, $4, $5, $6, "
+        "$7, $8, $9::text[], "
         "to_timestamp($10::double precision / 1000000))",
-        {Param::Text(id), Param::Text(*analysis_id), Param::Text(unit_id), Param::Double(headline.fault_probability),
-         Param::Text(top ? top->module() : ""), Param::Text(top ? top->failure_mode() : ""),
-         Param::Double(top ? top->probability() : 0.0), Param::Bytes(body),
-         Param::TextArray(notes),
+        {Param::Text(id), Param::Text(in.analysis_id), Param::Text(in.unit_id),
+         Param::Double(headline.fault_probability), Param::Text(top ? top->module() : ""),
+         Param::Text(top ? top->failure_mode() : ""), Param::Double(top ? top->probability() : 0.0),
+         Param::Bytes(body), Param::TextArray(notes),
          Param::Int(internal::MicrosOf(diagnosis.create_time()))});
     if (!inserted.ok()) return inserted.status();
     int rank = 0;
     for (const auto& c : diagnosis.candidates()) {
       std::vector<std::string> evidence(c.evidence().begin(), c.evidence().end());
-      auto row = (*db)->Exec(
-          "INSERT INTO diagnosis_candidates (diagnosis_id, rank, module, failure_mode, probability, evidence) "
-          "VALUES ($1::uuid, $2, $3, $4, $5, $6::text[])",
-          {Param::Text(id), Param::Int(rank++), Param::Text(c.module()), Param::Text(c.failure_mode()),
-           Param::Double(c.probability()), Param::TextArray(evidence)});
-      if (!row.ok()) return row.status();
+      INSDIAG_RETURN_IF_ERROR(
+          db->Exec("INSERT INTO diagnosis_candidates (diagnosis_id, rank, module, "
+                   "failure_mode, probability, evidence) "
+                   "VALUES ($1::uuid, $2, $3, $4, $5, $6::text[])",
+                   {Param::Text(id), Param::Int(rank++), Param::Text(c.module()),
+                    Param::Text(c.failure_mode()), Param::Double(c.probability()),
+                    Param::TextArray(evidence)}));
     }
     return absl::OkStatus();
   });
@@ -167,11 +171,9 @@ absl::StatusOr<v1::Diagnosis> DiagnosisStore::Create(const std::string& analysis
 }
 
 absl::StatusOr<v1::Diagnosis> DiagnosisStore::Get(const std::string& name) {
-  auto id = internal::UuidOf(name, api::kDiagnoses, "name");
-  if (!id.ok()) return id.status();
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
-  return LoadDiagnosis(**db, *id);
+  INSDIAG_ASSIGN_OR_RETURN(auto id, internal::UuidOf(name, api::kDiagnoses, "name"));
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
+  return LoadDiagnosis(*db, id);
 }
 
 absl::StatusOr<std::pair<std::vector<v1::Diagnosis>, std::string>> DiagnosisStore::List(
@@ -179,104 +181,102 @@ absl::StatusOr<std::pair<std::vector<v1::Diagnosis>, std::string>> DiagnosisStor
   const int size = internal::ClampPageSize(query.page.page_size);
   std::string analysis_id, serial;
   if (!query.analysis.empty()) {
-    auto id = internal::UuidOf(query.analysis, api::kAnalyses, "analysis");
-    if (!id.ok()) return id.status();
-    analysis_id = *id;
+    INSDIAG_ASSIGN_OR_RETURN(auto id, internal::UuidOf(query.analysis, api::kAnalyses, "analysis"));
+    analysis_id = id;
   }
   if (!query.unit.empty()) {
-    auto s = api::ResourceId(query.unit, api::kUnits, "unit");
-    if (!s.ok()) return s.status();
-    serial = *s;
+    INSDIAG_ASSIGN_OR_RETURN(auto s, api::ResourceId(query.unit, api::kUnits, "unit"));
+    serial = s;
   }
   std::vector<Param> params = {Param::Int(size + 1), Param::TextOrNull(analysis_id), Param::TextOrNull(serial)};
-  auto after = internal::KeysetCondition(query.page.page_token, "d.create_time", "d.diagnosis_id",
-                                         internal::KeysetOrder::kNewestFirst, params);
-  if (!after.ok()) return after.status();
-  auto db = list_pool_.Acquire();
-  if (!db.ok()) return db.status();
-  auto rows = (*db)->Exec(
-      absl::StrCat("SELECT d.diagnosis_id::text, d.create_time::text FROM diagnoses d JOIN units u USING (unit_id) "
-                   "WHERE ($2::uuid IS NULL OR d.analysis_id = $2::uuid) AND ($3::text IS NULL OR u.serial = $3) AND ",
-                   *after, " ORDER BY d.create_time DESC, d.diagnosis_id DESC LIMIT $1"),
-      params);
-  if (!rows.ok()) return rows.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto after, internal::KeysetCondition(
+                                           query.page.page_token, "d.create_time", "d.diagnosis_id",
+                                           internal::KeysetOrder::kNewestFirst, params));
+  INSDIAG_ASSIGN_OR_RETURN(auto db, list_pool_.Acquire());
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto rows,
+      db->Exec(absl::StrCat("SELECT d.diagnosis_id::text, d.create_time::text FROM diagnoses d "
+                            "JOIN units u USING (unit_id) "
+                            "WHERE ($2::uuid IS NULL OR d.analysis_id = $2::uuid) AND ($3::text IS "
+                            "NULL OR u.serial = $3) AND ",
+                            after, " ORDER BY d.create_time DESC, d.diagnosis_id DESC LIMIT $1"),
+               params));
   std::vector<v1::Diagnosis> out;
-  const int shown = std::min(rows->rows(), size);
+  const int shown = std::min(rows.rows(), size);
   for (int r = 0; r < shown; ++r) {
-    auto d = LoadDiagnosis(**db, rows->String(r, 0));
-    if (!d.ok()) return d.status();
-    out.push_back(std::move(*d));
+    INSDIAG_ASSIGN_OR_RETURN(auto d, LoadDiagnosis(*db, rows.String(r, 0)));
+    out.push_back(std::move(d));
   }
   std::string next;
-  if (rows->rows() > size) next = internal::EncodeToken(rows->String(shown - 1, 1), rows->String(shown - 1, 0));
+  if (rows.rows() > size)
+    next = internal::EncodeToken(rows.String(shown - 1, 1), rows.String(shown - 1, 0));
   return std::make_pair(std::move(out), next);
 }
 
 absl::StatusOr<v1::Diagnosis> DiagnosisStore::Resolve(const v1::ResolveDiagnosisRequest& request) {
-  auto id = internal::UuidOf(request.name(), api::kDiagnoses, "name");
-  if (!id.ok()) return id.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto id, internal::UuidOf(request.name(), api::kDiagnoses, "name"));
   if (request.module().empty()) {
     return absl::InvalidArgumentError("module: the module found faulty (or suspected) is required");
   }
   std::string mode_id;
   if (!request.failure_mode().empty()) {
-    auto m = api::ResourceId(request.failure_mode(), api::kFailureModes, "failure_mode");
-    if (!m.ok()) return m.status();
-    mode_id = *m;
+    INSDIAG_ASSIGN_OR_RETURN(
+        auto m, api::ResourceId(request.failure_mode(), api::kFailureModes, "failure_mode"));
+    mode_id = m;
   }
   if (request.confirmed() && mode_id.empty()) {
     return absl::InvalidArgumentError("failure_mode: a confirmed diagnosis names the failure mode found");
   }
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
-  const absl::Status status = (*db)->InTransaction([&]() -> absl::Status {
-    auto row = (*db)->Exec(
-        "SELECT d.analysis_id::text, d.unit_id, d.record_id IS NOT NULL, coalesce(a.unit_hours, u.operating_hours) "
-        "FROM diagnoses d JOIN analyses a USING (analysis_id) JOIN units u ON u.unit_id = d.unit_id "
-        "WHERE d.diagnosis_id = $1::uuid FOR UPDATE OF d",
-        {Param::Text(*id)});
-    if (!row.ok()) return row.status();
-    if (row->rows() == 0) return absl::NotFoundError(absl::StrCat(request.name(), " does not exist"));
-    if (row->Bool(0, 2)) return absl::FailedPreconditionError(absl::StrCat(request.name(), " is already resolved"));
-    auto unit_id = row->Int(0, 1);
-    if (!unit_id.ok()) return unit_id.status();
-    if (auto known = CheckModuleRole(**db, request.module(), "module"); !known.ok()) return known;
-    if (auto fits = CheckModeOfRole(**db, mode_id, request.failure_mode(), request.module(), "failure_mode");
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
+  const absl::Status status = db->InTransaction([&]() -> absl::Status {
+    INSDIAG_ASSIGN_OR_RETURN(auto row,
+                             db->Exec("SELECT d.analysis_id::text, d.unit_id, d.record_id IS NOT "
+                                      "NULL, coalesce(a.unit_hours, u.operating_hours) "
+                                      "FROM diagnoses d JOIN analyses a USING (analysis_id) JOIN "
+                                      "units u ON u.unit_id = d.unit_id "
+                                      "WHERE d.diagnosis_id = $1::uuid FOR UPDATE OF d",
+                                      {Param::Text(id)}));
+    if (row.rows() == 0)
+      return absl::NotFoundError(absl::StrCat(request.name(), " does not exist"));
+    if (row.Bool(0, 2))
+      return absl::FailedPreconditionError(absl::StrCat(request.name(), " is already resolved"));
+    INSDIAG_ASSIGN_OR_RETURN(auto unit_id, row.Int(0, 1));
+    INSDIAG_RETURN_IF_ERROR(CheckModuleRole(*db, request.module(), "module"));
+    if (auto fits = CheckModeOfRole(*db, mode_id, request.failure_mode(), request.module(), "failure_mode");
         !fits.ok()) {
       return fits;
     }
-    auto module_id = CurrentModule(**db, *unit_id, request.module());
-    if (!module_id.ok()) return module_id.status();
+    INSDIAG_ASSIGN_OR_RETURN(auto module_id, CurrentModule(*db, unit_id, request.module()));
     v1::FailureRecord record;
-    record.set_operating_hours(internal::DoubleOr0(*row, 0, 3));
+    record.set_operating_hours(internal::DoubleOr0(row, 0, 3));
     record.set_confirmed(request.confirmed());
     record.set_no_fault_found(!request.confirmed());
     record.set_repaired(request.confirmed() && !request.repair_action().empty());
     record.set_repair_action(request.repair_action());
     record.set_notes(request.notes());
-    auto written = InsertFailureRecord(**db, *module_id, *unit_id, record, mode_id, row->String(0, 0), *id);
-    if (!written.ok()) return written.status();
-    auto linked = (*db)->Exec("UPDATE diagnoses SET record_id = $2::uuid WHERE diagnosis_id = $1::uuid",
-                              {Param::Text(*id), Param::Text(*written)});
-    if (!linked.ok()) return linked.status();
-    if (request.confirmed()) return RefineModeSignature(**db, mode_id);
+    INSDIAG_ASSIGN_OR_RETURN(auto written, InsertFailureRecord(*db, module_id, unit_id, record,
+                                                               mode_id, row.String(0, 0), id));
+    INSDIAG_RETURN_IF_ERROR(
+        db->Exec("UPDATE diagnoses SET record_id = $2::uuid WHERE diagnosis_id = $1::uuid",
+                 {Param::Text(id), Param::Text(written)}));
+    if (request.confirmed()) return RefineModeSignature(*db, mode_id);
     return absl::OkStatus();
   });
   if (!status.ok()) return status;
-  return LoadDiagnosis(**db, *id);
+  return LoadDiagnosis(*db, id);
 }
 
 absl::Status DiagnosisStore::RefineSignatures(const std::string& unit_type) {
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
-  auto modes = (*db)->Exec(
-      "SELECT DISTINCT r.failure_mode FROM failure_records r JOIN failure_modes f USING (failure_mode) "
-      "WHERE r.confirmed AND r.analysis_id IS NOT NULL AND ($1::text IS NULL OR f.unit_type = $1) ORDER BY 1",
-      {Param::TextOrNull(unit_type.empty() ? "" : UnitTypeId(unit_type))});
-  if (!modes.ok()) return modes.status();
-  for (int r = 0; r < modes->rows(); ++r) {
-    const std::string mode_id = modes->String(r, 0);
-    if (auto s = (*db)->InTransaction([&] { return RefineModeSignature(**db, mode_id); }); !s.ok()) return s;
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto modes, db->Exec("SELECT DISTINCT r.failure_mode FROM failure_records r JOIN "
+                           "failure_modes f USING (failure_mode) "
+                           "WHERE r.confirmed AND r.analysis_id IS NOT NULL AND ($1::text IS NULL "
+                           "OR f.unit_type = $1) ORDER BY 1",
+                           {Param::TextOrNull(unit_type.empty() ? "" : UnitTypeId(unit_type))}));
+  for (int r = 0; r < modes.rows(); ++r) {
+    const std::string mode_id = modes.String(r, 0);
+    INSDIAG_RETURN_IF_ERROR(db->InTransaction([&] { return RefineModeSignature(*db, mode_id); }));
   }
   return absl::OkStatus();
 }

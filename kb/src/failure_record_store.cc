@@ -8,6 +8,7 @@
 #include "catalogue_rows.h"
 #include "failure_record_writes.h"
 #include "insdiag/api/resource_names.h"
+#include "insdiag/engine/status_macros.h"
 #include "signature_refinement.h"
 #include "store_util.h"
 
@@ -75,49 +76,46 @@ absl::StatusOr<std::string> CheckedFacts(const v1::FailureRecord& facts) {
 }
 
 absl::StatusOr<v1::FailureRecord> GetRecord(Connection& db, const std::string& id) {
-  auto rows = db.Exec(absl::StrCat(kRecordColumns, "WHERE r.record_id = $1::uuid"), {Param::Text(id)});
-  if (!rows.ok()) return rows.status();
-  if (rows->rows() == 0)
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto rows,
+      db.Exec(absl::StrCat(kRecordColumns, "WHERE r.record_id = $1::uuid"), {Param::Text(id)}));
+  if (rows.rows() == 0)
     return absl::NotFoundError(
         absl::StrCat(api::ResourceName(api::kFailureRecords, id), " does not exist"));
-  return RecordFromRow(*rows, 0);
+  return RecordFromRow(rows, 0);
 }
 
 }  // namespace
 
 absl::StatusOr<v1::FailureRecord> FailureRecordStore::Create(const v1::FailureRecord& record) {
-  auto module = api::ParseModuleName(record.module(), "failure_record.module");
-  if (!module.ok()) return module.status();
-  const std::string& serial = module->unit;
-  const std::string& role = module->role;
-  auto checked_mode = CheckedFacts(record);
-  if (!checked_mode.ok()) return checked_mode.status();
-  const std::string mode_id = *checked_mode;
+  INSDIAG_ASSIGN_OR_RETURN(auto module,
+                           api::ParseModuleName(record.module(), "failure_record.module"));
+  const std::string& serial = module.unit;
+  const std::string& role = module.role;
+  INSDIAG_ASSIGN_OR_RETURN(auto checked_mode, CheckedFacts(record));
+  const std::string mode_id = checked_mode;
   std::string analysis_id;
   if (!record.analysis().empty()) {
-    auto id = internal::UuidOf(record.analysis(), api::kAnalyses, "failure_record.analysis");
-    if (!id.ok()) return id.status();
-    analysis_id = *id;
+    INSDIAG_ASSIGN_OR_RETURN(
+        auto id, internal::UuidOf(record.analysis(), api::kAnalyses, "failure_record.analysis"));
+    analysis_id = id;
   }
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
   std::string id;
-  const absl::Status status = (*db)->InTransaction([&]() -> absl::Status {
-    auto unit = (*db)->Exec("SELECT unit_id FROM units WHERE serial = $1", {Param::Text(serial)});
-    if (!unit.ok()) return unit.status();
-    if (unit->rows() == 0) {
+  const absl::Status status = db->InTransaction([&]() -> absl::Status {
+    INSDIAG_ASSIGN_OR_RETURN(
+        auto unit, db->Exec("SELECT unit_id FROM units WHERE serial = $1", {Param::Text(serial)}));
+    if (unit.rows() == 0) {
       return absl::NotFoundError(absl::StrCat("failure_record.module: units/", serial, " does not exist"));
     }
-    if (auto known = CheckModuleRole(**db, role, "failure_record.module"); !known.ok()) return known;
-    if (auto fits = CheckModeOfRole(**db, mode_id, record.failure_mode(), role, "failure_record.failure_mode");
+    INSDIAG_RETURN_IF_ERROR(CheckModuleRole(*db, role, "failure_record.module"));
+    if (auto fits = CheckModeOfRole(*db, mode_id, record.failure_mode(), role, "failure_record.failure_mode");
         !fits.ok()) {
       return fits;
     }
-    auto unit_id = unit->Int(0, 0);
-    if (!unit_id.ok()) return unit_id.status();
-    auto module_id = CurrentModule(**db, *unit_id, role);
-    if (!module_id.ok()) return module_id.status();
-    auto written = InsertFailureRecord(**db, *module_id, *unit_id, record, mode_id, analysis_id, "");
+    INSDIAG_ASSIGN_OR_RETURN(auto unit_id, unit.Int(0, 0));
+    INSDIAG_ASSIGN_OR_RETURN(auto module_id, CurrentModule(*db, unit_id, role));
+    auto written = InsertFailureRecord(*db, module_id, unit_id, record, mode_id, analysis_id, "");
     if (!written.ok()) {
       if (written.status().code() == absl::StatusCode::kFailedPrecondition && !analysis_id.empty()) {
         return absl::NotFoundError(absl::StrCat("failure_record.analysis: ", record.analysis(), " does not exist"));
@@ -125,100 +123,103 @@ absl::StatusOr<v1::FailureRecord> FailureRecordStore::Create(const v1::FailureRe
       return written.status();
     }
     id = *written;
-    if (record.confirmed()) return RefineModeSignature(**db, mode_id);
+    if (record.confirmed()) return RefineModeSignature(*db, mode_id);
     return absl::OkStatus();
   });
   if (!status.ok()) return status;
-  return GetRecord(**db, id);
+  return GetRecord(*db, id);
 }
 
 absl::StatusOr<v1::FailureRecord> FailureRecordStore::Correct(const std::string& name, const v1::FailureRecord& facts,
                                                               const std::string& reason) {
-  auto id = internal::UuidOf(name, api::kFailureRecords, "name");
-  if (!id.ok()) return id.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto id, internal::UuidOf(name, api::kFailureRecords, "name"));
   if (reason.empty()) return absl::InvalidArgumentError("reason: required (why the record was wrong)");
-  auto checked_mode = CheckedFacts(facts);
-  if (!checked_mode.ok()) return checked_mode.status();
-  const std::string mode_id = *checked_mode;
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
-  const absl::Status status = (*db)->InTransaction([&]() -> absl::Status {
-    auto current = (*db)->Exec(
-        "SELECT coalesce(r.failure_mode, ''), m.role, r.confirmed FROM failure_records r JOIN modules m "
-        "USING (module_id) WHERE r.record_id = $1::uuid FOR UPDATE OF r",
-        {Param::Text(*id)});
-    if (!current.ok()) return current.status();
-    if (current->rows() == 0) return absl::NotFoundError(absl::StrCat(name, " does not exist"));
-    const std::string old_mode = current->String(0, 0), role = current->String(0, 1);
-    const bool was_confirmed = current->Bool(0, 2);
-    if (auto fits = CheckModeOfRole(**db, mode_id, facts.failure_mode(), role, "failure_record.failure_mode");
+  INSDIAG_ASSIGN_OR_RETURN(auto checked_mode, CheckedFacts(facts));
+  const std::string mode_id = checked_mode;
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
+  const absl::Status status = db->InTransaction([&]() -> absl::Status {
+    INSDIAG_ASSIGN_OR_RETURN(
+        auto current, db->Exec("SELECT coalesce(r.failure_mode, ''), m.role, r.confirmed FROM "
+                               "failure_records r JOIN modules m "
+                               "USING (module_id) WHERE r.record_id = $1::uuid FOR UPDATE OF r",
+                               {Param::Text(id)}));
+    if (current.rows() == 0) return absl::NotFoundError(absl::StrCat(name, " does not exist"));
+    const std::string old_mode = current.String(0, 0), role = current.String(0, 1);
+    const bool was_confirmed = current.Bool(0, 2);
+    if (auto fits = CheckModeOfRole(*db, mode_id, facts.failure_mode(), role, "failure_record.failure_mode");
         !fits.ok()) {
       return fits;
     }
-    auto kept = (*db)->Exec(
-        "INSERT INTO failure_record_revisions (record_id, revision, failure_mode, detected_time, operating_hours, "
-        "confirmed, no_fault_found, censored, repaired, repair_action, notes, record_time, reason) "
-        "SELECT record_id, revision, failure_mode, detected_time, operating_hours, confirmed, no_fault_found, "
-        "censored, repaired, repair_action, notes, record_time, $2 FROM failure_records WHERE record_id = $1::uuid",
-        {Param::Text(*id), Param::Text(reason)});
-    if (!kept.ok()) return kept.status();
-    auto updated = (*db)->Exec(
-        "UPDATE failure_records SET failure_mode = $2, operating_hours = $3, confirmed = $4, no_fault_found = $5, "
+    INSDIAG_RETURN_IF_ERROR(
+        db->Exec("INSERT INTO failure_record_revisions (record_id, revision, "
+                 "failure_mode, detected_time, operating_hours, "
+                 "confirmed, no_fault_found, censored, repaired, "
+                 "repair_action, notes, record_time, reason) "
+                 "SELECT record_id, revision, failure_mode, detected_time, "
+                 "operating_hours, confirmed, no_fault_found, "
+                 "censored, repaired, repair_action, notes, record_time, $2 "
+                 "FROM failure_records WHERE record_id = $1::uuid",
+                 {Param::Text(id), Param::Text(reason)}));
+    auto updated = db->Exec(
+        "UPDATE failure_records SET failure_mode = $2, operating_hours = $3, confirmed = $4, "
+        "no_fault_found = $5, "
         "censored = $6, repaired = $7, repair_action = $8, notes = $9, "
-        "detected_time = coalesce($10::timestamptz, detected_time), record_time = now(), revision = revision + 1 "
+        "detected_time = coalesce($10::timestamptz, detected_time), record_time = now(), revision "
+        "= revision + 1 "
         "WHERE record_id = $1::uuid",
-        {Param::Text(*id), Param::TextOrNull(mode_id), Param::Double(facts.operating_hours()),
+        {Param::Text(id), Param::TextOrNull(mode_id), Param::Double(facts.operating_hours()),
          Param::Text(BoolText(facts.confirmed())), Param::Text(BoolText(facts.no_fault_found())),
          Param::Text(BoolText(facts.censored())), Param::Text(BoolText(facts.repaired())),
          Param::Text(facts.repair_action()), Param::Text(facts.notes()),
-         facts.has_detected_time() ? Param::Text(internal::TimestampText(facts.detected_time())) : Param::Null()});
+         facts.has_detected_time() ? Param::Text(internal::TimestampText(facts.detected_time()))
+                                   : Param::Null()});
     if (!updated.ok()) return updated.status();
     // The signatures learn from confirmed cases: a mode the record leaves or joins is refined again.
     if (was_confirmed && !old_mode.empty()) {
-      if (auto refined = RefineModeSignature(**db, old_mode); !refined.ok()) return refined;
+      INSDIAG_RETURN_IF_ERROR(RefineModeSignature(*db, old_mode));
     }
-    if (facts.confirmed() && mode_id != old_mode) return RefineModeSignature(**db, mode_id);
+    if (facts.confirmed() && mode_id != old_mode) return RefineModeSignature(*db, mode_id);
     return absl::OkStatus();
   });
   if (!status.ok()) return status;
-  return GetRecord(**db, *id);
+  return GetRecord(*db, id);
 }
 
 absl::StatusOr<std::vector<v1::FailureRecordRevision>> FailureRecordStore::ListRevisions(
     const std::string& name) {
-  auto id = internal::UuidOf(name, api::kFailureRecords, "name");
-  if (!id.ok()) return id.status();
-  auto db = list_pool_.Acquire();
-  if (!db.ok()) return db.status();
-  auto current = GetRecord(**db, *id);
-  if (!current.ok()) return current.status();
-  auto rows = (*db)->Exec(
-      absl::StrCat("SELECT revision, coalesce(failure_mode, ''), operating_hours, confirmed, no_fault_found, censored, "
-                   "repaired, repair_action, notes, ", Micros("detected_time"), ", ", Micros("record_time"), ", ",
-                   Micros("superseded_time"), ", reason FROM failure_record_revisions WHERE record_id = $1::uuid "
-                   "ORDER BY revision"),
-      {Param::Text(*id)});
-  if (!rows.ok()) return rows.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto id, internal::UuidOf(name, api::kFailureRecords, "name"));
+  INSDIAG_ASSIGN_OR_RETURN(auto db, list_pool_.Acquire());
+  INSDIAG_ASSIGN_OR_RETURN(auto current, GetRecord(*db, id));
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto rows,
+      db->Exec(absl::StrCat("SELECT revision, coalesce(failure_mode, ''), operating_hours, "
+                            "confirmed, no_fault_found, censored, "
+                            "repaired, repair_action, notes, ",
+                            Micros("detected_time"), ", ", Micros("record_time"), ", ",
+                            Micros("superseded_time"),
+                            ", reason FROM failure_record_revisions WHERE record_id = $1::uuid "
+                            "ORDER BY revision"),
+               {Param::Text(id)}));
   std::vector<v1::FailureRecordRevision> revisions;
-  for (int r = 0; r < rows->rows(); ++r) {
+  for (int r = 0; r < rows.rows(); ++r) {
     v1::FailureRecordRevision& v = revisions.emplace_back();
     v1::FailureRecord& f = *v.mutable_failure_record();
-    f = *current;  // name, module, analysis and diagnosis do not change
-    f.set_revision(static_cast<int>(internal::IntOr0(*rows, r, 0)));
+    f = current;  // name, module, analysis and diagnosis do not change
+    f.set_revision(static_cast<int>(internal::IntOr0(rows, r, 0)));
     f.clear_failure_mode();
-    if (!rows->String(r, 1).empty())
-      f.set_failure_mode(api::ResourceName(api::kFailureModes, rows->String(r, 1)));
-    f.set_operating_hours(internal::DoubleOr0(*rows, r, 2));
-    f.set_confirmed(rows->Bool(r, 3));
-    f.set_no_fault_found(rows->Bool(r, 4));
-    f.set_censored(rows->Bool(r, 5));
-    f.set_repaired(rows->Bool(r, 6));
-    f.set_repair_action(rows->String(r, 7));
-    f.set_notes(rows->String(r, 8));
-    *f.mutable_detected_time() = internal::TimestampOfMicros(internal::IntOr0(*rows, r, 9));
-    *f.mutable_record_time() = internal::TimestampOfMicros(internal::IntOr0(*rows, r, 10));
-    *v.mutable_superseded_time() = internal::TimestampOfMicros(internal::IntOr0(*rows, r, 11));
-    v.set_reason(rows->String(r, 12));
+    if (!rows.String(r, 1).empty())
+      f.set_failure_mode(api::ResourceName(api::kFailureModes, rows.String(r, 1)));
+    f.set_operating_hours(internal::DoubleOr0(rows, r, 2));
+    f.set_confirmed(rows.Bool(r, 3));
+    f.set_no_fault_found(rows.Bool(r, 4));
+    f.set_censored(rows.Bool(r, 5));
+    f.set_repaired(rows.Bool(r, 6));
+    f.set_repair_action(rows.String(r, 7));
+    f.set_notes(rows.String(r, 8));
+    *f.mutable_detected_time() = internal::TimestampOfMicros(internal::IntOr0(rows, r, 9));
+    *f.mutable_record_time() = internal::TimestampOfMicros(internal::IntOr0(rows, r, 10));
+    *v.mutable_superseded_time() = internal::TimestampOfMicros(internal::IntOr0(rows, r, 11));
+    v.set_reason(rows.String(r, 12));
   }
   return revisions;
 }
@@ -228,39 +229,40 @@ absl::StatusOr<std::pair<std::vector<v1::FailureRecord>, std::string>> FailureRe
   const int size = internal::ClampPageSize(query.page.page_size);
   std::string serial, role, mode_id;
   if (!query.module.empty()) {
-    auto module = api::ParseModuleName(query.module, "module");
-    if (!module.ok()) return module.status();
-    serial = module->unit;
-    role = module->role;
+    INSDIAG_ASSIGN_OR_RETURN(auto module, api::ParseModuleName(query.module, "module"));
+    serial = module.unit;
+    role = module.role;
   }
   if (!query.unit.empty()) {
-    auto s = api::ResourceId(query.unit, api::kUnits, "unit");
-    if (!s.ok()) return s.status();
-    serial = *s;
+    INSDIAG_ASSIGN_OR_RETURN(auto s, api::ResourceId(query.unit, api::kUnits, "unit"));
+    serial = s;
   }
   if (!query.failure_mode.empty()) {
-    auto m = api::ResourceId(query.failure_mode, api::kFailureModes, "failure_mode");
-    if (!m.ok()) return m.status();
-    mode_id = *m;
+    INSDIAG_ASSIGN_OR_RETURN(
+        auto m, api::ResourceId(query.failure_mode, api::kFailureModes, "failure_mode"));
+    mode_id = m;
   }
   std::vector<Param> params = {Param::Int(size + 1), Param::TextOrNull(serial), Param::TextOrNull(role),
                                Param::TextOrNull(mode_id)};
-  auto after = internal::KeysetCondition(query.page.page_token, "r.record_time", "r.record_id",
-                                         internal::KeysetOrder::kNewestFirst, params);
-  if (!after.ok()) return after.status();
-  auto db = list_pool_.Acquire();
-  if (!db.ok()) return db.status();
-  auto rows = (*db)->Exec(absl::StrCat(kRecordColumns,
-                                       "WHERE ($2::text IS NULL OR u.serial = $2) AND ($3::text IS NULL OR m.role = $3) "
-                                       "AND ($4::text IS NULL OR r.failure_mode = $4) AND ",
-                                       *after, " ORDER BY r.record_time DESC, r.record_id DESC LIMIT $1"),
-                          params);
-  if (!rows.ok()) return rows.status();
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto after, internal::KeysetCondition(query.page.page_token, "r.record_time", "r.record_id",
+                                            internal::KeysetOrder::kNewestFirst, params));
+  INSDIAG_ASSIGN_OR_RETURN(auto db, list_pool_.Acquire());
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto rows,
+      db->Exec(
+          absl::StrCat(
+              kRecordColumns,
+              "WHERE ($2::text IS NULL OR u.serial = $2) AND ($3::text IS NULL OR m.role = $3) "
+              "AND ($4::text IS NULL OR r.failure_mode = $4) AND ",
+              after, " ORDER BY r.record_time DESC, r.record_id DESC LIMIT $1"),
+          params));
   std::vector<v1::FailureRecord> out;
-  const int shown = std::min(rows->rows(), size);
-  for (int r = 0; r < shown; ++r) out.push_back(RecordFromRow(*rows, r));
+  const int shown = std::min(rows.rows(), size);
+  for (int r = 0; r < shown; ++r) out.push_back(RecordFromRow(rows, r));
   std::string next;
-  if (rows->rows() > size) next = internal::EncodeToken(rows->String(shown - 1, 15), rows->String(shown - 1, 0));
+  if (rows.rows() > size)
+    next = internal::EncodeToken(rows.String(shown - 1, 15), rows.String(shown - 1, 0));
   return std::make_pair(std::move(out), next);
 }
 

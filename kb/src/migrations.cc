@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "insdiag/api/run_codec.h"
+#include "insdiag/engine/status_macros.h"
 
 namespace insdiag::kb {
 namespace {
@@ -33,8 +34,8 @@ absl::StatusOr<int> VersionOf(const std::string& file_name) {
 class AdvisoryLock {
  public:
   static absl::StatusOr<AdvisoryLock> Take(Connection& connection, std::int64_t key) {
-    auto locked = connection.Exec("SELECT pg_advisory_lock($1)", {Param::Int(key)});
-    if (!locked.ok()) return locked.status();
+    INSDIAG_ASSIGN_OR_RETURN(auto locked,
+                             connection.Exec("SELECT pg_advisory_lock($1)", {Param::Int(key)}));
     return AdvisoryLock(connection, key);
   }
   AdvisoryLock(AdvisoryLock&& other) noexcept : connection_(other.connection_), key_(other.key_) {
@@ -59,13 +60,12 @@ absl::StatusOr<std::vector<Migration>> LoadMigrationsFromDirectory(const std::fi
   for (const auto& entry : std::filesystem::directory_iterator(dir, error)) {
     const std::string file_name = entry.path().filename().string();
     if (!file_name.ends_with(".sql")) continue;
-    auto version = VersionOf(file_name);
-    if (!version.ok()) return version.status();
+    INSDIAG_ASSIGN_OR_RETURN(auto version, VersionOf(file_name));
     std::ifstream in(entry.path(), std::ios::binary);
     std::ostringstream text;
     text << in.rdbuf();
     if (!in) return absl::NotFoundError(absl::StrCat("cannot read ", entry.path().string()));
-    migrations.push_back(Migration{*version, file_name, text.str()});
+    migrations.push_back(Migration{version, file_name, text.str()});
   }
   if (error) return absl::NotFoundError(absl::StrCat("cannot list ", dir.string(), ": ", error.message()));
   std::sort(migrations.begin(), migrations.end(),
@@ -85,8 +85,7 @@ std::string MigrationChecksum(const Migration& migration) {
 
 absl::StatusOr<MigrationReport> ApplyMigrations(Connection& connection,
                                                 std::span<const Migration> migrations) {
-  auto lock = AdvisoryLock::Take(connection, AdvisoryLockKey(kLockName));
-  if (!lock.ok()) return lock.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto lock, AdvisoryLock::Take(connection, AdvisoryLockKey(kLockName)));
 
   if (auto created = connection.Exec(
           "CREATE TABLE IF NOT EXISTS schema_migrations ("
@@ -97,30 +96,30 @@ absl::StatusOr<MigrationReport> ApplyMigrations(Connection& connection,
       !created.ok()) {
     return created.status();
   }
-  auto recorded = connection.Exec("SELECT version, name, sha256 FROM schema_migrations ORDER BY version");
-  if (!recorded.ok()) return recorded.status();
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto recorded,
+      connection.Exec("SELECT version, name, sha256 FROM schema_migrations ORDER BY version"));
 
   std::map<int, const Migration*> by_version;
   for (const auto& migration : migrations) by_version[migration.version] = &migration;
 
   MigrationReport report;
   std::map<int, bool> done;
-  for (int row = 0; row < recorded->rows(); ++row) {
-    auto version = recorded->Int(row, 0);
-    if (!version.ok()) return version.status();
-    const std::string recorded_name = recorded->String(row, 1);
-    const auto known = by_version.find(static_cast<int>(*version));
+  for (int row = 0; row < recorded.rows(); ++row) {
+    INSDIAG_ASSIGN_OR_RETURN(auto version, recorded.Int(row, 0));
+    const std::string recorded_name = recorded.String(row, 1);
+    const auto known = by_version.find(static_cast<int>(version));
     if (known == by_version.end()) {
       return absl::FailedPreconditionError(absl::StrCat(
           "the database has migration ", recorded_name,
           " applied, which this server does not know: the database is newer than the server"));
     }
     const std::string checksum = MigrationChecksum(*known->second);
-    if (checksum != recorded->String(row, 2)) {
-      return absl::FailedPreconditionError(absl::StrCat(
-          "migration ", known->second->name, " has changed since it was applied as ", recorded_name,
-          " (recorded sha256 ", recorded->String(row, 2), ", file now ", checksum,
-          "); add a new migration instead of editing an applied one"));
+    if (checksum != recorded.String(row, 2)) {
+      return absl::FailedPreconditionError(
+          absl::StrCat("migration ", known->second->name, " has changed since it was applied as ",
+                       recorded_name, " (recorded sha256 ", recorded.String(row, 2), ", file now ",
+                       checksum, "); add a new migration instead of editing an applied one"));
     }
     done[known->first] = true;
     ++report.already_applied;
@@ -129,7 +128,7 @@ absl::StatusOr<MigrationReport> ApplyMigrations(Connection& connection,
   for (const auto& migration : migrations) {
     if (done.contains(migration.version)) continue;
     const absl::Status applied = connection.InTransaction([&]() -> absl::Status {
-      if (auto status = connection.ExecScript(migration.sql); !status.ok()) return status;
+      INSDIAG_RETURN_IF_ERROR(connection.ExecScript(migration.sql));
       return connection
           .Exec("INSERT INTO schema_migrations (version, name, sha256) VALUES ($1, $2, $3)",
                 {Param::Int(migration.version), Param::Text(migration.name),

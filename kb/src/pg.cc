@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cstdlib>
 
+#include "insdiag/engine/status_macros.h"
 #include "store_util.h"
 
 namespace insdiag::kb {
@@ -145,6 +146,17 @@ absl::StatusOr<std::string> Connection::QuoteIdentifier(std::string_view name) {
   PQfreemem(quoted);
   return result;
 }
+
+absl::Status Connection::CreateDatabaseIfMissing(std::string_view name) {
+  INSDIAG_ASSIGN_OR_RETURN(auto exists, Exec("SELECT 1 FROM pg_database WHERE datname = $1",
+                                             {Param::Text(std::string(name))}));
+  if (exists.rows() > 0) return absl::OkStatus();
+  // CREATE DATABASE takes no parameters: the name goes in as a quoted identifier.
+  INSDIAG_ASSIGN_OR_RETURN(auto quoted, QuoteIdentifier(name));
+  return ExecScript(absl::StrCat("CREATE DATABASE ", quoted));
+}
+
+absl::Status Connection::Ping() { return Exec("SELECT 1").status(); }
 
 absl::StatusOr<std::int64_t> Connection::CopyIn(std::string_view copy_sql,
                                                 absl::FunctionRef<bool(std::string&)> produce) {

@@ -14,6 +14,7 @@
 #include "insdiag/api/json.h"
 #include "insdiag/api/resource_names.h"
 #include "insdiag/benchrun/bench_run_validation.h"
+#include "insdiag/engine/status_macros.h"
 #include "store_util.h"
 
 namespace insdiag::kb {
@@ -130,9 +131,8 @@ absl::StatusOr<StoredRun> RunFromRow(const Result& rows, int row) {
   const std::array<double*, 3> site = {&run.metadata.site.latitude_rad, &run.metadata.site.longitude_rad,
                                        &run.metadata.site.height_m};
   for (int i = 0; i < 3; ++i) {
-    auto value = rows.Double(row, 4 + i);
-    if (!value.ok()) return value.status();
-    *site[i] = *value;
+    INSDIAG_ASSIGN_OR_RETURN(auto value, rows.Double(row, 4 + i));
+    *site[i] = value;
   }
   run.metadata.site.latitude_rad /= kDegPerRad;
   run.metadata.site.longitude_rad /= kDegPerRad;
@@ -172,92 +172,106 @@ absl::Status LoadExtraMetadata(Connection& db, std::vector<StoredRun>& runs) {
     by_id[run.id] = &run;
   }
   ids += '}';
-  auto rows = db.Exec(
-      "SELECT r.run_id::text, e.pair->>0, e.pair->>1 FROM runs r, "
-      "jsonb_array_elements(r.extra_metadata) WITH ORDINALITY AS e(pair, position) "
-      "WHERE r.run_id = ANY($1::uuid[]) ORDER BY r.run_id, e.position",
-      {Param::Text(ids)});
-  if (!rows.ok()) return rows.status();
-  for (int row = 0; row < rows->rows(); ++row) {
-    engine::BenchRunMetadata& metadata = by_id[rows->String(row, 0)]->metadata;
-    if (rows->String(row, 1) == benchrun::kSegmentStartsKey) {
-      auto starts = benchrun::ParseSegmentStarts(rows->String(row, 2));
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto rows,
+      db.Exec("SELECT r.run_id::text, e.pair->>0, e.pair->>1 FROM runs r, "
+              "jsonb_array_elements(r.extra_metadata) WITH ORDINALITY AS e(pair, position) "
+              "WHERE r.run_id = ANY($1::uuid[]) ORDER BY r.run_id, e.position",
+              {Param::Text(ids)}));
+  for (int row = 0; row < rows.rows(); ++row) {
+    engine::BenchRunMetadata& metadata = by_id[rows.String(row, 0)]->metadata;
+    if (rows.String(row, 1) == benchrun::kSegmentStartsKey) {
+      auto starts = benchrun::ParseSegmentStarts(rows.String(row, 2));
       if (!starts.ok()) return absl::DataLossError("a stored run's segment starts: " + std::string(starts.status().message()));
       metadata.segment_starts = *std::move(starts);
       continue;
     }
-    metadata.extra.emplace_back(rows->String(row, 1), rows->String(row, 2));
+    metadata.extra.emplace_back(rows.String(row, 1), rows.String(row, 2));
   }
   return absl::OkStatus();
 }
 
 absl::StatusOr<StoredRun> GetRun(Connection& db, const std::string& run_id) {
-  if (auto status = CheckRunId(run_id); !status.ok()) return status;
-  auto rows = db.Exec(absl::StrCat("SELECT ", kRunColumns, " FROM runs WHERE run_id = $1::uuid"),
-                      {Param::Text(run_id)});
-  if (!rows.ok()) return rows.status();
-  if (rows->rows() == 0)
+  INSDIAG_RETURN_IF_ERROR(CheckRunId(run_id));
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto rows, db.Exec(absl::StrCat("SELECT ", kRunColumns, " FROM runs WHERE run_id = $1::uuid"),
+                         {Param::Text(run_id)}));
+  if (rows.rows() == 0)
     return absl::NotFoundError(
         absl::StrCat(api::ResourceName(api::kRuns, run_id), " does not exist"));
   std::vector<StoredRun> runs;
-  auto run = RunFromRow(*rows, 0);
-  if (!run.ok()) return run.status();
-  runs.push_back(std::move(*run));
-  if (auto status = LoadExtraMetadata(db, runs); !status.ok()) return status;
+  INSDIAG_ASSIGN_OR_RETURN(auto run, RunFromRow(rows, 0));
+  runs.push_back(std::move(run));
+  INSDIAG_RETURN_IF_ERROR(LoadExtraMetadata(db, runs));
   return std::move(runs.front());
 }
 
 absl::StatusOr<std::string> InsertRun(Connection& db, const engine::BenchRun& run,
                                       const UploadIdentity& identity) {
   const auto& meta = run.metadata;
-  auto unit = db.Exec(
-      "INSERT INTO units (serial, unit_type) VALUES ($1, $2) "
-      "ON CONFLICT (serial) DO UPDATE SET unit_type = coalesce(units.unit_type, EXCLUDED.unit_type) "
-      "RETURNING unit_id",
-      {Param::Text(meta.unit_serial), Param::TextOrNull(meta.unit_type)});
-  if (!unit.ok()) return unit.status();
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto unit, db.Exec("INSERT INTO units (serial, unit_type) VALUES ($1, $2) "
+                         "ON CONFLICT (serial) DO UPDATE SET unit_type = coalesce(units.unit_type, "
+                         "EXCLUDED.unit_type) "
+                         "RETURNING unit_id",
+                         {Param::Text(meta.unit_serial), Param::TextOrNull(meta.unit_type)}));
   // A unit's modules are registered with it (migrations/0002_knowledge.sql):
   // one current part per role, its serial unknown until the knowledge base learns it.
-  auto modules = db.Exec(
-      "INSERT INTO modules (unit_id, role, installed_time) "
-      "SELECT u.unit_id, r.role, u.create_time FROM units u CROSS JOIN module_roles r "
-      "WHERE u.unit_id = $1 AND NOT EXISTS (SELECT 1 FROM modules m WHERE m.unit_id = u.unit_id "
-      "AND m.role = r.role AND m.removed_time IS NULL)",
-      {Param::Text(unit->String(0, 0))});
-  if (!modules.ok()) return modules.status();
+  INSDIAG_RETURN_IF_ERROR(
+      db.Exec("INSERT INTO modules (unit_id, role, installed_time) "
+              "SELECT u.unit_id, r.role, u.create_time FROM units u CROSS JOIN module_roles r "
+              "WHERE u.unit_id = $1 AND NOT EXISTS (SELECT 1 FROM modules m WHERE m.unit_id = "
+              "u.unit_id "
+              "AND m.role = r.role AND m.removed_time IS NULL)",
+              {Param::Text(unit.String(0, 0))}));
 
   const auto& sheet = meta.datasheet;
   auto inserted = db.Exec(
       "INSERT INTO runs (unit_id, format, unit_serial, unit_type, site_latitude_deg, "
-      "site_longitude_deg, site_height_m, gyro_arw_rad_rts, gyro_bias_sigma_rad_s, gyro_bias_tau_s, "
+      "site_longitude_deg, site_height_m, gyro_arw_rad_rts, gyro_bias_sigma_rad_s, "
+      "gyro_bias_tau_s, "
       "acc_vrw_mps_rts, acc_bias_sigma_mps2, acc_bias_tau_s, extra_metadata, has_temperature, "
-      "sample_count, nominal_interval_s, duration_s, first_t, sha256, request_id, request_fingerprint, test_time) "
-      "VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14::jsonb, $15, $16, $17, $18, "
+      "sample_count, nominal_interval_s, duration_s, first_t, sha256, request_id, "
+      "request_fingerprint, test_time) "
+      "VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14::jsonb, $15, $16, $17, "
+      "$18, "
       "$19, $20, $21, $22, $23::timestamptz) RETURNING run_id::text",
-      {Param::Text(unit->String(0, 0)), Param::Text(meta.format), Param::Text(meta.unit_serial),
-       Param::TextOrNull(meta.unit_type), Param::Double(meta.site.latitude_rad * kDegPerRad),
-       Param::Double(meta.site.longitude_rad * kDegPerRad), Param::Double(meta.site.height_m),
-       Param::OptionalDouble(sheet.gyro_arw_rad_rts), Param::OptionalDouble(sheet.gyro_bias_sigma_rad_s),
-       Param::OptionalDouble(sheet.gyro_bias_tau_s), Param::OptionalDouble(sheet.acc_vrw_mps_rts),
-       Param::OptionalDouble(sheet.acc_bias_sigma_mps2), Param::OptionalDouble(sheet.acc_bias_tau_s),
-       Param::Text(ExtraMetadataJson(meta)), Param::Text(run.has_temperature ? "true" : "false"),
-       Param::Int(static_cast<std::int64_t>(run.samples.size())), Param::Double(run.NominalIntervalS()),
-       Param::Double(run.DurationS()), Param::Double(run.samples.empty() ? 0.0 : run.samples.front().t_s),
-       Param::Text(identity.sha256), Param::TextOrNull(identity.request_id),
-       Param::TextOrNull(identity.request_fingerprint), Param::TextOrNull(TestTimeText(meta))});
+      {Param::Text(unit.String(0, 0)),
+       Param::Text(meta.format),
+       Param::Text(meta.unit_serial),
+       Param::TextOrNull(meta.unit_type),
+       Param::Double(meta.site.latitude_rad * kDegPerRad),
+       Param::Double(meta.site.longitude_rad * kDegPerRad),
+       Param::Double(meta.site.height_m),
+       Param::OptionalDouble(sheet.gyro_arw_rad_rts),
+       Param::OptionalDouble(sheet.gyro_bias_sigma_rad_s),
+       Param::OptionalDouble(sheet.gyro_bias_tau_s),
+       Param::OptionalDouble(sheet.acc_vrw_mps_rts),
+       Param::OptionalDouble(sheet.acc_bias_sigma_mps2),
+       Param::OptionalDouble(sheet.acc_bias_tau_s),
+       Param::Text(ExtraMetadataJson(meta)),
+       Param::Text(run.has_temperature ? "true" : "false"),
+       Param::Int(static_cast<std::int64_t>(run.samples.size())),
+       Param::Double(run.NominalIntervalS()),
+       Param::Double(run.DurationS()),
+       Param::Double(run.samples.empty() ? 0.0 : run.samples.front().t_s),
+       Param::Text(identity.sha256),
+       Param::TextOrNull(identity.request_id),
+       Param::TextOrNull(identity.request_fingerprint),
+       Param::TextOrNull(TestTimeText(meta))});
   if (!inserted.ok()) return inserted.status();
   const std::string run_id = inserted->String(0, 0);
 
   const std::span<const engine::ImuSample> samples(run.samples);
   for (std::size_t first = 0, chunk = 0; first < samples.size(); first += kSamplesPerChunk, ++chunk) {
     const auto part = samples.subspan(first, std::min(kSamplesPerChunk, samples.size() - first));
-    auto stored = db.Exec(
+    INSDIAG_RETURN_IF_ERROR(db.Exec(
         "INSERT INTO run_sample_chunks (run_id, chunk_index, first_sample, sample_count, data) "
         "VALUES ($1::uuid, $2, $3, $4, $5)",
         {Param::Text(run_id), Param::Int(static_cast<std::int64_t>(chunk)),
-         Param::Int(static_cast<std::int64_t>(first)), Param::Int(static_cast<std::int64_t>(part.size())),
-         Param::Bytes(PackSamples(part, run.has_temperature))});
-    if (!stored.ok()) return stored.status();
+         Param::Int(static_cast<std::int64_t>(first)),
+         Param::Int(static_cast<std::int64_t>(part.size())),
+         Param::Bytes(PackSamples(part, run.has_temperature))}));
   }
   return run_id;
 }
@@ -265,33 +279,31 @@ absl::StatusOr<std::string> InsertRun(Connection& db, const engine::BenchRun& ru
 }  // namespace
 
 absl::StatusOr<StoredRun> RunStore::Create(const engine::BenchRun& run, const UploadIdentity& identity) {
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
   absl::StatusOr<StoredRun> result = absl::InternalError("run not stored");
-  const absl::Status status = (*db)->InTransaction([&]() -> absl::Status {
+  const absl::Status status = db->InTransaction([&]() -> absl::Status {
     if (!identity.request_id.empty()) {
       // Serialise uploads of one request id: a retry racing the original
       // waits for it and then finds its run.
-      auto locked = (*db)->Exec("SELECT pg_advisory_xact_lock($1)",
-                                {Param::Int(AdvisoryLockKey("insdiag.run." + identity.request_id))});
-      if (!locked.ok()) return locked.status();
-      auto earlier = (*db)->Exec(
-          "SELECT run_id::text, coalesce(request_fingerprint, '') FROM runs WHERE request_id = $1",
-          {Param::Text(identity.request_id)});
-      if (!earlier.ok()) return earlier.status();
-      if (earlier->rows() > 0) {
-        if (earlier->Get(0, 1) != identity.request_fingerprint) {
-          return absl::AlreadyExistsError(
-              absl::StrCat("request id '", identity.request_id, "' was already used to upload runs/",
-                           earlier->String(0, 0), " with different content"));
+      INSDIAG_RETURN_IF_ERROR(
+          db->Exec("SELECT pg_advisory_xact_lock($1)",
+                   {Param::Int(AdvisoryLockKey("insdiag.run." + identity.request_id))}));
+      INSDIAG_ASSIGN_OR_RETURN(auto earlier,
+                               db->Exec("SELECT run_id::text, coalesce(request_fingerprint, '') "
+                                        "FROM runs WHERE request_id = $1",
+                                        {Param::Text(identity.request_id)}));
+      if (earlier.rows() > 0) {
+        if (earlier.Get(0, 1) != identity.request_fingerprint) {
+          return absl::AlreadyExistsError(absl::StrCat(
+              "request id '", identity.request_id, "' was already used to upload runs/",
+              earlier.String(0, 0), " with different content"));
         }
-        result = GetRun(**db, earlier->String(0, 0));
+        result = GetRun(*db, earlier.String(0, 0));
         return result.status();
       }
     }
-    auto run_id = InsertRun(**db, run, identity);
-    if (!run_id.ok()) return run_id.status();
-    result = GetRun(**db, *run_id);
+    INSDIAG_ASSIGN_OR_RETURN(auto run_id, InsertRun(*db, run, identity));
+    result = GetRun(*db, run_id);
     return result.status();
   });
   if (!status.ok()) return status;
@@ -299,79 +311,70 @@ absl::StatusOr<StoredRun> RunStore::Create(const engine::BenchRun& run, const Up
 }
 
 absl::StatusOr<StoredRun> RunStore::Get(const std::string& run_id) {
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
-  return GetRun(**db, run_id);
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
+  return GetRun(*db, run_id);
 }
 
 absl::StatusOr<RunPage> RunStore::List(const RunQuery& query) {
-  const int page_size = std::clamp(query.page_size <= 0 ? 50 : query.page_size, 1, 1000);
+  const int page_size = internal::ClampPageSize(query.page_size);
   std::vector<Param> params = {Param::Int(page_size + 1), Param::TextOrNull(query.unit_serial)};
-  std::string after = "true";
-  if (!query.page_token.empty()) {
-    // Page tokens are opaque to clients: the last row's sort key (store_util.h).
-    auto key = internal::DecodeToken(query.page_token);
-    if (!key.ok()) return key.status();
-    if (!CheckRunId(key->second).ok()) return absl::InvalidArgumentError("page_token is not one this server issued");
-    params.push_back(Param::Text(key->first));
-    params.push_back(Param::Text(key->second));
-    after = "(create_time, run_id) < ($3::timestamptz, $4::uuid)";
-  }
-  auto db = list_pool_.Acquire();
-  if (!db.ok()) return db.status();
-  auto rows = (*db)->Exec(absl::StrCat("SELECT ", kRunColumns,
-                                       " FROM runs WHERE ($2::text IS NULL OR unit_serial = $2) AND ", after,
-                                       " ORDER BY create_time DESC, run_id DESC LIMIT $1"),
-                          params);
-  if (!rows.ok()) return rows.status();
+  // Page tokens are opaque to clients: the last row's sort key (store_util.h).
+  INSDIAG_ASSIGN_OR_RETURN(const std::string after,
+                           internal::KeysetCondition(query.page_token, "create_time", "run_id",
+                                                     internal::KeysetOrder::kNewestFirst, params));
+  INSDIAG_ASSIGN_OR_RETURN(auto db, list_pool_.Acquire());
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto rows,
+      db->Exec(absl::StrCat("SELECT ", kRunColumns,
+                            " FROM runs WHERE ($2::text IS NULL OR unit_serial = $2) AND ", after,
+                            " ORDER BY create_time DESC, run_id DESC LIMIT $1"),
+               params));
   RunPage page;
-  const int shown = std::min(rows->rows(), page_size);
+  const int shown = std::min(rows.rows(), page_size);
   for (int row = 0; row < shown; ++row) {
-    auto run = RunFromRow(*rows, row);
-    if (!run.ok()) return run.status();
-    page.runs.push_back(std::move(*run));
+    INSDIAG_ASSIGN_OR_RETURN(auto run, RunFromRow(rows, row));
+    page.runs.push_back(std::move(run));
   }
   // One row more than asked for tells whether another page exists.
-  if (rows->rows() > page_size) {
-    page.next_page_token = internal::EncodeToken(rows->String(shown - 1, 21), page.runs.back().id);
+  if (rows.rows() > page_size) {
+    page.next_page_token = internal::EncodeToken(rows.String(shown - 1, 21), page.runs.back().id);
   }
-  if (auto status = LoadExtraMetadata(**db, page.runs); !status.ok()) return status;
+  INSDIAG_RETURN_IF_ERROR(LoadExtraMetadata(*db, page.runs));
   return page;
 }
 
 absl::Status RunStore::Delete(const std::string& run_id) {
-  if (auto status = CheckRunId(run_id); !status.ok()) return status;
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
-  return (*db)->InTransaction([&]() -> absl::Status {
+  INSDIAG_RETURN_IF_ERROR(CheckRunId(run_id));
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
+  return db->InTransaction([&]() -> absl::Status {
     // A diagnosis that lands between the check and the delete is refused by
     // the foreign keys (migrations/0004_access.sql): the check gives the message.
-    auto run = (*db)->Exec("SELECT 1 FROM runs WHERE run_id = $1::uuid FOR UPDATE", {Param::Text(run_id)});
-    if (!run.ok()) return run.status();
-    if (run->rows() == 0)
+    INSDIAG_ASSIGN_OR_RETURN(
+        auto run,
+        db->Exec("SELECT 1 FROM runs WHERE run_id = $1::uuid FOR UPDATE", {Param::Text(run_id)}));
+    if (run.rows() == 0)
       return absl::NotFoundError(
           absl::StrCat(api::ResourceName(api::kRuns, run_id), " does not exist"));
-    auto history = (*db)->Exec(
-        "SELECT (SELECT count(*) FROM diagnoses d JOIN analyses a USING (analysis_id) WHERE a.run_id = $1::uuid), "
-        "(SELECT count(*) FROM failure_records f JOIN analyses a USING (analysis_id) WHERE a.run_id = $1::uuid)",
-        {Param::Text(run_id)});
-    if (!history.ok()) return history.status();
-    const std::string diagnoses = history->String(0, 0), records = history->String(0, 1);
+    INSDIAG_ASSIGN_OR_RETURN(auto history,
+                             db->Exec("SELECT (SELECT count(*) FROM diagnoses d JOIN analyses a "
+                                      "USING (analysis_id) WHERE a.run_id = $1::uuid), "
+                                      "(SELECT count(*) FROM failure_records f JOIN analyses a "
+                                      "USING (analysis_id) WHERE a.run_id = $1::uuid)",
+                                      {Param::Text(run_id)}));
+    const std::string diagnoses = history.String(0, 0), records = history.String(0, 1);
     if (diagnoses != "0" || records != "0") {
       return absl::FailedPreconditionError(absl::StrCat(
           api::ResourceName(api::kRuns, run_id), " is not deleted: ", diagnoses, " diagnoses and ",
           records, " failure records rest on its analyses, and the failure history is kept"));
     }
-    return (*db)->Exec("DELETE FROM runs WHERE run_id = $1::uuid", {Param::Text(run_id)}).status();
+    return db->Exec("DELETE FROM runs WHERE run_id = $1::uuid", {Param::Text(run_id)}).status();
   });
 }
 
 absl::Status RunStore::ReadSamples(const std::string& run_id, std::size_t batch_samples,
                                    absl::FunctionRef<bool(std::span<const engine::ImuSample>)> consume) {
-  auto run = Get(run_id);
-  if (!run.ok()) return run.status();
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto run, Get(run_id));
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
   batch_samples = std::max<std::size_t>(batch_samples, 1);
   // Enough stored chunks per query to fill about one batch.
   const std::int64_t chunks_per_query =
@@ -379,18 +382,20 @@ absl::Status RunStore::ReadSamples(const std::string& run_id, std::size_t batch_
   std::vector<engine::ImuSample> pending;
   std::int64_t next_chunk = 0;
   for (;;) {
-    auto rows = (*db)->Exec(
-        "SELECT data FROM run_sample_chunks WHERE run_id = $1::uuid AND chunk_index >= $2 "
-        "ORDER BY chunk_index LIMIT $3",
-        {Param::Text(run->id), Param::Int(next_chunk), Param::Int(chunks_per_query)}, ResultFormat::kBinary);
-    if (!rows.ok()) return rows.status();
-    for (int row = 0; row < rows->rows(); ++row) {
-      if (auto status = UnpackSamples(rows->Get(row, 0), run->has_temperature, pending); !status.ok()) {
+    INSDIAG_ASSIGN_OR_RETURN(
+        auto rows,
+        db->Exec("SELECT data FROM run_sample_chunks WHERE run_id = $1::uuid AND chunk_index >= $2 "
+                 "ORDER BY chunk_index LIMIT $3",
+                 {Param::Text(run.id), Param::Int(next_chunk), Param::Int(chunks_per_query)},
+                 ResultFormat::kBinary));
+    for (int row = 0; row < rows.rows(); ++row) {
+      if (auto status = UnpackSamples(rows.Get(row, 0), run.has_temperature, pending);
+          !status.ok()) {
         return status;
       }
     }
-    next_chunk += rows->rows();
-    const bool last = rows->rows() < chunks_per_query;
+    next_chunk += rows.rows();
+    const bool last = rows.rows() < chunks_per_query;
     std::size_t sent = 0;
     while (pending.size() - sent >= batch_samples || (last && sent < pending.size())) {
       const std::size_t count = std::min(batch_samples, pending.size() - sent);

@@ -2,12 +2,16 @@
 
 #include <absl/strings/escaping.h>
 #include <absl/strings/match.h>
+#include <absl/strings/numbers.h>
 #include <absl/strings/str_cat.h>
+#include <absl/strings/str_join.h>
 #include <absl/strings/str_split.h>
 #include <absl/time/time.h>
 
 #include <algorithm>
 #include <cctype>
+
+#include "insdiag/engine/status_macros.h"
 
 namespace insdiag::kb::internal {
 
@@ -68,15 +72,47 @@ absl::StatusOr<std::pair<std::string, std::string>> DecodeToken(const std::strin
 absl::StatusOr<std::string> KeysetCondition(const std::string& page_token, const std::string& time_column,
                                             const std::string& uuid_column, KeysetOrder order,
                                             std::vector<Param>& params) {
+  return KeysetAfter(page_token, {{time_column, "timestamptz"}, {uuid_column, "uuid"}}, order, params);
+}
+
+namespace {
+
+// Whether a token's value reads as the SQL type it is cast to; timestamps
+// and text are left to the SQL (a timestamp the server wrote always parses).
+bool ReadsAs(const std::string& value, const std::string& sql_type) {
+  if (sql_type == "uuid") return IsUuid(value);
+  if (sql_type == "bigint") {
+    std::int64_t v = 0;
+    return absl::SimpleAtoi(value, &v);
+  }
+  if (sql_type == "double precision") {
+    double v = 0.0;
+    return absl::SimpleAtod(value, &v);
+  }
+  return true;
+}
+
+}  // namespace
+
+absl::StatusOr<std::string> KeysetAfter(const std::string& page_token, const std::vector<KeyColumn>& key,
+                                        KeysetOrder order, std::vector<Param>& params) {
   if (page_token.empty()) return std::string("true");
-  auto key = DecodeToken(page_token);
-  if (!key.ok()) return key.status();
-  if (!IsUuid(key->second)) return absl::InvalidArgumentError("page_token is not one this server issued");
-  const std::size_t first = params.size() + 1;
-  params.push_back(Param::Text(key->first));
-  params.push_back(Param::Text(key->second));
-  return absl::StrCat("(", time_column, ", ", uuid_column, ") ", order == KeysetOrder::kNewestFirst ? "<" : ">",
-                      " ($", first, "::timestamptz, $", first + 1, "::uuid)");
+  INSDIAG_ASSIGN_OR_RETURN(const auto values, DecodeToken(page_token));
+  if (key.empty() || key.size() > 2) return absl::InternalError("a keyset of one or two columns");
+  // A one-column key is the token's second value.
+  const std::vector<std::string> parts = key.size() == 1 ? std::vector<std::string>{values.second}
+                                                         : std::vector<std::string>{values.first, values.second};
+  std::vector<std::string> columns, placeholders;
+  for (std::size_t k = 0; k < key.size(); ++k) {
+    if (!ReadsAs(parts[k], key[k].sql_type)) {
+      return absl::InvalidArgumentError("page_token is not one this server issued");
+    }
+    params.push_back(Param::Text(parts[k]));
+    columns.push_back(key[k].expression);
+    placeholders.push_back(absl::StrCat("$", params.size(), "::", key[k].sql_type));
+  }
+  return absl::StrCat("(", absl::StrJoin(columns, ", "), ") ", order == KeysetOrder::kDescending ? "<" : ">",
+                      " (", absl::StrJoin(placeholders, ", "), ")");
 }
 
 int ClampPageSize(int page_size) { return std::clamp(page_size <= 0 ? 50 : page_size, 1, 1000); }

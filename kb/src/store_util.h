@@ -36,10 +36,24 @@ absl::StatusOr<std::pair<std::string, std::string>> DecodeToken(const std::strin
 // SQL condition for the rows after it, its two values appended to `params`
 // as the next two parameters. INVALID_ARGUMENT for a token this server did
 // not issue (a key that is not a UUID never reaches the SQL).
-enum class KeysetOrder { kNewestFirst, kOldestFirst };
+// The key's order: down it ("<" the last row's key) or up it (">"); newest
+// and oldest first for a time-ordered key.
+enum class KeysetOrder { kDescending, kAscending, kNewestFirst = kDescending, kOldestFirst = kAscending };
 absl::StatusOr<std::string> KeysetCondition(const std::string& page_token, const std::string& time_column,
                                             const std::string& uuid_column, KeysetOrder order,
                                             std::vector<Param>& params);
+
+// The same for any sort key: one or two columns (an SQL expression each)
+// with the SQL type their token values are cast to ("bigint", "double
+// precision", "text", "uuid", "timestamptz"). A one-column key is the token's
+// second value. A value that does not read as its type is refused as a
+// token this server did not issue.
+struct KeyColumn {
+  std::string expression;
+  std::string sql_type;
+};
+absl::StatusOr<std::string> KeysetAfter(const std::string& page_token, const std::vector<KeyColumn>& key,
+                                        KeysetOrder order, std::vector<Param>& params);
 
 int ClampPageSize(int page_size);  // default 50, within [1, 1000]
 

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <limits>
 
-#include "insdiag/engine/model/effect_catalogue.h"
+#include "insdiag/engine/model/parameter_key.h"
 #include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::kb {
@@ -66,7 +66,8 @@ double StudentTwoSidedPValue(double t, double dof) {
 }
 
 bool IsTurnOnBias(const std::string& parameter) {
-  const engine::EffectFamily* family = engine::FindEffectFamily(parameter.substr(0, parameter.find('.')));
+  const std::optional<engine::ParameterKey> key = engine::ParseParameterKey(parameter);
+  const engine::EffectFamily* family = key ? key->effect_family : nullptr;
   return family != nullptr && family->kind == engine::EffectKind::kConstant &&
          family->regressor == engine::Regressor::kOne;
 }

@@ -7,6 +7,7 @@
 
 #include "history_rows.h"
 #include "insdiag/api/resource_names.h"
+#include "insdiag/engine/status_macros.h"
 #include "store_util.h"
 
 namespace insdiag::kb {
@@ -22,26 +23,28 @@ absl::Status LoadRuns(Connection& db, const std::string& unit_id, const v1::GetU
                       v1::UnitHistory& out) {
   const int size = internal::ClampPageSize(request.page_size());
   std::vector<Param> params = {Param::Text(unit_id), Param::Int(size + 1)};
-  auto after = internal::KeysetCondition(request.page_token(), kRunTestTime, "r.run_id",
-                                         internal::KeysetOrder::kOldestFirst, params);
-  if (!after.ok()) return after.status();
-  auto runs = db.Exec(absl::StrCat("SELECT r.run_id::text, ", Micros(kRunTestTime), ", ", kRunTestTime,
-                                   "::text, r.duration_s FROM runs r WHERE r.unit_id = $1 AND ", *after,
-                                   " ORDER BY ", kRunTestTime, ", r.run_id LIMIT $2"),
-                      params);
-  if (!runs.ok()) return runs.status();
-  const int shown = std::min(runs->rows(), size);
+  INSDIAG_ASSIGN_OR_RETURN(auto after,
+                           internal::KeysetCondition(request.page_token(), kRunTestTime, "r.run_id",
+                                                     internal::KeysetOrder::kOldestFirst, params));
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto runs,
+      db.Exec(absl::StrCat("SELECT r.run_id::text, ", Micros(kRunTestTime), ", ", kRunTestTime,
+                           "::text, r.duration_s FROM runs r WHERE r.unit_id = $1 AND ", after,
+                           " ORDER BY ", kRunTestTime, ", r.run_id LIMIT $2"),
+              params));
+  const int shown = std::min(runs.rows(), size);
   std::vector<std::string> ids;
   std::map<std::string, v1::HistoryRun*> by_id;
   for (int r = 0; r < shown; ++r) {
     v1::HistoryRun* run = out.add_runs();
-    ids.push_back(runs->String(r, 0));
+    ids.push_back(runs.String(r, 0));
     run->set_run(api::ResourceName(api::kRuns, ids.back()));
-    *run->mutable_test_time() = internal::TimestampOfMicros(internal::IntOr0(*runs, r, 1));
-    run->set_duration_s(internal::DoubleOr0(*runs, r, 3));
+    *run->mutable_test_time() = internal::TimestampOfMicros(internal::IntOr0(runs, r, 1));
+    run->set_duration_s(internal::DoubleOr0(runs, r, 3));
     by_id[ids.back()] = run;
   }
-  if (runs->rows() > size) out.set_next_page_token(internal::EncodeToken(runs->String(shown - 1, 2), ids.back()));
+  if (runs.rows() > size)
+    out.set_next_page_token(internal::EncodeToken(runs.String(shown - 1, 2), ids.back()));
   if (ids.empty()) return absl::OkStatus();
   // `counted`: ordered as history_rows.cc picks the run's analysis.
   auto analyses = db.Exec(
@@ -76,30 +79,28 @@ absl::StatusOr<v1::UnitHistory> UnitHistoryStore::Get(const v1::GetUnitHistoryRe
   HistoryOptions options;
   options.confidence = request.confidence() == 0.0 ? kDefaultConfidence : request.confidence();
   if (!options.Validate()) return absl::InvalidArgumentError("confidence: must lie strictly between 0 and 1");
-  auto db = pool_.Acquire();
-  if (!db.ok()) return db.status();
-  auto unit = (*db)->Exec(
-      "SELECT u.unit_id, coalesce(u.unit_type, ''), "
-      "(SELECT count(*) FROM runs r WHERE r.unit_id = u.unit_id), "
-      "(SELECT count(DISTINCT a.run_id) FROM analyses a WHERE a.unit_id = u.unit_id AND a.state = 'SUCCEEDED') "
-      "FROM units u WHERE u.serial = $1",
-      {Param::Text(*serial)});
-  if (!unit.ok()) return unit.status();
-  if (unit->rows() == 0) return absl::NotFoundError(absl::StrCat(request.unit(), " does not exist"));
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
+  INSDIAG_ASSIGN_OR_RETURN(auto unit,
+                           db->Exec("SELECT u.unit_id, coalesce(u.unit_type, ''), "
+                                    "(SELECT count(*) FROM runs r WHERE r.unit_id = u.unit_id), "
+                                    "(SELECT count(DISTINCT a.run_id) FROM analyses a WHERE "
+                                    "a.unit_id = u.unit_id AND a.state = 'SUCCEEDED') "
+                                    "FROM units u WHERE u.serial = $1",
+                                    {Param::Text(*serial)}));
+  if (unit.rows() == 0) return absl::NotFoundError(absl::StrCat(request.unit(), " does not exist"));
   v1::UnitHistory out;
   out.set_unit(api::ResourceName(api::kUnits, *serial));
-  if (!unit->String(0, 1).empty())
-    out.set_unit_type(api::ResourceName(api::kUnitTypes, unit->String(0, 1)));
-  out.set_run_count(static_cast<int>(internal::IntOr0(*unit, 0, 2)));
-  out.set_analysed_run_count(static_cast<int>(internal::IntOr0(*unit, 0, 3)));
+  if (!unit.String(0, 1).empty())
+    out.set_unit_type(api::ResourceName(api::kUnitTypes, unit.String(0, 1)));
+  out.set_run_count(static_cast<int>(internal::IntOr0(unit, 0, 2)));
+  out.set_analysed_run_count(static_cast<int>(internal::IntOr0(unit, 0, 3)));
   out.set_confidence(options.confidence);
-  if (auto status = LoadRuns(**db, unit->String(0, 0), request, out); !status.ok()) return status;
+  INSDIAG_RETURN_IF_ERROR(LoadRuns(*db, unit.String(0, 0), request, out));
   internal::HistoryScope scope;
-  scope.unit_id = unit->String(0, 0);
+  scope.unit_id = unit.String(0, 0);
   scope.only_parameters.assign(request.parameters().begin(), request.parameters().end());
-  auto parameters = internal::LoadParameterHistories(**db, scope, options);
-  if (!parameters.ok()) return parameters.status();
-  for (auto& p : *parameters) *out.add_parameters() = std::move(p);
+  INSDIAG_ASSIGN_OR_RETURN(auto parameters, internal::LoadParameterHistories(*db, scope, options));
+  for (auto& p : parameters) *out.add_parameters() = std::move(p);
   if (out.analysed_run_count() < 2) {
     out.add_notes("fewer than two runs with a succeeded analysis: no repeatability yet");
   } else if (out.analysed_run_count() < 3) {

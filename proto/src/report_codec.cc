@@ -8,7 +8,9 @@
 #include <optional>
 #include <string_view>
 
+#include "insdiag/engine/candidate_source.h"
 #include "insdiag/engine/filter/observation.h"
+#include "insdiag/engine/model/parameter_key.h"
 #include "insdiag/engine/model/parameters.h"
 
 namespace insdiag::api {
@@ -192,14 +194,11 @@ void Fill(const engine::ident::AllanChannel& ch, const std::vector<engine::Param
     out->add_fitted(Finite(p.fitted_adev));
   }
   for (const engine::ident::RateJump& j : ch.jumps) out->add_jump_times_s(j.time_s);
-  // The channel's terms: "{gyro|acc}_<term>.<axis>[.<parameter>]".
-  const std::string_view sensor = ch.sensor == engine::Sensor::kGyro ? "gyro_" : "acc_";
-  const char axis = "xyz"[ch.axis];
+  // The channel's terms: "{gyro|acc}_<term>.<axis>[.<parameter>]" on its one axis.
   for (const engine::ParameterEstimate& t : terms) {
-    const std::string_view name = t.name;
-    const size_t dot = name.find('.');
-    const bool this_channel = name.substr(0, sensor.size()) == sensor && dot + 1 < name.size() &&
-                              name[dot + 1] == axis && (dot + 2 == name.size() || name[dot + 2] == '.');
+    const std::optional<engine::ParameterKey> key = engine::ParseParameterKey(t.name);
+    const bool this_channel =
+        key && key->sensor == ch.sensor && key->axes == engine::AxisName(ch.axis);
     if (this_channel) Fill(t, out->add_terms());
   }
 }
@@ -305,7 +304,8 @@ absl::StatusOr<engine::IdentifiedModel> IdentifiedModelOf(const v1::AnalysisRepo
     out.identified.push_back(std::move(e));
   }
   for (const v1::EffectCandidate& c : report.effect_candidates()) {
-    if (c.source() == "LIKELIHOOD") out.structure_outcomes.push_back(CandidateOf(c));
+    if (engine::CandidateSourceNamed(c.source()) == engine::CandidateSource::kLikelihood)
+      out.structure_outcomes.push_back(CandidateOf(c));
   }
   return out;
 }

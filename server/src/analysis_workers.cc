@@ -5,10 +5,11 @@
 
 #include <exception>
 
-#include "insdiag/api/resource_names.h"
 #include "insdiag/api/report_codec.h"
+#include "insdiag/api/resource_names.h"
 #include "insdiag/engine/analysis.h"
 #include "insdiag/engine/model/parameters.h"
+#include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/fleet_store.h"
 #include "insdiag/kb/run_store.h"
 #include "insdiag/server/server_log.h"
@@ -141,12 +142,11 @@ std::string_view AnalysisWorkers::RunJobOutcome(const kb::ClaimedJob& job, const
 
   absl::Status status = [&]() -> absl::Status {
     kb::RunStore runs(pool_);
-    auto stored = runs.Get(job.run_id);
-    if (!stored.ok()) return stored.status();
+    INSDIAG_ASSIGN_OR_RETURN(auto stored, runs.Get(job.run_id));
     engine::BenchRun run;
-    run.metadata = stored->metadata;
-    run.has_temperature = stored->has_temperature;
-    run.samples.reserve(static_cast<std::size_t>(stored->sample_count));
+    run.metadata = stored.metadata;
+    run.has_temperature = stored.has_temperature;
+    run.samples.reserve(static_cast<std::size_t>(stored.sample_count));
     if (auto read = runs.ReadSamples(job.run_id, 1 << 16,
                                      [&](std::span<const engine::ImuSample> samples) {
                                        run.samples.insert(run.samples.end(), samples.begin(), samples.end());
@@ -161,13 +161,11 @@ std::string_view AnalysisWorkers::RunJobOutcome(const kb::ClaimedJob& job, const
     request.baseline_effects.assign(job.spec.baseline().effects().begin(), job.spec.baseline().effects().end());
     request.discover = job.spec.discover();
     if (!job.spec.base_analysis().empty()) {
-      auto base_id = api::ResourceId(job.spec.base_analysis(), api::kAnalyses, "base_analysis");
-      if (!base_id.ok()) return base_id.status();
-      auto base = store_.Get(*base_id, true);
-      if (!base.ok()) return base.status();
-      auto identified = api::IdentifiedModelOf(base->report());
-      if (!identified.ok()) return identified.status();
-      request.identified_base = *std::move(identified);
+      INSDIAG_ASSIGN_OR_RETURN(
+          auto base_id, api::ResourceId(job.spec.base_analysis(), api::kAnalyses, "base_analysis"));
+      INSDIAG_ASSIGN_OR_RETURN(auto base, store_.Get(base_id, true));
+      INSDIAG_ASSIGN_OR_RETURN(auto identified, api::IdentifiedModelOf(base.report()));
+      request.identified_base = std::move(identified);
     }
     auto nominal = NominalModelOfUnitType(pool_, run.metadata.unit_type);
     if (!nominal.ok()) return nominal.status();

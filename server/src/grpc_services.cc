@@ -4,6 +4,7 @@
 
 #include <atomic>
 
+#include "insdiag/engine/status_macros.h"
 #include "insdiag/server/status_mapping.h"
 
 namespace insdiag::server {
@@ -69,7 +70,7 @@ grpc::Status RunServiceGrpc::DeleteRun(grpc::ServerContext* context, const v1::D
                                        google::protobuf::Empty* response) {
   return guard_.Unary(*context, MethodName(kRunService, "DeleteRun"), *request, response,
                       [&](const v1::Caller&) -> absl::StatusOr<google::protobuf::Empty> {
-                        if (auto status = runs_.DeleteRun(*request); !status.ok()) return status;
+                        INSDIAG_RETURN_IF_ERROR(runs_.DeleteRun(*request));
                         return google::protobuf::Empty();
                       });
 }

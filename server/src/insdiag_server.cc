@@ -15,15 +15,16 @@
 #include <sstream>
 
 #include "insdiag/api/unit_types.h"
+#include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/diagnosis.h"
 #include "insdiag/kb/run_store.h"
 #include "insdiag/server/access_guard.h"
 #include "insdiag/server/analysis_workers.h"
 #include "insdiag/server/grpc_services.h"
+#include "insdiag/server/metrics.h"
 #include "insdiag/server/rest_gateway.h"
 #include "insdiag/server/run_service.h"
 #include "insdiag/server/web_page.h"
-#include "insdiag/server/metrics.h"
 #include "insdiag/v1/analyses.grpc.pb.h"
 #include "insdiag/v1/fleet.grpc.pb.h"
 #include "insdiag/v1/knowledge.grpc.pb.h"
@@ -116,11 +117,9 @@ absl::StatusOr<grpc::SslServerCredentialsOptions::PemKeyCertPair> ReadKeyCertPai
   if (options.tls_cert_file.empty() || options.tls_key_file.empty()) {
     return absl::InvalidArgumentError("TLS needs both --tls-cert and --tls-key");
   }
-  auto cert = ReadPemFile(options.tls_cert_file, "--tls-cert");
-  if (!cert.ok()) return cert.status();
-  auto key = ReadPemFile(options.tls_key_file, "--tls-key");
-  if (!key.ok()) return key.status();
-  return grpc::SslServerCredentialsOptions::PemKeyCertPair{*key, *cert};
+  INSDIAG_ASSIGN_OR_RETURN(auto cert, ReadPemFile(options.tls_cert_file, "--tls-cert"));
+  INSDIAG_ASSIGN_OR_RETURN(auto key, ReadPemFile(options.tls_key_file, "--tls-key"));
+  return grpc::SslServerCredentialsOptions::PemKeyCertPair{key, cert};
 }
 
 // Counts each request's duration for the metrics, and keeps brotli out of
@@ -167,18 +166,18 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
     // The built-in unit types and failure modes, upserted idempotently.
     const auto unit_types = api::BuiltinUnitTypes();
     const auto& catalogues = kb::BuiltinFailureModeCatalogues();
-    if (auto seeded = server->services_->catalogue_store.Seed(unit_types, catalogues); !seeded.ok()) return seeded;
+    INSDIAG_RETURN_IF_ERROR(server->services_->catalogue_store.Seed(unit_types, catalogues));
   }
 
   if (auto guarded = AccessGuard::CheckEveryMethodHasARule(ServiceNames()); !guarded.ok())
     return guarded;
   if (!options.first_admin_token_file.empty()) {
-    auto made = server->services_->access_store.CreateFirstAdminToken(options.first_admin_token_file);
-    if (!made.ok()) return made.status();
-    server->wrote_first_admin_token_ = *made;
+    INSDIAG_ASSIGN_OR_RETURN(auto made, server->services_->access_store.CreateFirstAdminToken(
+                                            options.first_admin_token_file));
+    server->wrote_first_admin_token_ = made;
   }
-  if (auto grpc = server->StartGrpc(options); !grpc.ok()) return grpc;
-  if (auto http = server->StartHttp(options); !http.ok()) return http;
+  INSDIAG_RETURN_IF_ERROR(server->StartGrpc(options));
+  INSDIAG_RETURN_IF_ERROR(server->StartHttp(options));
   server->StartHealthWatch(pool, options.health_poll);
   server->services_->workers.Start();
   return server;
@@ -190,10 +189,9 @@ absl::Status InsdiagServer::StartGrpc(const Options& options) {
   grpc::ServerBuilder builder;
   std::shared_ptr<grpc::ServerCredentials> credentials = grpc::InsecureServerCredentials();
   if (UsesTls(options)) {
-    auto pair = ReadKeyCertPair(options);
-    if (!pair.ok()) return pair.status();
+    INSDIAG_ASSIGN_OR_RETURN(auto pair, ReadKeyCertPair(options));
     grpc::SslServerCredentialsOptions ssl;
-    ssl.pem_key_cert_pairs.push_back(*pair);
+    ssl.pem_key_cert_pairs.push_back(pair);
     credentials = grpc::SslServerCredentials(ssl);
   }
   builder.AddListeningPort(absl::StrCat(options.bind_address, ":", options.grpc_port), credentials,
@@ -215,10 +213,10 @@ absl::Status InsdiagServer::StartGrpc(const Options& options) {
 }
 
 absl::Status InsdiagServer::StartHttp(const Options& options) {
-  auto gateway = RestGateway::Create(grpc_->InProcessChannel(grpc::ChannelArguments()),
-                                     ServiceNames(), services_->guard.gateway_key());
-  if (!gateway.ok()) return gateway.status();
-  gateway_ = std::move(*gateway);
+  INSDIAG_ASSIGN_OR_RETURN(auto gateway,
+                           RestGateway::Create(grpc_->InProcessChannel(grpc::ChannelArguments()),
+                                               ServiceNames(), services_->guard.gateway_key()));
+  gateway_ = std::move(gateway);
   gateway_->ServeMetrics([services = services_.get()] { return services->RenderMetrics(); });
   if (UsesTls(options)) {
     auto https = std::make_unique<httplib::SSLServer>(options.tls_cert_file.c_str(), options.tls_key_file.c_str());
@@ -262,7 +260,7 @@ void InsdiagServer::StartHealthWatch(kb::ConnectionPool& pool, std::chrono::mill
     while (!stopping_) {
       lock.unlock();
       bool answers = false;
-      if (auto db = pool.Acquire(); db.ok()) answers = (*db)->Exec("SELECT 1").ok();
+      if (auto db = pool.Acquire(); db.ok()) answers = (*db)->Ping().ok();
       health->SetServingStatus(answers);
       lock.lock();
       health_wake_.wait_for(lock, poll, [this] { return stopping_; });

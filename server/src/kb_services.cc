@@ -9,6 +9,8 @@
 #include "insdiag/api/report_codec.h"
 #include "insdiag/api/resource_names.h"
 #include "insdiag/engine/model/effect_catalogue.h"
+#include "insdiag/engine/status_macros.h"
+#include "insdiag/kb/diagnose_analysis.h"
 #include "insdiag/server/display_series.h"
 
 namespace insdiag::server {
@@ -28,61 +30,59 @@ absl::Status CheckPageSize(int page_size) {
 absl::StatusOr<v1::Analysis> AnalysisService::CreateAnalysis(const v1::CreateAnalysisRequest& request) {
   const std::string& run = request.analysis().run();
   if (run.empty()) return absl::InvalidArgumentError("analysis.run: required (runs/{run})");
-  auto run_id = api::ResourceId(run, api::kRuns, "analysis.run");
-  if (!run_id.ok()) return run_id.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto run_id, api::ResourceId(run, api::kRuns, "analysis.run"));
   v1::AnalysisSpec spec;
   *spec.mutable_model() = request.analysis().model();
   if (request.analysis().has_baseline()) *spec.mutable_baseline() = request.analysis().baseline();
   spec.set_discover(request.analysis().discover());
   if (!request.analysis().base_analysis().empty()) {
-    if (auto checked = CheckBaseAnalysis(request.analysis(), spec); !checked.ok()) return checked;
+    INSDIAG_RETURN_IF_ERROR(CheckBaseAnalysis(request.analysis(), spec));
   }
-  return store_.Create(*run_id, spec, request.request_id());
+  return store_.Create(run_id, spec, request.request_id());
 }
 
 // An analysis that starts from an earlier one's identified model: the earlier
 // one succeeded on the same run, and the baseline is (within) its model.
 absl::Status AnalysisService::CheckBaseAnalysis(const v1::Analysis& asked, v1::AnalysisSpec& spec) {
-  auto id = api::ResourceId(asked.base_analysis(), api::kAnalyses, "analysis.base_analysis");
-  if (!id.ok()) return id.status();
-  auto base = store_.Get(*id, true);
-  if (!base.ok()) return base.status();
-  if (base->run() != asked.run()) {
-    return absl::InvalidArgumentError(absl::StrCat("analysis.base_analysis: ", asked.base_analysis(), " analysed ",
-                                                   base->run(), ", not ", asked.run()));
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto id, api::ResourceId(asked.base_analysis(), api::kAnalyses, "analysis.base_analysis"));
+  INSDIAG_ASSIGN_OR_RETURN(auto base, store_.Get(id, true));
+  if (base.run() != asked.run()) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("analysis.base_analysis: ", asked.base_analysis(), " analysed ", base.run(),
+                     ", not ", asked.run()));
   }
-  if (base->state() != v1::Analysis::SUCCEEDED) {
+  if (base.state() != v1::Analysis::SUCCEEDED) {
     return absl::FailedPreconditionError(absl::StrCat("analysis.base_analysis: ", asked.base_analysis(),
                                                       " has not succeeded: it has no identified model to start from"));
   }
-  auto identified = api::IdentifiedModelOf(base->report());
-  if (!identified.ok()) return identified.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto identified, api::IdentifiedModelOf(base.report()));
   for (int i = 0; i < spec.baseline().effects_size(); ++i) {
     const std::string& effect = spec.baseline().effects(i);
     auto terms = engine::ParseEffectSelector(effect);
-    const bool covered = terms.ok() && std::all_of(terms->begin(), terms->end(), [&](const engine::EffectTerm& t) {
-      return identified->model.FindEffect(t) >= 0;
-    });
+    const bool covered =
+        terms.ok() && std::all_of(terms->begin(), terms->end(), [&](const engine::EffectTerm& t) {
+          return identified.model.FindEffect(t) >= 0;
+        });
     if (!covered) {
       return absl::InvalidArgumentError(absl::StrCat("analysis.baseline.effects[", i, "]: '", effect, "' is not in ",
                                                      asked.base_analysis(), "'s model"));
     }
   }
   if (spec.baseline().effects_size() == 0) {
-    *spec.mutable_baseline()->mutable_effects() = base->report().model().effects();
+    *spec.mutable_baseline()->mutable_effects() = base.report().model().effects();
   }
   spec.set_base_analysis(asked.base_analysis());
   return absl::OkStatus();
 }
 
 absl::StatusOr<v1::Analysis> AnalysisService::GetAnalysis(const v1::GetAnalysisRequest& request) {
-  auto id = api::ResourceId(request.name(), api::kAnalyses);
-  if (!id.ok()) return id.status();
-  return store_.Get(*id, true);
+  INSDIAG_ASSIGN_OR_RETURN(auto id, api::ResourceId(request.name(), api::kAnalyses));
+  return store_.Get(id, true);
 }
 
 absl::StatusOr<v1::ListAnalysesResponse> AnalysisService::ListAnalyses(const v1::ListAnalysesRequest& request) {
-  if (auto s = CheckPageSize(request.page_size()); !s.ok()) return s;
+  INSDIAG_RETURN_IF_ERROR(CheckPageSize(request.page_size()));
   kb::AnalysisQuery query;
   query.page_size = request.page_size();
   query.page_token = request.page_token();
@@ -93,45 +93,40 @@ absl::StatusOr<v1::ListAnalysesResponse> AnalysisService::ListAnalyses(const v1:
     query.run_id = *std::move(run_id);
   }
   if (!request.unit().empty()) {
-    auto serial = api::ResourceId(request.unit(), api::kUnits, "unit");
-    if (!serial.ok()) return serial.status();
-    query.unit_serial = *std::move(serial);
+    INSDIAG_ASSIGN_OR_RETURN(auto serial, api::ResourceId(request.unit(), api::kUnits, "unit"));
+    query.unit_serial = std::move(serial);
   }
-  auto page = store_.List(query);
-  if (!page.ok()) return page.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto page, store_.List(query));
   v1::ListAnalysesResponse response;
-  for (auto& a : page->analyses) *response.add_analyses() = std::move(a);
-  response.set_next_page_token(page->next_page_token);
+  for (auto& a : page.analyses) *response.add_analyses() = std::move(a);
+  response.set_next_page_token(page.next_page_token);
   return response;
 }
 
 absl::StatusOr<v1::Analysis> AnalysisService::CancelAnalysis(const v1::CancelAnalysisRequest& request) {
-  auto id = api::ResourceId(request.name(), api::kAnalyses);
-  if (!id.ok()) return id.status();
-  return store_.Cancel(*id);
+  INSDIAG_ASSIGN_OR_RETURN(auto id, api::ResourceId(request.name(), api::kAnalyses));
+  return store_.Cancel(id);
 }
 
 absl::Status AnalysisService::WatchAnalysis(const v1::WatchAnalysisRequest& request,
                                             absl::FunctionRef<bool(const v1::Analysis&)> send,
                                             std::function<bool()> stop) {
-  auto id = api::ResourceId(request.name(), api::kAnalyses);
-  if (!id.ok()) return id.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto id, api::ResourceId(request.name(), api::kAnalyses));
   std::string last;
   for (;;) {
-    auto analysis = store_.Get(*id, false);
-    if (!analysis.ok()) return analysis.status();
-    const bool terminal = Terminal(analysis->state());
+    INSDIAG_ASSIGN_OR_RETURN(auto analysis, store_.Get(id, false));
+    const bool terminal = Terminal(analysis.state());
     if (terminal) {
-      auto full = store_.Get(*id, true);  // the last message carries the report
+      auto full = store_.Get(id, true);  // the last message carries the report
       if (!full.ok()) return full.status();
       send(*full);
       return absl::OkStatus();
     }
-    const std::string key = absl::StrCat(analysis->state(), "|", analysis->progress().fraction(), "|",
-                                         analysis->progress().stage(), "|", analysis->attempts());
+    const std::string key = absl::StrCat(analysis.state(), "|", analysis.progress().fraction(), "|",
+                                         analysis.progress().stage(), "|", analysis.attempts());
     if (key != last) {
       last = key;
-      if (!send(*analysis)) return absl::OkStatus();
+      if (!send(analysis)) return absl::OkStatus();
     }
     if (stop && stop()) return absl::CancelledError("the watch was cancelled");
     std::this_thread::sleep_for(options_.watch_poll);
@@ -140,14 +135,14 @@ absl::Status AnalysisService::WatchAnalysis(const v1::WatchAnalysisRequest& requ
 
 absl::Status AnalysisService::ReadResidualSeries(const v1::ReadResidualSeriesRequest& request,
                                                  absl::FunctionRef<bool(const v1::ResidualSeriesChunk&)> send) {
-  auto id = api::ResourceId(request.name(), api::kAnalyses);
-  if (!id.ok()) return id.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto id, api::ResourceId(request.name(), api::kAnalyses));
   if (request.chunk_size() < 0 || request.chunk_size() > 50'000) {
     return absl::InvalidArgumentError("chunk_size must be within 0 … 50000");
   }
   const std::vector<std::string> channels(request.channels().begin(), request.channels().end());
-  return store_.ReadSeries(*id, channels, request.chunk_size() == 0 ? 5000 : static_cast<std::size_t>(request.chunk_size()),
-                           send);
+  return store_.ReadSeries(
+      id, channels,
+      request.chunk_size() == 0 ? 5000 : static_cast<std::size_t>(request.chunk_size()), send);
 }
 
 absl::StatusOr<v1::DisplaySeries> AnalysisService::ReadDisplaySeries(const v1::ReadDisplaySeriesRequest& request) {
@@ -162,13 +157,12 @@ absl::StatusOr<v1::DisplaySeries> AnalysisService::ReadDisplaySeries(const v1::R
     return absl::InvalidArgumentError(absl::StrCat("end_s (", request.end_s(), ") must be after start_s (",
                                                    request.start_s(), "); both 0 ask for the whole series"));
   }
-  auto id = api::ResourceId(request.name(), api::kAnalyses);
-  if (!id.ok()) return id.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto id, api::ResourceId(request.name(), api::kAnalyses));
   // The stored series arrives channel by channel, each in time order.
   std::vector<std::string> order;
   std::map<std::string, std::vector<SeriesEpoch>> epochs;
   const std::vector<std::string> channels(request.channels().begin(), request.channels().end());
-  auto read = store_.ReadSeries(*id, channels, 50'000, [&](const v1::ResidualSeriesChunk& chunk) {
+  auto read = store_.ReadSeries(id, channels, 50'000, [&](const v1::ResidualSeriesChunk& chunk) {
     for (const auto& p : chunk.points()) {
       auto [it, inserted] = epochs.try_emplace(p.channel());
       if (inserted) order.push_back(p.channel());
@@ -192,10 +186,10 @@ absl::StatusOr<v1::DisplaySeries> AnalysisService::ReadDisplaySeries(const v1::R
   out.set_start_s(whole ? out.series_start_s() : request.start_s());
   out.set_end_s(whole ? out.series_end_s() : request.end_s());
   for (const auto& channel : order) {
-    auto envelope = DecimateForDisplay(epochs[channel], out.start_s(), out.end_s(), out.columns());
-    if (!envelope.ok()) return envelope.status();
-    envelope->set_channel(channel);
-    *out.add_channels() = std::move(*envelope);
+    INSDIAG_ASSIGN_OR_RETURN(auto envelope, DecimateForDisplay(epochs[channel], out.start_s(),
+                                                               out.end_s(), out.columns()));
+    envelope.set_channel(channel);
+    *out.add_channels() = std::move(envelope);
   }
   return out;
 }
@@ -205,11 +199,10 @@ absl::StatusOr<v1::UnitType> KnowledgeService::GetUnitType(const v1::GetUnitType
 }
 
 absl::StatusOr<v1::ListUnitTypesResponse> KnowledgeService::ListUnitTypes(const v1::ListUnitTypesRequest& request) {
-  if (auto s = CheckPageSize(request.page_size()); !s.ok()) return s;
-  auto types = catalogue_.ListUnitTypes();
-  if (!types.ok()) return types.status();
+  INSDIAG_RETURN_IF_ERROR(CheckPageSize(request.page_size()));
+  INSDIAG_ASSIGN_OR_RETURN(auto types, catalogue_.ListUnitTypes());
   v1::ListUnitTypesResponse response;
-  for (auto& t : *types) *response.add_unit_types() = std::move(t);
+  for (auto& t : types) *response.add_unit_types() = std::move(t);
   return response;
 }
 
@@ -222,30 +215,30 @@ absl::StatusOr<v1::Unit> KnowledgeService::GetUnit(const v1::GetUnitRequest& req
 }
 
 absl::StatusOr<v1::ListUnitsResponse> KnowledgeService::ListUnits(const v1::ListUnitsRequest& request) {
-  if (auto s = CheckPageSize(request.page_size()); !s.ok()) return s;
-  auto page = catalogue_.ListUnits({request.page_size(), request.page_token()}, request.unit_type(), request.batch());
-  if (!page.ok()) return page.status();
+  INSDIAG_RETURN_IF_ERROR(CheckPageSize(request.page_size()));
+  INSDIAG_ASSIGN_OR_RETURN(auto page,
+                           catalogue_.ListUnits({request.page_size(), request.page_token()},
+                                                request.unit_type(), request.batch()));
   v1::ListUnitsResponse response;
-  for (auto& u : page->first) *response.add_units() = std::move(u);
-  response.set_next_page_token(page->second);
+  for (auto& u : page.first) *response.add_units() = std::move(u);
+  response.set_next_page_token(page.second);
   return response;
 }
 
 absl::StatusOr<v1::ListModulesResponse> KnowledgeService::ListModules(const v1::ListModulesRequest& request) {
-  auto modules = catalogue_.ListModules(request.parent());
-  if (!modules.ok()) return modules.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto modules, catalogue_.ListModules(request.parent()));
   v1::ListModulesResponse response;
-  for (auto& m : *modules) *response.add_modules() = std::move(m);
+  for (auto& m : modules) *response.add_modules() = std::move(m);
   return response;
 }
 
 absl::StatusOr<v1::ListFailureModesResponse> KnowledgeService::ListFailureModes(
     const v1::ListFailureModesRequest& request) {
-  if (auto s = CheckPageSize(request.page_size()); !s.ok()) return s;
-  auto modes = catalogue_.ListFailureModes(request.unit_type(), request.module_role());
-  if (!modes.ok()) return modes.status();
+  INSDIAG_RETURN_IF_ERROR(CheckPageSize(request.page_size()));
+  INSDIAG_ASSIGN_OR_RETURN(auto modes,
+                           catalogue_.ListFailureModes(request.unit_type(), request.module_role()));
   v1::ListFailureModesResponse response;
-  for (auto& m : *modes) *response.add_failure_modes() = std::move(m);
+  for (auto& m : modes) *response.add_failure_modes() = std::move(m);
   return response;
 }
 
@@ -264,32 +257,30 @@ absl::StatusOr<v1::FailureRecord> KnowledgeService::CorrectFailureRecord(
 
 absl::StatusOr<v1::ListFailureRecordRevisionsResponse> KnowledgeService::ListFailureRecordRevisions(
     const v1::ListFailureRecordRevisionsRequest& request) {
-  auto revisions = records_.ListRevisions(request.name());
-  if (!revisions.ok()) return revisions.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto revisions, records_.ListRevisions(request.name()));
   v1::ListFailureRecordRevisionsResponse response;
-  for (auto& revision : *revisions) *response.add_revisions() = std::move(revision);
+  for (auto& revision : revisions) *response.add_revisions() = std::move(revision);
   return response;
 }
 
 absl::StatusOr<v1::ListFailureRecordsResponse> KnowledgeService::ListFailureRecords(
     const v1::ListFailureRecordsRequest& request) {
-  if (auto s = CheckPageSize(request.page_size()); !s.ok()) return s;
+  INSDIAG_RETURN_IF_ERROR(CheckPageSize(request.page_size()));
   kb::FailureRecordQuery query;
   query.page = {request.page_size(), request.page_token()};
   query.module = request.module();
   query.unit = request.unit();
   query.failure_mode = request.failure_mode();
-  auto page = records_.List(query);
-  if (!page.ok()) return page.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto page, records_.List(query));
   v1::ListFailureRecordsResponse response;
-  for (auto& r : page->first) *response.add_failure_records() = std::move(r);
-  response.set_next_page_token(page->second);
+  for (auto& r : page.first) *response.add_failure_records() = std::move(r);
+  response.set_next_page_token(page.second);
   return response;
 }
 
 absl::StatusOr<v1::Diagnosis> KnowledgeService::CreateDiagnosis(const v1::CreateDiagnosisRequest& request) {
   if (request.analysis().empty()) return absl::InvalidArgumentError("analysis: required (analyses/{analysis})");
-  return diagnoses_.Create(request.analysis());
+  return kb::AnalysisDiagnoser(diagnoses_).Diagnose(request.analysis());
 }
 
 absl::StatusOr<v1::Diagnosis> KnowledgeService::GetDiagnosis(const v1::GetDiagnosisRequest& request) {
@@ -297,16 +288,15 @@ absl::StatusOr<v1::Diagnosis> KnowledgeService::GetDiagnosis(const v1::GetDiagno
 }
 
 absl::StatusOr<v1::ListDiagnosesResponse> KnowledgeService::ListDiagnoses(const v1::ListDiagnosesRequest& request) {
-  if (auto s = CheckPageSize(request.page_size()); !s.ok()) return s;
+  INSDIAG_RETURN_IF_ERROR(CheckPageSize(request.page_size()));
   kb::DiagnosisQuery query;
   query.page = {request.page_size(), request.page_token()};
   query.analysis = request.analysis();
   query.unit = request.unit();
-  auto page = diagnoses_.List(query);
-  if (!page.ok()) return page.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto page, diagnoses_.List(query));
   v1::ListDiagnosesResponse response;
-  for (auto& d : page->first) *response.add_diagnoses() = std::move(d);
-  response.set_next_page_token(page->second);
+  for (auto& d : page.first) *response.add_diagnoses() = std::move(d);
+  response.set_next_page_token(page.second);
   return response;
 }
 
@@ -325,12 +315,12 @@ absl::StatusOr<v1::CreatedToken> AccessService::CreateToken(const v1::CreateToke
 
 absl::StatusOr<v1::ListTokensResponse> AccessService::ListTokens(const v1::ListTokensRequest& request,
                                                                  const v1::Caller&) {
-  if (auto status = CheckPageSize(request.page_size()); !status.ok()) return status;
-  auto page = store_.ListTokens({.page_size = request.page_size(), .page_token = request.page_token()});
-  if (!page.ok()) return page.status();
+  INSDIAG_RETURN_IF_ERROR(CheckPageSize(request.page_size()));
+  INSDIAG_ASSIGN_OR_RETURN(auto page, store_.ListTokens({.page_size = request.page_size(),
+                                                         .page_token = request.page_token()}));
   v1::ListTokensResponse response;
-  for (auto& token : page->first) *response.add_tokens() = std::move(token);
-  response.set_next_page_token(page->second);
+  for (auto& token : page.first) *response.add_tokens() = std::move(token);
+  response.set_next_page_token(page.second);
   return response;
 }
 
@@ -340,14 +330,15 @@ absl::StatusOr<v1::Token> AccessService::RevokeToken(const v1::RevokeTokenReques
 
 absl::StatusOr<v1::ListAuditEventsResponse> AccessService::ListAuditEvents(const v1::ListAuditEventsRequest& request,
                                                                            const v1::Caller&) {
-  if (auto status = CheckPageSize(request.page_size()); !status.ok()) return status;
-  auto page = store_.ListAuditEvents({.page = {.page_size = request.page_size(), .page_token = request.page_token()},
-                                      .resource = request.resource(),
-                                      .token = request.token()});
-  if (!page.ok()) return page.status();
+  INSDIAG_RETURN_IF_ERROR(CheckPageSize(request.page_size()));
+  INSDIAG_ASSIGN_OR_RETURN(auto page,
+                           store_.ListAuditEvents({.page = {.page_size = request.page_size(),
+                                                            .page_token = request.page_token()},
+                                                   .resource = request.resource(),
+                                                   .token = request.token()}));
   v1::ListAuditEventsResponse response;
-  for (auto& event : page->first) *response.add_audit_events() = std::move(event);
-  response.set_next_page_token(page->second);
+  for (auto& event : page.first) *response.add_audit_events() = std::move(event);
+  response.set_next_page_token(page.second);
   return response;
 }
 

@@ -2,17 +2,17 @@
 
 #include <absl/strings/str_cat.h>
 #include <absl/strings/str_format.h>
+#include <google/protobuf/util/time_util.h>
 
 #include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
 
-#include <google/protobuf/util/time_util.h>
-
 #include "insdiag/api/report_codec.h"
 #include "insdiag/engine/analysis.h"
 #include "insdiag/engine/monitor/live_monitor.h"
+#include "insdiag/engine/status_macros.h"
 #include "insdiag/server/unit_type_models.h"
 
 namespace insdiag::server {
@@ -104,11 +104,10 @@ absl::Status LiveRunService::MonitorRun(absl::FunctionRef<bool(v1::MonitorRunReq
         "planned_duration_s: the test's planned length in seconds must be given with the metadata, and positive");
   }
   RunService::Upload upload = runs_.StartUpload();
-  if (auto status = upload.Accept(request.upload()); !status.ok()) return status;
+  INSDIAG_RETURN_IF_ERROR(upload.Accept(request.upload()));
   const engine::BenchRun& run = upload.received();
-  auto nominal = NominalModelOfUnitType(pool_, run.metadata.unit_type);
-  if (!nominal.ok()) return nominal.status();
-  auto model = engine::APrioriModel(run, *nominal, engine::AnalysisOptions{}.reference);
+  INSDIAG_ASSIGN_OR_RETURN(auto nominal, NominalModelOfUnitType(pool_, run.metadata.unit_type));
+  auto model = engine::APrioriModel(run, nominal, engine::AnalysisOptions{}.reference);
   if (!model.ok()) {
     return absl::FailedPreconditionError(
         absl::StrCat("live monitoring needs the unit's a-priori model (a datasheet in the metadata or a unit type "
@@ -117,9 +116,8 @@ absl::Status LiveRunService::MonitorRun(absl::FunctionRef<bool(v1::MonitorRunReq
   }
   engine::LiveMonitorOptions options;
   options.planned_duration_s = planned_duration_s;
-  auto monitor = engine::LiveMonitor::Create(run, *model, options);
-  if (!monitor.ok()) return monitor.status();
-  engine::LiveMonitor& live = **monitor;
+  INSDIAG_ASSIGN_OR_RETURN(auto monitor, engine::LiveMonitor::Create(run, *model, options));
+  engine::LiveMonitor& live = *monitor;
 
   v1::LiveRun state;
   state.set_unit_serial(run.metadata.unit_serial);

@@ -16,6 +16,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/pg.h"
 #include "insdiag/server/server_log.h"
 
@@ -160,23 +161,17 @@ absl::StatusOr<std::unique_ptr<PostgresSupervisor>> PostgresSupervisor::Start(Op
   }
   // A cluster still running from a crashed server is adopted.
   if (!supervisor->Run("pg_ctl", {"status", "-D", cluster}).ok()) {
-    if (auto status = supervisor->StartCluster(); !status.ok()) return status;
+    INSDIAG_RETURN_IF_ERROR(supervisor->StartCluster());
   }
   supervisor->running_ = true;
   if (supervisor->options_.restart_check_interval.count() > 0) {
     supervisor->watchdog_ = std::thread([s = supervisor.get()] { s->KeepClusterRunning(); });
   }
 
-  auto admin = kb::Connection::Open(absl::StrCat("host='", run_text, "' port=", kSocketPort, " user=postgres dbname=postgres"));
-  if (!admin.ok()) return admin.status();
-  auto exists = admin->Exec("SELECT 1 FROM pg_database WHERE datname = $1", {kb::Param::Text(supervisor->options_.database)});
-  if (!exists.ok()) return exists.status();
-  if (exists->rows() == 0) {
-    // CREATE DATABASE takes no parameters: the name goes in as a quoted identifier.
-    auto quoted = admin->QuoteIdentifier(supervisor->options_.database);
-    if (!quoted.ok()) return quoted.status();
-    if (auto status = admin->ExecScript("CREATE DATABASE " + *quoted); !status.ok()) return status;
-  }
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto admin, kb::Connection::Open(absl::StrCat("host='", run_text, "' port=", kSocketPort,
+                                                    " user=postgres dbname=postgres")));
+  INSDIAG_RETURN_IF_ERROR(admin.CreateDatabaseIfMissing(supervisor->options_.database));
   return supervisor;
 }
 

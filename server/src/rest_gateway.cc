@@ -2,10 +2,10 @@
 
 #include <absl/strings/ascii.h>
 #include <absl/strings/match.h>
-#include <absl/strings/strip.h>
 #include <absl/strings/numbers.h>
 #include <absl/strings/str_cat.h>
 #include <absl/strings/str_split.h>
+#include <absl/strings/strip.h>
 #include <google/protobuf/descriptor.h>
 #include <google/protobuf/dynamic_message.h>
 
@@ -13,15 +13,16 @@
 
 #include "google/api/annotations.pb.h"
 #include "in_process_call.h"
-#include "rest_request.h"
 #include "insdiag/api/json.h"
 #include "insdiag/api/run_codec.h"
 #include "insdiag/benchrun/bench_run_csv.h"
+#include "insdiag/engine/status_macros.h"
 #include "insdiag/server/access_guard.h"
 #include "insdiag/server/openapi.h"
 #include "insdiag/server/status_mapping.h"
 #include "insdiag/v1/access.pb.h"
 #include "insdiag/v1/runs.pb.h"
+#include "rest_request.h"
 
 // Last: httplib.h pulls in <resolv.h>, whose `_res` macro breaks Eigen's headers.
 #include <httplib.h>
@@ -133,10 +134,10 @@ absl::StatusOr<std::unique_ptr<RestGateway>> RestGateway::Create(std::shared_ptr
           case google::api::HttpRule::kCustom: verb = binding->custom().kind(), path = binding->custom().path(); break;
           default: continue;
         }
-        auto parsed = PathTemplate::Parse(path);
-        if (!parsed.ok()) return parsed.status();
-        gateway->routes_.push_back(Route{verb, std::move(*parsed), binding->body(), method,
-                                         absl::StrCat("/", service->full_name(), "/", method->name())});
+        INSDIAG_ASSIGN_OR_RETURN(auto parsed, PathTemplate::Parse(path));
+        gateway->routes_.push_back(
+            Route{verb, std::move(parsed), binding->body(), method,
+                  absl::StrCat("/", service->full_name(), "/", method->name())});
         operations.push_back(OpenApiOperation{verb, path, binding->body(), method});
       }
     }

@@ -6,6 +6,7 @@
 #include <google/protobuf/descriptor.h>
 
 #include "insdiag/api/json.h"
+#include "insdiag/engine/status_macros.h"
 
 // Last: httplib.h pulls in <resolv.h>, whose `_res` macro breaks Eigen's headers.
 #include <httplib.h>
@@ -121,10 +122,10 @@ absl::Status BuildRequest(const std::string& body_rule, const std::map<std::stri
       }
       body_target = request.GetReflection()->MutableMessage(&request, field);
     }
-    if (auto status = api::FromJson(http.body, body_target); !status.ok()) return status;
+    INSDIAG_RETURN_IF_ERROR(api::FromJson(http.body, body_target));
   }
   for (const auto& [name, value] : http.params) {
-    if (auto status = SetFieldFromText(request, name, value); !status.ok()) return status;
+    INSDIAG_RETURN_IF_ERROR(SetFieldFromText(request, name, value));
   }
   // Path variables last: the URL names the resource, whatever the body says.
   for (const auto& [path, value] : bindings) {
@@ -132,7 +133,7 @@ absl::Status BuildRequest(const std::string& body_rule, const std::map<std::stri
     if (field != nullptr && !field->is_repeated() && field->cpp_type() == FieldDescriptor::CPPTYPE_STRING) {
       request.GetReflection()->ClearField(&request, field);
     }
-    if (auto status = SetFieldFromText(request, path, value); !status.ok()) return status;
+    INSDIAG_RETURN_IF_ERROR(SetFieldFromText(request, path, value));
   }
   return absl::OkStatus();
 }

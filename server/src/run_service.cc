@@ -1,13 +1,13 @@
 #include "insdiag/server/run_service.h"
 
 #include <absl/strings/str_cat.h>
+#include <google/protobuf/util/time_util.h>
 
 #include <algorithm>
 #include <array>
 
-#include <google/protobuf/util/time_util.h>
-
 #include "insdiag/api/resource_names.h"
+#include "insdiag/engine/status_macros.h"
 #include "insdiag/server/status_mapping.h"
 
 namespace insdiag::server {
@@ -33,11 +33,9 @@ v1::Run ToProto(const kb::StoredRun& stored) {
 }  // namespace
 
 absl::StatusOr<v1::Run> RunService::GetRun(const v1::GetRunRequest& request) {
-  auto id = api::ResourceId(request.name(), api::kRuns);
-  if (!id.ok()) return id.status();
-  auto stored = store_.Get(*id);
-  if (!stored.ok()) return stored.status();
-  return ToProto(*stored);
+  INSDIAG_ASSIGN_OR_RETURN(auto id, api::ResourceId(request.name(), api::kRuns));
+  INSDIAG_ASSIGN_OR_RETURN(auto stored, store_.Get(id));
+  return ToProto(stored);
 }
 
 absl::StatusOr<v1::ListRunsResponse> RunService::ListRuns(const v1::ListRunsRequest& request) {
@@ -46,34 +44,32 @@ absl::StatusOr<v1::ListRunsResponse> RunService::ListRuns(const v1::ListRunsRequ
   query.page_size = request.page_size();
   query.page_token = request.page_token();
   query.unit_serial = request.unit_serial();
-  auto page = store_.List(query);
-  if (!page.ok()) return page.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto page, store_.List(query));
   v1::ListRunsResponse response;
-  for (const auto& run : page->runs) *response.add_runs() = ToProto(run);
-  response.set_next_page_token(page->next_page_token);
+  for (const auto& run : page.runs) *response.add_runs() = ToProto(run);
+  response.set_next_page_token(page.next_page_token);
   return response;
 }
 
 absl::Status RunService::DeleteRun(const v1::DeleteRunRequest& request) {
-  auto id = api::ResourceId(request.name(), api::kRuns);
-  if (!id.ok()) return id.status();
-  return store_.Delete(*id);
+  INSDIAG_ASSIGN_OR_RETURN(auto id, api::ResourceId(request.name(), api::kRuns));
+  return store_.Delete(id);
 }
 
 absl::Status RunService::ReadRunSamples(const v1::ReadRunSamplesRequest& request,
                                         absl::FunctionRef<bool(const v1::SampleChunk&)> send) {
-  auto id = api::ResourceId(request.name(), api::kRuns);
-  if (!id.ok()) return id.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto id, api::ResourceId(request.name(), api::kRuns));
   if (request.chunk_size() < 0 || request.chunk_size() > kMaxChunkSamples) {
     return absl::InvalidArgumentError(absl::StrCat("chunk_size must be within 0 … ", kMaxChunkSamples));
   }
   const int chunk_size = request.chunk_size() == 0 ? kDefaultChunkSamples : request.chunk_size();
   v1::SampleChunk chunk;
-  return store_.ReadSamples(*id, static_cast<std::size_t>(chunk_size),
+  return store_.ReadSamples(id, static_cast<std::size_t>(chunk_size),
                             [&](std::span<const engine::ImuSample> samples) {
                               chunk.Clear();
                               chunk.mutable_samples()->Reserve(static_cast<int>(samples.size()));
-                              for (const auto& sample : samples) *chunk.add_samples() = api::ToProto(sample);
+                              for (const auto& sample : samples)
+                                *chunk.add_samples() = api::ToProto(sample);
                               return send(chunk);
                             });
 }
@@ -81,12 +77,12 @@ absl::Status RunService::ReadRunSamples(const v1::ReadRunSamplesRequest& request
 absl::Status RunService::Upload::Accept(const v1::UploadRunRequest& message) { return assembler_.Accept(message); }
 
 absl::StatusOr<v1::Run> RunService::Upload::Finish() {
-  auto upload = assembler_.Finish();
-  if (!upload.ok()) return upload.status();
-  auto stored = service_.store_.Create(upload->run, upload->identity);
+  INSDIAG_ASSIGN_OR_RETURN(auto upload, assembler_.Finish());
+  auto stored = service_.store_.Create(upload.run, upload.identity);
   if (!stored.ok()) {
     if (stored.status().code() == absl::StatusCode::kAlreadyExists) {
-      return WithErrorInfo(stored.status(), "REQUEST_ID_REUSED", {{"request_id", upload->identity.request_id}});
+      return WithErrorInfo(stored.status(), "REQUEST_ID_REUSED",
+                           {{"request_id", upload.identity.request_id}});
     }
     return stored.status();
   }

@@ -6,6 +6,7 @@
 #include <absl/time/time.h>
 
 #include "insdiag/api/resource_names.h"
+#include "insdiag/engine/status_macros.h"
 #include "insdiag/testreport/test_report.h"
 
 namespace insdiag::server {
@@ -27,9 +28,8 @@ absl::StatusOr<google::api::HttpBody> TestReportService::GetTestReport(const v1:
   testreport::TestReportInput input;
   v1::GetRunRequest run;
   run.set_name(analysis->run());
-  auto stored_run = runs_.GetRun(run);
-  if (!stored_run.ok()) return stored_run.status();
-  input.run = std::move(*stored_run);
+  INSDIAG_ASSIGN_OR_RETURN(auto stored_run, runs_.GetRun(run));
+  input.run = std::move(stored_run);
   auto diagnosis = DiagnosisOf(request);
   if (!diagnosis.ok()) return diagnosis.status();
   input.diagnosis = std::move(*diagnosis);
@@ -61,21 +61,20 @@ absl::StatusOr<std::optional<v1::Diagnosis>> TestReportService::DiagnosisOf(cons
   if (!request.diagnosis().empty()) {
     v1::GetDiagnosisRequest get;
     get.set_name(request.diagnosis());
-    auto diagnosis = knowledge_.GetDiagnosis(get);
-    if (!diagnosis.ok()) return diagnosis.status();
-    if (diagnosis->analysis() != request.name()) {
+    INSDIAG_ASSIGN_OR_RETURN(auto diagnosis, knowledge_.GetDiagnosis(get));
+    if (diagnosis.analysis() != request.name()) {
       return absl::InvalidArgumentError(absl::StrCat("diagnosis ", request.diagnosis(), " is of ",
-                                                     diagnosis->analysis(), ", not of ", request.name()));
+                                                     diagnosis.analysis(), ", not of ",
+                                                     request.name()));
     }
-    return std::optional<v1::Diagnosis>(std::move(*diagnosis));
+    return std::optional<v1::Diagnosis>(std::move(diagnosis));
   }
   v1::ListDiagnosesRequest list;  // newest first
   list.set_analysis(request.name());
   list.set_page_size(1);
-  auto listed = knowledge_.ListDiagnoses(list);
-  if (!listed.ok()) return listed.status();
-  if (listed->diagnoses().empty()) return std::optional<v1::Diagnosis>();
-  return std::optional<v1::Diagnosis>(listed->diagnoses(0));
+  INSDIAG_ASSIGN_OR_RETURN(auto listed, knowledge_.ListDiagnoses(list));
+  if (listed.diagnoses().empty()) return std::optional<v1::Diagnosis>();
+  return std::optional<v1::Diagnosis>(listed.diagnoses(0));
 }
 
 absl::StatusOr<std::optional<v1::UnitType>> TestReportService::UnitTypeOf(const v1::Run& run) {

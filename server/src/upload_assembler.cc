@@ -5,7 +5,7 @@
 #include <google/protobuf/io/coded_stream.h>
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 
-
+#include "insdiag/engine/status_macros.h"
 #include "insdiag/server/status_mapping.h"
 
 namespace insdiag::server {
@@ -51,9 +51,9 @@ absl::Status UploadAssembler::AcceptMetadata(const v1::RunMetadata& metadata) {
   run_.metadata = api::FromProto(metadata);
   run_.has_temperature = metadata.has_temperature();
   locator_ = std::make_unique<benchrun::FieldPathLocator>("upload");
-  auto validator = benchrun::BenchRunValidator::Create(run_.metadata, run_.has_temperature, *locator_);
-  if (!validator.ok()) return validator.status();
-  validator_.emplace(std::move(*validator));
+  INSDIAG_ASSIGN_OR_RETURN(auto validator, benchrun::BenchRunValidator::Create(
+                                               run_.metadata, run_.has_temperature, *locator_));
+  validator_.emplace(std::move(validator));
   digest_.emplace(run_.has_temperature);
   stage_ = Stage::kSamples;
   return absl::OkStatus();
@@ -101,7 +101,7 @@ absl::StatusOr<AssembledUpload> UploadAssembler::Finish() {
         absl::StrCat("the upload ended after ", run_.samples.size(),
                      " samples without its sha256 message; nothing was stored"));
   }
-  if (auto status = validator_->Finish(); !status.ok()) return status;
+  INSDIAG_RETURN_IF_ERROR(validator_->Finish());
   AssembledUpload done;
   done.identity.sha256 = sha256_;
   done.identity.request_id = metadata_.request_id();

@@ -86,6 +86,29 @@ std::string VerdictReason(const v1::AnalysisReport& r) {
   return absl::StrCat(absl::StrJoin(parts, "; "), ".");
 }
 
+// Whether the run tells the parameter, in the table's words; "—" where it
+// was not judged (methods other than FILTER, reports stored before the field).
+std::string ObservabilityWords(v1::IdentifiedParameter::Observability verdict) {
+  switch (verdict) {
+    case v1::IdentifiedParameter::OBSERVABLE:
+      return "observable";
+    case v1::IdentifiedParameter::NOT_EXCITED:
+      return "not excited";
+    case v1::IdentifiedParameter::INSEPARABLE:
+      return "inseparable";
+    case v1::IdentifiedParameter::WEAKLY_DETERMINED:
+      return "weakly determined";
+    default:
+      return "—";
+  }
+}
+
+bool IsUnobservable(v1::IdentifiedParameter::Observability verdict) {
+  return verdict == v1::IdentifiedParameter::NOT_EXCITED ||
+         verdict == v1::IdentifiedParameter::INSEPARABLE ||
+         verdict == v1::IdentifiedParameter::WEAKLY_DETERMINED;
+}
+
 }  // namespace
 
 std::string Num(double v) {
@@ -188,7 +211,12 @@ Section TolerancesSection(const v1::AnalysisReport& r) {
 
 Section ParametersSection(const v1::AnalysisReport& r, const std::optional<v1::UnitType>& unit_type) {
   Section s{"Identified parameters against nominal", {}};
-  Table t{{"parameter", "value", "95 % interval", "nominal", "tolerance", "unit", "method", "against nominal"}, {}, {}, ""};
+  Table t{{"parameter", "value", "95 % interval", "nominal", "tolerance", "unit", "method",
+           "against nominal", "observability"},
+          {},
+          {},
+          ""};
+  std::vector<std::string> unobservable;
   for (const auto& p : r.identified()) {
     const v1::NominalParameter* n = NominalOf(unit_type, p.name());
     std::string interval = "—";
@@ -203,10 +231,22 @@ Section ParametersSection(const v1::AnalysisReport& r, const std::optional<v1::U
       reference = absl::StrCat(Num(p.a_priori()), " (a priori)");
     }
     const std::optional<bool> within = WithinTolerance(p, n);
-    t.rows.push_back({p.name(), Num(p.value()), interval, reference, n != nullptr ? Num(n->tolerance()) : "—", p.unit(),
+    t.rows.push_back({p.name(), Num(p.value()), interval, reference,
+                      n != nullptr ? Num(n->tolerance()) : "—", p.unit(),
                       v1::IdentifiedParameter::Method_Name(p.method()),
-                      !within ? "no tolerance" : *within ? "within tolerance" : "outside tolerance"});
-    t.row_tones.push_back(within == false ? Tone::kBad : Tone::kNeutral);
+                      !within   ? "no tolerance"
+                      : *within ? "within tolerance"
+                                : "outside tolerance",
+                      ObservabilityWords(p.observability())});
+    const bool unobserved = IsUnobservable(p.observability());
+    if (unobserved) {
+      unobservable.push_back(absl::StrCat(p.name(), " (", ObservabilityWords(p.observability()),
+                                          p.observability_note().empty() ? "" : ": ",
+                                          p.observability_note(), ")"));
+    }
+    t.row_tones.push_back(within == false ? Tone::kBad
+                          : unobserved    ? Tone::kWarning
+                                          : Tone::kNeutral);
   }
   t.caption = absl::StrCat(
       "95 % interval: value ± ", Num(kInterval95Z), " standard errors. Nominal values and tolerances: ",
@@ -217,6 +257,13 @@ Section ParametersSection(const v1::AnalysisReport& r, const std::optional<v1::U
     s.blocks.push_back(Paragraph{"The analysis identified no parameter."});
   } else {
     s.blocks.push_back(std::move(t));
+  }
+  // Which the run could not tell (docs/MULTI_POSITION.md): their values are the prior's and the
+  // noise's.
+  if (!unobservable.empty()) {
+    s.blocks.push_back(
+        Paragraph{absl::StrCat("Not observable in this run: ", absl::StrJoin(unobservable, "; "),
+                               ". Their values say little about the unit.")});
   }
   return s;
 }

@@ -13,6 +13,7 @@
 #include "allan_scenarios.h"
 #include "insdiag/benchrun/bench_run_csv.h"
 #include "insdiag/engine/ident/allan.h"
+#include "insdiag/engine/model/parameter_key.h"
 #include "scenarios.h"
 #include "support/subprocess.h"
 
@@ -306,9 +307,9 @@ TEST(AllanCrossCheckTest, RealRingLaserGyroRecord) {
       const double engine = curve[i].adev / kDegPerHour;
       const double readme = kReadme[i].value_deg_h[axis];
       const double numpy = readme_py.adev.at({std::string(kSensorChannelNames[axis]), m[i]}).first / kDegPerHour;
-      std::printf("gyro_%c τ %6.2f s: engine %.5g °/h [%.4g, %.4g], numpy %.5g, README %.3g\n", "xyz"[axis],
-                  kReadme[i].tau_s, engine, curve[i].ci_low / kDegPerHour, curve[i].ci_high / kDegPerHour, numpy,
-                  readme);
+      std::printf("gyro_%s τ %6.2f s: engine %.5g °/h [%.4g, %.4g], numpy %.5g, README %.3g\n",
+                  std::string(AxisName(axis)).c_str(), kReadme[i].tau_s, engine,
+                  curve[i].ci_low / kDegPerHour, curve[i].ci_high / kDegPerHour, numpy, readme);
       EXPECT_NEAR(numpy / engine, 1.0, 1e-9);
       EXPECT_NEAR(engine / readme, 1.0, 0.01) << "axis " << axis;
       if (std::abs(engine - readme) > 0.5 * kReadme[i].last_digit[axis]) {

@@ -236,7 +236,7 @@ TEST(CorrelationFamilyTest, DetectsTwoExponentialsOverAThousandCorrelationTimes)
   EXPECT_GE(screened, kFamilySeeds * 7 / 10);
 }
 
-// Writes `x` (one value a line, %.17g) and runs tests/engine/SCRIPT on it with
+// Writes `x` (one value a line, %.17g) and runs the script `script` of tests/engine/ on it with
 // Debian's python3 (numpy, scipy); its standard output, or why it failed.
 absl::StatusOr<std::string> RunPythonOnSeries(const std::string& script, const std::vector<double>& x,
                                               const std::string& argument) {

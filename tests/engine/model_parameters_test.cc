@@ -10,6 +10,7 @@
 
 #include "insdiag/engine/model/drift_axis.h"
 #include "insdiag/engine/model/parameter_field.h"
+#include "insdiag/engine/model/parameter_key.h"
 #include "insdiag/engine/model/parameters.h"
 
 namespace insdiag::engine {
@@ -145,6 +146,73 @@ TEST(ModelParameters, RefuseWhatTheyCannotBe) {
   EXPECT_FALSE(SetParameter("gyro_scale_factor.z.onset", 10.0, m).ok()) << "a constant effect has no onset";
   EXPECT_FALSE(SetParameter("reference.heading", 1.0, m).ok());
   EXPECT_TRUE(m == ErrorModel{}) << "a refused parameter changed the model";
+}
+
+// A name is parsed once into its sensor, family, axes and field; every name
+// a model states parses, and reads the sensor axis its drift or term reads.
+TEST(ParameterKey, ParsesEveryNameAModelStates) {
+  std::mt19937_64 rng(7);
+  for (const NamedParameter& p : ParametersOf(RandomModel(rng))) {
+    const std::optional<ParameterKey> key = ParseParameterKey(p.name);
+    ASSERT_TRUE(key.has_value()) << p.name;
+    const bool reference = p.name.starts_with("reference.");
+    EXPECT_EQ(key->sensor.has_value(), !reference) << p.name;
+    if (!reference) {
+      EXPECT_GE(key->axis, 0) << p.name;
+      EXPECT_EQ(p.name.starts_with(key->Quantity()), true) << p.name;
+    }
+  }
+}
+
+TEST(ParameterKey, SplitsSensorFamilyAxesAndField) {
+  const auto sigma = ParseParameterKey("acc_bias_gm.y.sigma");
+  ASSERT_TRUE(sigma.has_value());
+  EXPECT_EQ(sigma->family, "acc_bias_gm");
+  EXPECT_EQ(sigma->sensor, Sensor::kAccelerometer);
+  EXPECT_EQ(sigma->axes, "y");
+  EXPECT_EQ(sigma->field, ParameterField::kSigma);
+  EXPECT_EQ(sigma->SensorAxis(), "acc.y");
+  EXPECT_EQ(sigma->Drift(), (DriftAxis{Sensor::kAccelerometer, 1}));
+  EXPECT_EQ(sigma->effect_family, nullptr) << "the base drift is no catalogue effect";
+
+  const auto pair = ParseParameterKey("gyro_misalignment.zx");
+  ASSERT_TRUE(pair.has_value());
+  EXPECT_EQ(pair->axis, 2);
+  EXPECT_EQ(pair->source_axis, 0);
+  EXPECT_EQ(pair->SensorAxis(), "gyro.z") << "a pair reads into its output axis";
+  EXPECT_EQ(pair->effect_family, FindEffectFamily("gyro_misalignment"));
+  EXPECT_TRUE(pair->IsBareTerm());
+
+  const auto harmonic = ParseParameterKey("gyro_yaw_harmonic.x.cos.prior_sigma");
+  ASSERT_TRUE(harmonic.has_value());
+  EXPECT_EQ(harmonic->harmonic, 1);
+  EXPECT_EQ(harmonic->field, ParameterField::kPriorSigma);
+  EXPECT_EQ(harmonic->Quantity(), "gyro_yaw_harmonic.x");
+
+  const auto fault = ParseParameterKey("gyro_bias_step.y@1500");
+  ASSERT_TRUE(fault.has_value());
+  EXPECT_EQ(fault->onset_s, 1500.0);
+  EXPECT_EQ(fault->Quantity(), "gyro_bias_step.y");
+
+  const auto family = ParseParameterKey("acc_scale_factor.*");
+  ASSERT_TRUE(family.has_value());
+  EXPECT_TRUE(family->IsFamilyPattern());
+  EXPECT_EQ(family->axis, -1);
+  EXPECT_EQ(family->SensorAxis(), "");
+
+  const auto reference = ParseParameterKey("reference.attitude_sigma");
+  ASSERT_TRUE(reference.has_value());
+  EXPECT_FALSE(reference->sensor.has_value());
+  EXPECT_EQ(reference->Quantity(), "reference.attitude_sigma");
+}
+
+TEST(ParameterKey, RefusesWhatIsNoName) {
+  for (const char* name : {"", ".x", "gyro_scale_factor.w", "gyro_scale_factor.xyz",
+                           "gyro_bias_step.x@soon", "gyro_bias_step.x@inf"}) {
+    EXPECT_FALSE(ParseParameterKey(name).has_value()) << name;
+  }
+  EXPECT_EQ(AxisName(2), "z");
+  EXPECT_EQ(AxisName(3), "");
 }
 
 }  // namespace

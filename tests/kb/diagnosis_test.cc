@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "evidence_reports.h"
+#include "insdiag/engine/model/parameter_key.h"
 
 namespace insdiag::kb {
 namespace {
@@ -422,9 +423,10 @@ RankRates TripledDriftSigmaRanks(double relative_se, int draws, std::uint64_t se
   RankRates rates;
   for (int i = 0; i < draws; ++i) {
     Evidence e = HealthyScatter(rng);
-    const std::string axis(1, "xyz"[i % 3]);
+    const engine::DriftAxis drift{engine::Sensor::kGyro, i % 3};
+    const std::string axis(engine::AxisName(drift.axis));
     for (auto& t : e.terms) {
-      if (t.name != absl::StrCat("gyro_bias_gm.", axis, ".sigma")) continue;
+      if (t.name != engine::DriftSigmaName(drift)) continue;
       t.measurement_sd = relative_se;
       t.x = std::log(3.0) + relative_se * unit(rng);
     }

@@ -7,6 +7,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "insdiag/kb/diagnose_analysis.h"
+#include "insdiag/api/resource_names.h"
 #include "insdiag/kb/analysis_store.h"
 #include "insdiag/kb/diagnosis_store.h"
 #include "insdiag/kb/fleet_generator.h"
@@ -181,7 +183,7 @@ TEST_F(FleetGeneratorTest, GeneratedHistoryReadsBackThroughTheStoresAndEveryStat
   auto page = analyses.List(query);
   ASSERT_TRUE(page.ok()) << page.status();
   ASSERT_FALSE(page->analyses.empty());
-  const std::string id = page->analyses.front().name().substr(std::string("analyses/").size());
+  const std::string id = api::IdOrSelf(page->analyses.front().name(), api::kAnalyses);
   auto analysis = analyses.Get(id, true);
   ASSERT_TRUE(analysis.ok()) << analysis.status();
   EXPECT_EQ(analysis->state(), v1::Analysis::SUCCEEDED);
@@ -194,7 +196,7 @@ TEST_F(FleetGeneratorTest, GeneratedHistoryReadsBackThroughTheStoresAndEveryStat
 
   // A new diagnosis of a generated analysis works like any other.
   DiagnosisStore diagnoses(pool());
-  auto diagnosis = diagnoses.Create(analysis->name());
+  auto diagnosis = AnalysisDiagnoser(diagnoses).Diagnose(analysis->name());
   ASSERT_TRUE(diagnosis.ok()) << diagnosis.status();
   EXPECT_FALSE(diagnosis->candidates().empty());
 

@@ -8,6 +8,7 @@
 #include <set>
 #include <thread>
 
+#include "insdiag/api/resource_names.h"
 #include "insdiag/kb/analysis_store.h"
 #include "insdiag/kb/run_store.h"
 #include "support/database_fixture.h"
@@ -43,7 +44,7 @@ TEST_F(JobQueueTest, FourConcurrentWorkersRunTwoHundredJobsEachExactlyOnce) {
   for (int i = 0; i < 200; ++i) {
     auto a = store.Create(run, v1::AnalysisSpec(), "");
     ASSERT_TRUE(a.ok()) << a.status();
-    created.insert(a->name().substr(9));
+    created.insert(api::IdOrSelf(a->name(), api::kAnalyses));
   }
   auto workers_pool = ConnectionPool::Create({.database_url = database_url(), .max_connections = 8});
   ASSERT_TRUE(workers_pool.ok());
@@ -113,8 +114,8 @@ TEST_F(JobQueueTest, CancelEndsQueuedJobsAtOnceAndRunningOnesThroughTheirWorker)
   auto running = store.Create(run, v1::AnalysisSpec(), "");
   auto claimed = store.Claim("w", 30s);  // the older one
   ASSERT_TRUE(claimed.ok() && claimed->has_value());
-  EXPECT_EQ((*claimed)->analysis_id, queued->name().substr(9));
-  auto cancelled = store.Cancel(running->name().substr(9));
+  EXPECT_EQ((*claimed)->analysis_id, api::IdOrSelf(queued->name(), api::kAnalyses));
+  auto cancelled = store.Cancel(api::IdOrSelf(running->name(), api::kAnalyses));
   EXPECT_EQ(cancelled->state(), v1::Analysis::CANCELLED);
   auto requested = store.Cancel((*claimed)->analysis_id);
   EXPECT_EQ(requested->state(), v1::Analysis::RUNNING);

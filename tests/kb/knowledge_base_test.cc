@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "evidence_reports.h"
+#include "insdiag/kb/diagnose_analysis.h"
 #include "insdiag/kb/analysis_store.h"
 #include "insdiag/kb/catalogue_store.h"
 #include "insdiag/kb/diagnosis.h"
@@ -101,13 +102,13 @@ TEST_F(KnowledgeBaseTest, AUnitTypeWithoutBuiltInFailureModesIsDiagnosedWithSett
   other.set_name("unitTypes/INS-2000-LAB");
   other.set_display_name("INS-2000 (lab variant)");
   ASSERT_TRUE(catalogue_->Seed({&other, 1}, {}).ok());
-  auto diagnosis = diagnoses_->Create(StoreAnalysis("LAB-0001", WornGyroX(), "INS-2000-LAB"));
+  auto diagnosis = AnalysisDiagnoser(*diagnoses_).Diagnose(StoreAnalysis("LAB-0001", WornGyroX(), "INS-2000-LAB"));
   ASSERT_TRUE(diagnosis.ok()) << diagnosis.status();
   EXPECT_THAT(diagnosis->notes(),
               ::testing::Contains(::testing::AllOf(
                   ::testing::HasSubstr("'INS-2000-LAB' has no built-in failure-mode"),
                   ::testing::HasSubstr("INS-2000's settings"))));
-  auto own = diagnoses_->Create(StoreAnalysis("INS-0009", WornGyroX()));
+  auto own = AnalysisDiagnoser(*diagnoses_).Diagnose(StoreAnalysis("INS-0009", WornGyroX()));
   ASSERT_TRUE(own.ok()) << own.status();
   EXPECT_THAT(
       own->notes(),
@@ -116,7 +117,7 @@ TEST_F(KnowledgeBaseTest, AUnitTypeWithoutBuiltInFailureModesIsDiagnosedWithSett
 
 TEST_F(KnowledgeBaseTest, ConfirmingADiagnosisWritesAFailureRecordAndRaisesLaterPosteriors) {
   const std::string first = StoreAnalysis("INS-0002", WornGyroX());
-  auto diagnosis = diagnoses_->Create(first);
+  auto diagnosis = AnalysisDiagnoser(*diagnoses_).Diagnose(first);
   ASSERT_TRUE(diagnosis.ok()) << diagnosis.status();
   EXPECT_EQ(diagnosis->candidates(0).module(), "gyro.x");
   const double before = P(*diagnosis, "failureModes/dtg-bearing-wear.x");
@@ -147,12 +148,12 @@ TEST_F(KnowledgeBaseTest, ConfirmingADiagnosisWritesAFailureRecordAndRaisesLater
   EXPECT_NE(mode->signature(0).change(), mode->signature(0).expert_change());
 
   // Another unit with the same evidence: the mode is now more probable.
-  auto later = diagnoses_->Create(StoreAnalysis("INS-0003", WornGyroX()));
+  auto later = AnalysisDiagnoser(*diagnoses_).Diagnose(StoreAnalysis("INS-0003", WornGyroX()));
   ASSERT_TRUE(later.ok());
   EXPECT_GT(P(*later, "failureModes/dtg-bearing-wear.x"), before);
 
   // A rejection is a no-fault-found record and leaves the mode's count alone.
-  auto other = diagnoses_->Create(StoreAnalysis("INS-0004", WornGyroX()));
+  auto other = AnalysisDiagnoser(*diagnoses_).Diagnose(StoreAnalysis("INS-0004", WornGyroX()));
   resolve.set_name(other->name());
   resolve.set_confirmed(false);
   auto rejected = diagnoses_->Resolve(resolve);
@@ -253,7 +254,7 @@ TEST_F(KnowledgeBaseTest, ListsRecordsAndDiagnosesPageByPage) {
   std::vector<std::string> analyses;
   for (int i = 0; i < 3; ++i) analyses.push_back(StoreAnalysis("INS-0007", testing::NominalReport()));
   for (const auto& analysis : analyses) {
-    ASSERT_TRUE(diagnoses_->Create(analysis).ok());
+    ASSERT_TRUE(AnalysisDiagnoser(*diagnoses_).Diagnose(analysis).ok());
     v1::FailureRecord record;
     record.set_module(unit + "/modules/acc.x");
     record.set_analysis(analysis);

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <thread>
 
+#include "insdiag/api/resource_names.h"
 #include "insdiag/api/unit_types.h"
 #include "insdiag/engine/model/parameters.h"
 #include "insdiag/engine/sim/simulator.h"
@@ -16,6 +17,7 @@
 #include "insdiag/kb/run_store.h"
 #include "insdiag/v1/knowledge.grpc.pb.h"
 #include "server_fixture.h"
+#include "support/poll.h"
 #include "support/subprocess.h"
 
 namespace insdiag::testing {
@@ -137,9 +139,8 @@ class AnalysesTest : public ServerTest {
 
 TEST_F(AnalysesTest, CreateReturnsAtOnceThenWatchStreamsProgressToTheReportAndSeries) {
   const std::string run = Upload(SimulatedRun("INS-E2E-1", "static", 10.0));
-  const auto start = std::chrono::steady_clock::now();
+  // Create answers with the job queued, before any worker has run it.
   const v1::Analysis created = Create(run);
-  EXPECT_LT(std::chrono::steady_clock::now() - start, 2s);
   EXPECT_EQ(created.state(), v1::Analysis::QUEUED);
   EXPECT_EQ(created.run(), run);
   EXPECT_THAT(created.name(), ::testing::StartsWith("analyses/"));
@@ -405,7 +406,7 @@ class WorkerKillTest : public DatabaseTest {
     if (!stored.ok()) return "";
     auto created = kb::AnalysisStore(pool()).Create(stored->id, v1::AnalysisSpec(), "");
     EXPECT_TRUE(created.ok()) << created.status();
-    return created.ok() ? created->name().substr(9) : "";
+    return created.ok() ? api::IdOrSelf(created->name(), api::kAnalyses) : "";
   }
 
   // An insdiagd with one worker, its files under a directory named `tag`.
@@ -430,29 +431,29 @@ class WorkerKillTest : public DatabaseTest {
 
   // Polls until `process`'s worker holds job `id` (RUNNING).
   void WaitUntilRunning(const std::string& id, const Subprocess& process) {
-    const auto deadline = std::chrono::steady_clock::now() + 60s;
-    for (v1::Analysis a = Job(id); a.state() != v1::Analysis::RUNNING; a = Job(id)) {
-      ASSERT_NE(a.state(), v1::Analysis::SUCCEEDED)
-          << "the job finished before it could be reached";
-      ASSERT_LT(std::chrono::steady_clock::now(), deadline) << process.Stderr();
-      std::this_thread::sleep_for(10ms);
-    }
+    v1::Analysis a;
+    const bool running = testing::PollUntil(
+        [&] {
+          a = Job(id);
+          return a.state() == v1::Analysis::RUNNING || a.state() == v1::Analysis::SUCCEEDED;
+        },
+        60s, 10ms);
+    ASSERT_TRUE(running) << process.Stderr();
+    ASSERT_NE(a.state(), v1::Analysis::SUCCEEDED) << "the job finished before it could be reached";
   }
 
   // Polls until job `id` has ended (SUCCEEDED or FAILED), within `timeout`.
   v1::Analysis WaitUntilEnded(const std::string& id, const Subprocess& process,
                               std::chrono::seconds timeout) {
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    for (;;) {
-      v1::Analysis a = Job(id, true);
-      if (a.state() == v1::Analysis::SUCCEEDED || a.state() == v1::Analysis::FAILED) return a;
-      if (std::chrono::steady_clock::now() >= deadline) {
-        ADD_FAILURE() << "job " << id << " did not end within " << timeout.count() << " s\n"
-                      << process.Stderr();
-        return a;
-      }
-      std::this_thread::sleep_for(50ms);
-    }
+    v1::Analysis a;
+    const bool ended = testing::PollUntil(
+        [&] {
+          a = Job(id, true);
+          return a.state() == v1::Analysis::SUCCEEDED || a.state() == v1::Analysis::FAILED;
+        },
+        timeout, 50ms);
+    if (!ended) ADD_FAILURE() << "job " << id << " did not end within " << timeout.count() << " s\n" << process.Stderr();
+    return a;
   }
 
   std::filesystem::path dir_;

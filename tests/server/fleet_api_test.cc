@@ -18,6 +18,7 @@
 
 #include <absl/strings/str_cat.h>
 
+#include "insdiag/api/resource_names.h"
 #include "insdiag/api/json.h"
 #include "insdiag/client/unary.h"
 #include "insdiag/kb/diagnosis.h"
@@ -163,7 +164,7 @@ TEST_F(FleetApiTest, FailureCountsByModeTypeBatchAndMonthAreTheGeneratedFailures
   for (const auto& c : monthly.counts()) {
     EXPECT_EQ(c.unit_type(), kUnitType);
     EXPECT_EQ(c.module_role(), role_of[c.failure_mode()]) << c.failure_mode();
-    answered[{c.failure_mode().substr(std::string("failureModes/").size()), c.batch(), Micros(c.period_start())}] +=
+    answered[{api::IdOrSelf(c.failure_mode(), api::kFailureModes), c.batch(), Micros(c.period_start())}] +=
         c.failures();
   }
   EXPECT_EQ(answered, truth().failures);
@@ -181,7 +182,7 @@ TEST_F(FleetApiTest, FailureCountsByModeTypeBatchAndMonthAreTheGeneratedFailures
     for (const auto& c : response.counts()) {
       const std::int64_t month = MonthIndex(Micros(c.period_start()));
       EXPECT_EQ(month % months, 0) << period << " starts in month " << month % 12 + 1;
-      got[{c.failure_mode().substr(std::string("failureModes/").size()), c.batch(), month}] += c.failures();
+      got[{api::IdOrSelf(c.failure_mode(), api::kFailureModes), c.batch(), month}] += c.failures();
     }
     EXPECT_EQ(got, expected) << period;
   }
@@ -230,7 +231,7 @@ TEST_F(FleetApiTest, WeibullPerModeRecoversEachModesTrueShapeWithinItsBounds) {
   const auto by_mode = FailuresByMode();
   int tested = 0;
   for (const auto& mode : Modes()) {
-    const auto n = by_mode.find(mode.name().substr(std::string("failureModes/").size()));
+    const auto n = by_mode.find(api::IdOrSelf(mode.name(), api::kFailureModes));
     if (n == by_mode.end() || n->second < 30) continue;
     v1::GetWeibullFitRequest request;
     request.set_unit_type(kUnitType);
@@ -251,7 +252,7 @@ TEST_F(FleetApiTest, WeibullPerModeRecoversEachModesTrueShapeWithinItsBounds) {
 
 TEST_F(FleetApiTest, WeibullPerRoleCountsEveryPartsLifeAndAnswersOverRest) {
   std::map<std::string, std::string> role_of;
-  for (const auto& m : Modes()) role_of[m.name().substr(std::string("failureModes/").size())] = m.module_role();
+  for (const auto& m : Modes()) role_of[api::IdOrSelf(m.name(), api::kFailureModes)] = m.module_role();
   std::map<std::string, std::int64_t> failed;
   for (const auto& [mode, n] : FailuresByMode()) failed[role_of[mode]] += n;
   for (const std::string role : {"gyro.x", "acc.z", "power_supply"}) {
@@ -360,7 +361,7 @@ TEST_F(FleetApiTest, StatisticsParetoAndRankingAgreeWithTheRecords) {
   EXPECT_EQ(stats.analysis_count(), fleet_->analyses);
   EXPECT_EQ(stats.failure_count(), fleet_->confirmed_failures);
   std::map<std::string, std::string> role_of;
-  for (const auto& m : Modes()) role_of[m.name().substr(std::string("failureModes/").size())] = m.module_role();
+  for (const auto& m : Modes()) role_of[api::IdOrSelf(m.name(), api::kFailureModes)] = m.module_role();
   std::map<std::string, std::int64_t> failed;
   for (const auto& [mode, n] : FailuresByMode()) failed[role_of[mode]] += n;
   for (const auto& r : stats.failure_rates()) {
@@ -379,7 +380,7 @@ TEST_F(FleetApiTest, StatisticsParetoAndRankingAgreeWithTheRecords) {
   const auto by_mode = FailuresByMode();
   std::int64_t previous = INT64_MAX;
   for (const auto& e : pareto.entries()) {
-    const auto it = by_mode.find(e.failure_mode().substr(std::string("failureModes/").size()));
+    const auto it = by_mode.find(api::IdOrSelf(e.failure_mode(), api::kFailureModes));
     EXPECT_EQ(e.failures(), it == by_mode.end() ? 0 : it->second) << e.failure_mode();
     EXPECT_LE(e.failures(), previous);
     previous = e.failures();
@@ -408,7 +409,7 @@ TEST_F(FleetApiTest, StatisticsParetoAndRankingAgreeWithTheRecords) {
     if (i > 0) {
       EXPECT_LE(u.fault_probability(), ranked.units(i - 1).fault_probability());
     }
-    const bool coming = truth().units_about_to_fail.contains(u.unit().substr(std::string("units/").size()));
+    const bool coming = truth().units_about_to_fail.contains(api::IdOrSelf(u.unit(), api::kUnits));
     (coming ? failing : others).push_back(u.fault_probability());
   }
   ASSERT_GE(failing.size(), 20u);
@@ -421,7 +422,7 @@ TEST_F(FleetApiTest, StatisticsParetoAndRankingAgreeWithTheRecords) {
   for (const auto& u : ranked.units()) {
     if (u.fault_probability() < 0.99) continue;
     ++confident;
-    confident_failing += truth().units_about_to_fail.contains(u.unit().substr(std::string("units/").size())) ? 1 : 0;
+    confident_failing += truth().units_about_to_fail.contains(api::IdOrSelf(u.unit(), api::kUnits)) ? 1 : 0;
   }
   EXPECT_GT(auc, 0.81) << failing.size() << " units show a failure coming; " << confident_failing
                        << " of the " << confident << " units ranked P(fault) ≥ 0.99 are among them";

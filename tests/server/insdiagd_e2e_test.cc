@@ -21,6 +21,7 @@
 #include "insdiag/benchrun/bench_run_csv.h"
 #include "insdiag/client/run_client.h"
 #include "insdiag/v1/runs.grpc.pb.h"
+#include "support/poll.h"
 #include "support/subprocess.h"
 #include "support/synthetic_run.h"
 
@@ -172,17 +173,15 @@ TEST_F(InsdiagdTest, ServesHealthAcceptsCliUploadAndStopsWithPostgresOnSigterm) 
   ASSERT_TRUE(anonymous.ok());
   EXPECT_EQ(anonymous->exit_status, 1);
   EXPECT_THAT(anonymous->stderr_text, HasSubstr("UNAUTHENTICATED"));
-  const auto started = std::chrono::steady_clock::now();
+  // How fast uploads go is measured by the benchmarks (docs/PERFORMANCE.md); here, that one is stored whole.
   auto upload = RunToCompletion({INSDIAG_CLI_PATH, "upload", file.string(), "--server", grpc_address, "--token",
                                  admin_token},
                                 dir_, 60s);
-  const auto took = std::chrono::steady_clock::now() - started;
   ASSERT_TRUE(upload.ok()) << upload.status();
   EXPECT_EQ(upload->exit_status, 0) << upload->stderr_text;
   std::smatch name;
   ASSERT_TRUE(std::regex_match(upload->stdout_text, name, std::regex(R"((runs/[0-9a-f-]{36})\n)")))
       << upload->stdout_text;
-  EXPECT_LT(took, 10s) << "a 1-hour 50 Hz run must upload in under 10 s";
   auto got = http.Get(("/v1/" + name[1].str()).c_str());
   ASSERT_TRUE(got);
   EXPECT_THAT(got->body, HasSubstr(R"("sampleCount":"180000")"));
@@ -224,16 +223,19 @@ TEST_F(InsdiagdTest, StopsOnSigtermWhileAWatchWaitsOnAnAnalysisNoWorkerWillRun) 
   ASSERT_TRUE(std::regex_search(queued->body, analysis, std::regex(R"(analyses/[0-9a-f-]{36})")));
 
   std::string watched;
+  std::atomic<bool> first_message{false};
   std::thread watcher([&, name = analysis.str()] {
     httplib::Client watch("127.0.0.1", ports->http);
     watch.set_bearer_token_auth(admin_token.c_str());
     watch.set_read_timeout(60, 0);
     watch.Get(("/v1/" + name + ":watch").c_str(), [&](const char* data, size_t length) {
       watched.append(data, length);
+      first_message = true;
       return true;
     });
   });
-  std::this_thread::sleep_for(1s);  // the watch is open and has its first message
+  // The watch is open and has its first message.
+  EXPECT_TRUE(testing::PollUntil([&] { return first_message.load(); }, 30s)) << "the watch sent nothing";
   server.Signal(SIGTERM);
   const auto exit_status = server.Wait(30s);
   watcher.join();
@@ -297,7 +299,7 @@ TEST_F(InsdiagdTest, APostgresRestartUnderLoadLosesNothingAcknowledgedAndTheServ
   std::vector<std::pair<std::string, std::int64_t>> acknowledged;  // run, samples
   std::map<absl::StatusCode, int> refused;
   std::map<absl::StatusCode, std::string> refusal;  // a message of each code
-  int acknowledged_after_restart = 0;
+  std::atomic<int> acknowledged_count{0}, acknowledged_after_restart{0};
   std::thread load([&] {
     for (std::uint32_t seed = 1; !stop; ++seed) {
       client::UploadOptions options;
@@ -307,6 +309,7 @@ TEST_F(InsdiagdTest, APostgresRestartUnderLoadLosesNothingAcknowledgedAndTheServ
       auto run = client::UploadRun(*stub, SyntheticStaticRun(500 + seed % 7, 50.0, seed), options);
       if (run.ok()) {
         acknowledged.emplace_back(run->name(), run->sample_count());
+        ++acknowledged_count;
         acknowledged_after_restart += after ? 1 : 0;
       } else {
         ++refused[run.status().code()];
@@ -314,20 +317,22 @@ TEST_F(InsdiagdTest, APostgresRestartUnderLoadLosesNothingAcknowledgedAndTheServ
       }
     }
   });
-  std::this_thread::sleep_for(2s);
+  // The load runs before the restart.
+  EXPECT_TRUE(testing::PollUntil([&] { return acknowledged_count >= 3; }, 60s)) << server.Stderr();
   std::vector<std::string> pg_ctl = {"/usr/lib/postgresql/15/bin/pg_ctl", "restart", "-w", "-t", "60", "-m", "fast",
                                      "-D", (dir_ / "data" / "pg").string(), "-l",
                                      (dir_ / "data" / "run" / "postgresql.log").string()};
   if (::geteuid() == 0) pg_ctl.insert(pg_ctl.begin(), {"/usr/sbin/runuser", "-u", "postgres", "--"});
   auto restart = RunToCompletion(pg_ctl, dir_, 90s);
   restarted = true;
-  std::this_thread::sleep_for(3s);
+  // The load goes on until the server has acknowledged uploads on the restarted database.
+  testing::PollUntil([&] { return acknowledged_after_restart >= 3; }, 60s);
   stop = true;
   load.join();
   ASSERT_TRUE(restart.ok() && restart->exit_status == 0) << (restart.ok() ? restart->stderr_text : "");
 
   EXPECT_FALSE(server.Wait(0ms).has_value()) << "insdiagd died with its database:\n" << server.Stderr();
-  EXPECT_GT(acknowledged_after_restart, 0) << "the server did not reconnect";
+  EXPECT_GT(acknowledged_after_restart.load(), 0) << "the server did not reconnect";
   for (const auto& [code, count] : refused) {
     EXPECT_EQ(code, absl::StatusCode::kUnavailable) << count << " uploads refused with " << absl::StatusCodeToString(code)
                                                     << ", e.g. " << refusal[code];
@@ -357,12 +362,12 @@ TEST_F(InsdiagdTest, HealthSaysNotServingWhileTheDatabaseIsDownAndTheSupervisorS
   ASSERT_TRUE(ports) << "insdiagd did not come up:\n" << server.Stderr();
   httplib::Client http("127.0.0.1", ports->http);
   const auto health_becomes = [&](int status, std::chrono::milliseconds within) {
-    for (auto waited = 0ms; waited < within; waited += 100ms) {
-      auto answer = http.Get("/healthz");
-      if (answer && answer->status == status) return true;
-      std::this_thread::sleep_for(100ms);
-    }
-    return false;
+    return testing::PollUntil(
+        [&] {
+          auto answer = http.Get("/healthz");
+          return answer && answer->status == status;
+        },
+        within, 100ms);
   };
   ASSERT_TRUE(health_becomes(200, 10s));
   const auto pg_ctl = [&](std::vector<std::string> args) {
@@ -381,11 +386,7 @@ TEST_F(InsdiagdTest, HealthSaysNotServingWhileTheDatabaseIsDownAndTheSupervisorS
   // The server reconnects as soon as PostgreSQL accepts connections, which
   // can be before the supervisor's pg_ctl returns and it says so.
   const auto stderr_says = [&](std::string_view text, std::chrono::milliseconds within) {
-    for (auto waited = 0ms; waited < within; waited += 100ms) {
-      if (server.Stderr().find(text) != std::string::npos) return true;
-      std::this_thread::sleep_for(100ms);
-    }
-    return false;
+    return testing::PollUntil([&] { return server.Stderr().find(text) != std::string::npos; }, within, 100ms);
   };
   EXPECT_TRUE(stderr_says("the embedded PostgreSQL runs again", 30s)) << server.Stderr();
   EXPECT_TRUE(pg_ctl({"status", "-D", cluster}));

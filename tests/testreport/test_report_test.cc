@@ -97,6 +97,34 @@ TEST(TestReport, StatesTheVerdictToleranceIntervalsNominalEffectsAndDiagnosis) {
   EXPECT_THAT(html, HasSubstr("a note of the engine"));
 }
 
+// Each identified constant says whether the run tells it; those it cannot are
+// named under the table with why.
+TEST(TestReport, SaysWhichIdentifiedParametersTheRunCannotTell) {
+  TestReportInput in = FaultyUnit();
+  auto* report = in.analysis.mutable_report();
+  for (auto& p : *report->mutable_identified()) {
+    if (p.name() == "gyro_scale_factor.z") {
+      p.set_observability(v1::IdentifiedParameter::OBSERVABLE);
+    } else if (p.name() == "odd<b>&\"name\"") {
+      p.set_observability(v1::IdentifiedParameter::INSEPARABLE);
+      p.set_observability_note("only with acc_turn_on_bias.z (correlation +1.000)");
+    }
+  }
+  const std::string html = RenderHtml(BuildTestReport(in));
+  EXPECT_THAT(html, HasSubstr("<th>observability</th>"));
+  EXPECT_THAT(html, HasSubstr("<td>observable</td>"));
+  EXPECT_THAT(html, HasSubstr("<td>inseparable</td>"));
+  EXPECT_THAT(
+      html,
+      HasSubstr(
+          "Not observable in this run: odd&lt;b&gt;&amp;&quot;name&quot; (inseparable: only with "
+          "acc_turn_on_bias.z (correlation +1.000))"));
+  // The ML drift was not judged (not a filter constant): a dash, and no sentence about it.
+  EXPECT_THAT(html, Not(HasSubstr("gyro_bias_gm.x.sigma (")));
+  const std::string without = RenderHtml(BuildTestReport(FaultyUnit()));
+  EXPECT_THAT(without, Not(HasSubstr("Not observable in this run")));
+}
+
 TEST(TestReport, HtmlIsSelfContainedAndEscapesEveryText) {
   const std::string html = RenderHtml(BuildTestReport(FaultyUnit()));
   EXPECT_TRUE(absl::StartsWith(html, "<!DOCTYPE html>"));

@@ -14,6 +14,7 @@
 #include "insdiag/api/unit_types.h"
 #include "insdiag/benchrun/bench_run_csv.h"
 #include "insdiag/engine/analysis.h"
+#include "insdiag/engine/status_macros.h"
 #include "report_text.h"
 #include "verb.h"
 
@@ -144,7 +145,7 @@ class AnalyzeVerb final : public Verb {
     std::ostringstream text;
     if (!file || !(text << file.rdbuf())) return absl::NotFoundError("cannot read the file");
     v1::AnalysisReport report;
-    if (auto parsed = api::FromJson(text.str(), &report); !parsed.ok()) return parsed;
+    INSDIAG_RETURN_IF_ERROR(api::FromJson(text.str(), &report));
     return api::IdentifiedModelOf(report);
   }
 

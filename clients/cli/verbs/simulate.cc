@@ -10,6 +10,7 @@
 #include "insdiag/benchrun/bench_run_csv.h"
 #include "insdiag/engine/model/parameters.h"
 #include "insdiag/engine/sim/simulator.h"
+#include "insdiag/engine/status_macros.h"
 #include "verb.h"
 
 namespace insdiag::cli {
@@ -40,12 +41,12 @@ absl::Status ParseFault(const std::string& spec, const std::string& flag, engine
   if (!(gyro || acc) || a < 'x' || a > 'z') {
     return absl::InvalidArgumentError(flag + " " + spec + ": the target is gyro.x … acc.z");
   }
-  auto v = Numbers(std::string_view(spec).substr(eq + 1), flag + " " + spec, 2);
-  if (!v.ok()) return v.status();
+  INSDIAG_ASSIGN_OR_RETURN(auto v,
+                           Numbers(std::string_view(spec).substr(eq + 1), flag + " " + spec, 2));
   *sensor = gyro ? engine::Sensor::kGyro : engine::Sensor::kAccelerometer;
   *axis = a - 'x';
-  *time_s = (*v)[0];
-  *size = (*v)[1];
+  *time_s = (v)[0];
+  *size = (v)[1];
   return absl::OkStatus();
 }
 
@@ -91,34 +92,32 @@ class SimulateVerb final : public Verb {
 
  private:
   absl::Status Simulate(std::ostream& out) {
-    auto profile = engine::sim::BuiltinProfile(profile_);
-    if (!profile.ok()) return profile.status();
+    INSDIAG_ASSIGN_OR_RETURN(auto profile, engine::sim::BuiltinProfile(profile_));
     auto unit_type = api::BuiltinUnitType(unit_type_);
     if (!unit_type.ok()) return absl::InvalidArgumentError(std::string(unit_type.status().message()));
-    auto model = api::BaseModelOf(*unit_type);
-    if (!model.ok()) return model.status();
+    INSDIAG_ASSIGN_OR_RETURN(auto model, api::BaseModelOf(*unit_type));
     // The datasheet states the unit type's specification; --param makes this
     // unit depart from it.
-    const engine::Datasheet specification = engine::sim::DatasheetOf(model->gyro, model->acc);
+    const engine::Datasheet specification = engine::sim::DatasheetOf(model.gyro, model.acc);
     for (const std::string& p : params_) {
       const size_t eq = p.find('=');
-      auto value = Numbers(eq == std::string::npos ? "" : std::string_view(p).substr(eq + 1), "--param " + p, 1);
-      if (!value.ok()) return value.status();
+      INSDIAG_ASSIGN_OR_RETURN(
+          auto value, Numbers(eq == std::string::npos ? "" : std::string_view(p).substr(eq + 1),
+                              "--param " + p, 1));
       engine::ErrorModel probe;
-      if (auto s = engine::SetParameter(p.substr(0, eq), (*value)[0], probe); !s.ok()) return s;
+      INSDIAG_RETURN_IF_ERROR(engine::SetParameter(p.substr(0, eq), (value)[0], probe));
       if (!probe.effects.empty()) {
         return absl::InvalidArgumentError("--param " + p + ": effects are hidden with --effect");
       }
-      if (auto s = engine::SetParameter(p.substr(0, eq), (*value)[0], *model); !s.ok()) return s;
+      INSDIAG_RETURN_IF_ERROR(engine::SetParameter(p.substr(0, eq), (value)[0], model));
     }
     engine::sim::SimulatedUnit unit;
     unit.type = unit_type->display_name();
-    unit.gyro = model->gyro;
-    unit.acc = model->acc;
+    unit.gyro = model.gyro;
+    unit.acc = model.acc;
     for (const std::string& e : effects_) {
-      auto parsed = engine::sim::ParseTrueEffect(e);
-      if (!parsed.ok()) return parsed.status();
-      unit.effects.insert(unit.effects.end(), parsed->begin(), parsed->end());
+      INSDIAG_ASSIGN_OR_RETURN(auto parsed, engine::sim::ParseTrueEffect(e));
+      unit.effects.insert(unit.effects.end(), parsed.begin(), parsed.end());
     }
     for (const std::string& s : steps_) {
       engine::sim::BiasStep step;
@@ -150,11 +149,11 @@ class SimulateVerb final : public Verb {
     options.write_datasheet = !no_datasheet_;
     options.datasheet = specification;
     unit.serial = serial_.empty() ? "SIM-" + std::to_string(options.seed) : serial_;
-    auto sim = engine::sim::Simulate(unit, *profile, options);
-    if (!sim.ok()) return sim.status();
-    if (auto st = benchrun::WriteBenchRunFile(sim->run, file_); !st.ok()) return st;
-    out << file_ << ": " << sim->run.samples.size() << " samples, " << sim->run.DurationS() << " s, profile "
-        << profile->name << ", unit " << unit.serial << " (" << unit.type << "), seed " << options.seed << "\n";
+    INSDIAG_ASSIGN_OR_RETURN(auto sim, engine::sim::Simulate(unit, profile, options));
+    INSDIAG_RETURN_IF_ERROR(benchrun::WriteBenchRunFile(sim.run, file_));
+    out << file_ << ": " << sim.run.samples.size() << " samples, " << sim.run.DurationS()
+        << " s, profile " << profile.name << ", unit " << unit.serial << " (" << unit.type
+        << "), seed " << options.seed << "\n";
     return absl::OkStatus();
   }
 

@@ -115,6 +115,12 @@ export function idOf(name) {
   return name.slice(name.indexOf('/') + 1);
 }
 
+/** A unit's module, "units/{unit}/modules/{role}" → {unit, role} (the role: "gyro.x"). */
+export function moduleOf(name) {
+  const [, unit = '', , role = ''] = name.split('/');
+  return { unit, role };
+}
+
 /** A number of the JSON mapping (doubles may be "NaN"; int64 are strings). */
 export function num(value) {
   const n = typeof value === 'number' ? value : Number(value);

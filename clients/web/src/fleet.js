@@ -2,7 +2,7 @@
 // with MTBF bounds, the Pareto of failure modes, the Weibull life of a module
 // role on Weibull paper with its B10, trends of an identified parameter
 // across the fleet, and the units ranked by fault probability.
-import { api, listAll, num } from './api.js';
+import { api, listAll, moduleOf, num } from './api.js';
 import { h, fmt, fmtTime, empty, section, table } from './dom.js';
 import { plot, line, bars, markers, formatTick, uPlot } from './charts.js';
 
@@ -135,7 +135,7 @@ async function failurePoints(role, suspensions) {
   const firstFailure = new Map();
   for (const r of records) {
     const hours = num(r.operatingHours);
-    if (!r.confirmed || r.module.split('/').pop() !== role || !(hours > 0)) continue;
+    if (!r.confirmed || moduleOf(r.module).role !== role || !(hours > 0)) continue;
     firstFailure.set(r.module, Math.min(hours, firstFailure.get(r.module) ?? Infinity));
   }
   const times = [...firstFailure.values()].sort((a, b) => a - b);

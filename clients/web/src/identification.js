@@ -20,11 +20,28 @@ export function identificationSection(report, cleanups) {
   return element;
 }
 
+// Whether the run tells the parameter (IdentifiedParameter.observability,
+// docs/MULTI_POSITION.md); '—' where it was not judged (methods other than FILTER).
+const OBSERVABILITY = {
+  OBSERVABLE: 'observable',
+  NOT_EXCITED: 'not excited',
+  INSEPARABLE: 'inseparable',
+  WEAKLY_DETERMINED: 'weakly determined',
+};
+
+function observabilityCell(p) {
+  const words = OBSERVABILITY[p.observability];
+  if (!words) return h('td', '—');
+  const told = p.observability === 'OBSERVABLE';
+  return h(told ? 'td' : 'td.warn', { title: p.observabilityNote || '' },
+    told || !p.observabilityNote ? words : `${words}: ${p.observabilityNote}`);
+}
+
 function identifiedTable(identified) {
   if (!identified.length) return empty('No identified parameter in this report yet.');
-  return table(['Parameter', 'Value ± SE', 'Method', 'A priori'], identified.map((p) => h('tr',
+  return table(['Parameter', 'Value ± SE', 'Method', 'A priori', 'Observability'], identified.map((p) => h('tr',
     h('td', p.name), h('td.num', `${fmt(p.value)} ± ${fmt(p.stdError, 2)} ${p.unit || ''}`), h('td', p.method),
-    h('td.num', p.aPriori === undefined ? '—' : fmt(p.aPriori)))), { id: 'identified-table' });
+    h('td.num', p.aPriori === undefined ? '—' : fmt(p.aPriori)), observabilityCell(p))), { id: 'identified-table' });
 }
 
 function acfPlots(curves, after) {

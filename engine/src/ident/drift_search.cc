@@ -259,10 +259,9 @@ absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const Epoch
   ErrorModel kept = fit.model;
   double kept_ll = fit.log_likelihood_after;
   auto parameters_of = [&](DriftAxis d) {
-    const std::string prefix = DriftName(d) + ".";
-    return static_cast<int>(std::count_if(fit.identified.begin(), fit.identified.end(), [&](const ParameterEstimate& p) {
-      return p.name.rfind(prefix, 0) == 0;
-    }));
+    return static_cast<int>(
+        std::count_if(fit.identified.begin(), fit.identified.end(),
+                      [&](const ParameterEstimate& p) { return DriftOfParameter(p.name) == d; }));
   };
   for (;;) {
     // Each kept drift put back to the model's values: independent passes.
@@ -295,7 +294,7 @@ absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const Epoch
   }
   std::erase_if(fit.identified, [&](const ParameterEstimate& p) {
     for (const DriftAxis d : DriftAxis::All()) {
-      if (DriftOf(kept, d) != DriftOf(model, d) && p.name.rfind(DriftName(d) + ".", 0) == 0) return false;
+      if (DriftOf(kept, d) != DriftOf(model, d) && DriftOfParameter(p.name) == d) return false;
     }
     return true;
   });

@@ -12,11 +12,16 @@
 
 #include "generator.h"
 #include "insdiag/api/run_codec.h"
+#include "insdiag/engine/candidate_source.h"
+#include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/copy_text.h"
 #include "insdiag/kb/diagnosis.h"
 
 namespace insdiag::kb::generator {
 namespace {
+
+// The generated candidates are score-test candidates, as the engine names them.
+const std::string kScoreSource(engine::CandidateSourceName(engine::CandidateSource::kScore));
 
 constexpr std::size_t kCopyChunkBytes = 1 << 20;
 
@@ -43,12 +48,13 @@ absl::StatusOr<std::int64_t> CopyItems(Connection& db, std::string_view sql, std
 
 absl::StatusOr<std::vector<std::int64_t>> ReserveIds(Connection& db, const char* table, const char* column,
                                                      std::int64_t count) {
-  auto rows = db.Exec("SELECT nextval(pg_get_serial_sequence($1, $2)) FROM generate_series(1, $3)",
-                      {Param::Text(table), Param::Text(column), Param::Int(count)});
-  if (!rows.ok()) return rows.status();
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto rows,
+      db.Exec("SELECT nextval(pg_get_serial_sequence($1, $2)) FROM generate_series(1, $3)",
+              {Param::Text(table), Param::Text(column), Param::Int(count)}));
   std::vector<std::int64_t> ids;
   ids.reserve(static_cast<std::size_t>(count));
-  for (int r = 0; r < rows->rows(); ++r) ids.push_back(rows->Int(r, 0).value_or(0));
+  for (int r = 0; r < rows.rows(); ++r) ids.push_back(rows.Int(r, 0).value_or(0));
   return ids;
 }
 
@@ -60,16 +66,18 @@ constexpr char kLoadedTables[] =
     "{modules,runs,analyses,identified_parameters,effect_candidates,diagnoses,diagnosis_candidates,failure_records}";
 
 absl::StatusOr<std::vector<std::string>> DropForeignKeys(Connection& db) {
-  auto keys = db.Exec(
-      "SELECT format('ALTER TABLE %s DROP CONSTRAINT %I', conrelid::regclass, conname), "
-      "format('ALTER TABLE %s ADD CONSTRAINT %I %s', conrelid::regclass, conname, pg_get_constraintdef(oid)) "
-      "FROM pg_constraint WHERE contype = 'f' AND conrelid = ANY($1::regclass[]) ORDER BY conrelid, conname",
-      {Param::Text(kLoadedTables)});
-  if (!keys.ok()) return keys.status();
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto keys,
+      db.Exec("SELECT format('ALTER TABLE %s DROP CONSTRAINT %I', conrelid::regclass, conname), "
+              "format('ALTER TABLE %s ADD CONSTRAINT %I %s', conrelid::regclass, conname, "
+              "pg_get_constraintdef(oid)) "
+              "FROM pg_constraint WHERE contype = 'f' AND conrelid = ANY($1::regclass[]) ORDER BY "
+              "conrelid, conname",
+              {Param::Text(kLoadedTables)}));
   std::vector<std::string> restore;
-  for (int r = 0; r < keys->rows(); ++r) {
-    if (auto s = db.ExecScript(keys->String(r, 0)); !s.ok()) return s;
-    restore.push_back(keys->String(r, 1));
+  for (int r = 0; r < keys.rows(); ++r) {
+    INSDIAG_RETURN_IF_ERROR(db.ExecScript(keys.String(r, 0)));
+    restore.push_back(keys.String(r, 1));
   }
   return restore;
 }
@@ -141,11 +149,10 @@ class Writer {
 absl::Status Writer::Copy(const std::string& what, std::string_view sql, std::size_t items,
                           absl::FunctionRef<void(std::size_t, std::string&)> emit, std::int64_t* count) {
   const auto start = std::chrono::steady_clock::now();
-  auto rows = CopyItems(db_, sql, items, emit);
-  if (!rows.ok()) return rows.status();
-  if (count != nullptr) *count = *rows;
+  INSDIAG_ASSIGN_OR_RETURN(auto rows, CopyItems(db_, sql, items, emit));
+  if (count != nullptr) *count = rows;
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  progress_(absl::StrCat(what, ": ", *rows, " rows in ", absl::StrFormat("%.1f", seconds), " s"));
+  progress_(absl::StrCat(what, ": ", rows, " rows in ", absl::StrFormat("%.1f", seconds), " s"));
   return absl::OkStatus();
 }
 
@@ -153,26 +160,30 @@ absl::Status Writer::Prepare() {
   std::vector<std::string> names;
   for (const auto& t : m_.identified) names.push_back(t.name);
   const Param literal = Param::TextArray(names);
-  auto inserted = db_.Exec("INSERT INTO parameter_names (name) SELECT unnest($1::text[]) ON CONFLICT DO NOTHING",
-                           {literal});
-  if (!inserted.ok()) return inserted.status();
-  auto rows = db_.Exec("SELECT name, parameter_id FROM parameter_names WHERE name = ANY($1::text[])",
-                       {literal});
-  if (!rows.ok()) return rows.status();
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto inserted,
+      db_.Exec(
+          "INSERT INTO parameter_names (name) SELECT unnest($1::text[]) ON CONFLICT DO NOTHING",
+          {literal}));
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto rows,
+      db_.Exec("SELECT name, parameter_id FROM parameter_names WHERE name = ANY($1::text[])",
+               {literal}));
   std::map<std::string, int> ids;
-  for (int r = 0; r < rows->rows(); ++r) ids[rows->String(r, 0)] = static_cast<int>(rows->Int(r, 1).value_or(0));
+  for (int r = 0; r < rows.rows(); ++r)
+    ids[rows.String(r, 0)] = static_cast<int>(rows.Int(r, 1).value_or(0));
   for (const auto& t : m_.identified) parameter_ids_.push_back(ids[t.name]);
 
-  auto unit_ids = ReserveIds(db_, "units", "unit_id", static_cast<std::int64_t>(plan_.units.size()));
-  if (!unit_ids.ok()) return unit_ids.status();
-  auto module_ids = ReserveIds(db_, "modules", "module_id", plan_.parts);
-  if (!module_ids.ok()) return module_ids.status();
+  INSDIAG_ASSIGN_OR_RETURN(
+      auto unit_ids,
+      ReserveIds(db_, "units", "unit_id", static_cast<std::int64_t>(plan_.units.size())));
+  INSDIAG_ASSIGN_OR_RETURN(auto module_ids, ReserveIds(db_, "modules", "module_id", plan_.parts));
   std::size_t next_module = 0;
   std::uint64_t next_record = 0;
   for (std::size_t i = 0; i < plan_.units.size(); ++i) {
     UnitPlan& u = plan_.units[i];
-    u.unit_id = (*unit_ids)[i];
-    for (auto& part : u.parts) part.module_id = (*module_ids)[next_module++];
+    u.unit_id = (unit_ids)[i];
+    for (auto& part : u.parts) part.module_id = (module_ids)[next_module++];
     first_record_.push_back(next_record);
     for (const auto& f : u.failures) next_record += f.realised ? 1 : 0;
     next_record += u.no_fault_found.size();
@@ -282,7 +293,14 @@ void Writer::EmitCandidates(std::size_t g, std::string& buffer) const {
   for (const auto& r : Candidates(m_, v, Diagnosed(u, static_cast<std::size_t>(test)))) {
     const EffectTerm& e = m_.effects[static_cast<std::size_t>(r.effect)];
     CopyRow row(buffer);
-    row.Id(id).Text(e.name).Text(e.family).Bool(false).Text("SCORE").Double(r.statistic).Int(1).Double(r.p_value);
+    row.Id(id)
+        .Text(e.name)
+        .Text(e.family)
+        .Bool(false)
+        .Text(kScoreSource)
+        .Double(r.statistic)
+        .Int(1)
+        .Double(r.p_value);
     row.Double(r.p_holm).Double(r.estimate).Double(r.std_error).Text(e.unit).Bool(true);
     row.End();
   }
@@ -468,7 +486,7 @@ absl::Status Writer::LinkDiagnosesToRecords() {
 absl::Status Writer::RestoreForeignKeys(const std::vector<std::string>& restore) {
   const auto start = std::chrono::steady_clock::now();
   for (const auto& statement : restore) {
-    if (auto s = db_.ExecScript(statement); !s.ok()) return s;
+    INSDIAG_RETURN_IF_ERROR(db_.ExecScript(statement));
   }
   progress_(absl::StrCat("validated ", restore.size(), " foreign keys in ",
                          absl::StrFormat("%.1f", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()),
@@ -486,17 +504,16 @@ void Writer::CountOutcomes() {
 }
 
 absl::Status Writer::WriteAll() {
-  if (auto s = Prepare(); !s.ok()) return s;
+  INSDIAG_RETURN_IF_ERROR(Prepare());
   // Validating the keys joins millions of rows: give the joins memory.
-  if (auto s = db_.ExecScript("SET LOCAL work_mem = '256MB'"); !s.ok()) return s;
-  auto restore = DropForeignKeys(db_);
-  if (!restore.ok()) return restore.status();
-  if (auto s = CopyUnits(); !s.ok()) return s;
-  if (auto s = CopyTests(); !s.ok()) return s;
-  if (auto s = CopyDiagnoses(); !s.ok()) return s;
-  if (auto s = CopyRecords(); !s.ok()) return s;
-  if (auto s = LinkDiagnosesToRecords(); !s.ok()) return s;
-  if (auto s = RestoreForeignKeys(*restore); !s.ok()) return s;
+  INSDIAG_RETURN_IF_ERROR(db_.ExecScript("SET LOCAL work_mem = '256MB'"));
+  INSDIAG_ASSIGN_OR_RETURN(auto restore, DropForeignKeys(db_));
+  INSDIAG_RETURN_IF_ERROR(CopyUnits());
+  INSDIAG_RETURN_IF_ERROR(CopyTests());
+  INSDIAG_RETURN_IF_ERROR(CopyDiagnoses());
+  INSDIAG_RETURN_IF_ERROR(CopyRecords());
+  INSDIAG_RETURN_IF_ERROR(LinkDiagnosesToRecords());
+  INSDIAG_RETURN_IF_ERROR(RestoreForeignKeys(restore));
   CountOutcomes();
   return absl::OkStatus();
 }

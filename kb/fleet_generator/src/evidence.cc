@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "generator.h"
+#include "insdiag/engine/candidate_source.h"
 
 namespace insdiag::kb::generator {
 namespace {
@@ -130,7 +131,7 @@ v1::AnalysisReport ReportOf(const Model& m, const TestValues& v) {
     c->set_name(e.name);
     c->set_family(e.family);
     c->set_unit(e.unit);
-    c->set_source("SCORE");
+    c->set_source(std::string(engine::CandidateSourceName(engine::CandidateSource::kScore)));
     c->set_statistic(r.statistic);
     c->set_degrees_of_freedom(1);
     c->set_p_value(r.p_value);

@@ -13,6 +13,7 @@
 #include "insdiag/api/json.h"
 #include "insdiag/api/resource_names.h"
 #include "insdiag/api/unit_types.h"
+#include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/catalogue_store.h"
 #include "insdiag/kb/diagnosis.h"
 #include "insdiag/kb/diagnosis_store.h"
@@ -118,38 +119,39 @@ absl::Status FleetGeneratorOptions::Validate() const {
 
 absl::StatusOr<GeneratedFleet> GenerateFleet(ConnectionPool& pool, const FleetGeneratorOptions& options,
                                              absl::FunctionRef<void(const std::string&)> progress) {
-  if (auto s = options.Validate(); !s.ok()) return s;
-  if (auto s = CatalogueStore(pool).Seed(api::BuiltinUnitTypes(), BuiltinFailureModeCatalogues()); !s.ok()) return s;
-  auto db = pool.Acquire();
-  if (!db.ok()) return db.status();
-  auto roles = (*db)->Exec("SELECT role FROM module_roles ORDER BY role");
-  if (!roles.ok()) return roles.status();
+  INSDIAG_RETURN_IF_ERROR(options.Validate());
+  INSDIAG_RETURN_IF_ERROR(
+      CatalogueStore(pool).Seed(api::BuiltinUnitTypes(), BuiltinFailureModeCatalogues()));
+  INSDIAG_ASSIGN_OR_RETURN(auto db, pool.Acquire());
+  INSDIAG_ASSIGN_OR_RETURN(auto roles, db->Exec("SELECT role FROM module_roles ORDER BY role"));
   std::vector<std::string> role_names;
-  for (int r = 0; r < roles->rows(); ++r) role_names.push_back(roles->String(r, 0));
-  auto model = generator::BuildModel(options, role_names);
-  if (!model.ok()) return model.status();
-  const generator::Model& m = *model;
+  for (int r = 0; r < roles.rows(); ++r) role_names.push_back(roles.String(r, 0));
+  INSDIAG_ASSIGN_OR_RETURN(auto model, generator::BuildModel(options, role_names));
+  const generator::Model& m = model;
 
   const auto start = std::chrono::steady_clock::now();
   generator::Plan plan;
   const int units = options.units > 0 ? options.units : m.profile.units();
   if (units <= 0) return absl::InvalidArgumentError("the fleet needs at least one unit");
   generator::PlanUnits(m, units, plan);
-  auto interval_us = TestInterval(options, m, plan, units);
-  if (!interval_us.ok()) return interval_us.status();
-  generator::PlanTests(m, plan, *interval_us);
-  progress(absl::StrCat("planned ", units, " units, ", plan.parts, " parts, ", plan.order.size(), " tests in ",
-                        absl::StrFormat("%.1f", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()),
-                        " s (test interval ", absl::StrFormat("%.1f", static_cast<double>(*interval_us) / kMicrosPerDay),
-                        " days)"));
+  INSDIAG_ASSIGN_OR_RETURN(auto interval_us, TestInterval(options, m, plan, units));
+  generator::PlanTests(m, plan, interval_us);
+  progress(absl::StrCat(
+      "planned ", units, " units, ", plan.parts, " parts, ", plan.order.size(), " tests in ",
+      absl::StrFormat(
+          "%.1f", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()),
+      " s (test interval ",
+      absl::StrFormat("%.1f", static_cast<double>(interval_us) / kMicrosPerDay), " days)"));
 
   GeneratedFleet out;
   out.notes = m.notes;
-  if (auto s = (*db)->InTransaction([&] { return generator::WriteFleet(**db, m, plan, out, progress); }); !s.ok()) {
+  if (auto s =
+          db->InTransaction([&] { return generator::WriteFleet(*db, m, plan, out, progress); });
+      !s.ok()) {
     return s;
   }
   generator::FillTruth(m, plan, out);
-  if (auto s = UpdateDerivedState(pool, **db, options, m.unit_type.name(), progress); !s.ok()) return s;
+  INSDIAG_RETURN_IF_ERROR(UpdateDerivedState(pool, *db, options, m.unit_type.name(), progress));
   return out;
 }
 

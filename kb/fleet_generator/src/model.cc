@@ -10,7 +10,10 @@
 #include <cmath>
 
 #include "generator.h"
+#include "insdiag/api/resource_names.h"
 #include "insdiag/api/unit_types.h"
+#include "insdiag/engine/model/parameter_key.h"
+#include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/diagnosis.h"
 
 namespace insdiag::kb::generator {
@@ -26,9 +29,12 @@ bool GlobMatches(const std::string& pattern, const std::string& name) {
   return true;
 }
 
-std::string FamilyOf(const std::string& name) { return name.substr(0, name.find('.')); }
+std::string FamilyOf(const std::string& name) {
+  const std::optional<engine::ParameterKey> key = engine::ParseParameterKey(name);
+  return key ? key->family : name;
+}
 
-std::string ModeId(const v1::FailureMode& mode) { return mode.name().substr(std::string("failureModes/").size()); }
+std::string ModeId(const v1::FailureMode& mode) { return api::IdOrSelf(mode.name(), api::kFailureModes); }
 
 // The unit type, its failure modes and diagnosis settings, and the fleet
 // profile (the options' or the built-in one).
@@ -36,11 +42,10 @@ absl::Status LoadData(const FleetGeneratorOptions& options, Model& m) {
   auto unit_type = api::BuiltinUnitType(options.unit_type);
   if (!unit_type.ok()) return unit_type.status();
   m.unit_type = *unit_type;
-  m.unit_type_id = m.unit_type.name().substr(std::string("unitTypes/").size());
-  auto catalogue = BuiltinFailureModeCatalogue(m.unit_type_id);
-  if (!catalogue.ok()) return catalogue.status();
-  m.settings = (*catalogue)->settings();
-  auto modes = ExpandCatalogue(**catalogue);
+  m.unit_type_id = api::IdOrSelf(m.unit_type.name(), api::kUnitTypes);
+  INSDIAG_ASSIGN_OR_RETURN(auto catalogue, BuiltinFailureModeCatalogue(m.unit_type_id));
+  m.settings = catalogue->settings();
+  auto modes = ExpandCatalogue(*catalogue);
   if (!modes.ok()) return modes.status();
   m.modes = *modes;
   if (options.profile) {
@@ -187,13 +192,13 @@ void SetHistory(const FleetGeneratorOptions& options, Model& m) {
 
 absl::StatusOr<Model> BuildModel(const FleetGeneratorOptions& options, std::vector<std::string> roles) {
   Model m;
-  if (auto s = LoadData(options, m); !s.ok()) return s;
-  if (auto s = ValidateProfile(m.profile, m.unit_type_id); !s.ok()) return s;
+  INSDIAG_RETURN_IF_ERROR(LoadData(options, m));
+  INSDIAG_RETURN_IF_ERROR(ValidateProfile(m.profile, m.unit_type_id));
   m.roles = std::move(roles);
   m.modes_of_role.assign(m.roles.size(), {});
   m.role_weight.assign(m.roles.size(), 0.0);
   AddTerms(m);
-  if (auto s = AddModeModels(m); !s.ok()) return s;
+  INSDIAG_RETURN_IF_ERROR(AddModeModels(m));
   SetHistory(options, m);
   return m;
 }

@@ -1,7 +1,9 @@
-// Stored diagnoses: ranking a SUCCEEDED analysis's unit against its unit
-// type's failure modes (the math is kb/diagnosis.h), resolving a diagnosis
-// into a failure record, and the failure modes' signatures learnt from the
-// confirmed cases (migrations/0002_knowledge.sql).
+// Stored diagnoses: what diagnosing an analysis reads (its report, its unit
+// type's failure modes, the fleet's priors, the unit's history) and the
+// diagnosis stored; resolving a diagnosis into a failure record; and the
+// failure modes' signatures learnt from the confirmed cases
+// (migrations/0002_knowledge.sql). The diagnosis itself is made by
+// AnalysisDiagnoser (kb/diagnose_analysis.h), its math in kb/diagnosis.h.
 #pragma once
 
 #include <absl/status/status.h>
@@ -12,6 +14,7 @@
 #include <vector>
 
 #include "insdiag/kb/connection_pool.h"
+#include "insdiag/kb/diagnosis.h"
 #include "insdiag/kb/page_query.h"
 #include "insdiag/v1/knowledge.pb.h"
 
@@ -24,6 +27,24 @@ struct DiagnosisQuery {
   std::string unit;      // units/{u}
 };
 
+// What the knowledge base holds for diagnosing one analysis.
+struct DiagnosisInputs {
+  std::string analysis_name;  // analyses/{a}
+  std::string analysis_id;
+  std::string unit_id;
+  std::string serial;
+  v1::AnalysisReport report;
+  v1::UnitType unit_type;
+  std::vector<v1::FailureMode> modes;
+  v1::DiagnosisSettings settings;
+  std::string settings_note;  // when the unit type's catalogue has none and a default's apply
+  PriorInputs prior;
+  // The unit's own significant trends up to this analysis, and what its
+  // history showed ("" before three runs: no trend to test yet).
+  std::vector<EvidenceTerm> history_trends;
+  std::string history_note;
+};
+
 class DiagnosisStore {
  public:
   // `list_pool`: where the listings read (a streaming replica of the
@@ -31,10 +52,12 @@ class DiagnosisStore {
   explicit DiagnosisStore(ConnectionPool& pool, ConnectionPool* list_pool = nullptr)
       : pool_(pool), list_pool_(list_pool != nullptr ? *list_pool : pool) {}
 
-  // Diagnoses a SUCCEEDED analysis against its unit type's failure modes and
-  // stores the result. FAILED_PRECONDITION when the analysis has not
-  // succeeded or its unit has no known unit type.
-  absl::StatusOr<v1::Diagnosis> Create(const std::string& analysis_name);
+  // What diagnosing a SUCCEEDED analysis reads. NOT_FOUND for no such
+  // analysis; FAILED_PRECONDITION when it has not succeeded or its unit has
+  // no known unit type.
+  absl::StatusOr<DiagnosisInputs> LoadInputs(const std::string& analysis_name);
+  // Stores the diagnosis made from `inputs`, naming it and its create time.
+  absl::StatusOr<v1::Diagnosis> Store(const DiagnosisInputs& inputs, v1::Diagnosis diagnosis);
   absl::StatusOr<v1::Diagnosis> Get(const std::string& name);
   absl::StatusOr<std::pair<std::vector<v1::Diagnosis>, std::string>> List(const DiagnosisQuery& query);
   // Writes the failure record (confirmed, or no fault found) and, when

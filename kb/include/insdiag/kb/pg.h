@@ -100,6 +100,13 @@ class Connection {
   // statements that take no parameters in that place (CREATE DATABASE).
   absl::StatusOr<std::string> QuoteIdentifier(std::string_view name);
 
+  // Creates database `name` on this connection's server unless it exists
+  // (an embedded cluster's first start).
+  absl::Status CreateDatabaseIfMissing(std::string_view name);
+
+  // OK when the server answers a trivial query (health checking).
+  absl::Status Ping();
+
   // COPY … FROM STDIN in text format: `produce` appends rows (tab-separated,
   // newline-terminated) to its buffer and returns false once it has no more.
   // Returns the number of rows COPY reports.

@@ -1,0 +1,33 @@
+#include "insdiag/engine/candidate_source.h"
+
+#include <array>
+#include <utility>
+
+namespace insdiag::engine {
+namespace {
+
+constexpr std::array<std::pair<CandidateSource, std::string_view>, 5> kNames = {{
+    {CandidateSource::kScore, "SCORE"},
+    {CandidateSource::kStructure, "STRUCTURE"},
+    {CandidateSource::kLikelihood, "LIKELIHOOD"},
+    {CandidateSource::kGlr, "GLR"},
+    {CandidateSource::kRaw, "RAW"},
+}};
+
+}  // namespace
+
+std::string_view CandidateSourceName(CandidateSource source) {
+  for (const auto& [s, name] : kNames) {
+    if (s == source) return name;
+  }
+  return "";
+}
+
+std::optional<CandidateSource> CandidateSourceNamed(std::string_view name) {
+  for (const auto& [s, n] : kNames) {
+    if (n == name) return s;
+  }
+  return std::nullopt;
+}
+
+}  // namespace insdiag::engine

@@ -1,0 +1,31 @@
+// The diagnosis use case: an analysis's unit ranked against its unit type's
+// failure modes, from what the report tells, the fleet's priors and the
+// unit's own history (the math: kb/diagnosis.h, docs/DIAGNOSIS.md), and
+// stored. The store reads and writes; this decides.
+#pragma once
+
+#include <absl/status/statusor.h>
+
+#include <string>
+
+#include "insdiag/kb/diagnosis_store.h"
+#include "insdiag/v1/knowledge.pb.h"
+
+namespace insdiag::kb {
+
+// The evidence and the diagnosis of loaded inputs, free of SQL.
+v1::Diagnosis DiagnoseInputs(const DiagnosisInputs& inputs);
+
+class AnalysisDiagnoser {
+ public:
+  explicit AnalysisDiagnoser(DiagnosisStore& store) : store_(store) {}
+
+  // Diagnoses a SUCCEEDED analysis (analyses/{a}) and stores the diagnosis.
+  // NOT_FOUND, FAILED_PRECONDITION: as DiagnosisStore::LoadInputs.
+  absl::StatusOr<v1::Diagnosis> Diagnose(const std::string& analysis_name);
+
+ private:
+  DiagnosisStore& store_;
+};
+
+}  // namespace insdiag::kb
