@@ -12,7 +12,7 @@ std::optional<std::string> BenchRunMetadata::Extra(const std::string& key) const
 }
 
 bool BenchRunMetadata::ReferenceAttitudeIsRead() const {
-  return Extra(std::string(kReferenceAttitudeReadoutKey)) != std::string(kAttitudeNotRead);
+  return Extra(std::string(kReferenceAttitudeReadoutKey)) == std::string(kAttitudeReadByEncoders);
 }
 
 double MedianSampleIntervalS(std::span<const ImuSample> samples) {

@@ -114,11 +114,11 @@ TEST(ParseBenchRun, KeepsUnknownAndFreeMetadataInFileOrder) {
   EXPECT_EQ(run->metadata.unit_type, "INS-2000");
 }
 
-// A table's encoders are read unless the file says otherwise (a vehicle, an attitude levelled or given).
-TEST(ParseBenchRun, TheReferenceAttitudeIsReadUnlessTheFileSaysNone) {
-  const absl::StatusOr<engine::BenchRun> table = ParseBenchRun(CsvText().Text(), kSource);
-  ASSERT_TRUE(table.ok()) << table.status();
-  EXPECT_TRUE(table->metadata.ReferenceAttitudeIsRead());
+// The encoders' attitude is read where the file says so, and only there.
+TEST(ParseBenchRun, TheReferenceAttitudeIsReadWhereTheFileSaysEncoders) {
+  const absl::StatusOr<engine::BenchRun> unsaid = ParseBenchRun(CsvText().Text(), kSource);
+  ASSERT_TRUE(unsaid.ok()) << unsaid.status();
+  EXPECT_FALSE(unsaid->metadata.ReferenceAttitudeIsRead());
   for (const auto& [value, read] : {std::pair{"encoders", true}, std::pair{"none", false}}) {
     CsvText csv;
     csv.metadata.push_back(std::string("# reference_attitude_readout: ") + value);

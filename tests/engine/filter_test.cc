@@ -61,6 +61,7 @@ TEST_P(TrueModelConsistency, NisInItsBandAndSmoothedDriftsWithinThreeSigma) {
   EXPECT_GT(r.nis_mean, stats::ChiSquareQuantile(0.0005, n) / n);
   EXPECT_LT(r.nis_mean, stats::ChiSquareQuantile(0.9995, n) / n);
   for (const ChannelFit& c : r.channels) {
+    if (c.count == 0) continue;  // the attitude of a run whose encoders are not read: nothing to fit
     const double low = stats::ChiSquareQuantile(0.001 / 2, c.count) / c.count;
     const double high = stats::ChiSquareQuantile(1 - 0.001 / 2, c.count) / c.count;
     EXPECT_GT(c.nis_mean, low) << c.name;
@@ -132,7 +133,8 @@ TEST(TrueModelConsistency, EveryChannelsNisIsInsideItsBandForARunOfOneSampleASec
   std::array<double, kChannelCount> normalised_squares{};
   std::array<int, kChannelCount> updates{};
   for (int seed = 0; seed < 4; ++seed) {
-    const auto sim = testing::SimulateOrDie(unit, profile, 1.0, 300 + static_cast<uint64_t>(seed));
+    auto sim = testing::SimulateOrDie(unit, profile, 1.0, 300 + static_cast<uint64_t>(seed));
+    sim.run.metadata.extra.emplace_back(kReferenceAttitudeReadoutKey, kAttitudeReadByEncoders);
     auto fw = RunForwardFilter(sim.run, model, FilterOptions{});
     ASSERT_TRUE(fw.ok()) << fw.status();
     ASSERT_GT(fw->epochs(), 2);

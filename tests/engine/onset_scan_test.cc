@@ -352,11 +352,11 @@ OnsetFit GyroStepFit(const sim::TableProfile& profile, double onset_s, uint64_t 
                      const std::vector<EffectTerm>& terms, bool encoders_read = false) {
   auto unit = testing::NavigationGradeUnit();
   unit.bias_steps.push_back({Sensor::kGyro, 0, onset_s, 20.0 * unit.gyro.bias[0].sigma});
-  const auto sim = testing::SimulateOrDie(unit, profile, 10.0, seed);
+  auto sim = testing::SimulateOrDie(unit, profile, 10.0, seed);
+  if (encoders_read) sim.run.metadata.extra.emplace_back(kReferenceAttitudeReadoutKey, kAttitudeReadByEncoders);
   const ErrorModel model = testing::TrueBaseModel(unit);
   auto run = CondenseRun(sim.run, model, 1.0);
   EXPECT_TRUE(run.ok()) << run.status();
-  if (!encoders_read) ForgoAttitudeObservations(*run);
   auto fw = RunForwardFilter(*run, model);
   EXPECT_TRUE(fw.ok()) << fw.status();
   const auto fits = ScanOnsets(*fw, StateLayout(model), *run, terms, OnsetScanOptions{});

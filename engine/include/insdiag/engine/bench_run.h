@@ -42,10 +42,13 @@ struct Datasheet {
 };
 
 // Whether the bench reads the unit's attitude: `# reference_attitude_readout:`
-// `encoders` (a rotary table, the default) or `none` (a vehicle at rest, an
-// attitude given, levelled or gyro-compassed by an importer). Where it is not
-// read, the reference attitude is the start of the mechanisation only, and
-// the attitude is not observed (filter/observation.h).
+// `encoders` (a rotary table whose encoders are logged with the samples) or
+// `none` (a vehicle at rest, an attitude given, levelled or gyro-compassed by
+// an importer). Without the key the attitude is taken as not read: the
+// encoders' attitude is observed only where the run says they are read
+// (filter/observation.h; docs/API.md says what observing it changes, and
+// what it does not yet do right). Where it is not read, the reference
+// attitude is the start of the mechanisation only.
 inline constexpr std::string_view kReferenceAttitudeReadoutKey = "reference_attitude_readout";
 inline constexpr std::string_view kAttitudeReadByEncoders = "encoders";
 inline constexpr std::string_view kAttitudeNotRead = "none";
