@@ -416,7 +416,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   absl::StatusOr<EpochRun> epochs;
   std::vector<std::string> allan_notes;
   numerics::InParallel(
-      [&] { epochs = CondenseRunFor(run, base, options.filter, &compensations); },
+      [&] { epochs = CondenseRun(run, base, options.filter.update_interval_s, &compensations); },
       [&] {
         if (a_priori->from_datasheet) allan = AllanOfStaticSegments(run, options, allan_notes);
       });

@@ -74,7 +74,7 @@ void AddFault(const FaultFinding& f, const AnalysisOptions& options, ErrorModel&
 // the mechanisation, as for a fault beyond the linear range.
 absl::StatusOr<double> FaultPValueBeside(const RunContext& c, const ErrorModel& model,
                                          const FaultFinding& f, int fault_terms) {
-  auto epochs = CondenseRunFor(c.run, model, c.options.filter);
+  auto epochs = CondenseRun(c.run, model, c.options.filter.update_interval_s);
   if (!epochs.ok()) return epochs.status();
   auto forward = RunForwardFilter(*epochs, model);
   if (!forward.ok()) return forward.status();

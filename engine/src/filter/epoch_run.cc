@@ -364,10 +364,6 @@ double StillToleranceRad(const ReferenceAccuracy& reference) {
   return kStillToleranceReadoutSigmas * std::max(reference.attitude_readout_sigma_rad, kAttitudeRoundingRad);
 }
 
-void ForgoAttitudeObservations(EpochRun& run) {
-  for (EpochInterval& e : run.epochs) e.attitude_observed = false;
-}
-
 double UpdateIntervalForRun(double requested_update_interval_s, double nominal_interval_s) {
   const double shortest_s = kMinimumSamplesPerUpdate * nominal_interval_s;
   return std::lround(requested_update_interval_s / nominal_interval_s) < kMinimumSamplesPerUpdate

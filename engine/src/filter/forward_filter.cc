@@ -203,17 +203,10 @@ absl::StatusOr<ForwardPass> RunForwardFilter(const EpochRun& run, const ErrorMod
   return out;
 }
 
-absl::StatusOr<EpochRun> CondenseRunFor(const BenchRun& run, const ErrorModel& pilot, const FilterOptions& options,
-                                        const nav::RunCompensations* compensations) {
-  auto condensed = CondenseRun(run, pilot, options.update_interval_s, compensations);
-  if (condensed.ok() && !options.observe_attitude_at_rest) ForgoAttitudeObservations(*condensed);
-  return condensed;
-}
-
 absl::StatusOr<ForwardPass> RunForwardFilter(const BenchRun& run, const ErrorModel& model,
                                              const FilterOptions& options, FilterObserver* observer) {
   if (auto st = options.Validate(); !st.ok()) return st;
-  auto condensed = CondenseRunFor(run, model, options);
+  auto condensed = CondenseRun(run, model, options.update_interval_s);
   if (!condensed.ok()) return condensed.status();
   return RunForwardFilter(*condensed, model, observer);
 }

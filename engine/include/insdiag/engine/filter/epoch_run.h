@@ -183,10 +183,6 @@ class RunCondenser {
 inline constexpr double kStillToleranceReadoutSigmas = 5.0 * std::numbers::sqrt2;
 double StillToleranceRad(const ReferenceAccuracy& reference);
 
-// The attitude channels of every epoch unobserved, as on a bench that does
-// not read the attitude: the six position and velocity channels alone.
-void ForgoAttitudeObservations(EpochRun& run);
-
 // A packed symmetric 9×9 (upper triangle, row by row) unpacked, and back.
 Matrix9d Unpack9(const PackedSymmetric9d& packed);
 PackedSymmetric9d Pack9(const Matrix9d& m);

@@ -45,9 +45,6 @@ struct FilterOptions {
   // Interval between observation updates; the run's samples are grouped into
   // intervals of round(update_interval_s / Δt) samples.
   double update_interval_s = 1.0;
-  // Observe the table encoders' attitude at the epochs the table stands still
-  // (observation.h); off, the six position and velocity channels alone.
-  bool observe_attitude_at_rest = true;
 
   absl::Status Validate() const;
 };
@@ -138,10 +135,6 @@ class EpochFilter {
   double log_likelihood_ = 0.0;
   int scalar_updates_ = 0;
 };
-
-// CondenseRun with `options`' observations.
-absl::StatusOr<EpochRun> CondenseRunFor(const BenchRun& run, const ErrorModel& pilot, const FilterOptions& options,
-                                        const nav::RunCompensations* compensations = nullptr);
 
 // The forward filter of `model` over a condensed run.
 absl::StatusOr<ForwardPass> RunForwardFilter(const EpochRun& run, const ErrorModel& model,
