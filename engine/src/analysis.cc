@@ -367,7 +367,7 @@ AnalysisOptions OptionsForThisRun(const AnalysisOptions& options,
 // The encoders' readout noise, unless the model states it: the attitude
 // channels' noise, and what "the table stands still" tolerates (epoch_run.h).
 void MeasureAttitudeReadout(const BenchRun& run, ErrorModel& model, std::vector<std::string>& notes) {
-  if (!run.metadata.ReferenceAttitudeIsRead() || model.reference.attitude_readout_sigma_rad > 0.0) return;
+  if (!run.ReferenceAttitudeIsRead() || model.reference.attitude_readout_sigma_rad > 0.0) return;
   model.reference.attitude_readout_sigma_rad = nav::AttitudeReadoutNoiseRad(run);
   if (model.reference.attitude_readout_sigma_rad > 0.0) {
     notes.push_back(absl::StrFormat(

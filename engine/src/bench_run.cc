@@ -11,8 +11,23 @@ std::optional<std::string> BenchRunMetadata::Extra(const std::string& key) const
   return std::nullopt;
 }
 
-bool BenchRunMetadata::ReferenceAttitudeIsRead() const {
-  return Extra(std::string(kReferenceAttitudeReadoutKey)) == std::string(kAttitudeReadByEncoders);
+std::optional<bool> BenchRunMetadata::DeclaredAttitudeReadout() const {
+  const auto readout = Extra(std::string(kReferenceAttitudeReadoutKey));
+  if (!readout.has_value()) return std::nullopt;
+  return *readout == kAttitudeReadByEncoders;
+}
+
+bool BenchRun::ReferenceAttitudeIsRead() const {
+  if (const auto declared = metadata.DeclaredAttitudeReadout(); declared.has_value()) return *declared;
+  size_t segment_first = 0;
+  for (size_t k = 1; k < samples.size(); ++k) {
+    if (StartsSegment(k)) {
+      segment_first = k;
+    } else if (samples[k].ref_rpy_rad != samples[segment_first].ref_rpy_rad) {
+      return true;
+    }
+  }
+  return false;
 }
 
 double MedianSampleIntervalS(std::span<const ImuSample> samples) {

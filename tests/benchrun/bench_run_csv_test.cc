@@ -114,17 +114,23 @@ TEST(ParseBenchRun, KeepsUnknownAndFreeMetadataInFileOrder) {
   EXPECT_EQ(run->metadata.unit_type, "INS-2000");
 }
 
-// The encoders' attitude is read where the file says so, and only there.
-TEST(ParseBenchRun, TheReferenceAttitudeIsReadWhereTheFileSaysEncoders) {
-  const absl::StatusOr<engine::BenchRun> unsaid = ParseBenchRun(CsvText().Text(), kSource);
-  ASSERT_TRUE(unsaid.ok()) << unsaid.status();
-  EXPECT_FALSE(unsaid->metadata.ReferenceAttitudeIsRead());
-  for (const auto& [value, read] : {std::pair{"encoders", true}, std::pair{"none", false}}) {
-    CsvText csv;
-    csv.metadata.push_back(std::string("# reference_attitude_readout: ") + value);
-    const absl::StatusOr<engine::BenchRun> run = ParseBenchRun(csv.Text(), kSource);
-    ASSERT_TRUE(run.ok()) << run.status();
-    EXPECT_EQ(run->metadata.ReferenceAttitudeIsRead(), read) << value;
+// The encoders' attitude is read where the file says so; without the key,
+// where the reference attitude moves (only a table's encoders give that), and
+// not where it stays constant (it may be an alignment's estimate).
+TEST(ParseBenchRun, TheReferenceAttitudeIsReadWhereTheFileSaysEncodersOrTheTableTurns) {
+  CsvText turning;
+  turning.SetField(150, 9, "0.25");
+  for (const auto& [csv, read] : {std::pair{CsvText(), false}, std::pair{turning, true}}) {
+    const absl::StatusOr<engine::BenchRun> unsaid = ParseBenchRun(csv.Text(), kSource);
+    ASSERT_TRUE(unsaid.ok()) << unsaid.status();
+    EXPECT_EQ(unsaid->ReferenceAttitudeIsRead(), read) << "without the key, turning " << read;
+    for (const auto& [value, said] : {std::pair{"encoders", true}, std::pair{"none", false}}) {
+      CsvText with_key = csv;
+      with_key.metadata.push_back(std::string("# reference_attitude_readout: ") + value);
+      const absl::StatusOr<engine::BenchRun> run = ParseBenchRun(with_key.Text(), kSource);
+      ASSERT_TRUE(run.ok()) << run.status();
+      EXPECT_EQ(run->ReferenceAttitudeIsRead(), said) << value << ", turning " << read;
+    }
   }
 }
 

