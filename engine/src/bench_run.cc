@@ -17,6 +17,17 @@ std::optional<bool> BenchRunMetadata::DeclaredAttitudeReadout() const {
   return *readout == kAttitudeReadByEncoders;
 }
 
+void BenchRunMetadata::DeclareAttitudeReadout(bool encoders_read) {
+  const std::string value(encoders_read ? kAttitudeReadByEncoders : kAttitudeNotRead);
+  for (auto& [k, v] : extra) {
+    if (k == kReferenceAttitudeReadoutKey) {
+      v = value;
+      return;
+    }
+  }
+  extra.emplace_back(std::string(kReferenceAttitudeReadoutKey), value);
+}
+
 bool BenchRun::ReferenceAttitudeIsRead() const {
   if (const auto declared = metadata.DeclaredAttitudeReadout(); declared.has_value()) return *declared;
   size_t segment_first = 0;

@@ -165,9 +165,7 @@ absl::Status SetAttitude(const ImportRecipe& recipe, DecodedRecords& records, en
   }
   // An attitude given, levelled or turned by a table-yaw column from a given
   // start is as accurate as that start only: not a reading to observe.
-  if (!metadata.Extra(std::string(engine::kReferenceAttitudeReadoutKey)).has_value()) {
-    metadata.extra.emplace_back(engine::kReferenceAttitudeReadoutKey, engine::kAttitudeNotRead);
-  }
+  if (!metadata.DeclaredAttitudeReadout().has_value()) metadata.DeclareAttitudeReadout(false);
   Eigen::Vector3d initial = recipe.constant_rpy_rad;
   if (recipe.attitude == AttitudeSource::kLevelled) {
     INSDIAG_ASSIGN_OR_RETURN(auto levelled, LevelledAttitude(recipe, samples, metadata));

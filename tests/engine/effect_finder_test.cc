@@ -16,8 +16,8 @@
 #include <cmath>
 #include <cstdio>
 #include <set>
+#include <optional>
 #include <string>
-#include <string_view>
 #include <vector>
 
 #include "insdiag/api/report_codec.h"
@@ -128,8 +128,8 @@ struct FamilyCase {
   std::string profile;  // built-in profile that excites it
   Size size = Size::kTolerances;
   double k = 0.0;
-  // The run's reference_attitude_readout, where the case fixes it (bench_run.h).
-  std::string_view attitude_readout = {};
+  // Whether the run says its attitude is read, where the case fixes it (bench_run.h).
+  std::optional<bool> encoders_read = std::nullopt;
 };
 
 void PrintTo(const FamilyCase& c, std::ostream* os) { *os << c.term << " on " << c.profile; }
@@ -180,9 +180,7 @@ HiddenRun SimulateHidden(const FamilyCase& c) {
   const sim::TrueEffect truth = HiddenEffect(c, unit);
   unit.effects.push_back(truth);
   HiddenRun hidden{truth, testing::SimulateOrDie(unit, testing::BuiltinProfileOrDie(c.profile), kFindRate10Hz, 7)};
-  if (!c.attitude_readout.empty()) {
-    hidden.sim.run.metadata.extra.emplace_back(std::string(kReferenceAttitudeReadoutKey), std::string(c.attitude_readout));
-  }
+  if (c.encoders_read.has_value()) hidden.sim.run.metadata.DeclareAttitudeReadout(*c.encoders_read);
   return hidden;
 }
 
@@ -295,7 +293,7 @@ INSTANTIATE_TEST_SUITE_P(
                       // gyro (ΔBIC -84 against -71): docs/FAULT_SCENARIOS.md, "The
                       // encoders' attitude", gives the rate over seeds.
                       FamilyCase{"GyroBiasSecondOrder", "gyro_bias_second_order.y", "full", Size::kSecondOrderSigma, 3.0,
-                                 kAttitudeNotRead}),
+                                 /*encoders_read=*/false}),
     [](const ::testing::TestParamInfo<FamilyCase>& p) { return p.param.label; });
 
 // A bias random walk, on the eight-hour `drift` profile (a walk as slow as

@@ -134,7 +134,7 @@ TEST(TrueModelConsistency, EveryChannelsNisIsInsideItsBandForARunOfOneSampleASec
   std::array<int, kChannelCount> updates{};
   for (int seed = 0; seed < 4; ++seed) {
     auto sim = testing::SimulateOrDie(unit, profile, 1.0, 300 + static_cast<uint64_t>(seed));
-    sim.run.metadata.extra.emplace_back(kReferenceAttitudeReadoutKey, kAttitudeReadByEncoders);
+    sim.run.metadata.DeclareAttitudeReadout(true);
     auto fw = RunForwardFilter(sim.run, model, FilterOptions{});
     ASSERT_TRUE(fw.ok()) << fw.status();
     ASSERT_GT(fw->epochs(), 2);

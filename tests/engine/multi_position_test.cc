@@ -160,7 +160,7 @@ RecordedTest RecordSession(uint64_t seed, const std::filesystem::path& dir) {
   const sim::SimulatedRun simulated = SimulateOrDie(unit, SixPositionsAndThreeTurns(), kRateHz, seed);
   std::vector<BenchRun> recorded = RecordedFiles(simulated.run);
   // The table's encoders are logged with the samples (filter/observation.h).
-  for (BenchRun& file : recorded) file.metadata.extra.emplace_back(kReferenceAttitudeReadoutKey, kAttitudeReadByEncoders);
+  for (BenchRun& file : recorded) file.metadata.DeclareAttitudeReadout(true);
   EXPECT_EQ(recorded.size(), 9u) << "six positions and three turns are nine files";
   for (size_t i = 0; i < recorded.size(); ++i) {
     test.files.push_back(dir / absl::StrFormat("file-%d.csv", i + 1));

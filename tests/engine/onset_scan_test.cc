@@ -346,14 +346,15 @@ sim::TableProfile StillTable(double duration_s) {
 
 // The scan of a gyro-x step of 20 drift σ at `onset_s`, filtered with the
 // unit's true base model: the step's own fit. `encoders_read`: the bench
-// reads the attitude at rest (observation.h); else the position and velocity
-// channels alone, as a bench without encoders.
+// says it reads the attitude (observation.h); else it says it does not, and
+// the position and velocity channels are all there is, even where the table
+// turns.
 OnsetFit GyroStepFit(const sim::TableProfile& profile, double onset_s, uint64_t seed,
                      const std::vector<EffectTerm>& terms, bool encoders_read = false) {
   auto unit = testing::NavigationGradeUnit();
   unit.bias_steps.push_back({Sensor::kGyro, 0, onset_s, 20.0 * unit.gyro.bias[0].sigma});
   auto sim = testing::SimulateOrDie(unit, profile, 10.0, seed);
-  if (encoders_read) sim.run.metadata.extra.emplace_back(kReferenceAttitudeReadoutKey, kAttitudeReadByEncoders);
+  sim.run.metadata.DeclareAttitudeReadout(encoders_read);
   const ErrorModel model = testing::TrueBaseModel(unit);
   auto run = CondenseRun(sim.run, model, 1.0);
   EXPECT_TRUE(run.ok()) << run.status();
@@ -420,7 +421,7 @@ std::vector<OnsetFit> StillRampScan(const sim::SimulatedUnit& unit, double drift
   const ErrorModel model = testing::TrueBaseModel(unit);
   auto run = CondenseRun(sim.run, model, 1.0);
   EXPECT_TRUE(run.ok()) << run.status();
-  // The simulated bench does not read its encoders: on a still table the ramp and the step look alike.
+  // A still table's constant attitude is not read (bench_run.h): the ramp and the step look alike.
   auto fw = RunForwardFilter(*run, model);
   EXPECT_TRUE(fw.ok()) << fw.status();
   if (!run.ok() || !fw.ok()) return {};

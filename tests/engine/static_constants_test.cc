@@ -225,8 +225,7 @@ TEST(StaticConstants, AMemsUnitOnATurningTableGetsNoScaleFactorFromFarOutsideThe
       sim::SimulatedUnit unit = MemsUnit();
       AddTurnOnBiases(rng, unit);
       BenchRun run = OneHourAt50Hz(unit, "positions", 60 + seed);
-      run.metadata.extra.emplace_back(std::string(kReferenceAttitudeReadoutKey),
-                                      std::string(encoders_read ? kAttitudeReadByEncoders : kAttitudeNotRead));
+      run.metadata.DeclareAttitudeReadout(encoders_read);
       auto analysis = Analyze(run, {}, AnalysisOptions{});
       ASSERT_TRUE(analysis.ok()) << analysis.status();
       for (const EffectCandidate& c : analysis->report.effect_candidates) {

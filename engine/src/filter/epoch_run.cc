@@ -321,7 +321,7 @@ struct RunCondenser::State {
     condenser.AddSample(*disc, t_prev, nav::Midway(q_ref_previous, q_ref).toRotationMatrix(), inputs);
     q_ref_previous = q_ref;
     // Undeclared, the attitude is read from its first move on (bench_run.h).
-    if (!attitude_declared.has_value() && s.ref_rpy_rad != segment_start_rpy) attitude_read = true;
+    if (!attitude_read && !attitude_declared.has_value() && s.ref_rpy_rad != segment_start_rpy) attitude_read = true;
     interval_still = interval_still && StillAtIntervalStart(s.ref_rpy_rad);
     const bool last = run_complete && k + 1 == run.samples.size();
     if (condenser.samples() < out.samples_per_epoch && !last && !run.StartsSegment(k + 1)) return;

@@ -74,6 +74,8 @@ struct BenchRunMetadata {
   std::optional<std::string> Extra(const std::string& key) const;
   // Whether the file says its attitude is read (kReferenceAttitudeReadoutKey), or nullopt.
   std::optional<bool> DeclaredAttitudeReadout() const;
+  // Says whether the attitude is read: `encoders` or `none`, replacing what was said.
+  void DeclareAttitudeReadout(bool encoders_read);
 };
 
 struct ImuSample {
