@@ -284,11 +284,8 @@ class Parser {
 
     const std::optional<MetadataField> field = SpecField(key);
     if (!field.has_value()) {
-      if (key == engine::kReferenceAttitudeReadoutKey && value != engine::kAttitudeReadByEncoders &&
-          value != engine::kAttitudeNotRead) {
-        return Refuse(line, value_at, key,
-                      absl::StrFormat("expected '%s' or '%s', got '%s'", engine::kAttitudeReadByEncoders,
-                                      engine::kAttitudeNotRead, value));
+      if (std::string detail = internal::CheckReferenceKey(key, value); !detail.empty()) {
+        return Refuse(line, value_at, key, detail);
       }
       run_.metadata.extra.emplace_back(key, value);
       locator_.AddExtraPlace(key, {lines_.number(), CharacterColumn(line, key_at)});

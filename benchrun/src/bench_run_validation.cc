@@ -1,6 +1,7 @@
 #include "insdiag/benchrun/bench_run_validation.h"
 
 #include <absl/strings/cord.h>
+#include <absl/strings/numbers.h>
 #include <absl/strings/str_format.h>
 
 #include <algorithm>
@@ -147,6 +148,9 @@ absl::Status CheckMetadata(const engine::BenchRunMetadata& metadata, const Input
     if (value.find_first_of("\r\n") != std::string::npos) {
       return refuse(MetadataField::kExtra, absl::StrFormat("value of '%s' spans lines", key), i);
     }
+    if (std::string detail = internal::CheckReferenceKey(key, value); !detail.empty()) {
+      return refuse(MetadataField::kExtra, detail, i);
+    }
   }
   return absl::OkStatus();
 }
@@ -169,6 +173,21 @@ bool IsMetadataKey(std::string_view key) {
   return std::all_of(key.begin(), key.end(), [](char c) {
     return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
   });
+}
+
+std::string CheckReferenceKey(std::string_view key, std::string_view value) {
+  if (key == engine::kReferenceAttitudeReadoutKey) {
+    if (value == engine::kAttitudeReadByEncoders || value == engine::kAttitudeNotRead) return {};
+    return absl::StrFormat("expected '%s' or '%s', got '%s'", engine::kAttitudeReadByEncoders,
+                           engine::kAttitudeNotRead, value);
+  }
+  const bool heading = key == engine::kReferenceHeadingSigmaKey;
+  if (!heading && key != engine::kReferenceLevelSigmaKey) return {};
+  if (heading && value == engine::kHeadingNotSurveyed) return {};
+  double sigma_rad = 0.0;
+  if (absl::SimpleAtod(absl::string_view(value.data(), value.size()), &sigma_rad) && std::isfinite(sigma_rad) && sigma_rad > 0.0) return {};
+  return absl::StrFormat("expected a positive 1σ in radians%s, got '%s'",
+                         heading ? absl::StrFormat(" or '%s'", engine::kHeadingNotSurveyed) : "", value);
 }
 
 std::string CheckFormat(std::string_view format) {

@@ -31,8 +31,13 @@ std::string ObservabilityText(v1::IdentifiedParameter::Observability verdict, co
   }
 }
 
-void PrintReport(const engine::AnalysisReport& r, std::ostream& out) {
+void PrintReport(const engine::AnalysisReport& r, std::ostream& out, const std::vector<std::string>& plain_words) {
   out << "verdict: " << engine::VerdictName(r.verdict) << "\n";
+  if (!plain_words.empty()) {
+    out << "\nin plain words:\n";
+    for (const std::string& line : plain_words) out << "  " << line << "\n";
+    out << "\n";
+  }
   out << "model: base";
   for (const auto& e : r.model_effects) out << " + " << e;
   out << "  (" << r.parameter_count << " parameters)\n";

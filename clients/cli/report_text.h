@@ -4,13 +4,17 @@
 
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include "insdiag/engine/report.h"
 #include "insdiag/v1/analyses.pb.h"
 
 namespace insdiag::cli {
 
-void PrintReport(const engine::AnalysisReport& report, std::ostream& out);
+// `plain_words` (engine/plain_words.h), where given, follows the verdict
+// line: what a quality engineer reads first; the engine's notes stay last.
+void PrintReport(const engine::AnalysisReport& report, std::ostream& out,
+                 const std::vector<std::string>& plain_words = {});
 
 // Whether the run tells an identified parameter, as the text reports show it:
 // "observable", "NOT observable: inseparable, only with acc_turn_on_bias.z

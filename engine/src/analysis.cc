@@ -2,6 +2,7 @@
 // outputs are explicit; the stages live in engine/src/analysis/.
 #include "insdiag/engine/analysis.h"
 
+#include <absl/strings/str_cat.h>
 #include <absl/strings/str_format.h>
 
 #include <algorithm>
@@ -16,6 +17,7 @@
 #include "analysis/run_context.h"
 #include "insdiag/engine/nav/reference_readout.h"
 #include "insdiag/engine/numerics/parallel_map.h"
+#include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::engine {
 absl::Status AnalysisOptions::Validate() const {
@@ -67,14 +69,17 @@ absl::StatusOr<ErrorModel> APrioriModel(const BenchRun& run, const std::optional
 // The dominant constant biases removed from `run` (ident/static_constants.h),
 // on the Allan analysis's static segments when it ran.
 std::vector<ParameterEstimate> RemoveDominantConstants(BenchRun& run, const std::optional<ident::AllanResult>& allan,
-                                                       const ErrorModel& a_priori, const AnalysisOptions& options,
+                                                       const pipeline::APriori& a_priori, const AnalysisOptions& options,
                                                        std::vector<std::string>& notes) {
+  const ident::ConstantPrior prior = a_priori.from_allan ? ident::ConstantPrior::kNone
+                                                         : ident::ConstantPrior::kBoundedByDrift;
   if (allan.has_value()) {
-    return ident::RemoveDominantConstants(run, allan->segments, a_priori, options.dominant_constants, notes);
+    return ident::RemoveDominantConstants(run, allan->segments, a_priori.model, options.dominant_constants, prior,
+                                          notes);
   }
   auto segments = ident::FindStaticSegments(run, options.allan);
   if (!segments.ok()) return {};
-  return ident::RemoveDominantConstants(run, *segments, a_priori, options.dominant_constants, notes);
+  return ident::RemoveDominantConstants(run, *segments, a_priori.model, options.dominant_constants, prior, notes);
 }
 
 absl::Status AddEffects(const BenchRun& run, const std::vector<std::string>& selectors, double update_interval_s,
@@ -177,17 +182,71 @@ std::optional<ident::AllanResult> AllanOfStaticSegments(const BenchRun& run, con
 // to a segment's shortest length for a ramp (the least-squares onset of a
 // ramp in noise is looser than a jump's); and each sensor axis' constant bias
 // over the still samples of `run` as the analysis filters it.
+// An accelerometer's jump less the specific-force change the gyros account
+// for: a unit whose bench settles or is knocked turns by δθ, and its
+// reading of gravity changes by Δf = −δθ × f̄ (the small-angle rotation of a
+// fixed vector in body axes; Titterton & Weston, §3.6), a change of the
+// samples but not of the sensor. δθ is the gyros' rate less its mean over the
+// static segment (Earth's rate and the biases), integrated, between the means over the
+// jump's two windows. Where the gyros resolve a turn, the remainder is
+// tested as the jump was (allan.h, Jumps: J positions at 2Φ(−z) each), its
+// standard error widened by the gyros' angle random walk over a window.
+// A turn counts when the gyros resolve it: beyond three standard errors of
+// their angle noise over a window (a one-sided chance of 0.13 % that noise
+// alone reaches it).
+constexpr double kResolvedTurnStdErrors = 3.0;
+
+RawSampleChange UntiltedJump(const BenchRun& run, const ident::AllanResult& allan, const ident::AllanChannel& channel,
+                             const ident::RateJump& jump, const ErrorModel& a_priori) {
+  const double tau0_s = allan.tau0_s;
+  RawSampleChange change{channel.sensor, channel.axis, Regressor::kStep, jump.time_s, jump.size,
+                         static_cast<double>(jump.window) * tau0_s, jump.p_value,
+                         jump.z > 0.0 ? std::abs(jump.size) / jump.z : 0.0};
+  if (channel.sensor != Sensor::kAccelerometer || run.samples.empty() || !(jump.z > 0.0)) return change;
+  const auto at = std::lower_bound(run.samples.begin(), run.samples.end(), jump.time_s,
+                                   [](const ImuSample& s, double t) { return s.t_s <= t; });
+  const auto k = static_cast<std::size_t>(at - run.samples.begin());
+  const auto w = static_cast<std::size_t>(jump.window);
+  const auto segment = std::find_if(allan.segments.begin(), allan.segments.end(), [&](const ident::StaticSegment& s) {
+    return s.first_sample + w <= k && k + w <= s.end_sample;
+  });
+  if (segment == allan.segments.end()) return change;
+  Eigen::Vector3d mean_rate = Eigen::Vector3d::Zero();
+  for (std::size_t i = segment->first_sample; i < segment->end_sample; ++i) mean_rate += run.samples[i].gyro_rad_s;
+  mean_rate /= static_cast<double>(segment->end_sample - segment->first_sample);
+  Eigen::Vector3d angle = Eigen::Vector3d::Zero(), mean_angle_before = Eigen::Vector3d::Zero(),
+                  mean_angle_after = Eigen::Vector3d::Zero(), force_before = Eigen::Vector3d::Zero();
+  for (std::size_t i = k - w; i < k + w; ++i) {
+    angle += (run.samples[i].gyro_rad_s - mean_rate) * tau0_s;
+    (i < k ? mean_angle_before : mean_angle_after) += angle;
+    if (i < k) force_before += run.samples[i].acc_mps2;
+  }
+  const double n = static_cast<double>(w);
+  const Eigen::Vector3d turn_rad = (mean_angle_after - mean_angle_before) / n;
+  const Eigen::Vector3d tilt_change = -turn_rad.cross(force_before / n);
+  double arw = 0.0;
+  for (int a = 0; a < 3; ++a) arw = std::max(arw, a_priori.gyro.white_noise_density[a]);
+  const double angle_noise_rad = arw * std::sqrt(n * tau0_s);
+  const double tilt_noise = angle_noise_rad * (force_before / n).norm();
+  // A turn the gyros do not resolve explains nothing: the jump stands as
+  // the samples show it.
+  if (std::abs(tilt_change[channel.axis]) < kResolvedTurnStdErrors * tilt_noise) return change;
+  const double std_error = std::hypot(change.std_error, tilt_noise);
+  const double remainder = jump.size - tilt_change[channel.axis];
+  const double positions = jump.p_value / (2.0 * stats::NormalCdf(-jump.z));
+  change.size = remainder;
+  change.std_error = std_error;
+  change.p_value = std::min(1.0, positions * 2.0 * stats::NormalCdf(-std::abs(remainder) / std_error));
+  return change;
+}
+
 RawSampleEvidence RawSampleEvidenceOf(const BenchRun& run,
                                       const std::optional<ident::AllanResult>& allan,
                                       const ErrorModel& a_priori, const AnalysisOptions& options) {
   RawSampleEvidence out;
   if (!allan.has_value()) return out;
   for (const ident::AllanChannel& ch : allan->channels) {
-    for (const ident::RateJump& j : ch.jumps) {
-      out.changes.push_back({ch.sensor, ch.axis, Regressor::kStep, j.time_s, j.size,
-                             static_cast<double>(j.window) * allan->tau0_s, j.p_value,
-                             j.z > 0.0 ? std::abs(j.size) / j.z : 0.0});
-    }
+    for (const ident::RateJump& j : ch.jumps) out.changes.push_back(UntiltedJump(run, *allan, ch, j, a_priori));
     for (const ident::RateRamp& r : ch.ramps) {
       out.changes.push_back({ch.sensor, ch.axis, Regressor::kRamp, r.onset_s, r.slope,
                              options.allan.min_segment_s,
@@ -274,7 +333,10 @@ absl::StatusOr<pipeline::APriori> ChooseAPrioriModel(const BenchRun& run, const 
         "deviation",
         beyond->channel, beyond->tau_s, beyond->ratio));
   } else if (!allan.has_value()) {
-    return model.status();
+    // Neither source: say why the run's own noise could not stand in.
+    return absl::Status(model.status().code(),
+                        absl::StrCat(model.status().message(), "; nor can the run's own Allan deviation stand in (",
+                                     notes.empty() ? "" : notes.back(), ")"));
   }
   const ReferenceAccuracy& reference = model.ok() ? model->reference : options.reference;
   auto from_allan = ident::ErrorModelFromAllan(*allan, reference, &notes);
@@ -376,6 +438,18 @@ void MeasureAttitudeReadout(const BenchRun& run, ErrorModel& model, std::vector<
   }
 }
 
+// What the filter starts from where the run says its heading was not
+// surveyed (bench_run.h): the user reads why the horizontal gyros' constant
+// terms come with the heading's uncertainty.
+void NoteUnsurveyedHeading(const BenchRun& run, const ErrorModel& model, std::vector<std::string>& notes) {
+  if (run.metadata.AttitudeAccuracy().heading_surveyed) return;
+  notes.push_back(absl::StrFormat(
+      "the bench did not survey the heading: the filter starts it with σ %.3g rad, as gyro-compassing the start "
+      "leaves it with this model's drifts (at most %.3g rad); at rest a heading error reads as a horizontal gyro bias "
+      "of up to Ω cos L, so those two are told apart only where the table turns",
+      UnsurveyedHeadingSigmaRad(model, run.metadata.site), kUnsurveyedHeadingLimitRad));
+}
+
 }  // namespace
 
 absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& request,
@@ -399,8 +473,9 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   auto a_priori = ChooseAPrioriModel(run, request, allan, options, notes);
   if (!a_priori.ok()) return a_priori.status();
   MeasureAttitudeReadout(run, a_priori->model, notes);
+  NoteUnsurveyedHeading(run, a_priori->model, notes);
   const std::vector<ParameterEstimate> removed_constants =
-      options.remove_dominant_constants ? RemoveDominantConstants(run, allan, a_priori->model, options, notes)
+      options.remove_dominant_constants ? RemoveDominantConstants(run, allan, *a_priori, options, notes)
                                         : std::vector<ParameterEstimate>{};
   ErrorModel base = a_priori->model;
   if (auto st = AddEffects(run, request.baseline_effects, options.filter.update_interval_s,

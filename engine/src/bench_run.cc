@@ -1,6 +1,9 @@
 #include "insdiag/engine/bench_run.h"
 
+#include <absl/strings/numbers.h>
+
 #include <algorithm>
+#include <cmath>
 
 namespace insdiag::engine {
 
@@ -26,6 +29,21 @@ void BenchRunMetadata::DeclareAttitudeReadout(bool encoders_read) {
     }
   }
   extra.emplace_back(std::string(kReferenceAttitudeReadoutKey), value);
+}
+
+StatedAttitudeAccuracy BenchRunMetadata::AttitudeAccuracy() const {
+  StatedAttitudeAccuracy stated;
+  const auto positive = [](const std::string& text) -> std::optional<double> {
+    double value = 0.0;
+    if (!absl::SimpleAtod(text, &value) || !std::isfinite(value) || value <= 0.0) return std::nullopt;
+    return value;
+  };
+  if (const auto level = Extra(std::string(kReferenceLevelSigmaKey))) stated.level_sigma_rad = positive(*level);
+  if (const auto heading = Extra(std::string(kReferenceHeadingSigmaKey))) {
+    stated.heading_surveyed = *heading != kHeadingNotSurveyed;
+    if (stated.heading_surveyed) stated.heading_sigma_rad = positive(*heading);
+  }
+  return stated;
 }
 
 bool BenchRun::ReferenceAttitudeIsRead() const {

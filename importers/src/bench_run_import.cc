@@ -2,6 +2,8 @@
 
 #include <absl/strings/str_format.h>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -22,10 +24,20 @@ using benchrun::InputLocation;
 using benchrun::Refusal;
 using internal::DecodedRecords;
 
-// Over a window where the mean body rate exceeds this, the unit was turning
-// (0.57°/s: above the bias of any navigation or tactical gyro and Earth's
-// rate by two orders), so it cannot be levelled or gyro-compassed there.
+// Over a window where the mean body rate exceeds this (0.57°/s: above the
+// bias of any navigation or tactical gyro and Earth's rate by two orders),
+// the unit was turning or its gyros are consumer-grade: no heading can be
+// gyro-compassed there.
 constexpr double kStaticMeanRateLimitRadS = 0.01;
+// A unit at rest keeps its specific force's direction: a batch mean of it
+// turned by more than a degree from the window's mean is a tilt, far beyond
+// what vibration moves a mean of a twentieth of the window.
+constexpr double kStaticTiltChangeLimitRad = 1.0 * std::numbers::pi / 180.0;
+constexpr std::size_t kLevelBatches = 20;
+// A window too short to batch gives no level accuracy of its own: that of a
+// precision table's levelling, about an arc-second, is not claimed; a
+// milliradian, a bubble level's, is.
+constexpr double kUnresolvedLevelSigmaRad = 1e-3;
 
 // Names the raw log's line (text) or record (binary) of a sample.
 class RecordLocator final : public benchrun::InputLocator {
@@ -37,13 +49,19 @@ class RecordLocator final : public benchrun::InputLocator {
     if (binary_) return {source_, 0, 0, absl::StrFormat("record %d: %s", records_.origin[i], name)};
     return {source_, static_cast<int>(records_.origin[i]), 0, name};
   }
-  InputLocation OfMetadata(benchrun::MetadataField field, std::size_t) const override {
+  InputLocation OfMetadata(benchrun::MetadataField field, std::size_t extra_index) const override {
+    if (field == benchrun::MetadataField::kExtra && metadata_ != nullptr && extra_index < metadata_->extra.size()) {
+      return {"settings", 0, 0, metadata_->extra[extra_index].first};
+    }
     return {"settings", 0, 0, std::string(benchrun::MetadataKey(field))};
   }
+  // Free metadata is named by its key once the run's metadata is known.
+  void SetMetadata(const engine::BenchRunMetadata* metadata) { metadata_ = metadata; }
   InputLocation OfSampleList() const override { return {source_, 0, 0, "records"}; }
 
  private:
   std::string source_;
+  const engine::BenchRunMetadata* metadata_ = nullptr;
   const DecodedRecords& records_;
   bool binary_;
 };
@@ -66,6 +84,33 @@ double MedianStep(const std::vector<engine::ImuSample>& samples) {
   if (steps.empty()) return 0.0;
   std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
   return steps[steps.size() / 2];
+}
+
+// Step 1b: the records of the window, in time since the first record (the
+// log's own t, or the nominal interval's count when t is implied).
+absl::Status KeepWindow(const ImportRecipe& recipe, DecodedRecords& records) {
+  if (!recipe.window_s.has_value()) return absl::OkStatus();
+  const auto [from_s, to_s] = *recipe.window_s;
+  const bool implied = !HasColumn(recipe, ColumnTarget::kTime);
+  const double first_t = records.samples.front().t_s;
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < records.samples.size(); ++k) {
+    const double since_first_s = implied ? static_cast<double>(k) * *recipe.interval_s : records.samples[k].t_s - first_t;
+    if (since_first_s < from_s || since_first_s > to_s) continue;
+    records.samples[kept] = records.samples[k];
+    records.origin[kept] = records.origin[k];
+    if (!records.table_yaw_rad.empty()) records.table_yaw_rad[kept] = records.table_yaw_rad[k];
+    ++kept;
+  }
+  if (kept < 2) {
+    return Refusal({"settings", 0, 0, "window_s"},
+                   absl::StrFormat("keeps %d record(s) of %d: the window %.6g–%.6g s lies outside the log", kept,
+                                   records.samples.size(), from_s, to_s));
+  }
+  records.samples.resize(kept);
+  records.origin.resize(kept);
+  if (!records.table_yaw_rad.empty()) records.table_yaw_rad.resize(kept);
+  return absl::OkStatus();
 }
 
 // Step 2: the time base, relative to the start of the first sample's interval.
@@ -125,31 +170,91 @@ absl::Status CheckIncrementTriples(const ImportRecipe& recipe) {
   return absl::OkStatus();
 }
 
-// Step 4, levelled: the mean force and rate over the static window.
+// Step 4, levelled: the attitude at the run's start from the mean specific
+// force and rate over the static window, and how well they give it (the
+// bench-run format's reference_*_sigma_rad).
+//
+// A unit at rest on a bench that settles, or on a vehicle, rocks by
+// milliradians while the window runs, and the gyros measure it: a body that
+// turned by θ since the start reads a fixed vector f as (I − [θ×]) f₀
+// (small angles; Titterton & Weston, §3.6), so f₀ = f + θ × f takes each
+// sample's force back to the start's axes, with θ the rate less its window
+// mean (Earth's and the biases) integrated from the start. The mean of f₀
+// levels the start. How far the batch means of f₀ stray from it — the
+// accelerometers' wander and the gyros' drift over the window — is the
+// level's accuracy at the start.
 absl::StatusOr<Eigen::Vector3d> LevelledAttitude(const ImportRecipe& recipe, const std::vector<engine::ImuSample>& samples,
                                                  engine::BenchRunMetadata& metadata) {
   const double window_end_s = recipe.level_window_s.value_or(samples.back().t_s);
-  Eigen::Vector3d force = Eigen::Vector3d::Zero(), rate = Eigen::Vector3d::Zero();
   std::size_t n = 0;
-  for (const auto& s : samples) {
-    if (s.t_s > window_end_s && n > 0) break;
-    force += s.acc_mps2;
-    rate += s.gyro_rad_s;
-    ++n;
+  while (n < samples.size() && (samples[n].t_s <= window_end_s || n == 0)) ++n;
+  Eigen::Vector3d rate = Eigen::Vector3d::Zero(), force = Eigen::Vector3d::Zero();
+  for (std::size_t k = 0; k < n; ++k) {
+    rate += samples[k].gyro_rad_s;
+    force += samples[k].acc_mps2;
   }
-  force /= static_cast<double>(n);
   rate /= static_cast<double>(n);
-  if (rate.norm() > kStaticMeanRateLimitRadS) {
-    return Refusal({"settings", 0, 0, "level_window_s"},
-                   absl::StrFormat("the unit turns at a mean %.3g rad/s over 0–%.6g s, so it cannot be levelled there: "
-                                   "give a static window (level_window_s) or the attitude",
-                                   rate.norm(), window_end_s));
+  force /= static_cast<double>(n);
+
+  const std::size_t batch = std::max<std::size_t>(1, n / kLevelBatches);
+  const std::size_t batches = n / batch;
+  std::vector<Eigen::Vector3d> batch_force(batches, Eigen::Vector3d::Zero());
+  std::vector<Eigen::Vector3d> batch_force_at_start(batches, Eigen::Vector3d::Zero());
+  Eigen::Vector3d turned_rad = Eigen::Vector3d::Zero(), force_at_start = Eigen::Vector3d::Zero();
+  for (std::size_t k = 0; k < n; ++k) {
+    const double dt_s = k == 0 ? 0.0 : samples[k].t_s - samples[k - 1].t_s;
+    turned_rad += (samples[k].gyro_rad_s - rate) * dt_s;
+    const Eigen::Vector3d f0 = samples[k].acc_mps2 + turned_rad.cross(samples[k].acc_mps2);
+    force_at_start += f0;
+    if (k / batch < batches) {
+      batch_force[k / batch] += samples[k].acc_mps2 / static_cast<double>(batch);
+      batch_force_at_start[k / batch] += f0 / static_cast<double>(batch);
+    }
   }
-  const Eigen::Vector3d rpy = engine::nav::CoarseAlignment(force, rate, recipe.heading_rad);
+  force_at_start /= static_cast<double>(n);
+
+  // A batch whose force turned by more than a degree: the unit was moved.
+  double tilt_change_rad = 0.0;
+  for (const Eigen::Vector3d& m : batch_force) {
+    tilt_change_rad = std::max(tilt_change_rad, std::acos(std::clamp(m.normalized().dot(force.normalized()), -1.0, 1.0)));
+  }
+  if (tilt_change_rad > kStaticTiltChangeLimitRad) {
+    return Refusal({"settings", 0, 0, "level_window_s"},
+                   absl::StrFormat("the specific force turns by %.3g° over 0–%.6g s, so the unit is not at rest there: "
+                                   "give a static window (level_window_s) or the attitude",
+                                   tilt_change_rad * 180.0 / std::numbers::pi, window_end_s));
+  }
+  const Eigen::Vector3d up = force_at_start.normalized();
+  double tilt_square_sum_rad2 = 0.0;
+  for (const Eigen::Vector3d& m : batch_force_at_start) {
+    const Eigen::Vector3d across = (m - force_at_start) - (m - force_at_start).dot(up) * up;
+    tilt_square_sum_rad2 += across.squaredNorm() / force_at_start.squaredNorm();
+  }
+  // Two level axes share the squared deviation across the force.
+  const double level_sigma_rad = batches > 1 ? std::sqrt(tilt_square_sum_rad2 / (2.0 * static_cast<double>(batches - 1)))
+                                             : kUnresolvedLevelSigmaRad;
+
+  // Gyro-compassing needs the mean rate to be Earth's: a rate far above it
+  // is a turn or a consumer gyro's bias, and gives no heading.
+  const bool compass = !recipe.heading_rad.has_value() && rate.norm() <= kStaticMeanRateLimitRadS;
+  const std::optional<double> heading = recipe.heading_rad.has_value() ? recipe.heading_rad
+                                        : compass                       ? std::nullopt
+                                                                        : std::optional<double>(0.0);
+  const Eigen::Vector3d rpy = engine::nav::CoarseAlignment(force_at_start, rate, heading);
   metadata.extra.emplace_back(
       "reference_attitude",
-      absl::StrFormat("constant, levelled from the mean specific force over 0-%.6g s%s", window_end_s,
-                      recipe.heading_rad.has_value() ? ", heading given" : ", heading gyro-compassed from the mean rate"));
+      absl::StrFormat("constant, levelled at the start from the mean specific force over 0-%.6g s taken back to the start by the gyros%s", window_end_s,
+                      recipe.heading_rad.has_value() ? ", heading given"
+                      : compass ? ", heading gyro-compassed from the mean rate"
+                                : ", heading 0: the mean rate is far above Earth's, so it gives none"));
+  // A log that reads exactly the same at every sample resolves no level
+  // scatter: it states none, and the encoders' accuracy applies.
+  if (level_sigma_rad > 0.0) {
+    metadata.extra.emplace_back(std::string(engine::kReferenceLevelSigmaKey), absl::StrFormat("%.3g", level_sigma_rad));
+  }
+  if (!recipe.heading_rad.has_value()) {
+    metadata.extra.emplace_back(std::string(engine::kReferenceHeadingSigmaKey), std::string(engine::kHeadingNotSurveyed));
+  }
   return rpy;
 }
 
@@ -195,7 +300,7 @@ absl::StatusOr<engine::BenchRun> ImportBenchRun(std::string_view bytes, std::str
                            recipe.format == LogFormat::kText
                                ? internal::ReadTextRecords(bytes, source_name, recipe)
                                : internal::ReadBinaryRecords(bytes, source_name, recipe));
-  const RecordLocator where(std::string(source_name), records, recipe.format == LogFormat::kBinary);
+  RecordLocator where(std::string(source_name), records, recipe.format == LogFormat::kBinary);
   if (records.samples.empty()) return Refusal(where.OfSampleList(), "the log holds no record");
 
   engine::BenchRun run;
@@ -203,11 +308,15 @@ absl::StatusOr<engine::BenchRun> ImportBenchRun(std::string_view bytes, std::str
   run.has_temperature = HasColumn(recipe, ColumnTarget::kTemp);
   if (!recipe.source_description.empty())
     run.metadata.extra.emplace_back("imported_from", recipe.source_description);
+  if (HasColumn(recipe, ColumnTarget::kTime) || recipe.interval_s.has_value()) {
+    if (absl::Status st = KeepWindow(recipe, records); !st.ok()) return st;
+  }
   if (absl::Status st = SettleTime(recipe, where, records, run.metadata); !st.ok()) return st;
   IncrementsToRates(recipe, records.samples);
   if (absl::Status st = SetAttitude(recipe, records, run.metadata); !st.ok()) return st;
   run.samples = std::move(records.samples);
   // The bench-run rules (units, ranges, gaps, gravity), naming the log's lines.
+  where.SetMetadata(&run.metadata);
   INSDIAG_ASSIGN_OR_RETURN(auto validator, benchrun::BenchRunValidator::Create(
                                                run.metadata, run.has_temperature, where));
   if (absl::Status st = validator.Add(run.samples); !st.ok()) return st;

@@ -1,7 +1,9 @@
 #include "insdiag/importers/import_recipe.h"
 
 #include <absl/strings/str_cat.h>
+#include <absl/strings/numbers.h>
 #include <absl/strings/str_format.h>
+#include <absl/strings/str_split.h>
 
 #include <cmath>
 #include <functional>
@@ -370,6 +372,15 @@ absl::Status ApplyTimeAndAttitude(const Setting& s, ImportRecipe& r, bool& handl
   } else if (k == "start_time_s") {
     INSDIAG_ASSIGN_OR_RETURN(auto v, value());
     r.start_time_s = v;
+  } else if (k == "window_s") {
+    const std::vector<absl::string_view> ends = absl::StrSplit(s.value, ',');
+    double from = 0.0, to = 0.0;
+    if (ends.size() != 2 || !absl::SimpleAtod(ends[0], &from) || !absl::SimpleAtod(ends[1], &to) ||
+        !std::isfinite(from) || !std::isfinite(to) || from < 0.0 || !(to > from)) {
+      return Refusal(s.origin, absl::StrFormat("'%s' is not FROM,TO in seconds since the first record, 0 ≤ FROM < TO",
+                                               s.value));
+    }
+    r.window_s = std::pair{from, to};
   } else if (k == "attitude") {
     if (s.value == "constant") r.attitude = AttitudeSource::kConstant;
     else if (s.value == "level") r.attitude = AttitudeSource::kLevelled;

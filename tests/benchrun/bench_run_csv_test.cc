@@ -10,6 +10,7 @@
 #include <numbers>
 #include <random>
 #include <string>
+#include <tuple>
 
 #include "test_runs.h"
 
@@ -279,6 +280,41 @@ TEST(ParseBenchRunRefuses, MetadataNumberThatIsNotANumber) {
   const absl::Status status = ParseStatus(csv.Text());
   EXPECT_TRUE(IsRefusalAt(status, At(6, 18, "site_height_m")));
   EXPECT_EQ(MessageOf(status), "run.csv:6:18: site_height_m: '12O.5' is not a number");
+}
+
+// The initial attitude's accuracy as the file states it: a level σ, and a
+// heading σ or `unknown` where the bench did not survey it.
+TEST(ParseBenchRun, ReadsTheInitialAttitudesStatedAccuracy) {
+  const engine::StatedAttitudeAccuracy unsaid = ParseBenchRun(CsvText().Text(), kSource)->metadata.AttitudeAccuracy();
+  EXPECT_FALSE(unsaid.level_sigma_rad.has_value());
+  EXPECT_FALSE(unsaid.heading_sigma_rad.has_value());
+  EXPECT_TRUE(unsaid.heading_surveyed);
+  CsvText csv;
+  csv.metadata.push_back("# reference_level_sigma_rad: 0.0012");
+  csv.metadata.push_back("# reference_heading_sigma_rad: unknown");
+  const absl::StatusOr<engine::BenchRun> run = ParseBenchRun(csv.Text(), kSource);
+  ASSERT_TRUE(run.ok()) << run.status();
+  const engine::StatedAttitudeAccuracy stated = run->metadata.AttitudeAccuracy();
+  EXPECT_EQ(stated.level_sigma_rad, 0.0012);
+  EXPECT_FALSE(stated.heading_surveyed);
+  EXPECT_FALSE(stated.heading_sigma_rad.has_value());
+  csv.metadata.back() = "# reference_heading_sigma_rad: 3e-4";
+  EXPECT_EQ(ParseBenchRun(csv.Text(), kSource)->metadata.AttitudeAccuracy().heading_sigma_rad, 3e-4);
+}
+
+TEST(ParseBenchRunRefuses, AnInitialAttitudeAccuracyThatIsNoPositiveSigma) {
+  for (const auto& [line_text, column, key, why] :
+       {std::tuple{"# reference_level_sigma_rad: unknown", 30, "reference_level_sigma_rad",
+                   "expected a positive 1σ in radians, got 'unknown'"},
+        std::tuple{"# reference_heading_sigma_rad: -1e-3", 32, "reference_heading_sigma_rad",
+                   "expected a positive 1σ in radians or 'unknown', got '-1e-3'"}}) {
+    CsvText csv;
+    csv.metadata.push_back(line_text);
+    const absl::Status status = ParseStatus(csv.Text());
+    const int line = static_cast<int>(csv.metadata.size());
+    EXPECT_TRUE(IsRefusalAt(status, At(line, column, key))) << status;
+    EXPECT_THAT(MessageOf(status), HasSubstr(why));
+  }
 }
 
 TEST(ParseBenchRunRefuses, AReferenceAttitudeReadoutThatIsNeitherEncodersNorNone) {

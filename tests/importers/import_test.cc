@@ -22,6 +22,7 @@
 #include "insdiag/importers/bench_run_import.h"
 #include "insdiag/importers/import_recipe.h"
 
+#include <absl/strings/numbers.h>
 #include <absl/strings/str_format.h>
 
 namespace insdiag::importers {
@@ -318,6 +319,87 @@ struct Refused {
   std::string message;
 };
 
+// A unit that rocks while the levelling window runs — it turns by 1 mrad
+// about x a second after the start and back four seconds later — is
+// levelled at the start, where the run begins: the gyros' pulses take the
+// turned force back to the start's axes. The whole window's mean would be
+// off by the share of the window spent turned (0.4 mrad).
+TEST(ImportText, LevelsTheStartOfAUnitThatTurnsWhileItIsLevelled) {
+  std::mt19937_64 rng(20261206);
+  std::uniform_real_distribution<double> tilt(-0.3, 0.3), heading(-kPi + 1e-3, kPi - 1e-3);
+  constexpr double kTurnRad = 1e-3;
+  constexpr int kSamples = 1000, kTurnSample = 100, kBackSample = 500;
+  for (int trial = 0; trial < 10; ++trial) {
+    const Eigen::Vector3d rpy(tilt(rng), tilt(rng), heading(rng));
+    const StaticTruth start = AtRest(rpy);
+    // Turned by kTurnRad about body x: a fixed vector reads (I − [θ×]) v.
+    const Eigen::Vector3d theta(kTurnRad, 0.0, 0.0);
+    const Eigen::Vector3d force_turned = start.force_mps2 - theta.cross(start.force_mps2);
+    std::string log;
+    for (int k = 1; k <= kSamples; ++k) {
+      const bool turned = k > kTurnSample && k <= kBackSample;
+      Eigen::Vector3d w = start.rate_rad_s;
+      if (k == kTurnSample + 1) w += theta / 0.01;
+      if (k == kBackSample + 1) w -= theta / 0.01;
+      const Eigen::Vector3d f = turned ? force_turned : start.force_mps2;
+      log += absl::StrFormat("%.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", 0.01 * k, w.x(), w.y(), w.z(), f.x(),
+                             f.y(), f.z());
+    }
+    auto run = ImportBenchRun(log, "rocking.txt", Settings({{"columns", "t,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z"}}));
+    ASSERT_TRUE(run.ok()) << run.status();
+    const Eigen::Vector3d got = run->samples.front().ref_rpy_rad;
+    // The small-angle step leaves errors of order θ², 1e-6 rad.
+    EXPECT_NEAR(got.x(), rpy.x(), 5e-6) << "trial " << trial;
+    EXPECT_NEAR(got.y(), rpy.y(), 5e-6) << "trial " << trial;
+    EXPECT_THAT(*run->metadata.Extra("reference_attitude"), HasSubstr("taken back to the start by the gyros"));
+    double level_sigma_rad = 0.0;
+    ASSERT_TRUE(absl::SimpleAtod(*run->metadata.Extra("reference_level_sigma_rad"), &level_sigma_rad));
+    EXPECT_LT(level_sigma_rad, 0.1 * kTurnRad) << "the turn is taken back, not counted as scatter";
+    EXPECT_EQ(run->metadata.Extra("reference_heading_sigma_rad"), "unknown");
+  }
+}
+
+// A consumer gyro's bias (0.05 rad/s, hundreds of times Earth's rate) gives
+// no heading: the import levels, leaves the heading at 0 and says the bench
+// did not survey it, rather than refusing the unit.
+TEST(ImportText, LevelsAConsumerUnitAndLeavesItsHeadingUnsurveyed) {
+  const Eigen::Vector3d rpy(0.02, -0.01, 1.0);
+  const StaticTruth truth = AtRest(rpy);
+  const Eigen::Vector3d w = truth.rate_rad_s + Eigen::Vector3d(0.05, -0.03, 0.02);
+  std::string log;
+  for (int k = 1; k <= 200; ++k) {
+    log += absl::StrFormat("%.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", 0.01 * k, w.x(), w.y(), w.z(),
+                           truth.force_mps2.x(), truth.force_mps2.y(), truth.force_mps2.z());
+  }
+  auto run = ImportBenchRun(log, "mems.txt", Settings({{"columns", "t,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z"}}));
+  ASSERT_TRUE(run.ok()) << run.status();
+  const Eigen::Vector3d got = run->samples.front().ref_rpy_rad;
+  EXPECT_NEAR(got.x(), rpy.x(), 1e-12);
+  EXPECT_NEAR(got.y(), rpy.y(), 1e-12);
+  EXPECT_EQ(got.z(), 0.0);
+  EXPECT_THAT(*run->metadata.Extra("reference_attitude"), HasSubstr("heading 0"));
+  EXPECT_EQ(run->metadata.Extra("reference_heading_sigma_rad"), "unknown");
+}
+
+// window_s keeps the records whose time since the first lies in it, with a
+// t column and with t implied by the rate alike.
+TEST(ImportText, KeepsTheRecordsOfTheWindow) {
+  std::string timed, untimed;
+  for (int k = 0; k < 100; ++k) {
+    timed += absl::StrFormat("%.17g,0,0,0,0,0,-9.81\n", 5.0 + 0.01 * k);
+    untimed += "0,0,0,0,0,-9.81\n";
+  }
+  auto with_t = ImportBenchRun(timed, "timed.csv", Settings({{"columns", "t,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z"},
+                                                             {"window_s", "0.2,0.5"}}));
+  ASSERT_TRUE(with_t.ok()) << with_t.status();
+  EXPECT_EQ(with_t->samples.size(), 31u);
+  auto implied = ImportBenchRun(untimed, "untimed.csv", Settings({{"columns", "gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z"},
+                                                                  {"rate_hz", "100"},
+                                                                  {"window_s", "0.2,0.5"}}));
+  ASSERT_TRUE(implied.ok()) << implied.status();
+  EXPECT_EQ(implied->samples.size(), 31u);
+}
+
 TEST(ImportRefusals, NameTheLineAndFieldOrTheSetting) {
   const std::string good = "0.01,0,0,0,0,0,-9.81\n";
   const std::string columns = "t,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z";
@@ -330,8 +412,11 @@ TEST(ImportRefusals, NameTheLineAndFieldOrTheSetting) {
       {good, {{"columns", columns}, {"colums", "x"}}, "test: colums: is not a setting of an import"},
       {good, {{"columns", columns}, {"units", "gyro=deg/s,acc_z=m/s"}}, "the acc columns mix rates and increments"},
       {good, {{"columns", columns}, {"units", "gyro=furlong"}}, "'furlong' is not a unit of gyro_x"},
-      {good + "0.02,0,0,0,0,0,-9.81\n0.03,0.5,0,0,0,0,-9.81\n", {{"columns", columns}},
-       "settings: level_window_s: the unit turns at a mean"},
+      {good + "0.02,0,0,0,0,0,-9.81\n0.03,0,0,0,0,0.86,-9.77\n0.04,0,0,0,0,0.86,-9.77\n", {{"columns", columns}},
+       "settings: level_window_s: the specific force turns by 2.5"},
+      {good + "0.02,0,0,0,0,0,-9.81\n", {{"columns", columns}, {"window_s", "5,6"}},
+       "settings: window_s: keeps 0 record(s) of 2"},
+      {good, {{"columns", columns}, {"window_s", "6,5"}}, "test: window_s: '6,5' is not FROM,TO"},
       {"0.01,0,0,0,0,0,-1.0\n", {{"columns", columns}, {"attitude", "constant"}}, "log.csv:1: acc_x: "},
       {"%RAWIMUSA,1815,407772.000;1815,407771.985103333,00000077,63811,-6290,6253,7,-31,14*2d2a4cfe\n",
        {{"columns", "-,-,-,gps_week,t,-,acc_z,-acc_y,acc_x,gyro_z,-gyro_y,gyro_x"},
@@ -381,10 +466,18 @@ TEST(ImportPsins, TheRealRecordImportsWithItsPublishedAlignment) {
   ASSERT_TRUE(run.ok()) << run.status();
   ASSERT_EQ(run->samples.size(), 184718u);
   EXPECT_NEAR(run->DurationS(), 1847.18, 1e-9);
+  // The converted copy levels the whole run's mean attitude (roll 0.358°,
+  // pitch 0.927°, heading 88.59°); the import levels the start, which the
+  // unit, on a vehicle at rest, left by the milliradians its gyros measured:
+  // within three of the level accuracy the import states.
   const Eigen::Vector3d rpy_deg = run->samples.front().ref_rpy_rad / kRadPerDeg;
-  EXPECT_NEAR(rpy_deg.x(), 0.358, 5e-4);
-  EXPECT_NEAR(rpy_deg.y(), 0.927, 5e-4);
-  EXPECT_NEAR(rpy_deg.z(), 88.59, 5e-3);
+  double level_sigma_rad = 0.0;
+  ASSERT_TRUE(absl::SimpleAtod(*run->metadata.Extra("reference_level_sigma_rad"), &level_sigma_rad));
+  EXPECT_GT(level_sigma_rad, 0.0);
+  EXPECT_NEAR(rpy_deg.x(), 0.358, 3.0 * level_sigma_rad / kRadPerDeg);
+  EXPECT_NEAR(rpy_deg.y(), 0.927, 3.0 * level_sigma_rad / kRadPerDeg);
+  EXPECT_NEAR(rpy_deg.z(), 88.59, 0.1);
+  EXPECT_EQ(run->metadata.Extra("reference_heading_sigma_rad"), "unknown");
   EXPECT_NEAR(run->metadata.site.latitude_rad / kRadPerDeg, 34.246048, 1e-12);
 
 

@@ -14,6 +14,7 @@
 #include "insdiag/api/unit_types.h"
 #include "insdiag/benchrun/bench_run_csv.h"
 #include "insdiag/engine/analysis.h"
+#include "insdiag/engine/plain_words.h"
 #include "insdiag/engine/status_macros.h"
 #include "report_text.h"
 #include "verb.h"
@@ -131,7 +132,8 @@ class AnalyzeVerb final : public Verb {
       }
       out << *text << "\n";
     } else {
-      PrintReport(analysis->report, out);
+      PrintReport(analysis->report, out,
+                  engine::PlainWordsVerdict(analysis->report, *run, options.monitor.family_wise_alpha));
     }
     return kExitOk;
   }

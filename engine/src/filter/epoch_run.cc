@@ -248,6 +248,7 @@ struct RunCondenser::State {
     const double update_interval_s =
         UpdateIntervalForRun(requested_update_interval_s, nominal_interval_s);
     out.site = run.metadata.site;
+    out.stated_attitude = run.metadata.AttitudeAccuracy();
     out.update_interval_s = update_interval_s;
     out.sample_interval_s = nominal_interval_s;
     out.constant_columns = AllConstantParameters();

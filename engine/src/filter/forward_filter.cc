@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "insdiag/engine/nav/wgs84.h"
+
 
 namespace insdiag::engine {
 
@@ -37,12 +39,26 @@ double ForwardPass::BytesPerSample(size_t samples) const {
   return bytes / static_cast<double>(samples);
 }
 
-Eigen::MatrixXd InitialCovariance(const ErrorModel& model, const StateLayout& layout) {
+double UnsurveyedHeadingSigmaRad(const ErrorModel& model, const Site& site) {
+  const double horizontal_earth_rate_rad_s = wgs84::kEarthRateRadS * std::cos(site.latitude_rad);
+  double drift_sigma_rad_s = 0.0;
+  for (const auto& axis : model.gyro.bias) drift_sigma_rad_s = std::max(drift_sigma_rad_s, axis.sigma);
+  const double compassed_rad = drift_sigma_rad_s / std::max(horizontal_earth_rate_rad_s, 1e-300);
+  return std::clamp(compassed_rad, model.reference.attitude_sigma_rad, kUnsurveyedHeadingLimitRad);
+}
+
+Eigen::MatrixXd InitialCovariance(const ErrorModel& model, const StateLayout& layout, const EpochRun& run) {
   const int n = layout.size();
   Eigen::MatrixXd P = Eigen::MatrixXd::Zero(n, n);
   const ReferenceAccuracy& ref = model.reference;
+  const StatedAttitudeAccuracy& stated = run.stated_attitude;
+  const double level_sigma_rad = stated.level_sigma_rad.value_or(ref.attitude_sigma_rad);
+  const double heading_sigma_rad = stated.heading_surveyed ? stated.heading_sigma_rad.value_or(ref.attitude_sigma_rad)
+                                                           : UnsurveyedHeadingSigmaRad(model, run.site);
+  // ψ is in NED: north and east are the level errors, down the heading's.
+  const Eigen::Vector3d attitude_sigma_rad(level_sigma_rad, level_sigma_rad, heading_sigma_rad);
   for (int i = 0; i < 3; ++i) {
-    P(layout.attitude() + i, layout.attitude() + i) = ref.attitude_sigma_rad * ref.attitude_sigma_rad;
+    P(layout.attitude() + i, layout.attitude() + i) = attitude_sigma_rad[i] * attitude_sigma_rad[i];
     P(layout.velocity() + i, layout.velocity() + i) = ref.velocity_sigma_mps * ref.velocity_sigma_mps;
     P(layout.position() + i, layout.position() + i) = ref.position_sigma_m * ref.position_sigma_m;
   }
@@ -78,7 +94,7 @@ EpochFilter::EpochFilter(const ErrorModel& model, const StateLayout& layout, con
     : model_(model), run_(run), transitions_(model, layout, run), rows_(ObservationRows(layout)) {
   const int n = layout.size();
   x_ = Eigen::VectorXd::Zero(n);
-  P_ = InitialCovariance(model, layout);
+  P_ = InitialCovariance(model, layout, run);
   PH_.resize(n);
   gain_.resize(n);
   half_joseph_.resize(n);

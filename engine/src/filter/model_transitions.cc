@@ -174,7 +174,7 @@ ModelTransitions::ModelTransitions(const ErrorModel& model, const StateLayout& l
   }
   quantisation_var_ = model.acc.quantization.cwiseAbs2();
   initial_navigation_covariance_ =
-      InitialCovariance(model, layout).topLeftCorner<StateLayout::kNavigationSize, StateLayout::kNavigationSize>();
+      InitialCovariance(model, layout, run).topLeftCorner<StateLayout::kNavigationSize, StateLayout::kNavigationSize>();
 }
 
 void ModelTransitions::PrepareGrid(int samples, double dt, const GramMatrix& gram, double interval_s) {

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <set>
@@ -95,39 +96,43 @@ double ImpliedPeakAttitudeError(const Eigen::VectorXd& beta, const Eigen::Vector
   return rad;
 }
 
-double Percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  auto it = v.begin() + static_cast<std::ptrdiff_t>(q * static_cast<double>(v.size() - 1));
-  std::nth_element(v.begin(), it, v.end());
-  return *it;
-}
 
 }  // namespace
 
 RunExcitation MeasureExcitation(const BenchRun& run) {
   RunExcitation e;
   if (run.samples.size() < 2) return e;
-  const Eigen::Vector3d w_ie = wgs84::EarthRateNed(run.metadata.site.latitude_rad);
-  std::array<std::vector<double>, 3> force;
+  const double g = wgs84::NormalGravityMps2(run.metadata.site.latitude_rad, run.metadata.site.height_m);
+  const Eigen::Vector3d gravity_ned(0.0, 0.0, g);
+  std::array<double, 3> force_min{}, force_max{};
+  force_min.fill(std::numeric_limits<double>::infinity());
+  force_max.fill(-std::numeric_limits<double>::infinity());
   std::array<bool, 36> yaw_bins{};
   double t_min = run.samples.front().temp_degc, t_max = t_min;
   // Every tenth sample is plenty to see what the table and the oven did.
   constexpr size_t kStride = 10;
-  for (size_t k = 1; k < run.samples.size(); k += kStride) {
+  Eigen::Matrix3d C_previous = nav::EulerToDcm(run.samples.front().ref_rpy_rad);
+  for (size_t k = 0; k < run.samples.size(); k += kStride) {
     const ImuSample& s = run.samples[k];
-    const double dt = (s.t_s - run.samples[k - 1].t_s) * kStride;
     const Eigen::Matrix3d C_b_n = nav::EulerToDcm(s.ref_rpy_rad);
-    e.turned_rad += (s.gyro_rad_s - C_b_n.transpose() * w_ie).cwiseAbs() * dt;
-    for (int i = 0; i < 3; ++i) force[static_cast<size_t>(i)].push_back(s.acc_mps2[i]);
+    // The table's rotation of the body w.r.t. the local level frame, in body
+    // axes: the sensors' readings would count a turn-on bias or the noise of
+    // a unit at rest as turning.
+    const Eigen::Vector3d turn = nav::QuaternionToRotationVector(Eigen::Quaterniond(C_previous.transpose() * C_b_n));
+    e.turned_rad += turn.cwiseAbs();
+    C_previous = C_b_n;
+    // The specific force the table's attitude gives a perfect unit: f = −C_n^b g^n.
+    const Eigen::Vector3d force = -C_b_n.transpose() * gravity_ned;
+    for (int i = 0; i < 3; ++i) {
+      force_min[static_cast<size_t>(i)] = std::min(force_min[static_cast<size_t>(i)], force[i]);
+      force_max[static_cast<size_t>(i)] = std::max(force_max[static_cast<size_t>(i)], force[i]);
+    }
     const double yaw = std::remainder(s.ref_rpy_rad.z(), 2.0 * std::numbers::pi) + std::numbers::pi;
     yaw_bins[std::min<size_t>(35, static_cast<size_t>(yaw / (2.0 * std::numbers::pi) * 36.0))] = true;
     t_min = std::min(t_min, s.temp_degc);
     t_max = std::max(t_max, s.temp_degc);
   }
-  for (int i = 0; i < 3; ++i) {
-    // Percentiles, so that noise and spikes do not pass for tilts.
-    e.force_range_mps2[i] = Percentile(force[static_cast<size_t>(i)], 0.99) - Percentile(force[static_cast<size_t>(i)], 0.01);
-  }
+  for (int i = 0; i < 3; ++i) e.force_range_mps2[i] = force_max[static_cast<size_t>(i)] - force_min[static_cast<size_t>(i)];
   e.temperature_range_degc = run.has_temperature ? t_max - t_min : 0.0;
   e.yaw_span_rad = 2.0 * std::numbers::pi * static_cast<double>(std::count(yaw_bins.begin(), yaw_bins.end(), true)) / 36.0;
   return e;

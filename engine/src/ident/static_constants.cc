@@ -33,7 +33,7 @@ bool StaticConstants::AnyDominant() const {
 absl::StatusOr<StaticConstants> MeasureStaticConstants(const BenchRun& run,
                                                        const std::vector<StaticSegment>& segments,
                                                        const ErrorModel& a_priori,
-                                                       const DominantConstantOptions& options) {
+                                                       const DominantConstantOptions& options, ConstantPrior prior) {
   const Site& site = run.metadata.site;
   const Eigen::Vector3d earth_rate_n = wgs84::EarthRateNed(site.latitude_rad);
   const Eigen::Vector3d specific_force_n(0.0, 0.0, -wgs84::NormalGravityMps2(site.latitude_rad, site.height_m));
@@ -107,7 +107,9 @@ absl::StatusOr<StaticConstants> MeasureStaticConstants(const BenchRun& run,
     for (const Vector6d& m : batch_means) {
       c.weakest_batch_bias = std::min(c.weakest_batch_bias, std::copysign(1.0, c.bias) * m[i]);
     }
-    c.dominant = std::abs(c.bias) > options.drift_sigmas * c.drift_sigma &&
+    const bool beyond_prior =
+        prior == ConstantPrior::kNone || std::abs(c.bias) > options.drift_sigmas * c.drift_sigma;
+    c.dominant = beyond_prior &&
                  std::abs(c.bias) > options.standard_errors * c.std_error &&
                  c.weakest_batch_bias > options.batch_share * std::abs(c.bias);
   }
@@ -116,9 +118,9 @@ absl::StatusOr<StaticConstants> MeasureStaticConstants(const BenchRun& run,
 
 std::vector<ParameterEstimate> RemoveDominantConstants(BenchRun& run, const std::vector<StaticSegment>& segments,
                                                        const ErrorModel& a_priori,
-                                                       const DominantConstantOptions& options,
+                                                       const DominantConstantOptions& options, ConstantPrior prior,
                                                        std::vector<std::string>& notes) {
-  const auto constants = MeasureStaticConstants(run, segments, a_priori, options);
+  const auto constants = MeasureStaticConstants(run, segments, a_priori, options, prior);
   if (!constants.ok() || !constants->AnyDominant()) return {};
   Eigen::Vector3d gyro = Eigen::Vector3d::Zero(), acc = Eigen::Vector3d::Zero();
   std::vector<ParameterEstimate> removed;
@@ -143,8 +145,10 @@ std::vector<ParameterEstimate> RemoveDominantConstants(BenchRun& run, const std:
     s.acc_mps2 -= acc;
   }
   notes.push_back(absl::StrFormat(
-      "constant biases far beyond the a-priori model, measured over %.0f s of static segments against the reference "
-      "and removed from the samples before identification: %s",
+      "constant biases %s, measured over %.0f s of static segments against the reference and removed from the "
+      "samples before identification: %s",
+      prior == ConstantPrior::kNone ? "the run resolves (its a-priori model, fitted to the Allan deviation, bounds none)"
+                                    : "far beyond the a-priori model",
       constants->static_s, list));
   return removed;
 }

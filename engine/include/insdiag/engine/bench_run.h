@@ -57,6 +57,22 @@ inline constexpr std::string_view kReferenceAttitudeReadoutKey = "reference_atti
 inline constexpr std::string_view kAttitudeReadByEncoders = "encoders";
 inline constexpr std::string_view kAttitudeNotRead = "none";
 
+// How accurately the first sample's reference attitude is known (bench-run
+// format): `# reference_level_sigma_rad:` the 1σ of roll and pitch (the
+// encoders', or a levelling's from the static specific force) and
+// `# reference_heading_sigma_rad:` that of the heading, or `unknown` where
+// the bench does not survey it. Absent, the encoders' accuracy applies.
+inline constexpr std::string_view kReferenceLevelSigmaKey = "reference_level_sigma_rad";
+inline constexpr std::string_view kReferenceHeadingSigmaKey = "reference_heading_sigma_rad";
+inline constexpr std::string_view kHeadingNotSurveyed = "unknown";
+
+// What a run states of its initial attitude's accuracy.
+struct StatedAttitudeAccuracy {
+  std::optional<double> level_sigma_rad;    // nullopt: not stated
+  std::optional<double> heading_sigma_rad;  // nullopt: not stated, or not surveyed
+  bool heading_surveyed = true;             // false: `unknown`
+};
+
 struct BenchRunMetadata {
   std::string format;       // "insdiag-bench-run/1"
   std::string unit_serial;  // required
@@ -76,6 +92,9 @@ struct BenchRunMetadata {
   std::optional<bool> DeclaredAttitudeReadout() const;
   // Says whether the attitude is read: `encoders` or `none`, replacing what was said.
   void DeclareAttitudeReadout(bool encoders_read);
+  // The reference_*_sigma_rad keys, read; values the reader refuses
+  // (bench-run CSV) count as not stated.
+  StatedAttitudeAccuracy AttitudeAccuracy() const;
 };
 
 struct ImuSample {

@@ -17,6 +17,8 @@
 
 #include <array>
 #include <optional>
+#include <utility>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -90,6 +92,9 @@ struct ImportRecipe {
   std::array<double, 3> axis_sign = {1.0, 1.0, 1.0};
   std::optional<double> interval_s;  // when no column holds t
   double start_time_s = 0.0;         // t of the first record's start when t is implied
+  // The records kept: those whose time since the first record lies in
+  // [first, second] s (a static stretch of a longer log); all when unset.
+  std::optional<std::pair<double, double>> window_s;
   double g_mps2;                     // the g of the units g, mg and ug.s
 
   AttitudeSource attitude = AttitudeSource::kLevelled;

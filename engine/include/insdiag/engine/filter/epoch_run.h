@@ -102,6 +102,9 @@ struct EpochInterval {
 
 struct EpochRun {
   Site site;
+  // What the run says of its initial attitude's accuracy (bench_run.h): the
+  // filter's initial attitude covariance.
+  StatedAttitudeAccuracy stated_attitude;
   double update_interval_s = 0.0;
   double sample_interval_s = 0.0;  // the run's nominal Δt
   int samples_per_epoch = 0;

@@ -145,8 +145,20 @@ absl::StatusOr<ForwardPass> RunForwardFilter(const EpochRun& run, const ErrorMod
 absl::StatusOr<ForwardPass> RunForwardFilter(const BenchRun& run, const ErrorModel& model,
                                              const FilterOptions& options, FilterObserver* observer = nullptr);
 
-// The filter's initial covariance for a model (reference accuracy for the
-// navigation errors, steady-state or prior variances for the sensor states).
-Eigen::MatrixXd InitialCovariance(const ErrorModel& model, const StateLayout& layout);
+// The filter's initial covariance for a model and a run: the reference's
+// accuracy for the navigation errors — the initial attitude's as the run
+// states it (level and heading), else the encoders' — and steady-state or
+// prior variances for the sensor states.
+Eigen::MatrixXd InitialCovariance(const ErrorModel& model, const StateLayout& layout, const EpochRun& run);
+
+// The 1σ of a heading the bench did not survey: what gyro-compassing the
+// run's start tells, a horizontal gyro bias b turning it by b / (Ω cos L)
+// (coarse_alignment.h), with b the model's largest gyro drift σ; no more
+// than kUnsurveyedHeadingLimitRad, within which the phi-angle model of the
+// heading error still holds: its Earth-rate error 2Ω_h sin(ψ/2) is Ω_h ψ
+// within 4 % at 1 rad. A heading the run cannot tell is then carried as a
+// horizontal rate error of at most Ω cos L, below any such gyro's bias.
+inline constexpr double kUnsurveyedHeadingLimitRad = 1.0;
+double UnsurveyedHeadingSigmaRad(const ErrorModel& model, const Site& site);
 
 }  // namespace insdiag::engine

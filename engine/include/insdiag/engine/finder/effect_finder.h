@@ -39,10 +39,12 @@
 
 namespace insdiag::engine {
 
-// What a run does to the sensors, for the excitation checks.
+// What the table did to the unit, for the excitation checks: read from the
+// reference attitude, the table's motion, not from the sensors, whose
+// turn-on biases and noise would pass for motion on a unit at rest.
 struct RunExcitation {
-  Eigen::Vector3d turned_rad = Eigen::Vector3d::Zero();  // ∫|ω_i − Earth rate_i| dt per body axis
-  Eigen::Vector3d force_range_mps2 = Eigen::Vector3d::Zero();  // max − min of f_i over still stretches
+  Eigen::Vector3d turned_rad = Eigen::Vector3d::Zero();  // Σ|rotation w.r.t. the local level frame| per body axis
+  Eigen::Vector3d force_range_mps2 = Eigen::Vector3d::Zero();  // max − min of gravity's component f_i over the run
   double temperature_range_degc = 0.0;
   double yaw_span_rad = 0.0;  // range of the reference yaw covered (≤ 2π)
 };

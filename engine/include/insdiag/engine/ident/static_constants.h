@@ -88,13 +88,24 @@ struct StaticConstants {
   bool AnyDominant() const;
 };
 
+// What the a-priori model says of a constant bias. A datasheet's or a unit
+// type's drift σ bounds it: a constant far beyond it is dominant. A model
+// fitted to the run's Allan deviation says nothing of it — the Allan
+// variance of a constant is zero (IEEE Std 952, Annex C: the curve is blind
+// to a fixed offset) — so every constant the static samples resolve, beyond
+// `standard_errors` of its standard error and held by every batch, is
+// dominant: the unit far from any prior gets its constant terms first, on
+// every axis.
+enum class ConstantPrior { kBoundedByDrift, kNone };
+
 // The constant bias of every sensor axis over the static segments, weighed
 // against the a-priori model. FailedPrecondition when the run has no static
 // segment.
 absl::StatusOr<StaticConstants> MeasureStaticConstants(const BenchRun& run,
                                                        const std::vector<StaticSegment>& segments,
                                                        const ErrorModel& a_priori,
-                                                       const DominantConstantOptions& options = {});
+                                                       const DominantConstantOptions& options = {},
+                                                       ConstantPrior prior = ConstantPrior::kBoundedByDrift);
 
 // Measures the constants on `segments`, subtracts the dominant ones from
 // every sample of `run` and says so in `notes`. Returns them as identified
@@ -102,7 +113,7 @@ absl::StatusOr<StaticConstants> MeasureStaticConstants(const BenchRun& run,
 // the run has no static segment.
 std::vector<ParameterEstimate> RemoveDominantConstants(BenchRun& run, const std::vector<StaticSegment>& segments,
                                                        const ErrorModel& a_priori,
-                                                       const DominantConstantOptions& options,
+                                                       const DominantConstantOptions& options, ConstantPrior prior,
                                                        std::vector<std::string>& notes);
 
 }  // namespace insdiag::engine::ident

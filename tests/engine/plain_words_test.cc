@@ -1,0 +1,71 @@
+// The verdict in plain words (engine/plain_words.h): at most five lines, the
+// verdict first, each finding with what the raw samples read either side of
+// it, and what to do last.
+#include "insdiag/engine/plain_words.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <numbers>
+
+namespace insdiag::engine {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::StartsWith;
+
+constexpr double kRadSPerDegH = std::numbers::pi / 180.0 / 3600.0;
+
+// Ten minutes at 10 Hz whose gyro x reads 1 °/h, then 3 °/h from 300 s.
+BenchRun StepRun() {
+  BenchRun run;
+  for (int k = 1; k <= 6000; ++k) {
+    ImuSample s;
+    s.t_s = 0.1 * k;
+    s.gyro_rad_s.x() = (s.t_s < 300.0 ? 1.0 : 3.0) * kRadSPerDegH;
+    s.acc_mps2.z() = -9.81;
+    run.samples.push_back(s);
+  }
+  return run;
+}
+
+EffectCandidate Step(double p_value_holm) {
+  EffectCandidate c;
+  c.name = "gyro_bias_step.x";
+  c.family = "gyro_bias_step";
+  c.estimate = 2.0 * kRadSPerDegH;
+  c.std_error = 0.1 * kRadSPerDegH;
+  c.unit = "rad/s";
+  c.p_value = c.p_value_holm = p_value_holm;
+  c.onset_s = 300.0;
+  return c;
+}
+
+TEST(PlainWords, AFaultyUnitsStepIsStatedWithTheRawMinuteMeansAndTheModuleToCheck) {
+  AnalysisReport report;
+  report.verdict = Verdict::kFaulty;
+  report.effect_candidates = {Step(1e-9), Step(0.5)};
+  const std::vector<std::string> lines = PlainWordsVerdict(report, StepRun(), 0.01);
+  ASSERT_EQ(lines.size(), 3u);  // the verdict, the one significant finding, what to do
+  EXPECT_THAT(lines[0], StartsWith("FAULTY: 1 finding(s)"));
+  EXPECT_THAT(lines[1], HasSubstr("gyro x bias stepped by 2 °/h at 300 s"));
+  EXPECT_THAT(lines[1], HasSubstr("read 1 °/h in the minute before, 3 °/h in the minute after"));
+  EXPECT_THAT(lines[2], HasSubstr("check the gyro x module"));
+}
+
+TEST(PlainWords, NeverMoreThanFiveLinesAndAGoodUnitNeedsNothing) {
+  AnalysisReport faulty;
+  faulty.verdict = Verdict::kFaulty;
+  faulty.effect_candidates.assign(6, Step(1e-9));
+  EXPECT_EQ(PlainWordsVerdict(faulty, StepRun(), 0.01).size(), static_cast<std::size_t>(kPlainWordsMaxLines));
+
+  AnalysisReport good;
+  good.verdict = Verdict::kGood;
+  const std::vector<std::string> lines = PlainWordsVerdict(good, StepRun(), 0.01);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_THAT(lines[0], StartsWith("GOOD: "));
+  EXPECT_THAT(lines[1], HasSubstr("nothing"));
+}
+
+}  // namespace
+}  // namespace insdiag::engine

@@ -1,0 +1,167 @@
+// The real-record corpus (data/real/README.md), each record imported by the
+// build with its recipe as a user would (tests/CMakeLists.txt) and analysed
+// as `insdiag analyze` analyses it, with no datasheet and no unit type. What
+// each test asserts is what a factory's first upload relies on; the figures
+// and what does not hold yet are in docs/REAL_RECORDS.md.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <string_view>
+
+#include "insdiag/benchrun/bench_run_csv.h"
+#include "insdiag/engine/analysis.h"
+#include "insdiag/engine/nav/rotation.h"
+#include "insdiag/engine/nav/wgs84.h"
+
+namespace insdiag::engine {
+namespace {
+
+using ::testing::HasSubstr;
+
+// The first minute of a healthy run, where start-up alarms used to sit.
+constexpr double kStartUpS = 60.0;
+// The MEMS turn-on biases to this share of the raw mean less Earth's rate.
+constexpr double kTurnOnBiasTolerance = 0.02;
+constexpr double kFamilyWiseAlpha = 0.01;
+
+BenchRun Record(std::string_view csv) {
+  auto run = benchrun::ReadBenchRunFile(std::string(INSDIAG_REAL_RECORD_DIR "/") + std::string(csv));
+  EXPECT_TRUE(run.ok()) << run.status();
+  return run.ok() ? *std::move(run) : BenchRun{};
+}
+
+AnalysisReport AnalysisOf(const BenchRun& run) {
+  auto analysis = Analyze(run, AnalysisRequest{}, AnalysisOptions{});
+  EXPECT_TRUE(analysis.ok()) << analysis.status();
+  if (!analysis.ok()) return {};
+  const AnalysisReport& r = analysis->report;
+  std::printf("%s: verdict %s, NIS %.3f (band %.3f–%.3f), %zu fault intervals\n", run.metadata.unit_serial.c_str(),
+              VerdictName(r.verdict), r.nis_mean, r.nis_band_low, r.nis_band_high, r.faults.size());
+  return analysis->report;
+}
+
+// A unit at rest turns about no axis and sees gravity at one attitude only:
+// no scale factor, misalignment, g-sensitivity or yaw harmonic is excited,
+// so none may be a finding.
+void ExpectNothingOnlyMotionExcites(const AnalysisReport& report) {
+  for (const EffectCandidate& c : report.effect_candidates) {
+    for (std::string_view family : {"scale_factor", "misalignment", "g_sensitivity", "yaw_harmonic"}) {
+      if (c.name.find(family) == std::string::npos) continue;
+      EXPECT_FALSE(c.SignificantAt(kFamilyWiseAlpha)) << c.name << " " << c.estimate << ": " << c.note;
+    }
+  }
+}
+
+// Raw mean of the gyros less Earth's rate at the reference attitude [rad/s].
+Eigen::Vector3d RawGyroBias(const BenchRun& run) {
+  const Eigen::Vector3d earth_rate_n = wgs84::EarthRateNed(run.metadata.site.latitude_rad);
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const ImuSample& s : run.samples) {
+    sum += s.gyro_rad_s - nav::EulerToDcm(s.ref_rpy_rad).transpose() * earth_rate_n;
+  }
+  return sum / static_cast<double>(run.samples.size());
+}
+
+// Mean of one sensor channel (0–2 gyro, 3–5 accelerometer) over [from, to) s.
+double RawMean(const BenchRun& run, int channel, double from_s, double to_s) {
+  double sum = 0.0;
+  int n = 0;
+  for (const ImuSample& s : run.samples) {
+    if (s.t_s < from_s || s.t_s >= to_s) continue;
+    sum += channel < 3 ? s.gyro_rad_s[channel] : s.acc_mps2[channel - 3];
+    ++n;
+  }
+  return n > 0 ? sum / n : std::nan("");
+}
+
+// The MPU-6050 at rest, level, 100 s: a consumer unit far from any prior,
+// whose gyro biases are 100–800 times Earth's rate. It is GOOD with no
+// interval in its first minute; every gyro axis's turn-on bias is
+// identified, z's as well (heading-free: −Ω sin L is subtracted whatever
+// the heading), each the raw mean less Earth's rate within 2 %.
+TEST(RealRecords, AStaticConsumerUnitIsGoodWithItsTurnOnBiasOnEveryGyroAxis) {
+  const BenchRun run = Record("mpu6050-static.csv");
+  const AnalysisReport report = AnalysisOf(run);
+  EXPECT_NE(report.verdict, Verdict::kFaulty);
+  for (const FaultInterval& f : report.faults) {
+    EXPECT_GE(f.start_s, kStartUpS) << "a fault interval on " << f.channel << " at " << f.start_s << " s";
+  }
+  ExpectNothingOnlyMotionExcites(report);
+  const Eigen::Vector3d raw_bias = RawGyroBias(run);
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::string name = std::string("gyro_turn_on_bias.") + "xyz"[axis];
+    const auto identified = std::find_if(report.identified.begin(), report.identified.end(),
+                                         [&](const ParameterEstimate& p) { return p.name == name; });
+    ASSERT_NE(identified, report.identified.end()) << name << " not identified";
+    EXPECT_NEAR(identified->value, raw_bias[axis], kTurnOnBiasTolerance * std::abs(raw_bias[axis])) << name;
+  }
+}
+
+// The NASA DLC IMU on the pad: at about 112 s its three accelerometers
+// shift together by 0.7 mg along gravity while the gyros show no turn. The
+// analysis calls it a step of the vertical accelerometer's bias, and a
+// quality engineer sees it in the raw samples: the 10-s means either side of
+// the onset differ by the step's estimate, within four of its standard
+// errors and the window's noise.
+TEST(RealRecords, AFindingOnARealRecordIsOneItsRawSamplesShow) {
+  const BenchRun run = Record("nasa-ddlf1-preignition.csv");
+  const AnalysisReport report = AnalysisOf(run);
+  ExpectNothingOnlyMotionExcites(report);
+  int steps = 0;
+  for (const EffectCandidate& c : report.effect_candidates) {
+    if (!c.SignificantAt(kFamilyWiseAlpha) || !c.onset_s.has_value() || c.name.find("bias_step") == std::string::npos) {
+      continue;
+    }
+    ++steps;
+    const bool gyro = c.name.starts_with("gyro");
+    const int channel = (gyro ? 0 : 3) + (c.name.back() - 'x');
+    constexpr double kWindowS = 10.0;
+    const double before = RawMean(run, channel, *c.onset_s - kWindowS - 2.0, *c.onset_s - 2.0);
+    const double after = RawMean(run, channel, *c.onset_s + 2.0, *c.onset_s + kWindowS + 2.0);
+    std::printf("%s at %.1f s: %.3g ± %.2g; raw 10-s means %.6g then %.6g\n", c.name.c_str(), *c.onset_s, c.estimate,
+                c.std_error, before, after);
+    EXPECT_NEAR(after - before, c.estimate, 4.0 * c.std_error + 0.5 * std::abs(c.estimate)) << c.name;
+  }
+  EXPECT_GE(steps, 1) << "the shift at 112 s is not found";
+}
+
+// The navigation-grade ring-laser-gyro unit on a vehicle at rest. Knocked
+// at 164 s, it turns by 4.3 mrad about x, and its y accelerometer's mean
+// jumps by −36 mm/s² — gravity seen from the turned axes, as the gyros
+// measured. No accelerometer step may be a finding; nor, with its start
+// levelled where it began, may its horizontal position channels' first
+// updates be outliers (they were, at β² 117 and 95, with the whole run's
+// mean attitude). Its moving-window alarms are not solved
+// (docs/REAL_RECORDS.md).
+TEST(RealRecords, ABumpTheGyrosMeasuredIsNoAccelerometerStepAndTheStartIsQuiet) {
+  const BenchRun run = Record("rlg-static-psins.csv");
+  const AnalysisReport report = AnalysisOf(run);
+  ExpectNothingOnlyMotionExcites(report);
+  for (const EffectCandidate& c : report.effect_candidates) {
+    if (c.name.starts_with("acc_bias_step")) EXPECT_FALSE(c.SignificantAt(kFamilyWiseAlpha)) << c.name << ": " << c.note;
+  }
+  constexpr double kFirstUpdatesS = 3.0;
+  for (const FaultInterval& f : report.faults) {
+    if ((f.channel != "lat" && f.channel != "lon") || f.kind != FaultKind::kOutlier) continue;
+    EXPECT_GE(f.start_s, kFirstUpdatesS) << f.channel << " at " << f.start_s << " s, peak " << f.peak_statistic;
+  }
+}
+
+// A record shorter than the Allan analysis's 60-s static segment, with no
+// datasheet and no unit type, has no a-priori model: the refusal names what
+// is missing and why the run's own noise cannot stand in.
+TEST(RealRecords, ARecordTooShortForItsOwnNoiseAsksForItsDatasheet) {
+  for (std::string_view csv : {"px4-sensor-combined.csv", "xio-fusion-static.csv"}) {
+    const BenchRun run = Record(csv);
+    auto analysis = Analyze(run, AnalysisRequest{}, AnalysisOptions{});
+    ASSERT_FALSE(analysis.ok()) << csv;
+    EXPECT_THAT(std::string(analysis.status().message()), HasSubstr("no a-priori value for gyro_arw")) << csv;
+    EXPECT_THAT(std::string(analysis.status().message()), HasSubstr("no static segment of at least 60 s")) << csv;
+  }
+}
+
+}  // namespace
+}  // namespace insdiag::engine
