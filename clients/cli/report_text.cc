@@ -31,11 +31,11 @@ std::string ObservabilityText(v1::IdentifiedParameter::Observability verdict, co
   }
 }
 
-void PrintReport(const engine::AnalysisReport& r, std::ostream& out, const std::vector<std::string>& plain_words) {
+void PrintReport(const engine::AnalysisReport& r, std::ostream& out) {
   out << "verdict: " << engine::VerdictName(r.verdict) << "\n";
-  if (!plain_words.empty()) {
+  if (!r.plain_words.empty()) {
     out << "\nin plain words:\n";
-    for (const std::string& line : plain_words) out << "  " << line << "\n";
+    for (const std::string& line : r.plain_words) out << "  " << line << "\n";
     out << "\n";
   }
   out << "model: base";

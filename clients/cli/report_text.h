@@ -11,10 +11,9 @@
 
 namespace insdiag::cli {
 
-// `plain_words` (engine/plain_words.h), where given, follows the verdict
-// line: what a quality engineer reads first; the engine's notes stay last.
-void PrintReport(const engine::AnalysisReport& report, std::ostream& out,
-                 const std::vector<std::string>& plain_words = {});
+// The verdict line, then the verdict in plain words (engine/plain_words.h):
+// what a quality engineer reads first; the engine's notes stay last.
+void PrintReport(const engine::AnalysisReport& report, std::ostream& out);
 
 // Whether the run tells an identified parameter, as the text reports show it:
 // "observable", "NOT observable: inseparable, only with acc_turn_on_bias.z

@@ -17,6 +17,7 @@
 #include "analysis/run_context.h"
 #include "insdiag/engine/nav/reference_readout.h"
 #include "insdiag/engine/numerics/parallel_map.h"
+#include "insdiag/engine/plain_words.h"
 #include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::engine {
@@ -534,6 +535,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   }
   if (!out.ok()) return out.status();
   out->report.allan = std::move(allan);
+  out->report.plain_words = PlainWordsVerdict(out->report, input, options.monitor.family_wise_alpha);
   Progress(options, 1.0, "done");
   return out;
 }

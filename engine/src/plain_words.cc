@@ -56,27 +56,40 @@ std::string SensorName(const SensorChannel& c) {
   return absl::StrFormat("%s %c", c.gyro ? "gyro" : "accelerometer", static_cast<char>('x' + c.axis));
 }
 
+// Two raw means and their change, with the decimals that show the change:
+// a 0.6 mg step on a 964 mg reading needs two.
+std::string RawChange(const SensorChannel& c, double before_si, double after_si, const char* before_label,
+                      const char* after_label) {
+  const double scale = c.gyro ? kDegPerHourPerRadPerS : 1e3 / kStandardGravityMps2;
+  const char* unit = c.gyro ? "°/h" : "mg";
+  const double before = before_si * scale, after = after_si * scale, change = after - before;
+  const int decimals =
+      change != 0.0 ? std::clamp(1 - static_cast<int>(std::floor(std::log10(std::abs(change)))), 0, 6) : 1;
+  return absl::StrFormat("its raw samples read %.*f %s %s and %.*f %s %s, a change of %.2g %s", decimals, before, unit,
+                         before_label, decimals, after, unit, after_label, change, unit);
+}
+
 // One finding: what changed, when, how sure, and what the raw samples read.
 std::string FindingLine(const EffectCandidate& c, const SensorChannel& channel, const BenchRun& run) {
   const bool ramp = c.name.find("_ramp.") != std::string::npos;
-  std::string line;
-  if (c.onset_s.has_value()) {
-    const double onset_s = *c.onset_s;
-    line = ramp ? absl::StrFormat("%s drifts by %s a minute from %.0f s", SensorName(channel),
-                                  Reading(channel, c.estimate * kRawWindowS), onset_s)
-                : absl::StrFormat("%s bias stepped by %s at %.0f s", SensorName(channel), Reading(channel, c.estimate),
-                                  onset_s);
-    const double before = RawMean(run, channel, onset_s - kRawWindowS, onset_s);
-    const double after = RawMean(run, channel, onset_s, onset_s + kRawWindowS);
-    if (std::isfinite(before) && std::isfinite(after)) {
-      line += absl::StrFormat(" (p %.1g); its raw samples read %s in the minute before, %s in the minute after",
-                              c.p_value_holm, Reading(channel, before), Reading(channel, after));
-    } else {
-      line += absl::StrFormat(" (p %.1g)", c.p_value_holm);
-    }
-  } else {
-    line = absl::StrFormat("%s: %s %.3g ± %.2g %s, missing from the model (p %.1g)", SensorName(channel), c.name,
+  if (!c.onset_s.has_value()) {
+    return absl::StrFormat("%s: %s %.3g ± %.2g %s, missing from the model (p %.1g)", SensorName(channel), c.name,
                            c.estimate, c.std_error, c.unit, c.p_value_holm);
+  }
+  const double onset_s = *c.onset_s;
+  std::string line = ramp ? absl::StrFormat("%s drifts by %s a minute from %.0f s (p %.1g)", SensorName(channel),
+                                            Reading(channel, c.estimate * kRawWindowS), onset_s, c.p_value_holm)
+                          : absl::StrFormat("%s bias stepped by %s at %.0f s (p %.1g)", SensorName(channel),
+                                            Reading(channel, c.estimate), onset_s, c.p_value_holm);
+  // A step: the minutes either side of its onset; a ramp: the minute before
+  // it and the run's last minute, where it has gone furthest.
+  const double end_s = run.samples.empty() ? onset_s : run.samples.back().t_s;
+  const double before = RawMean(run, channel, onset_s - kRawWindowS, onset_s);
+  const double after = ramp ? RawMean(run, channel, end_s - kRawWindowS, end_s + 1.0)
+                            : RawMean(run, channel, onset_s, onset_s + kRawWindowS);
+  if (std::isfinite(before) && std::isfinite(after)) {
+    line += "; " + RawChange(channel, before, after, "in the minute before",
+                             ramp ? "in the run's last minute" : "in the minute after");
   }
   return line;
 }
@@ -118,6 +131,9 @@ std::vector<std::string> PlainWordsVerdict(const AnalysisReport& report, const B
   for (const EffectCandidate& c : report.effect_candidates) {
     SensorChannel channel;
     if (!c.SignificantAt(family_wise_alpha) || !ChannelOf(c.name, channel)) continue;
+    // One finding a sensor axis, its most significant: a step and a ramp on
+    // one axis are two readings of one change.
+    if (modules.count(SensorName(channel)) > 0) continue;
     if (static_cast<int>(findings.size()) == kMaxFindings) break;
     findings.push_back("  " + FindingLine(c, channel, run));
     modules.insert(SensorName(channel));
@@ -134,9 +150,10 @@ std::vector<std::string> PlainWordsVerdict(const AnalysisReport& report, const B
     case Verdict::kFaulty:
       lines.push_back(modules.empty()
                           ? "To do: read the failure intervals and the localised sensors below, and test again."
-                          : absl::StrFormat("To do: check the %s module%s (the change is in its raw samples), then "
+                          : absl::StrFormat("To do: check the %s module%s (the change is in %s raw samples), then "
                                             "test again to confirm.",
-                                            absl::StrJoin(modules, " and "), modules.size() > 1 ? "s" : ""));
+                                            absl::StrJoin(modules, " and "), modules.size() > 1 ? "s" : "",
+                                            modules.size() > 1 ? "their" : "its"));
       break;
   }
   lines.resize(std::min<std::size_t>(lines.size(), kPlainWordsMaxLines));

@@ -344,6 +344,7 @@ v1::AnalysisReport ToProto(const engine::AnalysisReport& r, const engine::ErrorM
   for (const auto& l : r.localisation) Fill(l, out.add_localisation());
   for (const auto& l : r.discrepancies) Fill(l, out.add_discrepancies());
   for (const auto& n : r.notes) out.add_notes(n);
+  for (const auto& line : r.plain_words) out.add_plain_words(line);
   out.set_duration_s(r.duration_s);
   out.set_sample_count(static_cast<int64_t>(r.samples));
   out.set_sample_rate_hz(r.sample_rate_hz);

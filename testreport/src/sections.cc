@@ -122,6 +122,8 @@ Section VerdictSection(const TestReportInput& input) {
   Section s{"Verdict", {}};
   const std::string verdict = v1::AnalysisReport::Verdict_Name(r.verdict());
   s.blocks.push_back(Callout{absl::StrCat("Verdict: ", verdict), VerdictReason(r), ToneOf(r.verdict())});
+  // In plain words first: what is wrong, where, how sure, what to do.
+  for (const auto& line : r.plain_words()) s.blocks.push_back(Paragraph{line});
   Fields f;
   f.items.push_back({"Verdict", verdict});
   f.items.push_back({"Effects in the model", EffectList(r.model())});

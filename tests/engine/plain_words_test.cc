@@ -49,14 +49,21 @@ TEST(PlainWords, AFaultyUnitsStepIsStatedWithTheRawMinuteMeansAndTheModuleToChec
   ASSERT_EQ(lines.size(), 3u);  // the verdict, the one significant finding, what to do
   EXPECT_THAT(lines[0], StartsWith("FAULTY: 1 finding(s)"));
   EXPECT_THAT(lines[1], HasSubstr("gyro x bias stepped by 2 °/h at 300 s"));
-  EXPECT_THAT(lines[1], HasSubstr("read 1 °/h in the minute before, 3 °/h in the minute after"));
+  EXPECT_THAT(lines[1], HasSubstr("read 1.0 °/h in the minute before and 3.0 °/h in the minute after, a change of 2 °/h"));
   EXPECT_THAT(lines[2], HasSubstr("check the gyro x module"));
 }
 
+// Seven findings on six axes: three are stated, one an axis, and the lines
+// stay five.
 TEST(PlainWords, NeverMoreThanFiveLinesAndAGoodUnitNeedsNothing) {
   AnalysisReport faulty;
   faulty.verdict = Verdict::kFaulty;
-  faulty.effect_candidates.assign(6, Step(1e-9));
+  for (const char* name : {"gyro_bias_step.x", "gyro_bias_step.y", "gyro_bias_step.z", "acc_bias_step.x",
+                           "acc_bias_step.y", "acc_bias_step.z", "gyro_bias_ramp.x"}) {
+    EffectCandidate c = Step(1e-9);
+    c.name = name;
+    faulty.effect_candidates.push_back(c);
+  }
   EXPECT_EQ(PlainWordsVerdict(faulty, StepRun(), 0.01).size(), static_cast<std::size_t>(kPlainWordsMaxLines));
 
   AnalysisReport good;

@@ -14,7 +14,6 @@
 #include "insdiag/api/unit_types.h"
 #include "insdiag/benchrun/bench_run_csv.h"
 #include "insdiag/engine/analysis.h"
-#include "insdiag/engine/plain_words.h"
 #include "insdiag/engine/status_macros.h"
 #include "report_text.h"
 #include "verb.h"
@@ -132,8 +131,7 @@ class AnalyzeVerb final : public Verb {
       }
       out << *text << "\n";
     } else {
-      PrintReport(analysis->report, out,
-                  engine::PlainWordsVerdict(analysis->report, *run, options.monitor.family_wise_alpha));
+      PrintReport(analysis->report, out);
     }
     return kExitOk;
   }

@@ -26,6 +26,7 @@ void PrintReportText(const v1::Analysis& analysis, std::ostream& out) {
     for (int i = 0; i < r.model().effects_size(); ++i) out << (i > 0 ? ", " : "") << r.model().effects(i);
   }
   out << "\n";
+  for (const std::string& line : r.plain_words()) out << "  " << line << "\n";
   if (r.channels_size() > 0) {
     out << "\n";
     Table channels({"channel", "rms", "unit", "fit", "NIS", "whiteness p"});

@@ -151,9 +151,15 @@ function summaryCard(report) {
     ['samples', `${Number(report.sampleCount).toLocaleString()} at ${fmt(report.sampleRateHz)} Hz`],
     ['updates', Number(report.updateCount).toLocaleString()],
   ];
+  // In plain words first; the engine's notes folded below.
+  const plain = report.plainWords || [];
   return section('Verdict',
+    plain.length ? h('div.plain-words', plain.map((line) => h('p', line))) : null,
     h('div.row', items.map(([k, v]) => h('div', { style: 'margin-right:18px' }, h('div.small.muted', k), h('div', v)))),
-    report.notes.length ? h('ul.notes', report.notes.map((n) => h('li', n))) : null);
+    report.notes.length
+      ? h('details.notes', h('summary', `the engine's notes (${report.notes.length})`),
+        h('ul.notes', report.notes.map((n) => h('li', n))))
+      : null);
 }
 
 // --- the loop: every step's fit, before and after ------------------------------

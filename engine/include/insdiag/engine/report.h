@@ -143,6 +143,9 @@ struct AnalysisReport {
   std::vector<EffectCandidate> effect_candidates;  // per term, most significant first
   std::vector<EffectCandidate> family_candidates;  // per family
   std::vector<ParameterEstimate> identified;
+  // The verdict in plain words, what a quality engineer reads first
+  // (plain_words.h); the notes below are the engine's detail.
+  std::vector<std::string> plain_words;
   std::vector<std::string> notes;  // what the engine wants the user to know (e.g. a fallback it took)
   std::vector<DriftCorrelation> correlation;
   std::optional<ident::AllanResult> allan;
