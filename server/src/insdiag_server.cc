@@ -25,6 +25,7 @@
 #include "insdiag/server/rest_gateway.h"
 #include "insdiag/server/run_service.h"
 #include "insdiag/server/web_page.h"
+#include "request_edge.h"
 #include "insdiag/v1/analyses.grpc.pb.h"
 #include "insdiag/v1/fleet.grpc.pb.h"
 #include "insdiag/v1/knowledge.grpc.pb.h"
@@ -213,8 +214,14 @@ absl::Status InsdiagServer::StartGrpc(const Options& options) {
 }
 
 absl::Status InsdiagServer::StartHttp(const Options& options) {
+  // The gateway takes whatever the services answer: an answer must not be
+  // refused for its size on the way (gRPC's default limit is 4 MiB, -1 is
+  // none). The services bound what they answer (a listing carries
+  // summaries, docs/API.md "Limits").
+  grpc::ChannelArguments in_process;
+  in_process.SetMaxReceiveMessageSize(-1);
   INSDIAG_ASSIGN_OR_RETURN(auto gateway,
-                           RestGateway::Create(grpc_->InProcessChannel(grpc::ChannelArguments()),
+                           RestGateway::Create(grpc_->InProcessChannel(in_process),
                                                ServiceNames(), services_->guard.gateway_key()));
   gateway_ = std::move(gateway);
   gateway_->ServeMetrics([services = services_.get()] { return services->RenderMetrics(); });
@@ -239,6 +246,7 @@ absl::Status InsdiagServer::StartHttp(const Options& options) {
   InstrumentHttp(*http_, services_->metrics);
   // A 1-hour 50 Hz run is ~20 MB of CSV; give slow links time.
   http_->set_read_timeout(std::chrono::seconds(60));
+  http_->set_payload_max_length(kMaxRequestBodyBytes);
   http_port_ =
       options.http_port == 0
           ? http_->bind_to_any_port(options.bind_address)
