@@ -109,10 +109,10 @@ absl::StatusOr<Result> Connection::Check(PGresult* raw, std::string_view sql) {
         "or a crash, see its log): ",
         FirstLine(PQresultErrorMessage(raw))));
   }
-  absl::Status status = StatusFromSqlState(
+  absl::Status refused = StatusFromSqlState(
       sqlstate, absl::StrCat(FirstLine(PQresultErrorMessage(raw)), " [", FirstLine(sql.substr(0, 80)), "]"));
-  status.SetPayload(kSqlErrorPayload, absl::Cord(sqlstate));
-  return status;
+  refused.SetPayload(kSqlErrorPayload, absl::Cord(sqlstate));
+  return refused;
 }
 
 absl::StatusOr<Result> Connection::Exec(std::string_view sql, const std::vector<Param>& params,

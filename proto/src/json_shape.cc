@@ -48,7 +48,7 @@ absl::Status CheckSingle(const Value& value, const FieldDescriptor& field, const
 absl::Status CheckScalar(const Value& value, FieldDescriptor::CppType type, const std::string& path) {
   switch (type) {
     case FieldDescriptor::CPPTYPE_BOOL:
-      if (!value.has_bool_value()) return WrongType(path, "true or false", value);
+      if (value.kind_case() != Value::kBoolValue) return WrongType(path, "true or false", value);
       return absl::OkStatus();
     case FieldDescriptor::CPPTYPE_STRING:
       if (value.kind_case() != Value::kStringValue) return WrongType(path, "a string", value);
@@ -120,8 +120,10 @@ absl::Status CheckField(const Value& value, const FieldDescriptor& field, const 
 
 absl::Status CheckJsonShape(const google::protobuf::Struct& object, const Descriptor& type, const std::string& path) {
   for (const auto& [name, value] : object.fields()) {
-    const FieldDescriptor* field = type.FindFieldByJsonName(name);
-    if (field == nullptr) field = type.FindFieldByName(name);
+    const FieldDescriptor* field = type.FindFieldByName(name);
+    for (int i = 0; field == nullptr && i < type.field_count(); ++i) {
+      if (type.field(i)->json_name() == name) field = type.field(i);
+    }
     if (field == nullptr) continue;  // protobuf's parser names unknown fields
     const std::string field_path = path.empty() ? name : absl::StrCat(path, ".", name);
     if (absl::Status status = CheckField(value, *field, field_path); !status.ok()) return status;

@@ -27,7 +27,7 @@ absl::Status CheckPageSize(int page_size) {
 
 // Every effect named against the engine's catalogue, before the analysis is
 // queued: a worker would fail on it later, after the user has gone.
-absl::Status CheckEffectNames(const google::protobuf::RepeatedPtrField<std::string>& effects, std::string_view field) {
+absl::Status CheckEffectNames(const google::protobuf::RepeatedPtrField<std::string>& effects, const char* field) {
   for (int i = 0; i < effects.size(); ++i) {
     if (auto terms = engine::ParseEffectSelector(effects[i]); !terms.ok()) {
       return absl::InvalidArgumentError(absl::StrCat(field, "[", i, "]: ", terms.status().message()));

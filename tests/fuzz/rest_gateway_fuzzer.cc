@@ -101,7 +101,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (response.content_provider_) {  // a streamed answer: drain it as httplib would
     httplib::DataSink sink;
     std::string streamed;
-    sink.write = [&](const char* bytes, std::size_t n) { return streamed.append(bytes, n), true; };
+    sink.write = [&](const char* bytes, std::size_t n) {
+      streamed.append(bytes, n);
+      return true;
+    };
     sink.done = [] {};
     sink.is_writable = [] { return true; };
     response.content_provider_(0, 0, sink);
