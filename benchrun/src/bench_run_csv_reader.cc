@@ -297,17 +297,17 @@ class Parser {
       return Refuse(line, &*control, key,
                     absl::StrFormat("control character U+%04X in the value", static_cast<unsigned char>(*control)));
     }
-    if (raw_value.size() > kMaxMetadataValueBytes) {
-      return Refuse(line, raw_value.data() + kMaxMetadataValueBytes, key,
-                    absl::StrFormat("value of %d bytes is longer than %d bytes", raw_value.size(),
+    const std::string_view value = Trim(raw_value);
+    if (value.size() > kMaxMetadataValueBytes) {
+      return Refuse(line, value.data() + kMaxMetadataValueBytes, key,
+                    absl::StrFormat("value of %d bytes is longer than %d bytes", value.size(),
                                     kMaxMetadataValueBytes));
     }
-    if (const auto bad = FindInvalidUtf8(raw_value)) {
-      return Refuse(line, raw_value.data() + *bad, key,
+    if (const auto bad = FindInvalidUtf8(value)) {
+      return Refuse(line, value.data() + *bad, key,
                     absl::StrFormat("byte 0x%02X is not UTF-8 text; metadata values are UTF-8",
-                                    static_cast<unsigned char>(raw_value[*bad])));
+                                    static_cast<unsigned char>(value[*bad])));
     }
-    const std::string_view value = Trim(raw_value);
     const char* const value_at = value.empty() ? raw_value.data() : value.data();
     const CsvLocator::Place value_place{lines_.number(), CharacterColumn(line, value_at)};
 

@@ -48,7 +48,7 @@ TEST(BenchRunLimits, AThirtyThousandKeyRunIsRefusedAtTheFirstKeyBeyondTheLimitWi
   const std::chrono::duration<double> elapsed = std::chrono::steady_clock::now() - start;
   EXPECT_LT(elapsed.count(), 2.0);
   EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_THAT(status.message(), HasSubstr("at most 256"));
+  EXPECT_THAT(std::string(status.message()), HasSubstr("at most 256"));
   const InputLocation where = Where(status);
   EXPECT_EQ(where.line, 7 + static_cast<int>(kMaxFreeMetadataKeys));
   EXPECT_EQ(where.field, "note_256");
@@ -58,25 +58,25 @@ TEST(BenchRunLimits, DuplicateKeysAreFoundInLinearTimeAndNamedWithTheirFirstLine
   CsvText csv = WithFreeKeys(200);
   csv.metadata.push_back("# note_3: again");
   const absl::Status status = ParseStatus(csv.Text());
-  EXPECT_THAT(status.message(), HasSubstr("duplicate metadata key (first at line 10)"));
+  EXPECT_THAT(std::string(status.message()), HasSubstr("duplicate metadata key (first at line 10)"));
   EXPECT_EQ(Where(status).line, 7 + 200);
 }
 
 TEST(BenchRunLimits, LongKeysValuesAndLinesAreRefusedNamingTheirPlace) {
   CsvText long_key;
   long_key.metadata.push_back("# " + std::string(kMaxMetadataKeyBytes + 1, 'k') + ": v");
-  EXPECT_THAT(ParseStatus(long_key.Text()).message(), HasSubstr("bomb.csv:7:3: metadata: key of 65 bytes"));
+  EXPECT_THAT(std::string(ParseStatus(long_key.Text()).message()), HasSubstr("bomb.csv:7:3: metadata: key of 65 bytes"));
 
   CsvText long_value;
   long_value.metadata.push_back("# notes: " + std::string(kMaxMetadataValueBytes + 10, 'v'));
   const absl::Status value = ParseStatus(long_value.Text());
-  EXPECT_THAT(value.message(), HasSubstr("notes: value of 4106 bytes is longer than 4096 bytes"));
+  EXPECT_THAT(std::string(value.message()), HasSubstr("notes: value of 4106 bytes is longer than 4096 bytes"));
   EXPECT_EQ(Where(value).line, 7);
 
   CsvText long_row;
   long_row.rows[5] += std::string(kMaxLineBytes, ' ');
   const absl::Status row = ParseStatus(long_row.Text());
-  EXPECT_THAT(row.message(), HasSubstr("row: line of"));
+  EXPECT_THAT(std::string(row.message()), HasSubstr("row: line of"));
   EXPECT_EQ(Where(row).line, long_row.RowLine(5));
   EXPECT_EQ(Where(row).column, static_cast<int>(kMaxLineBytes) + 1);
 }
@@ -85,9 +85,9 @@ TEST(BenchRunLimits, AMetadataValueThatIsNotUtf8IsRefusedAtItsByte) {
   CsvText csv;
   csv.metadata.push_back("# operator: caf\xff");
   const absl::Status status = ParseStatus(csv.Text());
-  EXPECT_THAT(status.message(), HasSubstr("bomb.csv:7:16: operator: byte 0xFF is not UTF-8 text"));
+  EXPECT_THAT(std::string(status.message()), HasSubstr("bomb.csv:7:16: operator: byte 0xFF is not UTF-8 text"));
   // The message itself is UTF-8: it travels in protobuf strings and JSON.
-  EXPECT_FALSE(FindInvalidUtf8(status.message()).has_value());
+  EXPECT_FALSE(FindInvalidUtf8(std::string(status.message())).has_value());
 }
 
 TEST(BenchRunLimits, SerialsThatCannotBeResourceNamesAreRefused) {
@@ -106,22 +106,22 @@ TEST(BenchRunLimits, SerialsThatCannotBeResourceNamesAreRefused) {
 // The typed upload's path: the same limits, named by field path.
 TEST(BenchRunLimits, TheValidatorAppliesTheLimitsToTypedUploads) {
   engine::BenchRun run = StaticRun();
-  for (std::size_t k = 0; k <= kMaxFreeMetadataKeys; ++k) run.metadata.extra.emplace_back("k" + std::to_string(k), "v");
-  EXPECT_THAT(ValidateBenchRun(run, "upload").message(),
+  for (std::size_t k = 0; k <= kMaxFreeMetadataKeys; ++k) run.metadata.extra.emplace_back(std::string("k").append(std::to_string(k)), "v");
+  EXPECT_THAT(std::string(ValidateBenchRun(run, "upload").message()),
               HasSubstr("upload: metadata.extra[256]: 257 free metadata keys; a run holds at most 256"));
 
   run = StaticRun();
   run.metadata.extra.emplace_back("operator", "caf\xff");
-  EXPECT_THAT(ValidateBenchRun(run, "upload").message(),
+  EXPECT_THAT(std::string(ValidateBenchRun(run, "upload").message()),
               HasSubstr("upload: metadata.extra[0]: 'operator': byte 0xFF at byte 4 of the value is not UTF-8"));
 
   run = StaticRun();
   run.metadata.extra.emplace_back("notes", std::string(kMaxMetadataValueBytes + 1, 'v'));
-  EXPECT_THAT(ValidateBenchRun(run, "upload").message(), HasSubstr("value of 4097 bytes"));
+  EXPECT_THAT(std::string(ValidateBenchRun(run, "upload").message()), HasSubstr("value of 4097 bytes"));
 
   run = StaticRun();
   run.metadata.unit_serial = "units/INS-1";
-  EXPECT_THAT(ValidateBenchRun(run, "upload").message(), HasSubstr("upload: metadata.unit_serial: 'units/INS-1' holds '/'"));
+  EXPECT_THAT(std::string(ValidateBenchRun(run, "upload").message()), HasSubstr("upload: metadata.unit_serial: 'units/INS-1' holds '/'"));
 }
 
 TEST(BenchRunLimits, TheLineStreamBoundsItsHead) {
@@ -129,10 +129,10 @@ TEST(BenchRunLimits, TheLineStreamBoundsItsHead) {
   absl::Status status;
   for (int k = 0; status.ok() && k < 100'000; ++k) status = stream.AddLine("# key_" + std::to_string(k) + ": v");
   EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_THAT(status.message(), HasSubstr("at most 256"));
+  EXPECT_THAT(std::string(status.message()), HasSubstr("at most 256"));
 
   BenchRunLineStream long_line("live");
-  EXPECT_THAT(long_line.AddLine("# notes: " + std::string(kMaxLineBytes, 'v')).message(),
+  EXPECT_THAT(std::string(long_line.AddLine("# notes: " + std::string(kMaxLineBytes, 'v')).message()),
               HasSubstr("live:1:8193: metadata: line of"));
 }
 

@@ -21,7 +21,9 @@ TEST(StatusMapping, CanonicalCodesMapOneToOneOntoGrpc) {
     const bool servers_trouble = status.code() == absl::StatusCode::kInternal ||
                                  status.code() == absl::StatusCode::kUnknown ||
                                  status.code() == absl::StatusCode::kDataLoss;
-    if (!servers_trouble) EXPECT_EQ(mapped.error_message(), "why");
+    if (!servers_trouble) {
+      EXPECT_EQ(mapped.error_message(), "why");
+    }
     EXPECT_EQ(FromGrpcStatus(mapped).code(), status.code());
   }
   EXPECT_TRUE(ToGrpcStatus(absl::OkStatus()).ok());
