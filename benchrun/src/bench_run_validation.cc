@@ -221,7 +221,9 @@ std::string CheckFormat(std::string_view format) {
 // Locations
 
 absl::Status Refusal(const InputLocation& where, std::string_view detail) {
-  std::string message = Utf8Printable(where.source);
+  // A source is a name the caller gave (a path may hold a tab): kept as it
+  // is unless it is not UTF-8.
+  std::string message = FindInvalidUtf8(where.source) ? Utf8Printable(where.source) : where.source;
   if (where.line > 0) message += absl::StrFormat(":%d", where.line);
   if (where.line > 0 && where.column > 0) message += absl::StrFormat(":%d", where.column);
   // Details quote the input: hostile bytes are escaped so that the message is

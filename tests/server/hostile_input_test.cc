@@ -57,7 +57,7 @@ TEST_F(HostileInputTest, RequestFieldsOfTheWrongJsonTypeOrUnknownEffectsAreRefus
   EXPECT_EQ(scalar->status, 400);
   EXPECT_THAT(scalar->body, HasSubstr("model.effects: expected an array"));
 
-  auto unknown = post(R"({"run":")" + run.name() + R"(","model":{"effects":["gyro_scale","gyro"]}})");
+  auto unknown = post(R"({"run":")" + run.name() + R"(","model":{"effects":["gyro_scale_factor","gyro"]}})");
   ASSERT_TRUE(unknown);
   EXPECT_EQ(unknown->status, 400);
   EXPECT_THAT(unknown->body, HasSubstr("analysis.model.effects[1]: unknown effect 'gyro'"));
