@@ -24,6 +24,7 @@
 #include "insdiag/server/metrics.h"
 #include "insdiag/server/rest_gateway.h"
 #include "insdiag/server/run_service.h"
+#include "insdiag/server/status_mapping.h"
 #include "insdiag/server/web_page.h"
 #include "request_edge.h"
 #include "insdiag/v1/analyses.grpc.pb.h"
@@ -247,6 +248,16 @@ absl::Status InsdiagServer::StartHttp(const Options& options) {
   // A 1-hour 50 Hz run is ~20 MB of CSV; give slow links time.
   http_->set_read_timeout(std::chrono::seconds(60));
   http_->set_payload_max_length(kMaxRequestBodyBytes);
+  // A request cpp-httplib refuses itself (a header line too long, a body too
+  // large) is answered with its empty body: say which rule it broke.
+  http_->set_error_handler(httplib::Server::HandlerWithResponse([](const httplib::Request&,
+                                                                   httplib::Response& response) {
+    if (!response.body.empty() || response.status == 404) return httplib::Server::HandlerResponse::Unhandled;
+    const HttpError error = ToHttpError(
+        grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, UnreadableRequestMessage(response.status)));
+    response.set_content(error.json_body, "application/json");
+    return httplib::Server::HandlerResponse::Handled;
+  }));
   http_port_ =
       options.http_port == 0
           ? http_->bind_to_any_port(options.bind_address)

@@ -46,6 +46,21 @@ absl::Status CheckForwardedHeader(std::string_view name, std::string_view value)
   return absl::OkStatus();
 }
 
+std::string UnreadableRequestMessage(int http_status) {
+  switch (http_status) {
+    case 413:
+      return absl::StrCat("the request body is longer than ", kMaxRequestBodyBytes,
+                          " bytes; upload larger runs over gRPC (docs/API.md, Limits)");
+    case 414:
+      return absl::StrCat("the request's URI is longer than ", kMaxHttpLineBytes, " bytes");
+    case 400:
+      return absl::StrCat("the request could not be read: a malformed request line or header, or a header line ",
+                          "longer than ", kMaxHttpLineBytes, " bytes (docs/API.md, Limits)");
+    default:
+      return absl::StrCat("the request was refused with HTTP ", http_status);
+  }
+}
+
 absl::Status CheckRequestEdge(const httplib::Request& request) {
   if (request.headers.size() > kMaxRequestHeaderCount) {
     return absl::InvalidArgumentError(absl::StrCat("the request has ", request.headers.size(),

@@ -12,6 +12,7 @@
 #include <absl/status/status.h>
 
 #include <cstddef>
+#include <string>
 #include <string_view>
 
 namespace httplib {
@@ -31,6 +32,16 @@ inline constexpr std::size_t kMaxRequestBodyBytes = 1024 * 1024 * 1024;
 // UNAUTHENTICATED naming the byte and its position when `value` of the
 // header `name` holds a byte outside printable ASCII.
 absl::Status CheckForwardedHeader(std::string_view name, std::string_view value);
+
+// cpp-httplib's own limits, which it answers before the gateway sees the
+// request (compiled into Debian's library): a request line or a header
+// line of 8 KiB at most.
+inline constexpr std::size_t kMaxHttpLineBytes = 8192;
+
+// What a client is told when cpp-httplib itself refuses its request with
+// `http_status` (400 unreadable, 413 too large, 414 URI too long) and no
+// body: the rule it broke.
+std::string UnreadableRequestMessage(int http_status);
 
 // INVALID_ARGUMENT naming the part of the request (header count or size,
 // path, query parameter) that breaks a rule above; UNAUTHENTICATED for a

@@ -64,8 +64,11 @@ class HostileClientTest : public ServerProcessTest {
       httplib::Client raw("127.0.0.1", http_port_);
       ExpectRefused(raw.Get("/v1/runs", {{"Authorization", bad}}), 401, "header Authorization: byte 0x", "bad token");
     }
-    ExpectRefused(http_->Get("/v1/runs", {{"X-Filler", std::string(40'000, 'x')}}), 400, "headers hold",
-                  "oversized headers");
+    ExpectRefused(http_->Get("/v1/runs", {{"X-Filler", std::string(40'000, 'x')}}), 400, "header line",
+                  "a header line over 8 KiB");
+    httplib::Headers many;
+    for (int i = 0; i < 6; ++i) many.emplace("X-Filler-" + std::to_string(i), std::string(7'000, 'x'));
+    ExpectRefused(http_->Get("/v1/runs", many), 400, "headers hold", "headers over 32 KiB in all");
 
     const std::string good = benchrun::FormatBenchRun(SyntheticStaticRun(500, 50.0, 41));
     const std::size_t after_site = good.find("\nt,");
