@@ -34,18 +34,26 @@ class StandIn final : public grpc::CallbackGenericService {
   grpc::ServerGenericBidiReactor* CreateReactor(grpc::GenericCallbackServerContext*) override {
     class Reactor final : public grpc::ServerGenericBidiReactor {
      public:
-      Reactor() {
-        if (answer_ok) {
-          grpc::Slice empty(std::string{});
-          response_ = grpc::ByteBuffer(&empty, 1);
-          StartWriteAndFinish(&response_, grpc::WriteOptions(), grpc::Status::OK);
-        } else {
+      // A refusal comes at once, as the access guard's; an answer after the
+      // request is read, as a unary method's.
+      Reactor() : ok_(answer_ok) {
+        if (!ok_) {
           Finish(grpc::Status(grpc::StatusCode::UNAUTHENTICATED, "stand-in: no token is valid here"));
+          return;
         }
+        StartRead(&request_);
+      }
+      void OnReadDone(bool read) override {
+        if (read) return StartRead(&request_);
+        grpc::Slice empty(std::string{});
+        response_ = grpc::ByteBuffer(&empty, 1);
+        StartWriteAndFinish(&response_, grpc::WriteOptions(), grpc::Status::OK);
       }
       void OnDone() override { delete this; }
 
      private:
+      const bool ok_;
+      grpc::ByteBuffer request_;
       grpc::ByteBuffer response_;
     };
     return new Reactor();
