@@ -12,14 +12,14 @@
 # first lines (the build's import of data/real, tests/CMakeLists.txt) and
 # the format's own example; inputs that once found a bug
 # (tests/fuzz/regressions/), run first every time.
-# Usage: scripts/fuzz.sh [SECONDS] [FUZZER...]   (default 60 s each, all four)
+# Usage: scripts/fuzz.sh [SECONDS] [FUZZER...]   (default 60 s each, all five)
 # The figures in docs/RELIABILITY.md come from `scripts/fuzz.sh 60`.
 set -euo pipefail
 root=$(cd "$(dirname "$0")" && pwd)/..
 seconds=${1:-60}
 shift || true
 fuzzers=("$@")
-((${#fuzzers[@]})) || fuzzers=(bench_run_csv_fuzzer json_request_fuzzer rest_request_fuzzer upload_stream_fuzzer)
+((${#fuzzers[@]})) || fuzzers=(bench_run_csv_fuzzer json_request_fuzzer rest_request_fuzzer rest_gateway_fuzzer upload_stream_fuzzer)
 build=${INSDIAG_FUZZ_BUILD_DIR:-$root/build-fuzz}
 
 if [[ ! -f $build/build.ninja ]]; then
@@ -45,6 +45,9 @@ fi
 head -n 40 "$tests_build/data/real/rlg-static-psins.csv" >"$build/corpus/bench_run_csv_fuzzer/real-record" 2>/dev/null ||
   rm -f "$build/corpus/bench_run_csv_fuzzer/real-record"
 seed bench_run_csv_fuzzer spec-example '# format: insdiag-bench-run/1\n# unit_serial: INS-2000-0042\n# unit_type: INS-2000\n# site_latitude_deg: 55.5672\n# site_longitude_deg: 38.1500\n# site_height_m: 125.0\nt,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,ref_roll,ref_pitch,ref_yaw,temp\n0.0,1e-5,2e-5,-3e-5,0.01,-0.02,-9.81,0,0,0,25.0\n0.01,1e-5,2e-5,-3e-5,0.01,-0.02,-9.81,0,0,0,25.0\n'
+# The gateway's own hostile cases: bytes gRPC refuses in metadata, an upload.
+seed rest_gateway_fuzzer bad-authorization '- GET /v1/runs\nAuthorization: Bearer \xff\x01caf\xc3\xa9\n\n'
+seed rest_gateway_fuzzer csv-upload "o POST /v1/runs:upload?requestId=r1\nContent-Type: text/csv\nAuthorization: Bearer t\n\n$(cat "$build/corpus/bench_run_csv_fuzzer/spec-example" 2>/dev/null)"
 # The upload fuzzer's input is the bending of a valid stream, not data a test holds.
 seed upload_stream_fuzzer valid '\x10\x04\xff\xff\xff\x00'
 for dir in "$root"/tests/fuzz/regressions/*/; do

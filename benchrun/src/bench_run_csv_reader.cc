@@ -9,9 +9,11 @@
 #include <cstring>
 #include <memory>
 #include <optional>
+#include <unordered_map>
 #include <vector>
 
 #include "insdiag/benchrun/bench_run_csv.h"
+#include "insdiag/benchrun/text_rules.h"
 #include "metadata_rules.h"
 #include "number_text.h"
 #include "sample_fields.h"
@@ -137,6 +139,9 @@ class CsvLocator final : public InputLocator {
     return metadata_places_[static_cast<std::size_t>(field)].line > 0;
   }
   void AddExtraPlace(std::string_view key, Place place) { extra_places_.emplace_back(key, place); }
+  void RemoveExtraPlace(std::size_t extra_index) {
+    extra_places_.erase(extra_places_.begin() + static_cast<std::ptrdiff_t>(extra_index));
+  }
   void SetHeaderColumn(SampleField field, int header_column) {
     header_column_of_[static_cast<std::size_t>(field)] = header_column;
   }
@@ -192,6 +197,7 @@ class Parser {
     std::string_view row;
     lines_.Next(row);
     locator_.SetData(line, line_number, validator_->sample_count());
+    if (absl::Status status = CheckLineLength(row, "row"); !status.ok()) return status;
     engine::ImuSample& sample = run_.samples.emplace_back();
     if (absl::Status status = ReadRow(row, sample); !status.ok()) return status;
     return validator_->Add(sample);
@@ -229,6 +235,7 @@ class Parser {
       const std::string detail = CheckSegmentStarts(run_.metadata, std::numeric_limits<std::size_t>::max());
       if (!detail.empty()) return Refusal(where, detail);
       extra.erase(extra.begin() + static_cast<std::ptrdiff_t>(i));
+      locator_.RemoveExtraPlace(i);
       return absl::OkStatus();
     }
     return absl::OkStatus();
@@ -238,6 +245,10 @@ class Parser {
   absl::Status ReadMetadata(std::optional<std::string_view>& header) {
     std::string_view line;
     while (lines_.Next(line)) {
+      if (absl::Status status = CheckLineLength(line, line.starts_with('#') ? "metadata" : "header");
+          !status.ok()) {
+        return status;
+      }
       if (IsBlank(line)) continue;
       if (!line.starts_with('#')) {
         header = line;
@@ -248,25 +259,33 @@ class Parser {
     return absl::OkStatus();
   }
 
+  // Every line is bounded before it is looked into: a line-length bomb is
+  // refused at its first byte past the limit.
+  absl::Status CheckLineLength(std::string_view line, std::string_view field) const {
+    if (line.size() <= kMaxLineBytes) return absl::OkStatus();
+    return Refuse(line, line.data() + kMaxLineBytes, field,
+                  absl::StrFormat("line of %d bytes is longer than %d bytes", line.size(), kMaxLineBytes));
+  }
+
   absl::Status ReadMetadataLine(std::string_view line) {
     const char* const key_at = Trim(line.substr(1)).data();
     const auto key_begin = static_cast<std::size_t>(key_at - line.data());
     const std::size_t colon = line.find(':', key_begin);
     if (colon == line.npos) return Refuse(line, key_at, "metadata", "expected '# key: value'");
     const std::string_view key = Trim(line.substr(key_begin, colon - key_begin));
+    if (key.size() > kMaxMetadataKeyBytes) {
+      return Refuse(line, key_at, "metadata",
+                    absl::StrFormat("key of %d bytes is longer than %d bytes", key.size(), kMaxMetadataKeyBytes));
+    }
     if (!internal::IsMetadataKey(key)) {
       return Refuse(line, key_at, "metadata",
                     absl::StrFormat("expected '# key: value' with a lower-case ASCII key "
                                     "(a-z, 0-9, _), got '%s'",
                                     key));
     }
-    for (const auto& [seen_key, seen_line] : seen_keys_) {
-      if (seen_key == key) {
-        return Refuse(line, key_at, key,
-                      absl::StrFormat("duplicate metadata key (first at line %d)", seen_line));
-      }
+    if (const auto [seen, added] = seen_keys_.emplace(key, lines_.number()); !added) {
+      return Refuse(line, key_at, key, absl::StrFormat("duplicate metadata key (first at line %d)", seen->second));
     }
-    seen_keys_.emplace_back(key, lines_.number());
 
     const std::string_view raw_value = line.substr(colon + 1);
     // Lines end at "\n" or "\r\n"; a control character inside one (a lone
@@ -279,6 +298,16 @@ class Parser {
                     absl::StrFormat("control character U+%04X in the value", static_cast<unsigned char>(*control)));
     }
     const std::string_view value = Trim(raw_value);
+    if (value.size() > kMaxMetadataValueBytes) {
+      return Refuse(line, value.data() + kMaxMetadataValueBytes, key,
+                    absl::StrFormat("value of %d bytes is longer than %d bytes", value.size(),
+                                    kMaxMetadataValueBytes));
+    }
+    if (const auto bad = FindInvalidUtf8(value)) {
+      return Refuse(line, value.data() + *bad, key,
+                    absl::StrFormat("byte 0x%02X is not UTF-8 text; metadata values are UTF-8",
+                                    static_cast<unsigned char>(value[*bad])));
+    }
     const char* const value_at = value.empty() ? raw_value.data() : value.data();
     const CsvLocator::Place value_place{lines_.number(), CharacterColumn(line, value_at)};
 
@@ -286,6 +315,12 @@ class Parser {
     if (!field.has_value()) {
       if (std::string detail = internal::CheckReferenceKey(key, value); !detail.empty()) {
         return Refuse(line, value_at, key, detail);
+      }
+      // segment_starts is no free key once read (TakeSegmentStarts).
+      if (run_.metadata.extra.size() >= kMaxFreeMetadataKeys + (key == kSegmentStartsKey ? 1 : 0)) {
+        return Refuse(line, key_at, key,
+                      absl::StrFormat("more than %d free metadata keys; a run holds at most %d",
+                                      kMaxFreeMetadataKeys, kMaxFreeMetadataKeys));
       }
       run_.metadata.extra.emplace_back(key, value);
       locator_.AddExtraPlace(key, {lines_.number(), CharacterColumn(line, key_at)});
@@ -410,6 +445,7 @@ class Parser {
 
     std::string_view line;
     while (lines_.Next(line)) {
+      if (absl::Status status = CheckLineLength(line, "row"); !status.ok()) return status;
       if (IsBlank(line)) {
         if (IsBlank(lines_.rest())) break;  // blank lines at the end
         return Refuse(line, line.data(), "row",
@@ -455,7 +491,7 @@ class Parser {
   CsvLocator locator_;
   engine::BenchRun run_;
   std::optional<BenchRunValidator> validator_;  // once the head is read
-  std::vector<std::pair<std::string_view, int>> seen_keys_;  // metadata key, line
+  std::unordered_map<std::string_view, int> seen_keys_;     // metadata key, its line
   std::vector<std::string_view> column_names_;               // header, in order
   std::vector<std::optional<SampleField>>
       column_fields_;  // nullopt: a column the spec does not name
@@ -478,8 +514,22 @@ absl::Status BenchRunLineStream::AddLine(std::string_view line) {
     if (IsBlank(line)) return absl::OkStatus();  // the end may follow; rows after it are still checked
     return reader_->parser.ReadArrivedRow(line, line_number_);
   }
+  // The head is kept until the header arrives: bound it by its lines' length
+  // and, at one key more than a run may hold, read it for the precise refusal.
+  if (line.size() > kMaxLineBytes) {
+    return Refusal({.source = source_,
+                    .line = line_number_,
+                    .column = CharacterColumn(line, line.data() + kMaxLineBytes),
+                    .field = line.starts_with('#') ? "metadata" : "header"},
+                   absl::StrFormat("line of %d bytes is longer than %d bytes", line.size(), kMaxLineBytes));
+  }
   head_.append(line);
   head_.push_back('\n');
+  if (++head_lines_ > kMaxFreeMetadataKeys + kSpecMetadataFieldCount + kMaxHeadBlankLines) {
+    if (absl::Status status = ParseBenchRun(head_, source_).status(); !status.ok()) return status;
+    return Refusal({.source = source_, .line = line_number_, .field = "metadata"},
+                   absl::StrFormat("more than %d lines before the header", head_lines_ - 1));
+  }
   const std::string_view text = line_number_ == 1 && line.starts_with(kUtf8ByteOrderMark)
                                     ? line.substr(kUtf8ByteOrderMark.size())
                                     : line;

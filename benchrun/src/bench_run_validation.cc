@@ -10,7 +10,9 @@
 #include <charconv>
 #include <cmath>
 #include <numbers>
+#include <unordered_set>
 
+#include "insdiag/benchrun/text_rules.h"
 #include "insdiag/engine/nav/wgs84.h"
 #include "metadata_rules.h"
 #include "number_text.h"
@@ -93,6 +95,59 @@ std::string CheckSampleValue(SampleField field, double value) {
   return {};
 }
 
+// Why a metadata value breaks the text limits; empty when it keeps them.
+std::string CheckMetadataText(std::string_view value, std::size_t max_bytes = kMaxMetadataValueBytes) {
+  if (value.size() > max_bytes) {
+    return absl::StrFormat("value of %d bytes is longer than %d bytes", value.size(), max_bytes);
+  }
+  if (const auto bad = FindInvalidUtf8(value)) {
+    return absl::StrFormat("byte 0x%02X at byte %d of the value is not UTF-8 text", static_cast<unsigned char>(value[*bad]),
+                           *bad + 1);
+  }
+  return {};
+}
+
+// Free metadata must survive a trip through the text format, and stay within
+// the limits. One pass and a hash set: linear in the number of keys.
+template <typename Refuse>
+absl::Status CheckFreeMetadata(const std::vector<std::pair<std::string, std::string>>& extra, const Refuse& refuse) {
+  if (extra.size() > kMaxFreeMetadataKeys) {
+    return refuse(MetadataField::kExtra,
+                  absl::StrFormat("%d free metadata keys; a run holds at most %d", extra.size(), kMaxFreeMetadataKeys),
+                  kMaxFreeMetadataKeys);
+  }
+  std::unordered_set<std::string_view> seen;
+  seen.reserve(extra.size());
+  for (std::size_t i = 0; i < extra.size(); ++i) {
+    const auto& [key, value] = extra[i];
+    if (key.size() > kMaxMetadataKeyBytes) {
+      return refuse(MetadataField::kExtra,
+                    absl::StrFormat("key of %d bytes is longer than %d bytes", key.size(), kMaxMetadataKeyBytes), i);
+    }
+    if (!IsMetadataKey(key)) {
+      return refuse(MetadataField::kExtra,
+                    absl::StrFormat("key '%s' is not lower-case ASCII (a-z, 0-9, _)", key), i);
+    }
+    if (IsSpecMetadataKey(key)) {
+      return refuse(MetadataField::kExtra,
+                    absl::StrFormat("key '%s' is a spec key, not free metadata", key), i);
+    }
+    if (!seen.insert(key).second) {
+      return refuse(MetadataField::kExtra, absl::StrFormat("duplicate key '%s'", key), i);
+    }
+    if (std::string detail = CheckMetadataText(value); !detail.empty()) {
+      return refuse(MetadataField::kExtra, absl::StrFormat("'%s': %s", key, detail), i);
+    }
+    if (value.find_first_of("\r\n") != std::string::npos) {
+      return refuse(MetadataField::kExtra, absl::StrFormat("value of '%s' spans lines", key), i);
+    }
+    if (std::string detail = internal::CheckReferenceKey(key, value); !detail.empty()) {
+      return refuse(MetadataField::kExtra, detail, i);
+    }
+  }
+  return absl::OkStatus();
+}
+
 absl::Status CheckMetadata(const engine::BenchRunMetadata& metadata, const InputLocator& locator) {
   const auto refuse = [&](MetadataField field, std::string_view detail,
                           std::size_t extra_index = 0) {
@@ -101,7 +156,12 @@ absl::Status CheckMetadata(const engine::BenchRunMetadata& metadata, const Input
   if (std::string detail = internal::CheckFormat(metadata.format); !detail.empty()) {
     return refuse(MetadataField::kFormat, detail);
   }
-  if (metadata.unit_serial.empty()) return refuse(MetadataField::kUnitSerial, "is empty");
+  if (std::string detail = CheckUnitSerial(metadata.unit_serial); !detail.empty()) {
+    return refuse(MetadataField::kUnitSerial, detail);
+  }
+  if (std::string detail = CheckMetadataText(metadata.unit_type, kMaxUnitTypeBytes); !detail.empty()) {
+    return refuse(MetadataField::kUnitType, detail);
+  }
 
   const engine::Site& site = metadata.site;
   const engine::Datasheet& sheet = metadata.datasheet;
@@ -129,29 +189,7 @@ absl::Status CheckMetadata(const engine::BenchRunMetadata& metadata, const Input
                                   ShortestText(kMaxLatitudeDeg)));
   }
 
-  // Free metadata must survive a trip through the text format.
-  for (std::size_t i = 0; i < metadata.extra.size(); ++i) {
-    const auto& [key, value] = metadata.extra[i];
-    if (!IsMetadataKey(key)) {
-      return refuse(MetadataField::kExtra,
-                    absl::StrFormat("key '%s' is not lower-case ASCII (a-z, 0-9, _)", key), i);
-    }
-    if (IsSpecMetadataKey(key)) {
-      return refuse(MetadataField::kExtra,
-                    absl::StrFormat("key '%s' is a spec key, not free metadata", key), i);
-    }
-    for (std::size_t j = 0; j < i; ++j) {
-      if (metadata.extra[j].first == key) {
-        return refuse(MetadataField::kExtra, absl::StrFormat("duplicate key '%s'", key), i);
-      }
-    }
-    if (value.find_first_of("\r\n") != std::string::npos) {
-      return refuse(MetadataField::kExtra, absl::StrFormat("value of '%s' spans lines", key), i);
-    }
-    if (std::string detail = internal::CheckReferenceKey(key, value); !detail.empty()) {
-      return refuse(MetadataField::kExtra, detail, i);
-    }
-  }
+  return CheckFreeMetadata(metadata.extra, refuse);
   return absl::OkStatus();
 }
 
@@ -202,15 +240,20 @@ std::string CheckFormat(std::string_view format) {
 // Locations
 
 absl::Status Refusal(const InputLocation& where, std::string_view detail) {
-  std::string message = where.source;
+  // A source is a name the caller gave (a path may hold a tab): kept as it
+  // is unless it is not UTF-8.
+  std::string message = FindInvalidUtf8(where.source) ? Utf8Printable(where.source) : where.source;
   if (where.line > 0) message += absl::StrFormat(":%d", where.line);
   if (where.line > 0 && where.column > 0) message += absl::StrFormat(":%d", where.column);
-  message += absl::StrFormat(": %s: %s", where.field, detail);
+  // Details quote the input: hostile bytes are escaped so that the message is
+  // UTF-8 on one line (it travels in protobuf strings and JSON).
+  const std::string field = Utf8Printable(where.field);
+  message += absl::StrFormat(": %s: %s", field, Utf8Printable(detail));
   absl::Status status = absl::InvalidArgumentError(message);
   // The source goes last so that it may hold tabs; fields are names without tabs.
   status.SetPayload(kInputLocationTypeUrl,
                     absl::Cord(absl::StrFormat("%d\t%d\t%s\t%s", where.line, where.column,
-                                               where.field, where.source)));
+                                               field, where.source)));
   return status;
 }
 

@@ -4,6 +4,8 @@
 #include <absl/strings/match.h>
 #include <absl/strings/str_cat.h>
 #include <absl/strings/str_replace.h>
+#include <absl/time/clock.h>
+#include <absl/time/time.h>
 #include <fcntl.h>
 #include <openssl/rand.h>
 #include <unistd.h>
@@ -13,6 +15,7 @@
 #include <cstring>
 #include <tuple>
 
+#include "insdiag/api/limits.h"
 #include "insdiag/api/resource_names.h"
 #include "insdiag/api/run_codec.h"
 #include "insdiag/engine/status_macros.h"
@@ -100,11 +103,29 @@ absl::StatusOr<v1::Caller> AccessStore::Authenticate(const std::string& secret) 
   return caller;
 }
 
+namespace {
+
+// An expiry in the future and at most api::kMaxTokenLifetimeDays ahead.
+absl::Status CheckExpiry(const google::protobuf::Timestamp& expiry) {
+  const absl::Time now = absl::Now();
+  const absl::Time when = absl::FromUnixSeconds(expiry.seconds()) + absl::Nanoseconds(expiry.nanos());
+  if (when <= now) return absl::InvalidArgumentError("token.expire_time: must be in the future");
+  if (when > now + absl::Hours(24 * api::kMaxTokenLifetimeDays)) {
+    return absl::InvalidArgumentError(absl::StrCat("token.expire_time: ", absl::FormatTime(absl::RFC3339_sec, when, absl::UTCTimeZone()),
+                                                   " is more than ", api::kMaxTokenLifetimeDays,
+                                                   " days (ten years) ahead; a token lives at most that long"));
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
 absl::StatusOr<v1::CreatedToken> AccessStore::CreateToken(const v1::Token& token, const std::string& creator) {
   if (token.display_name().empty()) return absl::InvalidArgumentError("token.display_name: required");
   if (token.role() == v1::ROLE_UNSPECIFIED || !v1::Role_IsValid(token.role())) {
     return absl::InvalidArgumentError("token.role: one of VIEWER, OPERATOR, ENGINEER, ADMIN");
   }
+  if (token.has_expire_time()) INSDIAG_RETURN_IF_ERROR(CheckExpiry(token.expire_time()));
   INSDIAG_ASSIGN_OR_RETURN(auto secret, NewSecret());
   INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
   auto rows =

@@ -1,5 +1,6 @@
 #include "insdiag/kb/pg.h"
 
+#include <absl/strings/cord.h>
 #include <absl/strings/numbers.h>
 #include <absl/strings/str_cat.h>
 
@@ -108,8 +109,10 @@ absl::StatusOr<Result> Connection::Check(PGresult* raw, std::string_view sql) {
         "or a crash, see its log): ",
         FirstLine(PQresultErrorMessage(raw))));
   }
-  return StatusFromSqlState(sqlstate, absl::StrCat(FirstLine(PQresultErrorMessage(raw)), " [",
-                                                   FirstLine(sql.substr(0, 80)), "]"));
+  absl::Status refused = StatusFromSqlState(
+      sqlstate, absl::StrCat(FirstLine(PQresultErrorMessage(raw)), " [", FirstLine(sql.substr(0, 80)), "]"));
+  refused.SetPayload(kSqlErrorPayload, absl::Cord(sqlstate));
+  return refused;
 }
 
 absl::StatusOr<Result> Connection::Exec(std::string_view sql, const std::vector<Param>& params,

@@ -339,7 +339,7 @@ absl::StatusOr<RunPage> RunStore::List(const RunQuery& query) {
   if (rows.rows() > page_size) {
     page.next_page_token = internal::EncodeToken(rows.String(shown - 1, 21), page.runs.back().id);
   }
-  INSDIAG_RETURN_IF_ERROR(LoadExtraMetadata(*db, page.runs));
+  if (query.with_extra_metadata) INSDIAG_RETURN_IF_ERROR(LoadExtraMetadata(*db, page.runs));
   return page;
 }
 

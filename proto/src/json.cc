@@ -1,9 +1,12 @@
 #include "insdiag/api/json.h"
 
 #include <absl/strings/str_cat.h>
+#include <google/protobuf/struct.pb.h>
 #include <google/protobuf/util/json_util.h>
 
 #include <string>
+
+#include "json_shape.h"
 
 namespace insdiag::api {
 
@@ -25,6 +28,16 @@ absl::Status FromJson(std::string_view json, google::protobuf::Message* message)
   if (!status.ok()) {
     return absl::InvalidArgumentError("request body is not a valid " + message->GetTypeName() +
                                       " in JSON: " + std::string(status.message()));
+  }
+  // Parsed as protobuf takes it; now as it was written, every value of the
+  // type its field takes (json_shape.h). The body is a JSON object: it parsed.
+  google::protobuf::Struct written;
+  if (google::protobuf::util::JsonStringToMessage(json, &written, options).ok()) {
+    if (absl::Status shape = internal::CheckJsonShape(written, *message->GetDescriptor(), ""); !shape.ok()) {
+      message->Clear();
+      return absl::InvalidArgumentError("request body is not a valid " + message->GetTypeName() +
+                                        " in JSON: " + std::string(shape.message()));
+    }
   }
   return absl::OkStatus();
 }

@@ -24,7 +24,9 @@
 #include "insdiag/server/metrics.h"
 #include "insdiag/server/rest_gateway.h"
 #include "insdiag/server/run_service.h"
+#include "insdiag/server/status_mapping.h"
 #include "insdiag/server/web_page.h"
+#include "request_edge.h"
 #include "insdiag/v1/analyses.grpc.pb.h"
 #include "insdiag/v1/fleet.grpc.pb.h"
 #include "insdiag/v1/knowledge.grpc.pb.h"
@@ -213,8 +215,14 @@ absl::Status InsdiagServer::StartGrpc(const Options& options) {
 }
 
 absl::Status InsdiagServer::StartHttp(const Options& options) {
+  // The gateway takes whatever the services answer: an answer must not be
+  // refused for its size on the way (gRPC's default limit is 4 MiB, -1 is
+  // none). The services bound what they answer (a listing carries
+  // summaries, docs/API.md "Limits").
+  grpc::ChannelArguments in_process;
+  in_process.SetMaxReceiveMessageSize(-1);
   INSDIAG_ASSIGN_OR_RETURN(auto gateway,
-                           RestGateway::Create(grpc_->InProcessChannel(grpc::ChannelArguments()),
+                           RestGateway::Create(grpc_->InProcessChannel(in_process),
                                                ServiceNames(), services_->guard.gateway_key()));
   gateway_ = std::move(gateway);
   gateway_->ServeMetrics([services = services_.get()] { return services->RenderMetrics(); });
@@ -239,6 +247,17 @@ absl::Status InsdiagServer::StartHttp(const Options& options) {
   InstrumentHttp(*http_, services_->metrics);
   // A 1-hour 50 Hz run is ~20 MB of CSV; give slow links time.
   http_->set_read_timeout(std::chrono::seconds(60));
+  http_->set_payload_max_length(kMaxRequestBodyBytes);
+  // A request cpp-httplib refuses itself (a header line too long, a body too
+  // large) is answered with its empty body: say which rule it broke.
+  http_->set_error_handler(httplib::Server::HandlerWithResponse([](const httplib::Request&,
+                                                                   httplib::Response& response) {
+    if (!response.body.empty() || response.status == 404) return httplib::Server::HandlerResponse::Unhandled;
+    const HttpError error = ToHttpError(
+        grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, UnreadableRequestMessage(response.status)));
+    response.set_content(error.json_body, "application/json");
+    return httplib::Server::HandlerResponse::Handled;
+  }));
   http_port_ =
       options.http_port == 0
           ? http_->bind_to_any_port(options.bind_address)

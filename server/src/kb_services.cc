@@ -25,12 +25,25 @@ absl::Status CheckPageSize(int page_size) {
   return absl::OkStatus();
 }
 
+// Every effect named against the engine's catalogue, before the analysis is
+// queued: a worker would fail on it later, after the user has gone.
+absl::Status CheckEffectNames(const google::protobuf::RepeatedPtrField<std::string>& effects, const char* field) {
+  for (int i = 0; i < effects.size(); ++i) {
+    if (auto terms = engine::ParseEffectSelector(effects[i]); !terms.ok()) {
+      return absl::InvalidArgumentError(absl::StrCat(field, "[", i, "]: ", terms.status().message()));
+    }
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 absl::StatusOr<v1::Analysis> AnalysisService::CreateAnalysis(const v1::CreateAnalysisRequest& request) {
   const std::string& run = request.analysis().run();
   if (run.empty()) return absl::InvalidArgumentError("analysis.run: required (runs/{run})");
   INSDIAG_ASSIGN_OR_RETURN(auto run_id, api::ResourceId(run, api::kRuns, "analysis.run"));
+  INSDIAG_RETURN_IF_ERROR(CheckEffectNames(request.analysis().model().effects(), "analysis.model.effects"));
+  INSDIAG_RETURN_IF_ERROR(CheckEffectNames(request.analysis().baseline().effects(), "analysis.baseline.effects"));
   v1::AnalysisSpec spec;
   *spec.mutable_model() = request.analysis().model();
   if (request.analysis().has_baseline()) *spec.mutable_baseline() = request.analysis().baseline();

@@ -6,6 +6,7 @@
 #include <pwd.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -24,6 +25,15 @@ extern char** environ;
 
 namespace insdiag::server {
 namespace {
+
+// The guard of a postmaster (StartGuard): it reads its standard input, a
+// pipe whose only writer is insdiagd, until the end, which comes when insdiagd
+// exits however it exits (kill -9, abort); then, if postmaster.pid still
+// names the postmaster it guards, it asks that postmaster for a fast shutdown
+// (SIGINT). Shell builtins only: nothing to build or install.
+constexpr char kGuardScript[] =
+    "while read -r _; do :; done; "
+    "read -r running < \"$2\" 2>/dev/null && [ \"$running\" = \"$1\" ] && kill -INT \"$1\"; exit 0";
 
 // The socket name is <dir>/.s.PGSQL.<port>; sun_path holds 107 bytes.
 constexpr std::size_t kMaxSocketPath = 107;
@@ -58,6 +68,41 @@ PostgresSupervisor::PostgresSupervisor(Options options)
       run_dir_(options_.data_dir / "run"),
       as_postgres_(::geteuid() == 0) {}
 
+namespace {
+
+// A child of its own process group, without the server's blocked signals:
+// the server blocks SIGINT/SIGTERM to take them on its signal thread; the
+// children must not inherit that, and a Ctrl-C at the terminal is for the
+// server (which then stops PostgreSQL in order), not for them.
+struct ChildAttributes {
+  ChildAttributes() {
+    posix_spawnattr_init(&attributes);
+    sigset_t none;
+    sigemptyset(&none);
+    posix_spawnattr_setsigmask(&attributes, &none);
+    sigset_t defaults;
+    sigemptyset(&defaults);
+    sigaddset(&defaults, SIGINT);
+    sigaddset(&defaults, SIGTERM);
+    posix_spawnattr_setsigdefault(&attributes, &defaults);
+    posix_spawnattr_setpgroup(&attributes, 0);
+    posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETPGROUP);
+  }
+  ~ChildAttributes() { posix_spawnattr_destroy(&attributes); }
+  ChildAttributes(const ChildAttributes&) = delete;
+  ChildAttributes& operator=(const ChildAttributes&) = delete;
+  posix_spawnattr_t attributes;
+};
+
+pid_t WaitFor(pid_t pid, int* status) {
+  pid_t done = 0;
+  while ((done = ::waitpid(pid, status, 0)) < 0 && errno == EINTR) {
+  }
+  return done;
+}
+
+}  // namespace
+
 absl::Status PostgresSupervisor::Run(const std::string& tool, const std::vector<std::string>& args) const {
   std::vector<std::string> argv;
   if (as_postgres_) argv = {"/usr/sbin/runuser", "-u", "postgres", "--"};
@@ -70,33 +115,17 @@ absl::Status PostgresSupervisor::Run(const std::string& tool, const std::vector<
   posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
   posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-  // The server blocks SIGINT/SIGTERM to take them on its signal thread; the
-  // children must not inherit that, and a Ctrl-C at the terminal is for the
-  // server (which then stops PostgreSQL in order), not for them.
-  posix_spawnattr_t attributes;
-  posix_spawnattr_init(&attributes);
-  sigset_t none;
-  sigemptyset(&none);
-  posix_spawnattr_setsigmask(&attributes, &none);
-  sigset_t defaults;
-  sigemptyset(&defaults);
-  sigaddset(&defaults, SIGINT);
-  sigaddset(&defaults, SIGTERM);
-  posix_spawnattr_setsigdefault(&attributes, &defaults);
-  posix_spawnattr_setpgroup(&attributes, 0);
-  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETPGROUP);
+  const ChildAttributes child;
 
   std::vector<char*> raw;
   for (auto& arg : argv) raw.push_back(arg.data());
   raw.push_back(nullptr);
   pid_t pid = 0;
-  const int error = posix_spawn(&pid, raw[0], &actions, &attributes, raw.data(), environ);
+  const int error = posix_spawn(&pid, raw[0], &actions, &child.attributes, raw.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
-  posix_spawnattr_destroy(&attributes);
   if (error != 0) return absl::InternalError(absl::StrCat("cannot run ", argv[0], ": ", std::strerror(error)));
   int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
+  WaitFor(pid, &status);
   if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return absl::OkStatus();
   return absl::InternalError(absl::StrCat(tool, " ", absl::StrJoin(args, " "), " failed (status ", status,
                                           "): ", Tail(output, 600)));
@@ -151,6 +180,7 @@ absl::StatusOr<std::unique_ptr<PostgresSupervisor>> PostgresSupervisor::Start(Op
     }
   }
 
+  INSDIAG_RETURN_IF_ERROR(supervisor->LockDataDir());
   const std::string cluster = supervisor->cluster_dir_.string();
   if (!std::filesystem::exists(supervisor->cluster_dir_ / "PG_VERSION")) {
     if (auto status = supervisor->Run("initdb", {"-D", cluster, "--no-sync", "-A", "trust", "-U", "postgres",
@@ -159,10 +189,15 @@ absl::StatusOr<std::unique_ptr<PostgresSupervisor>> PostgresSupervisor::Start(Op
       return status;
     }
   }
-  // A cluster still running from a crashed server is adopted.
-  if (!supervisor->Run("pg_ctl", {"status", "-D", cluster}).ok()) {
-    INSDIAG_RETURN_IF_ERROR(supervisor->StartCluster());
+  // A cluster still running is an orphan (this server holds the data
+  // directory's lock, so no other insdiagd owns it): it is stopped and
+  // started again under this server's guard.
+  if (supervisor->Run("pg_ctl", {"status", "-D", cluster}).ok()) {
+    Log(LogLevel::kWarning, absl::StrCat("an embedded PostgreSQL left running by an earlier insdiagd in ", cluster,
+                                         " is stopped and started again under this server"));
+    INSDIAG_RETURN_IF_ERROR(supervisor->Run("pg_ctl", {"stop", "-w", "-t", "60", "-m", "fast", "-D", cluster}));
   }
+  INSDIAG_RETURN_IF_ERROR(supervisor->StartCluster());
   supervisor->running_ = true;
   if (supervisor->options_.restart_check_interval.count() > 0) {
     supervisor->watchdog_ = std::thread([s = supervisor.get()] { s->KeepClusterRunning(); });
@@ -175,10 +210,69 @@ absl::StatusOr<std::unique_ptr<PostgresSupervisor>> PostgresSupervisor::Start(Op
   return supervisor;
 }
 
-absl::Status PostgresSupervisor::StartCluster() const {
+absl::Status PostgresSupervisor::LockDataDir() {
+  const auto lock_path = options_.data_dir / "insdiagd.lock";
+  // O_CLOEXEC: the lock is this process's alone, not its children's.
+  lock_fd_ = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (lock_fd_ < 0) {
+    return absl::FailedPreconditionError(absl::StrCat("cannot open ", lock_path.string(), ": ", std::strerror(errno)));
+  }
+  if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+    return absl::FailedPreconditionError(absl::StrCat(
+        "another insdiagd serves the data directory ", options_.data_dir.string(), " (it holds ", lock_path.string(),
+        "): stop it first, or give this one another --data-dir"));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status PostgresSupervisor::StartCluster() {
   const std::string settings = absl::StrCat("-c listen_addresses='' -k '", run_dir_.string(), "' -p ", kSocketPort);
-  return Run("pg_ctl", {"start", "-w", "-t", "60", "-D", cluster_dir_.string(), "-l",
-                        (run_dir_ / "postgresql.log").string(), "-o", settings});
+  INSDIAG_RETURN_IF_ERROR(Run("pg_ctl", {"start", "-w", "-t", "60", "-D", cluster_dir_.string(), "-l",
+                                         (run_dir_ / "postgresql.log").string(), "-o", settings}));
+  return StartGuard();
+}
+
+absl::Status PostgresSupervisor::StartGuard() {
+  StopGuard();  // of the postmaster before, which a restart replaced
+  const auto pid_file = cluster_dir_ / "postmaster.pid";
+  std::ifstream in(pid_file);
+  pid_t postmaster = 0;
+  if (!(in >> postmaster) || postmaster <= 0) {
+    return absl::InternalError(absl::StrCat(pid_file.string(), " names no postmaster after pg_ctl start"));
+  }
+  int ends[2];
+  if (::pipe2(ends, O_CLOEXEC) != 0) return absl::InternalError(absl::StrCat("pipe: ", std::strerror(errno)));
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, ends[0], STDIN_FILENO);  // dup2 clears O_CLOEXEC
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
+  const ChildAttributes child;
+  std::vector<std::string> argv = {"/bin/sh", "-c", kGuardScript, "insdiag-postgres-guard",
+                                   std::to_string(postmaster), pid_file.string()};
+  std::vector<char*> raw;
+  for (auto& arg : argv) raw.push_back(arg.data());
+  raw.push_back(nullptr);
+  const int error = posix_spawn(&guard_pid_, raw[0], &actions, &child.attributes, raw.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(ends[0]);
+  if (error != 0) {
+    ::close(ends[1]);
+    guard_pid_ = 0;
+    return absl::InternalError(absl::StrCat("cannot start the PostgreSQL guard: ", std::strerror(error)));
+  }
+  guard_pipe_fd_ = ends[1];
+  return absl::OkStatus();
+}
+
+void PostgresSupervisor::StopGuard() {
+  if (guard_pipe_fd_ >= 0) ::close(guard_pipe_fd_);  // the guard reads the end
+  guard_pipe_fd_ = -1;
+  if (guard_pid_ > 0) {
+    int status = 0;
+    WaitFor(guard_pid_, &status);
+  }
+  guard_pid_ = 0;
 }
 
 void PostgresSupervisor::KeepClusterRunning() {
@@ -222,9 +316,15 @@ absl::Status PostgresSupervisor::Stop() {
   }
   stopping_.notify_all();
   if (watchdog_.joinable()) watchdog_.join();
-  return Run("pg_ctl", {"stop", "-w", "-t", "60", "-m", "fast", "-D", cluster_dir_.string()});
+  absl::Status stopped = Run("pg_ctl", {"stop", "-w", "-t", "60", "-m", "fast", "-D", cluster_dir_.string()});
+  StopGuard();  // after the stop: the guard then finds no postmaster.pid
+  return stopped;
 }
 
-PostgresSupervisor::~PostgresSupervisor() { (void)Stop(); }
+PostgresSupervisor::~PostgresSupervisor() {
+  (void)Stop();
+  StopGuard();
+  if (lock_fd_ >= 0) ::close(lock_fd_);
+}
 
 }  // namespace insdiag::server

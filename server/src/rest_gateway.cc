@@ -22,6 +22,7 @@
 #include "insdiag/server/status_mapping.h"
 #include "insdiag/v1/access.pb.h"
 #include "insdiag/v1/runs.pb.h"
+#include "request_edge.h"
 #include "rest_request.h"
 
 // Last: httplib.h pulls in <resolv.h>, whose `_res` macro breaks Eigen's headers.
@@ -188,6 +189,8 @@ void RestGateway::Register(httplib::Server& http) {
 }
 
 void RestGateway::Handle(const httplib::Request& request, httplib::Response& response) {
+  // Before anything reaches a call's metadata, a request field or a log.
+  if (absl::Status edge = CheckRequestEdge(request); !edge.ok()) return SendStatus(response, edge);
   if (request.method == "GET" && request.path == "/healthz") return Health(response);
   if (request.method == "GET" && request.path == kMetricsPath && render_metrics_)
     return Metrics(request, response);

@@ -44,6 +44,9 @@ absl::StatusOr<v1::ListRunsResponse> RunService::ListRuns(const v1::ListRunsRequ
   query.page_size = request.page_size();
   query.page_token = request.page_token();
   query.unit_serial = request.unit_serial();
+  // Summaries: a run's free metadata (up to 1 MiB each) is GetRun's, so that
+  // no page of runs outgrows a message whatever the runs hold.
+  query.with_extra_metadata = false;
   INSDIAG_ASSIGN_OR_RETURN(auto page, store_.List(query));
   v1::ListRunsResponse response;
   for (const auto& run : page.runs) *response.add_runs() = ToProto(run);

@@ -3,11 +3,17 @@
 #include <absl/strings/cord.h>
 #include <absl/strings/match.h>
 #include <absl/strings/str_cat.h>
+#include <absl/strings/str_format.h>
+
+#include <random>
 
 #include "google/rpc/error_details.pb.h"
 #include "google/rpc/status.pb.h"
 #include "insdiag/api/json.h"
 #include "insdiag/benchrun/bench_run_validation.h"
+#include "insdiag/benchrun/text_rules.h"
+#include "insdiag/kb/pg.h"
+#include "insdiag/server/server_log.h"
 
 namespace insdiag::server {
 namespace {
@@ -37,6 +43,19 @@ const char* CodeName(grpc::StatusCode code) {
     case grpc::StatusCode::UNAUTHENTICATED: return "UNAUTHENTICATED";
     default: return "UNKNOWN";
   }
+}
+
+// The codes that tell of the server's own trouble, not of the request: their
+// messages may hold SQL, paths or values no client should see.
+bool IsServersTrouble(absl::StatusCode code) {
+  return code == absl::StatusCode::kInternal || code == absl::StatusCode::kUnknown ||
+         code == absl::StatusCode::kDataLoss;
+}
+
+// A reference that finds an error's detail in the log: 8 hex digits.
+std::string NewErrorReference() {
+  thread_local std::mt19937 random(std::random_device{}());
+  return absl::StrFormat("%08x", random());
 }
 
 google::rpc::Status RpcStatusOf(const absl::Status& status) {
@@ -87,9 +106,23 @@ absl::Status WithErrorInfo(absl::Status status, const std::string& reason,
 
 grpc::Status ToGrpcStatus(const absl::Status& status) {
   if (status.ok()) return grpc::Status::OK;
-  const google::rpc::Status rpc = RpcStatusOf(status);
   // absl and gRPC share the canonical code numbers.
-  return grpc::Status(static_cast<grpc::StatusCode>(status.code()), std::string(status.message()),
+  const auto code = static_cast<grpc::StatusCode>(status.code());
+  if (IsServersTrouble(status.code())) {
+    const std::string reference = NewErrorReference();
+    Log(LogLevel::kError, absl::StrCat("error ", reference, " (", CodeName(code), "): ", status.message()));
+    return grpc::Status(code, absl::StrCat("internal error ", reference,
+                                           "; the server's log tells what happened under this reference"));
+  }
+  std::string message(status.message());
+  if (status.GetPayload(kb::kSqlErrorPayload).has_value()) {
+    // A refusal of the database's (a constraint): its words, not the statement.
+    if (const std::size_t sql = message.rfind(" ["); sql != std::string::npos) message.resize(sql);
+  }
+  if (benchrun::FindInvalidUtf8(message).has_value()) message = benchrun::Utf8Printable(message);
+  google::rpc::Status rpc = RpcStatusOf(status);
+  rpc.set_message(message);
+  return grpc::Status(code, message,
                       rpc.details_size() > 0 ? rpc.SerializeAsString() : std::string());
 }
 

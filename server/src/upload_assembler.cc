@@ -99,7 +99,8 @@ absl::StatusOr<AssembledUpload> UploadAssembler::Finish() {
   if (stage_ != Stage::kComplete) {
     return absl::InvalidArgumentError(
         absl::StrCat("the upload ended after ", run_.samples.size(),
-                     " samples without its sha256 message; nothing was stored"));
+                     " samples without its sha256 message, or a message of it did not parse (text fields "
+                     "must be UTF-8); nothing was stored"));
   }
   INSDIAG_RETURN_IF_ERROR(validator_->Finish());
   AssembledUpload done;

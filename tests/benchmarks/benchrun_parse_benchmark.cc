@@ -1,6 +1,9 @@
 // Speed of the bench-run CSV reader and writer on a 1-hour 50 Hz run
 // (180,000 rows, ~27 MB, numbers written like the factory exports: 10
 // significant digits). The server must parse such a run well under a second.
+// And the metadata: reading free keys is linear in their number (a hash set
+// finds duplicates), and a metadata bomb of 1k to 100k keys is refused at the
+// first key past the limit, in the same time whatever follows it.
 //
 //   build/tests/benchmarks/benchrun_parse_benchmark
 #include <benchmark/benchmark.h>
@@ -73,6 +76,47 @@ void BM_FormatBenchRun(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * kRows);
 }
 BENCHMARK(BM_FormatBenchRun)->Unit(benchmark::kMillisecond);
+
+// A run with `keys` free metadata lines and a few rows.
+std::string RunWithFreeKeys(std::int64_t keys) {
+  std::string text =
+      "# format: insdiag-bench-run/1\n# unit_serial: INS-2000-0042\n# unit_type: INS-2000\n"
+      "# site_latitude_deg: 55.5672\n# site_longitude_deg: 38.15\n# site_height_m: 125.0\n";
+  for (std::int64_t k = 0; k < keys; ++k) text += "# note_" + std::to_string(k) + ": bench note " + std::to_string(k) + "\n";
+  text += "t,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,ref_roll,ref_pitch,ref_yaw,temp\n";
+  for (int row = 1; row <= 10; ++row) text += std::to_string(0.01 * row) + ",0,0,0,0,0,-9.8154,0,0,0,24\n";
+  return text;
+}
+
+void BM_ReadFreeMetadata(benchmark::State& state) {
+  const std::string text = RunWithFreeKeys(state.range(0));
+  for (auto _ : state) {
+    absl::StatusOr<engine::BenchRun> run = ParseBenchRun(text, "keys.csv");
+    if (!run.ok()) {
+      state.SkipWithError(std::string(run.status().message()).c_str());
+      break;
+    }
+    benchmark::DoNotOptimize(run->metadata.extra.data());
+  }
+  state.SetComplexityN(state.range(0));
+}
+BENCHMARK(BM_ReadFreeMetadata)->RangeMultiplier(2)->Range(16, kMaxFreeMetadataKeys)->Complexity(benchmark::oN)
+    ->Unit(benchmark::kMicrosecond);
+
+void BM_RefuseMetadataBomb(benchmark::State& state) {
+  const std::string text = RunWithFreeKeys(state.range(0));
+  for (auto _ : state) {
+    const absl::Status refused = ParseBenchRun(text, "bomb.csv").status();
+    if (refused.ok()) {
+      state.SkipWithError("a metadata bomb was read");
+      break;
+    }
+    benchmark::DoNotOptimize(refused);
+  }
+  state.SetComplexityN(state.range(0));
+}
+BENCHMARK(BM_RefuseMetadataBomb)->Arg(1'000)->Arg(10'000)->Arg(30'000)->Arg(100'000)->Complexity()
+    ->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace insdiag::benchrun

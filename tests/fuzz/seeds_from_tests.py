@@ -9,6 +9,10 @@
                        literals of the server tests, in turn.
   json_request_fuzzer  (method byte, JSON): every JSON literal of the server
                        tests, for every method whose request has a body.
+  rest_gateway_fuzzer  ("FLAGS METHOD PATH?QUERY", headers, body): every
+                       REST path above as a GET with a bearer token, and
+                       every http rule's template with a body, POSTed with
+                       the server tests' JSON bodies in turn.
   bench_run_csv_fuzzer the CSV texts the reader tests spell out literally
                        (malformed ones included); the fixtures they build in
                        code come from the write_fuzz_seeds program.
@@ -87,7 +91,17 @@ def main():
                              if s.startswith("/") and "{" in s})
     rules = http_rules()
     templates = [t for t, _ in rules if t]
-    count = {"rest_request_fuzzer": 0, "json_request_fuzzer": 0, "bench_run_csv_fuzzer": 0}
+    count = {"rest_request_fuzzer": 0, "json_request_fuzzer": 0, "rest_gateway_fuzzer": 0,
+             "bench_run_csv_fuzzer": 0}
+    headers = "Authorization: Bearer fuzz-token\nContent-Type: application/json"
+    for i, url in enumerate(paths):
+        write(corpus, "rest_gateway_fuzzer", f"{'o' if i % 2 else '-'} GET {url}\n{headers}\n\n")
+        count["rest_gateway_fuzzer"] += 1
+    for index, (template, has_body) in enumerate(rules):
+        if template and has_body and bodies:
+            path = re.sub(r"\{[^}=]+=([^}]*)\}", lambda m: m.group(1).replace("*", "x"), template)
+            write(corpus, "rest_gateway_fuzzer", f"o POST {path}\n{headers}\n\n{bodies[index % len(bodies)]}")
+            count["rest_gateway_fuzzer"] += 1
     for i, url in enumerate(paths):
         path, _, query = url.partition("?")
         matched = [t for t in templates if template_regex(t).match(path)] or test_templates

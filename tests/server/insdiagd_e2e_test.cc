@@ -200,6 +200,59 @@ TEST_F(InsdiagdTest, ServesHealthAcceptsCliUploadAndStopsWithPostgresOnSigterm) 
   EXPECT_FALSE(ProcessAlive(postmaster)) << "PostgreSQL outlived the server";
 }
 
+// No PostgreSQL outlives its server, however the server ends: killed, or
+// aborted (SIGABRT, as an assertion does), or stopped. The guard stops the
+// postmaster; each restart on the same data directory serves every run
+// stored before.
+TEST_F(InsdiagdTest, KilledOrAbortedItsPostgresStopsTooAndARestartServesTheSameRuns) {
+  std::vector<std::string> stored_names;
+  for (const int signal : {SIGKILL, SIGABRT, SIGTERM}) {
+    auto server = StartServer();
+    const auto ports = AwaitListening(server, 60s);
+    ASSERT_TRUE(ports) << "insdiagd did not take the data directory over:\n" << server.Stderr();
+    std::string admin_token;
+    std::ifstream(dir_ / "data" / "admin-token") >> admin_token;
+    httplib::Client http("127.0.0.1", ports->http);
+    http.set_bearer_token_auth(admin_token.c_str());
+    for (const std::string& name : stored_names) {
+      auto kept = http.Get(("/v1/" + name).c_str());
+      ASSERT_TRUE(kept);
+      EXPECT_EQ(kept->status, 200) << name << " was lost across the restart";
+    }
+    auto upload = http.Post("/v1/runs:upload", benchrun::FormatBenchRun(SyntheticStaticRun(2'000, 50.0, signal)),
+                            "text/csv");
+    ASSERT_TRUE(upload);
+    ASSERT_EQ(upload->status, 200) << upload->body;
+    std::smatch name;
+    ASSERT_TRUE(std::regex_search(upload->body, name, std::regex(R"((runs/[0-9a-f-]{36}))")));
+    stored_names.push_back(name[1]);
+
+    std::ifstream pid_file(dir_ / "data" / "pg" / "postmaster.pid");
+    pid_t postmaster = 0;
+    ASSERT_TRUE(pid_file >> postmaster);
+    server.Signal(signal);
+    ASSERT_TRUE(server.Wait(60s)) << "insdiagd did not end on signal " << signal;
+    EXPECT_TRUE(PollUntil([&] { return !ProcessAlive(postmaster); }, 30s))
+        << "PostgreSQL outlived insdiagd ended by signal " << signal;
+  }
+}
+
+// One server per data directory: a second is refused, saying why, and the
+// first serves on.
+TEST_F(InsdiagdTest, ASecondServerOnTheSameDataDirectoryIsRefused) {
+  auto first = StartServer();
+  const auto ports = AwaitListening(first, 60s);
+  ASSERT_TRUE(ports) << "insdiagd did not come up:\n" << first.Stderr();
+  auto second = StartServer();
+  const auto exit_status = second.Wait(60s);
+  ASSERT_TRUE(exit_status) << "the second insdiagd kept running";
+  EXPECT_NE(*exit_status, 0);
+  EXPECT_THAT(second.Stderr(), HasSubstr("another insdiagd serves the data directory"));
+  EXPECT_TRUE(GrpcHealthy(ports->grpc));
+  first.Signal(SIGTERM);
+  EXPECT_TRUE(first.Wait(60s));
+}
+
 // A page left open on a queued analysis holds a watch that no worker will
 // end once the server stops: SIGTERM must end the watch, not wait for it.
 TEST_F(InsdiagdTest, StopsOnSigtermWhileAWatchWaitsOnAnAnalysisNoWorkerWillRun) {

@@ -6,11 +6,13 @@
 // `create` prints the new secret once: it cannot be read back later.
 // All take [--json] [--server ADDR] [--token TOKEN].
 #include <absl/strings/ascii.h>
+#include <absl/strings/str_cat.h>
 #include <absl/time/clock.h>
 #include <absl/time/time.h>
 
 #include <ostream>
 
+#include "insdiag/api/limits.h"
 #include "insdiag/client/unary.h"
 #include "insdiag/v1/access.grpc.pb.h"
 #include "server_output.h"
@@ -64,8 +66,11 @@ class TokensVerb final : public Verb {
     token->set_role(role);
     if (!expires_days_.empty()) {
       double days = 0;
-      if (auto s = ParseDouble(expires_days_, "--expires-days", &days); !s.ok() || days <= 0) {
-        return UsageError(err, Name(), "create: --expires-days must be a positive number");
+      if (auto s = ParseDouble(expires_days_, "--expires-days", &days);
+          !s.ok() || !(days > 0) || days > api::kMaxTokenLifetimeDays) {
+        return UsageError(err, Name(),
+                          absl::StrCat("create: --expires-days must be a number of days above 0 and at most ",
+                                       api::kMaxTokenLifetimeDays, " (ten years)"));
       }
       const absl::Time expiry = absl::Now() + absl::Hours(24.0 * days);
       token->mutable_expire_time()->set_seconds(absl::ToUnixSeconds(expiry));

@@ -8,6 +8,8 @@
 
 #include <grpcpp/support/client_interceptor.h>
 
+#include "insdiag/benchrun/text_rules.h"
+
 namespace insdiag::client {
 
 std::string DefaultServerAddress() {
@@ -84,8 +86,33 @@ absl::Status FromGrpc(const grpc::Status& status) {
   return absl::Status(static_cast<absl::StatusCode>(status.error_code()), status.error_message());
 }
 
+namespace {
+
+absl::Status CheckMetadataIsUtf8(const engine::BenchRunMetadata& metadata) {
+  const auto check = [](const std::string& text, const std::string& field) {
+    if (const auto bad = benchrun::FindInvalidUtf8(text)) {
+      return absl::InvalidArgumentError(absl::StrFormat("upload: %s: byte 0x%02X at byte %d is not UTF-8 text", field,
+                                                        static_cast<unsigned char>(text[*bad]), *bad + 1));
+    }
+    return absl::OkStatus();
+  };
+  if (absl::Status s = check(metadata.unit_serial, "metadata.unit_serial"); !s.ok()) return s;
+  if (absl::Status s = check(metadata.unit_type, "metadata.unit_type"); !s.ok()) return s;
+  for (std::size_t i = 0; i < metadata.extra.size(); ++i) {
+    const std::string field = absl::StrFormat("metadata.extra[%d]", i);
+    if (absl::Status s = check(metadata.extra[i].first, field); !s.ok()) return s;
+    if (absl::Status s = check(metadata.extra[i].second, field); !s.ok()) return s;
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
 absl::StatusOr<v1::Run> UploadRun(v1::RunService::StubInterface& stub, const engine::BenchRun& run,
                                   const UploadOptions& options) {
+  // Protobuf does not serialise a string that is not UTF-8 (it logs and
+  // sends what the server cannot parse): such text is refused here, by field.
+  if (absl::Status text = CheckMetadataIsUtf8(run.metadata); !text.ok()) return text;
   grpc::ClientContext context;
   context.set_deadline(std::chrono::system_clock::now() + options.deadline);
   v1::Run stored;

@@ -71,6 +71,9 @@ class BenchRunLineStream {
   std::string source_;
   std::string head_;  // the metadata and header lines, which the reader's names point into
   int line_number_ = 0;
+  std::size_t head_lines_ = 0;
+  // Blank lines the head may hold beside its metadata lines.
+  static constexpr std::size_t kMaxHeadBlankLines = 1024;
   std::unique_ptr<Reader> reader_;
 };
 

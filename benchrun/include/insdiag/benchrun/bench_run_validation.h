@@ -3,10 +3,11 @@
 // (spec: shared/spec/bench-run-format.md, "What the reader must refuse").
 //
 // Rules, in SI units as the run holds them:
-//   metadata   format == "insdiag-bench-run/1"; unit_serial not empty;
+//   metadata   format == "insdiag-bench-run/1"; unit_serial follows the
+//              serial rule (text_rules.h); unit_type UTF-8;
 //              site and datasheet values finite; |latitude| ≤ 90°;
 //              free (extra) keys are lower-case ASCII, not a spec key, unique,
-//              values on one line
+//              values UTF-8 on one line; the limits below
 //   samples    every value finite (temp only when the run has temperature)
 //              t_k > t_{k−1}
 //              |gyro_i| ≤ 35 rad/s, |acc_i| ≤ 500 m/s²           (per axis)
@@ -64,6 +65,18 @@ inline constexpr double kMaxLatitudeDeg = 90.0;
 inline constexpr double kGravityWindowS = 1.0;             // "the first second"
 inline constexpr double kGravityRelativeTolerance = 0.10;  // of local normal gravity
 inline constexpr double kMaxGapNominalIntervals = 5.0;
+
+// Size limits, checked before anything else is done with the text: no bench
+// writes more than a few dozen free keys of a line each, and each limit is far
+// above what a factory file holds (docs/API.md, "Limits"), while a run at the
+// limits stays about 1 MiB of metadata, well within a gRPC message.
+inline constexpr std::size_t kMaxFreeMetadataKeys = 256;
+inline constexpr std::size_t kMaxMetadataKeyBytes = 64;
+inline constexpr std::size_t kMaxMetadataValueBytes = 4096;
+// A model name ("INS-2000"); listings carry it for every run.
+inline constexpr std::size_t kMaxUnitTypeBytes = 128;
+// Any line of the CSV text: a metadata line at the key and value limits fits.
+inline constexpr std::size_t kMaxLineBytes = 8192;
 
 // Where a refused input is wrong. line/column are 1-based and 0 when not
 // applicable (e.g. a missing column names the header line and column 0; a gRPC

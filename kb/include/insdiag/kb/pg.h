@@ -20,6 +20,11 @@
 
 namespace insdiag::kb {
 
+// A statement's error carries this payload (its SQLSTATE) and ends its
+// message with " [the statement's first 80 characters]": for the server's
+// log, which the status mapping writes it to; clients never see the SQL.
+inline constexpr char kSqlErrorPayload[] = "type.googleapis.com/insdiag.kb.SqlError";
+
 // One statement parameter: SQL NULL, a text value, or raw bytes (bytea).
 class Param {
  public:

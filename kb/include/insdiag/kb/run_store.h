@@ -48,6 +48,9 @@ struct RunQuery {
   int page_size = 50;       // clamped to [1, 1000]
   std::string page_token;   // from RunPage::next_page_token
   std::string unit_serial;  // filter when not empty
+  // The free metadata (metadata.extra) of each run; false leaves it out: a
+  // listing of summaries, bounded in size whatever the runs hold.
+  bool with_extra_metadata = true;
 };
 
 class RunStore {

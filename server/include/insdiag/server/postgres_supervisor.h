@@ -5,9 +5,16 @@
 //   <data_dir>/run/   its unix socket and server log; no TCP listener
 //
 // As root, initdb and pg_ctl run as the `postgres` user (initdb refuses
-// root), which then owns both directories. A cluster left running by a
-// crashed server is adopted, and stopped when this supervisor stops. A
-// cluster that stops while the supervisor runs (a crash, a shutdown for want
+// root), which then owns both directories.
+//
+// One server per data directory: the supervisor holds an flock on
+// <data_dir>/insdiagd.lock while it lives, and a second server on the same
+// directory is refused. No PostgreSQL outlives its server: beside each
+// postmaster it starts a guard process, which asks that postmaster for a
+// fast shutdown when the server's end of a pipe closes, i.e. when the server
+// exits, killed or aborted included. A cluster found running at start (an
+// orphan of a server the guard could not stop: the guard itself killed) is
+// stopped and started again under a new guard. A cluster that stops while the supervisor runs (a crash, a shutdown for want
 // of disk space) is started again: the supervisor looks for it every
 // `restart_check_interval` and starts it when it finds it stopped twice in a
 // row; the server reconnects by itself.
@@ -22,6 +29,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <sys/types.h>
 #include <thread>
 #include <vector>
 
@@ -61,7 +69,16 @@ class PostgresSupervisor {
  private:
   explicit PostgresSupervisor(Options options);
   absl::Status Run(const std::string& tool, const std::vector<std::string>& args) const;
-  absl::Status StartCluster() const;
+  // pg_ctl start, then StartGuard.
+  absl::Status StartCluster();
+  // The flock on <data_dir>/insdiagd.lock; FAILED_PRECONDITION when another
+  // process holds it.
+  absl::Status LockDataDir();
+  // The guard of the postmaster postmaster.pid names, replacing the guard
+  // of an earlier postmaster.
+  absl::Status StartGuard();
+  // Closes the guard's pipe and reaps it.
+  void StopGuard();
   // The watchdog thread: starts the cluster again whenever it finds it stopped.
   void KeepClusterRunning();
 
@@ -75,6 +92,9 @@ class PostgresSupervisor {
   bool running_ = false;
   int restarts_ = 0;
   std::thread watchdog_;
+  int lock_fd_ = -1;
+  pid_t guard_pid_ = 0;
+  int guard_pipe_fd_ = -1;  // the write end; the guard reads to its end
 };
 
 }  // namespace insdiag::server
