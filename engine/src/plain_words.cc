@@ -94,30 +94,45 @@ std::string FindingLine(const EffectCandidate& c, const SensorChannel& channel, 
   return line;
 }
 
-std::string VerdictLine(const AnalysisReport& r, int findings) {
+// Where the observations fail: the channels and the first interval's start.
+struct Misfit {
+  std::string channels;
+  double first_s = 0.0;
+  int intervals = 0;
+};
+Misfit MisfitOf(const AnalysisReport& r, bool gradual_only) {
+  std::set<std::string> channels;
+  Misfit m{"", std::numeric_limits<double>::infinity(), 0};
+  for (const FaultInterval& f : r.faults) {
+    if (gradual_only && f.kind != FaultKind::kGradual) continue;
+    channels.insert(f.channel);
+    m.first_s = std::min(m.first_s, f.start_s);
+    ++m.intervals;
+  }
+  m.channels = absl::StrJoin(channels, ", ");
+  return m;
+}
+
+std::string VerdictLine(const AnalysisReport& r, int faults) {
   const std::string fit = absl::StrFormat("NIS %.3f, band %.3f–%.3f", r.nis_mean, r.nis_band_low, r.nis_band_high);
+  // FAULTY without a fault effect is the moving-window test's verdict: its
+  // gradual intervals say where.
+  const Misfit misfit = MisfitOf(r, /*gradual_only=*/r.verdict == Verdict::kFaulty);
   switch (r.verdict) {
     case Verdict::kGood:
       return absl::StrFormat("GOOD: the unit behaves as its error model says over the whole run (%s); no fault found.",
                              fit);
-    case Verdict::kOperable: {
-      std::set<std::string> channels;
-      double first_s = std::numeric_limits<double>::infinity();
-      for (const FaultInterval& f : r.faults) {
-        channels.insert(f.channel);
-        first_s = std::min(first_s, f.start_s);
-      }
-      if (r.faults.empty()) {
+    case Verdict::kOperable:
+      if (misfit.intervals == 0) {
         return absl::StrFormat("OPERABLE: no sensor fault stands, but the model's fit is outside its band (%s).", fit);
       }
       return absl::StrFormat(
           "OPERABLE: no sensor fault stands, but the model misfits in %d interval(s) on %s, the first at %.0f s (%s).",
-          static_cast<int>(r.faults.size()), absl::StrJoin(channels, ", "), first_s, fit);
-    }
+          misfit.intervals, misfit.channels, misfit.first_s, fit);
     case Verdict::kFaulty:
-      return findings > 0
-                 ? absl::StrFormat("FAULTY: %d finding(s) the model without them cannot explain (%s):", findings, fit)
-                 : absl::StrFormat("FAULTY: the model fails gradually on the observations (%s); see where below.", fit);
+      if (faults > 0) return absl::StrFormat("FAULTY: %d sensor fault(s) found (%s):", faults, fit);
+      return absl::StrFormat("FAULTY: the model fails gradually on %s from %.0f s (%s):", misfit.channels,
+                             misfit.first_s, fit);
   }
   return "";
 }
@@ -126,36 +141,56 @@ std::string VerdictLine(const AnalysisReport& r, int findings) {
 
 std::vector<std::string> PlainWordsVerdict(const AnalysisReport& report, const BenchRun& run,
                                            double family_wise_alpha) {
+  // Faults first: changes at an onset, one a sensor axis (a step and a ramp
+  // on one axis are two readings of one change), the most significant.
   std::vector<std::string> findings;
-  std::set<std::string> modules;
+  std::set<std::string> faulty_modules;
+  std::vector<const EffectCandidate*> missing;
   for (const EffectCandidate& c : report.effect_candidates) {
     SensorChannel channel;
     if (!c.SignificantAt(family_wise_alpha) || !ChannelOf(c.name, channel)) continue;
-    // One finding a sensor axis, its most significant: a step and a ramp on
-    // one axis are two readings of one change.
-    if (modules.count(SensorName(channel)) > 0) continue;
-    if (static_cast<int>(findings.size()) == kMaxFindings) break;
+    if (!c.onset_s.has_value()) {
+      missing.push_back(&c);
+      continue;
+    }
+    if (faulty_modules.count(SensorName(channel)) > 0 || static_cast<int>(findings.size()) == kMaxFindings) continue;
     findings.push_back("  " + FindingLine(c, channel, run));
-    modules.insert(SensorName(channel));
+    faulty_modules.insert(SensorName(channel));
   }
-  std::vector<std::string> lines = {VerdictLine(report, static_cast<int>(findings.size()))};
+  const int faults = static_cast<int>(findings.size());
+  // A gradual failure with no fault effect behind it: where the filter put it.
+  if (faults == 0 && report.verdict == Verdict::kFaulty && !report.localisation.empty()) {
+    const Localisation& l = report.localisation.front();
+    findings.push_back(absl::StrFormat("  the filter localises it to %s at %.0f s (p %.1g)", l.state, l.time_s,
+                                       l.p_value));
+  }
+  // Then what the model lacks: constants the scan finds, which the loop adds.
+  for (const EffectCandidate* c : missing) {
+    if (static_cast<int>(findings.size()) == kMaxFindings) break;
+    SensorChannel channel;
+    ChannelOf(c->name, channel);
+    findings.push_back("  " + FindingLine(*c, channel, run));
+  }
+
+  std::vector<std::string> lines = {VerdictLine(report, faults)};
   lines.insert(lines.end(), findings.begin(), findings.end());
-  switch (report.verdict) {
-    case Verdict::kGood:
-      lines.push_back("To do: nothing; the unit passes.");
-      break;
-    case Verdict::kOperable:
-      lines.push_back("To do: check the bench at those times (a knock, motion, power), and test again if they recur.");
-      break;
-    case Verdict::kFaulty:
-      lines.push_back(modules.empty()
-                          ? "To do: read the failure intervals and the localised sensors below, and test again."
-                          : absl::StrFormat("To do: check the %s module%s (the change is in %s raw samples), then "
-                                            "test again to confirm.",
-                                            absl::StrJoin(modules, " and "), modules.size() > 1 ? "s" : "",
-                                            modules.size() > 1 ? "their" : "its"));
-      break;
+  std::string to_do;
+  if (faults > 0) {
+    to_do = absl::StrFormat("check the %s module%s (the change is in %s raw samples), then test again to confirm",
+                            absl::StrJoin(faulty_modules, " and "), faulty_modules.size() > 1 ? "s" : "",
+                            faulty_modules.size() > 1 ? "their" : "its");
+  } else if (!missing.empty()) {
+    to_do = absl::StrFormat("add %s to the model (insdiag analyze --add %s, or Add on the page) and see whether the "
+                            "misfit goes",
+                            missing.front()->name, missing.front()->name);
+  } else if (report.verdict == Verdict::kFaulty) {
+    to_do = "read where the model fails below, check the bench at those times, and test again";
+  } else if (report.verdict == Verdict::kOperable) {
+    to_do = "check the bench at those times (a knock, motion, power), and test again if they recur";
+  } else {
+    to_do = "nothing; the unit passes";
   }
+  lines.push_back("To do: " + to_do + ".");
   lines.resize(std::min<std::size_t>(lines.size(), kPlainWordsMaxLines));
   return lines;
 }

@@ -47,7 +47,7 @@ TEST(PlainWords, AFaultyUnitsStepIsStatedWithTheRawMinuteMeansAndTheModuleToChec
   report.effect_candidates = {Step(1e-9), Step(0.5)};
   const std::vector<std::string> lines = PlainWordsVerdict(report, StepRun(), 0.01);
   ASSERT_EQ(lines.size(), 3u);  // the verdict, the one significant finding, what to do
-  EXPECT_THAT(lines[0], StartsWith("FAULTY: 1 finding(s)"));
+  EXPECT_THAT(lines[0], StartsWith("FAULTY: 1 sensor fault(s) found"));
   EXPECT_THAT(lines[1], HasSubstr("gyro x bias stepped by 2 °/h at 300 s"));
   EXPECT_THAT(lines[1], HasSubstr("read 1.0 °/h in the minute before and 3.0 °/h in the minute after, a change of 2 °/h"));
   EXPECT_THAT(lines[2], HasSubstr("check the gyro x module"));
@@ -72,6 +72,22 @@ TEST(PlainWords, NeverMoreThanFiveLinesAndAGoodUnitNeedsNothing) {
   ASSERT_EQ(lines.size(), 2u);
   EXPECT_THAT(lines[0], StartsWith("GOOD: "));
   EXPECT_THAT(lines[1], HasSubstr("nothing"));
+}
+
+// A constant the model lacks is no fault: the plain words say what to add,
+// the loop's next step.
+TEST(PlainWords, AMissingConstantIsToBeAddedNotAModuleToCheck) {
+  AnalysisReport report;
+  report.verdict = Verdict::kOperable;
+  EffectCandidate c = Step(1e-6);
+  c.name = "acc_turn_on_bias.x";
+  c.onset_s.reset();
+  report.effect_candidates = {c};
+  const std::vector<std::string> lines = PlainWordsVerdict(report, StepRun(), 0.01);
+  ASSERT_EQ(lines.size(), 3u);
+  EXPECT_THAT(lines[1], HasSubstr("acc_turn_on_bias.x"));
+  EXPECT_THAT(lines[2], HasSubstr("--add acc_turn_on_bias.x"));
+  EXPECT_THAT(lines[2], ::testing::Not(HasSubstr("module")));
 }
 
 }  // namespace

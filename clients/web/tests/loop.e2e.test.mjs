@@ -207,6 +207,9 @@ test('upload a run with a hidden effect, add it, and see the error fall', { skip
   const wholeRun = await info.innerText();
   assert.match(wholeRun, /min\/max envelope in \d+ columns/);
   const over = page.locator('#plot-residual .u-over');
+  // A user scrolls to the plot before dragging on it: mouse events land on
+  // the viewport only.
+  await over.scrollIntoViewIfNeeded();
   const box = await over.boundingBox();
   await page.mouse.move(box.x + box.width * 0.40, box.y + box.height / 2);
   await page.mouse.down();
