@@ -7,8 +7,10 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <set>
 
+#include "insdiag/engine/model/parameter_key.h"
 #include "insdiag/engine/monitor/monitoring.h"
 
 namespace insdiag::engine {
@@ -25,19 +27,26 @@ struct SensorChannel {
   int axis = 0;
 };
 
-// "gyro_bias_step.x" → gyro x; false for a name on no sensor axis.
+// "gyro_bias_step.x" → gyro x; false for a name on no single sensor axis.
 bool ChannelOf(const std::string& name, SensorChannel& channel) {
-  const bool gyro = name.starts_with("gyro");
-  if (!gyro && !name.starts_with("acc")) return false;
-  const char axis = name.empty() ? ' ' : name.back();
-  if (axis < 'x' || axis > 'z' || name.size() < 2 || name[name.size() - 2] != '.') return false;
-  channel = {gyro, axis - 'x'};
+  const std::optional<ParameterKey> key = ParseParameterKey(name);
+  if (!key.has_value() || !key->sensor.has_value() || key->axes.size() != 1 || key->axis < 0) return false;
+  channel = {*key->sensor == Sensor::kGyro, key->axis};
   return true;
 }
 
+// A quality engineer's units: °/h for a gyro, mg for an accelerometer.
+struct ReadingUnit {
+  double per_si;
+  const char* name;
+};
+ReadingUnit UnitOf(const SensorChannel& c) {
+  return c.gyro ? ReadingUnit{kDegPerHourPerRadPerS, "°/h"} : ReadingUnit{1e3 / kStandardGravityMps2, "mg"};
+}
+
 std::string Reading(const SensorChannel& c, double si) {
-  return c.gyro ? absl::StrFormat("%.3g °/h", si * kDegPerHourPerRadPerS)
-                : absl::StrFormat("%.3g mg", si / kStandardGravityMps2 * 1e3);
+  const ReadingUnit unit = UnitOf(c);
+  return absl::StrFormat("%.3g %s", si * unit.per_si, unit.name);
 }
 
 // The raw mean of a channel over [from, to) s, NaN where no sample lies.
@@ -60,9 +69,9 @@ std::string SensorName(const SensorChannel& c) {
 // a 0.6 mg step on a 964 mg reading needs two.
 std::string RawChange(const SensorChannel& c, double before_si, double after_si, const char* before_label,
                       const char* after_label) {
-  const double scale = c.gyro ? kDegPerHourPerRadPerS : 1e3 / kStandardGravityMps2;
-  const char* unit = c.gyro ? "°/h" : "mg";
-  const double before = before_si * scale, after = after_si * scale, change = after - before;
+  const ReadingUnit reading = UnitOf(c);
+  const char* unit = reading.name;
+  const double before = before_si * reading.per_si, after = after_si * reading.per_si, change = after - before;
   const int decimals =
       change != 0.0 ? std::clamp(1 - static_cast<int>(std::floor(std::log10(std::abs(change)))), 0, 6) : 1;
   return absl::StrFormat("its raw samples read %.*f %s %s and %.*f %s %s, a change of %.2g %s", decimals, before, unit,
