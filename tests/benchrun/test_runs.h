@@ -138,4 +138,29 @@ inline ::testing::AssertionResult IsRefusalAt(const absl::Status& status,
   return ::testing::AssertionSuccess();
 }
 
+// The same run to the bit: metadata, and every sample's fields.
+inline void ExpectSameRun(const engine::BenchRun& actual, const engine::BenchRun& expected) {
+  EXPECT_EQ(actual.metadata.format, expected.metadata.format);
+  EXPECT_EQ(actual.metadata.unit_serial, expected.metadata.unit_serial);
+  EXPECT_EQ(actual.metadata.unit_type, expected.metadata.unit_type);
+  EXPECT_EQ(actual.metadata.site.latitude_rad, expected.metadata.site.latitude_rad);
+  EXPECT_EQ(actual.metadata.site.longitude_rad, expected.metadata.site.longitude_rad);
+  EXPECT_EQ(actual.metadata.site.height_m, expected.metadata.site.height_m);
+  EXPECT_EQ(actual.metadata.datasheet, expected.metadata.datasheet);
+  EXPECT_EQ(actual.metadata.extra, expected.metadata.extra);
+  EXPECT_EQ(actual.has_temperature, expected.has_temperature);
+  ASSERT_EQ(actual.samples.size(), expected.samples.size());
+  for (std::size_t i = 0; i < actual.samples.size(); ++i) {
+    const engine::ImuSample& a = actual.samples[i];
+    const engine::ImuSample& e = expected.samples[i];
+    ASSERT_EQ(a.t_s, e.t_s) << "sample " << i;
+    ASSERT_EQ(a.gyro_rad_s, e.gyro_rad_s) << "sample " << i;
+    ASSERT_EQ(a.acc_mps2, e.acc_mps2) << "sample " << i;
+    ASSERT_EQ(a.ref_rpy_rad, e.ref_rpy_rad) << "sample " << i;
+    if (expected.has_temperature) {
+      ASSERT_EQ(a.temp_degc, e.temp_degc) << "sample " << i;
+    }
+  }
+}
+
 }  // namespace insdiag::benchrun::testing
