@@ -161,9 +161,10 @@ ReferenceNoiseExcess ScreenReferenceNoise(const ForwardPass& fw, double alpha,
   ReferenceNoiseExcess out;
   const int K = fw.epochs();
   if (K == 0) return out;
-  for (int group = 0; group < 2; ++group) {  // position channels, then velocity channels
+  for (size_t group = 0; group < kReferenceChannelGroups.size(); ++group) {
+    const ReferenceChannelGroup& g = kReferenceChannelGroups[group];
     double nis = 0.0, excess = 0.0, lag1 = 0.0;
-    for (int c = 3 * group; c < 3 * group + 3; ++c) {
+    for (int c = g.first_channel; c < g.first_channel + g.channel_count; ++c) {
       double previous = 0.0;
       for (int k = 0; k < K; ++k) {
         const double nu = fw.innovation(k, c);
@@ -175,7 +176,7 @@ ReferenceNoiseExcess ScreenReferenceNoise(const ForwardPass& fw, double alpha,
         excess += nu * nu - S;  // mean(ν²) − mean(S) = r̂ − r
       }
     }
-    const int n = 3 * K;
+    const int n = g.channel_count * K;
     if (nis / n <= stats::ChiSquareQuantile(1.0 - alpha, n) / n) continue;
     // Reference noise the model lacks is white: a filter that trusts the
     // reference too much overreacts, and its innovations alternate (lag-one
@@ -185,11 +186,10 @@ ReferenceNoiseExcess ScreenReferenceNoise(const ForwardPass& fw, double alpha,
     // covariance matching presumes the model's structure is right).
     const double rho1 = lag1 / nis;
     if (rho1 > stats::NormalQuantile(1.0 - alpha) / std::sqrt(static_cast<double>(n))) continue;
-    const double sigma =
-        group == 0 ? model.reference.position_sigma_m : model.reference.velocity_sigma_mps;
+    const double sigma = model.reference.*g.sigma;
     const double r = sigma * sigma + excess / n;
     if (!(r > sigma * sigma)) continue;
-    (group == 0 ? out.position_sigma_m : out.velocity_sigma_mps) = std::sqrt(r);
+    out.matched_sigma[group] = std::sqrt(r);
   }
   return out;
 }
