@@ -154,8 +154,10 @@ void RetuneUnresolvedNoise(const RunContext& c, const std::optional<ident::Allan
     std::string terms;
     for (const std::string& t : g.terms) terms += (terms.empty() ? "" : ", ") + t;
     const bool seeded = g.name.ends_with("seed");
+    const bool white = g.name.find("white") != std::string::npos;
     notes.push_back("re-tuned by maximum likelihood of the innovations, " + g.name + " (" + terms +
-                    (seeded ? ", seeded by the Allan fit, not resolved by correlation processing): "
+                    (seeded && white ? ", resolved by the Allan fit of the raw samples): "
+                     : seeded        ? ", seeded by the Allan fit, not resolved by correlation processing): "
                             : ", set from Allan bounds): ") +
                     absl::StrFormat("× %.3g (SE of ln: %.2g)%s", g.scale, g.log_std_error,
                                     g.at_limit ? ", at the search range's limit" : ""));

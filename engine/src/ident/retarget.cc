@@ -195,7 +195,8 @@ ReferenceNoiseExcess ScreenReferenceNoise(const ForwardPass& fw, double alpha,
 }
 
 bool UnresolvedNoise::Any() const {
-  for (const auto* flags : {&gyro_white, &acc_white, &gyro_drift, &acc_drift, &gyro_drift_seed, &acc_drift_seed}) {
+  for (const auto* flags : {&gyro_white, &acc_white, &gyro_drift, &acc_drift, &gyro_drift_seed, &acc_drift_seed,
+                            &gyro_white_seed, &acc_white_seed}) {
     for (bool f : *flags) {
       if (f) return true;
     }
@@ -209,7 +210,9 @@ UnresolvedNoise UnresolvedAllanTerms(const AllanResult& allan) {
     const auto axis = static_cast<size_t>(ch.axis);
     const bool gyro = ch.sensor == Sensor::kGyro;
     // The same tests as ErrorModelFromAllan's branches.
-    (gyro ? u.gyro_white : u.acc_white)[axis] = !ch.fit[AllanParameter::kWhiteDensity].included;
+    const bool white_resolved = ch.fit[AllanParameter::kWhiteDensity].included;
+    (gyro ? u.gyro_white : u.acc_white)[axis] = !white_resolved;
+    (gyro ? u.gyro_white_seed : u.acc_white_seed)[axis] = white_resolved;
     const bool bound = !ch.fit[AllanParameter::kMarkovSigma].included &&
                        !ch.fit[AllanParameter::kBiasInstability].included &&
                        !ch.fit[AllanParameter::kRateRandomWalk].included;
@@ -266,6 +269,8 @@ std::vector<Group> GroupsToScale(ErrorModel& m, const UnresolvedNoise& which,
   add_group("acc drift", which.acc_drift, Sensor::kAccelerometer, true, bound);
   add_group("gyro drift seed", which.gyro_drift_seed, Sensor::kGyro, true, seed);
   add_group("acc drift seed", which.acc_drift_seed, Sensor::kAccelerometer, true, seed);
+  add_group("gyro white seed", which.gyro_white_seed, Sensor::kGyro, false, seed);
+  add_group("acc white seed", which.acc_white_seed, Sensor::kAccelerometer, false, seed);
   return groups;
 }
 

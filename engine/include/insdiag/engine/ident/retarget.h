@@ -117,6 +117,12 @@ struct UnresolvedNoise {
   // it where it resolves it, and nothing else re-tunes it.
   std::array<bool, 3> gyro_drift_seed = {false, false, false};
   std::array<bool, 3> acc_drift_seed = {false, false, false};
+  // White densities the Allan fit resolved. They too are seeds: the raw
+  // samples of a unit that rocks or sways carry the motion its gyros
+  // measured, which the Allan curve reads as noise and the filter's
+  // innovations do not show.
+  std::array<bool, 3> gyro_white_seed = {false, false, false};
+  std::array<bool, 3> acc_white_seed = {false, false, false};
 
   bool Any() const;
 };
