@@ -71,9 +71,21 @@ struct RawSampleConstant {
   double std_error = 0.0;
 };
 
+// A still segment's samples of the run, [first_sample, end_sample).
+struct StillStretch {
+  std::size_t first_sample = 0;
+  std::size_t end_sample = 0;
+};
+
 struct RawSampleEvidence {
   std::vector<RawSampleChange> changes;
   std::vector<RawSampleConstant> constants;  // none when the run has no still segment
+  // The still segments and what a look at the raw samples across a fault's
+  // onset needs of them (analysis/unrecorded_turns.h): the sample interval
+  // and the gyros' largest white density, the integrated rate's noise.
+  std::vector<StillStretch> still;
+  double sample_interval_s = 0.0;
+  double gyro_white_density = 0.0;
 };
 
 // The constants of `evidence` that measure what a candidate of `model` would:
