@@ -248,7 +248,6 @@ RawSampleEvidence RawSampleEvidenceOf(const BenchRun& run,
   if (!allan.has_value()) return out;
   for (const ident::StaticSegment& s : allan->segments) out.still.push_back({s.first_sample, s.end_sample});
   out.sample_interval_s = allan->tau0_s;
-  out.gyro_white_density = a_priori.gyro.white_noise_density.maxCoeff();
   for (const ident::AllanChannel& ch : allan->channels) {
     for (const ident::RateJump& j : ch.jumps) out.changes.push_back(UntiltedJump(run, *allan, ch, j, a_priori));
     for (const ident::RateRamp& r : ch.ramps) {

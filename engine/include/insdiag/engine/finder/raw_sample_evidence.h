@@ -80,12 +80,10 @@ struct StillStretch {
 struct RawSampleEvidence {
   std::vector<RawSampleChange> changes;
   std::vector<RawSampleConstant> constants;  // none when the run has no still segment
-  // The still segments and what a look at the raw samples across a fault's
-  // onset needs of them (analysis/unrecorded_turns.h): the sample interval
-  // and the gyros' largest white density, the integrated rate's noise.
+  // The still segments and their sample interval, for a look at the raw
+  // samples across a step's onset (analysis/steps_in_raw_samples.h).
   std::vector<StillStretch> still;
   double sample_interval_s = 0.0;
-  double gyro_white_density = 0.0;
 };
 
 // The constants of `evidence` that measure what a candidate of `model` would:

@@ -1,4 +1,4 @@
-#include "analysis/unrecorded_turns.h"
+#include "analysis/steps_in_raw_samples.h"
 
 #include <absl/strings/str_format.h>
 
@@ -12,17 +12,12 @@
 namespace insdiag::engine::pipeline {
 namespace {
 
-struct WindowDifference {
-  double reading = 0.0;            // the axis' mean after less before (accelerometers untilted)
-  Eigen::Vector3d turn_rad = Eigen::Vector3d::Zero();  // mean angle after less before
-};
-
 // The difference of the means over [j − w, j) and [j, j + w) of one sensor
-// axis, and of the gyros' angle integrated from j − w with `mean_rate` (Earth's
-// rate and the biases over the stretch) taken out. An accelerometer's is
-// untilted: less the change −δθ × f̄ that the turn δθ makes of the force f̄
-// before it.
-WindowDifference AcrossSample(const BenchRun& run, std::size_t j, std::size_t w, const Eigen::Vector3d& mean_rate,
+// axis. An accelerometer's is untilted: less the change −δθ × f̄ that the
+// turn δθ between the windows' mean angles makes of the force f̄ before it,
+// the angle integrated from j − w with `mean_rate` (Earth's rate and the
+// biases over the stretch) taken out.
+double AcrossSample(const BenchRun& run, std::size_t j, std::size_t w, const Eigen::Vector3d& mean_rate,
                               double tau0_s, Sensor sensor, int axis) {
   Eigen::Vector3d angle = Eigen::Vector3d::Zero(), angle_before = Eigen::Vector3d::Zero(),
                   angle_after = Eigen::Vector3d::Zero(), force_before = Eigen::Vector3d::Zero();
@@ -41,11 +36,9 @@ WindowDifference AcrossSample(const BenchRun& run, std::size_t j, std::size_t w,
     }
   }
   const double n = static_cast<double>(w);
-  WindowDifference d;
-  d.turn_rad = (angle_after - angle_before) / n;
-  d.reading = (after - before) / n;
-  if (sensor == Sensor::kAccelerometer) d.reading -= (-d.turn_rad.cross(force_before / n))[axis];
-  return d;
+  const Eigen::Vector3d turn_rad = (angle_after - angle_before) / n;
+  const double change = (after - before) / n;
+  return sensor == Sensor::kAccelerometer ? change - (-turn_rad.cross(force_before / n))[axis] : change;
 }
 
 }  // namespace
@@ -68,14 +61,14 @@ std::optional<RawAcrossOnset> RawSamplesAcrossOnset(const BenchRun& run, const R
   for (std::size_t i = stretch->first_sample; i < stretch->end_sample; ++i) mean_rate += run.samples[i].gyro_rad_s;
   mean_rate /= static_cast<double>(stretch->end_sample - stretch->first_sample);
   const Sensor sensor = term.family->sensor;
-  const WindowDifference centre = AcrossSample(run, k, w, mean_rate, tau0_s, sensor, term.axis);
+  const double centre = AcrossSample(run, k, w, mean_rate, tau0_s, sensor, term.axis);
   // The same difference at the stretch's other positions, two windows or
   // more from the onset, gives its standard error.
   double sum_squares = 0.0;
   int positions = 0;
   for (std::size_t j = stretch->first_sample + w; j + w <= stretch->end_sample; j += w) {
     if (j + 2 * w > k && j < k + 2 * w) continue;
-    const double d = AcrossSample(run, j, w, mean_rate, tau0_s, sensor, term.axis).reading;
+    const double d = AcrossSample(run, j, w, mean_rate, tau0_s, sensor, term.axis);
     sum_squares += d * d;
     ++positions;
   }
@@ -83,18 +76,13 @@ std::optional<RawAcrossOnset> RawSamplesAcrossOnset(const BenchRun& run, const R
   if (positions < kFewestPositions) return std::nullopt;
   RawAcrossOnset out;
   out.window_s = static_cast<double>(w) * tau0_s;
-  out.turn_rad = centre.turn_rad.cwiseAbs().maxCoeff();
-  // The difference of adjacent window means of an angle random walk of
-  // density N has variance N²·2T/3 (its kernel is a triangle of height 1 over 2T).
-  const double turn_noise_rad = raw.gyro_white_density * std::sqrt(2.0 * out.window_s / 3.0);
-  out.turn_resolved = turn_noise_rad > 0.0 && out.turn_rad > kResolvedTurnStdErrors * turn_noise_rad;
-  out.jump = centre.reading;
+  out.jump = centre;
   out.jump_std_error = std::sqrt(sum_squares / positions);
   return out;
 }
 
-void WeighStepsWhereTheUnitTurned(std::vector<EffectCandidate>& faults, const BenchRun& run,
-                                  const RawSampleEvidence& raw, double window_s, double alpha) {
+void WeighStepsByTheirRawSamples(std::vector<EffectCandidate>& faults, const BenchRun& run,
+                                 const RawSampleEvidence& raw, double window_s, double alpha) {
   const double z = stats::NormalQuantile(1.0 - alpha / 2.0);
   for (EffectCandidate& c : faults) {
     if (c.source != "GLR" || !c.identifiable || !c.onset_s.has_value()) continue;
@@ -103,23 +91,22 @@ void WeighStepsWhereTheUnitTurned(std::vector<EffectCandidate>& faults, const Be
     const EffectTerm& term = terms->front();
     if (term.family->regressor != Regressor::kStep) continue;
     const auto across = RawSamplesAcrossOnset(run, raw, term, *c.onset_s, window_s);
-    if (!across.has_value() || !across->turn_resolved) continue;
+    if (!across.has_value()) continue;
     const bool shows = std::abs(across->jump) > z * across->jump_std_error;
     const bool agrees = std::abs(c.estimate - across->jump) <= z * std::hypot(across->jump_std_error, c.std_error);
     const std::string what = absl::StrFormat(
-        "the unit turned by %.2g mrad across %.0f s, which the reference did not record; its raw samples over "
-        "%.0f s either side%s change by %.3g ± %.2g %s",
-        across->turn_rad * 1e3, *c.onset_s, across->window_s,
-        term.family->sensor == Sensor::kAccelerometer ? ", untilted," : "", across->jump, across->jump_std_error,
-        c.unit);
+        "its raw samples over %.0f s either side of %.0f s%s change by %.3g ± %.2g %s", across->window_s,
+        *c.onset_s, term.family->sensor == Sensor::kAccelerometer ? ", untilted by the turn the gyros measured," : "",
+        across->jump, across->jump_std_error, c.unit);
     if (shows && agrees) {
       c.seen_in_raw_samples = true;
       c.note += "; " + what;
       continue;
     }
     c.identifiable = false;
-    c.note = what + (shows ? ", not the step's size" : ", no more than their scatter") +
-             ": the step in the navigation errors is the motion's, not the sensor's; " + c.note;
+    c.note = what + (shows ? ", not the step's size" : ", no more than their scatter elsewhere in the stretch") +
+             ": not a change of the sensor the samples show (a knock or a rocking mount turns the unit as a "
+             "step would seem to); " + c.note;
   }
 }
 
