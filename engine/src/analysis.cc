@@ -246,6 +246,8 @@ RawSampleEvidence RawSampleEvidenceOf(const BenchRun& run,
                                       const ErrorModel& a_priori, const AnalysisOptions& options) {
   RawSampleEvidence out;
   if (!allan.has_value()) return out;
+  for (const ident::StaticSegment& s : allan->segments) out.still.push_back({s.first_sample, s.end_sample});
+  out.sample_interval_s = allan->tau0_s;
   for (const ident::AllanChannel& ch : allan->channels) {
     for (const ident::RateJump& j : ch.jumps) out.changes.push_back(UntiltedJump(run, *allan, ch, j, a_priori));
     for (const ident::RateRamp& r : ch.ramps) {

@@ -33,8 +33,11 @@ ErrorModel RandomModel(std::mt19937_64& rng) {
     t->white_noise_density = Eigen::Vector3d(u(rng), u(rng), u(rng)) * 1e-6;
     t->quantization = Eigen::Vector3d(u(rng), 0.0, u(rng)) * 1e-7;
   }
-  m.reference = {.attitude_sigma_rad = 5e-6 * u(rng), .position_sigma_m = 1e-6 * u(rng),
-                 .velocity_sigma_mps = 1e-7 * u(rng)};
+  m.reference = {.attitude_sigma_rad = 5e-6 * u(rng),
+                 .horizontal_position_sigma_m = 1e-6 * u(rng),
+                 .vertical_position_sigma_m = 2e-6 * u(rng),
+                 .horizontal_velocity_sigma_mps = 1e-7 * u(rng),
+                 .vertical_velocity_sigma_mps = 2e-7 * u(rng)};
   ModelEffect scale = EffectOrDie("gyro_scale_factor.z");
   scale.prior_sigma[0] = 1e-5 * u(rng);
   ModelEffect harmonic = EffectOrDie("gyro_yaw_harmonic.x");
@@ -77,6 +80,7 @@ TEST(ModelParameters, SettingThemAllOnAnEmptyModelGivesTheModelBack) {
 }
 
 TEST(ModelParameters, NameTheirUnits) {
+  EXPECT_EQ(ParameterUnit("reference.vertical_position_sigma"), "m");
   EXPECT_EQ(ParameterUnit("reference.position_sigma"), "m");
   EXPECT_EQ(ParameterUnit("gyro_bias_step.x.onset"), "s");
   EXPECT_EQ(ParameterUnit("gyro_bias_gm.x.sigma"), "rad/s");
@@ -140,9 +144,22 @@ TEST(ModelParameters, AFieldIsSplitOffANameAndPutBackTheSameWay) {
   EXPECT_EQ(read_back, 2);
 }
 
+// Models stored before the reference's accuracy was stated across and
+// along the vertical name one σ for both; they load with it on both.
+TEST(ModelParameters, OneReferenceSigmaOfAStoredModelSetsBothAxes) {
+  ErrorModel m;
+  ASSERT_TRUE(SetParameter("reference.position_sigma", 2e-3, m).ok());
+  ASSERT_TRUE(SetParameter("reference.velocity_sigma", 3e-4, m).ok());
+  EXPECT_EQ(m.reference.horizontal_position_sigma_m, 2e-3);
+  EXPECT_EQ(m.reference.vertical_position_sigma_m, 2e-3);
+  EXPECT_EQ(m.reference.horizontal_velocity_sigma_mps, 3e-4);
+  EXPECT_EQ(m.reference.vertical_velocity_sigma_mps, 3e-4);
+}
+
 TEST(ModelParameters, RefuseWhatTheyCannotBe) {
   ErrorModel m;
   EXPECT_FALSE(SetParameter("reference.position_sigma", 0.0, m).ok());
+  EXPECT_FALSE(SetParameter("reference.vertical_velocity_sigma", -1.0, m).ok());
   EXPECT_FALSE(SetParameter("gyro_scale_factor.z.onset", 10.0, m).ok()) << "a constant effect has no onset";
   EXPECT_FALSE(SetParameter("reference.heading", 1.0, m).ok());
   EXPECT_TRUE(m == ErrorModel{}) << "a refused parameter changed the model";

@@ -11,6 +11,7 @@
 #include <optional>
 
 #include "analysis/fault_passes.h"
+#include "analysis/steps_in_raw_samples.h"
 #include "insdiag/engine/finder/effect_finder.h"
 #include "insdiag/engine/finder/fault_findings.h"
 #include "insdiag/engine/model/parameter_field.h"
@@ -505,6 +506,8 @@ Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const M
   std::vector<EffectCandidate> faults =
       FaultCandidates(pass.onsets, pass.forward.scalar_updates, scale, raw_samples.changes);
   ConfirmFaultsOutsideTheLinearRange(run, pass, options, faults);
+  WeighStepsByTheirRawSamples(faults, run, raw_samples, options.onset_scan.min_side_s,
+                              options.finder.family_wise_alpha);
   AddRawSampleFaultCandidates(faults, pass.onsets, raw_samples.changes, epochs,
                               pass.forward.scalar_updates, scale, options.finder.family_wise_alpha);
   for (EffectCandidate& c : faults) others.push_back(std::move(c));

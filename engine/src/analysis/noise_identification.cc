@@ -80,21 +80,15 @@ bool FitReferenceNoiseTheInnovationsReject(const RunContext& c, const ForwardPas
   const double alpha = c.options.monitor.family_wise_alpha;
   const ident::ReferenceNoiseExcess excess = ident::ScreenReferenceNoise(forward, alpha, passed);
   if (!excess.Any()) return false;
-  struct Group {
-    std::string_view name, unit;
-    double ReferenceAccuracy::*sigma;
-    std::optional<double> matched;
-  };
-  const std::array<Group, 2> groups = {
-      {{"position", "m", &ReferenceAccuracy::position_sigma_m, excess.position_sigma_m},
-       {"velocity", "m/s", &ReferenceAccuracy::velocity_sigma_mps, excess.velocity_sigma_mps}}};
   ErrorModel fitted = passed;
   const double before = ProfileLogLikelihood(forward, passed);
   double best = before;
   int fitted_groups = 0;
   absl::Status failure = absl::OkStatus();
-  for (const Group& g : groups) {
-    if (!g.matched.has_value()) continue;
+  for (size_t group = 0; group < ident::kReferenceChannelGroups.size(); ++group) {
+    const ident::ReferenceChannelGroup& g = ident::kReferenceChannelGroups[group];
+    const std::optional<double>& matched = excess.matched_sigma[group];
+    if (!matched.has_value()) continue;
     ++fitted_groups;
     double& sigma = fitted.reference.*g.sigma;
     const double lowest = std::log(sigma);
@@ -105,7 +99,7 @@ bool FitReferenceNoiseTheInnovationsReject(const RunContext& c, const ForwardPas
       return l.ok() ? *l : -std::numeric_limits<double>::infinity();
     };
     const auto [top, log_sigma] =
-        numerics::GoldenSectionMaximum(lowest, std::log(2.0 * *g.matched), lowest, best,
+        numerics::GoldenSectionMaximum(lowest, std::log(2.0 * *matched), lowest, best,
                                        c.options.noise_scale.log_tolerance, log_likelihood_at);
     best = top;
     sigma = std::exp(log_sigma);
@@ -115,7 +109,7 @@ bool FitReferenceNoiseTheInnovationsReject(const RunContext& c, const ForwardPas
     return false;
   }
   std::string changes;
-  for (const Group& g : groups) {
+  for (const ident::ReferenceChannelGroup& g : ident::kReferenceChannelGroups) {
     const double from = passed.reference.*g.sigma, to = fitted.reference.*g.sigma;
     if (to != from) {
       absl::StrAppendFormat(&changes, "%s%s %.3g → %.3g %s", changes.empty() ? "" : ", ", g.name,
@@ -160,8 +154,10 @@ void RetuneUnresolvedNoise(const RunContext& c, const std::optional<ident::Allan
     std::string terms;
     for (const std::string& t : g.terms) terms += (terms.empty() ? "" : ", ") + t;
     const bool seeded = g.name.ends_with("seed");
+    const bool white = g.name.find("white") != std::string::npos;
     notes.push_back("re-tuned by maximum likelihood of the innovations, " + g.name + " (" + terms +
-                    (seeded ? ", seeded by the Allan fit, not resolved by correlation processing): "
+                    (seeded && white ? ", resolved by the Allan fit of the raw samples): "
+                     : seeded        ? ", seeded by the Allan fit, not resolved by correlation processing): "
                             : ", set from Allan bounds): ") +
                     absl::StrFormat("× %.3g (SE of ln: %.2g)%s", g.scale, g.log_std_error,
                                     g.at_limit ? ", at the search range's limit" : ""));

@@ -58,9 +58,12 @@ Eigen::MatrixXd InitialCovariance(const ErrorModel& model, const StateLayout& la
   // ψ is in NED: north and east are the level errors, down the heading's.
   const Eigen::Vector3d attitude_sigma_rad(level_sigma_rad, level_sigma_rad, heading_sigma_rad);
   for (int i = 0; i < 3; ++i) {
+    const bool vertical = i == 2;  // NED: down
+    const double velocity_sigma_mps = vertical ? ref.vertical_velocity_sigma_mps : ref.horizontal_velocity_sigma_mps;
+    const double position_sigma_m = vertical ? ref.vertical_position_sigma_m : ref.horizontal_position_sigma_m;
     P(layout.attitude() + i, layout.attitude() + i) = attitude_sigma_rad[i] * attitude_sigma_rad[i];
-    P(layout.velocity() + i, layout.velocity() + i) = ref.velocity_sigma_mps * ref.velocity_sigma_mps;
-    P(layout.position() + i, layout.position() + i) = ref.position_sigma_m * ref.position_sigma_m;
+    P(layout.velocity() + i, layout.velocity() + i) = velocity_sigma_mps * velocity_sigma_mps;
+    P(layout.position() + i, layout.position() + i) = position_sigma_m * position_sigma_m;
   }
   for (const SensorState& s : layout.sensor_states()) {
     double var = 0.0;
@@ -160,8 +163,10 @@ void EpochFilter::Step(int index, ForwardPass* pass, FilterObserver* observer) {
 
 EpochFilter::ObservationNoise EpochFilter::ObservationNoiseAt(const EpochInterval& e) const {
   const ReferenceAccuracy& ref = model_.reference;
-  const double r_position = ref.position_sigma_m * ref.position_sigma_m;
-  const double r_velocity = ref.velocity_sigma_mps * ref.velocity_sigma_mps;
+  const Eigen::Vector3d position_sigma_m(ref.horizontal_position_sigma_m, ref.horizontal_position_sigma_m,
+                                         ref.vertical_position_sigma_m);
+  const Eigen::Vector3d velocity_sigma_mps(ref.horizontal_velocity_sigma_mps, ref.horizontal_velocity_sigma_mps,
+                                           ref.vertical_velocity_sigma_mps);
   const double readout = std::max(ref.attitude_readout_sigma_rad, kAttitudeRoundingRad);
   const double r_attitude = readout * readout;
   // The INS velocity and attitude carry the current sub-quantum remainder of
@@ -172,8 +177,9 @@ EpochFilter::ObservationNoise EpochFilter::ObservationNoiseAt(const EpochInterva
   ObservationNoise r{};
   for (int i = 0; i < 3; ++i) {
     const Eigen::Vector3d row_squared = e.C_b_n.row(i).transpose().cwiseAbs2();
-    r[static_cast<size_t>(kPositionChannel + i)] = r_position;
-    r[static_cast<size_t>(kVelocityChannel + i)] = r_velocity + row_squared.dot(acc_quantization_var);
+    r[static_cast<size_t>(kPositionChannel + i)] = position_sigma_m[i] * position_sigma_m[i];
+    r[static_cast<size_t>(kVelocityChannel + i)] =
+        velocity_sigma_mps[i] * velocity_sigma_mps[i] + row_squared.dot(acc_quantization_var);
     r[static_cast<size_t>(kAttitudeChannel + i)] = r_attitude + row_squared.dot(gyro_quantization_var);
   }
   return r;

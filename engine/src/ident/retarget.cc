@@ -161,9 +161,10 @@ ReferenceNoiseExcess ScreenReferenceNoise(const ForwardPass& fw, double alpha,
   ReferenceNoiseExcess out;
   const int K = fw.epochs();
   if (K == 0) return out;
-  for (int group = 0; group < 2; ++group) {  // position channels, then velocity channels
+  for (size_t group = 0; group < kReferenceChannelGroups.size(); ++group) {
+    const ReferenceChannelGroup& g = kReferenceChannelGroups[group];
     double nis = 0.0, excess = 0.0, lag1 = 0.0;
-    for (int c = 3 * group; c < 3 * group + 3; ++c) {
+    for (int c = g.first_channel; c < g.first_channel + g.channel_count; ++c) {
       double previous = 0.0;
       for (int k = 0; k < K; ++k) {
         const double nu = fw.innovation(k, c);
@@ -175,7 +176,7 @@ ReferenceNoiseExcess ScreenReferenceNoise(const ForwardPass& fw, double alpha,
         excess += nu * nu - S;  // mean(ν²) − mean(S) = r̂ − r
       }
     }
-    const int n = 3 * K;
+    const int n = g.channel_count * K;
     if (nis / n <= stats::ChiSquareQuantile(1.0 - alpha, n) / n) continue;
     // Reference noise the model lacks is white: a filter that trusts the
     // reference too much overreacts, and its innovations alternate (lag-one
@@ -185,17 +186,17 @@ ReferenceNoiseExcess ScreenReferenceNoise(const ForwardPass& fw, double alpha,
     // covariance matching presumes the model's structure is right).
     const double rho1 = lag1 / nis;
     if (rho1 > stats::NormalQuantile(1.0 - alpha) / std::sqrt(static_cast<double>(n))) continue;
-    const double sigma =
-        group == 0 ? model.reference.position_sigma_m : model.reference.velocity_sigma_mps;
+    const double sigma = model.reference.*g.sigma;
     const double r = sigma * sigma + excess / n;
     if (!(r > sigma * sigma)) continue;
-    (group == 0 ? out.position_sigma_m : out.velocity_sigma_mps) = std::sqrt(r);
+    out.matched_sigma[group] = std::sqrt(r);
   }
   return out;
 }
 
 bool UnresolvedNoise::Any() const {
-  for (const auto* flags : {&gyro_white, &acc_white, &gyro_drift, &acc_drift, &gyro_drift_seed, &acc_drift_seed}) {
+  for (const auto* flags : {&gyro_white, &acc_white, &gyro_drift, &acc_drift, &gyro_drift_seed, &acc_drift_seed,
+                            &gyro_white_seed, &acc_white_seed}) {
     for (bool f : *flags) {
       if (f) return true;
     }
@@ -209,7 +210,9 @@ UnresolvedNoise UnresolvedAllanTerms(const AllanResult& allan) {
     const auto axis = static_cast<size_t>(ch.axis);
     const bool gyro = ch.sensor == Sensor::kGyro;
     // The same tests as ErrorModelFromAllan's branches.
-    (gyro ? u.gyro_white : u.acc_white)[axis] = !ch.fit[AllanParameter::kWhiteDensity].included;
+    const bool white_resolved = ch.fit[AllanParameter::kWhiteDensity].included;
+    (gyro ? u.gyro_white : u.acc_white)[axis] = !white_resolved;
+    (gyro ? u.gyro_white_seed : u.acc_white_seed)[axis] = white_resolved;
     const bool bound = !ch.fit[AllanParameter::kMarkovSigma].included &&
                        !ch.fit[AllanParameter::kBiasInstability].included &&
                        !ch.fit[AllanParameter::kRateRandomWalk].included;
@@ -266,6 +269,8 @@ std::vector<Group> GroupsToScale(ErrorModel& m, const UnresolvedNoise& which,
   add_group("acc drift", which.acc_drift, Sensor::kAccelerometer, true, bound);
   add_group("gyro drift seed", which.gyro_drift_seed, Sensor::kGyro, true, seed);
   add_group("acc drift seed", which.acc_drift_seed, Sensor::kAccelerometer, true, seed);
+  add_group("gyro white seed", which.gyro_white_seed, Sensor::kGyro, false, seed);
+  add_group("acc white seed", which.acc_white_seed, Sensor::kAccelerometer, false, seed);
   return groups;
 }
 

@@ -27,9 +27,26 @@ struct ReferenceName {
 };
 constexpr ReferenceName kReferences[] = {
     {&ReferenceAccuracy::attitude_sigma_rad, "reference.attitude_sigma", "rad"},
-    {&ReferenceAccuracy::position_sigma_m, "reference.position_sigma", "m"},
-    {&ReferenceAccuracy::velocity_sigma_mps, "reference.velocity_sigma", "m/s"},
+    {&ReferenceAccuracy::horizontal_position_sigma_m, "reference.horizontal_position_sigma", "m"},
+    {&ReferenceAccuracy::vertical_position_sigma_m, "reference.vertical_position_sigma", "m"},
+    {&ReferenceAccuracy::horizontal_velocity_sigma_mps, "reference.horizontal_velocity_sigma", "m/s"},
+    {&ReferenceAccuracy::vertical_velocity_sigma_mps, "reference.vertical_velocity_sigma", "m/s"},
     {&ReferenceAccuracy::attitude_readout_sigma_rad, "reference.attitude_readout_sigma", "rad", true},
+};
+
+// One σ for a position or velocity along every axis, as models stored
+// before the accuracy was stated across and along the vertical name it:
+// setting it sets both, so that those models still load.
+struct ReferencePairName {
+  const char* name;
+  double ReferenceAccuracy::*horizontal;
+  double ReferenceAccuracy::*vertical;
+};
+constexpr ReferencePairName kReferencePairs[] = {
+    {"reference.position_sigma", &ReferenceAccuracy::horizontal_position_sigma_m,
+     &ReferenceAccuracy::vertical_position_sigma_m},
+    {"reference.velocity_sigma", &ReferenceAccuracy::horizontal_velocity_sigma_mps,
+     &ReferenceAccuracy::vertical_velocity_sigma_mps},
 };
 
 // Sets `field` of parameter `parameter` of effect `e`; false when the
@@ -134,6 +151,12 @@ std::vector<NamedParameter> ParametersOf(const ErrorModel& model) {
 }
 
 std::string ParameterUnit(const std::string& name) {
+  for (const ReferencePairName& pair : kReferencePairs) {
+    if (name != pair.name) continue;
+    for (const ReferenceName& r : kReferences) {
+      if (r.sigma == pair.horizontal) return r.unit;
+    }
+  }
   ErrorModel probe;
   if (!SetParameter(name, 1.0, probe).ok()) return "";
   for (const NamedParameter& p : ParametersOf(probe)) {
@@ -168,6 +191,13 @@ absl::Status SetParameter(const std::string& name, double value, ErrorModel& mod
       return absl::InvalidArgumentError("'" + name + (r.zero_allowed ? "' must not be negative" : "' must be positive"));
     }
     model.reference.*(r.sigma) = value;
+    return absl::OkStatus();
+  }
+  for (const ReferencePairName& r : kReferencePairs) {
+    if (name != r.name) continue;
+    if (!(value > 0.0)) return absl::InvalidArgumentError("'" + name + "' must be positive");
+    model.reference.*(r.horizontal) = value;
+    model.reference.*(r.vertical) = value;
     return absl::OkStatus();
   }
   // An effect: "<term>", "<term>.sin|cos", then any field ("<term>.onset", …).

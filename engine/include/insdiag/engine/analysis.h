@@ -58,7 +58,11 @@ struct AnalysisOptions {
   ScreeningOptions screening;
   // Accuracy of the bench's reference (table encoders, surveyed site, a body
   // at rest): a precision rate table reads attitude to about an arc-second.
-  ReferenceAccuracy reference{.attitude_sigma_rad = 5e-6, .position_sigma_m = 1e-6, .velocity_sigma_mps = 1e-7};
+  ReferenceAccuracy reference{.attitude_sigma_rad = 5e-6,
+                              .horizontal_position_sigma_m = 1e-6,
+                              .vertical_position_sigma_m = 1e-6,
+                              .horizontal_velocity_sigma_mps = 1e-7,
+                              .vertical_velocity_sigma_mps = 1e-7};
   // Prior σ of an added constant effect with no estimate to start from, in
   // units of the parameter whose effect over one update interval equals the
   // sensor's white noise over that interval (diffuse: the data decide).

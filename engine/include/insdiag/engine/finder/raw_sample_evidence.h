@@ -71,9 +71,19 @@ struct RawSampleConstant {
   double std_error = 0.0;
 };
 
+// A still segment's samples of the run, [first_sample, end_sample).
+struct StillStretch {
+  std::size_t first_sample = 0;
+  std::size_t end_sample = 0;
+};
+
 struct RawSampleEvidence {
   std::vector<RawSampleChange> changes;
   std::vector<RawSampleConstant> constants;  // none when the run has no still segment
+  // The still segments and their sample interval, for a look at the raw
+  // samples across a step's onset (analysis/steps_in_raw_samples.h).
+  std::vector<StillStretch> still;
+  double sample_interval_s = 0.0;
 };
 
 // The constants of `evidence` that measure what a candidate of `model` would:

@@ -17,13 +17,16 @@
 
 #include <absl/status/statusor.h>
 
+#include <algorithm>
 #include <array>
 #include <limits>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "insdiag/engine/filter/forward_filter.h"
+#include "insdiag/engine/filter/observation.h"
 #include "insdiag/engine/filter/smoother.h"
 #include "insdiag/engine/ident/allan.h"
 #include "insdiag/engine/ident/correlation.h"
@@ -63,17 +66,37 @@ RetargetResult RetargetDrifts(const ErrorModel& current, const ErrorModel& a_pri
 std::vector<ParameterEstimate> ApplyAllanNoise(const AllanResult& allan, const ErrorModel& a_priori,
                                                ErrorModel& model, double alpha);
 
-// The channel groups whose innovations exceed their predicted variance
+// The channel groups (kReferenceChannelGroups) whose innovations exceed their predicted variance
 // beyond the χ² band at `alpha` and are not positively correlated (a missing
 // effect, not a missing noise), each with the reference σ covariance
 // matching gives it: σ² + mean(ν² − S) (Mehra, IEEE Trans. AC-15(2), 1970).
 // That moment estimate is biased high where the filter's gain on the
 // reference is near one (a jitter enters two successive innovations), so the
 // analysis takes it as the upper end of a likelihood search, not as the value.
+// The reference's channels in the groups that share one σ of its accuracy
+// (model/error_model.h): position and velocity, across and along the vertical.
+struct ReferenceChannelGroup {
+  std::string_view name;
+  std::string_view unit;
+  double ReferenceAccuracy::*sigma;
+  int first_channel;
+  int channel_count;
+};
+inline constexpr std::array<ReferenceChannelGroup, 4> kReferenceChannelGroups = {{
+    {"horizontal position", "m", &ReferenceAccuracy::horizontal_position_sigma_m, kPositionChannel, 2},
+    {"vertical position", "m", &ReferenceAccuracy::vertical_position_sigma_m, kPositionChannel + 2, 1},
+    {"horizontal velocity", "m/s", &ReferenceAccuracy::horizontal_velocity_sigma_mps, kVelocityChannel, 2},
+    {"vertical velocity", "m/s", &ReferenceAccuracy::vertical_velocity_sigma_mps, kVelocityChannel + 2, 1},
+}};
+
+// Per group of kReferenceChannelGroups, the σ covariance matching gives
+// where that group's innovations exceed their band.
 struct ReferenceNoiseExcess {
-  std::optional<double> position_sigma_m;
-  std::optional<double> velocity_sigma_mps;
-  bool Any() const { return position_sigma_m.has_value() || velocity_sigma_mps.has_value(); }
+  std::array<std::optional<double>, kReferenceChannelGroups.size()> matched_sigma;
+  bool Any() const {
+    return std::any_of(matched_sigma.begin(), matched_sigma.end(),
+                       [](const std::optional<double>& s) { return s.has_value(); });
+  }
 };
 ReferenceNoiseExcess ScreenReferenceNoise(const ForwardPass& forward, double alpha,
                                           const ErrorModel& model);
@@ -94,6 +117,12 @@ struct UnresolvedNoise {
   // it where it resolves it, and nothing else re-tunes it.
   std::array<bool, 3> gyro_drift_seed = {false, false, false};
   std::array<bool, 3> acc_drift_seed = {false, false, false};
+  // White densities the Allan fit resolved. They too are seeds: the raw
+  // samples of a unit that rocks or sways carry the motion its gyros
+  // measured, which the Allan curve reads as noise and the filter's
+  // innovations do not show.
+  std::array<bool, 3> gyro_white_seed = {false, false, false};
+  std::array<bool, 3> acc_white_seed = {false, false, false};
 
   bool Any() const;
 };

@@ -65,10 +65,16 @@ struct ModelEffect {
 // Accuracy of the bench's reference: the table's attitude (initial attitude),
 // the site's position and the zero velocity of the body at the table centre.
 // They set the initial attitude uncertainty and the observation noise.
+// Position and velocity are stated across and along the vertical: gravity is
+// the one direction a unit at rest tells apart, a floor, a mount or a
+// vehicle's suspension moves it differently along it, and a surveyed height
+// is known less well than a surveyed place.
 struct ReferenceAccuracy {
   double attitude_sigma_rad = 0.0;
-  double position_sigma_m = 0.0;
-  double velocity_sigma_mps = 0.0;
+  double horizontal_position_sigma_m = 0.0;  // north and east, each
+  double vertical_position_sigma_m = 0.0;
+  double horizontal_velocity_sigma_mps = 0.0;
+  double vertical_velocity_sigma_mps = 0.0;
   // The encoders' readout noise while the table is at rest, white, per angle
   // [rad]; 0 when they read exactly (the attitude channels' rounding floor
   // applies then, filter/observation.h).

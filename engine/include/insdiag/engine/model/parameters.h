@@ -5,8 +5,10 @@
 //   acc_bias_gm.{x,y,z}.sigma [m/s²]     acc_bias_gm.{x,y,z}.tau [s]
 //   gyro_arw.{x,y,z} [rad/√s]            acc_vrw.{x,y,z} [m/s/√s]
 //   gyro_quantization.{x,y,z} [rad]      acc_quantization.{x,y,z} [m/s]
-//   reference.attitude_sigma [rad]       reference.position_sigma [m]
-//   reference.velocity_sigma [m/s]       the bench reference's accuracy
+//   reference.attitude_sigma [rad]       the bench reference's accuracy:
+//   reference.{horizontal,vertical}_position_sigma [m]
+//   reference.{horizontal,vertical}_velocity_sigma [m/s]
+//     (reference.position_sigma and .velocity_sigma set both, as models stored earlier name them)
 //   <effect term>            constant effects: the parameter value (yaw harmonics: ….sin, ….cos)
 //   <effect term>.prior_sigma            the same, as the model states it: its prior σ
 //   <effect term>.onset [s]  faults (bias steps and ramps): the onset in run time
