@@ -56,7 +56,11 @@ then turn-on biases, then the output's quantisation.
              turn-on (uniform). The error is Θ's residue: white in angle when
              the input moves Θ through many quanta at random, which gives the
              Allan deviation of quantisation noise, σ(τ) = √3 Q/τ with
-             Q = q/√12, i.e. q/(2τ) (IEEE Std 952-1997, annex C.2). Defaults:
+             Q = q/√12, i.e. q/(2τ) (IEEE Std 952-1997, annex C.2). The
+             error Θ_k − Σ out = q·(frac(Θ_k/q + r₀) − r₀) has the mean
+             q·(½ − r₀): summed velocity increments carry a constant velocity
+             of up to ±q/2 from turn-on (0.6 mm/s for 125 µg·s), which a
+             zero-velocity reference sees from the first second. Defaults:
              the counts of the navigation-grade RLG log in data/real, 0.1″
              and 125 µg·s.
              rates: a MEMS ADC samples the rate (force) and rounds it to its
@@ -177,12 +181,13 @@ def stand_means(edges, C0, u, rocking, lever_arm_m, latitude, gravity):
 
 def quantise_increments(rng, rates, dt, lsb):
     """Integer counts of `lsb` per sample from a counter of the running
-    integral, its turn-on residue uniform; returns the rates (counts·lsb/dt)
-    and the counts."""
+    integral, its turn-on residue uniform; returns the rates (counts·lsb/dt),
+    the counts and the residues r₀ (the velocity the counts lose on average,
+    q·(½ − r₀), is an initial velocity of up to half a quantum)."""
     residue = rng.random(rates.shape[1])  # r₀ in [0, 1): ⌊r₀⌋ = 0
     totals = np.floor(np.cumsum(rates * dt, axis=0) / lsb + residue[None])
     counts = np.diff(np.vstack([np.zeros((1, rates.shape[1])), totals]), axis=0)
-    return counts * lsb / dt, counts
+    return counts * lsb / dt, counts, residue
 
 
 def quantise_rates(rates, lsb):
@@ -246,14 +251,15 @@ def simulate_raw(config, parameters, effects, apply_effects):
 
     quantised = config["quantise"]
     q_rng = np.random.default_rng([config["seed"], 2])
-    values = {}
+    values, residues = {}, {}
     for sensor in ("gyro", "acc"):
         lsb = out_class[f"{sensor}_lsb"]
         if not quantised:
             values[sensor] = measured[sensor] * (dt if output == "increments" else 1.0)
         elif output == "increments":
-            _, counts = quantise_increments(q_rng, measured[sensor], dt, lsb)
+            _, counts, residue = quantise_increments(q_rng, measured[sensor], dt, lsb)
             values[sensor] = counts * lsb
+            residues[sensor] = residue.tolist()
         else:
             values[sensor] = quantise_rates(measured[sensor], lsb)[0]
     times = edges[1:]
@@ -272,7 +278,7 @@ def simulate_raw(config, parameters, effects, apply_effects):
     truth = dict(
         raw_log=True, preset=config["preset"], rate_hz=rate_hz, duration_s=duration_s, seed=config["seed"],
         format=config["raw_format"], output=output, quantised=quantised,
-        gyro_lsb=out_class["gyro_lsb"], acc_lsb=out_class["acc_lsb"],
+        gyro_lsb=out_class["gyro_lsb"], acc_lsb=out_class["acc_lsb"], counter_residues=residues,
         import_columns="t,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z", import_units=units,
         site=[config["latitude_deg"], config["longitude_deg"], config["height_m"]], gravity_mps2=gravity,
         orientation=base, tilt_deg=config["tilt_deg"], roll0_rad=roll0, pitch0_rad=pitch0, heading_rad=heading,

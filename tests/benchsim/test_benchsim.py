@@ -233,7 +233,7 @@ class RawLogs(unittest.TestCase):
         rng = np.random.default_rng(11)
         dt, q, n = 0.01, 1e-6, 400000
         rates = rng.standard_normal((n, 1)) * q / dt
-        quantised, counts = rawlog.quantise_increments(rng, rates, dt, q)
+        quantised, counts, _ = rawlog.quantise_increments(rng, rates, dt, q)
         np.testing.assert_array_equal(counts, np.round(counts))
         for m in (1, 2, 4, 8, 32):
             expected = q * q / (4.0 * (m * dt) ** 2)
@@ -246,7 +246,7 @@ class RawLogs(unittest.TestCase):
         # The signature: σ(τ) ∝ 1/τ where quantisation dominates (no noise: the Earth's
         # rate through the quanta), against 1/√τ for white noise.
         slow = np.full((n, 1), 7.3e-5 * 0.7)
-        coarse, _ = rawlog.quantise_increments(rng, slow + rng.standard_normal((n, 1)) * 1e-3 * q / dt, dt, q)
+        coarse, _, _ = rawlog.quantise_increments(rng, slow + rng.standard_normal((n, 1)) * 1e-3 * q / dt, dt, q)
         a1, a10 = (math.sqrt(allan_variance(coarse[:, 0], dt, m)) for m in (10, 100))
         self.assertAlmostEqual(math.log10(a1 / a10), 1.0, delta=0.15)
 
