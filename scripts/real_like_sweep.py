@@ -58,6 +58,10 @@ SCENARIOS = {
     "nav-up-level": (NAV + ["--orientation", "up", "--tilt-deg", "0"], False),
     "nav-up-gyro-quantised-only": (NAV + ["--orientation", "up", "--acc-lsb", "1e-9"], False),
     "mems-unquantised": (MEMS + ["--orientation", "up", "--quantise", "no"], False),
+    "mems-2.8h": ([a if a != "3600" else "10008" for a in MEMS] + ["--orientation", "up"], False),
+    # The accelerometers' count: 125 µg·s (as the record in data/real) over 4 and 16.
+    "nav-up-acc-31ugs": (NAV + ["--orientation", "up", "--acc-lsb", str(31.25e-6 * 9.80665)], False),
+    "nav-up-acc-8ugs": (NAV + ["--orientation", "up", "--acc-lsb", str(7.8125e-6 * 9.80665)], False),
     "nav-up-sway-only": (NAV + ["--orientation", "up"], "sway"),
     "nav-up-settle-only": (NAV + ["--orientation", "up"], "settle"),
     "nav-up-sway-unquantised": (NAV + ["--orientation", "up", "--quantise", "no"], True),
