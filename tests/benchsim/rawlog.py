@@ -43,7 +43,7 @@ then turn-on biases, then the output's quantisation.
   turn-on bias  a constant per axis and per power-up, drawn with a random sign
              and a magnitude uniform in [lo, hi]: for the `mems` preset the
              gyros' 0.1–0.5 °/s and accelerometers' 5–50 mg of consumer MEMS
-             datasheets (the MPU-6050's ±20 °/s and ±50 mg zero-rate and
+             datasheets (the MPU-6050's ±20 °/s and ±50–80 mg zero-rate and
              zero-g offsets are the worst case; the record in data/real has
              −3.3, −1.1, 0.5 °/s); for `nav` the INS-2000's class, 0.002–0.01
              °/h and 20–100 µg.
