@@ -9,6 +9,13 @@ Usage:
               [--fault NAME=VALUE[@ONSET_S]]... [--fault PARAM*FACTOR]...
               [--set PARAM=VALUE]... [--datasheet yes|no] [--unit-type INS-2000|none]
               [--serial S]
+  benchsim.py --raw-log --out LOG [--preset nav|mems] [--raw-format csv|f64]
+              [--raw-output increments|rates] [--quantise yes|no] [--gyro-lsb Q]
+              [--acc-lsb Q] [--turn-on-biases yes|no] [--orientation up|side|inverted]
+              [--tilt-deg T] [--heading-deg H] [--sway-urad A --sway-hz F]
+              [--settle-urad A --settle-hz F --settle-tau-s TAU] [--lever-arm-m L]
+A raw log is what the unit's own logger writes on a stand (rawlog.py): samples
+only, for `insdiag import --attitude level`; its truth says the import's units.
 Faults: gyro_bias_step.x=3e-6@1500.3, acc_bias_ramp.y=1e-7@900,
 gyro_turn_on_bias.z=1e-6, gyro_scale_factor.x=5e-5 (a family without an axis:
 every axis), gyro_bias_rw.y=1e-9 (rate random walk density), and
@@ -29,6 +36,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import kinematics  # noqa: E402
 import profiles  # noqa: E402
+import rawlog  # noqa: E402
 import sensors  # noqa: E402
 import unit_classes  # noqa: E402
 
@@ -74,6 +82,29 @@ def parse_faults(specs, parameters):
     return effects
 
 
+def apply_effects(measured, true_input, effects, edges, rng):
+    """Adds the effects to the measured interval means, in place."""
+    dt = edges[1] - edges[0]
+    n = len(edges) - 1
+    for e in effects:
+        sensor = "gyro" if e["family"].startswith("gyro") else "acc"
+        kind = e["family"].split("_", 1)[1]
+        i = AXES.index(e["axis"])
+        column = measured[sensor][:, i]
+        if kind == "turn_on_bias":
+            column += e["value"]
+        elif kind == "scale_factor":
+            column += e["value"] * true_input[sensor][:, i]
+        elif kind == "bias_step":
+            column += sensors.step_means(edges, e["onset_s"], e["value"])
+        elif kind == "bias_ramp":
+            column += sensors.ramp_means(edges, e["onset_s"], e["value"])
+        elif kind == "bias_rw":
+            column += sensors.random_walk_means(rng, e["value"], dt, n)
+        else:
+            raise ValueError(f"--fault {e['family']}: this simulator does not inject that family")
+
+
 def simulate(config):
     """Writes the run to config['out'] and its truth beside it; returns the truth."""
     rng = np.random.default_rng(config["seed"])
@@ -105,23 +136,7 @@ def simulate(config):
             measured[sensor][:, i] += sensors.gauss_markov_means(
                 rng, parameters[f"{sensor}_bias_gm.{a}.sigma"], parameters[f"{sensor}_bias_gm.{a}.tau"], dt, n)
             measured[sensor][:, i] += sensors.white_noise(rng, parameters[f"{noise}.{a}"], dt, n)
-    for e in effects:
-        sensor = "gyro" if e["family"].startswith("gyro") else "acc"
-        kind = e["family"].split("_", 1)[1]
-        i = AXES.index(e["axis"])
-        column = measured[sensor][:, i]
-        if kind == "turn_on_bias":
-            column += e["value"]
-        elif kind == "scale_factor":
-            column += e["value"] * true_input[sensor][:, i]
-        elif kind == "bias_step":
-            column += sensors.step_means(edges, e["onset_s"], e["value"])
-        elif kind == "bias_ramp":
-            column += sensors.ramp_means(edges, e["onset_s"], e["value"])
-        elif kind == "bias_rw":
-            column += sensors.random_walk_means(rng, e["value"], dt, n)
-        else:
-            raise ValueError(f"--fault {e['family']}: this simulator does not inject that family")
+    apply_effects(measured, true_input, effects, edges, rng)
 
     C = kinematics.body_attitude(*[m.evaluate(edges[1:])[0] for m in (yaw, roll)])
     ref_roll, ref_pitch, ref_yaw = kinematics.euler_zyx(C)
@@ -132,6 +147,16 @@ def simulate(config):
     with open(config["out"] + ".truth.json", "w") as f:
         json.dump(truth, f, indent=1)
     return truth
+
+
+def simulate_raw(config):
+    """A raw log (rawlog.py) of the preset's unit with --set and --fault applied."""
+    if config["preset"] not in rawlog.OUTPUTS:
+        raise ValueError(f"--raw-log: no output class for preset {config['preset']}")
+    parameters = PRESETS[config["preset"]]()
+    set_parameters(config["set"], parameters)
+    effects = parse_faults(config["faults"], parameters)
+    return rawlog.simulate_raw(config, parameters, effects, apply_effects)
 
 
 def write_csv(config, datasheet, times, measured, ref_roll, ref_pitch, ref_yaw):
@@ -167,13 +192,49 @@ def main(argv=None):
     p.add_argument("--latitude-deg", type=float, default=48.137)
     p.add_argument("--longitude-deg", type=float, default=11.575)
     p.add_argument("--height-m", type=float, default=519.0)
+    r = p.add_argument_group("raw log (rawlog.py): a unit's own logger on a stand, samples only")
+    r.add_argument("--raw-log", action="store_true", help="write a raw log (t, gyro xyz, acc xyz), not a bench run")
+    r.add_argument("--raw-format", default="csv", choices=["csv", "f64"])
+    r.add_argument("--raw-output", default=None, choices=["increments", "rates"],
+                   help="default: the preset's (nav and tactical: increments; mems: rates)")
+    r.add_argument("--quantise", default="yes", choices=["yes", "no"])
+    r.add_argument("--gyro-lsb", type=float, default=None, help="gyro quantum [rad, or rad/s for rates]")
+    r.add_argument("--acc-lsb", type=float, default=None, help="accelerometer quantum [m/s, or m/s² for rates]")
+    r.add_argument("--turn-on-biases", default="yes", choices=["yes", "no"])
+    r.add_argument("--orientation", default="up", help="up, side, inverted or ROLL,PITCH,YAW [deg]")
+    r.add_argument("--tilt-deg", type=float, default=1.0, help="roll and pitch drawn within ±this")
+    r.add_argument("--heading-deg", type=float, default=None, help="default: drawn over the circle")
+    r.add_argument("--sway-urad", type=float, default=0.0)
+    r.add_argument("--sway-hz", type=float, default=1.0)
+    r.add_argument("--settle-urad", type=float, default=0.0)
+    r.add_argument("--settle-hz", type=float, default=2.0)
+    r.add_argument("--settle-tau-s", type=float, default=1.0)
+    r.add_argument("--lever-arm-m", type=float, default=0.1, help="sensors above the stand's pivot")
     a = p.parse_args(argv)
     config = dict(out=a.out, preset=a.preset, profile=a.profile, rate_hz=a.rate_hz, duration_s=a.duration,
                   seed=a.seed, ramp_accel_deg_s2=a.ramp_accel, jitter_s=a.jitter, faults=a.fault, set=a.set,
                   datasheet=a.datasheet, unit_type=a.unit_type, serial=a.serial or f"BSIM-{a.seed}",
                   latitude_deg=a.latitude_deg, longitude_deg=a.longitude_deg, height_m=a.height_m)
+    if a.raw_log:
+        orientation = a.orientation
+        if orientation not in rawlog.ORIENTATIONS:
+            try:
+                orientation = tuple(float(v) for v in orientation.split(","))
+                assert len(orientation) == 3
+            except (ValueError, AssertionError):
+                print(f"benchsim: --orientation {a.orientation}: expected up, side, inverted or ROLL,PITCH,YAW",
+                      file=sys.stderr)
+                return 2
+        config.update(raw_format=a.raw_format, raw_output=a.raw_output, quantise=a.quantise == "yes",
+                      gyro_lsb=a.gyro_lsb, acc_lsb=a.acc_lsb, turn_on_biases=a.turn_on_biases == "yes",
+                      orientation=orientation, tilt_deg=a.tilt_deg, heading_deg=a.heading_deg,
+                      sway_urad=a.sway_urad, sway_hz=a.sway_hz, settle_urad=a.settle_urad, settle_hz=a.settle_hz,
+                      settle_tau_s=a.settle_tau_s, lever_arm_m=a.lever_arm_m)
     try:
-        simulate(config)
+        if a.raw_log:
+            simulate_raw(config)
+        else:
+            simulate(config)
     except ValueError as e:
         print(f"benchsim: {e}", file=sys.stderr)
         return 2

@@ -14,6 +14,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import benchsim  # noqa: E402
 import kinematics  # noqa: E402
+import rawlog  # noqa: E402
 import sensors  # noqa: E402
 
 DEG = math.pi / 180.0
@@ -171,6 +172,165 @@ class Files(unittest.TestCase):
                     code = benchsim.main(["--out", os.path.join(d, "run.csv"), "--duration", "60", f"--set={bad}"])
                 self.assertEqual(code, 2)
                 self.assertIn(f"--set {bad}", err.getvalue())
+
+
+def allan_variance(rates, dt, m):
+    """Overlapping Allan variance of a rate series at τ = m·Δt (IEEE Std 952, eq. C.4)."""
+    theta = np.concatenate([[0.0], np.cumsum(rates) * dt])
+    tau = m * dt
+    d = theta[2 * m:] - 2.0 * theta[m:-m] + theta[:-2 * m]
+    return np.mean(d * d) / (2.0 * tau * tau)
+
+
+class RawLogs(unittest.TestCase):
+    """The raw logs of rawlog.py: samples only, quantised, tilted, turn-on biases."""
+
+    def raw(self, directory, *extra, name="raw.csv"):
+        out = os.path.join(directory, name)
+        self.assertEqual(benchsim.main(["--raw-log", "--out", out, *extra]), 0)
+        with open(out + ".truth.json") as f:
+            truth = json.load(f)
+        if truth["format"] == "f64":
+            data = np.fromfile(out, dtype="<f8").reshape(-1, 7)
+        else:
+            data = np.loadtxt(out, delimiter=",", comments="#")
+        return data, truth
+
+    def test_a_raw_log_holds_samples_only_and_the_same_seed_the_same_bytes(self):
+        with tempfile.TemporaryDirectory() as d:
+            args = ["--preset", "nav", "--rate-hz", "64", "--duration", "30", "--seed", "3", "--sway-urad", "50",
+                    "--settle-urad", "500"]
+            a, truth = self.raw(d, *args, name="a.csv")
+            b, _ = self.raw(d, *args, name="b.csv")
+            with open(os.path.join(d, "a.csv"), "rb") as fa, open(os.path.join(d, "b.csv"), "rb") as fb:
+                self.assertEqual(fa.read(), fb.read())
+            with open(os.path.join(d, "a.csv")) as f:
+                self.assertEqual(f.readline().strip(), "# t,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z")
+            self.assertEqual(a.shape, (30 * 64, 7))
+            np.testing.assert_allclose(a[:, 0], np.arange(1, 30 * 64 + 1) / 64.0, atol=1e-6)
+            self.assertEqual(truth["import_units"], "gyro=rad,acc=m/s")
+            f64, _ = self.raw(d, *args, "--raw-format", "f64", name="c.bin")
+            np.testing.assert_allclose(f64[:, 1:], a[:, 1:], rtol=1e-15, atol=0)
+
+    def test_increments_are_integer_counts_whose_sum_stays_within_one_count_of_the_angle(self):
+        with tempfile.TemporaryDirectory() as d:
+            q, truth = self.raw(d, "--preset", "nav", "--rate-hz", "64", "--duration", "120", "--seed", "5",
+                                "--turn-on-biases", "no", name="q.csv")
+            u, _ = self.raw(d, "--preset", "nav", "--rate-hz", "64", "--duration", "120", "--seed", "5",
+                            "--turn-on-biases", "no", "--quantise", "no", name="u.csv")
+        for col, lsb in ((1, truth["gyro_lsb"]), (2, truth["gyro_lsb"]), (3, truth["gyro_lsb"]),
+                         (4, truth["acc_lsb"]), (5, truth["acc_lsb"]), (6, truth["acc_lsb"])):
+            counts = q[:, col] / lsb
+            np.testing.assert_allclose(counts, np.round(counts), rtol=0, atol=1e-6)
+            # The counter's error does not accumulate: Σ counts·q − Θ stays within one quantum.
+            gap = np.cumsum(q[:, col]) - np.cumsum(u[:, col])
+            self.assertLess(np.max(np.abs(gap)), lsb * (1 + 1e-6), col)
+            self.assertGreater(np.max(np.abs(gap)), 0.5 * lsb, col)
+
+    def test_counting_quantisation_adds_q_over_2_tau_to_the_allan_deviation(self):
+        # IEEE Std 952, annex C.2: σ²(τ) = 3Q²/τ² with Q = q/√12, i.e. q²/(4τ²), when
+        # the angle passes through the quanta at random (here noise of one q a sample).
+        rng = np.random.default_rng(11)
+        dt, q, n = 0.01, 1e-6, 400000
+        rates = rng.standard_normal((n, 1)) * q / dt
+        quantised, counts, _ = rawlog.quantise_increments(rng, rates, dt, q)
+        np.testing.assert_array_equal(counts, np.round(counts))
+        for m in (1, 2, 4, 8, 32):
+            expected = q * q / (4.0 * (m * dt) ** 2)
+            # The quantisation error's own Allan variance (its estimate's σ ≈ 1 % at m = 32) …
+            error = allan_variance(quantised[:, 0] - rates[:, 0], dt, m)
+            self.assertAlmostEqual(error / expected, 1.0, delta=0.05, msg=m)
+            # … and it adds to the input's, uncorrelated with it.
+            excess = allan_variance(quantised[:, 0], dt, m) - allan_variance(rates[:, 0], dt, m)
+            self.assertAlmostEqual(excess / expected, 1.0, delta=0.1 * m ** 0.5, msg=m)
+        # The signature: σ(τ) ∝ 1/τ where quantisation dominates (no noise: the Earth's
+        # rate through the quanta), against 1/√τ for white noise.
+        slow = np.full((n, 1), 7.3e-5 * 0.7)
+        coarse, _, _ = rawlog.quantise_increments(rng, slow + rng.standard_normal((n, 1)) * 1e-3 * q / dt, dt, q)
+        a1, a10 = (math.sqrt(allan_variance(coarse[:, 0], dt, m)) for m in (10, 100))
+        self.assertAlmostEqual(math.log10(a1 / a10), 1.0, delta=0.15)
+
+    def test_mems_rates_are_integer_lsbs_with_the_variance_of_rounding(self):
+        with tempfile.TemporaryDirectory() as d:
+            q, truth = self.raw(d, "--preset", "mems", "--rate-hz", "100", "--duration", "60", "--seed", "6",
+                                name="q.csv")
+            u, _ = self.raw(d, "--preset", "mems", "--rate-hz", "100", "--duration", "60", "--seed", "6",
+                            "--quantise", "no", name="u.csv")
+        self.assertEqual(truth["output"], "rates")
+        self.assertEqual(truth["import_units"], "gyro=rad/s,acc=m/s2")
+        for col, lsb in ((1, truth["gyro_lsb"]), (4, truth["acc_lsb"])):
+            counts = q[:, col] / lsb
+            np.testing.assert_allclose(counts, np.round(counts), rtol=0, atol=1e-6)
+            error = q[:, col] - u[:, col]
+            self.assertLessEqual(np.max(np.abs(error)), 0.5 * lsb * (1 + 1e-9))
+            # Rounding under noise of several LSB: a uniform error, variance q²/12 (5σ of 6000 draws).
+            self.assertAlmostEqual(np.var(error) / (lsb * lsb / 12.0), 1.0, delta=5 * math.sqrt(0.8 / 6000))
+
+    def test_the_tilt_and_heading_are_what_the_specific_force_and_earth_rate_say(self):
+        with tempfile.TemporaryDirectory() as d:
+            for orientation, tilt in (("up", 2.0), ("side", 0.5), ("inverted", 0.2)):
+                data, truth = self.raw(d, "--preset", "nav", "--rate-hz", "64", "--duration", "60", "--seed", "8",
+                                       "--orientation", orientation, "--tilt-deg", str(tilt), "--quantise", "no",
+                                       "--turn-on-biases", "no", name=f"{orientation}.csv")
+                with self.subTest(orientation=orientation):
+                    C0 = np.array(truth["C0"])
+                    self.assertLessEqual(max(abs(truth["roll0_rad"]), abs(truth["pitch0_rad"])), tilt * DEG)
+                    force = data[:, 4:7].sum(axis=0) / 60.0
+                    g = truth["gravity_mps2"]
+                    # f^b = C₀ᵀ(−g^n): the body's down axis is −f/|f|, within the drift's 30 µg (3e-5 rad).
+                    np.testing.assert_allclose(-force / np.linalg.norm(force), C0[2], atol=1e-4)
+                    self.assertAlmostEqual(np.linalg.norm(force), g, delta=1e-3)
+                    roll, pitch, _ = kinematics.euler_zyx(C0)
+                    base = {"up": 0.0, "side": 90.0, "inverted": 180.0}[orientation] * DEG
+                    self.assertLess(abs(math.remainder(float(roll) - base, 2 * math.pi)), tilt * DEG * 1.5)
+                    self.assertLess(abs(float(pitch)), tilt * DEG * 1.5)
+                    # The Earth's rate: C₀ᵀ ω_ie^n within the ARW over a minute (8e-8 rad/s).
+                    lat = 48.137 * DEG
+                    w_ie = kinematics.EARTH_RATE_RAD_S * np.array([math.cos(lat), 0.0, -math.sin(lat)])
+                    np.testing.assert_allclose(data[:, 1:4].sum(axis=0) / 60.0, C0.T @ w_ie, atol=6e-7)
+
+    def test_rocking_turns_the_unit_by_its_angle_and_its_lever_arm_moves_the_force(self):
+        with tempfile.TemporaryDirectory() as d:
+            data, truth = self.raw(d, "--preset", "nav", "--rate-hz", "100", "--duration", "20", "--seed", "9",
+                                   "--quantise", "no", "--turn-on-biases", "no", "--tilt-deg", "0",
+                                   "--settle-urad", "2000", "--settle-hz", "3", "--settle-tau-s", "1",
+                                   "--sway-urad", "100", "--sway-hz", "0.5", "--lever-arm-m", "0.2")
+        rocking = rawlog.Rocking(1e-4, 0.5, truth["rocking"]["sway_phase_rad"], 2e-3, 3.0, 1.0)
+        C0, u = np.array(truth["C0"]), np.array(truth["rocking"]["axis_n"])
+        t = data[:, 0]
+        # The gyros' summed increments about the rocking axis: θ(t) − θ(0), plus the Earth's rate.
+        axis_b = C0.T @ u
+        turned = np.cumsum(data[:, 1:4] @ axis_b)  # increments [rad]
+        lat = 48.137 * DEG
+        earth = kinematics.EARTH_RATE_RAD_S * np.array([math.cos(lat), 0.0, -math.sin(lat)]) @ u
+        expected = rocking(t)[0] - rocking(np.array([0.0]))[0][0] + earth * t
+        np.testing.assert_allclose(turned, expected, atol=2e-6)
+        # The settling's first swing: 2 mrad · (2π·3 Hz)² · 0.2 m ≈ 0.14 m/s² across the axis.
+        force = data[:, 4:7] * 100.0  # increments [m/s] over 10 ms
+        peak = np.max(np.abs(force[:100, :2] - force[-100:, :2].mean(axis=0)))
+        self.assertGreater(peak, 0.05)
+        self.assertLess(peak, 0.2)
+
+    def test_mems_turn_on_biases_are_of_their_size_and_in_the_samples(self):
+        sizes = []
+        with tempfile.TemporaryDirectory() as d:
+            for seed in range(1, 9):
+                data, truth = self.raw(d, "--preset", "mems", "--rate-hz", "100", "--duration", "30",
+                                       "--seed", str(seed), "--tilt-deg", "0", "--heading-deg", "0",
+                                       name=f"m{seed}.csv")
+                lat = 48.137 * DEG
+                w_ie = kinematics.EARTH_RATE_RAD_S * np.array([math.cos(lat), 0.0, -math.sin(lat)])
+                mean = data[:, 1:4].mean(axis=0) - np.array(truth["C0"]).T @ w_ie
+                biases = np.array([truth["turn_on_biases"][f"gyro_turn_on_bias.{a}"] for a in "xyz"])
+                # The mean over 30 s: the ARW's 0.005 °/√s gives 1e-3 °/s, the 100-s Gauss–Markov
+                # drift's 10 °/h (0.003 °/s); 0.015 °/s is five of their σ, a tenth of the smallest bias.
+                np.testing.assert_allclose(mean, biases, atol=0.015 * DEG)
+                sizes += list(np.abs(biases) / DEG)
+                acc = np.array([truth["turn_on_biases"][f"acc_turn_on_bias.{a}"] for a in "xyz"])
+                self.assertTrue(np.all((np.abs(acc) >= 5e-3 * 9.80665) & (np.abs(acc) <= 50e-3 * 9.80665)))
+        self.assertGreaterEqual(min(sizes), 0.1)
+        self.assertLessEqual(max(sizes), 0.5)
+        self.assertGreater(max(sizes) - min(sizes), 0.2)  # spread over the range, not one value
 
 
 if __name__ == "__main__":
