@@ -5,7 +5,11 @@ of scripts/fault_matrix.py), and healthy MEMS units whose a-priori model is
 their own Allan fit (of scripts/allan_prior_probe.py); the blind draws'
 faults an earlier build missed; and the evidence a run holds for its fault
 (scripts/fault_evidence.py). Needs the CLI: INSDIAG_CLI, else
-build/clients/insdiag."""
+build/clients/insdiag.
+
+The suite runs one case of each claim; with INSDIAG_SWEEP=full (the ctest
+label `sweep`, scripts/sweeps.sh) every axis, seed and blind-draw run
+(tests/support/monte_carlo.h says the same of the C++ tests)."""
 import json
 import os
 import subprocess
@@ -25,6 +29,20 @@ sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import fault_evidence  # noqa: E402
 import fault_matrix  # noqa: E402
 import no_datasheet_step_sweep  # noqa: E402
+
+
+FULL_SWEEP = os.environ.get("INSDIAG_SWEEP") == "full"
+
+
+def sweep_size(cases, suite):
+    """The first `suite` of `cases` in the suite, all of them in the sweep."""
+    return list(cases) if FULL_SWEEP else list(cases)[:suite]
+
+
+def in_the_sweep_only(why):
+    """A case the suite leaves to the sweep; `why` names the suite's case
+    that exercises the same mechanism."""
+    return unittest.skipUnless(FULL_SWEEP, f"in the sweep only (INSDIAG_SWEEP=full): {why}")
 
 
 def declare_attitude_readout(run_csv, readout):
@@ -116,8 +134,9 @@ class EngineOnIndependentRuns(unittest.TestCase):
     def test_gyro_steps_of_a_tactical_unit_are_named_on_their_axis_with_their_onset(self):
         # Another class than the INS-2000 the engine's defaults come from: a
         # 0.1 °/h drift with τ 200 s, its datasheet in the file, no unit type.
+        # The suite steps the x gyro; the sweep each axis.
         sigma = unit_classes.PRESETS["tactical-0.1"]()["gyro_bias_gm.x.sigma"]
-        for seed, axis, onset_s in ((31, "x", 1010.5), (32, "y", 1333.3), (33, "z", 1587.9)):
+        for seed, axis, onset_s in sweep_size(((31, "x", 1010.5), (32, "y", 1333.3), (33, "z", 1587.9)), 1):
             with self.subTest(axis=axis), tempfile.TemporaryDirectory() as d:
                 step = 5.0 * sigma * (-1 if seed % 2 else 1)
                 report, _ = analyse(d, "--preset", "tactical-0.1", "--profile", "mixed", "--rate-hz", "10",
@@ -152,9 +171,11 @@ class EngineOnIndependentRuns(unittest.TestCase):
         # Such estimates arise where the encoders are not read; with them read
         # (the default on a turning table) the attitude holds the heading, and
         # no scale factor may be a finding either.
-        runs = (("--unit-type", "none", "--rate-hz", "10", "--duration", "4074", "--seed", "7132",
-                 "--latitude-deg", "-3.14"),
-                ("--rate-hz", "25", "--duration", "4115", "--seed", "7146", "--latitude-deg", "-6.67", "--ramp-accel", "20"))
+        # The suite runs the first of the two draws each way; the sweep both.
+        runs = sweep_size((("--unit-type", "none", "--rate-hz", "10", "--duration", "4074", "--seed", "7132",
+                            "--latitude-deg", "-3.14"),
+                           ("--rate-hz", "25", "--duration", "4115", "--seed", "7146", "--latitude-deg", "-6.67",
+                            "--ramp-accel", "20")), 1)
         beyond = 0
         for readout in ("none", None):
             for args in runs:
@@ -424,6 +445,8 @@ class FaultsTheBlindDrawsMissed(unittest.TestCase):
                                    "acc_bias_ramp.x", slope, 865.993)
         self.assertNamedFirst(report, "acc_bias_ramp.x", slope, 865.993, source="RAW")
 
+    @in_the_sweep_only("run 395 (a MEMS gyro ramp far outside the scan's linear range) has the suite's "
+                       "pass with the fault in its pilot")
     def test_a_mems_gyro_step_beyond_the_scans_linear_range_is_measured_and_named(self):
         # The seventh blind draw's run 384: a MEMS unit labelled INS-2000,
         # no datasheet, its y gyro stepping by 27 drift σ at 2798.5 s on a
@@ -442,6 +465,8 @@ class FaultsTheBlindDrawsMissed(unittest.TestCase):
         self.assertNamedFirst(report, "gyro_bias_step.y", step, 2798.541)
         self.assertOnlySensorLocalised(report, "gyro_", "y")
 
+    @in_the_sweep_only("run 378 (an accelerometer ramp only the still samples show) has the suite's "
+                       "fault named from the still samples")
     def test_a_z_gyro_step_on_a_still_table_is_named_from_its_still_samples(self):
         # The eighth blind draw's run 439: a 1 °/h unit with its datasheet,
         # its z gyro stepping by 15 drift σ at 697 s on a still level table

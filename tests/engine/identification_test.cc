@@ -29,6 +29,7 @@
 #include "insdiag/engine/model/parameters.h"
 #include "insdiag/engine/model/state_layout.h"
 #include "scenarios.h"
+#include "support/monte_carlo.h"
 #include "support/subprocess.h"
 
 namespace insdiag::engine::ident {
@@ -353,14 +354,25 @@ const GaussMarkov& TrueDrift(const sim::SimulatedUnit& unit, const std::string& 
   return (gyro ? unit.gyro : unit.acc).bias[static_cast<size_t>(name[name.find('.') + 1] - 'x')];
 }
 
+// The claims, each threshold failing falsely with probability ≤ the one the
+// 20-seed test's hand-set thresholds allowed: every observable drift
+// resolved in 80 % of runs (≤ 0.1 %: 10 of 20); the accelerometer drifts'
+// intervals hold the truth at their nominal 95 % (≤ 1 %: 90 % of ~110
+// checks); the horizontal gyro drifts' at the 78 % measured (≤ 5 %: 70 % of
+// ~75 checks, as asserted before). The suite runs 6 seeds: resolved in at
+// least 1 of 6 (a drift never resolved fails), at least 31 of ~36
+// accelerometer checks, which catches a coverage of 80 % with probability
+// 0.75, and 15 of ~24 gyro checks, 0.85 against 50 %; the sweep 20 (1.00
+// and 1.00).
 TEST(CorrelationCoverageTest, IntervalsCoverTheTrueDriftsOverSeeds) {
   const sim::SimulatedUnit unit = CoverageUnit();
   const ErrorModel model = testing::TrueBaseModel(unit);  // the a-priori model is the truth
   const StateLayout layout(model);
   const sim::TableProfile profile = testing::BuiltinProfileOrDie("full");
+  const int seeds = insdiag::testing::Runs({.suite = 6, .sweep = kCoverageSeeds});
   std::map<std::string, std::array<int, 3>> tally;  // resolved, σ covered, τ covered
   int checks = 0, covered = 0;
-  for (int seed = 0; seed < kCoverageSeeds; ++seed) {
+  for (int seed = 0; seed < seeds; ++seed) {
     const sim::SimulatedRun s = testing::SimulateOrDie(unit, profile, kCoverageRateHz, 500 + seed);
     auto fw = RunForwardFilter(s.run, model, FilterOptions{});
     ASSERT_TRUE(fw.ok()) << fw.status();
@@ -384,8 +396,8 @@ TEST(CorrelationCoverageTest, IntervalsCoverTheTrueDriftsOverSeeds) {
     }
   }
   for (const auto& [state, t] : tally) {
-    std::printf("%-16s resolved in %2d of %d runs; σ covered %2d, τ covered %2d\n", state.c_str(), t[0],
-                kCoverageSeeds, t[1], t[2]);
+    std::printf("%-16s resolved in %2d of %d runs; σ covered %2d, τ covered %2d\n", state.c_str(), t[0], seeds, t[1],
+                t[2]);
   }
   const double rate = checks > 0 ? static_cast<double>(covered) / checks : 0.0;
   std::printf("coverage of the 95%% intervals: %d of %d (%.1f%%)\n", covered, checks, 100.0 * rate);
@@ -399,25 +411,44 @@ TEST(CorrelationCoverageTest, IntervalsCoverTheTrueDriftsOverSeeds) {
   // the exponential fit's intervals are too narrow for the horizontal gyro
   // drifts, a finding not yet fixed (docs/IDENTIFICATION.md).
   int acc_checks = 0, acc_covered = 0, gyro_checks = 0, gyro_covered = 0;
+  const int least_resolved = insdiag::testing::LeastSuccesses(seeds, 0.8, 0.001);
+  ASSERT_GT(least_resolved, 0);
+  int fewest_resolved = seeds;
   for (const auto& [state, t] : tally) {
     if (state == "gyro_bias_gm.z") continue;
-    EXPECT_GE(t[0], kCoverageSeeds / 2) << state;
+    fewest_resolved = std::min(fewest_resolved, t[0]);
+    EXPECT_GE(t[0], least_resolved) << state;
     const bool gyro = state.rfind("gyro", 0) == 0;
     (gyro ? gyro_checks : acc_checks) += 2 * t[0];
     (gyro ? gyro_covered : acc_covered) += t[1] + t[2];
   }
   ASSERT_GT(acc_checks, 0);
   ASSERT_GT(gyro_checks, 0);
-  EXPECT_GE(static_cast<double>(acc_covered) / acc_checks, 0.90);
-  EXPECT_GE(static_cast<double>(gyro_covered) / gyro_checks, 0.70);
+  const int least_acc = insdiag::testing::LeastSuccesses(acc_checks, 0.95, 0.01);
+  const int least_gyro = insdiag::testing::LeastSuccesses(gyro_checks, 0.78, 0.05);
+  std::printf("the drift resolved least often: %d of %d runs (at least %d); accelerometers covered %d of %d (at least "
+              "%d); gyro x, y covered %d of %d (at least %d)\n",
+              fewest_resolved, seeds, least_resolved, acc_covered, acc_checks, least_acc, gyro_covered, gyro_checks,
+              least_gyro);
+  ASSERT_GT(least_acc, 0);
+  ASSERT_GT(least_gyro, 0);
+  EXPECT_GE(acc_covered, least_acc);
+  EXPECT_GE(gyro_covered, least_gyro);
 }
 
 // The drifts' σ and τ the analysis reports (identified[], method ML: the
 // likelihood's estimates started from correlation processing's), over the
-// same 20 seeds as above, the a-priori model the truth. Every drift's σ is
+// same seeds as above, the a-priori model the truth. Every drift's σ is
 // reported, and τ where correlation processing resolved the drift; each
-// reported interval is a check. At 95% per check, 90% of ~170 checks is more
-// than three standard deviations below the nominal rate. At 10 Hz: at 5 Hz
+// reported interval is a check. The claims: each interval holds the truth
+// at its nominal 95 % (the threshold fails falsely with probability ≤ 0.1 %:
+// at 20 seeds, ~210 checks, it is 90 %, about three standard deviations
+// below), and each drift's σ is reported in 98 % of runs (≤ 1 %: 18 of 20).
+// Each run is an analysis of 100 minutes: the suite runs 4 seeds — ~47
+// checks, at least 39 covered, which catches a coverage of 80 % with
+// probability 0.62 and one of 70 % with 0.97 (20 seeds: 1.00); each σ
+// reported in at least 3 of 4, which catches a report rate of 50 % with
+// 0.69 — and the sweep 20. At 10 Hz: at 5 Hz
 // the strapdown's two-sample algorithm leaves a velocity error at each
 // start and end of the table's rate ramps that the scan takes for scale
 // factors (docs/IDENTIFICATION.md), and the analysis defers the re-tuning.
@@ -431,8 +462,11 @@ TEST(AnalysisDriftCoverageTest, ReportedDriftIntervalsCoverTheTruthOverSeeds) {
   // The scan's likelihood structures are not what this checks.
   options.test_walks_by_likelihood = false;
   options.test_second_orders_by_likelihood = false;
+  constexpr double kNominalCoverage = 0.95, kCoverageFalseFailure = 0.001;
+  constexpr double kClaimedReportRate = 0.98, kReportFalseFailure = 0.01;
+  const int seeds = insdiag::testing::Runs({.suite = 4, .sweep = kCoverageSeeds});
   std::map<std::string, std::array<int, 2>> tally;  // reported, covered
-  for (int seed = 0; seed < kCoverageSeeds; ++seed) {
+  for (int seed = 0; seed < seeds; ++seed) {
     const sim::SimulatedRun s = testing::SimulateOrDie(unit, profile, kRateHz, 500 + seed);
     auto a = Analyze(s.run, request, options);
     ASSERT_TRUE(a.ok()) << a.status();
@@ -452,30 +486,46 @@ TEST(AnalysisDriftCoverageTest, ReportedDriftIntervalsCoverTheTruthOverSeeds) {
   }
   int checks = 0, covered = 0;
   for (const auto& [name, t] : tally) {
-    std::printf("%-22s reported in %2d of %d runs, covers the truth in %2d\n", name.c_str(), t[0], kCoverageSeeds,
-                t[1]);
+    std::printf("%-22s reported in %2d of %d runs, covers the truth in %2d\n", name.c_str(), t[0], seeds, t[1]);
     checks += t[0];
     covered += t[1];
   }
-  std::printf("coverage of the reported 95%% intervals: %d of %d\n", covered, checks);
+  const int least_covered = insdiag::testing::LeastSuccesses(checks, kNominalCoverage, kCoverageFalseFailure);
+  const int least_reported = insdiag::testing::LeastSuccesses(seeds, kClaimedReportRate, kReportFalseFailure);
+  int fewest_reported = seeds;
+  for (const std::string sensor : {"gyro", "acc"}) {
+    for (const std::string axis : {"x", "y", "z"}) {
+      fewest_reported = std::min(fewest_reported, tally[sensor + "_bias_gm." + axis + ".sigma"][0]);
+    }
+  }
+  std::printf("coverage of the reported 95%% intervals: %d of %d (at least %d); the σ reported least often: in %d of %d "
+              "runs (at least %d)\n",
+              covered, checks, least_covered, fewest_reported, seeds, least_reported);
   // Every drift's σ in most runs (a run whose monitoring flags a fault, or
   // whose model lacks a significant effect, is not re-tuned).
+  ASSERT_GT(least_reported, 0);
   for (const std::string axis : {"x", "y", "z"}) {
-    EXPECT_GE(tally["gyro_bias_gm." + axis + ".sigma"][0], kCoverageSeeds - 2) << axis;
-    EXPECT_GE(tally["acc_bias_gm." + axis + ".sigma"][0], kCoverageSeeds - 2) << axis;
+    EXPECT_GE(tally["gyro_bias_gm." + axis + ".sigma"][0], least_reported) << axis;
+    EXPECT_GE(tally["acc_bias_gm." + axis + ".sigma"][0], least_reported) << axis;
   }
-  ASSERT_GT(checks, 0);
-  EXPECT_GE(static_cast<double>(covered) / checks, 0.90) << covered << " of " << checks;
+  ASSERT_GT(least_covered, 0);
+  EXPECT_GE(covered, least_covered) << covered << " of " << checks;
 }
 
 // Maximum-likelihood σ of the drifts (drift_likelihood.h): a unit whose
 // gyro-x drift σ is three times what the model says. τ = 300 s, so the 100-min
 // `full` run spans twenty correlation times. Over seeds, the true σ of every
-// identified drift lies inside its 95% interval (binomial: at 95% per check,
-// 85% of the checks is more than three standard deviations below), and the
-// tripled σ is told from the model's: its interval lies above it.
+// identified drift lies inside its 95% interval, and the tripled σ is told
+// from the model's: its interval lies above it. The claims: coverage at the
+// nominal 95 % and the tripled σ told in 98 % of runs, each threshold
+// failing falsely with probability ≤ 1 % (what six seeds' 85 % of ~36 checks
+// and 5 of 6 allowed). The suite runs 3 seeds: ~18 checks, at least 14
+// covered, which catches a coverage of 70 % with probability 0.67 (six
+// seeds: 0.98); told in at least 2 of 3, which catches a rate of 50 % with
+// 0.50 (six: 0.89). The sweep runs six.
 TEST(DriftLikelihoodTest, RecoversATripledGyroDriftSigmaWithinItsIntervalOverSeeds) {
-  constexpr int kSeeds = 6;
+  constexpr double kNominalCoverage = 0.95, kClaimedDetection = 0.98, kFalseFailure = 0.01;
+  const int kSeeds = insdiag::testing::Runs({.suite = 3, .sweep = 6});
   constexpr double kFactor = 3.0;
   sim::SimulatedUnit unit = CoverageUnit();
   const ErrorModel model = testing::TrueBaseModel(unit);  // what the model says
@@ -501,8 +551,13 @@ TEST(DriftLikelihoodTest, RecoversATripledGyroDriftSigmaWithinItsIntervalOverSee
     }
   }
   ASSERT_GE(checks, 4 * kSeeds);  // the accelerometer and horizontal gyro drifts at least
-  EXPECT_GE(static_cast<double>(covered) / checks, 0.85) << covered << " of " << checks;
-  EXPECT_GE(detected, kSeeds - 1);
+  const int least_covered = insdiag::testing::LeastSuccesses(checks, kNominalCoverage, kFalseFailure);
+  const int least_detected = insdiag::testing::LeastSuccesses(kSeeds, kClaimedDetection, kFalseFailure);
+  std::printf("covered %d of %d (at least %d), tripled σ told in %d of %d (at least %d)\n", covered, checks,
+              least_covered, detected, kSeeds, least_detected);
+  ASSERT_GT(least_detected, 0);
+  EXPECT_GE(covered, least_covered) << covered << " of " << checks;
+  EXPECT_GE(detected, least_detected);
 }
 
 // 5. The real RLG record at rest (no datasheet): the a-priori model comes

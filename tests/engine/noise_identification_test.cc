@@ -17,6 +17,7 @@
 #include "insdiag/engine/ident/retarget.h"
 #include "insdiag/engine/nav/rotation.h"
 #include "scenarios.h"
+#include "support/monte_carlo.h"
 
 namespace insdiag::engine::ident {
 namespace {
@@ -45,10 +46,12 @@ TEST(NoiseRetuneTest, RealRecordNisNearOne) {
 // gyros and accelerometers start at four times the truth, as an Allan curve
 // whose short-τ end is buried under quantisation bounds them; the re-tuned
 // densities must cover the truth in their 95% intervals (ln ŝ ± 1.96 SE).
-// 2 groups × 5 seeds = 10 checks; at 95% each, 8 or more of 10 fail to
-// happen with probability 1.2%.
+// Two groups a seed; at 95 % each, the threshold fails falsely with
+// probability ≤ 1.2 % (the sweep's 5 seeds: 8 of 10 checks). The suite runs
+// 3 seeds: at least 4 of 6, which catches a coverage of 50 % with
+// probability 0.66 (five seeds: 0.95).
 TEST(NoiseRetuneTest, RecoversKnownWhiteDensitiesFromTheirBoundsOverSeeds) {
-  constexpr int kSeeds = 5;
+  const int kSeeds = insdiag::testing::Runs({.suite = 3, .sweep = 5});
   constexpr double kBoundOverTruth = 4.0;
   const sim::SimulatedUnit unit = testing::NavigationGradeUnit();
   const ErrorModel truth = testing::TrueBaseModel(unit);
@@ -80,7 +83,10 @@ TEST(NoiseRetuneTest, RecoversKnownWhiteDensitiesFromTheirBoundsOverSeeds) {
     }
   }
   EXPECT_EQ(checks, 2 * kSeeds);
-  EXPECT_GE(covered, 8) << covered << " of " << checks << " intervals cover the truth";
+  const int least = insdiag::testing::LeastSuccesses(checks, 0.95, 0.012);
+  std::printf("white densities: %d of %d intervals cover the truth (at least %d)\n", covered, checks, least);
+  ASSERT_GT(least, 0);
+  EXPECT_GE(covered, least) << covered << " of " << checks << " intervals cover the truth";
 }
 
 // A bench that sways: the unit's position wanders about the reference by
@@ -128,11 +134,12 @@ bool SaysTheReferenceNoiseWasRaised(const AnalysisReport& report) {
 // (covariance matching alone gave 1.45–1.9 mm on these runs); one that moves
 // by 1 mm only along the vertical, as a floor or a suspension moves it, gets
 // its vertical σ raised and keeps the bench's horizontal accuracy; the same
-// unit on a steady bench keeps the bench's accuracy and is not FAULTY. Over
-// three seeds each. The swaying runs' verdict is not asserted: the static
-// segments' Allan fit reads the sway's acceleration (0.5 mg at 1 Hz) as
-// accelerometer white noise, 7–12 × the unit's, which the filter then
-// expects in the velocities (docs/IDENTIFICATION.md).
+// unit on a steady bench keeps the bench's accuracy and is not FAULTY. A
+// claim on every run: one seed each way in the suite, three in the sweep.
+// The swaying runs' verdict is not asserted: the static segments' Allan fit
+// reads the sway's acceleration (0.5 mg at 1 Hz) as accelerometer white
+// noise, 7–12 × the unit's, which the filter then expects in the velocities
+// (docs/IDENTIFICATION.md).
 TEST(ReferenceNoiseTest, ABenchThatSwaysHasItsReferenceNoiseMeasuredAndASteadyOneKeepsItsAccuracy) {
   constexpr double kSwayM = 1e-3;
   const ReferenceAccuracy bench = AnalysisOptions{}.reference;
@@ -142,7 +149,8 @@ TEST(ReferenceNoiseTest, ABenchThatSwaysHasItsReferenceNoiseMeasuredAndASteadyOn
   still.thermal.ambient_degc = 25.0;
   still.segments = {{sim::TableSegment::Kind::kHold, 1800.0, 0, 0, 0}};
   enum class Bench { kSteady, kSwaying, kHeaving };
-  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+  const auto seeds = static_cast<std::uint64_t>(insdiag::testing::Runs({.suite = 1, .sweep = 3}));
+  for (std::uint64_t seed = 1; seed <= seeds; ++seed) {
     const sim::SimulatedRun steady =
         testing::SimulateOrDie(testing::NavigationGradeUnit(), still, 10.0, 900 + seed);
     for (const Bench b : {Bench::kSteady, Bench::kSwaying, Bench::kHeaving}) {
