@@ -15,6 +15,7 @@
 #include "analysis/model_change.h"
 #include "analysis/model_pass.h"
 #include "analysis/run_context.h"
+#include "analysis/steps_in_raw_samples.h"
 #include "insdiag/engine/nav/reference_readout.h"
 #include "insdiag/engine/numerics/parallel_map.h"
 #include "insdiag/engine/plain_words.h"
@@ -204,31 +205,20 @@ RawSampleChange UntiltedJump(const BenchRun& run, const ident::AllanResult& alla
                          static_cast<double>(jump.window) * tau0_s, jump.p_value,
                          jump.z > 0.0 ? std::abs(jump.size) / jump.z : 0.0};
   if (channel.sensor != Sensor::kAccelerometer || run.samples.empty() || !(jump.z > 0.0)) return change;
-  const auto at = std::lower_bound(run.samples.begin(), run.samples.end(), jump.time_s,
-                                   [](const ImuSample& s, double t) { return s.t_s <= t; });
-  const auto k = static_cast<std::size_t>(at - run.samples.begin());
+  const std::size_t k = pipeline::FirstSampleAfter(run, jump.time_s);
   const auto w = static_cast<std::size_t>(jump.window);
   const auto segment = std::find_if(allan.segments.begin(), allan.segments.end(), [&](const ident::StaticSegment& s) {
     return s.first_sample + w <= k && k + w <= s.end_sample;
   });
   if (segment == allan.segments.end()) return change;
-  Eigen::Vector3d mean_rate = Eigen::Vector3d::Zero();
-  for (std::size_t i = segment->first_sample; i < segment->end_sample; ++i) mean_rate += run.samples[i].gyro_rad_s;
-  mean_rate /= static_cast<double>(segment->end_sample - segment->first_sample);
-  Eigen::Vector3d angle = Eigen::Vector3d::Zero(), mean_angle_before = Eigen::Vector3d::Zero(),
-                  mean_angle_after = Eigen::Vector3d::Zero(), force_before = Eigen::Vector3d::Zero();
-  for (std::size_t i = k - w; i < k + w; ++i) {
-    angle += (run.samples[i].gyro_rad_s - mean_rate) * tau0_s;
-    (i < k ? mean_angle_before : mean_angle_after) += angle;
-    if (i < k) force_before += run.samples[i].acc_mps2;
-  }
+  const pipeline::RawWindows windows = pipeline::RawWindowsAcross(
+      run, k, w, pipeline::MeanGyroRate(run, segment->first_sample, segment->end_sample), tau0_s);
+  const Eigen::Vector3d tilt_change = windows.TiltChange();
   const double n = static_cast<double>(w);
-  const Eigen::Vector3d turn_rad = (mean_angle_after - mean_angle_before) / n;
-  const Eigen::Vector3d tilt_change = -turn_rad.cross(force_before / n);
   double arw = 0.0;
   for (int a = 0; a < 3; ++a) arw = std::max(arw, a_priori.gyro.white_noise_density[a]);
   const double angle_noise_rad = arw * std::sqrt(n * tau0_s);
-  const double tilt_noise = angle_noise_rad * (force_before / n).norm();
+  const double tilt_noise = angle_noise_rad * windows.force_before.norm();
   // A turn the gyros do not resolve explains nothing: the jump stands as
   // the samples show it.
   if (std::abs(tilt_change[channel.axis]) < kResolvedTurnStdErrors * tilt_noise) return change;

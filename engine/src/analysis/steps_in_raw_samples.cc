@@ -10,35 +10,57 @@
 #include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::engine::pipeline {
-namespace {
+Eigen::Vector3d RawWindows::TiltChange() const { return -turn_rad.cross(force_before); }
 
-// The difference of the means over [j − w, j) and [j, j + w) of one sensor
-// axis. An accelerometer's is untilted: less the change −δθ × f̄ that the
-// turn δθ between the windows' mean angles makes of the force f̄ before it,
-// the angle integrated from j − w with `mean_rate` (Earth's rate and the
-// biases over the stretch) taken out.
-double AcrossSample(const BenchRun& run, std::size_t j, std::size_t w, const Eigen::Vector3d& mean_rate,
-                              double tau0_s, Sensor sensor, int axis) {
+RawWindows RawWindowsAcross(const BenchRun& run, std::size_t j, std::size_t w, const Eigen::Vector3d& mean_rate,
+                            double tau0_s) {
+  RawWindows out;
   Eigen::Vector3d angle = Eigen::Vector3d::Zero(), angle_before = Eigen::Vector3d::Zero(),
-                  angle_after = Eigen::Vector3d::Zero(), force_before = Eigen::Vector3d::Zero();
-  double before = 0.0, after = 0.0;
+                  angle_after = Eigen::Vector3d::Zero(), gyro_before = Eigen::Vector3d::Zero(),
+                  gyro_after = Eigen::Vector3d::Zero(), acc_after = Eigen::Vector3d::Zero();
   for (std::size_t i = j - w; i < j + w; ++i) {
     const ImuSample& s = run.samples[i];
     angle += (s.gyro_rad_s - mean_rate) * tau0_s;
-    const double reading = sensor == Sensor::kGyro ? s.gyro_rad_s[axis] : s.acc_mps2[axis];
     if (i < j) {
       angle_before += angle;
-      force_before += s.acc_mps2;
-      before += reading;
+      gyro_before += s.gyro_rad_s;
+      out.force_before += s.acc_mps2;
     } else {
       angle_after += angle;
-      after += reading;
+      gyro_after += s.gyro_rad_s;
+      acc_after += s.acc_mps2;
     }
   }
   const double n = static_cast<double>(w);
-  const Eigen::Vector3d turn_rad = (angle_after - angle_before) / n;
-  const double change = (after - before) / n;
-  return sensor == Sensor::kAccelerometer ? change - (-turn_rad.cross(force_before / n))[axis] : change;
+  out.turn_rad = (angle_after - angle_before) / n;
+  out.gyro_change = (gyro_after - gyro_before) / n;
+  out.acc_change = (acc_after - out.force_before) / n;
+  out.force_before /= n;
+  return out;
+}
+
+Eigen::Vector3d MeanGyroRate(const BenchRun& run, std::size_t first, std::size_t end) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (std::size_t i = first; i < end; ++i) sum += run.samples[i].gyro_rad_s;
+  return sum / static_cast<double>(end - first);
+}
+
+std::size_t FirstSampleAfter(const BenchRun& run, double t_s) {
+  const auto at = std::upper_bound(run.samples.begin(), run.samples.end(), t_s,
+                                   [](double t, const ImuSample& s) { return t < s.t_s; });
+  return static_cast<std::size_t>(at - run.samples.begin());
+}
+
+namespace {
+
+// The difference of one sensor axis' window means across sample j; an
+// accelerometer's untilted, less the change the turn between the windows
+// makes of gravity in it.
+double AcrossSample(const BenchRun& run, std::size_t j, std::size_t w, const Eigen::Vector3d& mean_rate,
+                    double tau0_s, Sensor sensor, int axis) {
+  const RawWindows windows = RawWindowsAcross(run, j, w, mean_rate, tau0_s);
+  return sensor == Sensor::kGyro ? windows.gyro_change[axis]
+                                 : windows.acc_change[axis] - windows.TiltChange()[axis];
 }
 
 }  // namespace
@@ -47,9 +69,7 @@ std::optional<RawAcrossOnset> RawSamplesAcrossOnset(const BenchRun& run, const R
                                                     const EffectTerm& term, double onset_s, double window_s) {
   const double tau0_s = raw.sample_interval_s;
   if (run.samples.empty() || !(tau0_s > 0.0) || !(window_s > 0.0)) return std::nullopt;
-  const auto at = std::lower_bound(run.samples.begin(), run.samples.end(), onset_s,
-                                   [](const ImuSample& s, double t) { return s.t_s <= t; });
-  const auto k = static_cast<std::size_t>(at - run.samples.begin());
+  const std::size_t k = FirstSampleAfter(run, onset_s);
   const auto stretch = std::find_if(raw.still.begin(), raw.still.end(), [&](const StillStretch& s) {
     return s.first_sample < k && k < s.end_sample;
   });
@@ -57,9 +77,7 @@ std::optional<RawAcrossOnset> RawSamplesAcrossOnset(const BenchRun& run, const R
   const auto widest = static_cast<std::size_t>(std::lround(window_s / tau0_s));
   const std::size_t w = std::min({widest, k - stretch->first_sample, stretch->end_sample - k});
   if (w < 2 || 4 * w < widest) return std::nullopt;
-  Eigen::Vector3d mean_rate = Eigen::Vector3d::Zero();
-  for (std::size_t i = stretch->first_sample; i < stretch->end_sample; ++i) mean_rate += run.samples[i].gyro_rad_s;
-  mean_rate /= static_cast<double>(stretch->end_sample - stretch->first_sample);
+  const Eigen::Vector3d mean_rate = MeanGyroRate(run, stretch->first_sample, stretch->end_sample);
   const Sensor sensor = term.family->sensor;
   const double centre = AcrossSample(run, k, w, mean_rate, tau0_s, sensor, term.axis);
   // The same difference at the stretch's other positions, two windows or

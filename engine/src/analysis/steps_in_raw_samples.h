@@ -25,6 +25,8 @@
 // checked: its raw samples say nothing the navigation errors do not.
 #pragma once
 
+#include <Eigen/Core>
+#include <cstddef>
 #include <optional>
 #include <vector>
 
@@ -34,6 +36,30 @@
 #include "insdiag/engine/report.h"
 
 namespace insdiag::engine::pipeline {
+
+// The raw samples either side of sample j of a still stretch: over
+// [j − w, j) and [j, j + w), the change of the gyros' and accelerometers'
+// window means, the turn between the windows' mean angles (the gyros' rate
+// less `mean_rate` — Earth's rate and the biases over the stretch —
+// integrated from j − w), and the force's mean before. A turn δθ changes a
+// still unit's reading of gravity by Δf = −δθ × f̄ (Titterton & Weston
+// §3.6), a change of the samples but not of the sensor: TiltChange.
+struct RawWindows {
+  Eigen::Vector3d gyro_change = Eigen::Vector3d::Zero();
+  Eigen::Vector3d acc_change = Eigen::Vector3d::Zero();
+  Eigen::Vector3d turn_rad = Eigen::Vector3d::Zero();
+  Eigen::Vector3d force_before = Eigen::Vector3d::Zero();
+
+  Eigen::Vector3d TiltChange() const;
+};
+RawWindows RawWindowsAcross(const BenchRun& run, std::size_t j, std::size_t w, const Eigen::Vector3d& mean_rate,
+                            double tau0_s);
+
+// The gyros' mean rate over samples [first, end) of `run`.
+Eigen::Vector3d MeanGyroRate(const BenchRun& run, std::size_t first, std::size_t end);
+
+// The index of the first sample of `run` after `t_s`.
+std::size_t FirstSampleAfter(const BenchRun& run, double t_s);
 
 struct RawAcrossOnset {
   double window_s = 0.0;
