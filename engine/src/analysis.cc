@@ -309,6 +309,11 @@ absl::StatusOr<pipeline::APriori> ChooseAPrioriModel(const BenchRun& run, const 
     return out;
   }
   allan = AllanOfStaticSegments(run, options, notes);
+  if (allan.has_value()) {
+    for (const ident::AllanChannel& ch : allan->channels)
+      out.counted_quantisation[static_cast<size_t>(DriftAxis{ch.sensor, ch.axis}.Index())] =
+          ch.CountedQuantisation();
+  }
   if (model.ok()) {
     const auto beyond = allan.has_value() ? DepartureBeyondSearch(*allan, *model, out.drift_starts,
                                                                   options.monitor.family_wise_alpha)

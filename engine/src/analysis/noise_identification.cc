@@ -34,9 +34,13 @@ void KeepQuantisationTheInnovationsSupport(const RunContext& c, QuantisationTest
                                            ErrorModel& model,
                                            std::vector<ParameterEstimate>& identified,
                                            std::vector<std::string>& notes) {
-  const Eigen::Vector3d stated = c.a_priori.from_allan
-                                     ? Eigen::Vector3d::Zero()
-                                     : Eigen::Vector3d(c.a_priori.model.acc.quantization);
+  Eigen::Vector3d stated = c.a_priori.from_allan ? Eigen::Vector3d::Zero()
+                                                 : Eigen::Vector3d(c.a_priori.model.acc.quantization);
+  for (int axis = 0; axis < 3; ++axis) {
+    const double counted =
+        c.a_priori.counted_quantisation[static_cast<size_t>(DriftAxis{Sensor::kAccelerometer, axis}.Index())];
+    stated[axis] = std::max(stated[axis], counted);
+  }
   if (model.acc.quantization == stated) return;
   ErrorModel without = model;
   without.acc.quantization = stated;

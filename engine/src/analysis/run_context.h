@@ -28,6 +28,11 @@ struct APriori {
   bool from_allan = false;
   // Where drift identification starts (a datasheet's drifts need no grid).
   ident::DriftStartOptions drift_starts;
+  // Per sensor axis (DriftAxis::Index order), the remainder of the counter
+  // its samples are read from, q/√12 (count_quantum.h); 0 where they are not
+  // counts. The quantisation term never falls below it: it is read from the
+  // samples, not a term the innovations are asked to support.
+  std::array<double, DriftAxis::kCount> counted_quantisation{};
 };
 
 struct RunContext {

@@ -65,6 +65,18 @@ Eigen::MatrixXd InitialCovariance(const ErrorModel& model, const StateLayout& la
     P(layout.velocity() + i, layout.velocity() + i) = velocity_sigma_mps * velocity_sigma_mps;
     P(layout.position() + i, layout.position() + i) = position_sigma_m * position_sigma_m;
   }
+  // A counter's residue at the run's start is unknown, uniform over a
+  // quantum: the velocity (angle) the counts have not yet delivered, of
+  // variance Q² per sensor axis (IEEE Std 952-1997, Annex C), in NED by the
+  // start's attitude. It is a start error of the velocity and attitude, not
+  // an observation's: the position integrates it from the first sample.
+  if (!run.epochs.empty()) {
+    const Eigen::Matrix3d& C_b_n = run.epochs.front().C_b_n;
+    P.block<3, 3>(layout.velocity(), layout.velocity()).noalias() +=
+        C_b_n * model.acc.quantization.cwiseAbs2().asDiagonal() * C_b_n.transpose();
+    P.block<3, 3>(layout.attitude(), layout.attitude()).noalias() +=
+        C_b_n * model.gyro.quantization.cwiseAbs2().asDiagonal() * C_b_n.transpose();
+  }
   for (const SensorState& s : layout.sensor_states()) {
     double var = 0.0;
     switch (s.dynamics) {

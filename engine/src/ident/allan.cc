@@ -1,4 +1,5 @@
 #include "insdiag/engine/ident/allan.h"
+#include "insdiag/engine/ident/count_quantum.h"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -389,6 +390,20 @@ std::vector<RateRamp> TakeOutRamps(const BenchRun& run, std::vector<std::vector<
 
 }  // namespace
 
+double AllanChannel::CountedQuantisation() const {
+  return count_quantum.has_value() ? *count_quantum / std::sqrt(12.0) : 0.0;
+}
+
+double AllanChannel::Quantisation() const {
+  const AllanTermEstimate& q = fit[AllanParameter::kQuantization];
+  return std::max(CountedQuantisation(), q.included ? q.value : 0.0);
+}
+
+bool AllanChannel::QuantisationIsCounted() const {
+  const AllanTermEstimate& q = fit[AllanParameter::kQuantization];
+  return count_quantum.has_value() && !(q.included && q.value > CountedQuantisation());
+}
+
 absl::StatusOr<AllanResult> AllanAnalysis(const BenchRun& run, const AllanOptions& options) {
   auto segments = FindStaticSegments(run, options);
   if (!segments.ok()) return segments.status();
@@ -424,6 +439,7 @@ absl::StatusOr<AllanResult> AllanAnalysis(const BenchRun& run, const AllanOption
       return absl::FailedPreconditionError(
           "Allan: the static segments are too short for any cluster");
     ch.curve = OverlappingAllanCurve(pieces, tau0, m, options);
+    ch.count_quantum = CountQuantum(run, DriftAxis{ch.sensor, ch.axis});
     ch.ramp_evidence = RampBeyondNoise(pieces, ch.curve, options);
     if (ch.ramp_evidence.has_value()) {
       ch.ramps = TakeOutRamps(run, pieces, first_samples, tau0, options);
@@ -465,7 +481,19 @@ std::vector<ParameterEstimate> AllanParameterEstimates(const AllanResult& result
     };
     const DriftAxis drift{ch.sensor, ch.axis};
     const SensorUnits units = UnitsOf(ch.sensor);
-    add(AllanParameter::kQuantization, QuantizationName(drift), units.quantization);
+    if (ch.QuantisationIsCounted()) {
+      // Read from the samples' lattice, not estimated: no standard error.
+      ParameterEstimate e;
+      e.name = QuantizationName(drift);
+      e.value = ch.Quantisation();
+      e.std_error = 0.0;
+      e.method = EstimationMethod::kAllan;
+      e.unit = std::string(units.quantization);
+      if (auto it = prior.find(e.name); it != prior.end()) e.a_priori = it->second;
+      out.push_back(e);
+    } else {
+      add(AllanParameter::kQuantization, QuantizationName(drift), units.quantization);
+    }
     add(AllanParameter::kWhiteDensity, WhiteNoiseName(drift), units.white_density);
     add(AllanParameter::kBiasInstability, s + "_bias_instability." + axis, units.rate);
     add(AllanParameter::kRateRandomWalk, s + "_rate_random_walk." + axis, units.rate_walk);
@@ -559,8 +587,7 @@ absl::StatusOr<ErrorModel> ErrorModelFromAllan(const AllanResult& result, const 
       triad.white_noise_density[ch.axis] = std::isfinite(bound) ? bound : 0.0;
       note(ch.name + ": white noise not resolved, density set to the bound min σ̂√τ");
     }
-    triad.quantization[ch.axis] =
-        fit[AllanParameter::kQuantization].included ? fit[AllanParameter::kQuantization].value : 0.0;
+    triad.quantization[ch.axis] = ch.Quantisation();
 
     auto drift = DriftPlaceholder(ch);
     if (!drift.ok()) return drift.status();

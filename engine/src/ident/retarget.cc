@@ -148,8 +148,11 @@ std::vector<ParameterEstimate> ApplyAllanNoise(const AllanResult& allan, const E
       p.a_priori = prior.white_noise_density[ch.axis];
       used.push_back(p);
     }
-    if (q.included && q.value > 0.0 && std::isfinite(q.std_error) &&
-        rejects(q.value, q.std_error, prior.quantization[ch.axis])) {
+    if (ch.QuantisationIsCounted()) {
+      // The counter's quantum is read, not estimated: it stands.
+      triad.quantization[ch.axis] = ch.Quantisation();
+    } else if (q.included && q.value > 0.0 && std::isfinite(q.std_error) &&
+               rejects(q.value, q.std_error, prior.quantization[ch.axis])) {
       triad.quantization[ch.axis] = q.value;
     }
   }

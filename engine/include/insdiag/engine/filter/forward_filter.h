@@ -147,8 +147,9 @@ absl::StatusOr<ForwardPass> RunForwardFilter(const BenchRun& run, const ErrorMod
 
 // The filter's initial covariance for a model and a run: the reference's
 // accuracy for the navigation errors — the initial attitude's as the run
-// states it (level and heading), else the encoders' — and steady-state or
-// prior variances for the sensor states.
+// states it (level and heading), else the encoders', with the counters'
+// unknown residue at the start (quantisation) — and steady-state or prior
+// variances for the sensor states.
 Eigen::MatrixXd InitialCovariance(const ErrorModel& model, const StateLayout& layout, const EpochRun& run);
 
 // The 1σ of a heading the bench did not survey: what gyro-compassing the

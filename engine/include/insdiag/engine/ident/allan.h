@@ -375,6 +375,22 @@ struct AllanChannel {
   std::optional<RampEvidence> ramp_evidence;
   std::vector<AllanPoint> curve;
   AllanFit fit;
+  // The output's counting quantum q, where its samples are counts
+  // (count_quantum.h).
+  std::optional<double> count_quantum;
+
+  // The counter's remainder, q/√12 (count_quantum.h); 0 for an output that
+  // is not counted.
+  double CountedQuantisation() const;
+  // The quantisation coefficient Q of the error model [rad | m/s]: the
+  // fit's Q where it resolves one, never below the counter's remainder. The
+  // curve's √3 Q/τ branch is any bounded velocity (angle) error — the
+  // counter's remainder and the unit's vibration the reference does not
+  // record alike — and falls below the remainder only where the input does
+  // not move the counter at random (count_quantum.h).
+  double Quantisation() const;
+  // Whether Quantisation() is the counter's remainder, read rather than fitted.
+  bool QuantisationIsCounted() const;
 };
 
 struct AllanResult {
@@ -419,7 +435,8 @@ std::vector<ParameterEstimate> AllanParameterEstimates(const AllanResult& result
 
 // An a-priori base model from the fit, for a run without datasheet values:
 //   white noise density ← N; when N is not resolved, the tangent bound min_j σ̂_j √τ_j;
-//   quantisation ← Q (0 when not resolved);
+//   quantisation ← AllanChannel::Quantisation(): Q (0 when not resolved), at
+//     least a counted output's remainder q/√12;
 //   Gauss–Markov drift ← (σ_m, T) when fitted; else from B: the Markov process whose
 //     Allan peak (√g* σ_m at τ = u* T, g(u) = (2u − 3 + 4e^{−u} − e^{−2u})/u², maximal at
 //     u* ≈ 1.89) equals the flicker floor √(2ln2/π) B at the τ where the fitted curve is
