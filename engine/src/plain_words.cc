@@ -122,7 +122,27 @@ Misfit MisfitOf(const AnalysisReport& r, bool gradual_only) {
   return m;
 }
 
-std::string VerdictLine(const AnalysisReport& r, int faults) {
+// The channels whose own mean NIS lies outside its band, farthest first (at
+// most three), as "lat (NIS 0.35), height (0.62)".
+std::string ChannelsOutsideTheirBand(const AnalysisReport& r, double family_wise_alpha) {
+  std::vector<const ChannelFit*> outside;
+  for (const ChannelFit& c : r.channels) {
+    if (c.count > 0 && c.nis_mean > 0.0 && MeanNisBandOf(c.count, family_wise_alpha).Excludes(c.nis_mean))
+      outside.push_back(&c);
+  }
+  std::ranges::sort(outside, [](const ChannelFit* a, const ChannelFit* b) {
+    return std::abs(std::log(a->nis_mean)) > std::abs(std::log(b->nis_mean));
+  });
+  if (outside.size() > 3) outside.resize(3);
+  std::vector<std::string> parts;
+  for (const ChannelFit* c : outside)
+    parts.push_back(absl::StrFormat(parts.empty() ? "%s (NIS %.2f)" : "%s (%.2f)", c->name, c->nis_mean));
+  return absl::StrJoin(parts, ", ");
+}
+
+bool QuieterThanItsModel(const AnalysisReport& r) { return r.nis_mean < r.nis_band_low; }
+
+std::string VerdictLine(const AnalysisReport& r, int faults, double family_wise_alpha) {
   const std::string fit = absl::StrFormat("NIS %.3f, band %.3f–%.3f", r.nis_mean, r.nis_band_low, r.nis_band_high);
   // FAULTY without a fault effect is the moving-window test's verdict: its
   // gradual intervals say where.
@@ -133,7 +153,19 @@ std::string VerdictLine(const AnalysisReport& r, int faults) {
                              fit);
     case Verdict::kOperable:
       if (misfit.intervals == 0) {
-        return absl::StrFormat("OPERABLE: no sensor fault stands, but the model's fit is outside its band (%s).", fit);
+        // No interval: the whole run's NIS is outside its band. Which way,
+        // and where, tells a pessimistic model from a noisy bench.
+        const std::string where = ChannelsOutsideTheirBand(r, family_wise_alpha);
+        const std::string most = where.empty() ? "" : ", most on " + where;
+        if (QuieterThanItsModel(r)) {
+          return absl::StrFormat(
+              "OPERABLE: no sensor fault stands; the run is quieter than its model (%s, below the band)%s: the "
+              "test is less sensitive there than the unit allows.",
+              fit, most);
+        }
+        return absl::StrFormat("OPERABLE: no sensor fault stands, but the run is noisier than its model (%s, above "
+                               "the band)%s.",
+                               fit, most);
       }
       return absl::StrFormat(
           "OPERABLE: no sensor fault stands, but the model misfits in %d interval(s) on %s, the first at %.0f s (%s).",
@@ -181,7 +213,7 @@ std::vector<std::string> PlainWordsVerdict(const AnalysisReport& report, const B
     findings.push_back("  " + FindingLine(*c, channel, run));
   }
 
-  std::vector<std::string> lines = {VerdictLine(report, faults)};
+  std::vector<std::string> lines = {VerdictLine(report, faults, family_wise_alpha)};
   lines.insert(lines.end(), findings.begin(), findings.end());
   std::string to_do;
   if (faults > 0) {
@@ -194,6 +226,11 @@ std::vector<std::string> PlainWordsVerdict(const AnalysisReport& report, const B
                             missing.front()->name, missing.front()->name);
   } else if (report.verdict == Verdict::kFaulty) {
     to_do = "read where the model fails below, check the bench at those times, and test again";
+  } else if (report.verdict == Verdict::kOperable && report.faults.empty() && QuieterThanItsModel(report)) {
+    to_do = "nothing on the unit; its datasheet's noise figures, or a longer still run, would let the test be as "
+            "sensitive as the unit allows";
+  } else if (report.verdict == Verdict::kOperable && report.faults.empty()) {
+    to_do = "check the bench for vibration or motion the reference does not record, and test again";
   } else if (report.verdict == Verdict::kOperable) {
     to_do = "check the bench at those times (a knock, motion, power), and test again if they recur";
   } else {

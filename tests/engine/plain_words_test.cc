@@ -90,5 +90,38 @@ TEST(PlainWords, AMissingConstantIsToBeAddedNotAModuleToCheck) {
   EXPECT_THAT(lines[2], ::testing::Not(HasSubstr("module")));
 }
 
+// A run whose NIS lies outside its band with no interval: which way says
+// whether the model is pessimistic (nothing to do on the unit) or the bench
+// noisy, and the channels outside their own band say where.
+TEST(PlainWords, AWholeRunOutsideItsBandSaysWhichWayAndWhere) {
+  AnalysisReport report;
+  report.verdict = Verdict::kOperable;
+  report.nis_band_low = 0.9;
+  report.nis_band_high = 1.1;
+  const int updates = 300;  // five minutes of one-second updates a channel
+  auto channel = [&](const char* name, double nis) {
+    ChannelFit c;
+    c.name = name;
+    c.count = updates;
+    c.nis_mean = nis;
+    return c;
+  };
+  report.channels = {channel("lat", 0.35), channel("lon", 0.98), channel("vel_d", 0.6)};
+  report.nis_mean = 0.64;
+  std::vector<std::string> lines = PlainWordsVerdict(report, StepRun(), 0.01);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_THAT(lines[0], HasSubstr("quieter than its model"));
+  EXPECT_THAT(lines[0], HasSubstr("most on lat (NIS 0.35), vel_d (0.60)"));
+  EXPECT_THAT(lines[0], ::testing::Not(HasSubstr("lon")));
+  EXPECT_THAT(lines[1], HasSubstr("nothing on the unit"));
+
+  report.channels = {channel("vel_n", 1.7), channel("lat", 1.02)};
+  report.nis_mean = 1.3;
+  lines = PlainWordsVerdict(report, StepRun(), 0.01);
+  EXPECT_THAT(lines[0], HasSubstr("noisier than its model"));
+  EXPECT_THAT(lines[0], HasSubstr("most on vel_n (NIS 1.70)"));
+  EXPECT_THAT(lines[1], HasSubstr("vibration or motion"));
+}
+
 }  // namespace
 }  // namespace insdiag::engine
