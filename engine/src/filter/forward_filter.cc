@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "insdiag/engine/nav/wgs84.h"
+#include "insdiag/engine/numerics/large_buffers.h"
 
 
 namespace insdiag::engine {
@@ -200,6 +201,7 @@ EpochFilter::ObservationNoise EpochFilter::ObservationNoiseAt(const EpochInterva
 void EpochFilter::ApplyFeedback(const NavigationVector& u) { x_.head<kNavigationStates>() -= u; }
 
 absl::StatusOr<ForwardPass> RunForwardFilter(const EpochRun& run, const ErrorModel& model, FilterObserver* observer) {
+  numerics::KeepLargeBuffersForReuse();
   if (auto st = ValidateErrorModel(model); !st.ok()) return st;
   if (run.epochs.empty()) return absl::InvalidArgumentError("the condensed run has no epochs");
   const StateLayout layout(model);

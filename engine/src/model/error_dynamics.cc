@@ -207,8 +207,12 @@ void SensorBlocks::RightMultiplyTranspose(Eigen::Ref<Eigen::MatrixXd> M) const {
     if (b.size == 1) {
       M.col(b.offset) *= b.m(0, 0);
     } else {
-      const Eigen::MatrixXd cols = M.middleCols(b.offset, 2) * b.m.transpose();
-      M.middleCols(b.offset, 2) = cols;
+      // A pair's two columns, row by row: in place, with no temporary.
+      const Eigen::Matrix2d mt = b.m.topLeftCorner<2, 2>().transpose();
+      for (Eigen::Index i = 0; i < M.rows(); ++i) {
+        const Eigen::RowVector2d row = M.block<1, 2>(i, b.offset);
+        M.block<1, 2>(i, b.offset).noalias() = row * mt;
+      }
     }
   }
 }
@@ -222,9 +226,12 @@ Eigen::MatrixXd SensorBlocks::Dense(int m) const {
 // ---- StateTransition, IntervalTransition ------------------------------------
 
 void StateTransition::PropagateMean(Eigen::VectorXd& x) const {
+  // Scratch per thread, sized once per pass: this runs every epoch.
+  thread_local Eigen::RowVectorXd sensors;
   const auto m = B.cols();
-  NavigationVector nav = A * x.head<kNavigationStates>() + B * x.tail(m);
-  Eigen::RowVectorXd sensors = x.tail(m).transpose();
+  NavigationVector nav = A * x.head<kNavigationStates>();
+  nav.noalias() += B * x.tail(m);
+  sensors = x.tail(m).transpose();
   D.RightMultiplyTranspose(sensors);
   x.head<kNavigationStates>() = nav;
   x.tail(m) = sensors.transpose();
