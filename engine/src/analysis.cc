@@ -73,7 +73,7 @@ absl::StatusOr<ErrorModel> APrioriModel(const BenchRun& run, const std::optional
 std::vector<ParameterEstimate> RemoveDominantConstants(BenchRun& run, const std::optional<ident::AllanResult>& allan,
                                                        const pipeline::APriori& a_priori, const AnalysisOptions& options,
                                                        std::vector<std::string>& notes) {
-  const ident::ConstantPrior prior = a_priori.from_allan ? ident::ConstantPrior::kNone
+  const ident::ConstantPrior prior = a_priori.FromAllanFit() ? ident::ConstantPrior::kNone
                                                          : ident::ConstantPrior::kBoundedByDrift;
   if (allan.has_value()) {
     return ident::RemoveDominantConstants(run, allan->segments, a_priori.model, options.dominant_constants, prior,
@@ -304,7 +304,7 @@ absl::StatusOr<pipeline::APriori> ChooseAPrioriModel(const BenchRun& run, const 
                                                    d.acc_bias_sigma_mps2 && d.acc_bias_tau_s &&
                                                    model.ok()) {
     out.drift_starts.grid_tau_points = 0;
-    out.from_datasheet = true;
+    out.source = pipeline::APrioriSource::kDatasheet;
     out.model = *std::move(model);
     return out;
   }
@@ -340,7 +340,7 @@ absl::StatusOr<pipeline::APriori> ChooseAPrioriModel(const BenchRun& run, const 
   auto from_allan = ident::ErrorModelFromAllan(*allan, reference, &notes);
   if (!from_allan.ok()) return from_allan.status();
   out.model = *std::move(from_allan);
-  out.from_allan = true;
+  out.source = pipeline::APrioriSource::kAllanFit;
   if (!model.ok()) {
     notes.push_back(
         "the run has no complete datasheet and no nominal model: the a-priori model comes from its "
@@ -491,7 +491,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   numerics::InParallel(
       [&] { epochs = CondenseRun(run, base, options.filter.update_interval_s, &compensations); },
       [&] {
-        if (a_priori->from_datasheet) allan = AllanOfStaticSegments(run, options, allan_notes);
+        if (a_priori->FromDatasheet()) allan = AllanOfStaticSegments(run, options, allan_notes);
       });
   notes.insert(notes.end(), allan_notes.begin(), allan_notes.end());
   if (!epochs.ok()) return epochs.status();

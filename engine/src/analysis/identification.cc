@@ -135,7 +135,7 @@ struct Retargeted {
   // likelihood stay the unit's specification; testing faults against them
   // called a healthy accelerometer's step at p 0.004 on a gyro drift σ × 10.
   bool DriftsFromAClassPrior(const APriori& a_priori) const {
-    return a_priori.from_allan || (drifts_by_likelihood && !a_priori.from_datasheet);
+    return a_priori.FromAllanFit() || (drifts_by_likelihood && !a_priori.FromDatasheet());
   }
 
   // Whether the final identification holds the drifts back because faults
@@ -143,7 +143,7 @@ struct Retargeted {
   // An Allan fit's placeholders are not held: what they flag says how far
   // they are from the unit, not that it failed.
   bool HoldsDriftsForFlaggedFaults(const APriori& a_priori) const {
-    return faults_flagged && !a_priori.from_allan;
+    return faults_flagged && !a_priori.FromAllanFit();
   }
 
   // Whether both sides of a fault's test identify drifts the model's own
@@ -240,7 +240,7 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
   }
   const double drift_bic = -DriftStatistic(*ml) + static_cast<double>(ml->identified.size()) * log_n;
   if (drift_bic < best.predicted_delta_bic &&
-      ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, c.a_priori.from_allan, base, identified, notes)) {
+      ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, c.a_priori.FromAllanFit(), base, identified, notes)) {
     notes.push_back(absl::StrFormat("the a-priori model's misfit is the drifts' σ rather than a missing effect (ΔBIC "
                                     "%.1f against the best candidate's %.1f): the model takes them and is scanned "
                                     "again",
@@ -255,7 +255,7 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
   const EffectFamily* family = FindEffectFamily(best.family);
   const bool fault = family != nullptr && family->kind == EffectKind::kFault;
   std::optional<absl::StatusOr<ident::DriftLikelihoodResult>> beside;
-  if (!c.a_priori.from_datasheet || fault) {
+  if (!c.a_priori.FromDatasheet() || fault) {
     beside = DriftsBesideTheCandidate(c, pass, found, best, base);
     if (!beside->ok()) {
       notes.push_back("the drifts were not identified beside " + best.name + ": " +
@@ -267,7 +267,7 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
   // drift takes its slow part: that drift alone would be left too narrow),
   // and the candidate is scanned again against them; a fault among the
   // candidates is tested against the drifts identified beside it.
-  if (!c.a_priori.from_datasheet && DriftsOffBesideTheCandidate(c, *beside)) {
+  if (!c.a_priori.FromDatasheet() && DriftsOffBesideTheCandidate(c, *beside)) {
     const double statistic = DriftStatistic(**beside);
     const auto dof = static_cast<int>((*beside)->identified.size());
     notes.push_back(absl::StrFormat(
@@ -276,7 +276,7 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
         "the a-priori model's misfit is its drifts as well",
         best.name, dof, (*beside)->iterations, (*beside)->filter_passes, statistic, dof,
         options.monitor.family_wise_alpha));
-    if (ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, c.a_priori.from_allan, base,
+    if (ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, c.a_priori.FromAllanFit(), base,
                              identified, notes)) {
       notes.push_back(absl::StrFormat(
           "the model takes the drifts' own estimates (ΔBIC %.1f; the best candidate's "
@@ -336,7 +336,7 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std
     // protect: its drift τ is a bound of the static segments (the longest τ
     // analysed) or a guess from them, and its misfit shows as effects. Its
     // drifts are re-tuned by the whole run before the scan.
-    const bool scan_a_priori = first && !c.a_priori.from_allan;
+    const bool scan_a_priori = first && !c.a_priori.FromAllanFit();
     std::vector<std::string> found_notes;
     out.drifts = ident::CorrelateDrifts(pass->forward, pass->smoothed, *pass->layout, options.correlation,
                                         scan_a_priori ? &found_notes : nullptr);
@@ -430,7 +430,7 @@ absl::StatusOr<ident::DriftLikelihoodResult> IdentifyDriftSet(const RunContext& 
     const bool keep_for_faults =
         !both_sides_of_a_fault_test && retargeted.HoldsDriftsForFlaggedFaults(c.a_priori);
     selection.Set(d, !keep_for_faults && resolved.Contains(d) == resolved_set);
-    tau_too.Set(d, selection.Contains(d) && (resolved_set || c.a_priori.from_allan));
+    tau_too.Set(d, selection.Contains(d) && (resolved_set || c.a_priori.FromAllanFit()));
   }
   if (c.a_priori.drift_starts.grid_tau_points > 0) {
     return ident::IdentifyDriftsFromGrid(c.epochs, model, c.a_priori.model, selection, tau_too,
@@ -457,7 +457,7 @@ void IdentifyFinalDrifts(const RunContext& c, const Retargeted& retargeted, Iden
     if (!ml.ok()) {
       notes.push_back("the drifts were not identified by likelihood: " + std::string(ml.status().message()));
     } else {
-      ApplyDriftLikelihood(*ml, c.options.monitor.family_wise_alpha, c.a_priori.from_allan, id.model, id.identified,
+      ApplyDriftLikelihood(*ml, c.options.monitor.family_wise_alpha, c.a_priori.FromAllanFit(), id.model, id.identified,
                            notes);
     }
   }

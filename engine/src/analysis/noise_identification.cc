@@ -34,7 +34,7 @@ void KeepQuantisationTheInnovationsSupport(const RunContext& c, QuantisationTest
                                            ErrorModel& model,
                                            std::vector<ParameterEstimate>& identified,
                                            std::vector<std::string>& notes) {
-  Eigen::Vector3d stated = c.a_priori.from_allan ? Eigen::Vector3d::Zero()
+  Eigen::Vector3d stated = c.a_priori.FromAllanFit() ? Eigen::Vector3d::Zero()
                                                  : Eigen::Vector3d(c.a_priori.model.acc.quantization);
   for (int axis = 0; axis < 3; ++axis) {
     const double counted =
@@ -142,7 +142,7 @@ bool FitReferenceNoiseTheInnovationsReject(const RunContext& c, const ForwardPas
 void RetuneUnresolvedNoise(const RunContext& c, const std::optional<ident::AllanResult>& allan,
                            ErrorModel& base, std::vector<ParameterEstimate>& identified,
                            std::vector<std::string>& notes) {
-  const ident::UnresolvedNoise unresolved = c.a_priori.from_allan && allan.has_value()
+  const ident::UnresolvedNoise unresolved = c.a_priori.FromAllanFit() && allan.has_value()
                                                 ? ident::UnresolvedAllanTerms(*allan)
                                                 : ident::UnresolvedNoise{};
   if (!c.options.retune_unresolved_noise || !unresolved.Any()) return;

@@ -18,14 +18,24 @@
 
 namespace insdiag::engine::pipeline {
 
+// Where the a-priori model came from.
+enum class APrioriSource {
+  // The run's complete datasheet: the unit's own specification.
+  kDatasheet,
+  // The unit type's nominal model: a class prior drift identification
+  // searches decades from.
+  kNominal,
+  // The run's own Allan fit: its drift τ is a bound or a guess of the static
+  // segments, a placeholder the whole run re-tunes.
+  kAllanFit,
+};
+
 // The a-priori model and where it came from.
 struct APriori {
   ErrorModel model;
-  // From the run's complete datasheet: the unit's own specification.
-  bool from_datasheet = false;
-  // From the run's own Allan fit: its drift τ is a bound or a guess of the
-  // static segments, a placeholder the whole run re-tunes.
-  bool from_allan = false;
+  APrioriSource source = APrioriSource::kNominal;
+  bool FromDatasheet() const { return source == APrioriSource::kDatasheet; }
+  bool FromAllanFit() const { return source == APrioriSource::kAllanFit; }
   // Where drift identification starts (a datasheet's drifts need no grid).
   ident::DriftStartOptions drift_starts;
   // Per sensor axis (DriftAxis::Index order), the remainder of the counter
