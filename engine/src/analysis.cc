@@ -418,9 +418,8 @@ AnalysisOptions OptionsForThisRun(const AnalysisOptions& options,
                                   const std::optional<ident::AllanResult>& allan) {
   AnalysisOptions out = options;
   out.drift_likelihood.raw_sample_ceilings =
-      options.bound_drifts_by_raw_samples && allan.has_value()
-          ? ident::DriftCeilings::FromAllan(*allan, options.monitor.family_wise_alpha)
-          : ident::DriftCeilings{};
+      allan.has_value() ? ident::DriftCeilings::FromAllan(*allan, options.monitor.family_wise_alpha)
+                        : ident::DriftCeilings{};
   return out;
 }
 

@@ -362,9 +362,7 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std
       best = LowestBicSignificant(found.candidates, found.families, options);
     }
     if (best != nullptr) {
-      if (options.identify_drifts_by_likelihood &&
-          ChooseDriftsOverTheBestCandidate(c, *pass, found, *best, id.model, id.identified,
-                                           notes)) {
+      if (ChooseDriftsOverTheBestCandidate(c, *pass, found, *best, id.model, id.identified, notes)) {
         out.drifts_by_likelihood = true;
         continue;
       }
@@ -622,7 +620,7 @@ absl::StatusOr<Identification> IdentifyModel(const RunContext& c, const std::opt
   id.model = std::move(base);
   auto retargeted = Retarget(c, id, notes);
   if (!retargeted.ok()) return retargeted.status();
-  if (c.options.identify_drifts_by_likelihood && !retargeted->deferred) {
+  if (!retargeted->deferred) {
     IdentifyFinalDrifts(c, *retargeted, id, notes);
     // Drifts re-tuned from the unit's own specification keep what the scan finds beside them.
     if (retargeted->DriftsFromAClassPrior(c.a_priori))

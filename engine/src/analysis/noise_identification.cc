@@ -145,7 +145,7 @@ void RetuneUnresolvedNoise(const RunContext& c, const std::optional<ident::Allan
   const ident::UnresolvedNoise unresolved = c.a_priori.FromAllanFit() && allan.has_value()
                                                 ? ident::UnresolvedAllanTerms(*allan)
                                                 : ident::UnresolvedNoise{};
-  if (!c.options.retune_unresolved_noise || !unresolved.Any()) return;
+  if (!unresolved.Any()) return;
   Progress(c.options, 0.08, "maximum-likelihood noise scale");
   auto scaled = ident::ScaleUnresolvedNoise(c.epochs, base, unresolved, c.options.noise_scale);
   if (!scaled.ok()) {

@@ -82,15 +82,9 @@ struct AnalysisOptions {
   double settle_log_ratio = 0.1;  // a parameter has settled within 10% (or one σ)
   ident::CorrelationOptions correlation;
   ident::AllanOptions allan;
-  // An Allan-based a-priori model's terms set from bounds are re-tuned by
-  // maximum likelihood of the innovations (retarget.h, ScaleUnresolvedNoise).
-  bool retune_unresolved_noise = true;
+  // How an Allan-based a-priori model's terms set from bounds are re-tuned
+  // by maximum likelihood of the innovations (retarget.h, ScaleUnresolvedNoise).
   ident::NoiseScaleOptions noise_scale;
-  // The drifts' σ (and τ where the run resolves it) are identified by
-  // maximum likelihood of the innovations (drift_likelihood.h), started from
-  // correlation processing's estimates; and, first, the σ of the drifts it
-  // leaves unresolved when they compete with the missing effects.
-  bool identify_drifts_by_likelihood = true;
   // Test a bias random walk on every drift axis by the innovations'
   // likelihood, each fitted with its axis' drift σ (drift_likelihood.h):
   // correlation processing cannot show a walk whose wander is as slow as the
@@ -106,12 +100,14 @@ struct AnalysisOptions {
   // earlier analysis): an added deterministic effect takes residual from a
   // structure and gives it none. True: every model tests every axis again.
   bool retest_settled_structures = false;
+  // How the drifts' σ (and τ where the run resolves it) are identified by
+  // maximum likelihood of the innovations (drift_likelihood.h), started from
+  // correlation processing's estimates. Every drift the likelihood fits is
+  // bounded by what the static segments' raw samples allow
+  // (ident/drift_ceiling.h), at the monitor's family-wise α: a drift the
+  // run's motion leaves unobservable otherwise wanders to values that absorb
+  // a fault (the analysis sets drift_likelihood.raw_sample_ceilings).
   ident::DriftLikelihoodOptions drift_likelihood;
-  // Bound every drift the likelihood fits by what the static segments' raw
-  // samples allow (ident/drift_ceiling.h), at the monitor's family-wise α:
-  // a drift the run's motion leaves unobservable otherwise wanders to values
-  // that absorb a fault. Replaces drift_likelihood.raw_sample_ceilings.
-  bool bound_drifts_by_raw_samples = true;
   // Where the a-priori model's misfit competes with its missing effects, its
   // drifts are searched from these starts besides the a-priori values
   // (ident::IdentifyDriftsFromStarts).
