@@ -34,6 +34,10 @@ BenchRun CountedRun(double quantum_mps, const Eigen::Vector3d& specific_force_mp
   return run;
 }
 
+std::optional<double> QuantumOf(const BenchRun& run, Sensor sensor, int axis) {
+  return CountQuanta(run)[static_cast<size_t>(DriftAxis{sensor, axis}.Index())];
+}
+
 TEST(CountQuantum, IsReadFromACountedOutputOnEveryAxis) {
   constexpr double kQuantumMps = 125e-6 * 9.80665;  // 125 µg·s, a navigation-grade accelerometer's count
   // z along gravity at exactly 98 quanta a sample with noise of a hundredth
@@ -42,7 +46,7 @@ TEST(CountQuantum, IsReadFromACountedOutputOnEveryAxis) {
   const Eigen::Vector3d force(0.02, -0.3, -98.0 * kQuantumMps / kIntervalS);
   const BenchRun run = CountedRun(kQuantumMps, force, 0.01 * kQuantumMps / kIntervalS, 1);
   for (int axis = 0; axis < 3; ++axis) {
-    const auto q = CountQuantum(run, {Sensor::kAccelerometer, axis});
+    const auto q = QuantumOf(run, Sensor::kAccelerometer, axis);
     ASSERT_TRUE(q.has_value()) << "axis " << axis;
     EXPECT_NEAR(*q, kQuantumMps, 1e-9 * kQuantumMps) << "axis " << axis;
   }
@@ -53,25 +57,25 @@ TEST(CountQuantum, TwoValuesTwoQuantaApartTakeTheSensorsSpacing) {
   BenchRun run = CountedRun(kQuantumMps, Eigen::Vector3d(0.05, 0.2, -9.8), 0.5, 2);
   // Only even counts on x: alone, its spacing would read two quanta.
   for (ImuSample& s : run.samples) s.acc_mps2.x() = (s.t_s < 100.0 ? -2.0 : 2.0) * kQuantumMps / kIntervalS;
-  const auto q = CountQuantum(run, {Sensor::kAccelerometer, 0});
+  const auto q = QuantumOf(run, Sensor::kAccelerometer, 0);
   ASSERT_TRUE(q.has_value());
   EXPECT_NEAR(*q, kQuantumMps, 1e-12);
 }
 
 TEST(CountQuantum, AContinuousOrConstantOutputHasNone) {
   BenchRun run = CountedRun(1e-3, Eigen::Vector3d(0.05, 0.2, -9.8), 0.5, 3);
-  for (int axis = 0; axis < 3; ++axis) EXPECT_FALSE(CountQuantum(run, {Sensor::kGyro, axis}).has_value()) << axis;
+  for (int axis = 0; axis < 3; ++axis) EXPECT_FALSE(QuantumOf(run, Sensor::kGyro, axis).has_value()) << axis;
   // One value: alone it has no spacing; on the lattice of the sensor's
   // other axes it is a count (an axis along gravity may read one count
   // throughout), off it not.
   for (ImuSample& s : run.samples) s.acc_mps2.y() = -98.0 * 1e-3 / kIntervalS;
-  EXPECT_TRUE(CountQuantum(run, {Sensor::kAccelerometer, 1}).has_value());
+  EXPECT_TRUE(QuantumOf(run, Sensor::kAccelerometer, 1).has_value());
   for (ImuSample& s : run.samples) s.acc_mps2.y() = -98.4 * 1e-3 / kIntervalS;
-  EXPECT_FALSE(CountQuantum(run, {Sensor::kAccelerometer, 1}).has_value());
+  EXPECT_FALSE(QuantumOf(run, Sensor::kAccelerometer, 1).has_value());
   // A counted output with one sample off the lattice (a logger's glitch) is
   // not counted: the lattice is exact or absent.
   run.samples[777].acc_mps2.z() += 0.3e-3 / kIntervalS;
-  EXPECT_FALSE(CountQuantum(run, {Sensor::kAccelerometer, 2}).has_value());
+  EXPECT_FALSE(QuantumOf(run, Sensor::kAccelerometer, 2).has_value());
 }
 
 }  // namespace

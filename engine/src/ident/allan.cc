@@ -1,5 +1,4 @@
 #include "insdiag/engine/ident/allan.h"
-#include "insdiag/engine/ident/count_quantum.h"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -13,6 +12,7 @@
 #include <utility>
 
 #include "ident/allan_model.h"
+#include "insdiag/engine/ident/count_quantum.h"
 #include "insdiag/engine/model/drift_axis.h"
 #include "insdiag/engine/model/parameters.h"
 #include "insdiag/engine/monitor/sample_screening.h"
@@ -417,6 +417,7 @@ absl::StatusOr<AllanResult> AllanAnalysis(const BenchRun& run, const AllanOption
   }
   AllanResult result;
   result.tau0_s = tau0;
+  const auto count_quanta = CountQuanta(run);
   result.segments = *std::move(segments);
   for (const StaticSegment& s : result.segments) result.samples_used += s.Samples();
   for (int c = 0; c < 6; ++c) {
@@ -439,7 +440,7 @@ absl::StatusOr<AllanResult> AllanAnalysis(const BenchRun& run, const AllanOption
       return absl::FailedPreconditionError(
           "Allan: the static segments are too short for any cluster");
     ch.curve = OverlappingAllanCurve(pieces, tau0, m, options);
-    ch.count_quantum = CountQuantum(run, DriftAxis{ch.sensor, ch.axis});
+    ch.count_quantum = count_quanta[static_cast<size_t>(DriftAxis{ch.sensor, ch.axis}.Index())];
     ch.ramp_evidence = RampBeyondNoise(pieces, ch.curve, options);
     if (ch.ramp_evidence.has_value()) {
       ch.ramps = TakeOutRamps(run, pieces, first_samples, tau0, options);

@@ -46,19 +46,28 @@ bool AllOnLattice(const BenchRun& run, const DriftAxis& channel, double interval
 
 }  // namespace
 
-std::optional<double> CountQuantum(const BenchRun& run, const DriftAxis& channel, const CountQuantumOptions& options) {
+std::array<std::optional<double>, DriftAxis::kCount> CountQuanta(const BenchRun& run,
+                                                                 const CountQuantumOptions& options) {
+  std::array<std::optional<double>, DriftAxis::kCount> out;
   const double interval_s = run.NominalIntervalS();
-  if (!(interval_s > 0.0)) return std::nullopt;
-  double sensor_spacing = 0.0;
-  for (int axis = 0; axis < 3; ++axis) {
-    const double s = SmallestSpacing(run, {channel.sensor, axis}, interval_s, options);
-    if (s > 0.0) sensor_spacing = sensor_spacing == 0.0 ? s : std::min(sensor_spacing, s);
+  if (!(interval_s > 0.0)) return out;
+  std::array<double, DriftAxis::kCount> spacing{};
+  for (const DriftAxis d : DriftAxis::All())
+    spacing[static_cast<size_t>(d.Index())] = SmallestSpacing(run, d, interval_s, options);
+  for (const DriftAxis d : DriftAxis::All()) {
+    double sensor_spacing = 0.0;
+    for (int axis = 0; axis < 3; ++axis) {
+      const double s = spacing[static_cast<size_t>(DriftAxis{d.sensor, axis}.Index())];
+      if (s > 0.0) sensor_spacing = sensor_spacing == 0.0 ? s : std::min(sensor_spacing, s);
+    }
+    for (const double q : {sensor_spacing, spacing[static_cast<size_t>(d.Index())]}) {
+      if (q > 0.0 && AllOnLattice(run, d, interval_s, q, options)) {
+        out[static_cast<size_t>(d.Index())] = q;
+        break;
+      }
+    }
   }
-  const double own_spacing = SmallestSpacing(run, channel, interval_s, options);
-  for (const double q : {sensor_spacing, own_spacing}) {
-    if (q > 0.0 && AllOnLattice(run, channel, interval_s, q, options)) return q;
-  }
-  return std::nullopt;
+  return out;
 }
 
 }  // namespace insdiag::engine::ident

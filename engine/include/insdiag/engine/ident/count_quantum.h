@@ -20,8 +20,8 @@
 // while the velocity the filter observes still carries the whole remainder.
 #pragma once
 
+#include <array>
 #include <optional>
-#include <span>
 
 #include "insdiag/engine/bench_run.h"
 #include "insdiag/engine/model/drift_axis.h"
@@ -40,14 +40,13 @@ struct CountQuantumOptions {
   double max_distinct_share = 0.25;
 };
 
-// q [rad | m/s] of the sensor axis `channel` of `run`'s samples, each read as
-// its increment over the run's nominal interval; nullopt when the samples do
-// not lie on one lattice (a single value lies on its sensor's other axes'
-// lattice, or on none).
-// The smallest spacing of the sensor's three axes is tried first on each
-// axis (two values two quanta apart would otherwise read as one quantum),
-// then the axis' own.
-std::optional<double> CountQuantum(const BenchRun& run, const DriftAxis& channel,
-                                   const CountQuantumOptions& options = {});
+// q [rad | m/s] of each sensor axis of `run`'s samples (DriftAxis::Index
+// order), each sample read as its increment over the run's nominal interval;
+// nullopt where the samples do not lie on one lattice (a single value lies
+// on its sensor's other axes' lattice, or on none). The smallest spacing of
+// the sensor's three axes is tried first on each axis (two values two quanta
+// apart would otherwise read as one quantum), then the axis' own.
+std::array<std::optional<double>, DriftAxis::kCount> CountQuanta(const BenchRun& run,
+                                                                 const CountQuantumOptions& options = {});
 
 }  // namespace insdiag::engine::ident
