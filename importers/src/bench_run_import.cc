@@ -170,6 +170,34 @@ absl::Status CheckIncrementTriples(const ImportRecipe& recipe) {
   return absl::OkStatus();
 }
 
+// The steady rate over the first n samples: the least-squares slope of the
+// integrated angle. The mean rate is the angle's change between the window's
+// ends, so a stand that settles from a swing at the start (a ring-down of a
+// few milliradians), or is knocked near the end, moves it by the whole swing
+// over the window — 0.8° of a gyro-compassed heading on a rocking stand; the
+// fitted slope weighs the ends least (a transient of length τ at one end
+// moves it by about 6τ/T of its swing over T). nullopt for fewer than three
+// samples.
+std::optional<Eigen::Vector3d> SteadyRate(const std::vector<engine::ImuSample>& samples, std::size_t n) {
+  if (n < 3) return std::nullopt;
+  // Sums about the window's first time, so that long logs keep precision.
+  const double t0 = samples[0].t_s;
+  double s_t = 0.0, s_tt = 0.0;
+  Eigen::Vector3d angle = Eigen::Vector3d::Zero(), s_a = Eigen::Vector3d::Zero(), s_ta = Eigen::Vector3d::Zero();
+  for (std::size_t k = 0; k < n; ++k) {
+    const double t = samples[k].t_s - t0;
+    if (k > 0) angle += samples[k].gyro_rad_s * (samples[k].t_s - samples[k - 1].t_s);
+    s_t += t;
+    s_tt += t * t;
+    s_a += angle;
+    s_ta += t * angle;
+  }
+  const double count = static_cast<double>(n);
+  const double spread = count * s_tt - s_t * s_t;
+  if (!(spread > 0.0)) return std::nullopt;
+  return (count * s_ta - s_t * s_a) / spread;
+}
+
 // Step 4, levelled: the attitude at the run's start from the mean specific
 // force and rate over the static window, and how well they give it (the
 // bench-run format's reference_*_sigma_rad).
@@ -240,7 +268,8 @@ absl::StatusOr<Eigen::Vector3d> LevelledAttitude(const ImportRecipe& recipe, con
   const std::optional<double> heading = recipe.heading_rad.has_value() ? recipe.heading_rad
                                         : compass                       ? std::nullopt
                                                                         : std::optional<double>(0.0);
-  const Eigen::Vector3d rpy = engine::nav::CoarseAlignment(force_at_start, rate, heading);
+  const Eigen::Vector3d rpy =
+      engine::nav::CoarseAlignment(force_at_start, SteadyRate(samples, n).value_or(rate), heading);
   metadata.extra.emplace_back(
       "reference_attitude",
       absl::StrFormat("constant, levelled at the start from the mean specific force over 0-%.6g s taken back to the start by the gyros%s", window_end_s,
