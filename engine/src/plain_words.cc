@@ -199,10 +199,15 @@ std::vector<std::string> PlainWordsVerdict(const AnalysisReport& report, const B
     faulty_modules.insert(SensorName(channel));
   }
   const int faults = static_cast<int>(findings.size());
-  // A gradual failure with no fault effect behind it: where the filter put it.
+  // A gradual failure with no fault effect behind it: where the filter put it,
+  // by the sensor's name where the state is one sensor axis'.
   if (faults == 0 && report.verdict == Verdict::kFaulty && !report.localisation.empty()) {
     const Localisation& l = report.localisation.front();
-    findings.push_back(absl::StrFormat("  the filter localises it to %s at %.0f s (p %.1g)", l.state, l.time_s,
+    SensorChannel channel;
+    const std::string where = ChannelOf(l.state, channel)
+                                  ? absl::StrFormat("the %s (%s)", SensorName(channel), l.state)
+                                  : l.state;
+    findings.push_back(absl::StrFormat("  the filter localises it to %s at %.0f s (p %.1g)", where, l.time_s,
                                        l.p_value));
   }
   // Then what the model lacks: constants the scan finds, which the loop adds.

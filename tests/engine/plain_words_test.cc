@@ -90,6 +90,27 @@ TEST(PlainWords, AMissingConstantIsToBeAddedNotAModuleToCheck) {
   EXPECT_THAT(lines[2], ::testing::Not(HasSubstr("module")));
 }
 
+// A gradual failure no fault explains names where the filter puts it by the
+// sensor, with the state's name for the engineer who reads the report on.
+TEST(PlainWords, AGradualFailureIsLocalisedToItsSensor) {
+  AnalysisReport report;
+  report.verdict = Verdict::kFaulty;
+  FaultInterval gradual;
+  gradual.channel = "lat";
+  gradual.kind = FaultKind::kGradual;
+  gradual.start_s = 2.0;
+  report.faults = {gradual};
+  Localisation l;
+  l.state = "acc_bias_gm.x";
+  l.time_s = 18.0;
+  l.p_value = 1e-9;
+  report.localisation = {l};
+  const std::vector<std::string> lines = PlainWordsVerdict(report, StepRun(), 0.01);
+  ASSERT_EQ(lines.size(), 3u);
+  EXPECT_THAT(lines[0], StartsWith("FAULTY: the model fails gradually on lat from 2 s"));
+  EXPECT_THAT(lines[1], HasSubstr("localises it to the accelerometer x (acc_bias_gm.x) at 18 s"));
+}
+
 // A run whose NIS lies outside its band with no interval: which way says
 // whether the model is pessimistic (nothing to do on the unit) or the bench
 // noisy, and the channels outside their own band say where.
