@@ -274,7 +274,7 @@ absl::StatusOr<Eigen::Vector3d> LevelledAttitude(const ImportRecipe& recipe, con
       "reference_attitude",
       absl::StrFormat("constant, levelled at the start from the mean specific force over 0-%.6g s taken back to the start by the gyros%s", window_end_s,
                       recipe.heading_rad.has_value() ? ", heading given"
-                      : compass ? ", heading gyro-compassed from the mean rate"
+                      : compass ? ", heading gyro-compassed from the steady rate (the integrated angle's fitted slope)"
                                 : ", heading 0: the mean rate is far above Earth's, so it gives none"));
   // A log that reads exactly the same at every sample resolves no level
   // scatter: it states none, and the encoders' accuracy applies.
