@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs what is missing, builds, runs every test against a throwaway
-# PostgreSQL, then the fuzzers' short run.
+# PostgreSQL (the fuzz targets' replay of their seeds among them; the fuzz
+# campaign is scripts/fuzz.sh).
 # Usage: ./test.sh [ctest options...]   e.g. ./test.sh -L unit
 # The `sweep` label — the Monte Carlo tests again at their full size, hours
 # in all — is left out unless an argument names it; scripts/sweeps.sh runs it.
@@ -27,9 +28,3 @@ if [[ $asks_for_sweep == no && $excludes == no ]]; then
 fi
 (cd "${INSDIAG_BUILD_DIR:-$root/build}" &&
   "$root/scripts/with-throwaway-pg.sh" ctest --output-on-failure -j "$(nproc)" "${ctest_args[@]}")
-# The fuzzers' short run: every regression input, then 10 s of each
-# (docs/RELIABILITY.md; the campaign is scripts/fuzz.sh with a longer time).
-# Skipped when ctest was asked for a subset.
-if (($# == 0)); then
-  "$root/scripts/fuzz.sh" 10
-fi

@@ -31,28 +31,11 @@ fi
 cmake --build "$build" --target "${fuzzers[@]}" >/dev/null
 
 rm -rf "$build/corpus"
-seed() {  # seed FUZZER NAME CONTENT
-  mkdir -p "$build/corpus/$1"
-  printf '%b' "$3" >"$build/corpus/$1/$2"
-}
-python3 "$root/tests/fuzz/seeds_from_tests.py" "$build/corpus" >/dev/null
 tests_build=${INSDIAG_BUILD_DIR:-$root/build}
-if [[ -f $tests_build/build.ninja ]] && cmake --build "$tests_build" --target write_fuzz_seeds >/dev/null; then
-  "$tests_build/tests/benchrun/write_fuzz_seeds" "$build/corpus/bench_run_csv_fuzzer"
-else
-  echo "fuzz.sh: no configured build in $tests_build: the tests' bench-run fixtures are not among the seeds" >&2
+if [[ -f $tests_build/build.ninja ]] && ! cmake --build "$tests_build" --target write_fuzz_seeds >/dev/null; then
+  echo "fuzz.sh: write_fuzz_seeds did not build in $tests_build" >&2
 fi
-head -n 40 "$tests_build/data/real/rlg-static-psins.csv" >"$build/corpus/bench_run_csv_fuzzer/real-record" 2>/dev/null ||
-  rm -f "$build/corpus/bench_run_csv_fuzzer/real-record"
-seed bench_run_csv_fuzzer spec-example '# format: insdiag-bench-run/1\n# unit_serial: INS-2000-0042\n# unit_type: INS-2000\n# site_latitude_deg: 55.5672\n# site_longitude_deg: 38.1500\n# site_height_m: 125.0\nt,gyro_x,gyro_y,gyro_z,acc_x,acc_y,acc_z,ref_roll,ref_pitch,ref_yaw,temp\n0.0,1e-5,2e-5,-3e-5,0.01,-0.02,-9.81,0,0,0,25.0\n0.01,1e-5,2e-5,-3e-5,0.01,-0.02,-9.81,0,0,0,25.0\n'
-# The gateway's own hostile cases: bytes gRPC refuses in metadata, an upload.
-seed rest_gateway_fuzzer bad-authorization '- GET /v1/runs\nAuthorization: Bearer \xff\x01caf\xc3\xa9\n\n'
-seed rest_gateway_fuzzer csv-upload "o POST /v1/runs:upload?requestId=r1\nContent-Type: text/csv\nAuthorization: Bearer t\n\n$(cat "$build/corpus/bench_run_csv_fuzzer/spec-example" 2>/dev/null)"
-# The upload fuzzer's input is the bending of a valid stream, not data a test holds.
-seed upload_stream_fuzzer valid '\x10\x04\xff\xff\xff\x00'
-for dir in "$root"/tests/fuzz/regressions/*/; do
-  [[ -d $dir ]] && cp "$dir"* "$build/corpus/$(basename "$dir")/" 2>/dev/null || true
-done
+"$root/tests/fuzz/write_seeds.sh" "$build/corpus" "$tests_build"
 
 status=0
 printf '%-24s %6s %12s %8s %8s %s\n' fuzzer seeds executions edges corpus finding
