@@ -136,7 +136,8 @@ std::string ChannelsOutsideTheirBand(const AnalysisReport& r, double family_wise
   if (outside.size() > 3) outside.resize(3);
   std::vector<std::string> parts;
   for (const ChannelFit* c : outside)
-    parts.push_back(absl::StrFormat(parts.empty() ? "%s (NIS %.2f)" : "%s (%.2f)", c->name, c->nis_mean));
+    parts.push_back(parts.empty() ? absl::StrFormat("%s (NIS %.2f)", c->name, c->nis_mean)
+                                  : absl::StrFormat("%s (%.2f)", c->name, c->nis_mean));
   return absl::StrJoin(parts, ", ");
 }
 
