@@ -468,30 +468,25 @@ std::vector<ParameterEstimate> AllanParameterEstimates(const AllanResult& result
     const bool gyro = ch.sensor == Sensor::kGyro;
     const std::string s = gyro ? "gyro" : "acc";
     const std::string axis = kAxis[ch.axis];
-    auto add = [&](AllanParameter p, const std::string& name, std::string_view unit) {
-      const AllanTermEstimate& t = ch.fit[p];
-      if (!t.included) return;
+    auto push = [&](const std::string& name, std::string_view unit, double value, double std_error) {
       ParameterEstimate e;
       e.name = name;
-      e.value = t.value;
-      e.std_error = t.std_error;
+      e.value = value;
+      e.std_error = std_error;
       e.method = EstimationMethod::kAllan;
       e.unit = std::string(unit);
       if (auto it = prior.find(name); it != prior.end()) e.a_priori = it->second;
       out.push_back(e);
     };
+    auto add = [&](AllanParameter p, const std::string& name, std::string_view unit) {
+      const AllanTermEstimate& t = ch.fit[p];
+      if (t.included) push(name, unit, t.value, t.std_error);
+    };
     const DriftAxis drift{ch.sensor, ch.axis};
     const SensorUnits units = UnitsOf(ch.sensor);
     if (ch.QuantisationIsCounted()) {
       // Read from the samples' lattice, not estimated: no standard error.
-      ParameterEstimate e;
-      e.name = QuantizationName(drift);
-      e.value = ch.Quantisation();
-      e.std_error = 0.0;
-      e.method = EstimationMethod::kAllan;
-      e.unit = std::string(units.quantization);
-      if (auto it = prior.find(e.name); it != prior.end()) e.a_priori = it->second;
-      out.push_back(e);
+      push(QuantizationName(drift), units.quantization, ch.Quantisation(), 0.0);
     } else {
       add(AllanParameter::kQuantization, QuantizationName(drift), units.quantization);
     }

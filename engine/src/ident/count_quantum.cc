@@ -20,9 +20,8 @@ double SmallestSpacing(const BenchRun& run, const DriftAxis& channel, double int
   std::vector<double> values(n);
   for (size_t k = 0; k < n; ++k) values[k] = Increment(run.samples[k], channel, interval_s);
   std::ranges::sort(values);
-  double largest = 0.0;
-  for (double v : values) largest = std::max(largest, std::abs(v));
   // Values closer than the double rounding of the largest are one value.
+  const double largest = n > 0 ? std::max(std::abs(values.front()), std::abs(values.back())) : 0.0;
   const double same = largest * 1e-12;
   double spacing = 0.0;
   size_t distinct = n > 0 ? 1 : 0;
