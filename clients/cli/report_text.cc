@@ -64,6 +64,14 @@ void PrintReport(const engine::AnalysisReport& r, std::ostream& out) {
           << " s (peak " << absl::StrFormat("%.3g", f.peak_statistic) << ")\n";
     }
   }
+  if (!r.bench_motion.empty()) {
+    out << "\nwhere the bench moved (its updates are not held against the unit):\n";
+    for (const auto& m : r.bench_motion) {
+      out << "  " << engine::kSensorChannelNames[static_cast<size_t>(m.sensor_channel)] << " "
+          << absl::StrFormat("%.2f", m.start_s) << " … " << absl::StrFormat("%.2f", m.end_s)
+          << " s (scatter " << absl::StrFormat("%.3g", m.statistic) << " σ over its quiet level)\n";
+    }
+  }
   for (const auto& l : r.localisation) {
     // A ramp's estimate is a rate from its onset, not a jump.
     const bool ramp = l.state.find("_bias_ramp.") != std::string::npos;

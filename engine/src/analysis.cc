@@ -287,6 +287,16 @@ std::optional<std::array<GaussMarkov, DriftAxis::kCount>> DriftsOfTheAllanFit(
   return drifts;
 }
 
+// Each axis' counted output quantum the static segments' samples lie on (0
+// where they lie on none), whichever a-priori model the run takes.
+std::array<double, DriftAxis::kCount> CountedQuantisationOf(const std::optional<ident::AllanResult>& allan) {
+  std::array<double, DriftAxis::kCount> counted{};
+  if (!allan.has_value()) return counted;
+  for (const ident::AllanChannel& ch : allan->channels)
+    counted[static_cast<size_t>(DriftAxis{ch.sensor, ch.axis}.Index())] = ch.CountedQuantisation();
+  return counted;
+}
+
 // The a-priori model: the datasheet; else the unit type's nominal model,
 // unless the run's Allan deviation puts the unit beyond the drift search's
 // reach from it; else the Allan fit. The Allan analysis, which `allan`
@@ -309,11 +319,6 @@ absl::StatusOr<pipeline::APriori> ChooseAPrioriModel(const BenchRun& run, const 
     return out;
   }
   allan = AllanOfStaticSegments(run, options, notes);
-  if (allan.has_value()) {
-    for (const ident::AllanChannel& ch : allan->channels)
-      out.counted_quantisation[static_cast<size_t>(DriftAxis{ch.sensor, ch.axis}.Index())] =
-          ch.CountedQuantisation();
-  }
   if (model.ok()) {
     const auto beyond = allan.has_value() ? DepartureBeyondSearch(*allan, *model, out.drift_starts,
                                                                   options.monitor.family_wise_alpha)
@@ -379,7 +384,7 @@ absl::StatusOr<pipeline::ScannedModel> ScanModelA(const pipeline::RunContext& c,
     notes.insert(notes.end(), id.scanned->notes.begin(), id.scanned->notes.end());
     return std::move(*id.scanned);
   }
-  auto pass = pipeline::RunPass(c.run, c.epochs, id.model, c.spikes, c.options, /*with_scan=*/true);
+  auto pass = pipeline::RunPass(c.run, c.epochs, id.model, c.samples, c.options, /*with_scan=*/true);
   if (!pass.ok()) return pass.status();
   // Model A from an earlier analysis: what its structure tests found nothing in stands.
   pipeline::SettledStructures settled;
@@ -463,7 +468,12 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   // constants removed below change the sensors' samples only).
   const nav::RunCompensations compensations(run);
   const std::vector<std::array<double, 6>> reference_measurements = ReferenceMeasurements(run, compensations);
-  const std::vector<SampleOutlier> spikes = ScreenAndRepairSpikes(run, reference_measurements, options.screening);
+  // The bench's motion from the samples with their spikes repaired: a
+  // transmission error is one sample, a move many.
+  SampleScreening screening;
+  screening.spikes = ScreenAndRepairSpikes(run, reference_measurements, options.screening);
+  screening.bench_motion = FindBenchMotion(run, reference_measurements, options.filter.update_interval_s,
+                                           options.monitor.family_wise_alpha);
 
   Progress(options, 0.05, "Allan deviation and the run condensed to its epochs");
   std::optional<ident::AllanResult> allan;
@@ -494,10 +504,11 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       });
   notes.insert(notes.end(), allan_notes.begin(), allan_notes.end());
   if (!epochs.ok()) return epochs.status();
+  a_priori->counted_quantisation = CountedQuantisationOf(allan);
   const RawSampleEvidence raw_samples = RawSampleEvidenceOf(run, allan, a_priori->model, options);
   const AnalysisOptions run_options = OptionsForThisRun(options, allan);
   const pipeline::RunContext context{
-      run, *epochs, reference_measurements, spikes, run_options, *a_priori, raw_samples};
+      run, *epochs, reference_measurements, screening, run_options, *a_priori, raw_samples};
 
   pipeline::Identification identification;
   identification.model = std::move(base);

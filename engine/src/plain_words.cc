@@ -143,6 +143,21 @@ std::string ChannelsOutsideTheirBand(const AnalysisReport& r, double family_wise
 
 bool QuieterThanItsModel(const AnalysisReport& r) { return r.nis_mean < r.nis_band_low; }
 
+// Where the bench moved, how long in all, and by which channel's samples.
+std::string BenchMotionLine(const AnalysisReport& r) {
+  double moved_s = 0.0;
+  const BenchMotion* largest = &r.bench_motion.front();
+  for (const BenchMotion& m : r.bench_motion) {
+    moved_s += m.end_s - m.start_s;
+    if (m.statistic > largest->statistic) largest = &m;
+  }
+  return absl::StrFormat(
+      "  the bench moved in %d stretch(es), %.0f s of %.0f s, the first at %.0f s (most at %.0f s, on %s): the "
+      "updates there test the bench, not the unit, and are not held against it",
+      static_cast<int>(r.bench_motion.size()), moved_s, r.duration_s, r.bench_motion.front().start_s,
+      largest->start_s, kSensorChannelNames[static_cast<size_t>(largest->sensor_channel)]);
+}
+
 std::string VerdictLine(const AnalysisReport& r, int faults, double family_wise_alpha) {
   const std::string fit = absl::StrFormat("NIS %.3f, band %.3f–%.3f", r.nis_mean, r.nis_band_low, r.nis_band_high);
   // FAULTY without a fault effect is the moving-window test's verdict: its
@@ -150,8 +165,8 @@ std::string VerdictLine(const AnalysisReport& r, int faults, double family_wise_
   const Misfit misfit = MisfitOf(r, /*gradual_only=*/r.verdict == Verdict::kFaulty);
   switch (r.verdict) {
     case Verdict::kGood:
-      return absl::StrFormat("GOOD: the unit behaves as its error model says over the whole run (%s); no fault found.",
-                             fit);
+      return absl::StrFormat("GOOD: the unit behaves as its error model says over %s (%s); no fault found.",
+                             r.bench_motion.empty() ? "the whole run" : "the run where the bench was still", fit);
     case Verdict::kOperable:
       if (misfit.intervals == 0) {
         // No interval: the whole run's NIS is outside its band. Which way,
@@ -220,7 +235,11 @@ std::vector<std::string> PlainWordsVerdict(const AnalysisReport& report, const B
   }
 
   std::vector<std::string> lines = {VerdictLine(report, faults, family_wise_alpha)};
+  // The verdict, its findings, where the bench moved, and what to do.
+  const std::size_t room = kPlainWordsMaxLines - 2 - (report.bench_motion.empty() ? 0 : 1);
+  findings.resize(std::min(findings.size(), room));
   lines.insert(lines.end(), findings.begin(), findings.end());
+  if (!report.bench_motion.empty()) lines.push_back(BenchMotionLine(report));
   std::string to_do;
   if (faults > 0) {
     to_do = absl::StrFormat("check the %s module%s (the change is in %s raw samples), then test again to confirm",

@@ -332,6 +332,13 @@ v1::AnalysisReport ToProto(const engine::AnalysisReport& r, const engine::ErrorM
   out.set_aic(r.aic);
   out.set_bic(r.bic);
   for (const engine::FaultInterval& f : r.faults) *out.add_fault_intervals() = ToProto(f);
+  for (const engine::BenchMotion& m : r.bench_motion) {
+    v1::BenchMotion* b = out.add_bench_motion();
+    b->set_start_s(m.start_s);
+    b->set_end_s(m.end_s);
+    b->set_channel(std::string(engine::kSensorChannelNames[static_cast<size_t>(m.sensor_channel)]));
+    b->set_statistic(m.statistic);
+  }
   for (const auto& c : r.effect_candidates) Fill(c, out.add_effect_candidates());
   for (const auto& c : r.family_candidates) Fill(c, out.add_family_candidates());
   for (const engine::ParameterEstimate& p : r.identified) Fill(p, out.add_identified());

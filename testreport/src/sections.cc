@@ -197,6 +197,17 @@ Section TolerancesSection(const v1::AnalysisReport& r) {
   }
   channels.caption = "Shares of updates with β² over γ² and of windows with F over η², per observation channel.";
   s.blocks.push_back(std::move(channels));
+  if (r.bench_motion_size() > 0) {
+    Table moved{{"sensor channel", "from [s]", "to [s]", "scatter over its quiet level [σ]"}, {}, {}, ""};
+    for (const auto& m : r.bench_motion()) {
+      moved.rows.push_back({m.channel(), Num(m.start_s()), Num(m.end_s()), Num(m.statistic())});
+      moved.row_tones.push_back(Tone::kWarning);
+    }
+    moved.caption =
+        "Where the bench moved while its reference says it was still: the unit's samples scatter far beyond their "
+        "quiet level. The updates there test the bench, not the unit, and are not held against it.";
+    s.blocks.push_back(std::move(moved));
+  }
   if (r.fault_intervals().empty()) {
     s.blocks.push_back(Paragraph{"No fault interval: the model holds on every channel."});
     return s;

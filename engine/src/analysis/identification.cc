@@ -330,7 +330,7 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std
   for (int it = 0; it < options.max_retarget_iterations; ++it) {
     Progress(options, 0.1 + 0.5 * it / options.max_retarget_iterations, "retargeting");
     const bool first = it == 0;
-    auto pass = RunPass(c.run, c.epochs, id.model, c.spikes, options, /*with_scan=*/first);
+    auto pass = RunPass(c.run, c.epochs, id.model, c.samples, options, /*with_scan=*/first);
     if (!pass.ok()) return pass.status();
     // An a-priori model from the Allan fit is not a specification to
     // protect: its drift τ is a bound of the static segments (the longest τ

@@ -207,7 +207,7 @@ absl::StatusOr<Analysis> Discover(const RunContext& c, ScannedModelA a) {
     Progress(options, 0.7 + 0.3 * step / (options.max_discovery_steps + 1), "discovery: adding " + top->name);
     auto extended = ExtendModel(c.run, current().model, {top->name}, current(), found, options);
     if (!extended.ok()) return extended.status();
-    auto next = RunPass(c.run, c.epochs, *extended, c.spikes, options, /*with_scan=*/true);
+    auto next = RunPass(c.run, c.epochs, *extended, c.samples, options, /*with_scan=*/true);
     if (!next.ok()) return next.status();
     const SettledStructures settled =
         !options.retest_settled_structures && AddsOnlyDeterministicEffects({top->name})
@@ -241,7 +241,7 @@ absl::StatusOr<Analysis> AddAndCompare(const RunContext& c, const std::vector<st
   Progress(options, 0.8, "model with the added effects");
   auto extended = ExtendModel(c.run, a.pass.model, effects, a.pass, a.found, options);
   if (!extended.ok()) return extended.status();
-  auto b = RunPass(c.run, c.epochs, *extended, c.spikes, options, /*with_scan=*/true);
+  auto b = RunPass(c.run, c.epochs, *extended, c.samples, options, /*with_scan=*/true);
   if (!b.ok()) return b.status();
   const SettledStructures settled = !options.retest_settled_structures && AddsOnlyDeterministicEffects(effects)
                                         ? SettledStructures{a.found.candidates, "model A, without the added effects"}

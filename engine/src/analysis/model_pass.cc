@@ -61,7 +61,7 @@ double ProfileCorrection(const ForwardPass& fw, const ErrorModel& model, const S
 }  // namespace
 
 absl::StatusOr<ModelPass> RunPass(const BenchRun& run, const EpochRun& epochs, const ErrorModel& model,
-                                  const std::vector<SampleOutlier>& spikes, const AnalysisOptions& options,
+                                  const SampleScreening& samples, const AnalysisOptions& options,
                                   bool with_scan) {
   ModelPass pass;
   pass.model = model;
@@ -78,7 +78,7 @@ absl::StatusOr<ModelPass> RunPass(const BenchRun& run, const EpochRun& epochs, c
                                                                         options.correlation));
   if (!smoothed.ok()) return smoothed.status();
   pass.smoothed = *std::move(smoothed);
-  pass.monitor = Monitor(pass.forward, pass.smoothed, *pass.layout, spikes, options.monitor);
+  pass.monitor = Monitor(pass.forward, pass.smoothed, *pass.layout, samples, options.monitor);
   pass.log_likelihood = pass.forward.log_likelihood + ProfileCorrection(pass.forward, pass.model, *pass.layout);
   if (with_scan) {
     pass.segment_motion = SegmentMotion(run, pass.forward, segment_epochs);
@@ -126,6 +126,7 @@ void FillFit(const ModelPass& pass, const BenchRun& run, const AnalysisOptions& 
   r.gamma2 = m.gamma2;
   r.eta2 = m.eta2;
   r.faults = m.faults;
+  r.bench_motion = m.bench_motion;
   r.localisation = m.localisation;
   r.discrepancies = m.discrepancies;
   r.duration_s = run.DurationS();

@@ -38,7 +38,7 @@ struct ModelPass {
 };
 
 absl::StatusOr<ModelPass> RunPass(const BenchRun& run, const EpochRun& epochs, const ErrorModel& model,
-                                  const std::vector<SampleOutlier>& spikes, const AnalysisOptions& options,
+                                  const SampleScreening& samples, const AnalysisOptions& options,
                                   bool with_scan);
 
 // ModelPass::log_likelihood alone, from the forward filter: for a model that

@@ -14,6 +14,7 @@
 #include "insdiag/engine/finder/fault_findings.h"
 #include "insdiag/engine/ident/drift_likelihood.h"
 #include "insdiag/engine/model/error_model.h"
+#include "insdiag/engine/monitor/monitoring.h"
 #include "insdiag/engine/monitor/sample_screening.h"
 
 namespace insdiag::engine::pipeline {
@@ -51,7 +52,7 @@ struct RunContext {
   // ReferenceMeasurements(run): the table's motion alone fixes it, so the
   // screening and every report share one computation.
   const std::vector<std::array<double, 6>>& reference_measurements;
-  const std::vector<SampleOutlier>& spikes;
+  const SampleScreening& samples;
   const AnalysisOptions& options;
   const APriori& a_priori;
   // What the static segments' raw samples show, needing no navigation model

@@ -66,7 +66,8 @@ void InnovationTests::AddInterval(int channel, double start_s, double end_s, Fau
   if (kind == FaultKind::kGradual) gradual_found_ = true;
 }
 
-void InnovationTests::Add(double start_s, double time_s, const PerChannel& innovation, const PerChannel& innovation_variance) {
+void InnovationTests::Add(double start_s, double time_s, const PerChannel& innovation, const PerChannel& innovation_variance,
+                          bool reference_holds) {
   const int k = epochs_++;
   const auto slot = static_cast<size_t>(k % window_);
   window_start_s_[slot] = start_s;
@@ -77,17 +78,23 @@ void InnovationTests::Add(double start_s, double time_s, const PerChannel& innov
     const double nu = innovation[ch];
     const double S = innovation_variance[ch];
     const bool observed = S > 0.0;  // else ν = S = 0 (ForwardPass::Observed)
-    const double nu2 = nu * nu;
-    beta2_[ch] = observed ? nu2 / S : std::numeric_limits<double>::quiet_NaN();
+    beta2_[ch] = observed ? nu * nu / S : std::numeric_limits<double>::quiet_NaN();
     if (observed) {
       ++observed_[ch];
-      ++window_observed_[ch];
       if (beta2_[ch] > gamma2_) ++over_gamma2_[ch];
+    }
+    // Where the bench moved, the update tests the bench: it is neither an
+    // outlier of the unit nor part of a window's evidence.
+    const bool tested = observed && reference_holds;
+    if (tested) {
+      ++window_observed_[ch];
       if (beta2_[ch] > outlier_threshold_) AddInterval(c, start_s, time_s, FaultKind::kOutlier, beta2_[ch]);
     }
+    const double nu2 = tested ? nu * nu : 0.0;
+    const double S_tested = tested ? S : 0.0;
     sum_nu2_[ch] += nu2;
-    sum_S_[ch] += S;
-    sum_S2_[ch] += S * S;
+    sum_S_[ch] += S_tested;
+    sum_S2_[ch] += S_tested * S_tested;
     if (k >= window_) {
       const double nu2_old = window_nu2_[slot][ch];
       const double S_old = window_S_[slot][ch];
@@ -97,7 +104,7 @@ void InnovationTests::Add(double start_s, double time_s, const PerChannel& innov
       sum_S2_[ch] -= S_old * S_old;
     }
     window_nu2_[slot][ch] = nu2;
-    window_S_[slot][ch] = S;
+    window_S_[slot][ch] = S_tested;
     if (window_observed_[ch] == 0) {
       // Exactly nothing, not the rounding the moving sums leave behind.
       sum_nu2_[ch] = sum_S_[ch] = sum_S2_[ch] = 0.0;

@@ -68,7 +68,7 @@ const char* FaultKindName(FaultKind k) {
 }
 
 MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const StateLayout& layout,
-                      const std::vector<SampleOutlier>& spikes, const MonitorOptions& options) {
+                      const SampleScreening& samples, const MonitorOptions& options) {
   MonitorResult out;
   const int K = fw.epochs();
   const double epoch_interval = K > 1 ? (fw.epoch_time_s.back() - fw.epoch_time_s.front()) / (K - 1) : 1.0;
@@ -83,7 +83,9 @@ MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const State
       nu[static_cast<size_t>(c)] = fw.innovation(k, c);
       S[static_cast<size_t>(c)] = fw.innovation_variance(k, c);
     }
-    tests.Add(fw.epoch_start_s[static_cast<size_t>(k)], fw.epoch_time_s[static_cast<size_t>(k)], nu, S);
+    const double start_s = fw.epoch_start_s[static_cast<size_t>(k)];
+    const double end_s = fw.epoch_time_s[static_cast<size_t>(k)];
+    tests.Add(start_s, end_s, nu, S, !BenchMovedWithin(samples.bench_motion, start_s, end_s));
     for (int c = 0; c < kChannelCount; ++c) out.window_ratio(k, c) = tests.window_ratio()[static_cast<size_t>(c)];
   }
   out.faults = tests.faults();
@@ -128,11 +130,14 @@ MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const State
     nis_total += nis;
     out.channels.push_back(std::move(fit));
   }
-  for (const SampleOutlier& s : spikes) {
+  for (const SampleOutlier& s : samples.spikes) {
+    // A departure where the bench moved is its motion, not the unit's spike.
+    if (BenchMovedWithin(samples.bench_motion, std::nextafter(s.time_s, -1.0e300), s.time_s)) continue;
     AddFaultInterval(out.faults, kSensorChannelNames[s.sensor_channel], s.time_s, s.time_s, FaultKind::kOutlier,
                      s.robust_z, 0.0);
   }
   SortFaultIntervals(out.faults);
+  out.bench_motion = samples.bench_motion;
 
   const int updates = fw.scalar_updates;
   out.nis_mean = updates > 0 ? nis_total / updates : 0.0;

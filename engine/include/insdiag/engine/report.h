@@ -138,6 +138,8 @@ struct AnalysisReport {
   double gamma2 = 0.0;
   double eta2 = 0.0;
   std::vector<FaultInterval> faults;
+  // Where the bench moved against its reference (monitor/bench_motion.h).
+  std::vector<BenchMotion> bench_motion;
   std::vector<Localisation> localisation;   // the sensor behind each gradual failure
   std::vector<Localisation> discrepancies;  // forward/backward disagreements per sensor state
   std::vector<EffectCandidate> effect_candidates;  // per term, most significant first

@@ -35,6 +35,7 @@
 #include "insdiag/engine/filter/forward_filter.h"
 #include "insdiag/engine/filter/smoother.h"
 #include "insdiag/engine/model/state_layout.h"
+#include "insdiag/engine/monitor/bench_motion.h"
 #include "insdiag/engine/monitor/fault_localisation.h"
 #include "insdiag/engine/monitor/sample_screening.h"
 
@@ -95,6 +96,8 @@ struct MonitorResult {
   int window_updates = 0;
   std::vector<ChannelFit> channels;
   std::vector<FaultInterval> faults;
+  // Where the bench moved (bench_motion.h): not tested against the unit.
+  std::vector<BenchMotion> bench_motion;
   std::vector<Localisation> localisation;   // one per localised gradual failure, in time order
   std::vector<Localisation> discrepancies;  // forward/backward, most significant first
   double nis_mean = 0.0;
@@ -103,8 +106,15 @@ struct MonitorResult {
   Eigen::MatrixXd window_ratio;  // K × 6 moving F (NaN until the first full window)
 };
 
+// What the raw samples show before any model: the spikes the screening
+// repaired, and where the bench moved against its reference.
+struct SampleScreening {
+  std::vector<SampleOutlier> spikes;
+  std::vector<BenchMotion> bench_motion;
+};
+
 MonitorResult Monitor(const ForwardPass& forward, const SmoothedPass& smoothed, const StateLayout& layout,
-                      const std::vector<SampleOutlier>& spikes, const MonitorOptions& options);
+                      const SampleScreening& samples, const MonitorOptions& options);
 
 // Appends [start, end] on `channel` to `faults`, merged into the channel's
 // last interval of the kind when it starts within `join_gap_s` of its end.
