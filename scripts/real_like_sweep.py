@@ -65,6 +65,14 @@ SCENARIOS = {
     "nav-up-sway-only": (NAV + ["--orientation", "up"], "sway"),
     "nav-up-settle-only": (NAV + ["--orientation", "up"], "settle"),
     "nav-up-sway-unquantised": (NAV + ["--orientation", "up", "--quantise", "no"], True),
+    # What a real part adds beyond the preset's Gauss–Markov drift: a flicker
+    # floor (bias instability at the class's datasheet values) and a warm-up.
+    "mems-flicker": (MEMS + ["--orientation", "up", "--gyro-flicker-dph", "10", "--acc-flicker-ug", "100"], False),
+    "mems-2.8h-flicker": ([a if a != "3600" else "10008" for a in MEMS] +
+                          ["--orientation", "up", "--gyro-flicker-dph", "10", "--acc-flicker-ug", "100"], False),
+    "mems-warmup": (MEMS + ["--orientation", "up", "--warmup-gyro-dps", "0.05", "--warmup-acc-mg", "5",
+                            "--warmup-tau-s", "600"], False),
+    "nav-up-flicker": (NAV + ["--orientation", "up", "--gyro-flicker-dph", "0.005", "--acc-flicker-ug", "10"], False),
 }
 MAIN = ["nav-up", "nav-side", "nav-up-sway", "nav-side-sway", "mems", "mems-sway"]
 

@@ -14,6 +14,7 @@ Usage:
               [--acc-lsb Q] [--turn-on-biases yes|no] [--orientation up|side|inverted]
               [--tilt-deg T] [--heading-deg H] [--sway-urad A --sway-hz F]
               [--settle-urad A --settle-hz F --settle-tau-s TAU] [--lever-arm-m L]
+              [--gyro-flicker-dph B --acc-flicker-ug B] [--warmup-gyro-dps W --warmup-acc-mg W --warmup-tau-s T]
 A raw log is what the unit's own logger writes on a stand (rawlog.py): samples
 only, for `insdiag import --attitude level`; its truth says the import's units.
 Faults: gyro_bias_step.x=3e-6@1500.3, acc_bias_ramp.y=1e-7@900,
@@ -37,6 +38,9 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import kinematics  # noqa: E402
 import profiles  # noqa: E402
 import rawlog  # noqa: E402
+
+# The standard gravity of the µg and mg the options state (BIPM, SI Brochure, 9th ed., 2019).
+STANDARD_GRAVITY_MPS2 = 9.80665
 import sensors  # noqa: E402
 import unit_classes  # noqa: E402
 
@@ -210,6 +214,11 @@ def main(argv=None):
     r.add_argument("--settle-hz", type=float, default=2.0)
     r.add_argument("--settle-tau-s", type=float, default=1.0)
     r.add_argument("--lever-arm-m", type=float, default=0.1, help="sensors above the stand's pivot")
+    r.add_argument("--gyro-flicker-dph", type=float, default=0.0, help="bias instability: the gyros' Allan floor [°/h]")
+    r.add_argument("--acc-flicker-ug", type=float, default=0.0, help="bias instability: the accelerometers' Allan floor [µg]")
+    r.add_argument("--warmup-gyro-dps", type=float, default=0.0, help="the gyros' warm-up bias at power-up [°/s]")
+    r.add_argument("--warmup-acc-mg", type=float, default=0.0, help="the accelerometers' warm-up bias at power-up [mg]")
+    r.add_argument("--warmup-tau-s", type=float, default=600.0, help="the warm-up's time constant [s]")
     a = p.parse_args(argv)
     config = dict(out=a.out, preset=a.preset, profile=a.profile, rate_hz=a.rate_hz, duration_s=a.duration,
                   seed=a.seed, ramp_accel_deg_s2=a.ramp_accel, jitter_s=a.jitter, faults=a.fault, set=a.set,
@@ -229,7 +238,11 @@ def main(argv=None):
                       gyro_lsb=a.gyro_lsb, acc_lsb=a.acc_lsb, turn_on_biases=a.turn_on_biases == "yes",
                       orientation=orientation, tilt_deg=a.tilt_deg, heading_deg=a.heading_deg,
                       sway_urad=a.sway_urad, sway_hz=a.sway_hz, settle_urad=a.settle_urad, settle_hz=a.settle_hz,
-                      settle_tau_s=a.settle_tau_s, lever_arm_m=a.lever_arm_m)
+                      settle_tau_s=a.settle_tau_s, lever_arm_m=a.lever_arm_m,
+                      gyro_flicker_rad_s=a.gyro_flicker_dph * math.pi / 180.0 / 3600.0,
+                      acc_flicker_mps2=a.acc_flicker_ug * 1e-6 * STANDARD_GRAVITY_MPS2,
+                      warmup_gyro_rad_s=a.warmup_gyro_dps * math.pi / 180.0,
+                      warmup_acc_mps2=a.warmup_acc_mg * 1e-3 * STANDARD_GRAVITY_MPS2, warmup_tau_s=a.warmup_tau_s)
     try:
         if a.raw_log:
             simulate_raw(config)

@@ -38,7 +38,22 @@ The stand (one unit set down on it, at rest on the Earth):
              the means are exact.
 
 The sensors: the preset's white noise and Gauss–Markov drift (sensors.py),
-then turn-on biases, then the output's quantisation.
+then flicker and warm-up where asked, then turn-on biases, then the output's
+quantisation.
+
+  flicker    bias instability: a 1/f power spectral density S(f) = h₋₁/f
+             (one-sided), whose Allan deviation is flat at σ_A = √(2 ln 2 ·
+             h₋₁) (IEEE Std 952-1997, annex C: σ_A = 0.664 B with
+             S = B²/(2π f)). Made as a sum of first-order Gauss–Markov
+             processes with correlation times spaced by a ratio r from one
+             sample interval to the log's length, each of variance h₋₁ ln r:
+             Σ 4σ²τ/(1 + (2πfτ)²) over log-spaced τ is σ²/(f ln r) within the
+             band (Keshner, Proc. IEEE 70(3), 1982). `--gyro-flicker-dph` and
+             `--acc-flicker-ug` give σ_A per axis.
+  warm-up    a bias that settles after power-up, b(t) = b_w e^{−t/τ_w}, of a
+             random sign per axis (`--warmup-gyro-dps`, `--warmup-acc-mg`,
+             `--warmup-tau-s`): a MEMS part's die warms by several kelvin over
+             its first minutes, and its bias follows.
 
   turn-on bias  a constant per axis and per power-up, drawn with a random sign
              and a magnitude uniform in [lo, hi]: for the `mems` preset the
@@ -195,6 +210,18 @@ def quantise_rates(rates, lsb):
     return counts * lsb, counts
 
 
+def flicker_means(rng, allan_floor, dt_s, n):
+    """Interval means of flicker noise whose Allan deviation is flat at
+    `allan_floor` between Δt and the log's length (the docstring's sum)."""
+    if allan_floor <= 0.0:
+        return np.zeros(n)
+    h_minus_1 = allan_floor ** 2 / (2.0 * math.log(2.0))
+    ratio = math.sqrt(10.0)
+    taus = dt_s * ratio ** np.arange(int(math.ceil(math.log(n) / math.log(ratio))) + 1)
+    sigma = math.sqrt(h_minus_1 * math.log(ratio))
+    return sum(sensors.gauss_markov_means(rng, sigma, float(tau), dt_s, n) for tau in taus)
+
+
 def draw_turn_on(rng, lo_hi):
     lo, hi = lo_hi
     return [float(rng.choice([-1.0, 1.0]) * rng.uniform(lo, hi)) for _ in AXES]
@@ -245,6 +272,21 @@ def simulate_raw(config, parameters, effects, apply_effects):
             measured[sensor][:, i] += sensors.gauss_markov_means(
                 noise_rng, parameters[f"{sensor}_bias_gm.{a}.sigma"], parameters[f"{sensor}_bias_gm.{a}.tau"], dt, n)
             measured[sensor][:, i] += sensors.white_noise(noise_rng, parameters[f"{noise}.{a}"], dt, n)
+    flicker_rng = np.random.default_rng([config["seed"], 3])
+    warmup_rng = np.random.default_rng([config["seed"], 4])
+    for sensor, floor in (("gyro", config.get("gyro_flicker_rad_s", 0.0)), ("acc", config.get("acc_flicker_mps2", 0.0))):
+        for i in range(3):
+            measured[sensor][:, i] += flicker_means(flicker_rng, floor, dt, n)
+    warmup = {"gyro": config.get("warmup_gyro_rad_s", 0.0), "acc": config.get("warmup_acc_mps2", 0.0)}
+    warmup_biases = {}
+    for sensor in ("gyro", "acc"):
+        signs = warmup_rng.choice([-1.0, 1.0], size=3)
+        warmup_biases[sensor] = (signs * warmup[sensor]).tolist()
+        if warmup[sensor] > 0.0:
+            tau = config["warmup_tau_s"]
+            # The interval mean of b_w e^{−t/τ} over (t[k−1], t[k]].
+            decay = tau * (np.exp(-edges[:-1] / tau) - np.exp(-edges[1:] / tau)) / dt
+            measured[sensor] += decay[:, None] * np.array(warmup_biases[sensor])[None]
     measured["gyro"] += np.array(gyro_turn_on)[None]
     measured["acc"] += np.array(acc_turn_on)[None]
     apply_effects(measured, {"gyro": true_rate, "acc": true_force}, effects, edges, noise_rng)
@@ -286,6 +328,10 @@ def simulate_raw(config, parameters, effects, apply_effects):
         rocking=dict(axis_n=u.tolist(), sway_rad=rocking.aw, sway_hz=config["sway_hz"], sway_phase_rad=sway_phase,
                      settle_rad=rocking.as_, settle_hz=config["settle_hz"], settle_tau_s=config["settle_tau_s"],
                      lever_arm_m=config["lever_arm_m"]),
+        flicker=dict(gyro_allan_floor_rad_s=config.get("gyro_flicker_rad_s", 0.0),
+                     acc_allan_floor_mps2=config.get("acc_flicker_mps2", 0.0)),
+        warmup=dict(gyro_rad_s=warmup_biases["gyro"], acc_mps2=warmup_biases["acc"],
+                    tau_s=config.get("warmup_tau_s", 0.0)),
         turn_on_biases={**{f"gyro_turn_on_bias.{a}": gyro_turn_on[i] for i, a in enumerate(AXES)},
                         **{f"acc_turn_on_bias.{a}": acc_turn_on[i] for i, a in enumerate(AXES)}},
         parameters=parameters, effects=effects)
