@@ -363,17 +363,11 @@ INSTANTIATE_TEST_SUITE_P(
                       FamilyCase{"GyroBiasRw", "gyro_bias_rw.x", "drift", Size::kWalkOverTau, 3.0}),
     [](const ::testing::TestParamInfo<FamilyCase>& p) { return p.param.label; });
 
-// Not found yet (docs/EFFECT_FINDER_SCENARIOS.md, "Walk detection over
-// seeds"): the heading-axis walk at this seed. Disabled on purpose, and
-// listed by ctest as disabled; run it with --gtest_also_run_disabled_tests.
-// A walk of this size is near what eight hours resolve: over seeds the walk
-// is found on 2 of 7 seeds for z and 5 of 7 for x and y; at this seed the z walk's
-// excursion looks like a turn-on offset and a wider drift, and its nested
-// test stays below the screen (also at K = 5 σ_GM/√τ_GM).
-INSTANTIATE_TEST_SUITE_P(
-    DISABLED_NotFoundYet, HiddenBiasRandomWalk,
-    ::testing::Values(FamilyCase{"GyroBiasRwZ", "gyro_bias_rw.z", "drift", Size::kWalkOverTau, 3.0}),
-    [](const ::testing::TestParamInfo<FamilyCase>& p) { return p.param.label; });
+// A walk of this size is near what eight hours resolve: over seeds it is
+// found on 5 of 7 seeds for x and y and 2 of 7 for z, the heading axis, whose
+// excursion looks like a turn-on offset and a wider drift
+// (docs/EFFECT_FINDER_SCENARIOS.md, "Walk detection over seeds"). The suite
+// asserts the x walks, which the run resolves; z's rate is the figure.
 
 // ---------------------------------------------------------------------------
 // 2. No hidden effect.

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 
 #include "insdiag/engine/filter/linear_range.h"
@@ -149,6 +150,31 @@ double RawSlopeStdError(const FaultScale& scale, int sensor_axis, double span_s)
   return std::sqrt(12.0 * white * white / (span_s * span_s * span_s) + 1.2 * walk * walk / span_s);
 }
 
+// Two measurements of one fault at one onset: the raw samples' and the
+// navigation errors'. Where the navigation errors measure it to within the
+// first-order model's range (linear_range.h, at the raw estimate's size) and
+// the two differ beyond their joint standard error at the family-wise level,
+// the raw samples' change is not the sensor's (a bench's periodic motion
+// moves the raw curve's tests; the navigation errors integrate it away).
+// What the note says then; nullopt where they agree or cannot be compared.
+std::optional<std::string> NavigationErrorsRefute(const OnsetFit& fit, const EpochRun& run,
+                                                  const RawSampleChange& change, const EffectCandidate& raw,
+                                                  double family_wise_alpha) {
+  const auto nav = EstimateNearOnset(fit, run, change.time_s, std::max(change.tolerance_s, run.update_interval_s));
+  if (!nav.has_value() || !(nav->std_error > 0.0) || !(raw.std_error > 0.0) || fit.estimate == 0.0) {
+    return std::nullopt;
+  }
+  // The attitude error the raw estimate would give, from the scan's response per unit of fault.
+  const double peak_attitude_error_rad = fit.peak_attitude_error_rad / std::abs(fit.estimate) * std::abs(raw.estimate);
+  const double nav_std_error = StandardErrorWithLinearisation(raw.estimate, nav->std_error, peak_attitude_error_rad);
+  const double difference = raw.estimate - nav->estimate;
+  const double z2 = difference * difference / (raw.std_error * raw.std_error + nav_std_error * nav_std_error);
+  if (!(stats::ChiSquareSurvival(z2, 1) < family_wise_alpha)) return std::nullopt;
+  return absl::StrFormat(
+      "refuted by the navigation errors: from %.0f s they give %.3g ± %.2g %s against the raw samples' %.3g ± %.2g",
+      nav->onset_s, nav->estimate, nav_std_error, raw.unit, raw.estimate, raw.std_error);
+}
+
 }  // namespace
 
 void AddRawSampleFaultCandidates(std::vector<EffectCandidate>& candidates,
@@ -204,6 +230,10 @@ void AddRawSampleFaultCandidates(std::vector<EffectCandidate>& candidates,
         "channels); the navigation errors give it 2Δℓ %.1f at that onset",
         ramp ? "a ramp" : "a jump", ramp ? "from" : "at", raw.time_s, ramp ? "ramp" : "jump",
         c.p_value, c.statistic);
+    if (const auto refuted = NavigationErrorsRefute(*fit, run, raw, c, family_wise_alpha)) {
+      c.identifiable = false;
+      c.note = *refuted + "; " + c.note;
+    }
     if (scanned != candidates.end()) {
       c.correlated_with = scanned->correlated_with;
       *scanned = std::move(c);

@@ -356,6 +356,8 @@ OnsetFit FitTerm(const EffectTerm& term, const OnsetSums& sums, const EpochRun& 
   std::vector<OnsetTrial> trials;
   trials.reserve(T.size());
   std::vector<double> weight(T.size());
+  fit.estimate_by_onset.resize(T.size());
+  fit.std_error_by_onset.resize(T.size());
   double total = 0.0;
   for (int theta = first; theta <= last; ++theta) {
     const auto j = static_cast<size_t>(theta - first);
@@ -363,6 +365,8 @@ OnsetFit FitTerm(const EffectTerm& term, const OnsetSums& sums, const EpochRun& 
     const double info = v.dot(pair(theta).information * v);
     trials.push_back({run.epochs[static_cast<size_t>(theta)].start_s, T[j],
                       v.dot(pair(theta).score) / info, 1.0 / std::sqrt(info)});
+    fit.estimate_by_onset[j] = trials.back().estimate;
+    fit.std_error_by_onset[j] = trials.back().std_error;
     weight[j] = std::exp(0.5 * (T[j] - fit.statistic)) * trials.back().std_error / fit.std_error;
     total += weight[j];
   }
@@ -452,15 +456,40 @@ void SetPeakAttitudeErrors(const ForwardPass& fw, const StateLayout& layout, con
 
 }  // namespace
 
-std::optional<double> StatisticWithOnsetAt(const OnsetFit& fit, const EpochRun& run,
-                                           double onset_s) {
+namespace {
+
+// The index into the fit's per-onset vectors of the first update interval
+// that starts at or after `onset_s`, where the scan tried one.
+std::optional<size_t> TriedOnsetAt(const OnsetFit& fit, const EpochRun& run, double onset_s) {
   const auto first_after = std::ranges::find_if(
       run.epochs, [&](const EpochInterval& e) { return e.start_s >= onset_s; });
   const auto theta = static_cast<int>(first_after - run.epochs.begin()) - fit.first_onset_epoch;
   if (!fit.identifiable || theta < 0 || theta >= static_cast<int>(fit.statistic_by_onset.size())) {
     return std::nullopt;
   }
-  return fit.statistic_by_onset[static_cast<size_t>(theta)];
+  return static_cast<size_t>(theta);
+}
+
+}  // namespace
+
+std::optional<double> StatisticWithOnsetAt(const OnsetFit& fit, const EpochRun& run,
+                                           double onset_s) {
+  const auto j = TriedOnsetAt(fit, run, onset_s);
+  if (!j.has_value()) return std::nullopt;
+  return fit.statistic_by_onset[*j];
+}
+
+std::optional<EstimateAtOnset> EstimateNearOnset(const OnsetFit& fit, const EpochRun& run, double onset_s,
+                                                 double tolerance_s) {
+  if (!fit.identifiable) return std::nullopt;
+  std::optional<EstimateAtOnset> nearest;
+  for (size_t j = 0; j < fit.estimate_by_onset.size(); ++j) {
+    const double start_s = run.epochs[static_cast<size_t>(fit.first_onset_epoch) + j].start_s;
+    if (std::abs(start_s - onset_s) > tolerance_s) continue;
+    if (!nearest.has_value() || std::abs(start_s - onset_s) < std::abs(nearest->onset_s - onset_s))
+      nearest = EstimateAtOnset{start_s, fit.estimate_by_onset[j], fit.std_error_by_onset[j]};
+  }
+  return nearest;
 }
 
 double OnsetPValue(double statistic, double path_length) {

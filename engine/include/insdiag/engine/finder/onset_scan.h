@@ -110,6 +110,8 @@ struct OnsetFit {
   // from `first_onset_epoch` on.
   int first_onset_epoch = 0;
   std::vector<double> statistic_by_onset;
+  // β̂ and its standard error at every onset tried, as statistic_by_onset.
+  std::vector<double> estimate_by_onset, std_error_by_onset;
 };
 
 // T = 2Δℓ of `fit`'s term with its onset given rather than searched, at
@@ -117,6 +119,15 @@ struct OnsetFit {
 // where no onset was tried there.
 std::optional<double> StatisticWithOnsetAt(const OnsetFit& fit, const EpochRun& run,
                                            double onset_s);
+// β̂ and its standard error at the onset tried nearest `onset_s`, within
+// `tolerance_s` of it (an onset known to that precision); nullopt where none was.
+struct EstimateAtOnset {
+  double onset_s = 0.0;
+  double estimate = 0.0;
+  double std_error = 0.0;
+};
+std::optional<EstimateAtOnset> EstimateNearOnset(const OnsetFit& fit, const EpochRun& run, double onset_s,
+                                                 double tolerance_s);
 
 // Davies' bound on P(max over onsets of 2Δℓ ≥ statistic) for a scan whose
 // path length is `path_length` (the p-value of OnsetFit).
