@@ -314,6 +314,16 @@ OnsetFit FitTerm(const EffectTerm& term, const OnsetSums& sums, const EpochRun& 
                     sums.information[at].block<2, 2>(2 * axis, 2 * axis),
                     sums.successive[at][static_cast<size_t>(axis)]};
   };
+  const int K = run.size();
+  fit.estimate_by_epoch.assign(static_cast<size_t>(K), 0.0);
+  fit.std_error_by_epoch.assign(static_cast<size_t>(K), 0.0);
+  for (int theta = 0; theta < K; ++theta) {
+    const Eigen::Vector2d v = direction(theta);
+    const double info = v.dot(pair(theta).information * v);
+    if (!(info > 0.0) || !std::isfinite(info)) continue;
+    fit.estimate_by_epoch[static_cast<size_t>(theta)] = v.dot(pair(theta).score) / info;
+    fit.std_error_by_epoch[static_cast<size_t>(theta)] = 1.0 / std::sqrt(info);
+  }
   // A run too short for both sides of any onset has no candidate (last < first).
   std::vector<double> T(static_cast<size_t>(std::max(0, last - first + 1)), 0.0);
   fit.identifiable = last >= first;
@@ -356,8 +366,6 @@ OnsetFit FitTerm(const EffectTerm& term, const OnsetSums& sums, const EpochRun& 
   std::vector<OnsetTrial> trials;
   trials.reserve(T.size());
   std::vector<double> weight(T.size());
-  fit.estimate_by_onset.resize(T.size());
-  fit.std_error_by_onset.resize(T.size());
   double total = 0.0;
   for (int theta = first; theta <= last; ++theta) {
     const auto j = static_cast<size_t>(theta - first);
@@ -365,8 +373,6 @@ OnsetFit FitTerm(const EffectTerm& term, const OnsetSums& sums, const EpochRun& 
     const double info = v.dot(pair(theta).information * v);
     trials.push_back({run.epochs[static_cast<size_t>(theta)].start_s, T[j],
                       v.dot(pair(theta).score) / info, 1.0 / std::sqrt(info)});
-    fit.estimate_by_onset[j] = trials.back().estimate;
-    fit.std_error_by_onset[j] = trials.back().std_error;
     weight[j] = std::exp(0.5 * (T[j] - fit.statistic)) * trials.back().std_error / fit.std_error;
     total += weight[j];
   }
@@ -481,13 +487,12 @@ std::optional<double> StatisticWithOnsetAt(const OnsetFit& fit, const EpochRun& 
 
 std::optional<EstimateAtOnset> EstimateNearOnset(const OnsetFit& fit, const EpochRun& run, double onset_s,
                                                  double tolerance_s) {
-  if (!fit.identifiable) return std::nullopt;
   std::optional<EstimateAtOnset> nearest;
-  for (size_t j = 0; j < fit.estimate_by_onset.size(); ++j) {
-    const double start_s = run.epochs[static_cast<size_t>(fit.first_onset_epoch) + j].start_s;
-    if (std::abs(start_s - onset_s) > tolerance_s) continue;
+  for (size_t k = 0; k < fit.estimate_by_epoch.size() && k < run.epochs.size(); ++k) {
+    const double start_s = run.epochs[k].start_s;
+    if (!(fit.std_error_by_epoch[k] > 0.0) || std::abs(start_s - onset_s) > tolerance_s) continue;
     if (!nearest.has_value() || std::abs(start_s - onset_s) < std::abs(nearest->onset_s - onset_s))
-      nearest = EstimateAtOnset{start_s, fit.estimate_by_onset[j], fit.std_error_by_onset[j]};
+      nearest = EstimateAtOnset{start_s, fit.estimate_by_epoch[k], fit.std_error_by_epoch[k]};
   }
   return nearest;
 }

@@ -110,8 +110,10 @@ struct OnsetFit {
   // from `first_onset_epoch` on.
   int first_onset_epoch = 0;
   std::vector<double> statistic_by_onset;
-  // β̂ and its standard error at every onset tried, as statistic_by_onset.
-  std::vector<double> estimate_by_onset, std_error_by_onset;
+  // β̂ and its standard error with the onset at each epoch of the run (0
+  // where the run holds no information on it), tried or not: what the
+  // navigation errors say of a fault at an onset found elsewhere.
+  std::vector<double> estimate_by_epoch, std_error_by_epoch;
 };
 
 // T = 2Δℓ of `fit`'s term with its onset given rather than searched, at
@@ -119,8 +121,9 @@ struct OnsetFit {
 // where no onset was tried there.
 std::optional<double> StatisticWithOnsetAt(const OnsetFit& fit, const EpochRun& run,
                                            double onset_s);
-// β̂ and its standard error at the onset tried nearest `onset_s`, within
-// `tolerance_s` of it (an onset known to that precision); nullopt where none was.
+// β̂ and its standard error with the onset at the epoch nearest `onset_s`,
+// within `tolerance_s` of it (an onset known to that precision); nullopt
+// where the run holds no information there.
 struct EstimateAtOnset {
   double onset_s = 0.0;
   double estimate = 0.0;
