@@ -191,19 +191,26 @@ void AddRawSampleFaultCandidates(std::vector<EffectCandidate>& candidates,
     });
     if (fit == fits.end()) continue;  // the model holds the fault already
     const std::string name = fit->term.Name();
+    const double span_s = scale.run_end_s - raw.time_s;
+    if (!(span_s > 0.0)) continue;
+    const bool ramp = raw.shape == Regressor::kRamp;
+    const double std_error = ramp ? RawSlopeStdError(scale, SensorAxisIndex(raw.sensor, raw.axis), span_s)
+                                  : raw.std_error;
+    // The change is a finding where the curve's shape and its measured size
+    // are both significant: an intersection–union test, whose p is the
+    // larger of the two (Berger, Technometrics 24(4), 1982).
+    const double size_z = std_error > 0.0 ? raw.size / std_error : 0.0;
+    const double p_value = std::max(std::min(1.0, raw.p_value * static_cast<double>(kSensorAxisCount)),
+                                    stats::ChiSquareSurvival(size_z * size_z, 1));
     // The scan's fit stands where it is the stronger evidence, or a finding
     // that places the samples' change: over the whole run it places the onset
     // better.
-    const double p_value = std::min(1.0, raw.p_value * static_cast<double>(kSensorAxisCount));
     const auto scanned = std::ranges::find(candidates, name, &EffectCandidate::name);
     if (scanned != candidates.end() &&
         (scanned->p_value <= p_value ||
          (scanned->seen_in_raw_samples && scanned->p_value < family_wise_alpha))) {
       continue;
     }
-    const double span_s = scale.run_end_s - raw.time_s;
-    if (!(span_s > 0.0)) continue;
-    const bool ramp = raw.shape == Regressor::kRamp;
     EffectCandidate c;
     c.name = name;
     c.family = std::string(fit->term.family->name);
@@ -211,8 +218,7 @@ void AddRawSampleFaultCandidates(std::vector<EffectCandidate>& candidates,
     c.unit = std::string(fit->term.family->unit);
     c.dof = 1;
     c.estimate = raw.size;
-    c.std_error = ramp ? RawSlopeStdError(scale, SensorAxisIndex(raw.sensor, raw.axis), span_s)
-                       : raw.std_error;
+    c.std_error = std_error;
     c.p_value = p_value;
     c.statistic = StatisticWithOnsetAt(*fit, run, raw.time_s).value_or(0.0);
     c.predicted_delta_aic = -c.statistic + 2.0;
@@ -226,10 +232,10 @@ void AddRawSampleFaultCandidates(std::vector<EffectCandidate>& candidates,
         scale.drift_sigma[static_cast<size_t>(SensorAxisIndex(raw.sensor, raw.axis))];
     if (sigma > 0.0) c.size_in_drift_sigma = std::abs(raw.size) * (ramp ? span_s : 1.0) / sigma;
     c.note = absl::StrFormat(
-        "%s the still segments' raw samples show %s %.0f s (the %s test's p %.2g over the six "
-        "channels); the navigation errors give it 2Δℓ %.1f at that onset",
-        ramp ? "a ramp" : "a jump", ramp ? "from" : "at", raw.time_s, ramp ? "ramp" : "jump",
-        c.p_value, c.statistic);
+        "%s the still segments' raw samples show %s %.0f s (p %.2g: the %s test over the six "
+        "channels, and its size); the navigation errors give it 2Δℓ %.1f at that onset",
+        ramp ? "a ramp" : "a jump", ramp ? "from" : "at", raw.time_s, c.p_value, ramp ? "ramp" : "jump",
+        c.statistic);
     if (const auto refuted = NavigationErrorsRefute(*fit, run, raw, c, family_wise_alpha)) {
       c.identifiable = false;
       c.note = *refuted + "; " + c.note;
