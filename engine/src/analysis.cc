@@ -287,6 +287,17 @@ std::optional<std::array<GaussMarkov, DriftAxis::kCount>> DriftsOfTheAllanFit(
   return drifts;
 }
 
+// Puts back the samples the screening took for spikes where the bench moved
+// (FindBenchMotion), and drops them from the spikes.
+void KeepTheMotionAsRecorded(SampleScreening& screening, BenchRun& run) {
+  std::erase_if(screening.spikes, [&](const SampleOutlier& s) {
+    if (!BenchMovedWithin(screening.bench_motion, std::nextafter(s.time_s, -1.0e300), s.time_s)) return false;
+    ImuSample& sample = run.samples[s.sample];
+    (s.sensor_channel < 3 ? sample.gyro_rad_s[s.sensor_channel] : sample.acc_mps2[s.sensor_channel - 3]) = s.value;
+    return true;
+  });
+}
+
 // Each axis' counted output quantum the static segments' samples lie on (0
 // where they lie on none), whichever a-priori model the run takes.
 std::array<double, DriftAxis::kCount> CountedQuantisationOf(const std::optional<ident::AllanResult>& allan) {
@@ -469,11 +480,14 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   const nav::RunCompensations compensations(run);
   const std::vector<std::array<double, 6>> reference_measurements = ReferenceMeasurements(run, compensations);
   // The bench's motion from the samples with their spikes repaired: a
-  // transmission error is one sample, a move many.
+  // transmission error is one sample, a move many. A departure inside a
+  // stretch where the bench moved is the motion itself: it is kept as
+  // recorded, for the mechanisation to follow.
   SampleScreening screening;
   screening.spikes = ScreenAndRepairSpikes(run, reference_measurements, options.screening);
   screening.bench_motion = FindBenchMotion(run, reference_measurements, options.filter.update_interval_s,
                                            options.monitor.family_wise_alpha);
+  KeepTheMotionAsRecorded(screening, run);
 
   Progress(options, 0.05, "Allan deviation and the run condensed to its epochs");
   std::optional<ident::AllanResult> allan;

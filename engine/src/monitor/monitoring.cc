@@ -131,8 +131,6 @@ MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const State
     out.channels.push_back(std::move(fit));
   }
   for (const SampleOutlier& s : samples.spikes) {
-    // A departure where the bench moved is its motion, not the unit's spike.
-    if (BenchMovedWithin(samples.bench_motion, std::nextafter(s.time_s, -1.0e300), s.time_s)) continue;
     AddFaultInterval(out.faults, kSensorChannelNames[s.sensor_channel], s.time_s, s.time_s, FaultKind::kOutlier,
                      s.robust_z, 0.0);
   }
