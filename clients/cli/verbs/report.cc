@@ -65,6 +65,14 @@ void PrintReportText(const v1::Analysis& analysis, std::ostream& out) {
     }
     intervals.Print(out);
   }
+  if (r.bench_motion_size() > 0) {
+    out << "\n";
+    Table moved({"bench moved", "from [s]", "to [s]", "scatter [σ]"});
+    for (const auto& m : r.bench_motion()) {
+      moved.Add({m.channel(), Number(m.start_s(), 6), Number(m.end_s(), 6), Number(m.statistic(), 3)});
+    }
+    moved.Print(out);
+  }
   for (const auto& note : r.notes()) out << "note: " << note << "\n";
 }
 
