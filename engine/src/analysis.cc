@@ -292,8 +292,7 @@ std::optional<std::array<GaussMarkov, DriftAxis::kCount>> DriftsOfTheAllanFit(
 void KeepTheMotionAsRecorded(SampleScreening& screening, BenchRun& run) {
   std::erase_if(screening.spikes, [&](const SampleOutlier& s) {
     if (!BenchMovedWithin(screening.bench_motion, std::nextafter(s.time_s, -1.0e300), s.time_s)) return false;
-    ImuSample& sample = run.samples[s.sample];
-    (s.sensor_channel < 3 ? sample.gyro_rad_s[s.sensor_channel] : sample.acc_mps2[s.sensor_channel - 3]) = s.value;
+    SensorChannelValue(run.samples[s.sample], s.sensor_channel) = s.value;
     return true;
   });
 }

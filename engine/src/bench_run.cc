@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "insdiag/engine/stats/robust.h"
+
 namespace insdiag::engine {
 
 std::optional<std::string> BenchRunMetadata::Extra(const std::string& key) const {
@@ -65,9 +67,7 @@ double MedianSampleIntervalS(std::span<const ImuSample> samples) {
   std::vector<double> dt;
   dt.reserve(samples.size() - 1);
   for (size_t k = 1; k < samples.size(); ++k) dt.push_back(samples[k].t_s - samples[k - 1].t_s);
-  auto mid = dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2);
-  std::nth_element(dt.begin(), mid, dt.end());
-  return *mid;
+  return stats::MedianInPlace(dt);
 }
 
 double BenchRun::NominalIntervalS() const { return MedianSampleIntervalS(samples); }

@@ -3,16 +3,14 @@
 #include <algorithm>
 #include <cmath>
 
+#include "insdiag/engine/monitor/sample_screening.h"
 #include "insdiag/engine/stats/distributions.h"
+#include "insdiag/engine/stats/robust.h"
 
 namespace insdiag::engine {
 namespace {
 
 constexpr int kChannels = 6;
-// 1/Φ⁻¹(0.75): the median absolute deviation of a normal variable in its σ.
-constexpr double kMadToSigma = 1.482602218505602;
-
-double SensorValue(const ImuSample& s, int c) { return c < 3 ? s.gyro_rad_s[c] : s.acc_mps2[c - 3]; }
 
 // One update interval's samples: per channel the log of the departures'
 // sample variance, and the range of the reference measurement over it.
@@ -38,14 +36,14 @@ std::vector<IntervalScatter> ScatterPerInterval(const BenchRun& run,
       const auto ch = static_cast<size_t>(c);
       double mean = 0.0, lo = reference[first][ch], hi = lo;
       for (size_t k = first; k < first + per_interval; ++k) {
-        mean += SensorValue(run.samples[k], c) - reference[k][ch];
+        mean += SensorChannelValue(run.samples[k], c) - reference[k][ch];
         lo = std::min(lo, reference[k][ch]);
         hi = std::max(hi, reference[k][ch]);
       }
       mean /= static_cast<double>(per_interval);
       double d2 = 0.0;
       for (size_t k = first; k < first + per_interval; ++k) {
-        const double d = SensorValue(run.samples[k], c) - reference[k][ch] - mean;
+        const double d = SensorChannelValue(run.samples[k], c) - reference[k][ch] - mean;
         d2 += d * d;
       }
       s.log_variance[ch] = std::log(d2 / static_cast<double>(per_interval - 1));
@@ -53,12 +51,6 @@ std::vector<IntervalScatter> ScatterPerInterval(const BenchRun& run,
     }
   }
   return out;
-}
-
-double MedianOf(std::vector<double>& v) {
-  auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
 }
 
 // A channel's quiet level over the intervals the table held still: the
@@ -79,9 +71,9 @@ QuietLevel QuietLevelOf(const std::vector<IntervalScatter>& intervals, const std
   QuietLevel out;
   // A channel with no scatter at rest (a counter that never turns) has no quiet level to depart from.
   if (values.size() * 2 < intervals.size()) return out;
-  out.log_variance = MedianOf(values);
+  out.log_variance = stats::MedianInPlace(values);
   for (double& v : values) v = std::abs(v - out.log_variance);
-  out.sigma = kMadToSigma * MedianOf(values);
+  out.sigma = stats::kMadToSigma * stats::MedianInPlace(values);
   return out;
 }
 
@@ -93,7 +85,7 @@ std::vector<bool> TableStill(const std::vector<IntervalScatter>& intervals) {
   for (int c = 0; c < kChannels; ++c) {
     values.clear();
     for (const IntervalScatter& s : intervals) values.push_back(s.log_variance[static_cast<size_t>(c)]);
-    quiet_sigma[static_cast<size_t>(c)] = std::exp(0.5 * MedianOf(values));
+    quiet_sigma[static_cast<size_t>(c)] = std::exp(0.5 * stats::MedianInPlace(values));
   }
   std::vector<bool> still(intervals.size());
   for (size_t i = 0; i < intervals.size(); ++i) {

@@ -11,11 +11,10 @@
 #include "insdiag/engine/nav/table_motion.h"
 #include "insdiag/engine/nav/wgs84.h"
 #include "insdiag/engine/numerics/parallel_map.h"
+#include "insdiag/engine/stats/robust.h"
 
 namespace insdiag::engine {
 namespace {
-
-double& Channel(ImuSample& s, int c) { return c < 3 ? s.gyro_rad_s[c] : s.acc_mps2[c - 3]; }
 
 // What a perfect unit would have measured over each sample interval, from the
 // table's reference attitude: the mean body rate Log(C_{k−1}ᵀ C_k)/Δt plus the
@@ -35,12 +34,6 @@ double QuantileOf(std::vector<double>& v, double p) {
   return *at;
 }
 
-double MedianOf(std::vector<double>& v) {
-  auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
 // Quantiles of |d| for Gaussian d of standard deviation 1: Φ⁻¹(0.75) and Φ⁻¹(0.95).
 constexpr double kHalfNormalMedian = 0.6744897501960817;
 constexpr double kHalfNormalQuantile90 = 1.6448536269514722;
@@ -52,7 +45,7 @@ constexpr double kHalfNormalQuantile90 = 1.6448536269514722;
 // "spike". The 90th percentile / Φ⁻¹(0.95) estimates the same σ for Gaussian
 // noise and stays at the quantisation level there; the larger is taken.
 double RobustSigma(std::vector<double>& magnitude) {
-  const double from_median = MedianOf(magnitude) / kHalfNormalMedian;
+  const double from_median = stats::MedianInPlace(magnitude) / kHalfNormalMedian;
   return std::max(from_median, QuantileOf(magnitude, 0.9) / kHalfNormalQuantile90);
 }
 
@@ -109,12 +102,12 @@ std::vector<SampleOutlier> ScreenAndRepairSpikes(BenchRun& run, const std::vecto
   // The sample's departure from the reference motion.
   auto residual = [&](int c, long k) {
     const auto i = static_cast<size_t>(k);
-    return Channel(run.samples[i], c) - expected[i][static_cast<size_t>(c)];
+    return SensorChannelValue(run.samples[i], c) - expected[i][static_cast<size_t>(c)];
   };
   std::vector<double> window(static_cast<size_t>(2 * w + 1));
   auto departure_at = [&](int c, long k) {
     for (long j = -w; j <= w; ++j) window[static_cast<size_t>(j + w)] = residual(c, k + j);
-    return residual(c, k) - MedianOf(window);
+    return residual(c, k) - stats::MedianInPlace(window);
   };
   // σ from a systematic subsample of the departures: a robust scale needs
   // thousands of values, not all of them (the full Hampel pass would cost
@@ -151,10 +144,10 @@ std::vector<SampleOutlier> ScreenAndRepairSpikes(BenchRun& run, const std::vecto
       const double z = std::abs(departure) / sigma;
       if (z <= options.threshold) continue;
       ImuSample& s = run.samples[static_cast<size_t>(k)];
-      outliers.push_back({static_cast<size_t>(k), c, s.t_s, z, Channel(s, c), Channel(s, c) - departure});
+      outliers.push_back({static_cast<size_t>(k), c, s.t_s, z, SensorChannelValue(s, c), SensorChannelValue(s, c) - departure});
     }
   }
-  for (const SampleOutlier& o : outliers) Channel(run.samples[o.sample], o.sensor_channel) = o.replacement;
+  for (const SampleOutlier& o : outliers) SensorChannelValue(run.samples[o.sample], o.sensor_channel) = o.replacement;
   std::sort(outliers.begin(), outliers.end(), [](const SampleOutlier& a, const SampleOutlier& b) {
     return a.sample != b.sample ? a.sample < b.sample : a.sensor_channel < b.sensor_channel;
   });

@@ -5,11 +5,11 @@
 #include <numbers>
 #include <vector>
 
+#include "insdiag/engine/stats/robust.h"
+
 namespace insdiag::engine::nav {
 namespace {
 
-// 1/Φ⁻¹(0.75): the median absolute deviation of a Gaussian is 0.6745σ.
-constexpr double kMadToSigma = 1.482602218505602;
 constexpr double kSecondDifferenceVarianceFactor = 6.0;  // Var(e₊ − 2e + e₋) = 6σ²
 
 }  // namespace
@@ -29,9 +29,7 @@ double AttitudeReadoutNoiseRad(const BenchRun& run) {
     }
   }
   if (magnitudes.empty()) return 0.0;
-  const auto mid = magnitudes.begin() + static_cast<std::ptrdiff_t>(magnitudes.size() / 2);
-  std::nth_element(magnitudes.begin(), mid, magnitudes.end());
-  return kMadToSigma * *mid / std::sqrt(kSecondDifferenceVarianceFactor);
+  return stats::kMadToSigma * stats::MedianInPlace(magnitudes) / std::sqrt(kSecondDifferenceVarianceFactor);
 }
 
 }  // namespace insdiag::engine::nav
