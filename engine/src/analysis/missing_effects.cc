@@ -575,6 +575,7 @@ AnalysisReport ReportOf(const RunContext& c, const ModelPass& pass, const Findin
                         const std::vector<ParameterEstimate>& identified, const std::vector<std::string>& notes) {
   AnalysisReport r;
   FillFit(pass, c.run, c.options, r);
+  r.bench_motion = c.samples.bench_motion;
   std::vector<std::string> fault_notes;
   ReportFaults(FaultFindings(c, pass, found, fault_notes), c.run.samples.back().t_s, r);
   r.effect_candidates = found.candidates;

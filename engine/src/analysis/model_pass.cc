@@ -126,7 +126,6 @@ void FillFit(const ModelPass& pass, const BenchRun& run, const AnalysisOptions& 
   r.gamma2 = m.gamma2;
   r.eta2 = m.eta2;
   r.faults = m.faults;
-  r.bench_motion = m.bench_motion;
   r.localisation = m.localisation;
   r.discrepancies = m.discrepancies;
   r.duration_s = run.DurationS();

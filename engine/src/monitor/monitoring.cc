@@ -135,7 +135,6 @@ MonitorResult Monitor(const ForwardPass& fw, const SmoothedPass& sm, const State
                      s.robust_z, 0.0);
   }
   SortFaultIntervals(out.faults);
-  out.bench_motion = samples.bench_motion;
 
   const int updates = fw.scalar_updates;
   out.nis_mean = updates > 0 ? nis_total / updates : 0.0;

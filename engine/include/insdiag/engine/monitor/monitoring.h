@@ -96,8 +96,6 @@ struct MonitorResult {
   int window_updates = 0;
   std::vector<ChannelFit> channels;
   std::vector<FaultInterval> faults;
-  // Where the bench moved (bench_motion.h): not tested against the unit.
-  std::vector<BenchMotion> bench_motion;
   std::vector<Localisation> localisation;   // one per localised gradual failure, in time order
   std::vector<Localisation> discrepancies;  // forward/backward, most significant first
   double nis_mean = 0.0;
