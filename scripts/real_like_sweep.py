@@ -72,6 +72,12 @@ SCENARIOS = {
                           ["--orientation", "up", "--gyro-flicker-dph", "10", "--acc-flicker-ug", "100"], False),
     "mems-warmup": (MEMS + ["--orientation", "up", "--warmup-gyro-dps", "0.05", "--warmup-acc-mg", "5",
                             "--warmup-tau-s", "600"], False),
+    "mems-warmup-60s": (MEMS + ["--orientation", "up", "--warmup-gyro-dps", "0.1", "--warmup-acc-mg", "10",
+                                "--warmup-tau-s", "60"], False),
+    "mems-warmup-3000s": (MEMS + ["--orientation", "side", "--warmup-gyro-dps", "0.02", "--warmup-acc-mg", "2",
+                                  "--warmup-tau-s", "3000"], False),
+    "nav-up-warmup": (NAV + ["--orientation", "up", "--warmup-gyro-dps", "0.00001", "--warmup-acc-mg", "0.1",
+                             "--warmup-tau-s", "300"], False),
     "nav-up-flicker": (NAV + ["--orientation", "up", "--gyro-flicker-dph", "0.005", "--acc-flicker-ug", "10"], False),
 }
 MAIN = ["nav-up", "nav-side", "nav-up-sway", "nav-side-sway", "mems", "mems-sway"]

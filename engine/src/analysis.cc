@@ -517,6 +517,9 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
       });
   notes.insert(notes.end(), allan_notes.begin(), allan_notes.end());
   if (!epochs.ok()) return epochs.status();
+  epochs->start_departure = MeasureStartDeparture(
+      run, base, epochs->update_interval_s, StillToleranceRad(base.reference),
+      screening.bench_motion.empty() ? std::nullopt : std::optional<double>(screening.bench_motion.front().start_s));
   a_priori->counted_quantisation = CountedQuantisationOf(allan);
   const RawSampleEvidence raw_samples = RawSampleEvidenceOf(run, allan, a_priori->model, options);
   const AnalysisOptions run_options = OptionsForThisRun(options, allan);
