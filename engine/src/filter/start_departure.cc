@@ -8,13 +8,7 @@
 #include "insdiag/engine/nav/wgs84.h"
 
 namespace insdiag::engine {
-namespace {
 
-using Vector6d = Eigen::Matrix<double, 6, 1>;
-
-// The run's still start: the samples after the first while the reference
-// attitude stays at the first sample's and no new segment begins. Returns
-// their end (exclusive).
 size_t StillStartEnd(const BenchRun& run, double still_tolerance_rad) {
   const Eigen::Vector3d& start_rpy = run.samples.front().ref_rpy_rad;
   size_t k = 1;
@@ -29,7 +23,14 @@ size_t StillStartEnd(const BenchRun& run, double still_tolerance_rad) {
   return k;
 }
 
-}  // namespace
+Vector6d PerfectReadingAtStart(const BenchRun& run) {
+  const Site& site = run.metadata.site;
+  const Eigen::Matrix3d C_n_b = nav::EulerToDcm(run.samples.front().ref_rpy_rad).transpose();
+  Vector6d perfect;
+  perfect << C_n_b * wgs84::EarthRateNed(site.latitude_rad),
+      C_n_b * Eigen::Vector3d(0.0, 0.0, -wgs84::NormalGravityMps2(site.latitude_rad, site.height_m));
+  return perfect;
+}
 
 StartDeparture MeasureStartDeparture(const BenchRun& run, const ErrorModel& model, double update_interval_s,
                                      double still_tolerance_rad, std::optional<double> bench_moved_from_s) {
@@ -44,12 +45,7 @@ StartDeparture MeasureStartDeparture(const BenchRun& run, const ErrorModel& mode
   // does not show), so the window must end a window's length before it.
   const double quiet_s = bench_moved_from_s.has_value() ? *bench_moved_from_s - t0_s : still_s;
 
-  // A perfect unit's reading over the still start (static_constants.h).
-  const Site& site = run.metadata.site;
-  const Eigen::Matrix3d C_n_b = nav::EulerToDcm(run.samples.front().ref_rpy_rad).transpose();
-  Vector6d perfect;
-  perfect << C_n_b * wgs84::EarthRateNed(site.latitude_rad),
-      C_n_b * Eigen::Vector3d(0.0, 0.0, -wgs84::NormalGravityMps2(site.latitude_rad, site.height_m));
+  const Vector6d perfect = PerfectReadingAtStart(run);
 
   std::array<double, kSensorAxisCount> window_s{};
   for (int i = 0; i < kSensorAxisCount; ++i) {

@@ -37,6 +37,8 @@
 #include <array>
 #include <optional>
 
+#include <Eigen/Core>
+
 #include "insdiag/engine/bench_run.h"
 #include "insdiag/engine/model/error_model.h"
 
@@ -53,6 +55,18 @@ struct StartDeparture {
   std::array<double, kSensorAxisCount> window_s{};
   std::array<double, kSensorAxisCount> std_error{};
 };
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+
+// The run's still start: the samples from the first while the reference
+// attitude stays within `still_tolerance_rad` of the first sample's and no
+// new segment begins. Returns their end (exclusive).
+size_t StillStartEnd(const BenchRun& run, double still_tolerance_rad);
+
+// What a perfect unit reads at rest in the run's first reference attitude
+// (static_constants.h): Earth's rate, then gravity's specific force, in body
+// axes. The run must have a sample.
+Vector6d PerfectReadingAtStart(const BenchRun& run);
 
 // Measures the start's departure on `run`'s samples with `model`'s noise and
 // drift, the reference still within `still_tolerance_rad` (StillToleranceRad)
