@@ -76,7 +76,6 @@ absl::StatusOr<double> FaultPValueBeside(const RunContext& c, const ErrorModel& 
                                          const FaultFinding& f, int fault_terms) {
   auto epochs = CondenseRun(c.run, model, c.options.filter.update_interval_s);
   if (!epochs.ok()) return epochs.status();
-  epochs->start_departure = c.epochs.start_departure;
   auto forward = RunForwardFilter(*epochs, model);
   if (!forward.ok()) return forward.status();
   const std::vector<OnsetFit> fits =

@@ -83,9 +83,7 @@ Eigen::MatrixXd InitialCovariance(const ErrorModel& model, const StateLayout& la
     switch (s.dynamics) {
       case StateDynamics::kGaussMarkov: {
         const double sigma = (s.sensor == Sensor::kGyro ? model.gyro : model.acc).bias[s.axis].sigma;
-        // A start the samples show departing from the stationary drift starts there (start_departure.h).
-        var = std::max(sigma * sigma,
-                       run.start_departure.start_square[static_cast<size_t>(SensorAxisIndex(s.sensor, s.axis))]);
+        var = sigma * sigma;
         break;
       }
       case StateDynamics::kConstant: {

@@ -55,13 +55,16 @@
 
 #include "insdiag/engine/bench_run.h"
 #include "insdiag/engine/filter/observation.h"
-#include "insdiag/engine/filter/start_departure.h"
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/model/error_dynamics.h"
 #include "insdiag/engine/model/error_model.h"
 #include "insdiag/engine/nav/table_motion.h"
 
 namespace insdiag::engine {
+
+// The six sensor axes in this order: gyro x, y, z, accelerometer x, y, z.
+inline constexpr int kSensorAxisCount = 6;
+inline int SensorAxisIndex(Sensor sensor, int axis) { return (sensor == Sensor::kGyro ? 0 : 3) + axis; }
 
 // Coupling moments μ_p, p = 0 … kCouplingDegree.
 inline constexpr int kCouplingDegree = 2;
@@ -102,10 +105,6 @@ struct EpochRun {
   // What the run says of its initial attitude's accuracy (bench_run.h): the
   // filter's initial attitude covariance.
   StatedAttitudeAccuracy stated_attitude;
-  // What its still start says of each sensor's bias there: the filter's
-  // initial drift covariance (start_departure.h). The analysis measures it
-  // beside the bench's motion; a run condensed alone starts stationary.
-  StartDeparture start_departure;
   double update_interval_s = 0.0;
   double sample_interval_s = 0.0;  // the run's nominal Δt
   int samples_per_epoch = 0;

@@ -37,10 +37,6 @@ namespace insdiag::engine {
 
 enum class Sensor { kGyro, kAccelerometer };
 
-// The six sensor axes in this order: gyro x, y, z, accelerometer x, y, z.
-inline constexpr int kSensorAxisCount = 6;
-inline int SensorAxisIndex(Sensor sensor, int axis) { return (sensor == Sensor::kGyro ? 0 : 3) + axis; }
-
 // The SI units of one sensor's quantities, spelled as reports spell them.
 struct SensorUnits {
   std::string_view rate;           // its output and bias: "rad/s" | "m/s^2"
