@@ -494,17 +494,9 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   if (!a_priori.ok()) return a_priori.status();
   MeasureAttitudeReadout(run, a_priori->model, notes);
   NoteUnsurveyedHeading(run, a_priori->model, notes);
-  std::vector<ParameterEstimate> removed_constants =
+  const std::vector<ParameterEstimate> removed_constants =
       options.remove_dominant_constants ? RemoveDominantConstants(run, allan, *a_priori, options, notes)
                                         : std::vector<ParameterEstimate>{};
-  if (options.remove_dominant_constants) {
-    const std::optional<double> bench_moved_from_s =
-        screening.bench_motion.empty() ? std::nullopt : std::optional<double>(screening.bench_motion.front().start_s);
-    const std::vector<ParameterEstimate> warm_ups =
-        ident::RemoveWarmUps(run, a_priori->model, options.filter.update_interval_s,
-                             StillToleranceRad(a_priori->model.reference), bench_moved_from_s, options.warm_up, notes);
-    removed_constants.insert(removed_constants.end(), warm_ups.begin(), warm_ups.end());
-  }
   ErrorModel base = a_priori->model;
   if (auto st = AddEffects(run, request.baseline_effects, options.filter.update_interval_s,
                            options.diffuse_prior_scale, base);

@@ -44,7 +44,6 @@
 #include "insdiag/engine/ident/drift_likelihood.h"
 #include "insdiag/engine/ident/retarget.h"
 #include "insdiag/engine/ident/static_constants.h"
-#include "insdiag/engine/ident/warm_up.h"
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/model/error_model.h"
 #include "insdiag/engine/monitor/monitoring.h"
@@ -79,8 +78,6 @@ struct AnalysisOptions {
   // (ident/static_constants.h).
   bool remove_dominant_constants = true;
   ident::DominantConstantOptions dominant_constants;
-  // Biases settling after power-up, removed with the dominant constants (ident/warm_up.h).
-  ident::WarmUpOptions warm_up;
   int max_retarget_iterations = 4;
   double settle_log_ratio = 0.1;  // a parameter has settled within 10% (or one σ)
   ident::CorrelationOptions correlation;
