@@ -345,14 +345,12 @@ namespace {
 std::vector<std::vector<double>> PiecesBetweenJumps(
     const BenchRun& run, const std::vector<StaticSegment>& segments, int channel, double tau0,
     const AllanOptions& options, std::vector<RateJump>& jumps, std::vector<size_t>& first_samples) {
-  const auto axis = static_cast<size_t>(channel % 3);
   std::vector<std::vector<double>> out;
   std::vector<double> rates;
   for (const StaticSegment& seg : segments) {
     rates.resize(seg.Samples());
     for (size_t k = 0; k < seg.Samples(); ++k) {
-      const ImuSample& sample = run.samples[seg.first_sample + k];
-      rates[k] = channel < 3 ? sample.gyro_rad_s[axis] : sample.acc_mps2[axis];
+      rates[k] = SensorChannelValue(run.samples[seg.first_sample + k], channel);
     }
     std::vector<RateJump> in_segment;
     for (const RatePiece& piece : CutAtRateJumps(rates, tau0, options, &in_segment)) {

@@ -144,10 +144,13 @@ std::vector<SampleOutlier> ScreenAndRepairSpikes(BenchRun& run, const std::vecto
       const double z = std::abs(departure) / sigma;
       if (z <= options.threshold) continue;
       ImuSample& s = run.samples[static_cast<size_t>(k)];
-      outliers.push_back({static_cast<size_t>(k), c, s.t_s, z, SensorChannelValue(s, c), SensorChannelValue(s, c) - departure});
+      const double value = SensorChannelValue(s, c);
+      outliers.push_back({static_cast<size_t>(k), c, s.t_s, z, value, value - departure});
     }
   }
-  for (const SampleOutlier& o : outliers) SensorChannelValue(run.samples[o.sample], o.sensor_channel) = o.replacement;
+  for (const SampleOutlier& o : outliers) {
+    SensorChannelValue(run.samples[o.sample], o.sensor_channel) = o.replacement;
+  }
   std::sort(outliers.begin(), outliers.end(), [](const SampleOutlier& a, const SampleOutlier& b) {
     return a.sample != b.sample ? a.sample < b.sample : a.sensor_channel < b.sensor_channel;
   });

@@ -105,6 +105,15 @@ struct ImuSample {
   double temp_degc = 0.0;  // meaningful only when the run has temperature
 };
 
+// Sample `s`'s value on sensor channel `c`: gyro x, y, z, then accelerometer
+// x, y, z.
+inline double& SensorChannelValue(ImuSample& s, int c) {
+  return c < 3 ? s.gyro_rad_s[c] : s.acc_mps2[c - 3];
+}
+inline double SensorChannelValue(const ImuSample& s, int c) {
+  return c < 3 ? s.gyro_rad_s[c] : s.acc_mps2[c - 3];
+}
+
 // A test of several segments (docs/MULTI_POSITION.md): files recorded one
 // after another with unrecorded moves between them, for example six static
 // positions and three turns. Each segment starts from its own reference

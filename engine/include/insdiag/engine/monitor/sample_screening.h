@@ -29,10 +29,6 @@ namespace insdiag::engine {
 inline constexpr std::string_view kSensorChannelNames[6] = {"gyro_x", "gyro_y", "gyro_z",
                                                             "acc_x",  "acc_y",  "acc_z"};
 
-// Sample `s`'s value on sensor channel `c` (kSensorChannelNames order).
-inline double& SensorChannelValue(ImuSample& s, int c) { return c < 3 ? s.gyro_rad_s[c] : s.acc_mps2[c - 3]; }
-inline double SensorChannelValue(const ImuSample& s, int c) { return c < 3 ? s.gyro_rad_s[c] : s.acc_mps2[c - 3]; }
-
 struct ScreeningOptions {
   int half_window = 5;      // w
   double threshold = 12.0;  // in robust standard deviations
