@@ -5,9 +5,11 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include "allan_scenarios.h"
@@ -57,8 +59,10 @@ struct CheckOutput {
 
 CheckOutput RunCheck(std::vector<std::string> args) {
   args.insert(args.begin(), {"/usr/bin/python3", std::string(INSDIAG_SOURCE_DIR) + "/tests/engine/allan_check.py"});
-  auto done = insdiag::testing::RunToCompletion(args, insdiag::testing::MakeTempDir("allan-check"),
-                                                std::chrono::seconds(120));
+  const std::filesystem::path work = insdiag::testing::MakeTempDir("allan-check");
+  auto done = insdiag::testing::RunToCompletion(args, work, std::chrono::seconds(120));
+  std::error_code ignored;
+  std::filesystem::remove_all(work, ignored);  // the check writes nothing a failure would need
   CheckOutput out;
   EXPECT_TRUE(done.ok()) << done.status();
   if (!done.ok()) return out;

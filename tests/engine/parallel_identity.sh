@@ -9,9 +9,11 @@ dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 "$cli" simulate "$dir/full.csv" --profile rotations --rate 10 --seed 104 --no-datasheet \
   --param gyro_bias_gm.x.sigma=4.848e-7 --param gyro_bias_gm.x.tau=200 > /dev/null
-# The profile's first half hour (nine drift correlation times) takes every
-# parallel path; the whole hour only doubles the test's time.
-awk -F, 'header_seen && $1 > 1800 { exit } { print } /^t,/ { header_seen = 1 }' "$dir/full.csv" > "$dir/run.csv"
+# The profile's first quarter hour (four and a half drift correlation times)
+# takes every parallel path, the drift identified by likelihood among them,
+# as the half hour does (the same stages in `--progress`) in 17 s instead of
+# 40 s for the two analyses.
+awk -F, 'header_seen && $1 > 900 { exit } { print } /^t,/ { header_seen = 1 }' "$dir/full.csv" > "$dir/run.csv"
 INSDIAG_THREADS=1 "$cli" analyze "$dir/run.csv" --json --unit-type INS-2000 > "$dir/one.json"
 INSDIAG_THREADS=4 "$cli" analyze "$dir/run.csv" --json --unit-type INS-2000 > "$dir/four.json"
 if ! cmp -s "$dir/one.json" "$dir/four.json"; then

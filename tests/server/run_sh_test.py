@@ -6,7 +6,10 @@
    M, the banner says how to get the admin token and the token file is
    there (mode 0600); the demonstration loads, and once its analyses end,
    every analysis listed through the API has SUCCEEDED, the demonstration's
-   units and the real record among them. SIGTERM stops it all.
+   units and the real record among them; the page opens on the loop at work
+   (the healthy unit not FAULTY, the hidden scale factor found, the faulty
+   unit FAULTY with its step, each unit diagnosed once, a fleet of 40).
+   SIGTERM stops it all.
 2. `./run.sh --no-demo` on another fresh data directory: the database stays
    empty (no run, no analysis).
 
@@ -170,9 +173,48 @@ def check_demonstration(build_dir, cli):
                 fail(f"no succeeded analysis of {sorted(missing)}; runs: {sorted(set(by_name.values()))[:20]}")
             print(f"run.sh test: the demonstration loaded and analysed in {time.monotonic() - started:.0f} s: "
                   f"{len(runs)} runs, {len(analyses)} analyses, every one SUCCEEDED")
+            check_what_the_demonstration_shows(rest, analyses, by_name, read(os.path.join(run.data, "demo.log")))
         finally:
             run.stop()
         poll(f"port {http_port} closed after SIGTERM", 30, lambda: Rest(http_port).get("/healthz")[0] == 0)
+
+
+def check_what_the_demonstration_shows(rest, analyses, serial_of_run, demo_log):
+    """The page opens on the loop at work: the simulated units' hidden effects
+    found, the faulty one FAULTY, each unit diagnosed once, the real record
+    uploaded, and a fleet for the fleet views."""
+    def report_of(serial):
+        names = [a["name"] for a in analyses if serial_of_run.get(a["run"]) == serial]
+        if not names:
+            fail(f"{serial} has no analysis")
+        status, body = rest.get(f"/v1/{names[0]}")
+        if status != 200:
+            fail(f"GET /v1/{names[0]}: {status} {body[:300]!r}")
+        return json.loads(body).get("report", {})
+
+    def has_effect(report, prefix):
+        return any(e.startswith(prefix) for e in report.get("model", {}).get("effects", []))
+
+    healthy, hidden_scale_factor, faulty = (report_of(s) for s in ("DEMO-1", "DEMO-2", "DEMO-3"))
+    if healthy.get("verdict") == "FAULTY":
+        fail("the healthy DEMO-1 is FAULTY")
+    if not has_effect(hidden_scale_factor, "gyro_scale_factor.z"):
+        fail(f"DEMO-2's hidden gyro z scale factor was not found: {hidden_scale_factor.get('model')}")
+    if faulty.get("verdict") != "FAULTY" or not has_effect(faulty, "gyro_bias_step.x@"):
+        fail(f"DEMO-3's gyro x step: verdict {faulty.get('verdict')}, model {faulty.get('model')}")
+    for serial in ("DEMO-1", "DEMO-2", "DEMO-3"):
+        status, body = rest.get(f"/v1/diagnoses?unit=units/{serial}")
+        diagnoses = json.loads(body).get("diagnoses", []) if status == 200 else None
+        if diagnoses is None or len(diagnoses) != 1:
+            fail(f"{serial}: GET /v1/diagnoses answered {status} with {body[:300]!r}, not one diagnosis")
+    if "the real record is runs/" not in demo_log:
+        fail("the demonstration's log does not name the real record's run:\n" + demo_log[-3000:])
+    status, body = rest.get("/v1/fleetStatistics")
+    units = int(json.loads(body).get("unitCount", 0)) if status == 200 else 0
+    if units < 40:
+        fail(f"GET /v1/fleetStatistics: {status}, {units} units, not the fleet of 40")
+    print(f"run.sh test: DEMO-1 {healthy.get('verdict')}, DEMO-2's gyro z scale factor found, DEMO-3 FAULTY with "
+          f"its gyro x step, each diagnosed once; the real record uploaded; a fleet of {units} units")
 
 
 def check_no_demo(build_dir, cli):

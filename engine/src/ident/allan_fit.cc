@@ -12,6 +12,7 @@
 #include <string>
 
 #include "ident/allan_model.h"
+#include "insdiag/engine/numerics/quiet_solver.h"
 #include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::engine::ident {
@@ -230,6 +231,7 @@ SolveOutcome Solve(const FitData& data, const TermMask& on, const Bounds& bounds
   options.minimizer_progress_to_stdout = false;
   const LogParameters start = a;
   ceres::Solver::Summary summary;
+  numerics::QuietSolverLog();
   ceres::Solve(options, &problem, &summary);
   const bool capped = summary.termination_type == ceres::NO_CONVERGENCE;
   if (summary.IsSolutionUsable()) return {2.0 * summary.final_cost, capped};

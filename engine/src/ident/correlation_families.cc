@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 
+#include "insdiag/engine/numerics/quiet_solver.h"
 #include "insdiag/engine/stats/distributions.h"
 
 namespace insdiag::engine::ident::correlation_families {
@@ -352,6 +353,7 @@ FamilyFit FitFamily(const Problem& pb, CorrelationFamily family, std::vector<dou
   so.parameter_tolerance = 1e-12;
   so.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
+  numerics::QuietSolverLog();
   ceres::Solve(so, &problem, &summary);
   for (int c = 0; c < free_count; ++c) {
     theta[static_cast<size_t>(free_index[static_cast<size_t>(c)])] =
