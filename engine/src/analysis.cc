@@ -70,9 +70,9 @@ absl::StatusOr<ErrorModel> APrioriModel(const BenchRun& run, const std::optional
 
 // The dominant constant biases removed from `run` (ident/static_constants.h),
 // on the Allan analysis's static segments when it ran.
-std::vector<ParameterEstimate> RemoveDominantConstants(BenchRun& run, const std::optional<ident::AllanResult>& allan,
-                                                       const pipeline::APriori& a_priori, const AnalysisOptions& options,
-                                                       std::vector<std::string>& notes) {
+ident::RemovedConstants RemoveDominantConstants(BenchRun& run, const std::optional<ident::AllanResult>& allan,
+                                                const pipeline::APriori& a_priori, const AnalysisOptions& options,
+                                                std::vector<std::string>& notes) {
   const ident::ConstantPrior prior = a_priori.FromAllanFit() ? ident::ConstantPrior::kNone
                                                          : ident::ConstantPrior::kBoundedByDrift;
   if (allan.has_value()) {
@@ -464,7 +464,12 @@ void NoteUnsurveyedHeading(const BenchRun& run, const ErrorModel& model, std::ve
 
 }  // namespace
 
-absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& request,
+absl::StatusOr<Analysis> Analyze(const BenchRun& run, const AnalysisRequest& request,
+                                 const AnalysisOptions& options) {
+  return Analyze(BenchRun(run), request, options);
+}
+
+absl::StatusOr<Analysis> Analyze(BenchRun&& input, const AnalysisRequest& request,
                                  const AnalysisOptions& requested_options) {
   if (auto st = requested_options.Validate(); !st.ok()) return st;
   if (input.samples.size() < 2) return absl::InvalidArgumentError("the run has fewer than two samples");
@@ -472,7 +477,9 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   const AnalysisOptions options = WithTheRunsUpdateInterval(requested_options, input, notes);
 
   Progress(options, 0.0, "screening samples");
-  BenchRun run = input;
+  // The samples are screened and their dominant constants removed in place:
+  // the report quotes them as recorded through RecordedSamples.
+  BenchRun run = std::move(input);
   // The table's motion within each sample: the screen and the condensation
   // both need it, and it depends on the reference alone (screening and the
   // constants removed below change the sensors' samples only).
@@ -494,9 +501,9 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   if (!a_priori.ok()) return a_priori.status();
   MeasureAttitudeReadout(run, a_priori->model, notes);
   NoteUnsurveyedHeading(run, a_priori->model, notes);
-  const std::vector<ParameterEstimate> removed_constants =
+  const ident::RemovedConstants removed_constants =
       options.remove_dominant_constants ? RemoveDominantConstants(run, allan, *a_priori, options, notes)
-                                        : std::vector<ParameterEstimate>{};
+                                        : ident::RemovedConstants{};
   ErrorModel base = a_priori->model;
   if (auto st = AddEffects(run, request.baseline_effects, options.filter.update_interval_s,
                            options.diffuse_prior_scale, base);
@@ -536,7 +543,7 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   auto a = ScanModelA(context, request, identification, notes);
   if (!a.ok()) return a.status();
   std::vector<ParameterEstimate> identified = std::move(identification.identified);
-  identified.insert(identified.begin(), removed_constants.begin(), removed_constants.end());
+  identified.insert(identified.begin(), removed_constants.estimates.begin(), removed_constants.estimates.end());
   pipeline::ScannedModelA model_a{a->pass, a->found,
                                   pipeline::ReportOf(context, a->pass, a->found, identified, notes),
                                   identified, notes};
@@ -555,7 +562,8 @@ absl::StatusOr<Analysis> Analyze(const BenchRun& input, const AnalysisRequest& r
   }
   if (!out.ok()) return out.status();
   out->report.allan = std::move(allan);
-  out->report.plain_words = PlainWordsVerdict(out->report, input, options.monitor.family_wise_alpha);
+  const RecordedSamples recorded{run, removed_constants.gyro_rad_s, removed_constants.acc_mps2, screening.spikes};
+  out->report.plain_words = PlainWordsVerdict(out->report, recorded, options.monitor.family_wise_alpha);
   Progress(options, 1.0, "done");
   return out;
 }

@@ -49,16 +49,9 @@ std::string Reading(const SensorChannel& c, double si) {
   return absl::StrFormat("%.3g %s", si * unit.per_si, unit.name);
 }
 
-// The raw mean of a channel over [from, to) s, NaN where no sample lies.
-double RawMean(const BenchRun& run, const SensorChannel& c, double from_s, double to_s) {
-  double sum = 0.0;
-  int n = 0;
-  for (const ImuSample& s : run.samples) {
-    if (s.t_s < from_s || s.t_s >= to_s) continue;
-    sum += (c.gyro ? s.gyro_rad_s : s.acc_mps2)[c.axis];
-    ++n;
-  }
-  return n > 0 ? sum / n : std::nan("");
+// The recorded mean of a channel over [from, to) s, NaN where no sample lies.
+double RawMean(const RecordedSamples& samples, const SensorChannel& c, double from_s, double to_s) {
+  return samples.Mean(c.gyro ? c.axis : 3 + c.axis, from_s, to_s);
 }
 
 std::string SensorName(const SensorChannel& c) {
@@ -79,7 +72,7 @@ std::string RawChange(const SensorChannel& c, double before_si, double after_si,
 }
 
 // One finding: what changed, when, how sure, and what the raw samples read.
-std::string FindingLine(const EffectCandidate& c, const SensorChannel& channel, const BenchRun& run) {
+std::string FindingLine(const EffectCandidate& c, const SensorChannel& channel, const RecordedSamples& run) {
   const bool ramp = c.name.find("_ramp.") != std::string::npos;
   if (!c.onset_s.has_value()) {
     return absl::StrFormat("%s: %s %.3g ± %.2g %s, missing from the model (p %.1g)", SensorName(channel), c.name,
@@ -92,7 +85,7 @@ std::string FindingLine(const EffectCandidate& c, const SensorChannel& channel, 
                                             Reading(channel, c.estimate), onset_s, c.p_value_holm);
   // A step: the minutes either side of its onset; a ramp: the minute before
   // it and the run's last minute, where it has gone furthest.
-  const double end_s = run.samples.empty() ? onset_s : run.samples.back().t_s;
+  const double end_s = run.worked_on.samples.empty() ? onset_s : run.worked_on.samples.back().t_s;
   const double before = RawMean(run, channel, onset_s - kRawWindowS, onset_s);
   const double after = ramp ? RawMean(run, channel, end_s - kRawWindowS, end_s + 1.0)
                             : RawMean(run, channel, onset_s, onset_s + kRawWindowS);
@@ -196,7 +189,30 @@ std::string VerdictLine(const AnalysisReport& r, int faults, double family_wise_
 
 }  // namespace
 
+double RecordedSamples::Mean(int channel, double from_s, double to_s) const {
+  const double removed = channel < 3 ? removed_gyro_rad_s[channel] : removed_acc_mps2[channel - 3];
+  double sum = 0.0;
+  int n = 0;
+  for (const ImuSample& s : worked_on.samples) {
+    if (s.t_s < from_s || s.t_s >= to_s) continue;
+    sum += SensorChannelValue(s, channel) + removed;
+    ++n;
+  }
+  // A repaired spike was replaced before the constants were removed.
+  for (const SampleOutlier& spike : repaired_spikes) {
+    if (spike.sensor_channel == channel && spike.time_s >= from_s && spike.time_s < to_s)
+      sum += spike.value - spike.replacement;
+  }
+  return n > 0 ? sum / n : std::nan("");
+}
+
 std::vector<std::string> PlainWordsVerdict(const AnalysisReport& report, const BenchRun& run,
+                                           double family_wise_alpha) {
+  return PlainWordsVerdict(report, RecordedSamples{run, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), {}},
+                           family_wise_alpha);
+}
+
+std::vector<std::string> PlainWordsVerdict(const AnalysisReport& report, const RecordedSamples& run,
                                            double family_wise_alpha) {
   // Faults first: changes at an onset, one a sensor axis (a step and a ramp
   // on one axis are two readings of one change), the most significant.

@@ -193,7 +193,7 @@ std::string_view AnalysisWorkers::RunJobOutcome(const kb::ClaimedJob& job, const
     };
     absl::StatusOr<engine::Analysis> analysis = absl::InternalError("the engine did not run");
     try {
-      analysis = engine::Analyze(run, request, options);
+      analysis = engine::Analyze(std::move(run), request, options);
     } catch (const std::exception& e) {
       return absl::InternalError(absl::StrCat("the engine failed: ", e.what()));
     }

@@ -6,7 +6,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <numbers>
+#include <utility>
 
 namespace insdiag::engine {
 namespace {
@@ -39,6 +41,39 @@ EffectCandidate Step(double p_value_holm) {
   c.p_value = c.p_value_holm = p_value_holm;
   c.onset_s = 300.0;
   return c;
+}
+
+// The samples as recorded, read back from the run the analysis changed: a
+// spike repaired by the screening, then a constant removed from every sample.
+TEST(RecordedSamples, PutBackTheRepairedSpikeAndTheRemovedConstant) {
+  const BenchRun recorded = StepRun();
+  BenchRun worked_on = recorded;
+  SampleOutlier spike;
+  spike.sample = 1234;
+  spike.sensor_channel = 0;
+  spike.time_s = worked_on.samples[spike.sample].t_s;
+  spike.value = 500.0 * kRadSPerDegH;
+  worked_on.samples[spike.sample].gyro_rad_s.x() = spike.value;
+  BenchRun as_recorded_with_spike = worked_on;
+  spike.replacement = 1.0 * kRadSPerDegH;
+  worked_on.samples[spike.sample].gyro_rad_s.x() = spike.replacement;
+  const Eigen::Vector3d removed_gyro(2.0 * kRadSPerDegH, 0.0, 0.0), removed_acc(0.0, 0.0, -9.8);
+  for (ImuSample& s : worked_on.samples) {
+    s.gyro_rad_s -= removed_gyro;
+    s.acc_mps2 -= removed_acc;
+  }
+  const SampleOutlier spikes[] = {spike};
+  const RecordedSamples samples{worked_on, removed_gyro, removed_acc, spikes};
+  const RecordedSamples as_recorded{as_recorded_with_spike, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), {}};
+  for (int channel : {0, 5}) {
+    for (auto [from_s, to_s] : {std::pair{60.0, 180.0}, std::pair{100.0, 160.0}, std::pair{290.0, 350.0}}) {
+      EXPECT_NEAR(samples.Mean(channel, from_s, to_s), as_recorded.Mean(channel, from_s, to_s), 1e-12)
+          << "channel " << channel << " over [" << from_s << ", " << to_s << ")";
+    }
+  }
+  // The window holding the spike reads it as recorded: 499 °/h above the rest over 600 samples.
+  EXPECT_NEAR(samples.Mean(0, 100.0, 160.0) / kRadSPerDegH, 1.0 + 499.0 / 600.0, 1e-9);
+  EXPECT_TRUE(std::isnan(samples.Mean(0, 700.0, 800.0)));
 }
 
 TEST(PlainWords, AFaultyUnitsStepIsStatedWithTheRawMinuteMeansAndTheModuleToCheck) {

@@ -102,7 +102,7 @@ class AnalyzeVerb final : public Verb {
             << std::flush;
       };
     }
-    auto analysis = engine::Analyze(*run, request, options);
+    auto analysis = engine::Analyze(*std::move(run), request, options);
     if (!analysis.ok()) {
       err << "insdiag analyze: " << file_ << ": " << analysis.status().message() << "\n";
       return analysis.status().code() == absl::StatusCode::kInvalidArgument ? kExitUsage : kExitRefused;

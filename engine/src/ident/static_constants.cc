@@ -116,14 +116,15 @@ absl::StatusOr<StaticConstants> MeasureStaticConstants(const BenchRun& run,
   return out;
 }
 
-std::vector<ParameterEstimate> RemoveDominantConstants(BenchRun& run, const std::vector<StaticSegment>& segments,
+RemovedConstants RemoveDominantConstants(BenchRun& run, const std::vector<StaticSegment>& segments,
                                                        const ErrorModel& a_priori,
                                                        const DominantConstantOptions& options, ConstantPrior prior,
                                                        std::vector<std::string>& notes) {
   const auto constants = MeasureStaticConstants(run, segments, a_priori, options, prior);
   if (!constants.ok() || !constants->AnyDominant()) return {};
-  Eigen::Vector3d gyro = Eigen::Vector3d::Zero(), acc = Eigen::Vector3d::Zero();
-  std::vector<ParameterEstimate> removed;
+  RemovedConstants removed;
+  Eigen::Vector3d& gyro = removed.gyro_rad_s;
+  Eigen::Vector3d& acc = removed.acc_mps2;
   std::string list;
   for (const StaticConstant& c : constants->axes) {
     if (!c.dominant) continue;
@@ -135,7 +136,7 @@ std::vector<ParameterEstimate> RemoveDominantConstants(BenchRun& run, const std:
     p.method = EstimationMethod::kStaticMeans;
     p.unit = std::string(c.term.family->unit);
     p.a_priori = 0.0;
-    removed.push_back(std::move(p));
+    removed.estimates.push_back(std::move(p));
     absl::StrAppend(&list, list.empty() ? "" : ", ",
                     absl::StrFormat("%s %.3g ± %.2g %s (%.0f a-priori drift σ)", c.term.Name(), c.bias, c.std_error,
                                     c.term.family->unit, std::abs(c.bias) / c.drift_sigma));

@@ -163,6 +163,10 @@ struct Analysis {
 
 absl::StatusOr<Analysis> Analyze(const BenchRun& run, const AnalysisRequest& request,
                                  const AnalysisOptions& options);
+// The same, working on `run` in place where the caller no longer needs it:
+// the analysis then holds one copy of the samples, not two.
+absl::StatusOr<Analysis> Analyze(BenchRun&& run, const AnalysisRequest& request,
+                                 const AnalysisOptions& options);
 
 // The a-priori model from the datasheet, completed from `nominal`; an error
 // naming the missing values when neither has them.

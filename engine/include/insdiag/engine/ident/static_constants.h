@@ -107,11 +107,19 @@ absl::StatusOr<StaticConstants> MeasureStaticConstants(const BenchRun& run,
                                                        const DominantConstantOptions& options = {},
                                                        ConstantPrior prior = ConstantPrior::kBoundedByDrift);
 
+// The dominant constants taken out of a run's samples: as identified
+// parameters (method "STATIC", a-priori 0), and as what was subtracted from
+// every sample.
+struct RemovedConstants {
+  std::vector<ParameterEstimate> estimates;
+  Eigen::Vector3d gyro_rad_s = Eigen::Vector3d::Zero();
+  Eigen::Vector3d acc_mps2 = Eigen::Vector3d::Zero();
+};
+
 // Measures the constants on `segments`, subtracts the dominant ones from
-// every sample of `run` and says so in `notes`. Returns them as identified
-// parameters (method "STATIC", a-priori 0); empty when none is dominant or
+// every sample of `run` and says so in `notes`. None when none is dominant or
 // the run has no static segment.
-std::vector<ParameterEstimate> RemoveDominantConstants(BenchRun& run, const std::vector<StaticSegment>& segments,
+RemovedConstants RemoveDominantConstants(BenchRun& run, const std::vector<StaticSegment>& segments,
                                                        const ErrorModel& a_priori,
                                                        const DominantConstantOptions& options, ConstantPrior prior,
                                                        std::vector<std::string>& notes);
