@@ -291,7 +291,7 @@ std::optional<std::array<GaussMarkov, DriftAxis::kCount>> DriftsOfTheAllanFit(
 // (FindBenchMotion), and drops them from the spikes.
 void KeepTheMotionAsRecorded(SampleScreening& screening, BenchRun& run) {
   std::erase_if(screening.spikes, [&](const SampleOutlier& s) {
-    if (!BenchMovedWithin(screening.bench_motion, std::nextafter(s.time_s, -1.0e300), s.time_s)) return false;
+    if (!BenchMovedAt(screening.bench_motion, s.time_s)) return false;
     SensorChannelValue(run.samples[s.sample], s.sensor_channel) = s.value;
     return true;
   });

@@ -103,6 +103,25 @@ TEST(BenchMotion, FindsARingDownWhereItIs) {
   }
 }
 
+// A stretch holds the instants after its start up to its end, as the
+// interval ending at each.
+TEST(BenchMotion, AnInstantIsInsideAStretchFromJustAfterItsStartToItsEnd) {
+  std::vector<BenchMotion> motion(2);
+  motion[0].start_s = 10.0;
+  motion[0].end_s = 12.0;
+  motion[1].start_s = 30.0;
+  motion[1].end_s = 30.5;
+  for (double t : {10.0, 9.0, 12.000001, 20.0, 30.0, 31.0}) {
+    EXPECT_FALSE(BenchMovedAt(motion, t)) << t;
+    EXPECT_EQ(BenchMovedAt(motion, t), BenchMovedWithin(motion, std::nextafter(t, -1.0e300), t)) << t;
+  }
+  for (double t : {10.000001, 11.0, 12.0, 30.25, 30.5}) {
+    EXPECT_TRUE(BenchMovedAt(motion, t)) << t;
+    EXPECT_EQ(BenchMovedAt(motion, t), BenchMovedWithin(motion, std::nextafter(t, -1.0e300), t)) << t;
+  }
+  EXPECT_FALSE(BenchMovedAt({}, 1.0));
+}
+
 // An update at which the bench moved is neither an outlier nor a window's
 // evidence: a burst of wild innovations there leaves no interval, and the
 // same burst where the bench held is an outlier and a gradual failure.

@@ -165,4 +165,10 @@ bool BenchMovedWithin(const std::vector<BenchMotion>& motion, double start_s, do
   return it != motion.end() && it->start_s < end_s;
 }
 
+bool BenchMovedAt(const std::vector<BenchMotion>& motion, double t_s) {
+  // The first stretch that ends at or after t_s.
+  const auto it = std::ranges::lower_bound(motion, t_s, {}, &BenchMotion::end_s);
+  return it != motion.end() && it->start_s < t_s;
+}
+
 }  // namespace insdiag::engine

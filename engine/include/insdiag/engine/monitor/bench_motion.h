@@ -49,5 +49,8 @@ std::vector<BenchMotion> FindBenchMotion(const BenchRun& run,
 
 // Whether any stretch of `motion` (sorted) overlaps the interval (start_s, end_s].
 bool BenchMovedWithin(const std::vector<BenchMotion>& motion, double start_s, double end_s);
+// Whether a stretch of `motion` (sorted) holds the instant t_s, as the
+// interval ending at it: start_s < t_s ≤ end_s.
+bool BenchMovedAt(const std::vector<BenchMotion>& motion, double t_s);
 
 }  // namespace insdiag::engine
