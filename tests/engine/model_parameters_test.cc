@@ -33,6 +33,7 @@ ErrorModel RandomModel(std::mt19937_64& rng) {
     t->white_noise_density = Eigen::Vector3d(u(rng), u(rng), u(rng)) * 1e-6;
     t->quantization = Eigen::Vector3d(u(rng), 0.0, u(rng)) * 1e-7;
   }
+  m.acc.flicker[1] = {.coefficient = 1e-4 * u(rng), .shortest_tau_s = 2.0 * u(rng), .longest_tau_s = 3000.0 * u(rng)};
   m.reference = {.attitude_sigma_rad = 5e-6 * u(rng),
                  .horizontal_position_sigma_m = 1e-6 * u(rng),
                  .vertical_position_sigma_m = 2e-6 * u(rng),

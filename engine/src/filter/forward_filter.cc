@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "insdiag/engine/model/flicker_floor.h"
 #include "insdiag/engine/nav/wgs84.h"
 #include "insdiag/engine/numerics/large_buffers.h"
 
@@ -83,6 +84,11 @@ Eigen::MatrixXd InitialCovariance(const ErrorModel& model, const StateLayout& la
     switch (s.dynamics) {
       case StateDynamics::kGaussMarkov: {
         const double sigma = (s.sensor == Sensor::kGyro ? model.gyro : model.acc).bias[s.axis].sigma;
+        var = sigma * sigma;
+        break;
+      }
+      case StateDynamics::kFlickerComponent: {
+        const double sigma = FlickerComponentOf(model, s.sensor, s.axis, s.parameter).sigma;
         var = sigma * sigma;
         break;
       }

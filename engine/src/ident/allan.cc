@@ -14,6 +14,7 @@
 #include "ident/allan_model.h"
 #include "insdiag/engine/ident/count_quantum.h"
 #include "insdiag/engine/model/drift_axis.h"
+#include "insdiag/engine/model/flicker_floor.h"
 #include "insdiag/engine/model/parameters.h"
 #include "insdiag/engine/monitor/sample_screening.h"
 #include "insdiag/engine/nav/rotation.h"
@@ -504,7 +505,15 @@ namespace {
 // read: the fitted Markov term; else the larger of the drifts the flicker
 // floor and the rising branch stand for (one process carries both, and the
 // smaller is within its noise); else the bound from the curve's lowest point.
-absl::StatusOr<std::pair<GaussMarkov, std::string>> DriftPlaceholder(const AllanChannel& ch) {
+// What the drift placeholder was read from.
+enum class DriftSource { kMarkov, kFlickerFloor, kRisingBranch, kLowestPoint };
+struct DriftPlaceholderRead {
+  GaussMarkov drift;
+  DriftSource source = DriftSource::kLowestPoint;
+  std::string how;
+};
+
+absl::StatusOr<DriftPlaceholderRead> DriftPlaceholder(const AllanChannel& ch) {
   const AllanFit& fit = ch.fit;
   const AllanNoiseTerms terms = fit.Terms();
   const MarkovPeak& peak = MarkovShapePeak();
@@ -518,14 +527,15 @@ absl::StatusOr<std::pair<GaussMarkov, std::string>> DriftPlaceholder(const Allan
     return best;
   };
   if (fit[AllanParameter::kMarkovSigma].included) {
-    return std::pair{GaussMarkov{terms.markov_sigma, terms.markov_tau_s}, std::string("drift from the fitted Gauss–Markov term")};
+    return DriftPlaceholderRead{GaussMarkov{terms.markov_sigma, terms.markov_tau_s}, DriftSource::kMarkov,
+                                "drift from the fitted Gauss–Markov term"};
   }
-  std::optional<std::pair<GaussMarkov, std::string>> floor_drift, rising_drift;
+  std::optional<DriftPlaceholderRead> floor_drift, rising_drift;
   if (fit[AllanParameter::kBiasInstability].included) {
     const AllanPoint* p = lowest(true);
     const double floor = std::sqrt(kFlickerAvar) * terms.bias_instability;
     const double tau_floor = p != nullptr ? p->tau_s : ch.curve.back().tau_s;
-    floor_drift = {GaussMarkov{floor / std::sqrt(peak.g), tau_floor / peak.u},
+    floor_drift = {GaussMarkov{floor / std::sqrt(peak.g), tau_floor / peak.u}, DriftSource::kFlickerFloor,
                    "drift from the bias instability: the Markov process whose Allan peak is the flicker floor at τ = " +
                        FormatG(tau_floor) + " s"};
   }
@@ -540,18 +550,18 @@ absl::StatusOr<std::pair<GaussMarkov, std::string>> DriftPlaceholder(const Allan
     AllanNoiseTerms rising;
     rising.rate_random_walk = terms.rate_random_walk;
     rising.rate_ramp = terms.rate_ramp;
-    rising_drift = {GaussMarkov{std::sqrt(1.5 * ModelAllanVariance(rising, T)), T},
+    rising_drift = {GaussMarkov{std::sqrt(1.5 * ModelAllanVariance(rising, T)), T}, DriftSource::kRisingBranch,
                     "drift from the rate random walk and ramp with T = the longest τ analysed (" + FormatG(T) + " s)"};
   }
   if (floor_drift.has_value() && rising_drift.has_value()) {
-    return rising_drift->first.sigma > floor_drift->first.sigma ? *rising_drift : *floor_drift;
+    return rising_drift->drift.sigma > floor_drift->drift.sigma ? *rising_drift : *floor_drift;
   }
   if (floor_drift.has_value()) return *floor_drift;
   if (rising_drift.has_value()) return *rising_drift;
   const AllanPoint* p = lowest(false);
   if (p == nullptr) return absl::InvalidArgumentError("Allan: channel " + ch.name + " has no positive deviation");
-  return std::pair{GaussMarkov{p->adev / std::sqrt(peak.g), p->tau_s / peak.u},
-                   std::string("no drift term resolved; Gauss–Markov drift set to the bound from the curve's lowest point")};
+  return DriftPlaceholderRead{GaussMarkov{p->adev / std::sqrt(peak.g), p->tau_s / peak.u}, DriftSource::kLowestPoint,
+                              "no drift term resolved; Gauss–Markov drift set to the bound from the curve's lowest point"};
 }
 
 }  // namespace
@@ -564,9 +574,12 @@ absl::StatusOr<ErrorModel> ErrorModelFromAllan(const AllanResult& result, const 
   auto note = [&](const std::string& s) {
     if (notes != nullptr) notes->push_back(s);
   };
+  double longest_segment_s = 0.0;
+  for (const StaticSegment& s : result.segments) longest_segment_s = std::max(longest_segment_s, s.end_s - s.start_s);
   for (const AllanChannel& ch : result.channels) {
     SensorTriadModel& triad = ch.sensor == Sensor::kGyro ? model.gyro : model.acc;
     const AllanFit& fit = ch.fit;
+    const AllanNoiseTerms terms = fit.Terms();
     const auto axis = static_cast<size_t>(ch.axis);
     if (ch.curve.empty()) return absl::InvalidArgumentError("Allan: channel " + ch.name + " has no curve");
 
@@ -585,8 +598,26 @@ absl::StatusOr<ErrorModel> ErrorModelFromAllan(const AllanResult& result, const 
 
     auto drift = DriftPlaceholder(ch);
     if (!drift.ok()) return drift.status();
-    triad.bias[axis] = drift->first;
-    note(ch.name + ": " + drift->second);
+    // A flicker floor, where it is the drift, the filter carries as a sum of
+    // drifts, the shortest the axis' own (model/flicker_floor.h), over the
+    // cluster times where it stands above the white noise, up to the
+    // longest still segment.
+    if (drift->source == DriftSource::kFlickerFloor) {
+      const FlickerFloor floor = FlickerFloorAbove(terms.bias_instability, triad.white_noise_density[ch.axis],
+                                                   ch.curve.front().tau_s, longest_segment_s);
+      const std::vector<GaussMarkov> components = FlickerComponents(floor);
+      if (components.size() > 1) {
+        triad.flicker[axis] = floor;
+        triad.bias[axis] = components.front();
+        note(ch.name + ": bias instability " + FormatG(floor.coefficient) + " " + ch.unit + " over τ = " +
+             FormatG(floor.shortest_tau_s) + "–" + FormatG(floor.longest_tau_s) + " s, carried as " +
+             std::to_string(components.size()) + " Gauss–Markov drifts (the shortest, τ = " +
+             FormatG(components.front().tau_s) + " s, the axis' drift)");
+        continue;
+      }
+    }
+    triad.bias[axis] = drift->drift;
+    note(ch.name + ": " + drift->how);
   }
   return model;
 }
@@ -606,9 +637,15 @@ std::vector<AllanDeparture> AllanDeparturesFrom(const AllanResult& result, const
     predicted.white_density = triad.white_noise_density[ch.axis];
     predicted.markov_sigma = triad.bias[axis].sigma;
     predicted.markov_tau_s = triad.bias[axis].tau_s;
+    // A flicker floor's components past the drift (model/flicker_floor.h).
+    const std::vector<GaussMarkov> flicker = FlickerComponents(triad.flicker[axis]);
     AllanDeparture farthest{ch.name, 0.0, 1.0};
     for (const AllanPoint& p : ch.curve) {
-      const double model_adev = std::sqrt(ModelAllanVariance(predicted, p.tau_s));
+      double model_avar = ModelAllanVariance(predicted, p.tau_s);
+      for (size_t j = 1; j < flicker.size(); ++j) {
+        model_avar += flicker[j].sigma * flicker[j].sigma * MarkovShape(p.tau_s / flicker[j].tau_s);
+      }
+      const double model_adev = std::sqrt(model_avar);
       if (!(model_adev > 0.0) || !(p.adev > 0.0) || !(p.edf > 0.0)) continue;
       // σ² ν/χ²_ν within its interval (the curve's own intervals, at the
       // family-wise level).

@@ -9,6 +9,7 @@
 #include <limits>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <string>
 
 #include "ident/allan_model.h"
@@ -456,8 +457,34 @@ void TestRamp(const FitData& data, const FitContext& c, Selection& sel) {
   }
 }
 
-// Chooses the terms: the Markov structure where its term is significant,
-// else flicker; then the ramp. One working covariance `V_work` (of the full
+Eigen::VectorXd Residuals(const FitData& data, const StructureFit& f);
+
+// eᵀV⁻¹e over the directions V resolves (eigenvalues above 1e-9 of the
+// largest), and their number.
+std::pair<double, int> ResolvedChi2(const Eigen::MatrixXd& V, const Eigen::VectorXd& e) {
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(V);
+  const double lmax = LargestOf(eig.eigenvalues());
+  double chi2 = 0.0;
+  int rank = 0;
+  for (Eigen::Index k = 0; k < e.size(); ++k) {
+    const double l = eig.eigenvalues()[k];
+    if (!(l > 1e-9 * lmax)) continue;
+    const double proj = eig.eigenvectors().col(k).dot(e);
+    chi2 += proj * proj / l;
+    ++rank;
+  }
+  return {chi2, rank};
+}
+
+// Akaike's criterion of a structure's fit to the curve, its generalised χ²
+// under V (with the curve's discrepancy δ²) plus twice its terms (Akaike,
+// IEEE Trans. Autom. Control 19(6), 1974).
+double StructureAic(const FitData& data, const StructureFit& f, const Eigen::MatrixXd& V) {
+  return ResolvedChi2(WithDiscrepancy(V, data.discrepancy2), Residuals(data, f)).first + 2.0 * ParameterCount(f.on);
+}
+
+// Chooses the terms: the Markov structure where its term is significant and
+// the curve prefers it to flicker, else flicker; then the ramp. One working covariance `V_work` (of the full
 // Markov candidate fit) serves the eliminations of both structures: they
 // describe the same curve, and it only has to reflect the estimator's noise.
 Selection SelectTerms(const FitData& data, const CandidateSets& sets, const FitContext& c, Eigen::MatrixXd& V_work) {
@@ -482,12 +509,21 @@ Selection SelectTerms(const FitData& data, const CandidateSets& sets, const FitC
     have = markov_fit.on[kMs];
   }
   const bool flicker_empty = std::none_of(sets.flicker.begin(), sets.flicker.end(), [](bool b) { return b; });
-  if (have || flicker_empty) {
+  std::optional<StructureFit> flicker_fit;
+  if (!flicker_empty) flicker_fit = FitStructure(data, sets.flicker, c.tau0_s, c.segment_samples, options, V_work);
+  // Both resolved: the structure the curve prefers, by AIC on the
+  // generalised χ² under the one working covariance (a flat floor over
+  // decades is flicker, which a Markov term and a walk only bracket).
+  if (have && flicker_fit.has_value() && flicker_fit->on[kB] &&
+      StructureAic(data, *flicker_fit, V_work) < StructureAic(data, markov_fit, V_work)) {
+    have = false;
+  }
+  if (have || !flicker_fit.has_value()) {
     sel.fit = markov_fit;
     sel.markov = markov_fit.on[kMs];
     sel.candidates = sets.markov;
   } else {
-    sel.fit = FitStructure(data, sets.flicker, c.tau0_s, c.segment_samples, options, V_work);
+    sel.fit = *flicker_fit;
     sel.candidates = sets.flicker;
     for (const auto& [k, z] : markov_fit.dropped) {
       if (k == kMs) sel.unresolved_extra.push_back("markov (z = " + FormatG(z, 2) + ")");
@@ -511,17 +547,7 @@ Eigen::VectorXd Residuals(const FitData& data, const StructureFit& f) {
 // The adequacy test: χ²_g = eᵀV⁻¹e over the directions V resolves
 // (eigenvalues above 1e-9 of the largest).
 void TestAdequacy(const Selection& sel, const Eigen::VectorXd& e, const AllanOptions& options, AllanFit& out) {
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(sel.V_model);
-  const double lmax = LargestOf(eig.eigenvalues());
-  double chi2 = 0.0;
-  int rank = 0;
-  for (Eigen::Index k = 0; k < e.size(); ++k) {
-    const double l = eig.eigenvalues()[k];
-    if (!(l > 1e-9 * lmax)) continue;
-    const double proj = eig.eigenvectors().col(k).dot(e);
-    chi2 += proj * proj / l;
-    ++rank;
-  }
+  const auto [chi2, rank] = ResolvedChi2(sel.V_model, e);
   out.generalized_chi2 = chi2;
   out.dof = std::max(1, rank - ParameterCount(sel.fit.on));
   out.p_value = stats::ChiSquareSurvival(chi2, out.dof);

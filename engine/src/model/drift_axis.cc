@@ -39,6 +39,11 @@ std::string QuantizationName(DriftAxis drift) {
          AxisLabel(AxisSet::kSingle, drift.axis, drift.axis);
 }
 
+std::string FlickerName(DriftAxis drift) {
+  return std::string(SensorPrefix(drift.sensor)) + "_bias_instability." +
+         AxisLabel(AxisSet::kSingle, drift.axis, drift.axis);
+}
+
 std::optional<DriftAxis> DriftOfParameter(std::string_view parameter) {
   for (const DriftAxis d : DriftAxis::All()) {
     if (parameter == DriftSigmaName(d) || parameter == DriftTauName(d)) return d;
@@ -56,6 +61,14 @@ GaussMarkov& DriftOf(ErrorModel& model, DriftAxis drift) {
 
 const GaussMarkov& DriftOf(const ErrorModel& model, DriftAxis drift) {
   return (drift.sensor == Sensor::kGyro ? model.gyro : model.acc).bias[static_cast<size_t>(drift.axis)];
+}
+
+FlickerFloor& FlickerOf(ErrorModel& model, DriftAxis drift) {
+  return (drift.sensor == Sensor::kGyro ? model.gyro : model.acc).flicker[static_cast<size_t>(drift.axis)];
+}
+
+const FlickerFloor& FlickerOf(const ErrorModel& model, DriftAxis drift) {
+  return (drift.sensor == Sensor::kGyro ? model.gyro : model.acc).flicker[static_cast<size_t>(drift.axis)];
 }
 
 }  // namespace insdiag::engine

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "insdiag/engine/model/flicker_floor.h"
 #include "insdiag/engine/nav/rotation.h"
 #include "insdiag/engine/nav/strapdown.h"
 #include "insdiag/engine/nav/wgs84.h"
@@ -83,6 +84,7 @@ SensorBlocks StructureOf(const StateLayout& layout, const Eigen::Matrix2d& fill)
 // intensity c·I, is a damped rotation F = −α I + β J (J = [0 −1; 1 0]; a
 // 1×1 block has β = 0):
 //   Gauss–Markov drift (seed eq. 5)  ḃ = −b/τ + w     α = 1/τ, c = 2σ²/τ
+//   a flicker floor's component       likewise, its σ_c and T_j (model/flicker_floor.h)
 //   random walk                      ḃ = w            α = 0,   c = K²
 //   second-order pair                                 α, β,    c = 2ασ²
 //   constant                                          α = 0,   c = 0
@@ -101,6 +103,10 @@ ContinuousBlock ContinuousDynamics(const ErrorModel& model, const SensorState& s
       if (!(gm.tau_s > 0.0))
         return {};  // σ = 0 too (ErrorModel::Validate): a state that stays zero
       return {1.0 / gm.tau_s, 0.0, 2.0 * gm.sigma * gm.sigma / gm.tau_s};
+    }
+    case StateDynamics::kFlickerComponent: {
+      const GaussMarkov c = FlickerComponentOf(model, s.sensor, s.axis, s.parameter);
+      return {1.0 / c.tau_s, 0.0, 2.0 * c.sigma * c.sigma / c.tau_s};
     }
     case StateDynamics::kRandomWalk: {
       const double k = model.effects[static_cast<size_t>(s.effect)].random_walk_density;

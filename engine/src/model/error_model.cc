@@ -11,6 +11,12 @@ absl::Status ValidateErrorModel(const ErrorModel& model) {
         return absl::InvalidArgumentError("error model: a Gauss–Markov drift needs σ ≥ 0 and τ > 0");
       }
     }
+    for (const FlickerFloor& f : triad->flicker) {
+      if (!(f.coefficient >= 0.0) ||
+          (f.coefficient > 0.0 && !(f.shortest_tau_s > 0.0 && f.longest_tau_s >= f.shortest_tau_s))) {
+        return absl::InvalidArgumentError("error model: a flicker floor needs B ≥ 0 and a span 0 < τ_min ≤ τ_max");
+      }
+    }
     if (!(triad->white_noise_density.array() >= 0.0).all() || !(triad->quantization.array() >= 0.0).all()) {
       return absl::InvalidArgumentError("error model: noise densities and quantisation must be ≥ 0");
     }
@@ -42,6 +48,10 @@ std::vector<std::string> ErrorModel::EffectNames() const {
 int ErrorModel::ParameterCount() const {
   // Base: σ and τ of each of 6 drifts, and the white-noise density of each of 6 axes.
   int count = 6 * 2 + 6;
+  // A flicker floor's B (its span is the Allan curve's, not fitted).
+  for (const SensorTriadModel* triad : {&gyro, &acc}) {
+    for (const FlickerFloor& f : triad->flicker) count += f.coefficient > 0.0 ? 1 : 0;
+  }
   for (const auto& e : effects) {
     switch (e.term.family->process) {
       case RandomProcess::kNone:

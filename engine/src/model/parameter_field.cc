@@ -6,7 +6,7 @@
 namespace insdiag::engine {
 namespace {
 
-constexpr std::array<std::pair<ParameterField, std::string_view>, 8> kSuffixes = {{
+constexpr std::array<std::pair<ParameterField, std::string_view>, 10> kSuffixes = {{
     {ParameterField::kPriorSigma, "prior_sigma"},
     {ParameterField::kOnset, "onset"},
     {ParameterField::kDensity, "density"},
@@ -15,6 +15,8 @@ constexpr std::array<std::pair<ParameterField, std::string_view>, 8> kSuffixes =
     {ParameterField::kPeriod, "period"},
     {ParameterField::kDecayRate, "alpha"},
     {ParameterField::kFrequency, "beta"},
+    {ParameterField::kShortestTau, "tau_min"},
+    {ParameterField::kLongestTau, "tau_max"},
 }};
 
 }  // namespace

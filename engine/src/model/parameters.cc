@@ -117,6 +117,16 @@ std::vector<NamedParameter> ParametersOf(const ErrorModel& model) {
       out.push_back({QuantizationName({b.sensor, i}), t.quantization[i],
                      std::string(UnitsOf(b.sensor).quantization)});
     }
+    // A flicker floor only where the model has one: a model without is
+    // stated as before they were modelled.
+    for (int i = 0; i < 3; ++i) {
+      const FlickerFloor& f = t.flicker[static_cast<size_t>(i)];
+      if (!(f.coefficient > 0.0)) continue;
+      const std::string name = FlickerName({b.sensor, i});
+      out.push_back({name, f.coefficient, u});
+      out.push_back({ParameterName(name, ParameterField::kShortestTau), f.shortest_tau_s, "s"});
+      out.push_back({ParameterName(name, ParameterField::kLongestTau), f.longest_tau_s, "s"});
+    }
   }
   for (const ReferenceName& r : kReferences) out.push_back({r.name, model.reference.*(r.sigma), r.unit});
   for (const ModelEffect& e : model.effects) {
@@ -182,6 +192,19 @@ absl::Status SetParameter(const std::string& name, double value, ErrorModel& mod
     }
     if (name == QuantizationName(drift)) {
       t.quantization[drift.axis] = value;
+      return absl::OkStatus();
+    }
+    const std::string flicker = FlickerName(drift);
+    if (name == flicker) {
+      FlickerOf(model, drift).coefficient = value;
+      return absl::OkStatus();
+    }
+    if (name == ParameterName(flicker, ParameterField::kShortestTau)) {
+      FlickerOf(model, drift).shortest_tau_s = value;
+      return absl::OkStatus();
+    }
+    if (name == ParameterName(flicker, ParameterField::kLongestTau)) {
+      FlickerOf(model, drift).longest_tau_s = value;
       return absl::OkStatus();
     }
   }

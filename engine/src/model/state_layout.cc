@@ -1,5 +1,7 @@
 #include "insdiag/engine/model/state_layout.h"
 
+#include "insdiag/engine/model/flicker_floor.h"
+
 namespace insdiag::engine {
 namespace {
 
@@ -26,6 +28,23 @@ StateLayout::StateLayout(const ErrorModel& model) {
   for (int i = 0; i < 3; ++i) add_drift(Sensor::kGyro, "gyro_bias_gm", i);
   acc_bias_ = next;
   for (int i = 0; i < 3; ++i) add_drift(Sensor::kAccelerometer, "acc_bias_gm", i);
+  for (const Sensor sensor : {Sensor::kGyro, Sensor::kAccelerometer}) {
+    const SensorTriadModel& triad = sensor == Sensor::kGyro ? model.gyro : model.acc;
+    for (int i = 0; i < 3; ++i) {
+      // Component 0 is the axis' drift (model/flicker_floor.h).
+      const int components = FlickerComponentCount(triad.flicker[static_cast<size_t>(i)]);
+      for (int j = 1; j < components; ++j) {
+        SensorState s;
+        s.name = std::string(sensor == Sensor::kGyro ? "gyro" : "acc") + "_bias_instability." + kBodyAxes[i] + "." +
+                 std::to_string(j);
+        s.sensor = sensor;
+        s.axis = i;
+        s.parameter = j;
+        s.dynamics = StateDynamics::kFlickerComponent;
+        add(std::move(s));
+      }
+    }
+  }
   for (size_t k = 0; k < model.effects.size(); ++k) {
     const EffectTerm& term = model.effects[k].term;
     const int effect = static_cast<int>(k);

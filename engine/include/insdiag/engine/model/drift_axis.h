@@ -47,12 +47,18 @@ std::string DriftTauName(DriftAxis drift);
 // ("gyro_quantization.x") parameters.
 std::string WhiteNoiseName(DriftAxis drift);
 std::string QuantizationName(DriftAxis drift);
+// The axis' flicker floor ("gyro_bias_instability.x": its B; ".tau_min",
+// ".tau_max": its span).
+std::string FlickerName(DriftAxis drift);
 // The drift whose σ or τ `parameter` names, if it names one.
 std::optional<DriftAxis> DriftOfParameter(std::string_view parameter);
 
 // The drift's Gauss–Markov parameters in a model.
 GaussMarkov& DriftOf(ErrorModel& model, DriftAxis drift);
 const GaussMarkov& DriftOf(const ErrorModel& model, DriftAxis drift);
+// The axis' flicker floor in a model.
+FlickerFloor& FlickerOf(ErrorModel& model, DriftAxis drift);
+const FlickerFloor& FlickerOf(const ErrorModel& model, DriftAxis drift);
 
 // A subset of the six base drifts.
 class DriftSelection {

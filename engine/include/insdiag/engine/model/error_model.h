@@ -6,6 +6,8 @@
 //   ḃ_i = −b_i/τ + σ·√(2/τ)·ξ,       R(t) = σ² e^{−|t|/τ}          Gauss–Markov drift
 //   n_i white with density N (ARW [rad/√s] or VRW [m/s/√s])          (IEEE Std 952, Annex C)
 //   quantisation Q (angle [rad] or velocity [m/s]), σ²_Allan = 3Q²/τ²  (IEEE Std 952, Annex C)
+//   bias instability B over a span of cluster times, σ²_Allan = (2 ln 2/π) B²  (IEEE Std 952,
+//   Annex C), carried as a sum of Gauss–Markov processes (model/flicker_floor.h)
 // Random effects (shared/spec/effects.md):
 //   bias_rw            ḃ = w,  E[w²] = K² (rate random walk density K [unit/√s])
 //   bias_second_order  ẋ = (−α I + β J) x + w, E[w wᵀ] = 2ασ² I,  J = [0 −1; 1 0];
@@ -35,9 +37,21 @@ struct GaussMarkov {
   bool operator==(const GaussMarkov&) const = default;
 };
 
+// A bias-instability (flicker) floor: the flat Allan deviation a unit's
+// drift shows over a span of cluster times, where no single Gauss–Markov
+// process is flat.
+struct FlickerFloor {
+  double coefficient = 0.0;     // B [rad/s | m/s²]; 0 = no floor
+  double shortest_tau_s = 0.0;  // the span of cluster times it holds over
+  double longest_tau_s = 0.0;
+
+  bool operator==(const FlickerFloor&) const = default;
+};
+
 // The base model of one sensor triad (gyros or accelerometers).
 struct SensorTriadModel {
   std::array<GaussMarkov, 3> bias;                                // per axis
+  std::array<FlickerFloor, 3> flicker{};                          // per axis, beside the drift
   Eigen::Vector3d white_noise_density = Eigen::Vector3d::Zero();  // ARW [rad/√s] | VRW [m/s/√s]
   Eigen::Vector3d quantization = Eigen::Vector3d::Zero();         // Q [rad] | [m/s]; 0 = none
 

@@ -10,6 +10,7 @@
 //   sigma, tau    a Gauss–Markov drift's or second-order process's σ and τ [s]
 //   period        a second-order process's 2π/β [s]
 //   alpha, beta   a second-order process's 1/τ [1/s] and β [rad/s], as its fit states them
+//   tau_min, tau_max  the span of cluster times a flicker floor holds over [s]
 #pragma once
 
 #include <string>
@@ -26,7 +27,9 @@ enum class ParameterField {
   kTau,
   kPeriod,
   kDecayRate,
-  kFrequency
+  kFrequency,
+  kShortestTau,
+  kLongestTau
 };
 
 // "sigma", "tau", …; "" for kValue.

@@ -5,7 +5,9 @@
 //   δv  velocity error, m/s, NED
 //   δr  position error, m, NED (north, east, down)
 //   b_g, b_a  Gauss–Markov gyro [rad/s] and accelerometer [m/s²] drifts (seed eq. 5)
-// followed by each model effect's states in model order.
+// followed by the components of each flicker floor in the model (gyro x, y,
+// z, then accelerometer; model/flicker_floor.h), then each model effect's
+// states in model order.
 //
 // Every sensor state describes how it reaches the sensor outputs: the sensor
 // and axis it corrupts and the regressor that multiplies it, so that the
@@ -26,6 +28,7 @@ enum class StateDynamics {
   kRandomWalk,       // φ = 1, q = K²Δt
   kSecondOrderPair,  // first state of a 2-state block; the second follows it
   kSecondOrderTail,
+  kFlickerComponent,  // φ = e^{−Δt/T_j}: component j (`parameter`) of its axis' flicker floor
 };
 
 struct SensorState {
