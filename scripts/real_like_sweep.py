@@ -68,6 +68,9 @@ SCENARIOS = {
     # What a real part adds beyond the preset's Gauss–Markov drift: a flicker
     # floor (bias instability at the class's datasheet values) and a warm-up.
     "mems-flicker": (MEMS + ["--orientation", "up", "--gyro-flicker-dph", "10", "--acc-flicker-ug", "100"], False),
+    # Which sensor's floor a MEMS flicker result comes from.
+    "mems-flicker-gyro-only": (MEMS + ["--orientation", "up", "--gyro-flicker-dph", "10"], False),
+    "mems-flicker-acc-only": (MEMS + ["--orientation", "up", "--acc-flicker-ug", "100"], False),
     "mems-2.8h-flicker": ([a if a != "3600" else "10008" for a in MEMS] +
                           ["--orientation", "up", "--gyro-flicker-dph", "10", "--acc-flicker-ug", "100"], False),
     "mems-warmup": (MEMS + ["--orientation", "up", "--warmup-gyro-dps", "0.05", "--warmup-acc-mg", "5",

@@ -505,14 +505,51 @@ namespace {
 // read: the fitted Markov term; else the larger of the drifts the flicker
 // floor and the rising branch stand for (one process carries both, and the
 // smaller is within its noise); else the bound from the curve's lowest point.
-// What the drift placeholder was read from.
-enum class DriftSource { kMarkov, kFlickerFloor, kRisingBranch, kLowestPoint };
 struct DriftPlaceholderRead {
   GaussMarkov drift;
-  DriftSource source = DriftSource::kLowestPoint;
   std::string how;
 };
 
+// The drift of the fitted Markov term, if the fit has one.
+std::optional<DriftPlaceholderRead> MarkovDrift(const AllanChannel& ch) {
+  if (!ch.fit[AllanParameter::kMarkovSigma].included) return std::nullopt;
+  const AllanNoiseTerms terms = ch.fit.Terms();
+  return DriftPlaceholderRead{GaussMarkov{terms.markov_sigma, terms.markov_tau_s},
+                              "drift from the fitted Gauss–Markov term"};
+}
+
+// The curve still rising at its longest τ = T: a drift slower than the
+// segments, τ set to T. Its σ² is 3/2 of the rising terms' Allan variance at
+// T, K²T/3 + R²T²/2 (IEEE Std 952-1997, Table C.1) — for a rate random walk
+// alone K²T/2, the walk's variance over T/2. A ramp counts: over segments
+// shorter than the drift's τ, a drift's rise looks like one, and the walk's
+// coefficient may then fit to nothing.
+std::optional<DriftPlaceholderRead> RisingDrift(const AllanChannel& ch) {
+  if (!ch.fit[AllanParameter::kRateRandomWalk].included && !ch.fit[AllanParameter::kRateRamp].included) {
+    return std::nullopt;
+  }
+  const AllanNoiseTerms terms = ch.fit.Terms();
+  const double T = ch.curve.back().tau_s;
+  AllanNoiseTerms rising;
+  rising.rate_random_walk = terms.rate_random_walk;
+  rising.rate_ramp = terms.rate_ramp;
+  return DriftPlaceholderRead{GaussMarkov{std::sqrt(1.5 * ModelAllanVariance(rising, T)), T},
+                              "drift from the rate random walk and ramp with T = the longest τ analysed (" +
+                                  FormatG(T) + " s)"};
+}
+
+// What a channel's drift carries beside a flicker floor the model carries:
+// the Markov term, else the rising branch, else nothing.
+std::optional<DriftPlaceholderRead> DriftBeyondTheFloor(const AllanChannel& ch) {
+  if (auto markov = MarkovDrift(ch); markov.has_value()) return markov;
+  return RisingDrift(ch);
+}
+
+// The Gauss–Markov drift a channel's Allan fit stands for where the model
+// carries no floor, and how it was read: the fitted Markov term; else the
+// larger of the drifts the flicker floor and the rising branch stand for
+// (one process carries both, and the smaller is within its noise); else the
+// bound from the curve's lowest point.
 absl::StatusOr<DriftPlaceholderRead> DriftPlaceholder(const AllanChannel& ch) {
   const AllanFit& fit = ch.fit;
   const AllanNoiseTerms terms = fit.Terms();
@@ -526,33 +563,17 @@ absl::StatusOr<DriftPlaceholderRead> DriftPlaceholder(const AllanChannel& ch) {
     }
     return best;
   };
-  if (fit[AllanParameter::kMarkovSigma].included) {
-    return DriftPlaceholderRead{GaussMarkov{terms.markov_sigma, terms.markov_tau_s}, DriftSource::kMarkov,
-                                "drift from the fitted Gauss–Markov term"};
-  }
-  std::optional<DriftPlaceholderRead> floor_drift, rising_drift;
+  if (auto markov = MarkovDrift(ch); markov.has_value()) return *markov;
+  std::optional<DriftPlaceholderRead> floor_drift;
   if (fit[AllanParameter::kBiasInstability].included) {
     const AllanPoint* p = lowest(true);
     const double floor = std::sqrt(kFlickerAvar) * terms.bias_instability;
     const double tau_floor = p != nullptr ? p->tau_s : ch.curve.back().tau_s;
-    floor_drift = {GaussMarkov{floor / std::sqrt(peak.g), tau_floor / peak.u}, DriftSource::kFlickerFloor,
+    floor_drift = {GaussMarkov{floor / std::sqrt(peak.g), tau_floor / peak.u},
                    "drift from the bias instability: the Markov process whose Allan peak is the flicker floor at τ = " +
                        FormatG(tau_floor) + " s"};
   }
-  if (fit[AllanParameter::kRateRandomWalk].included || fit[AllanParameter::kRateRamp].included) {
-    // The curve still rising at its longest τ = T: a drift slower than the
-    // segments, τ set to T. Its σ² is 3/2 of the rising terms' Allan
-    // variance at T, K²T/3 + R²T²/2 (IEEE Std 952-1997, Table C.1) — for a
-    // rate random walk alone K²T/2, the walk's variance over T/2. A ramp
-    // counts: over segments shorter than the drift's τ, a drift's rise looks
-    // like one, and the walk's coefficient may then fit to nothing.
-    const double T = ch.curve.back().tau_s;
-    AllanNoiseTerms rising;
-    rising.rate_random_walk = terms.rate_random_walk;
-    rising.rate_ramp = terms.rate_ramp;
-    rising_drift = {GaussMarkov{std::sqrt(1.5 * ModelAllanVariance(rising, T)), T}, DriftSource::kRisingBranch,
-                    "drift from the rate random walk and ramp with T = the longest τ analysed (" + FormatG(T) + " s)"};
-  }
+  const std::optional<DriftPlaceholderRead> rising_drift = RisingDrift(ch);
   if (floor_drift.has_value() && rising_drift.has_value()) {
     return rising_drift->drift.sigma > floor_drift->drift.sigma ? *rising_drift : *floor_drift;
   }
@@ -560,7 +581,7 @@ absl::StatusOr<DriftPlaceholderRead> DriftPlaceholder(const AllanChannel& ch) {
   if (rising_drift.has_value()) return *rising_drift;
   const AllanPoint* p = lowest(false);
   if (p == nullptr) return absl::InvalidArgumentError("Allan: channel " + ch.name + " has no positive deviation");
-  return DriftPlaceholderRead{GaussMarkov{p->adev / std::sqrt(peak.g), p->tau_s / peak.u}, DriftSource::kLowestPoint,
+  return DriftPlaceholderRead{GaussMarkov{p->adev / std::sqrt(peak.g), p->tau_s / peak.u},
                               "no drift term resolved; Gauss–Markov drift set to the bound from the curve's lowest point"};
 }
 
@@ -596,26 +617,31 @@ absl::StatusOr<ErrorModel> ErrorModelFromAllan(const AllanResult& result, const 
     }
     triad.quantization[ch.axis] = ch.Quantisation();
 
+    // A flicker floor the filter carries as a floor (model/flicker_floor.h),
+    // over the cluster times where it stands above the white noise, up to
+    // the longest still segment; the axis' drift then carries what the curve
+    // shows beyond it: the Markov term, else the rising branch, else nothing.
+    const FlickerFloor floor =
+        fit[AllanParameter::kBiasInstability].included
+            ? FlickerFloorAbove(terms.bias_instability, triad.white_noise_density[ch.axis], ch.curve.front().tau_s,
+                                longest_segment_s)
+            : FlickerFloor{};
+    const std::vector<GaussMarkov> components = FlickerComponents(floor);
+    if (!components.empty()) {
+      triad.flicker[axis] = floor;
+      std::string beyond = "nothing beyond it";
+      triad.bias[axis] = GaussMarkov{0.0, components.front().tau_s};
+      if (auto drift = DriftBeyondTheFloor(ch); drift.has_value()) {
+        triad.bias[axis] = drift->drift;
+        beyond = drift->how;
+      }
+      note(ch.name + ": bias instability " + FormatG(floor.coefficient) + " " + ch.unit + " over τ = " +
+           FormatG(floor.shortest_tau_s) + "–" + FormatG(floor.longest_tau_s) + " s, carried as " +
+           std::to_string(components.size()) + " Gauss–Markov states; " + beyond);
+      continue;
+    }
     auto drift = DriftPlaceholder(ch);
     if (!drift.ok()) return drift.status();
-    // A flicker floor, where it is the drift, the filter carries as a sum of
-    // drifts, the shortest the axis' own (model/flicker_floor.h), over the
-    // cluster times where it stands above the white noise, up to the
-    // longest still segment.
-    if (drift->source == DriftSource::kFlickerFloor) {
-      const FlickerFloor floor = FlickerFloorAbove(terms.bias_instability, triad.white_noise_density[ch.axis],
-                                                   ch.curve.front().tau_s, longest_segment_s);
-      const std::vector<GaussMarkov> components = FlickerComponents(floor);
-      if (components.size() > 1) {
-        triad.flicker[axis] = floor;
-        triad.bias[axis] = components.front();
-        note(ch.name + ": bias instability " + FormatG(floor.coefficient) + " " + ch.unit + " over τ = " +
-             FormatG(floor.shortest_tau_s) + "–" + FormatG(floor.longest_tau_s) + " s, carried as " +
-             std::to_string(components.size()) + " Gauss–Markov drifts (the shortest, τ = " +
-             FormatG(components.front().tau_s) + " s, the axis' drift)");
-        continue;
-      }
-    }
     triad.bias[axis] = drift->drift;
     note(ch.name + ": " + drift->how);
   }
@@ -637,12 +663,12 @@ std::vector<AllanDeparture> AllanDeparturesFrom(const AllanResult& result, const
     predicted.white_density = triad.white_noise_density[ch.axis];
     predicted.markov_sigma = triad.bias[axis].sigma;
     predicted.markov_tau_s = triad.bias[axis].tau_s;
-    // A flicker floor's components past the drift (model/flicker_floor.h).
+    // A flicker floor's components beside the drift (model/flicker_floor.h).
     const std::vector<GaussMarkov> flicker = FlickerComponents(triad.flicker[axis]);
     AllanDeparture farthest{ch.name, 0.0, 1.0};
     for (const AllanPoint& p : ch.curve) {
       double model_avar = ModelAllanVariance(predicted, p.tau_s);
-      for (size_t j = 1; j < flicker.size(); ++j) {
+      for (size_t j = 0; j < flicker.size(); ++j) {
         model_avar += flicker[j].sigma * flicker[j].sigma * MarkovShape(p.tau_s / flicker[j].tau_s);
       }
       const double model_adev = std::sqrt(model_avar);

@@ -391,10 +391,10 @@ FitData DataOfCurve(const std::vector<AllanPoint>& curve) {
 }
 
 // The candidate sets: the random terms with the Markov term, with flicker
-// (B) instead, and every term. The deterministic ramp is tested last,
-// against the random terms.
+// (B) instead, with both (a unit whose drift has a bump above its floor), and
+// every term. The deterministic ramp is tested last, against the random terms.
 struct CandidateSets {
-  TermMask markov{}, flicker{}, all{};
+  TermMask markov{}, flicker{}, both{}, all{};
 };
 CandidateSets CandidatesOf(const AllanOptions::Terms& cand) {
   CandidateSets sets;
@@ -405,8 +405,9 @@ CandidateSets CandidatesOf(const AllanOptions::Terms& cand) {
   sets.flicker = sets.markov;
   sets.flicker[kMs] = sets.flicker[kMt] = false;
   sets.flicker[kB] = cand.bias_instability;
-  sets.all = sets.markov;
-  sets.all[kB] = cand.bias_instability;
+  sets.both = sets.markov;
+  sets.both[kB] = cand.bias_instability;
+  sets.all = sets.both;
   sets.all[kR] = cand.rate_ramp;
   return sets;
 }
@@ -483,8 +484,8 @@ double StructureAic(const FitData& data, const StructureFit& f, const Eigen::Mat
   return ResolvedChi2(WithDiscrepancy(V, data.discrepancy2), Residuals(data, f)).first + 2.0 * ParameterCount(f.on);
 }
 
-// Chooses the terms: the Markov structure where its term is significant and
-// the curve prefers it to flicker, else flicker; then the ramp. One working covariance `V_work` (of the full
+// Chooses the terms: the structure the curve prefers of those that resolve
+// their terms (below); then the ramp. One working covariance `V_work` (of the full
 // Markov candidate fit) serves the eliminations of both structures: they
 // describe the same curve, and it only has to reflect the estimator's noise.
 Selection SelectTerms(const FitData& data, const CandidateSets& sets, const FitContext& c, Eigen::MatrixXd& V_work) {
@@ -502,31 +503,52 @@ Selection SelectTerms(const FitData& data, const CandidateSets& sets, const FitC
     sel.V_model = LogAvarCovariance(data, sel.fit.a, sel.fit.on, c.tau0_s, c.segment_samples);
     return sel;
   }
-  bool have = false;
-  StructureFit markov_fit;
+  // Each structure fitted and its unresolved terms eliminated; of those that
+  // keep what makes them differ (σ_m and T; B; all three), the one of least
+  // Akaike criterion, by the generalised χ² under the one working covariance
+  // (with δ²) plus twice its terms (Akaike, IEEE Trans. Autom. Control 19(6),
+  // 1974). Where none does, the flicker set as eliminated.
+  struct Tried {
+    StructureFit fit;
+    TermMask candidates;
+    bool resolved = false;
+  };
+  std::vector<Tried> tried;
+  auto any = [](const TermMask& m) { return std::any_of(m.begin(), m.end(), [](bool b) { return b; }); };
   if (options.candidates.markov) {
-    markov_fit = FitStructure(data, sets.markov, c.tau0_s, c.segment_samples, options, V_work);
-    have = markov_fit.on[kMs];
+    StructureFit f = FitStructure(data, sets.markov, c.tau0_s, c.segment_samples, options, V_work);
+    tried.push_back({f, sets.markov, f.on[kMs]});
   }
-  const bool flicker_empty = std::none_of(sets.flicker.begin(), sets.flicker.end(), [](bool b) { return b; });
-  std::optional<StructureFit> flicker_fit;
-  if (!flicker_empty) flicker_fit = FitStructure(data, sets.flicker, c.tau0_s, c.segment_samples, options, V_work);
-  // Both resolved: the structure the curve prefers, by AIC on the
-  // generalised χ² under the one working covariance (a flat floor over
-  // decades is flicker, which a Markov term and a walk only bracket).
-  if (have && flicker_fit.has_value() && flicker_fit->on[kB] &&
-      StructureAic(data, *flicker_fit, V_work) < StructureAic(data, markov_fit, V_work)) {
-    have = false;
+  if (any(sets.flicker)) {
+    StructureFit f = FitStructure(data, sets.flicker, c.tau0_s, c.segment_samples, options, V_work);
+    tried.push_back({f, sets.flicker, f.on[kB]});
   }
-  if (have || !flicker_fit.has_value()) {
-    sel.fit = markov_fit;
-    sel.markov = markov_fit.on[kMs];
-    sel.candidates = sets.markov;
-  } else {
-    sel.fit = *flicker_fit;
-    sel.candidates = sets.flicker;
-    for (const auto& [k, z] : markov_fit.dropped) {
-      if (k == kMs) sel.unresolved_extra.push_back("markov (z = " + FormatG(z, 2) + ")");
+  if (options.candidates.markov && options.candidates.bias_instability) {
+    StructureFit f = FitStructure(data, sets.both, c.tau0_s, c.segment_samples, options, V_work);
+    tried.push_back({f, sets.both, f.on[kMs] && f.on[kB]});
+  }
+  const Tried* chosen = nullptr;
+  double best_aic = std::numeric_limits<double>::infinity();
+  for (const Tried& t : tried) {
+    if (!t.resolved) continue;
+    const double aic = StructureAic(data, t.fit, V_work);
+    if (aic < best_aic) {
+      best_aic = aic;
+      chosen = &t;
+    }
+  }
+  for (const Tried& t : tried) {
+    if (chosen == nullptr && t.candidates == sets.flicker) chosen = &t;
+  }
+  if (chosen == nullptr && !tried.empty()) chosen = &tried.front();
+  if (chosen != nullptr) {
+    sel.fit = chosen->fit;
+    sel.markov = chosen->fit.on[kMs];
+    sel.candidates = chosen->candidates;
+    if (!sel.markov && options.candidates.markov) {
+      for (const auto& [k, z] : tried.front().fit.dropped) {
+        if (k == kMs) sel.unresolved_extra.push_back("markov (z = " + FormatG(z, 2) + ")");
+      }
     }
   }
   sel.V_model = LogAvarCovariance(data, sel.fit.a, sel.fit.on, c.tau0_s, c.segment_samples);

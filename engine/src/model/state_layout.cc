@@ -31,12 +31,11 @@ StateLayout::StateLayout(const ErrorModel& model) {
   for (const Sensor sensor : {Sensor::kGyro, Sensor::kAccelerometer}) {
     const SensorTriadModel& triad = sensor == Sensor::kGyro ? model.gyro : model.acc;
     for (int i = 0; i < 3; ++i) {
-      // Component 0 is the axis' drift (model/flicker_floor.h).
       const int components = FlickerComponentCount(triad.flicker[static_cast<size_t>(i)]);
-      for (int j = 1; j < components; ++j) {
+      for (int j = 0; j < components; ++j) {
         SensorState s;
         s.name = std::string(sensor == Sensor::kGyro ? "gyro" : "acc") + "_bias_instability." + kBodyAxes[i] + "." +
-                 std::to_string(j);
+                 std::to_string(j + 1);
         s.sensor = sensor;
         s.axis = i;
         s.parameter = j;

@@ -12,9 +12,9 @@
 // (model/gauss_markov_allan.h), r = 10^{3/2}, all of one σ_c, with
 //   σ_c² = (2 ln 2/π) B² / exp( mean over log-spaced τ in [τ_min, τ_max] of ln Σ_j g(τ/T_j) ):
 // the sum's Allan variance equals the floor's in the mean of its logarithm
-// over the span. Component 0, the shortest, is the axis' Gauss–Markov drift
-// (the model's `bias`, which the identification may re-tune); components
-// 1 … n−1 are states of their own. At r = 10^{3/2} the sum's Allan deviation ripples within
+// over the span. The components are states of their own, beside the axis'
+// Gauss–Markov drift (the model's `bias`), which carries what the unit's
+// drift shows beyond the floor. At r = 10^{3/2} the sum's Allan deviation ripples within
 // about ±7 % of the floor, inside an Allan point's 1σ interval until it holds
 // some 200 independent differences; a ratio of 10² would ripple ±18 %.
 #pragma once
