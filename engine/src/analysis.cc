@@ -404,8 +404,7 @@ absl::StatusOr<pipeline::ScannedModel> ScanModelA(const pipeline::RunContext& c,
                     "analysis found a structure or did not test one");
   }
   pipeline::ScannedModel a;
-  a.found = pipeline::FindMissingEffects(c.run, c.epochs, *pass, c.a_priori.model, c.raw_samples,
-                                         c.options, &notes, settled);
+  a.found = pipeline::FindMissingEffects(c, *pass, c.options, &notes, settled);
   a.pass = *std::move(pass);
   return a;
 }
@@ -425,16 +424,6 @@ AnalysisOptions WithTheRunsUpdateInterval(const AnalysisOptions& requested, cons
                         "are multiples of one another and the six channels carry three dimensions",
                         out.filter.update_interval_s, requested.filter.update_interval_s));
   }
-  return out;
-}
-
-// The options with what this run's raw samples tell: the drifts they allow.
-AnalysisOptions OptionsForThisRun(const AnalysisOptions& options,
-                                  const std::optional<ident::AllanResult>& allan) {
-  AnalysisOptions out = options;
-  out.drift_likelihood.raw_sample_ceilings =
-      allan.has_value() ? ident::DriftCeilings::FromAllan(*allan, options.monitor.family_wise_alpha)
-                        : ident::DriftCeilings{};
   return out;
 }
 
@@ -526,9 +515,11 @@ absl::StatusOr<Analysis> Analyze(BenchRun&& input, const AnalysisRequest& reques
   if (!epochs.ok()) return epochs.status();
   a_priori->counted_quantisation = CountedQuantisationOf(allan);
   const RawSampleEvidence raw_samples = RawSampleEvidenceOf(run, allan, a_priori->model, options);
-  const AnalysisOptions run_options = OptionsForThisRun(options, allan);
-  const pipeline::RunContext context{
-      run, *epochs, reference_measurements, screening, run_options, *a_priori, raw_samples};
+  const ident::DriftCeilings drift_ceilings =
+      allan.has_value() ? ident::DriftCeilings::FromAllan(*allan, options.monitor.family_wise_alpha)
+                        : ident::DriftCeilings{};
+  const pipeline::RunContext context{run,     *epochs,    reference_measurements, screening,
+                                     options, *a_priori, raw_samples,            drift_ceilings};
 
   pipeline::Identification identification;
   identification.model = std::move(base);

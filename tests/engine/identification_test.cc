@@ -537,7 +537,7 @@ TEST(DriftLikelihoodTest, RecoversATripledGyroDriftSigmaWithinItsIntervalOverSee
     const auto epochs = CondenseRun(s.run, model, FilterOptions{}.update_interval_s);
     ASSERT_TRUE(epochs.ok()) << epochs.status();
     auto ml = IdentifyDriftsByLikelihood(*epochs, model, model, DriftSelection::Every(),
-                                         DriftSelection::None());
+                                         DriftSelection::None(), DriftCeilings{});
     ASSERT_TRUE(ml.ok()) << ml.status();
     EXPECT_GT(ml->log_likelihood_after, ml->log_likelihood_before);  // EM never lowers ℓ
     for (const ParameterEstimate& e : ml->identified) {
@@ -613,9 +613,9 @@ TEST(StructureCeilingTest, ASecondOrderPairBeyondTheRawSamplesIsNotTheUnits) {
   y.Set(kGyroY);
 
   auto refused = [&](double allan_variance_bound) -> std::optional<bool> {
-    DriftLikelihoodOptions options;
-    options.raw_sample_ceilings.Add(kGyroY, {kClusterTimeS, allan_variance_bound});
-    auto fit = IdentifySecondOrdersByLikelihood(*epochs, model, model, y, 0.01, options);
+    DriftCeilings ceilings;
+    ceilings.Add(kGyroY, {kClusterTimeS, allan_variance_bound});
+    auto fit = IdentifySecondOrdersByLikelihood(*epochs, model, model, y, 0.01, ceilings);
     if (!fit.ok() || fit->structures.size() != 1) return std::nullopt;
     return fit->structures.front().refused_by_raw_samples.has_value();
   };

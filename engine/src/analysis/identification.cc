@@ -180,7 +180,7 @@ absl::StatusOr<ident::DriftLikelihoodResult> DriftsFromStarts(const RunContext& 
                                                               std::vector<std::string>& notes) {
   auto ml =
       ident::IdentifyDriftsFromStarts(c.epochs, model, c.a_priori.model, DriftSelection::Every(),
-                                      c.a_priori.drift_starts, c.options.drift_likelihood);
+                                      c.a_priori.drift_starts, c.drift_ceilings, c.options.drift_likelihood);
   if (ml.ok()) ml = ident::KeepDriftsWorthTheirParameters(c.epochs, model, *std::move(ml));
   if (ml.ok()) WidenErrorsOrSay(c.epochs, c.a_priori.model, *ml, notes);
   return ml;
@@ -357,8 +357,7 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std
     Findings found;
     const EffectCandidate* best = nullptr;
     if (scan_a_priori) {
-      found = FindMissingEffects(c.run, c.epochs, *pass, out.drifts, c.a_priori.model,
-                                 c.raw_samples, options, &found_notes);
+      found = FindMissingEffects(c, *pass, out.drifts, options, &found_notes);
       best = LowestBicSignificant(found.candidates, found.families, options);
     }
     if (best != nullptr) {
@@ -432,10 +431,10 @@ absl::StatusOr<ident::DriftLikelihoodResult> IdentifyDriftSet(const RunContext& 
   }
   if (c.a_priori.drift_starts.grid_tau_points > 0) {
     return ident::IdentifyDriftsFromGrid(c.epochs, model, c.a_priori.model, selection, tau_too,
-                                         c.a_priori.drift_starts, c.options.drift_likelihood);
+                                         c.a_priori.drift_starts, c.drift_ceilings, c.options.drift_likelihood);
   }
   return ident::IdentifyDriftsByLikelihood(c.epochs, model, c.a_priori.model, selection, tau_too,
-                                           c.options.drift_likelihood);
+                                           c.drift_ceilings, c.options.drift_likelihood);
 }
 
 // The drifts' final values, by likelihood: correlation processing of the

@@ -291,6 +291,7 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
                                                             const ErrorModel& a_priori,
                                                             const std::vector<DriftCorrelation>& drifts,
                                                             bool constant_significant, double screen_alpha,
+                                                            const ident::DriftCeilings& ceilings,
                                                             const AnalysisOptions& options,
                                                             const SettledStructures& settled,
                                                             StructureOutcomes& outcomes,
@@ -353,7 +354,7 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
   std::array<std::optional<absl::StatusOr<ident::DriftLikelihoodResult>>, kTests> fits;
   auto fit = [&](std::size_t t) {
     if (tests[t].enabled && axes_of[t].Any()) {
-      fits[t] = tests[t].fit(epochs, pass.model, a_priori, axes_of[t], screen_alpha,
+      fits[t] = tests[t].fit(epochs, pass.model, a_priori, axes_of[t], screen_alpha, ceilings,
                              options.drift_likelihood);
     }
   };
@@ -437,10 +438,13 @@ std::vector<FaultFinding> FaultFindings(const RunContext& c, const ModelPass& pa
 }  // namespace
 
 // `drifts`: correlation processing of this pass's smoothed drifts.
-Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass,
-                            std::vector<DriftCorrelation> drifts, const ErrorModel& a_priori,
-                            const RawSampleEvidence& raw_samples, const AnalysisOptions& options,
-                            std::vector<std::string>* notes, const SettledStructures& settled) {
+Findings FindMissingEffects(const RunContext& context, const ModelPass& pass, std::vector<DriftCorrelation> drifts,
+                            const AnalysisOptions& options, std::vector<std::string>* notes,
+                            const SettledStructures& settled) {
+  const BenchRun& run = context.run;
+  const EpochRun& epochs = context.epochs;
+  const ErrorModel& a_priori = context.a_priori.model;
+  const RawSampleEvidence& raw_samples = context.raw_samples;
   Findings f;
   f.drifts = std::move(drifts);
   RankedEffects ranked =
@@ -458,7 +462,8 @@ Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const M
       });
   StructureOutcomes likelihood_outcomes, correlation_outcomes;
   std::vector<StructureProposal> proposals = LikelihoodStructureProposals(
-      epochs, pass, a_priori, f.drifts, constant_significant, screen_alpha, options, settled, likelihood_outcomes, notes);
+      epochs, pass, a_priori, f.drifts, constant_significant, screen_alpha, context.drift_ceilings, options, settled,
+      likelihood_outcomes, notes);
   for (StructureProposal& p : ProposeStructures(f.drifts, run.DurationS(), screen_alpha, correlation_outcomes)) {
     if (std::none_of(proposals.begin(), proposals.end(),
                      [&](const StructureProposal& o) { return o.effect.term == p.effect.term; })) {
@@ -516,14 +521,11 @@ Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const M
   return f;
 }
 
-Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass,
-                            const ErrorModel& a_priori, const RawSampleEvidence& raw_samples,
-                            const AnalysisOptions& options, std::vector<std::string>* notes,
-                            const SettledStructures& settled) {
+Findings FindMissingEffects(const RunContext& c, const ModelPass& pass, const AnalysisOptions& options,
+                            std::vector<std::string>* notes, const SettledStructures& settled) {
   return FindMissingEffects(
-      run, epochs, pass,
-      ident::CorrelateDrifts(pass.forward, pass.smoothed, *pass.layout, options.correlation, notes),
-      a_priori, raw_samples, options, notes, settled);
+      c, pass, ident::CorrelateDrifts(pass.forward, pass.smoothed, *pass.layout, options.correlation, notes),
+      options, notes, settled);
 }
 
 bool AddsOnlyDeterministicEffects(const std::vector<std::string>& selectors) {

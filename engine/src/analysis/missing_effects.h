@@ -61,19 +61,16 @@ struct ScannedModel {
   std::vector<std::string> notes;
 };
 
-// The missing effects of a scanned pass; `drifts`: correlation processing of
-// this pass's smoothed drifts; `raw_samples`: what the static segments' raw
-// samples show (RunContext::raw_samples). The likelihood does not test again the
-// structures `settled` holds; the report takes their outcomes.
-Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass,
-                            std::vector<DriftCorrelation> drifts, const ErrorModel& a_priori,
-                            const RawSampleEvidence& raw_samples, const AnalysisOptions& options,
-                            std::vector<std::string>* notes, const SettledStructures& settled = {});
-// The same, correlating the pass's drifts first.
-Findings FindMissingEffects(const BenchRun& run, const EpochRun& epochs, const ModelPass& pass,
-                            const ErrorModel& a_priori, const RawSampleEvidence& raw_samples,
+// The missing effects of a scanned pass of the run `c`, under `options`
+// (the context's, or a stage's variant of them); `drifts`: correlation
+// processing of this pass's smoothed drifts. The likelihood does not test
+// again the structures `settled` holds; the report takes their outcomes.
+Findings FindMissingEffects(const RunContext& c, const ModelPass& pass, std::vector<DriftCorrelation> drifts,
                             const AnalysisOptions& options, std::vector<std::string>* notes,
                             const SettledStructures& settled = {});
+// The same, correlating the pass's drifts first.
+Findings FindMissingEffects(const RunContext& c, const ModelPass& pass, const AnalysisOptions& options,
+                            std::vector<std::string>* notes, const SettledStructures& settled = {});
 
 // The significant, identifiable candidate whose predicted ΔBIC is lowest,
 // among single terms and whole families; nullptr when none is significant.

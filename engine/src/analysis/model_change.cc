@@ -213,8 +213,7 @@ absl::StatusOr<Analysis> Discover(const RunContext& c, ScannedModelA a) {
         !options.retest_settled_structures && AddsOnlyDeterministicEffects({top->name})
             ? SettledStructures{found.candidates, "the model before " + top->name + " was added"}
             : SettledStructures{};
-    Findings next_found = FindMissingEffects(c.run, c.epochs, *next, c.a_priori.model,
-                                             c.raw_samples, options, &a.notes, settled);
+    Findings next_found = FindMissingEffects(c, *next, options, &a.notes, settled);
     identified = WithTakenStructures(std::move(identified), next->model, found);
     AnalysisReport next_report = ReportOf(c, *next, next_found, identified, a.notes);
     report.discovery.push_back(StepOf(step, *top, next_report));
@@ -246,8 +245,7 @@ absl::StatusOr<Analysis> AddAndCompare(const RunContext& c, const std::vector<st
   const SettledStructures settled = !options.retest_settled_structures && AddsOnlyDeterministicEffects(effects)
                                         ? SettledStructures{a.found.candidates, "model A, without the added effects"}
                                         : SettledStructures{};
-  const Findings found_b = FindMissingEffects(c.run, c.epochs, *b, c.a_priori.model, c.raw_samples,
-                                              options, &a.notes, settled);
+  const Findings found_b = FindMissingEffects(c, *b, options, &a.notes, settled);
   Analysis out;
   out.report = ReportOf(c, *b, found_b, WithTakenStructures(a.identified, b->model, a.found), a.notes);
   std::vector<std::string> added;

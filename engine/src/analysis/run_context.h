@@ -59,6 +59,9 @@ struct RunContext {
   // (finder/raw_sample_evidence.h): the jumps and ramps the Allan analysis
   // found, and each sensor axis' constant bias.
   const RawSampleEvidence& raw_samples;
+  // The drifts those raw samples allow (ident/drift_ceiling.h): an estimate
+  // of the innovations' likelihood beyond them is not the drift's.
+  const ident::DriftCeilings& drift_ceilings;
 };
 
 inline void Progress(const AnalysisOptions& o, double fraction, std::string_view stage) {

@@ -116,7 +116,7 @@ std::vector<HeldDrift> RefutedByRawSamples(const DriftLikelihoodResult& fit,
 
 absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(
     const EpochRun& run, const ErrorModel& model, const ErrorModel& a_priori,
-    const DriftSelection& which, const DriftSelection& tau_too,
+    const DriftSelection& which, const DriftSelection& tau_too, const DriftCeilings& ceilings,
     const DriftLikelihoodOptions& options) {
   if (auto st = ValidateOptions(options); !st.ok()) return st;
   auto fit = FitDrifts(run, model, a_priori, which, tau_too, options);
@@ -127,9 +127,9 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(
   const double before = fit->log_likelihood_before;
   // Each round holds what the samples refute and fits the rest again; a
   // drift is held once, so at most one round per drift.
-  for (auto refuted = RefutedByRawSamples(*fit, a_priori, selected, options.raw_sample_ceilings);
+  for (auto refuted = RefutedByRawSamples(*fit, a_priori, selected, ceilings);
        !refuted.empty();
-       refuted = RefutedByRawSamples(*fit, a_priori, selected, options.raw_sample_ceilings)) {
+       refuted = RefutedByRawSamples(*fit, a_priori, selected, ceilings)) {
     ErrorModel start = fit->model;
     for (const HeldDrift& h : refuted) {
       DriftOf(start, h.drift) = h.held;
@@ -352,6 +352,7 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
                                                     const ErrorModel& a_priori,
                                                     const DriftSelection& axes,
                                                     const StructureKind& kind, double screen_alpha,
+                                                    const DriftCeilings& ceilings,
                                                     const DriftLikelihoodOptions& options) {
   if (auto st = ValidateOptions(options); !st.ok()) return st;
   DriftLikelihoodResult out;
@@ -433,7 +434,7 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
                         a_priori);
     };
     w.drift_sigma = estimate(0);
-    w.refused_by_raw_samples = StructureRefused(out.model, w, options.raw_sample_ceilings);
+    w.refused_by_raw_samples = StructureRefused(out.model, w, ceilings);
     std::vector<ParameterEstimate> fitted;
     for (Eigen::Index k = 1; k < per_axis; ++k) fitted.push_back(estimate(k));
     w.parameters = ReportedParameters(kind, w.drift, fitted);
@@ -461,21 +462,23 @@ Eigen::MatrixXd StructureCovariance(const Eigen::MatrixXd& information) {
 absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const EpochRun& run, const ErrorModel& model,
                                                                 const ErrorModel& a_priori,
                                                                 const DriftSelection& axes, double screen_alpha,
+                                                                const DriftCeilings& ceilings,
                                                                 const DriftLikelihoodOptions& options) {
-  return FitStructures(run, model, a_priori, axes, StructureKind{false}, screen_alpha, options);
+  return FitStructures(run, model, a_priori, axes, StructureKind{false}, screen_alpha, ceilings, options);
 }
 
 absl::StatusOr<DriftLikelihoodResult> IdentifySecondOrdersByLikelihood(const EpochRun& run, const ErrorModel& model,
                                                                        const ErrorModel& a_priori,
                                                                        const DriftSelection& axes,
                                                                        double screen_alpha,
+                                                                       const DriftCeilings& ceilings,
                                                                        const DriftLikelihoodOptions& options) {
   if (options.second_order_start_periods_s.empty() ||
       std::any_of(options.second_order_start_periods_s.begin(), options.second_order_start_periods_s.end(),
                   [](double p) { return !(p > 0.0); })) {
     return absl::InvalidArgumentError("drift likelihood: second-order starting periods must be positive");
   }
-  return FitStructures(run, model, a_priori, axes, StructureKind{true}, screen_alpha, options);
+  return FitStructures(run, model, a_priori, axes, StructureKind{true}, screen_alpha, ceilings, options);
 }
 
 }  // namespace insdiag::engine::ident

@@ -91,6 +91,7 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
                                                                const ErrorModel& a_priori,
                                                                const DriftSelection& which,
                                                                const DriftStartOptions& starts,
+                                                               const DriftCeilings& ceilings,
                                                                const DriftLikelihoodOptions& options) {
   const TauRange range(run);
   int iterations = 0, passes = 0;
@@ -118,11 +119,11 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
   }
   if (starts.grid_tau_points > 0)
     start_models.push_back(
-        GridStart(run, model, which, which, starts, options.raw_sample_ceilings, passes).model);
+        GridStart(run, model, which, which, starts, ceilings, passes).model);
   // EM from each start: independent runs, taken in the starts' order.
   std::vector<absl::StatusOr<DriftLikelihoodResult>> from_starts =
       numerics::ParallelMap(start_models.size(), [&](std::size_t i) {
-        return IdentifyDriftsByLikelihood(run, start_models[i], a_priori, which, which, options);
+        return IdentifyDriftsByLikelihood(run, start_models[i], a_priori, which, which, ceilings, options);
       });
   std::vector<DriftLikelihoodResult> fits;
   std::optional<double> before;  // the likelihood of the model as given: the first start's
@@ -161,7 +162,7 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
   std::optional<DriftLikelihoodResult> result = *best;
   if (changed) {
     // EM from the combined drifts: its likelihood only rises from there.
-    auto polished = IdentifyDriftsByLikelihood(run, combined, a_priori, which, which, options);
+    auto polished = IdentifyDriftsByLikelihood(run, combined, a_priori, which, which, ceilings, options);
     if (polished.ok()) {
       iterations += polished->iterations;
       passes += polished->filter_passes;
@@ -179,14 +180,15 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromGrid(const EpochRun& run
                                                              const ErrorModel& a_priori, const DriftSelection& which,
                                                              const DriftSelection& tau_too,
                                                              const DriftStartOptions& starts,
+                                                             const DriftCeilings& ceilings,
                                                              const DriftLikelihoodOptions& options) {
   if (!which.Any()) {
-    return IdentifyDriftsByLikelihood(run, model, a_priori, which, tau_too, options);
+    return IdentifyDriftsByLikelihood(run, model, a_priori, which, tau_too, ceilings, options);
   }
   int passes = 0;
   const GridPoint start =
-      GridStart(run, model, which, tau_too, starts, options.raw_sample_ceilings, passes);
-  auto fit = IdentifyDriftsByLikelihood(run, start.model, a_priori, which, tau_too, options);
+      GridStart(run, model, which, tau_too, starts, ceilings, passes);
+  auto fit = IdentifyDriftsByLikelihood(run, start.model, a_priori, which, tau_too, ceilings, options);
   if (!fit.ok()) return fit.status();
   // The improvement is measured from the model as given, not from the grid's point.
   fit->log_likelihood_before = start.model_log_likelihood;

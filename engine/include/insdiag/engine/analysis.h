@@ -106,7 +106,7 @@ struct AnalysisOptions {
   // bounded by what the static segments' raw samples allow
   // (ident/drift_ceiling.h), at the monitor's family-wise α: a drift the
   // run's motion leaves unobservable otherwise wanders to values that absorb
-  // a fault (the analysis sets drift_likelihood.raw_sample_ceilings).
+  // a fault (the run's context holds them: analysis/run_context.h).
   ident::DriftLikelihoodOptions drift_likelihood;
   // Where the a-priori model's misfit competes with its missing effects, its
   // drifts are searched from these starts besides the a-priori values

@@ -116,10 +116,6 @@ struct DriftLikelihoodOptions {
   // statistic is a lower bound (EM's likelihood only rises), which keeps the
   // test conservative, and a pair the screen kept by chance costs no more.
   int second_order_max_iterations = 12;
-  // The drifts the run's raw samples allow (drift_ceiling.h); empty, every
-  // drift. An estimate beyond them is not the drift's: the fit holds that
-  // drift (IdentifyDriftsByLikelihood) and the grid does not try it.
-  DriftCeilings raw_sample_ceilings;
 };
 
 // A drift whose likelihood estimate the raw samples refuted, and the value
@@ -183,8 +179,8 @@ struct DriftLikelihoodResult {
 // states: the joint M-step is the AR(1) regression φ̂ = Σ b_k / Σ a_k,
 // q̂ = Σ (a_{k+1} − 2φ̂ b_k + φ̂² a_k) / (n − 1), σ̂² = q̂ / (1 − φ̂²),
 // τ̂ = −Δt / ln φ̂; Shumway & Stoffer §6.3). `a_priori` gives the values the
-// report lists against the estimates. A drift whose estimate the options'
-// raw-sample ceilings refuse is held at its `a_priori` value (lowered to the
+// report lists against the estimates. A drift whose estimate `ceilings`
+// (what the run's raw samples allow; empty, every drift) refuse is held at its `a_priori` value (lowered to the
 // ceiling where that too is refused), listed in `held_by_raw_samples`, and
 // the other drifts fitted again beside it: what its wandering absorbed, they
 // must not keep. With nothing to identify it runs no filter pass and returns
@@ -193,6 +189,7 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const EpochRun&
                                                                  const ErrorModel& a_priori,
                                                                  const DriftSelection& which,
                                                                  const DriftSelection& tau_too,
+                                                                 const DriftCeilings& ceilings,
                                                                  const DriftLikelihoodOptions& options = {});
 
 // Where EM starts when the drifts may be far from the model's values.
@@ -229,6 +226,7 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
                                                                const ErrorModel& a_priori,
                                                                const DriftSelection& which,
                                                                const DriftStartOptions& starts,
+                                                               const DriftCeilings& ceilings,
                                                                const DriftLikelihoodOptions& options = {});
 
 // σ (and τ where `tau_too`) of the selected drifts by EM from the best
@@ -241,6 +239,7 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromGrid(const EpochRun& run
                                                              const ErrorModel& a_priori, const DriftSelection& which,
                                                              const DriftSelection& tau_too,
                                                              const DriftStartOptions& starts,
+                                                             const DriftCeilings& ceilings,
                                                              const DriftLikelihoodOptions& options = {});
 
 // The standard errors of `fit`'s drift estimates made consistent with the
@@ -287,6 +286,7 @@ absl::StatusOr<DriftLikelihoodResult> KeepDriftsWorthTheirParameters(const Epoch
 absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const EpochRun& run, const ErrorModel& model,
                                                                 const ErrorModel& a_priori,
                                                                 const DriftSelection& axes, double screen_alpha,
+                                                                const DriftCeilings& ceilings,
                                                                 const DriftLikelihoodOptions& options = {});
 
 // Fits a second-order Markov pair (catalogue: gyro_bias_second_order,
@@ -300,6 +300,7 @@ absl::StatusOr<DriftLikelihoodResult> IdentifySecondOrdersByLikelihood(const Epo
                                                                        const ErrorModel& a_priori,
                                                                        const DriftSelection& axes,
                                                                        double screen_alpha,
+                                                                       const DriftCeilings& ceilings,
                                                                        const DriftLikelihoodOptions& options = {});
 
 // The covariance of a fitted structure's (ln σ of its drift, then its own
