@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -133,29 +135,40 @@ ident::AllanResult SixChannelsOf(const std::vector<ident::AllanPoint>& curve, co
 // A flat curve over three and a half decades is fitted as flicker, not as a
 // Markov drift and a walk; B comes out within 25 % of the truth, and the
 // model built from it (the components) lies within 10 % of the curve's
-// intervals at family-wise 1 % (the components' ripple is ±7 %).
+// intervals at family-wise 1 % (the components' ripple is ±7 %). Over ten
+// seeds each holds in at least nine (measured: ten, B within 5 % of the
+// truth): a seed's curve may still rise or bend at its longest τ, where it
+// holds a few differences, and Kasdin's B² = Q_d holds only as f → 0.
 TEST(FlickerFloorTest, AFlatAllanCurveIsCarriedAsAFloorThatMatchesIt) {
   constexpr int kSamples = 12000;  // 1 s each: 3.3 h
   constexpr double kTau0S = 1.0, kB = 1e-5, kWhite = 2e-5;  // white rate σ per sample
-  std::mt19937_64 rng(7);
-  std::normal_distribution<double> white(0.0, kWhite);
-  std::vector<double> rates = KasdinFlicker(rng, kSamples, kB);
-  for (double& v : rates) v += white(rng);
-  std::vector<ident::AllanPoint> curve;
-  const absl::StatusOr<ident::AllanFit> fit = CurveAndFitOf(rates, kTau0S, curve);
-  ASSERT_TRUE(fit.ok()) << fit.status();
-  EXPECT_FALSE(fit->markov_structure);
-  ASSERT_TRUE((*fit)[ident::AllanParameter::kBiasInstability].included);
-  EXPECT_NEAR((*fit)[ident::AllanParameter::kBiasInstability].value / kB, 1.0, 0.25);
-
-  const ident::AllanResult result = SixChannelsOf(curve, *fit, kSamples * kTau0S);
-  const absl::StatusOr<ErrorModel> model = ident::ErrorModelFromAllan(result, ReferenceAccuracy{}, nullptr);
-  ASSERT_TRUE(model.ok()) << model.status();
-  EXPECT_GT(model->gyro.flicker[0].coefficient, 0.0);
-  EXPECT_GE(FlickerComponentCount(model->gyro.flicker[0]), 2);
-  for (const ident::AllanDeparture& d : ident::AllanDeparturesFrom(result, *model, 0.01)) {
-    EXPECT_LT(d.LogDistance(), std::log(1.1)) << d.channel << " departs by " << d.ratio << " at τ " << d.tau_s;
+  constexpr int kSeeds = 10;
+  int floor_kept = 0, b_within = 0, model_matches = 0;
+  for (int seed = 1; seed <= kSeeds; ++seed) {
+    std::mt19937_64 rng(static_cast<uint64_t>(seed));
+    std::normal_distribution<double> white(0.0, kWhite);
+    std::vector<double> rates = KasdinFlicker(rng, kSamples, kB);
+    for (double& v : rates) v += white(rng);
+    std::vector<ident::AllanPoint> curve;
+    const absl::StatusOr<ident::AllanFit> fit = CurveAndFitOf(rates, kTau0S, curve);
+    ASSERT_TRUE(fit.ok()) << fit.status();
+    const ident::AllanTermEstimate& b = (*fit)[ident::AllanParameter::kBiasInstability];
+    if (!fit->markov_structure && b.included) ++floor_kept;
+    if (b.included && std::abs(b.value / kB - 1.0) <= 0.25) ++b_within;
+    const ident::AllanResult result = SixChannelsOf(curve, *fit, kSamples * kTau0S);
+    const absl::StatusOr<ErrorModel> model = ident::ErrorModelFromAllan(result, ReferenceAccuracy{}, nullptr);
+    ASSERT_TRUE(model.ok()) << model.status();
+    bool matches = FlickerComponentCount(model->gyro.flicker[0]) >= 2;
+    for (const ident::AllanDeparture& d : ident::AllanDeparturesFrom(result, *model, 0.01)) {
+      matches = matches && d.LogDistance() < std::log(1.1);
+    }
+    if (matches) ++model_matches;
+    std::printf("seed %d: %s, B/B_true %.3f, model %s\n", seed, fit->markov_structure ? "markov" : "flicker",
+                b.included ? b.value / kB : 0.0, matches ? "matches" : "departs");
   }
+  EXPECT_GE(floor_kept, kSeeds - 1);
+  EXPECT_GE(b_within, kSeeds - 1);
+  EXPECT_GE(model_matches, kSeeds - 1);
 }
 
 // A Gauss–Markov bump above the floor (a MEMS part's datasheet drift beside
