@@ -109,11 +109,16 @@
 // Term selection: backward elimination by the Wald statistic z = 1/SE(a_k)
 // (= coefficient / its standard error) under the sandwich covariance: the least
 // significant term is dropped while z < `significance_z`. Bias instability and
-// the Markov term describe the same flat region (a Markov process looks like
-// K for τ ≪ T, like N for τ ≫ T, with a flat top between), so they are never
-// fitted together: the Markov set {Q, N, K, σ_m/T} is fitted first and kept
-// when σ_m and T are both significant (it is the model the engine's filter
-// uses); otherwise the flicker set {Q, N, B, K} is used. T is bounded so that
+// the Markov term can describe the same flat region (a Markov process looks
+// like K for τ ≪ T, like N for τ ≫ T, with a flat top between), and where the
+// curve has one flat part neither is resolvable beside the other. Three
+// structures are fitted and eliminated: the Markov set {Q, N, K, σ_m/T}, the
+// flicker set {Q, N, B, K} and both {Q, N, B, K, σ_m/T} (a drift's bump above
+// a floor); of those that keep what makes them differ (σ_m and T; B; all
+// three), the one of least AIC = χ²_g under the working V (with δ²) + 2p
+// (Akaike, IEEE Trans. Autom. Control 19(6), 1974) is kept, else the flicker
+// set as eliminated. The model carries a kept floor as states of its own
+// (model/flicker_floor.h). T is bounded so that
 // the Markov peak (τ ≈ 1.89 T) lies between 3τ_min and τ_max; on a bound the
 // term is unresolved. The rate ramp, deterministic, comes last: it is added
 // when its z under the V of the model without it (the null hypothesis) is
