@@ -85,6 +85,9 @@ TEST(ModelParameters, NameTheirUnits) {
   EXPECT_EQ(ParameterUnit("reference.position_sigma"), "m");
   EXPECT_EQ(ParameterUnit("gyro_bias_step.x.onset"), "s");
   EXPECT_EQ(ParameterUnit("gyro_bias_gm.x.sigma"), "rad/s");
+  EXPECT_EQ(ParameterUnit("acc_bias_instability.y"), "m/s^2");
+  EXPECT_EQ(ParameterUnit("gyro_bias_instability.z.tau_min"), "s");
+  EXPECT_EQ(ParameterUnit("gyro_bias_instability.z.tau_max"), "s");
 }
 
 TEST(ModelParameters, ADriftsParametersAreNamedAndFoundInOnePlace) {

@@ -117,11 +117,11 @@ std::vector<NamedParameter> ParametersOf(const ErrorModel& model) {
       out.push_back({QuantizationName({b.sensor, i}), t.quantization[i],
                      std::string(UnitsOf(b.sensor).quantization)});
     }
-    // A flicker floor only where the model has one: a model without is
+    // A flicker floor only where the model states one: a model without is
     // stated as before they were modelled.
     for (int i = 0; i < 3; ++i) {
       const FlickerFloor& f = t.flicker[static_cast<size_t>(i)];
-      if (!(f.coefficient > 0.0)) continue;
+      if (f == FlickerFloor{}) continue;
       const std::string name = FlickerName({b.sensor, i});
       out.push_back({name, f.coefficient, u});
       out.push_back({ParameterName(name, ParameterField::kShortestTau), f.shortest_tau_s, "s"});
