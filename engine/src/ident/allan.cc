@@ -501,10 +501,7 @@ std::vector<ParameterEstimate> AllanParameterEstimates(const AllanResult& result
 
 namespace {
 
-// The Gauss–Markov drift a channel's Allan fit stands for, and how it was
-// read: the fitted Markov term; else the larger of the drifts the flicker
-// floor and the rising branch stand for (one process carries both, and the
-// smaller is within its noise); else the bound from the curve's lowest point.
+// A drift read from a channel's Allan fit, and how it was read (the note).
 struct DriftPlaceholderRead {
   GaussMarkov drift;
   std::string how;

@@ -16,6 +16,7 @@
 
 #include "absl/strings/str_format.h"
 #include "insdiag/engine/ident/allan.h"
+#include "insdiag/engine/model/flicker_floor.h"
 #include "insdiag/engine/model/gauss_markov_allan.h"
 
 namespace insdiag::engine::ident::allan_model {
@@ -30,7 +31,7 @@ constexpr int kMt = static_cast<int>(AllanParameter::kMarkovTau);
 constexpr int kP = kAllanParameterCount;
 
 // (2 ln 2/π): σ²(τ) of flicker rate noise of coefficient B (IEEE 952 Annex C).
-constexpr double kFlickerAvar = 2.0 * std::numbers::ln2 / std::numbers::pi;
+constexpr double kFlickerAvar = kFlickerAllanVariancePerB2;
 
 using TermMask = std::array<bool, kP>;
 using LogParameters = std::array<double, kP>;

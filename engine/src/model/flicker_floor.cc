@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 
+#include "insdiag/engine/model/drift_axis.h"
 #include "insdiag/engine/model/gauss_markov_allan.h"
 
 namespace insdiag::engine {
@@ -13,8 +13,6 @@ namespace {
 const double kComponentRatio = std::pow(10.0, 1.5);
 // Cluster times per decade at which the sum is matched to the floor.
 constexpr int kMatchPointsPerDecade = 10;
-// (2 ln 2/π): the Allan variance of flicker rate noise per B² (IEEE 952 Annex C).
-constexpr double kFlickerAvarPerB2 = 2.0 * std::numbers::ln2 / std::numbers::pi;
 
 bool HasFloor(const FlickerFloor& f) {
   return f.coefficient > 0.0 && f.shortest_tau_s > 0.0 && f.longest_tau_s >= f.shortest_tau_s;
@@ -46,7 +44,7 @@ std::vector<GaussMarkov> FlickerComponents(const FlickerFloor& floor) {
     for (const GaussMarkov& c : out) shape += MarkovShape(tau / c.tau_s);
     mean_log_shape += std::log(shape) / points;
   }
-  const double sigma = std::sqrt(kFlickerAvarPerB2 * floor.coefficient * floor.coefficient / std::exp(mean_log_shape));
+  const double sigma = std::sqrt(kFlickerAllanVariancePerB2 * floor.coefficient * floor.coefficient / std::exp(mean_log_shape));
   for (GaussMarkov& c : out) c.sigma = sigma;
   return out;
 }
@@ -54,7 +52,7 @@ std::vector<GaussMarkov> FlickerComponents(const FlickerFloor& floor) {
 FlickerFloor FlickerFloorAbove(double coefficient, double white_density, double shortest_tau_s,
                                double longest_tau_s) {
   if (!(coefficient > 0.0)) return {};
-  const double floor_avar = kFlickerAvarPerB2 * coefficient * coefficient;
+  const double floor_avar = kFlickerAllanVariancePerB2 * coefficient * coefficient;
   const double meets_white_s = white_density * white_density / floor_avar;
   const double from_s = std::max(shortest_tau_s, meets_white_s);
   if (!(from_s < longest_tau_s)) return {};
@@ -62,8 +60,7 @@ FlickerFloor FlickerFloorAbove(double coefficient, double white_density, double 
 }
 
 GaussMarkov FlickerComponentOf(const ErrorModel& model, Sensor sensor, int axis, int component) {
-  const SensorTriadModel& triad = sensor == Sensor::kGyro ? model.gyro : model.acc;
-  const std::vector<GaussMarkov> components = FlickerComponents(triad.flicker[static_cast<size_t>(axis)]);
+  const std::vector<GaussMarkov> components = FlickerComponents(FlickerOf(model, DriftAxis{sensor, axis}));
   return components.at(static_cast<size_t>(component));
 }
 

@@ -1,5 +1,6 @@
 #include "insdiag/engine/model/state_layout.h"
 
+#include "insdiag/engine/model/drift_axis.h"
 #include "insdiag/engine/model/flicker_floor.h"
 
 namespace insdiag::engine {
@@ -34,8 +35,7 @@ StateLayout::StateLayout(const ErrorModel& model) {
       const int components = FlickerComponentCount(triad.flicker[static_cast<size_t>(i)]);
       for (int j = 0; j < components; ++j) {
         SensorState s;
-        s.name = std::string(sensor == Sensor::kGyro ? "gyro" : "acc") + "_bias_instability." + kBodyAxes[i] + "." +
-                 std::to_string(j + 1);
+        s.name = FlickerName({sensor, i}) + "." + std::to_string(j + 1);
         s.sensor = sensor;
         s.axis = i;
         s.parameter = j;

@@ -180,11 +180,11 @@ struct DriftLikelihoodResult {
 // q̂ = Σ (a_{k+1} − 2φ̂ b_k + φ̂² a_k) / (n − 1), σ̂² = q̂ / (1 − φ̂²),
 // τ̂ = −Δt / ln φ̂; Shumway & Stoffer §6.3). `a_priori` gives the values the
 // report lists against the estimates. A drift whose estimate `ceilings`
-// (what the run's raw samples allow; empty, every drift) refuse is held at its `a_priori` value (lowered to the
-// ceiling where that too is refused), listed in `held_by_raw_samples`, and
-// the other drifts fitted again beside it: what its wandering absorbed, they
-// must not keep. With nothing to identify it runs no filter pass and returns
-// the model as it is.
+// (what the run's raw samples allow; empty, every drift) refuse is held at
+// its `a_priori` value (lowered to the ceiling where that too is refused),
+// listed in `held_by_raw_samples`, and the other drifts fitted again beside
+// it: what its wandering absorbed, they must not keep. With nothing to
+// identify it runs no filter pass and returns the model as it is.
 absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const EpochRun& run, const ErrorModel& model,
                                                                  const ErrorModel& a_priori,
                                                                  const DriftSelection& which,

@@ -19,11 +19,15 @@
 // some 200 independent differences; a ratio of 10² would ripple ±18 %.
 #pragma once
 
+#include <numbers>
 #include <vector>
 
 #include "insdiag/engine/model/error_model.h"
 
 namespace insdiag::engine {
+
+// (2 ln 2/π): the Allan variance of flicker rate noise per B² (IEEE 952 Annex C).
+inline constexpr double kFlickerAllanVariancePerB2 = 2.0 * std::numbers::ln2 / std::numbers::pi;
 
 // The components of `floor` in increasing T, 0 … n−1 (empty for no floor).
 std::vector<GaussMarkov> FlickerComponents(const FlickerFloor& floor);
