@@ -97,6 +97,10 @@ absl::Status AddEffects(const BenchRun& run, const std::vector<SelectedTerm>& se
     if (model.FindEffect(term) >= 0) continue;
     ModelEffect e;
     e.term = term;
+    if (term.family->kind == EffectKind::kTransient) {
+      return absl::InvalidArgumentError("effect '" + selector + "' is a warm-up: the analysis identifies it with its "
+                                        "time constant where the run's start shows one (docs/IDENTIFICATION.md)");
+    }
     if (term.family->kind == EffectKind::kFault) {
       if (!onset_s.has_value()) {
         return absl::InvalidArgumentError(
@@ -138,6 +142,8 @@ absl::Status AddEffects(const BenchRun& run, const std::vector<SelectedTerm>& se
         e.second_order_sigma = triad.bias[term.axis].sigma;
         e.second_order_alpha_per_s = 1.0 / std::max(triad.bias[term.axis].tau_s, update_interval_s);
         e.second_order_beta_rad_s = 2.0 * std::numbers::pi * e.second_order_alpha_per_s;
+        break;
+      case RandomProcess::kDecayFromStart:  // refused above
         break;
     }
     model.effects.push_back(e);

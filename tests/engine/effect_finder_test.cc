@@ -166,6 +166,8 @@ double TruthOf(const sim::TrueEffect& e, int parameter) {
       return e.random_walk_density;
     case RandomProcess::kSecondOrderMarkov:
       return e.second_order_sigma;
+    case RandomProcess::kDecayFromStart:
+      return e.value[0];
   }
   return std::nan("");
 }

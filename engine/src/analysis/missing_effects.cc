@@ -1,5 +1,6 @@
 #include "analysis/missing_effects.h"
 
+#include <absl/strings/str_cat.h>
 #include <absl/strings/str_format.h>
 
 #include <algorithm>
@@ -14,6 +15,7 @@
 #include "analysis/steps_in_raw_samples.h"
 #include "insdiag/engine/finder/effect_finder.h"
 #include "insdiag/engine/finder/fault_findings.h"
+#include "insdiag/engine/finder/warm_up_scan.h"
 #include "insdiag/engine/model/parameter_field.h"
 #include "insdiag/engine/numerics/parallel_map.h"
 #include "insdiag/engine/stats/distributions.h"
@@ -516,6 +518,11 @@ Findings FindMissingEffects(const RunContext& context, const ModelPass& pass, st
   AddRawSampleFaultCandidates(faults, pass.onsets, raw_samples.changes, epochs,
                               pass.forward.scalar_updates, scale, options.finder.family_wise_alpha);
   for (EffectCandidate& c : faults) others.push_back(std::move(c));
+  if (auto warm_ups = ScanWarmUps(epochs, pass.model, WarmUpGrid{}); warm_ups.ok()) {
+    for (EffectCandidate& c : WarmUpCandidates(*warm_ups, pass.forward.scalar_updates)) others.push_back(std::move(c));
+  } else if (notes != nullptr) {
+    notes->push_back(absl::StrCat("no scan for warm-ups: ", warm_ups.status().message()));
+  }
   f.candidates = MergeCandidates(std::move(ranked.terms), f.structures, std::move(others),
                                  options.finder.family_wise_alpha);
   return f;

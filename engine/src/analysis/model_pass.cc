@@ -22,13 +22,25 @@ namespace {
 //   ℓ_max − ℓ_marginal = ½ Σ_i [ln(1 + λ_i) + (u_iᵀ g)² / (λ_i (1 + λ_i))]
 // over the directions the data inform (Harvey, Forecasting, Structural Time
 // Series Models and the Kalman Filter, 1989, §3.4: the diffuse likelihood).
+// A warm-up's start value decays with no process noise, so at the end its
+// posterior and its prior are the start's scaled by one factor e^{−T/τ}:
+// the same correction, with the prior scaled, where a double still holds it.
 double ProfileCorrection(const ForwardPass& fw, const ErrorModel& model, const StateLayout& layout) {
   std::vector<int> states;
   std::vector<double> prior_sigma;
+  const double run_s = fw.epochs() > 0 ? fw.epoch_time_s.back() - fw.epoch_start_s.front() : 0.0;
   for (const SensorState& s : layout.sensor_states()) {
-    if (s.dynamics != StateDynamics::kConstant || s.effect < 0) continue;
+    if ((s.dynamics != StateDynamics::kConstant && s.dynamics != StateDynamics::kDecaying) || s.effect < 0) continue;
+    const ModelEffect& e = model.effects[static_cast<size_t>(s.effect)];
+    double sigma = e.prior_sigma[static_cast<size_t>(s.parameter)];
+    if (s.dynamics == StateDynamics::kDecaying) {
+      constexpr double kSmallestDecayHeld = 1e-100;
+      const double decay = std::exp(-run_s / e.time_constant_s);
+      if (!(decay > kSmallestDecayHeld)) continue;
+      sigma *= decay;
+    }
     states.push_back(s.index);
-    prior_sigma.push_back(model.effects[static_cast<size_t>(s.effect)].prior_sigma[static_cast<size_t>(s.parameter)]);
+    prior_sigma.push_back(sigma);
   }
   if (states.empty() || fw.epochs() == 0) return 0.0;
   const auto m = static_cast<Eigen::Index>(states.size());

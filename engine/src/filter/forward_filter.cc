@@ -92,7 +92,8 @@ Eigen::MatrixXd InitialCovariance(const ErrorModel& model, const StateLayout& la
         var = sigma * sigma;
         break;
       }
-      case StateDynamics::kConstant: {
+      case StateDynamics::kConstant:
+      case StateDynamics::kDecaying: {
         const double sigma = model.effects[static_cast<size_t>(s.effect)].prior_sigma[static_cast<size_t>(s.parameter)];
         var = sigma * sigma;
         break;

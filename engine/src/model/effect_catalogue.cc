@@ -8,7 +8,7 @@
 namespace insdiag::engine {
 namespace {
 
-constexpr std::array<EffectFamily, 18> kCatalogue = {{
+constexpr std::array<EffectFamily, 20> kCatalogue = {{
     {"gyro_turn_on_bias", Sensor::kGyro, EffectKind::kConstant, AxisSet::kSingle, Regressor::kOne,
      RandomProcess::kNone, 1, Excitation::kAlways, "rad/s", "run-to-run constant gyro bias c_i"},
     {"gyro_scale_factor", Sensor::kGyro, EffectKind::kConstant, AxisSet::kSingle, Regressor::kOwnInput,
@@ -52,6 +52,12 @@ constexpr std::array<EffectFamily, 18> kCatalogue = {{
     {"acc_bias_ramp", Sensor::kAccelerometer, EffectKind::kFault, AxisSet::kSingle, Regressor::kRamp,
      RandomProcess::kNone, 1, Excitation::kAlways, "m/s^3",
      "accelerometer bias rate r_i·(t − t₀)·1(t ≥ t₀) from an unknown onset t₀"},
+    {"gyro_warm_up", Sensor::kGyro, EffectKind::kTransient, AxisSet::kSingle, Regressor::kNone,
+     RandomProcess::kDecayFromStart, 1, Excitation::kAlways, "rad/s",
+     "gyro bias settling after power-up b_i·e^(−t/τ) from the run's start"},
+    {"acc_warm_up", Sensor::kAccelerometer, EffectKind::kTransient, AxisSet::kSingle, Regressor::kNone,
+     RandomProcess::kDecayFromStart, 1, Excitation::kAlways, "m/s^2",
+     "accelerometer bias settling after power-up b_i·e^(−t/τ) from the run's start"},
 }};
 
 constexpr std::array<char, 3> kAxisNames = {'x', 'y', 'z'};

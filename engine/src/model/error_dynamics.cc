@@ -86,6 +86,7 @@ SensorBlocks StructureOf(const StateLayout& layout, const Eigen::Matrix2d& fill)
 //   Gauss–Markov drift (seed eq. 5)  ḃ = −b/τ + w     α = 1/τ, c = 2σ²/τ
 //   a flicker floor's component       likewise, its σ_c and T_j (model/flicker_floor.h)
 //   random walk                      ḃ = w            α = 0,   c = K²
+//   a transient's start value        ḃ = −b/τ         α = 1/τ, c = 0
 //   second-order pair                                 α, β,    c = 2ασ²
 //   constant                                          α = 0,   c = 0
 // so that both the discrete transition and the sample means follow from one
@@ -118,6 +119,8 @@ ContinuousBlock ContinuousDynamics(const ErrorModel& model, const SensorState& s
       return {alpha, e.second_order_beta_rad_s,
               2.0 * alpha * e.second_order_sigma * e.second_order_sigma};
     }
+    case StateDynamics::kDecaying:
+      return {1.0 / model.effects[static_cast<size_t>(s.effect)].time_constant_s, 0.0, 0.0};
     case StateDynamics::kConstant:
     case StateDynamics::kSecondOrderTail:
       break;

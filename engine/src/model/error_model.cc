@@ -21,6 +21,12 @@ absl::Status ValidateErrorModel(const ErrorModel& model) {
       return absl::InvalidArgumentError("error model: noise densities and quantisation must be ≥ 0");
     }
   }
+  for (const ModelEffect& e : model.effects) {
+    if (e.term.family->kind == EffectKind::kTransient && !(e.time_constant_s > 0.0)) {
+      return absl::InvalidArgumentError("error model: " + e.term.Name() + " needs its time constant, " +
+                                        e.term.Name() + ".tau > 0 [s]");
+    }
+  }
   return absl::OkStatus();
 }
 
@@ -63,6 +69,9 @@ int ErrorModel::ParameterCount() const {
         break;
       case RandomProcess::kSecondOrderMarkov:
         count += 3;
+        break;
+      case RandomProcess::kDecayFromStart:  // the start value and τ
+        count += 2;
         break;
     }
   }

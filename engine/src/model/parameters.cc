@@ -80,6 +80,14 @@ bool SetEffectField(ParameterField field, int parameter, double value, ModelEffe
         return false;
       }
       return true;
+    case RandomProcess::kDecayFromStart:
+      if (field == ParameterField::kTau && value > 0.0) {
+        e.time_constant_s = value;
+        return true;
+      }
+      if (field != ParameterField::kValue && field != ParameterField::kPriorSigma) return false;
+      e.prior_sigma[0] = std::abs(value);
+      return true;
   }
   return false;
 }
@@ -154,6 +162,10 @@ std::vector<NamedParameter> ParametersOf(const ErrorModel& model) {
                        1.0 / e.second_order_alpha_per_s, "s"});
         out.push_back({ParameterName(e.term.Name(), ParameterField::kPeriod),
                        2.0 * std::numbers::pi / e.second_order_beta_rad_s, "s"});
+        break;
+      case RandomProcess::kDecayFromStart:
+        out.push_back({ParameterName(e.term.Name(), ParameterField::kPriorSigma), e.prior_sigma[0], unit});
+        out.push_back({ParameterName(e.term.Name(), ParameterField::kTau), e.time_constant_s, "s"});
         break;
     }
   }

@@ -69,6 +69,13 @@ StateLayout::StateLayout(const ErrorModel& model) {
         add(s);
         break;
       }
+      case RandomProcess::kDecayFromStart: {
+        SensorState s = base;
+        s.name = term.Name();
+        s.dynamics = StateDynamics::kDecaying;
+        add(s);
+        break;
+      }
       case RandomProcess::kSecondOrderMarkov: {
         SensorState first = base;
         first.name = term.Name() + ".1";

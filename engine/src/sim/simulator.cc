@@ -88,6 +88,10 @@ void AdvanceDrifts(const SimulatedUnit& unit, double dt, Eigen::Vector3d& gyro_g
       s.x[0] += e.random_walk_density * std::sqrt(dt) * normal(rng);
       continue;
     }
+    if (e.term.family->process == RandomProcess::kDecayFromStart) {
+      s.x[0] *= std::exp(-dt / e.time_constant_s);
+      continue;
+    }
     // Rotating damped pair: x ← e^{−αΔt} R(βΔt) x + w, E[wwᵀ] = σ²(1 − e^{−2αΔt}) I.
     const double decay = std::exp(-e.second_order_alpha_per_s * dt);
     const double c = std::cos(e.second_order_beta_rad_s * dt);
@@ -174,6 +178,11 @@ absl::StatusOr<std::vector<TrueEffect>> ParseTrueEffect(std::string_view spec) {
         e.second_order_alpha_per_s = 1.0 / v[1];
         e.second_order_beta_rad_s = 2.0 * std::numbers::pi / v[2];
         break;
+      case RandomProcess::kDecayFromStart:
+        if (v.size() != 2 || v[1] <= 0.0) return count_error("START,TAU_S (a positive time constant)");
+        e.value[0] = v[0];
+        e.time_constant_s = v[1];
+        break;
     }
     effects.push_back(e);
   }
@@ -217,6 +226,9 @@ std::vector<RandomEffectState> InitialRandomEffects(const SimulatedUnit& unit, s
     if (e.term.family->process == RandomProcess::kSecondOrderMarkov) {
       s.x = e.second_order_sigma * Eigen::Vector2d(normal(rng), normal(rng));
       columns += 2;
+    } else if (e.term.family->process == RandomProcess::kDecayFromStart) {
+      s.x[0] = e.value[0];  // a warm-up is at its start value at the first sample
+      columns += 1;
     } else {
       columns += 1;  // a rate random walk starts at zero at the first sample
     }

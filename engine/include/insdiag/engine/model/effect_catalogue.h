@@ -18,6 +18,14 @@
 // t₀ that is estimated with them (shared/spec/effects.md):
 //   bias_step.i         r = 1(t ≥ t₀)                  p = c_i            [rad/s | m/s²]
 //   bias_ramp.i         r = (t − t₀)·1(t ≥ t₀)          p = r_i            [rad/s² | m/s³]
+// Transient effects are a start value that decays with a time constant τ
+// estimated with it, from the run's first sample t_s:
+//   warm_up.i           r = e^{−(t − t_s)/τ}          p = b_i            [rad/s | m/s²]
+// a bias settling as the unit warms up after power-up (a first-order
+// thermal lag: the sensor's temperature, and with it its bias, approaches
+// its steady state exponentially; IEEE Std 952-1997, Annex B, warm-up
+// drift). The filter carries b as a state that decays with τ and has no
+// process noise (model/state_layout.h).
 // Random effects add states with process noise (their equations are in
 // model/error_model.h).
 #pragma once
@@ -55,6 +63,7 @@ enum class EffectKind {
   kConstant,  // unknown parameters: states with zero process noise
   kRandom,    // changes the structure of the drift model: states with process noise
   kFault,     // a constant that starts at an unknown onset: a state with zero process noise
+  kTransient, // an unknown start value that decays with a time constant: a state with zero process noise
 };
 
 // Which axis labels a family has.
@@ -80,8 +89,13 @@ enum class Regressor {
 // What the run must contain for the effect to be excited.
 enum class Excitation { kAlways, kRotation, kTilt, kTemperature };
 
-// Random-process structure of a random effect.
-enum class RandomProcess { kNone, kRandomWalk, kSecondOrderMarkov };
+// Random-process structure of a random or transient effect.
+enum class RandomProcess {
+  kNone,
+  kRandomWalk,
+  kSecondOrderMarkov,
+  kDecayFromStart,  // ḃ = −b/τ, b(t_s) unknown, no process noise (transient effects)
+};
 
 struct EffectFamily {
   std::string_view name;

@@ -15,7 +15,9 @@
 //                      (Gelb, Applied Optimal Estimation, 1974, Table 3.8-1: damped
 //                      oscillatory process, here built from a rotating pair of states)
 // Constant effects: parameters with a Gaussian prior N(0, σ_prior²) and no process noise;
-// fault effects likewise, with the regressor starting at their onset.
+// fault effects likewise, with the regressor starting at their onset;
+// transient effects (warm-up) likewise, a start value b(t_s) ~ N(0, σ_prior²)
+// that decays as ḃ = −b/τ with no process noise.
 #pragma once
 
 #include <absl/status/status.h>
@@ -72,6 +74,9 @@ struct ModelEffect {
   // kFault families: the onset t₀ [s of run time]. The filter starts the
   // fault's regressor with the first update interval whose middle is past it.
   double onset_s = 0.0;
+  // kTransient families: the time constant τ [s] its start value decays
+  // with (prior_sigma[0] is the start value's prior σ).
+  double time_constant_s = 0.0;
 
   bool operator==(const ModelEffect&) const = default;
 };

@@ -14,6 +14,7 @@
 //   <effect term>.onset [s]  faults (bias steps and ramps): the onset in run time
 //   <effect term>.density    bias_rw: K [unit/√s]
 //   <effect term>.sigma / .tau / .period   bias_second_order: σ, 1/α [s], 2π/β [s]
+//   <effect term>.prior_sigma / .tau     warm_up: the start value's prior σ, the time constant [s]
 #pragma once
 
 #include <absl/status/statusor.h>

@@ -29,6 +29,7 @@ enum class StateDynamics {
   kSecondOrderPair,  // first state of a 2-state block; the second follows it
   kSecondOrderTail,
   kFlickerComponent,  // φ = e^{−Δt/T_j}: component j (`parameter`) of its axis' flicker floor
+  kDecaying,          // φ = e^{−Δt/τ}, no process noise: a transient's start value settling
 };
 
 struct SensorState {

@@ -42,6 +42,8 @@ struct TrueEffect {
   double second_order_beta_rad_s = 0.0;
   // Fault families (bias steps and ramps): the onset [s of run time].
   double onset_s = 0.0;
+  // Warm-ups: the start value is value[0], settling with this time constant [s].
+  double time_constant_s = 0.0;
 };
 
 // The comma-separated finite numbers of `text` ("1.5,-2,3e-3"; empty: none).
@@ -51,7 +53,8 @@ absl::StatusOr<std::vector<double>> ParseNumberList(std::string_view text, std::
 // Parses `NAME=VALUE[,VALUE…]` (insdiag simulate --effect): NAME is a term
 // ("gyro_scale_factor.z") or a family (every axis gets the value). Values:
 // constant families one value (yaw harmonics: sin[,cos]); bias_rw K;
-// bias_second_order σ,τ_s,period_s (α = 1/τ, β = 2π/period); faults
+// bias_second_order σ,τ_s,period_s (α = 1/τ, β = 2π/period); warm_up
+// START,TAU_S (the bias at the first sample and its time constant); faults
 // VALUE@ONSET_S (gyro_bias_ramp.x=1e-9@1500).
 absl::StatusOr<std::vector<TrueEffect>> ParseTrueEffect(std::string_view spec);
 

@@ -1,0 +1,89 @@
+#include "analysis/warm_ups.h"
+
+#include <absl/strings/str_cat.h>
+#include <absl/strings/str_format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include "analysis/model_pass.h"
+#include "insdiag/engine/finder/warm_up_scan.h"
+#include "insdiag/engine/model/parameter_field.h"
+#include "insdiag/engine/stats/distributions.h"
+
+namespace insdiag::engine::pipeline {
+namespace {
+
+std::string TimeConstantName(const EffectTerm& term) {
+  return ParameterName(term.Name(), ParameterField::kTau);
+}
+
+// The fits whose Holm-adjusted p-value over `fits` is below `alpha`.
+std::vector<const WarmUpFit*> Significant(const std::vector<WarmUpFit>& fits, double alpha) {
+  std::vector<double> p, adjusted(fits.size());
+  for (const WarmUpFit& f : fits) p.push_back(f.identifiable ? f.p_value : 1.0);
+  stats::HolmAdjust(p, adjusted);
+  std::vector<const WarmUpFit*> out;
+  for (size_t i = 0; i < fits.size(); ++i) {
+    if (fits[i].identifiable && adjusted[i] < alpha) out.push_back(&fits[i]);
+  }
+  return out;
+}
+
+void AddWarmUp(const WarmUpFit& f, const AnalysisOptions& options, ErrorModel& model,
+               std::vector<ParameterEstimate>& identified, std::vector<std::string>& notes) {
+  ModelEffect e;
+  e.term = f.term;
+  e.time_constant_s = f.time_constant_s;
+  e.prior_sigma[0] = PriorSigmaAroundEstimate(f.estimate, f.std_error, options);
+  model.effects.push_back(e);
+  const std::string unit(f.term.family->unit);
+  ParameterEstimate start;
+  start.name = f.term.Name();
+  start.value = f.estimate;
+  start.std_error = f.std_error;
+  start.method = EstimationMethod::kMaximumLikelihood;
+  start.unit = unit;
+  identified.push_back(start);
+  ParameterEstimate tau = start;
+  tau.name = TimeConstantName(f.term);
+  tau.value = f.time_constant_s;
+  tau.std_error = std::numeric_limits<double>::quiet_NaN();
+  tau.unit.assign(1, 's');  // seconds
+  identified.push_back(std::move(tau));
+  notes.push_back(absl::StrFormat(
+      "%s: the bias settles by %.3g %s from the run's start with τ %.0f s (2Δℓ = %.1f over %d time "
+      "constants, p = %.2g): a warm-up, carried in the model so that the start is not taken for a fault",
+      f.term.Name(), f.estimate, unit, f.time_constant_s, f.statistic, f.time_constants_tried, f.p_value));
+}
+
+}  // namespace
+
+int AddTheWarmUpsTheRunShows(const RunContext& c, ErrorModel& model, std::vector<ParameterEstimate>& identified,
+                             std::vector<std::string>& notes) {
+  int added = 0;
+  const double alpha = c.options.finder.family_wise_alpha;
+  // Each round adds what stands beside the warm-ups already in the model;
+  // there are six axes.
+  for (int round = 0; round < kSensorAxisCount; ++round) {
+    auto fits = ScanWarmUps(c.epochs, model, WarmUpGrid{});
+    if (!fits.ok()) {
+      notes.push_back(absl::StrCat("no scan for warm-ups: ", fits.status().message()));
+      return added;
+    }
+    // One at a time, the strongest first: two axes' warm-ups can carry one
+    // signal (on a level unit at rest every accelerometer's reaches the
+    // vertical channel), and the one added takes it from the others.
+    const std::vector<const WarmUpFit*> found = Significant(*fits, alpha);
+    if (found.empty()) return added;
+    const WarmUpFit* strongest = *std::max_element(
+        found.begin(), found.end(), [](const WarmUpFit* a, const WarmUpFit* b) { return a->statistic < b->statistic; });
+    AddWarmUp(*strongest, c.options, model, identified, notes);
+    ++added;
+  }
+  return added;
+}
+
+}  // namespace insdiag::engine::pipeline
