@@ -591,6 +591,7 @@ AnalysisReport ReportOf(const RunContext& c, const ModelPass& pass, const Findin
   r.family_candidates = found.families;
   r.correlation = found.drifts;
   r.identified = identified;
+  for (ParameterEstimate& e : WarmUpEstimates(pass)) r.identified.push_back(std::move(e));
   std::string unobservable;
   for (const ParameterEstimate& e : ConstantEffectEstimates(pass, c.run, c.reference_measurements)) {
     r.identified.push_back(e);

@@ -240,6 +240,27 @@ std::vector<ParameterEstimate> ConstantEffectEstimates(const ModelPass& pass, co
   }
   return out;
 }
+std::vector<ParameterEstimate> WarmUpEstimates(const ModelPass& pass) {
+  std::vector<ParameterEstimate> out;
+  const ForwardPass& fw = pass.forward;
+  if (fw.epochs() == 0) return out;
+  for (const SensorState& s : pass.layout->sensor_states()) {
+    if (s.dynamics != StateDynamics::kDecaying) continue;
+    const ModelEffect& e = pass.model.effects[static_cast<size_t>(s.effect)];
+    // The state at the first epoch is the start value decayed over one interval.
+    const double back_to_start = std::exp((fw.epoch_time_s.front() - fw.epoch_start_s.front()) / e.time_constant_s);
+    ParameterEstimate p;
+    p.name = s.name;
+    p.value = pass.smoothed.x(0, s.index) * back_to_start;
+    p.std_error = std::sqrt(pass.smoothed.variance(0, s.index)) * back_to_start;
+    p.method = EstimationMethod::kFilterState;
+    p.unit = std::string(e.term.family->unit);
+    p.prior_std = e.prior_sigma[0];
+    out.push_back(std::move(p));
+  }
+  return out;
+}
+
 void FillSeries(const ModelPass& pass, AnalysisSeries& series) {
   const ForwardPass& fw = pass.forward;
   const SmoothedPass& sm = pass.smoothed;

@@ -72,6 +72,11 @@ std::array<double, 2> RegressorRms(const BenchRun& run, const EffectTerm& term,
                                    const std::vector<std::array<double, 6>>* reference_inputs = nullptr,
                                    bool full_scale = false);
 
+// Each warm-up's start value, from the smoothed state at the first epoch:
+// what the whole run says of it, where the scan that found it measured it to
+// first order only.
+std::vector<ParameterEstimate> WarmUpEstimates(const ModelPass& pass);
+
 // The constant effects' estimates at the end of the pass, each with its
 // observability (parameter_estimate.h): the prior it is judged against is the
 // model's diffuse prior rescaled to what the table excited, so that an axis

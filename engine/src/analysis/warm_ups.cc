@@ -40,50 +40,80 @@ void AddWarmUp(const WarmUpFit& f, const AnalysisOptions& options, ErrorModel& m
   e.prior_sigma[0] = PriorSigmaAroundEstimate(f.estimate, f.std_error, options);
   model.effects.push_back(e);
   const std::string unit(f.term.family->unit);
-  ParameterEstimate start;
-  start.name = f.term.Name();
-  start.value = f.estimate;
-  start.std_error = f.std_error;
-  start.method = EstimationMethod::kMaximumLikelihood;
-  start.unit = unit;
-  identified.push_back(start);
-  ParameterEstimate tau = start;
+  // The start value is the model's state (WarmUpEstimates); τ is the scan's.
+  ParameterEstimate tau;
   tau.name = TimeConstantName(f.term);
   tau.value = f.time_constant_s;
-  tau.std_error = std::numeric_limits<double>::quiet_NaN();
+  tau.method = EstimationMethod::kMaximumLikelihood;
   tau.unit.assign(1, 's');  // seconds
   identified.push_back(std::move(tau));
   notes.push_back(absl::StrFormat(
-      "%s: the bias settles by %.3g %s from the run's start with τ %.0f s (2Δℓ = %.1f over %d time "
+      "%s: the bias settles by about %.3g %s from the run's start with τ %.0f s (2Δℓ = %.1f over %d time "
       "constants, p = %.2g): a warm-up, carried in the model so that the start is not taken for a fault",
       f.term.Name(), f.estimate, unit, f.time_constant_s, f.statistic, f.time_constants_tried, f.p_value));
 }
+
 
 }  // namespace
 
 int AddTheWarmUpsTheRunShows(const RunContext& c, ErrorModel& model, std::vector<ParameterEstimate>& identified,
                              std::vector<std::string>& notes) {
   int added = 0;
-  const double alpha = c.options.finder.family_wise_alpha;
   // Each round adds what stands beside the warm-ups already in the model;
   // there are six axes.
   for (int round = 0; round < kSensorAxisCount; ++round) {
     auto fits = ScanWarmUps(c.epochs, model, WarmUpGrid{});
     if (!fits.ok()) {
       notes.push_back(absl::StrCat("no scan for warm-ups: ", fits.status().message()));
-      return added;
+      break;
     }
     // One at a time, the strongest first: two axes' warm-ups can carry one
     // signal (on a level unit at rest every accelerometer's reaches the
     // vertical channel), and the one added takes it from the others.
-    const std::vector<const WarmUpFit*> found = Significant(*fits, alpha);
-    if (found.empty()) return added;
+    const std::vector<const WarmUpFit*> found = Significant(*fits, c.options.finder.family_wise_alpha);
+    if (found.empty()) break;
     const WarmUpFit* strongest = *std::max_element(
         found.begin(), found.end(), [](const WarmUpFit* a, const WarmUpFit* b) { return a->statistic < b->statistic; });
     AddWarmUp(*strongest, c.options, model, identified, notes);
     ++added;
   }
   return added;
+}
+
+bool RefitTheWarmUpsBesideTheDrifts(const RunContext& c, ErrorModel& model,
+                                    std::vector<ParameterEstimate>& identified, std::vector<std::string>& notes) {
+  std::vector<ModelEffect> before;
+  std::erase_if(model.effects, [&](const ModelEffect& e) {
+    if (e.term.family->kind != EffectKind::kTransient) return false;
+    before.push_back(e);
+    return true;
+  });
+  std::erase_if(identified, [&](const ParameterEstimate& p) {
+    return std::any_of(before.begin(), before.end(),
+                       [&](const ModelEffect& e) { return p.name == TimeConstantName(e.term); });
+  });
+  std::vector<std::string> found;
+  AddTheWarmUpsTheRunShows(c, model, identified, found);
+  // The same warm-ups at time constants within the grid's resolution: the drifts need not move.
+  const double resolution = WarmUpGrid{}.ratio;
+  const auto same = [&](const ModelEffect& e) {
+    const int i = model.FindEffect(e.term);
+    if (i < 0) return false;
+    const double ratio = model.effects[static_cast<size_t>(i)].time_constant_s / e.time_constant_s;
+    return ratio < resolution && ratio > 1.0 / resolution;
+  };
+  const auto transients = std::count_if(model.effects.begin(), model.effects.end(), [](const ModelEffect& e) {
+    return e.term.family->kind == EffectKind::kTransient;
+  });
+  const bool changed =
+      static_cast<size_t>(transients) != before.size() || !std::all_of(before.begin(), before.end(), same);
+  if (changed) {
+    notes.push_back(before.empty() ? "warm-ups beside the drifts identified from the whole run:"
+                                   : "the warm-ups found again beside the drifts identified from the whole run, "
+                                     "which replace those above:");
+    notes.insert(notes.end(), found.begin(), found.end());
+  }
+  return changed;
 }
 
 }  // namespace insdiag::engine::pipeline

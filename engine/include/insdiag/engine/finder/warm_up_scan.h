@@ -39,7 +39,7 @@ namespace insdiag::engine {
 // intervals) to a share of the run (longer, it is the run's drift).
 struct WarmUpGrid {
   double shortest_in_update_intervals = 5.0;
-  double longest_share_of_run = 1.0 / 3.0;
+  double longest_share_of_run = 1.0;
   double ratio = 1.7782794100389228;  // 10^{1/4}
 };
 std::vector<double> WarmUpTimeConstants(const EpochRun& run, const WarmUpGrid& grid);
