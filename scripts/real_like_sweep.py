@@ -143,7 +143,8 @@ def one_run(cli, scenario, seed, work):
     record = dict(scenario=scenario, seed=seed, cli_sha256=sha256_of(cli), simulate=[a for a in sim if a not in (log,)],
                   sway=sway, import_cmd=imp[1:], truth_start_rpy_rad=truth["start_rpy_rad"],
                   truth_turn_on=truth["turn_on_biases"], truth_roll_pitch_rad=[truth["roll0_rad"], truth["pitch0_rad"]],
-                  truth_heading_rad=truth["heading_rad"], truth_counter_residues=truth.get("counter_residues"))
+                  truth_heading_rad=truth["heading_rad"], truth_counter_residues=truth.get("counter_residues"),
+                  truth_warmup=truth.get("warmup"))
     if done.returncode != 0:
         record.update(verdict="IMPORT-REFUSED", error=done.stderr.strip()[-400:])
         return record
@@ -170,6 +171,8 @@ def one_run(cli, scenario, seed, work):
         localisation=[dict(state=l.get("state"), time_s=l.get("timeS"), p=l.get("pValue"))
                       for l in report.get("localisation", [])][:5],
         removed={p["name"]: p["value"] for p in report.get("identified", []) if p.get("method") == "STATIC"},
+        warm_ups={p["name"]: dict(value=p["value"], std_error=p.get("stdError")) for p in report.get("identified", [])
+                  if "_warm_up." in p["name"]},
         plain_words=report.get("plainWords", []))
     return record
 
@@ -248,6 +251,32 @@ def table(records):
     return "\n".join(lines)
 
 
+def warm_up_table(records):
+    """Per scenario with a warm-up and per sensor axis: how often the analysis
+    carried one, and its start value against the truth (median ratio)."""
+    lines = ["| scenario | axis | warm-up carried | start value / truth, median (min–max) | τ / truth, median |",
+             "|---|---|---|---|---|"]
+    for s in [s for s in SCENARIOS if any(r["scenario"] == s and r.get("truth_warmup") for r in records)]:
+        rs = [r for r in records if r["scenario"] == s and r.get("warm_ups") is not None and r.get("truth_warmup")]
+        for sensor, key in (("gyro", "gyro_rad_s"), ("acc", "acc_mps2")):
+            for i, a in enumerate("xyz"):
+                name = f"{sensor}_warm_up.{a}"
+                ratios, taus = [], []
+                for r in rs:
+                    truth = r["truth_warmup"][key][i]
+                    if name in r["warm_ups"] and truth:
+                        ratios.append(r["warm_ups"][name]["value"] / truth)
+                        tau = r["warm_ups"].get(name + ".tau")
+                        if tau:
+                            taus.append(tau["value"] / r["truth_warmup"]["tau_s"])
+                ratios.sort()
+                taus.sort()
+                ratio = f"{ratios[len(ratios) // 2]:.2f} ({ratios[0]:.2f}–{ratios[-1]:.2f})" if ratios else "—"
+                tau = f"{taus[len(taus) // 2]:.2f}" if taus else "—"
+                lines.append(f"| {s} | {name} | {len(ratios)}/{len(rs)} | {ratio} | {tau} |")
+    return "\n".join(lines) if len(lines) > 2 else ""
+
+
 def runs(records):
     """One line per run: what the table counts, with the draws beside it."""
     lines = []
@@ -289,6 +318,7 @@ def main(argv=None):
     a = p.parse_args(argv)
     if a.table:
         print(table(load(a.table)))
+        print(warm_up_table(load(a.table)))
         return 0
     if a.runs:
         print(runs(load(a.runs)))
@@ -318,6 +348,7 @@ def main(argv=None):
                   f"band {record.get('band')} early [{early}] significant "
                   f"{[c['name'] for c in record.get('significant', [])]} ({record.get('seconds')} s)", flush=True)
     print(table([r for r in load(a.out) if r["scenario"] in scenarios]))
+    print(warm_up_table([r for r in load(a.out) if r["scenario"] in scenarios]))
     return 0
 
 

@@ -16,6 +16,12 @@
 namespace insdiag::engine::pipeline {
 namespace {
 
+// The turn-on bias of a warm-up's axis.
+EffectTerm TurnOnBiasTerm(const EffectTerm& warm_up) {
+  const std::string_view family = warm_up.family->sensor == Sensor::kGyro ? "gyro_turn_on_bias" : "acc_turn_on_bias";
+  return {FindEffectFamily(family), warm_up.axis, warm_up.axis};
+}
+
 std::string TimeConstantName(const EffectTerm& term) {
   return ParameterName(term.Name(), ParameterField::kTau);
 }
@@ -39,6 +45,16 @@ void AddWarmUp(const WarmUpFit& f, const AnalysisOptions& options, ErrorModel& m
   e.time_constant_s = f.time_constant_s;
   e.prior_sigma[0] = PriorSigmaAroundEstimate(f.estimate, f.std_error, options);
   model.effects.push_back(e);
+  // The bias settles to a value the run did not show before the warm-up was
+  // seen: a constant removed as the run's mean, or a drift started at zero,
+  // holds the warm-up's mean over the run, of the order of its start value.
+  const EffectTerm steady = TurnOnBiasTerm(f.term);
+  if (model.FindEffect(steady) < 0) {
+    ModelEffect constant;
+    constant.term = steady;
+    constant.prior_sigma[0] = e.prior_sigma[0];
+    model.effects.push_back(constant);
+  }
   const std::string unit(f.term.family->unit);
   // The start value is the model's state (WarmUpEstimates); τ is the scan's.
   ParameterEstimate tau;
@@ -78,42 +94,6 @@ int AddTheWarmUpsTheRunShows(const RunContext& c, ErrorModel& model, std::vector
     ++added;
   }
   return added;
-}
-
-bool RefitTheWarmUpsBesideTheDrifts(const RunContext& c, ErrorModel& model,
-                                    std::vector<ParameterEstimate>& identified, std::vector<std::string>& notes) {
-  std::vector<ModelEffect> before;
-  std::erase_if(model.effects, [&](const ModelEffect& e) {
-    if (e.term.family->kind != EffectKind::kTransient) return false;
-    before.push_back(e);
-    return true;
-  });
-  std::erase_if(identified, [&](const ParameterEstimate& p) {
-    return std::any_of(before.begin(), before.end(),
-                       [&](const ModelEffect& e) { return p.name == TimeConstantName(e.term); });
-  });
-  std::vector<std::string> found;
-  AddTheWarmUpsTheRunShows(c, model, identified, found);
-  // The same warm-ups at time constants within the grid's resolution: the drifts need not move.
-  const double resolution = WarmUpGrid{}.ratio;
-  const auto same = [&](const ModelEffect& e) {
-    const int i = model.FindEffect(e.term);
-    if (i < 0) return false;
-    const double ratio = model.effects[static_cast<size_t>(i)].time_constant_s / e.time_constant_s;
-    return ratio < resolution && ratio > 1.0 / resolution;
-  };
-  const auto transients = std::count_if(model.effects.begin(), model.effects.end(), [](const ModelEffect& e) {
-    return e.term.family->kind == EffectKind::kTransient;
-  });
-  const bool changed =
-      static_cast<size_t>(transients) != before.size() || !std::all_of(before.begin(), before.end(), same);
-  if (changed) {
-    notes.push_back(before.empty() ? "warm-ups beside the drifts identified from the whole run:"
-                                   : "the warm-ups found again beside the drifts identified from the whole run, "
-                                     "which replace those above:");
-    notes.insert(notes.end(), found.begin(), found.end());
-  }
-  return changed;
 }
 
 }  // namespace insdiag::engine::pipeline

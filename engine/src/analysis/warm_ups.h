@@ -23,13 +23,4 @@ int AddTheWarmUpsTheRunShows(const RunContext& c, ErrorModel& model, std::vector
                              std::vector<std::string>& notes);
 
 
-// The warm-ups of `model` found again beside its drifts: those fitted to the
-// Allan curve carry a warm-up's slow part as a wide drift, hide it from the
-// first scan and leave its time constant short; the drifts identified from
-// the whole run do not. Drops the warm-ups and their time constants from
-// `identified`, adds what the scan finds now; true when the set or a time
-// constant changed beyond the grid's resolution.
-bool RefitTheWarmUpsBesideTheDrifts(const RunContext& c, ErrorModel& model,
-                                    std::vector<ParameterEstimate>& identified, std::vector<std::string>& notes);
-
 }  // namespace insdiag::engine::pipeline
