@@ -16,6 +16,7 @@
 #include "analysis/model_pass.h"
 #include "analysis/run_context.h"
 #include "analysis/steps_in_raw_samples.h"
+#include "insdiag/engine/finder/warm_up_scan.h"
 #include "insdiag/engine/nav/reference_readout.h"
 #include "insdiag/engine/numerics/parallel_map.h"
 #include "insdiag/engine/plain_words.h"
@@ -93,14 +94,15 @@ absl::Status AddEffects(const BenchRun& run, const std::vector<std::string>& sel
 
 absl::Status AddEffects(const BenchRun& run, const std::vector<SelectedTerm>& selected,
                         double update_interval_s, double diffuse_prior_scale, ErrorModel& model) {
-  for (const auto& [selector, term, onset_s] : selected) {
+  for (const auto& [selector, term, onset_s, time_constant_s] : selected) {
     if (model.FindEffect(term) >= 0) continue;
     ModelEffect e;
     e.term = term;
-    if (term.family->kind == EffectKind::kTransient) {
-      return absl::InvalidArgumentError("effect '" + selector + "' is a warm-up: the analysis identifies it with its "
-                                        "time constant where the run's start shows one (docs/IDENTIFICATION.md)");
+    if (term.family->kind == EffectKind::kTransient && !time_constant_s.has_value()) {
+      return absl::InvalidArgumentError("effect '" + selector + "' is a warm-up: name its time constant, " +
+                                        term.Name() + "@SECONDS, or add it after a scan has estimated one");
     }
+    e.time_constant_s = time_constant_s.value_or(0.0);
     if (term.family->kind == EffectKind::kFault) {
       if (!onset_s.has_value()) {
         return absl::InvalidArgumentError(
@@ -143,8 +145,19 @@ absl::Status AddEffects(const BenchRun& run, const std::vector<SelectedTerm>& se
         e.second_order_alpha_per_s = 1.0 / std::max(triad.bias[term.axis].tau_s, update_interval_s);
         e.second_order_beta_rad_s = 2.0 * std::numbers::pi * e.second_order_alpha_per_s;
         break;
-      case RandomProcess::kDecayFromStart:  // refused above
+      case RandomProcess::kDecayFromStart: {
+        // A start value on the scale of a turn-on bias, settling to a steady
+        // value the model estimates beside it (finder/warm_up_scan.h).
+        e.prior_sigma[0] = scale;
+        const EffectTerm steady = SteadyValueTerm(term);
+        if (model.FindEffect(steady) < 0) {
+          ModelEffect constant;
+          constant.term = steady;
+          constant.prior_sigma[0] = scale;
+          model.effects.push_back(constant);
+        }
         break;
+      }
     }
     model.effects.push_back(e);
   }

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "insdiag/engine/analysis.h"
 #include "insdiag/engine/filter/forward_filter.h"
 #include "insdiag/engine/model/parameters.h"
 #include "scenarios.h"
@@ -30,6 +31,12 @@ sim::SimulatedRun Simulated(const std::string& spec, uint64_t seed) {
   return testing::SimulateOrDie(unit, testing::ShortTurnsProfile(120.0, kRunS), kRateHz, seed);
 }
 
+EffectTerm TermOf(const std::string& name) {
+  auto terms = ParseEffectSelector(name);
+  EXPECT_TRUE(terms.ok() && terms->size() == 1) << name;
+  return terms->front();
+}
+
 const WarmUpFit& FitOf(const std::vector<WarmUpFit>& fits, const std::string& name) {
   const auto it = std::find_if(fits.begin(), fits.end(), [&](const WarmUpFit& f) { return f.term.Name() == name; });
   EXPECT_NE(it, fits.end()) << name;
@@ -38,8 +45,9 @@ const WarmUpFit& FitOf(const std::vector<WarmUpFit>& fits, const std::string& na
 
 // With τ fixed, the scan's start value and standard error are those of a
 // filter that carries the warm-up as a state decaying with τ from a diffuse
-// prior: two derivations, the column's second-order expansion against the
-// state's exact discretisation (model_transitions.h).
+// prior, beside the axis' steady value (its turn-on bias, diffuse too): two
+// derivations, the column's second-order expansion and the partial score
+// against the states' exact discretisation (model_transitions.h).
 TEST(WarmUpScan, EqualsTheFilterThatCarriesTheWarmUpAsAState) {
   auto unit = testing::NavigationGradeUnit();
   const double start = 20.0 * unit.acc.bias[1].sigma, tau_s = 240.0;
@@ -54,6 +62,7 @@ TEST(WarmUpScan, EqualsTheFilterThatCarriesTheWarmUpAsAState) {
   ErrorModel with = model;
   ASSERT_TRUE(SetParameter("acc_warm_up.y.tau", tau_s, with).ok());
   ASSERT_TRUE(SetParameter("acc_warm_up.y.prior_sigma", 1e4 * scanned.std_error, with).ok());
+  ASSERT_TRUE(SetParameter("acc_turn_on_bias.y.prior_sigma", 1e4 * scanned.std_error, with).ok());
   auto forward = RunForwardFilter(*run, with);
   ASSERT_TRUE(forward.ok()) << forward.status();
   const StateLayout layout(with);
@@ -114,6 +123,34 @@ TEST(WarmUpScan, HealthyUnitsRarelyShowOne) {
     alarms += p < 0.01 ? 1 : 0;
   }
   EXPECT_LE(alarms, 2) << "smallest adjusted p " << smallest;
+}
+
+// The loop on a unit that warms up: the report lists the warm-up with its
+// time constant, and adding it as the candidate says (name@τ) lets the
+// model explain the start: the log-likelihood rises by at least the scan's
+// 2Δℓ less a quarter (the model re-estimates what the scan took to first
+// order), the warm-up and its axis' steady value are in model B.
+TEST(WarmUpScan, AddedAsTheCandidateSaysTheModelExplainsTheStart) {
+  auto unit = testing::NavigationGradeUnit();
+  const double start = 20.0 * unit.acc.bias[1].sigma, tau_s = 240.0;
+  const auto sim = Simulated("acc_warm_up.y=" + std::to_string(start) + "," + std::to_string(tau_s), 2);
+  AnalysisRequest request;
+  request.nominal = testing::TrueBaseModel(unit);
+  auto a = Analyze(sim.run, request, AnalysisOptions{});
+  ASSERT_TRUE(a.ok()) << a.status();
+  const auto listed = std::find_if(a->report.effect_candidates.begin(), a->report.effect_candidates.end(),
+                                   [](const EffectCandidate& c) { return c.name == "acc_warm_up.y"; });
+  ASSERT_NE(listed, a->report.effect_candidates.end());
+  ASSERT_TRUE(listed->time_constant_s.has_value());
+  EXPECT_LT(listed->p_value_holm, 0.01);
+  request.add_effects = {"acc_warm_up.y@" + std::to_string(*listed->time_constant_s)};
+  auto b = Analyze(sim.run, request, AnalysisOptions{});
+  ASSERT_TRUE(b.ok()) << b.status();
+  ASSERT_TRUE(b->report.comparison.has_value());
+  const ModelComparison& c = *b->report.comparison;
+  EXPECT_GT(2.0 * (c.log_likelihood_after - c.log_likelihood_before), 0.75 * listed->statistic);
+  EXPECT_GE(b->model.FindEffect(TermOf("acc_warm_up.y")), 0);
+  EXPECT_GE(b->model.FindEffect(TermOf("acc_turn_on_bias.y")), 0);
 }
 
 }  // namespace

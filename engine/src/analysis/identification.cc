@@ -10,7 +10,6 @@
 
 #include "analysis/model_change.h"
 #include "analysis/noise_identification.h"
-#include "analysis/warm_ups.h"
 #include "insdiag/engine/ident/correlation.h"
 #include "insdiag/engine/ident/retarget.h"
 #include "insdiag/engine/stats/distributions.h"
@@ -617,17 +616,11 @@ absl::StatusOr<Identification> IdentifyModel(const RunContext& c, const std::opt
   KeepQuantisationTheInnovationsSupport(c, QuantisationTest::kBeforeTheDrifts, base, id.identified,
                                         notes);
   RetuneUnresolvedNoise(c, allan, base, id.identified, notes);
-  AddTheWarmUpsTheRunShows(c, base, id.identified, notes);
   id.model = std::move(base);
   auto retargeted = Retarget(c, id, notes);
   if (!retargeted.ok()) return retargeted.status();
   if (!retargeted->deferred) {
     IdentifyFinalDrifts(c, *retargeted, id, notes);
-    // Drifts fitted to the Allan curve carry a warm-up's slow part as a wide
-    // drift and hide it from the first scan; the drifts identified from the
-    // whole run no longer do. The drifts are identified again beside what
-    // the second scan adds.
-    if (AddTheWarmUpsTheRunShows(c, id.model, id.identified, notes) > 0) IdentifyFinalDrifts(c, *retargeted, id, notes);
     // Drifts re-tuned from the unit's own specification keep what the scan finds beside them.
     if (retargeted->DriftsFromAClassPrior(c.a_priori))
       TestFaultsAgainstTheIdentifiedDrifts(c, *retargeted, id, notes);

@@ -518,7 +518,8 @@ Findings FindMissingEffects(const RunContext& context, const ModelPass& pass, st
   AddRawSampleFaultCandidates(faults, pass.onsets, raw_samples.changes, epochs,
                               pass.forward.scalar_updates, scale, options.finder.family_wise_alpha);
   for (EffectCandidate& c : faults) others.push_back(std::move(c));
-  if (auto warm_ups = ScanWarmUps(epochs, pass.model, WarmUpGrid{}); warm_ups.ok()) {
+  if (auto warm_ups = ScanWarmUps(epochs, pass.model, WarmUpGrid{.shortest_s = options.onset_scan.min_side_s},
+                                    &context.samples.bench_motion); warm_ups.ok()) {
     for (EffectCandidate& c : WarmUpCandidates(*warm_ups, pass.forward.scalar_updates)) others.push_back(std::move(c));
   } else if (notes != nullptr) {
     notes->push_back(absl::StrCat("no scan for warm-ups: ", warm_ups.status().message()));

@@ -5,6 +5,8 @@
 #include <limits>
 #include <optional>
 
+#include "insdiag/engine/finder/warm_up_scan.h"
+
 namespace insdiag::engine::pipeline {
 
 // The identified parameters of a model that took structures of `found`:
@@ -46,10 +48,35 @@ absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& ba
                                             : c != found.candidates.end() ? c->onset_s
                                                                           : std::nullopt;
       if (c == found.candidates.end() || !onset_s.has_value()) {
-        fallback.push_back({term.Name(), term, onset_s});
+        fallback.push_back({term.Name(), term, onset_s, std::nullopt});
         continue;
       }
       model.effects.push_back(FaultEffectAt(term, *onset_s, c->estimate, c->std_error, options));
+      continue;
+    }
+    if (term.family->kind == EffectKind::kTransient) {
+      // At the time constant named, else at the scan's, with its steady value beside it.
+      const auto c = std::find_if(
+          found.candidates.begin(), found.candidates.end(),
+          [&](const EffectCandidate& x) { return x.name == term.Name() && x.time_constant_s.has_value(); });
+      const std::optional<double> tau_s = named.time_constant_s.has_value() ? named.time_constant_s
+                                          : c != found.candidates.end()     ? c->time_constant_s
+                                                                            : std::nullopt;
+      if (c == found.candidates.end() || !tau_s.has_value()) {
+        fallback.push_back({term.Name(), term, std::nullopt, tau_s});
+        continue;
+      }
+      ModelEffect e;
+      e.term = term;
+      e.time_constant_s = *tau_s;
+      e.prior_sigma[0] = PriorSigmaAroundEstimate(c->estimate, c->std_error, options);
+      if (const EffectTerm steady = SteadyValueTerm(term); model.FindEffect(steady) < 0) {
+        ModelEffect constant;
+        constant.term = steady;
+        constant.prior_sigma[0] = e.prior_sigma[0];
+        model.effects.push_back(constant);
+      }
+      model.effects.push_back(e);
       continue;
     }
     auto structure =
@@ -86,7 +113,7 @@ absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& ba
       }
       if (placed) model.effects.push_back(e);
     }
-    if (!placed) fallback.push_back({term.Name(), term, std::nullopt});
+    if (!placed) fallback.push_back({term.Name(), term, std::nullopt, std::nullopt});
   }
   if (auto st = AddEffects(run, fallback, options.filter.update_interval_s, options.diffuse_prior_scale, model); !st.ok()) {
     return st;

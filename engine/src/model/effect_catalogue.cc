@@ -140,9 +140,10 @@ absl::StatusOr<std::vector<EffectTerm>> ParseEffectSelector(std::string_view ful
   const std::string_view selector = full_selector.substr(0, full_selector.find('@'));
   if (selector.size() != full_selector.size()) {
     const EffectFamily* f = FindEffectFamily(selector.substr(0, selector.find('.')));
-    if (f != nullptr && f->kind != EffectKind::kFault) {
+    if (f != nullptr && f->kind != EffectKind::kFault && f->kind != EffectKind::kTransient) {
       return absl::InvalidArgumentError("effect '" + std::string(full_selector) +
-                                        "': only fault effects (bias steps and ramps) take an onset '@SECONDS'");
+                                        "': only fault effects (bias steps and ramps) take an onset '@SECONDS', "
+                                        "and warm-ups a time constant");
     }
     if (auto onset = ParseOnset(full_selector); !onset.ok()) return onset.status();
   }
@@ -176,7 +177,17 @@ absl::StatusOr<std::vector<SelectedTerm>> ParseEffectSelectors(
     if (!terms.ok()) return terms.status();
     auto onset = ParseOnset(selector);
     if (!onset.ok()) return onset.status();
-    for (const EffectTerm& term : *terms) out.push_back({selector, term, *onset});
+    for (const EffectTerm& term : *terms) {
+      if (term.family->kind != EffectKind::kTransient) {
+        out.push_back({selector, term, *onset, std::nullopt});
+        continue;
+      }
+      if (onset->has_value() && !(**onset > 0.0)) {
+        return absl::InvalidArgumentError("effect '" + selector + "': a warm-up's time constant after '@' must be "
+                                          "a positive number of seconds, e.g. " + term.Name() + "@600");
+      }
+      out.push_back({selector, term, std::nullopt, *onset});
+    }
   }
   return out;
 }

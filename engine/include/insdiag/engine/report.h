@@ -72,6 +72,8 @@ struct EffectCandidate {
   // orders the look-alikes the run cannot tell apart when the raw samples show
   // neither (fault_findings.h).
   std::optional<double> size_in_drift_sigma;
+  // Warm-ups (finder/warm_up_scan.h): the time constant at the scan's best [s].
+  std::optional<double> time_constant_s;
   // Fault effects: the sensor axis's raw samples in the static segments show
   // the same change near the onset (finder/fault_findings.h, RawSampleChange).
   bool seen_in_raw_samples = false;

@@ -14,6 +14,11 @@
 // of the axis' coupling moments μ_p, with a relative error below
 // (Δ_k/τ)³/6 for an interval of Δ_k (1e-6 at one second and τ = 5 s).
 //
+// The warm-up settles to a steady value c that the run's mean, or a drift
+// started at zero, does not hold: the test is of b beside c (the axis'
+// turn-on bias column, epoch_run.h), the partial score and information
+//   s_b|c = s_b − 𝓘_bc 𝓘_cc⁻¹ s_c,   𝓘_b|c = 𝓘_bb − 𝓘_bc² / 𝓘_cc
+// (a constant alone is no warm-up), unless the model carries c already.
 // The maximum of T over the τ tried is not χ²(1): as for an onset
 // (onset_scan.h) its p-value is Davies' bound with the path length V =
 // Σ_g arccos ρ(τ_g, τ_{g+1}) the standardised score traces over the grid,
@@ -28,21 +33,28 @@
 
 #include "insdiag/engine/filter/epoch_run.h"
 #include "insdiag/engine/filter/forward_filter.h"
+#include "insdiag/engine/finder/onset_scan.h"
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/model/state_layout.h"
+#include "insdiag/engine/monitor/bench_motion.h"
 #include "insdiag/engine/report.h"
 
 namespace insdiag::engine {
 
-// The time constants tried: log-spaced by `ratio` from the shortest a
-// warm-up can have that the run's update interval resolves (a few
-// intervals) to a share of the run (longer, it is the run's drift).
+// The time constants tried: log-spaced by `ratio` from the span at the
+// run's start that the fault scan leaves to the start itself
+// (OnsetScanOptions::min_side_s: a change within it is the turn-on bias, and
+// a transient that settles within it is the start's too; the monitor does
+// not hold a bench that moves there against the unit) to the run's length.
 struct WarmUpGrid {
-  double shortest_in_update_intervals = 5.0;
+  double shortest_s = OnsetScanOptions{}.min_side_s;
   double longest_share_of_run = 1.0;
   double ratio = 1.7782794100389228;  // 10^{1/4}
 };
 std::vector<double> WarmUpTimeConstants(const EpochRun& run, const WarmUpGrid& grid);
+
+// The steady value a warm-up settles to: its axis' turn-on bias.
+EffectTerm SteadyValueTerm(const EffectTerm& warm_up);
 
 // The best time constant of one axis' warm-up.
 struct WarmUpFit {
@@ -58,10 +70,15 @@ struct WarmUpFit {
 };
 
 // The score sums of every axis' warm-up at every τ, gathered in a forward
-// pass of the model laid out by `layout` (columns: axis-major, τ within).
+// pass of the model laid out by `layout` (columns: axis-major, τ within;
+// then each axis' steady value).
+//
+// The updates of intervals in which the bench moved (monitor/bench_motion.h)
+// are no evidence: they test the bench, not the unit, as the monitor holds.
 class WarmUpScoreObserver final : public FilterObserver {
  public:
-  WarmUpScoreObserver(const StateLayout& layout, const EpochRun& run, std::vector<double> time_constants_s);
+  WarmUpScoreObserver(const StateLayout& layout, const EpochRun& run, std::vector<double> time_constants_s,
+                      const std::vector<BenchMotion>* bench_motion = nullptr);
 
   void OnPrediction(int index, const EpochInterval& epoch, const IntervalTransition& transition) override;
   void OnScalarUpdate(int channel, const ObservationRow& h, const Eigen::VectorXd& gain, double innovation,
@@ -72,6 +89,9 @@ class WarmUpScoreObserver final : public FilterObserver {
 
  private:
   std::vector<double> time_constants_s_;
+  const std::vector<BenchMotion>* bench_motion_ = nullptr;
+  bool bench_moved_ = false;  // over the interval being updated
+  std::vector<int> steady_columns_;  // per sensor axis, its turn-on bias among the run's constant columns
   double start_s_ = 0.0;
   Eigen::MatrixXd sensitivity_;  // n × columns, A
   Eigen::VectorXd score_;
@@ -87,6 +107,7 @@ std::vector<EffectCandidate> WarmUpCandidates(const std::vector<WarmUpFit>& fits
 // Every sensor axis' warm-up term the model lacks, scanned over the grid's
 // time constants by one forward pass of `model` over `run`.
 absl::StatusOr<std::vector<WarmUpFit>> ScanWarmUps(const EpochRun& run, const ErrorModel& model,
-                                                   const WarmUpGrid& grid);
+                                                   const WarmUpGrid& grid,
+                                                   const std::vector<BenchMotion>* bench_motion = nullptr);
 
 }  // namespace insdiag::engine

@@ -150,19 +150,22 @@ std::vector<ConstantParameter> AllConstantParameters();
 
 // Parses "family" (all its terms) or "family.axis" (one term). Unknown names
 // are refused with the list of valid families or axes. A fault family may
-// carry its onset, "gyro_bias_step.x@1500" (seconds of run time): see
-// ParseOnset; other families refuse one.
+// carry its onset, "gyro_bias_step.x@1500" (seconds of run time), and a
+// warm-up its time constant, "gyro_warm_up.x@600" (seconds): see ParseOnset;
+// other families refuse one.
 absl::StatusOr<std::vector<EffectTerm>> ParseEffectSelector(std::string_view selector);
 
 // The onset of a selector "name@SECONDS", nullopt when it names none;
 // INVALID_ARGUMENT when the onset does not parse as a finite number.
 absl::StatusOr<std::optional<double>> ParseOnset(std::string_view selector);
 
-// One term a selector names, with the onset the selector gives it (faults).
+// One term a selector names, with the onset the selector gives it (faults),
+// or the time constant (warm-ups: "gyro_warm_up.x@600").
 struct SelectedTerm {
   std::string selector;  // as the user wrote it, for messages
   EffectTerm term;
   std::optional<double> onset_s;
+  std::optional<double> time_constant_s;
 };
 
 // Every term of every selector, in order, with its onset; the first
