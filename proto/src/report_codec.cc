@@ -110,6 +110,7 @@ void Fill(const engine::EffectCandidate& in, v1::EffectCandidate* out) {
     out->set_onset_high_s(in.onset_high_s);
     out->set_seen_in_raw_samples(in.seen_in_raw_samples);
   }
+  if (in.time_constant_s.has_value()) out->set_time_constant_s(*in.time_constant_s);
   for (const auto& w : in.where) {
     v1::SegmentContribution* s = out->add_where();
     s->set_channel(w.channel);
@@ -276,6 +277,7 @@ engine::EffectCandidate CandidateOf(const v1::EffectCandidate& in) {
     out.onset_high_s = in.onset_high_s();
     out.seen_in_raw_samples = in.seen_in_raw_samples();
   }
+  if (in.has_time_constant_s()) out.time_constant_s = in.time_constant_s();
   return out;
 }
 

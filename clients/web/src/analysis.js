@@ -518,6 +518,8 @@ function candidatesSection(analysis, state, channelsView) {
                      c.source === 'RAW' ? h('div.small.muted',
                                             `from ${fmt(c.onsetS, 5)} ± ${
                                          fmt(c.onsetStdS, 2)} s (a ramp in the still samples)`) :
+                     c.timeConstantS !== undefined ? h('div.small.muted',
+                                            `settling from the start, τ ${fmt(c.timeConstantS, 3)} s`) :
                                           null,
           // Why a candidate is not ranked or has no p-value of its own: not excitable by this run,
           // far outside the linear range, refuted by the still samples, or left to a later model.
@@ -545,8 +547,10 @@ function candidatesSection(analysis, state, channelsView) {
                     async (event) => {
                              event.stopPropagation();
                       event.target.disabled = true;
-                      // A fault goes in at the onset the scan estimated.
-                      const added = c.onsetS !== undefined ? `${c.name}@${num(c.onsetS)}` : c.name;
+                      // A fault goes in at the onset the scan estimated, a warm-up at its time constant.
+                      const added = c.onsetS !== undefined        ? `${c.name}@${num(c.onsetS)}` :
+                                    c.timeConstantS !== undefined ? `${c.name}@${num(c.timeConstantS)}` :
+                                                                    c.name;
                       await startAnalysis(
                                  analysis.run, [...analysis.model.effects, added], analysis.model.effects,
                                  false, analysis.name);

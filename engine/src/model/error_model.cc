@@ -41,12 +41,15 @@ std::vector<std::string> ErrorModel::EffectNames() const {
   std::vector<std::string> names;
   names.reserve(effects.size());
   for (const auto& e : effects) {
-    if (e.term.family->kind != EffectKind::kFault) {
+    // A fault's name carries its onset, and a warm-up's its time constant, so
+    // that the name adds it back (effect_catalogue.h, ParseOnset).
+    if (e.term.family->kind == EffectKind::kFault) {
+      names.push_back(e.term.Name() + absl::StrFormat("@%.10g", e.onset_s));
+    } else if (e.term.family->kind == EffectKind::kTransient) {
+      names.push_back(e.term.Name() + absl::StrFormat("@%.10g", e.time_constant_s));
+    } else {
       names.push_back(e.term.Name());
-      continue;
     }
-    // A fault's name carries its onset, so that the name adds it back (effect_catalogue.h, ParseOnset).
-    names.push_back(e.term.Name() + absl::StrFormat("@%.10g", e.onset_s));
   }
   return names;
 }

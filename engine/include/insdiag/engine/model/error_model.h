@@ -114,7 +114,8 @@ struct ErrorModel {
   // Index of the effect with this term in `effects`, or −1.
   int FindEffect(const EffectTerm& term) const;
   // Names of the effects in the model, in model order ("gyro_scale_factor.z",
-  // a fault with its onset "gyro_bias_step.x@1502", …).
+  // a fault with its onset "gyro_bias_step.x@1502", a warm-up with its time
+  // constant "gyro_warm_up.x@445", …).
   std::vector<std::string> EffectNames() const;
   // Number of free parameters of the model counted by AIC/BIC: the base
   // model's noise parameters plus each effect's parameters.
