@@ -99,9 +99,10 @@ class WarmUpScoreObserver final : public FilterObserver {
   Eigen::RowVectorXd X_;
 };
 
-// The fits as missing-effect candidates (source "SCORE": the score test at
-// the best τ, its p-value Davies' bound over the τ tried): two parameters,
-// the start value and τ, for the criteria; `scalar_updates` is the N of BIC.
+// The fits as missing-effect candidates (source "SCORE"), with their
+// statistic, estimate and time constant, two parameters (the start value and
+// τ) for the criteria (`scalar_updates` is the N of BIC), but not tested:
+// the bound over τ is not calibrated on drifts identified from the same run.
 std::vector<EffectCandidate> WarmUpCandidates(const std::vector<WarmUpFit>& fits, int scalar_updates);
 
 // Every sensor axis' warm-up term the model lacks, scanned over the grid's
