@@ -248,6 +248,39 @@ test('the hidden effect is the top missing effect, and its Add button re-runs wi
   await expectLoopStep(baseAnalysisUrl, 'after-adding-the-top-candidate');
 });
 
+test('a unit that warms up: the warm-up is listed with its time constant, and its Add puts it in at that τ', {
+  skip: skipReason,
+  timeout: 2 * ANALYSIS_TIMEOUT_MS,
+}, async () => {
+  // A navigation-grade unit on a still table whose vertical accelerometer
+  // settles by 3 mg (ten drift σ) with τ 300 s after power-up.
+  const warmUpCsv = path.join(workDir, 'warm-up.csv');
+  execFileSync(env('INSDIAG_CLI'), ['simulate', warmUpCsv, '--profile', 'static', '--effect',
+    'acc_warm_up.z=3e-3,300', '--seed', '7', '--rate', '10', '--serial', 'INS-WEB-2'], { stdio: 'pipe' });
+  await page.goto(`${baseUrl}/#/`);
+  await page.locator('input[type=file]').first().setInputFiles(warmUpCsv);
+  await page.waitForURL(/#\/analyses\//, { timeout: 120_000 });
+  await page.locator('#verdict').waitFor({ timeout: ANALYSIS_TIMEOUT_MS });
+  const fromUrl = page.url();
+  const row = page.locator('#candidate-table tbody tr[data-effect="acc_warm_up.z"]');
+  await row.waitFor({ timeout: 10_000 });
+  const listed = await row.innerText();
+  const tau = Number(listed.match(/settling from the start, τ ([\d.,]+) s/)[1].replace(/,/g, ''));
+  assert.ok(tau > 100 && tau < 900, `the listed time constant ${tau} s is the settling's (300 s)`);
+  await row.getByRole('button', { name: 'Add' }).click();
+  await page.waitForURL((url) => url.toString() !== fromUrl && /#\/analyses\//.test(url.toString()));
+  const added = (createRequests.at(-1)?.model?.effects || []).find((e) => e.startsWith('acc_warm_up.z@'));
+  assert.ok(added, `the Add asked for the warm-up at its time constant: ${JSON.stringify(createRequests.at(-1))}`);
+  await page.locator('#verdict').waitFor({ timeout: ANALYSIS_TIMEOUT_MS });
+  assert.match(await page.locator('#model-effects').innerText(), /acc_warm_up\.z@/);
+  const rows = page.locator('#step-table tbody tr');
+  await rows.nth(1).waitFor();
+  const nis = async (i) => Number(await rows.nth(i).getAttribute('data-nis'));
+  assert.ok(await nis(1) < await nis(0), 'mean NIS falls when the warm-up is added');
+  await screenshot('after-adding-the-warm-up');
+  assert.deepEqual(foreignRequests, []);
+});
+
 /**
  * After an Add on the analysis at `fromUrl`: the next analysis opens, shows
  * its progress and then the step table, whose second step has the hidden
