@@ -32,7 +32,8 @@ class AnalyzeVerb final : public Verb {
     options.Positional("RUN.csv", &file_, "Bench-run file (shared/spec/bench-run-format.md)");
     options.Repeated("--add", &add_,
                      "Put a catalogue effect into the model: a term (gyro_scale_factor.z) or a family "
-                     "(gyro_scale_factor); repeatable");
+                     "(gyro_scale_factor), a fault at its onset (gyro_bias_step.x@1500), a warm-up at its time "
+                     "constant (gyro_warm_up.x@516); repeatable");
     options.Repeated("--baseline", &baseline_,
                      "Start from a model with this effect (term or family) in it: identification and the "
                      "scan run on that model; repeatable");

@@ -65,7 +65,7 @@ class SimulateVerb final : public Verb {
                    "eight hours of drift)");
     options.Repeated("--effect", &effects_,
                      "Hidden effect NAME=VALUE, e.g. gyro_scale_factor.z=1e-4 (a family applies to every axis; "
-                     "yaw harmonics SIN[,COS]; bias_rw K; bias_second_order SIGMA,TAU_S,PERIOD_S)");
+                     "yaw harmonics SIN[,COS]; bias_rw K; bias_second_order SIGMA,TAU_S,PERIOD_S; warm_up START,TAU_S; faults VALUE@ONSET_S)");
     options.Option("--seed", &seed_, "Random seed (default 1)");
     options.Option("--rate", &rate_, "Sample rate in Hz (default 50)");
     options.Option("--unit-type", &unit_type_, "Unit type whose nominal model the unit has (default INS-2000)");
