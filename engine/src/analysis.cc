@@ -16,7 +16,6 @@
 #include "analysis/model_pass.h"
 #include "analysis/run_context.h"
 #include "analysis/steps_in_raw_samples.h"
-#include "insdiag/engine/finder/warm_up_scan.h"
 #include "insdiag/engine/nav/reference_readout.h"
 #include "insdiag/engine/numerics/parallel_map.h"
 #include "insdiag/engine/plain_words.h"
@@ -102,7 +101,6 @@ absl::Status AddEffects(const BenchRun& run, const std::vector<SelectedTerm>& se
       return absl::InvalidArgumentError("effect '" + selector + "' is a warm-up: name its time constant, " +
                                         term.Name() + "@SECONDS, or add it after a scan has estimated one");
     }
-    e.time_constant_s = time_constant_s.value_or(0.0);
     if (term.family->kind == EffectKind::kFault) {
       if (!onset_s.has_value()) {
         return absl::InvalidArgumentError(
@@ -117,6 +115,11 @@ absl::Status AddEffects(const BenchRun& run, const std::vector<SelectedTerm>& se
     const double noise = triad.white_noise_density.maxCoeff() / std::sqrt(update_interval_s);
     const double drift = std::max({triad.bias[0].sigma, triad.bias[1].sigma, triad.bias[2].sigma});
     const double scale = diffuse_prior_scale * std::max(noise, drift);
+    if (term.family->kind == EffectKind::kTransient) {
+      // A start value on the scale of a turn-on bias.
+      AddWarmUp(term, *time_constant_s, scale, model);
+      continue;
+    }
     if (term.family->kind == EffectKind::kFault) {
       // A step on the scale of a turn-on bias; a ramp that reaches it over the run.
       e.prior_sigma[0] = term.family->regressor == Regressor::kRamp
@@ -145,19 +148,8 @@ absl::Status AddEffects(const BenchRun& run, const std::vector<SelectedTerm>& se
         e.second_order_alpha_per_s = 1.0 / std::max(triad.bias[term.axis].tau_s, update_interval_s);
         e.second_order_beta_rad_s = 2.0 * std::numbers::pi * e.second_order_alpha_per_s;
         break;
-      case RandomProcess::kDecayFromStart: {
-        // A start value on the scale of a turn-on bias, settling to a steady
-        // value the model estimates beside it (finder/warm_up_scan.h).
-        e.prior_sigma[0] = scale;
-        const EffectTerm steady = SteadyValueTerm(term);
-        if (model.FindEffect(steady) < 0) {
-          ModelEffect constant;
-          constant.term = steady;
-          constant.prior_sigma[0] = scale;
-          model.effects.push_back(constant);
-        }
+      case RandomProcess::kDecayFromStart:  // added above
         break;
-      }
     }
     model.effects.push_back(e);
   }

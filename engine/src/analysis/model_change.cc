@@ -5,8 +5,6 @@
 #include <limits>
 #include <optional>
 
-#include "insdiag/engine/finder/warm_up_scan.h"
-
 namespace insdiag::engine::pipeline {
 
 // The identified parameters of a model that took structures of `found`:
@@ -66,17 +64,7 @@ absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& ba
         fallback.push_back({term.Name(), term, std::nullopt, tau_s});
         continue;
       }
-      ModelEffect e;
-      e.term = term;
-      e.time_constant_s = *tau_s;
-      e.prior_sigma[0] = PriorSigmaAroundEstimate(c->estimate, c->std_error, options);
-      if (const EffectTerm steady = SteadyValueTerm(term); model.FindEffect(steady) < 0) {
-        ModelEffect constant;
-        constant.term = steady;
-        constant.prior_sigma[0] = e.prior_sigma[0];
-        model.effects.push_back(constant);
-      }
-      model.effects.push_back(e);
+      AddWarmUp(term, *tau_s, PriorSigmaAroundEstimate(c->estimate, c->std_error, options), model);
       continue;
     }
     auto structure =

@@ -21,15 +21,6 @@ std::vector<EffectTerm> WarmUpTerms() {
   return out;
 }
 
-}  // namespace
-
-EffectTerm SteadyValueTerm(const EffectTerm& warm_up) {
-  const std::string_view family = warm_up.family->sensor == Sensor::kGyro ? "gyro_turn_on_bias" : "acc_turn_on_bias";
-  return {FindEffectFamily(family), warm_up.axis, warm_up.axis};
-}
-
-namespace {
-
 // The vertex of the parabola through (x_i, y_i), i = 0, 1, 2, clamped to [x_0, x_2].
 double ParabolaVertex(double x0, double y0, double x1, double y1, double x2, double y2) {
   const double d01 = (y1 - y0) / (x1 - x0), d12 = (y2 - y1) / (x2 - x1);

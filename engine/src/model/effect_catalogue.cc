@@ -105,6 +105,11 @@ std::vector<EffectTerm> TermsOf(const EffectFamily& family) {
   return terms;
 }
 
+EffectTerm SteadyValueTerm(const EffectTerm& warm_up) {
+  const std::string_view family = warm_up.family->sensor == Sensor::kGyro ? "gyro_turn_on_bias" : "acc_turn_on_bias";
+  return {FindEffectFamily(family), warm_up.axis, warm_up.axis};
+}
+
 std::vector<EffectTerm> AllCatalogueTerms() {
   std::vector<EffectTerm> all;
   for (const auto& f : kCatalogue) {

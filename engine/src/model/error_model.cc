@@ -30,6 +30,20 @@ absl::Status ValidateErrorModel(const ErrorModel& model) {
   return absl::OkStatus();
 }
 
+void AddWarmUp(const EffectTerm& term, double time_constant_s, double prior_sigma, ErrorModel& model) {
+  if (const EffectTerm steady = SteadyValueTerm(term); model.FindEffect(steady) < 0) {
+    ModelEffect constant;
+    constant.term = steady;
+    constant.prior_sigma[0] = prior_sigma;
+    model.effects.push_back(constant);
+  }
+  ModelEffect e;
+  e.term = term;
+  e.time_constant_s = time_constant_s;
+  e.prior_sigma[0] = prior_sigma;
+  model.effects.push_back(e);
+}
+
 int ErrorModel::FindEffect(const EffectTerm& term) const {
   for (size_t k = 0; k < effects.size(); ++k) {
     if (effects[k].term == term) return static_cast<int>(k);

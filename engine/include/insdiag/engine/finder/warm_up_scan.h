@@ -53,9 +53,6 @@ struct WarmUpGrid {
 };
 std::vector<double> WarmUpTimeConstants(const EpochRun& run, const WarmUpGrid& grid);
 
-// The steady value a warm-up settles to: its axis' turn-on bias.
-EffectTerm SteadyValueTerm(const EffectTerm& warm_up);
-
 // The best time constant of one axis' warm-up.
 struct WarmUpFit {
   EffectTerm term;             // gyro_warm_up.x, acc_warm_up.z, …

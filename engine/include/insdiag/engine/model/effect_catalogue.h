@@ -136,6 +136,9 @@ struct EffectTerm {
 // Every term of a family, in canonical axis order.
 std::vector<EffectTerm> TermsOf(const EffectFamily& family);
 
+// The steady value a warm-up term (kTransient) settles to: its axis' turn-on bias.
+EffectTerm SteadyValueTerm(const EffectTerm& warm_up);
+
 // Every term of the whole catalogue.
 std::vector<EffectTerm> AllCatalogueTerms();
 

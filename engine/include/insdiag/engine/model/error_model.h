@@ -122,6 +122,12 @@ struct ErrorModel {
   int ParameterCount() const;
 };
 
+// Adds the warm-up `term` (a kTransient family) settling with
+// `time_constant_s`, its start value's prior σ `prior_sigma`, and beside it
+// the steady value it settles to (SteadyValueTerm) with the same prior,
+// unless the model has that already.
+void AddWarmUp(const EffectTerm& term, double time_constant_s, double prior_sigma, ErrorModel& model);
+
 // OK when every parameter is usable by the filter: σ ≥ 0, τ > 0 where σ > 0,
 // noise densities and quantisation ≥ 0.
 absl::Status ValidateErrorModel(const ErrorModel& model);
