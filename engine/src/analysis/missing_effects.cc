@@ -1,6 +1,5 @@
 #include "analysis/missing_effects.h"
 
-#include <absl/strings/str_cat.h>
 #include <absl/strings/str_format.h>
 
 #include <algorithm>
@@ -518,12 +517,7 @@ Findings FindMissingEffects(const RunContext& context, const ModelPass& pass, st
   AddRawSampleFaultCandidates(faults, pass.onsets, raw_samples.changes, epochs,
                               pass.forward.scalar_updates, scale, options.finder.family_wise_alpha);
   for (EffectCandidate& c : faults) others.push_back(std::move(c));
-  if (auto warm_ups = ScanWarmUps(epochs, pass.model, WarmUpGrid{.shortest_s = options.onset_scan.min_side_s},
-                                    &context.samples.bench_motion); warm_ups.ok()) {
-    for (EffectCandidate& c : WarmUpCandidates(*warm_ups, pass.forward.scalar_updates)) others.push_back(std::move(c));
-  } else if (notes != nullptr) {
-    notes->push_back(absl::StrCat("no scan for warm-ups: ", warm_ups.status().message()));
-  }
+  for (EffectCandidate& c : WarmUpCandidates(pass.warm_ups, pass.forward.scalar_updates)) others.push_back(std::move(c));
   f.candidates = MergeCandidates(std::move(ranked.terms), f.structures, std::move(others),
                                  options.finder.family_wise_alpha);
   return f;

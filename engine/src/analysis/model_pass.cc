@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "insdiag/engine/ident/correlation.h"
 #include "insdiag/engine/ident/retarget.h"
@@ -80,10 +81,15 @@ absl::StatusOr<ModelPass> RunPass(const BenchRun& run, const EpochRun& epochs, c
   pass.layout = std::make_unique<StateLayout>(pass.model);
   const int segment_epochs =
       std::max(1, static_cast<int>(std::lround(options.segment_s / options.filter.update_interval_s)));
+  // The warm-ups' scan rides the same pass as the constants' (finder/warm_up_scan.h).
+  std::optional<WarmUpScoreObserver> warm_up_scan;
   if (with_scan) {
     pass.scan = std::make_unique<ScoreTestObserver>(*pass.layout, epochs, AbsentConstantCandidates(pass.model), segment_epochs);
+    std::vector<double> taus = WarmUpTimeConstants(epochs, WarmUpGrid{.shortest_s = options.onset_scan.min_side_s});
+    if (!taus.empty()) warm_up_scan.emplace(*pass.layout, epochs, std::move(taus), &samples.bench_motion);
   }
-  auto forward = RunForwardFilter(epochs, pass.model, pass.scan.get());
+  FilterObservers observers({pass.scan.get(), warm_up_scan ? &*warm_up_scan : nullptr});
+  auto forward = RunForwardFilter(epochs, pass.model, &observers);
   if (!forward.ok()) return forward.status();
   pass.forward = *std::move(forward);
   auto smoothed = RunSmoother(pass.forward, ident::DriftSmootherOptions(pass.model, *pass.layout, pass.forward,
@@ -95,6 +101,7 @@ absl::StatusOr<ModelPass> RunPass(const BenchRun& run, const EpochRun& epochs, c
   if (with_scan) {
     pass.segment_motion = SegmentMotion(run, pass.forward, segment_epochs);
     pass.onsets = ScanOnsets(pass.forward, *pass.layout, epochs, AbsentFaultTerms(pass.model), options.onset_scan);
+    if (warm_up_scan) pass.warm_ups = warm_up_scan->Fits(pass.model);
   }
   return pass;
 }

@@ -16,6 +16,7 @@
 #include "insdiag/engine/filter/smoother.h"
 #include "insdiag/engine/finder/onset_scan.h"
 #include "insdiag/engine/finder/score_test.h"
+#include "insdiag/engine/finder/warm_up_scan.h"
 #include "insdiag/engine/model/state_layout.h"
 #include "insdiag/engine/monitor/monitoring.h"
 
@@ -31,6 +32,7 @@ struct ModelPass {
   MonitorResult monitor;
   std::unique_ptr<ScoreTestObserver> scan;
   std::vector<OnsetFit> onsets;  // the fault terms' scan, with `scan`
+  std::vector<WarmUpFit> warm_ups;  // each absent warm-up's scan over time constants, with `scan`
   std::vector<std::string> segment_motion;
   // The innovations' log-likelihood with every added constant effect at its
   // maximum-likelihood value (the profile likelihood), see ProfileCorrection.

@@ -64,6 +64,27 @@ class FilterObserver {
   virtual void OnEpochUpdated(int /*index*/, const EpochInterval& /*epoch*/) {}
 };
 
+// Several observers riding one pass, each called in turn (null ones skipped).
+class FilterObservers final : public FilterObserver {
+ public:
+  explicit FilterObservers(std::vector<FilterObserver*> observers) : observers_(std::move(observers)) {
+    std::erase(observers_, nullptr);
+  }
+  void OnPrediction(int index, const EpochInterval& epoch, const IntervalTransition& transition) override {
+    for (FilterObserver* o : observers_) o->OnPrediction(index, epoch, transition);
+  }
+  void OnScalarUpdate(int channel, const ObservationRow& h, const Eigen::VectorXd& gain, double innovation,
+                      double innovation_variance) override {
+    for (FilterObserver* o : observers_) o->OnScalarUpdate(channel, h, gain, innovation, innovation_variance);
+  }
+  void OnEpochUpdated(int index, const EpochInterval& epoch) override {
+    for (FilterObserver* o : observers_) o->OnEpochUpdated(index, epoch);
+  }
+
+ private:
+  std::vector<FilterObserver*> observers_;
+};
+
 // Upper triangle of a symmetric n×n matrix, row by row.
 int PackedSize(int n);
 void PackSymmetric(const Eigen::MatrixXd& P, double* out);
