@@ -25,7 +25,7 @@ const EffectTerm& Term(const std::string& name) {
   return *std::find_if(all.begin(), all.end(), [&](const EffectTerm& t) { return t.Name() == name; });
 }
 
-void ApplyTransition(const StateTransition& t, Eigen::MatrixXd& M) {  // dense D: independent of PropagateRows
+void ApplyTransition(const TransitionView& t, Eigen::MatrixXd& M) {  // dense D: independent of PropagateRows
   const auto m = t.B.cols();
   const Eigen::MatrixXd nav = t.A * M.topRows<9>() + t.B * M.bottomRows(m);
   const Eigen::MatrixXd D = t.D.Dense(static_cast<int>(m));

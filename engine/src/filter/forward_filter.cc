@@ -32,13 +32,39 @@ void UnpackSymmetric(const double* in, int n, Eigen::MatrixXd& P) {
   }
 }
 
+void StoredTransitions::Reserve(size_t epochs, int sensor_states) {
+  sensor_states_ = sensor_states;
+  A_.reserve(epochs);
+  B_.reserve(epochs * static_cast<size_t>(kNavigationStates * sensor_states));
+  D_of_epoch_.reserve(epochs);
+}
+
+void StoredTransitions::Append(const StateTransition& t) {
+  A_.push_back(t.A);
+  B_.insert(B_.end(), t.B.data(), t.B.data() + t.B.size());
+  if (distinct_D_.empty() || distinct_D_.back().blocks != t.D.blocks) distinct_D_.push_back(t.D);
+  D_of_epoch_.push_back(static_cast<int>(distinct_D_.size()) - 1);
+}
+
+TransitionView StoredTransitions::operator[](size_t k) const {
+  const auto per_epoch = static_cast<size_t>(kNavigationStates * sensor_states_);
+  return {A_[k], Eigen::Map<const Eigen::MatrixXd>(B_.data() + k * per_epoch, kNavigationStates, sensor_states_),
+          distinct_D_[static_cast<size_t>(D_of_epoch_[k])]};
+}
+
+double StoredTransitions::Bytes() const {
+  double bytes = static_cast<double>(sizeof(Matrix9d) * A_.size() + sizeof(double) * B_.size() +
+                                     sizeof(int) * D_of_epoch_.size());
+  for (const SensorBlocks& D : distinct_D_) bytes += static_cast<double>(sizeof(SensorBlocks::Block) * D.blocks.size());
+  return bytes;
+}
+
 double ForwardPass::BytesPerSample(size_t samples) const {
   if (samples == 0) return 0.0;
   double bytes = 8.0 * static_cast<double>(z.size() + innovation.size() + innovation_variance.size() +
                                            observation_noise.size() + x_pred.size() + x_filt.size() +
                                            P_pred.size() + P_filt.size());
-  for (const auto& t : transitions) bytes += 8.0 * (81.0 + static_cast<double>(t.B.size())) + 40.0 * t.D.blocks.size();
-  return bytes / static_cast<double>(samples);
+  return (bytes + transitions.Bytes()) / static_cast<double>(samples);
 }
 
 double UnsurveyedHeadingSigmaRad(const ErrorModel& model, const Site& site) {
@@ -131,7 +157,7 @@ void EpochFilter::Step(int index, ForwardPass* pass, FilterObserver* observer) {
   if (observer != nullptr) observer->OnPrediction(index, e, tr);
   const auto k = static_cast<Eigen::Index>(index);
   if (pass != nullptr) {
-    pass->transitions.push_back(static_cast<const StateTransition&>(tr));  // Φ alone
+    pass->transitions.Append(tr);  // Φ alone
     pass->x_pred.row(k) = x_.transpose();
     PackSymmetric(P_, pass->P_pred.row(k).data());
   }
@@ -232,7 +258,7 @@ absl::StatusOr<ForwardPass> RunForwardFilter(const EpochRun& run, const ErrorMod
   out.x_filt.resize(K, n);
   out.P_pred.resize(K, PackedSize(n));
   out.P_filt.resize(K, PackedSize(n));
-  out.transitions.reserve(run.epochs.size());
+  out.transitions.Reserve(run.epochs.size(), n - kNavigationStates);
   EpochFilter filter(model, layout, run);
   out.x0 = filter.x();
   out.P0 = filter.P();

@@ -234,7 +234,7 @@ Eigen::MatrixXd SensorBlocks::Dense(int m) const {
 
 // ---- StateTransition, IntervalTransition ------------------------------------
 
-void StateTransition::PropagateMean(Eigen::VectorXd& x) const {
+void TransitionView::PropagateMean(Eigen::VectorXd& x) const {
   // Scratch per thread, sized once per pass: this runs every epoch.
   thread_local Eigen::RowVectorXd sensors;
   const auto m = B.cols();
@@ -246,7 +246,7 @@ void StateTransition::PropagateMean(Eigen::VectorXd& x) const {
   x.tail(m) = sensors.transpose();
 }
 
-void StateTransition::PropagateRows(Eigen::MatrixXd& M) const {
+void TransitionView::PropagateRows(Eigen::MatrixXd& M) const {
   // Scratch per thread, sized once per pass: this runs every epoch of every
   // forward and backward pass.
   thread_local Eigen::MatrixXd nav, sensors_t;
@@ -258,6 +258,20 @@ void StateTransition::PropagateRows(Eigen::MatrixXd& M) const {
   M.topRows<kNavigationStates>() = nav;
   M.bottomRows(m) = sensors_t.transpose();
 }
+
+void TransitionView::WriteDense(Eigen::MatrixXd& phi) const {
+  phi.setZero();
+  phi.topLeftCorner<kNavigationStates, kNavigationStates>() = A;
+  if (B.cols() == 0) return;
+  phi.topRightCorner(9, B.cols()) = B;
+  for (const SensorBlocks::Block& b : D.blocks) {
+    phi.block(9 + b.offset, 9 + b.offset, b.size, b.size) = b.m.topLeftCorner(b.size, b.size);
+  }
+}
+
+void StateTransition::PropagateMean(Eigen::VectorXd& x) const { View().PropagateMean(x); }
+
+void StateTransition::PropagateRows(Eigen::MatrixXd& M) const { View().PropagateRows(M); }
 
 void IntervalTransition::PropagateCovariance(Eigen::MatrixXd& P) const {
   // Φ P Φᵀ in two one-sided products, then add Q. Scratch per thread: this
@@ -285,14 +299,6 @@ Eigen::MatrixXd StateTransition::DenseTransition(int n) const {
   return phi;
 }
 
-void StateTransition::WriteDense(Eigen::MatrixXd& phi) const {
-  phi.setZero();
-  phi.topLeftCorner<kNavigationStates, kNavigationStates>() = A;
-  if (B.cols() == 0) return;
-  phi.topRightCorner(9, B.cols()) = B;
-  for (const SensorBlocks::Block& b : D.blocks) {
-    phi.block(9 + b.offset, 9 + b.offset, b.size, b.size) = b.m.topLeftCorner(b.size, b.size);
-  }
-}
+void StateTransition::WriteDense(Eigen::MatrixXd& phi) const { View().WriteDense(phi); }
 
 }  // namespace insdiag::engine

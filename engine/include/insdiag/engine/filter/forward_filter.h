@@ -94,6 +94,27 @@ void UnpackSymmetric(const double* in, int n, Eigen::MatrixXd& P);
 using PackedCovariances = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
 
+// A pass's transitions Φ_k, kept for the smoother and the scans: A_k and B_k
+// in storage reserved once per pass, and each distinct D once (an interval's
+// D depends on its length alone), so that recording an epoch allocates
+// nothing.
+class StoredTransitions {
+ public:
+  void Reserve(size_t epochs, int sensor_states);
+  void Append(const StateTransition& t);
+  size_t size() const { return A_.size(); }
+  // Φ_k: from epoch k−1 (or the start) to k.
+  TransitionView operator[](size_t k) const;
+  double Bytes() const;
+
+ private:
+  int sensor_states_ = 0;
+  std::vector<Matrix9d> A_;
+  std::vector<double> B_;  // B_k column-major, 9 × m each
+  std::vector<SensorBlocks> distinct_D_;
+  std::vector<int> D_of_epoch_;
+};
+
 struct ForwardPass {
   int state_size = 0;
   // Epoch k: the update at time epoch_time_s[k] (k = 0 … K−1).
@@ -108,7 +129,7 @@ struct ForwardPass {
   Eigen::MatrixXd observation_noise;    // r
   Eigen::MatrixXd x_pred, x_filt;       // K × n, before and after the epoch's updates (before the reset)
   PackedCovariances P_pred, P_filt;     // K × PackedSize(n)
-  std::vector<StateTransition> transitions;  // transitions[k]: from epoch k−1 (or the start) to k (kept for the smoother)
+  StoredTransitions transitions;  // transitions[k]: from epoch k−1 (or the start) to k (kept for the smoother)
   Eigen::VectorXd x0;
   Eigen::MatrixXd P0;
   double log_likelihood = 0.0;

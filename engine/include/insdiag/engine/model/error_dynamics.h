@@ -76,6 +76,9 @@ class SensorBlocks {
     int offset = 0;  // among the sensor states
     int size = 1;
     Eigen::Matrix2d m = Eigen::Matrix2d::Identity();
+    bool operator==(const Block& other) const {
+      return offset == other.offset && size == other.size && m == other.m;
+    }
   };
   std::vector<Block> blocks;
 
@@ -106,6 +109,21 @@ class SensorBlocks {
   Eigen::MatrixXd Dense(int m) const;
 };
 
+// Φ = [A B; 0 D]'s products over blocks held elsewhere: a StateTransition's,
+// or a pass's stored transitions (filter/forward_filter.h).
+struct TransitionView {
+  const Matrix9d& A;
+  Eigen::Map<const Eigen::MatrixXd> B;  // 9 × m
+  const SensorBlocks& D;
+
+  // x ← Φ x.
+  void PropagateMean(Eigen::VectorXd& x) const;
+  // M ← Φ M for a matrix with n rows.
+  void PropagateRows(Eigen::MatrixXd& M) const;
+  // Φ, dense, into `phi`, already n × n (no allocation: for per-epoch loops).
+  void WriteDense(Eigen::MatrixXd& phi) const;
+};
+
 // The interval's state transition Φ = [A B; 0 D] over a layout of n = 9 + m
 // states (A the navigation block, B the sensors' coupling into it, D the
 // sensors' own blocks).
@@ -122,6 +140,7 @@ struct StateTransition {
   Eigen::MatrixXd DenseTransition(int n) const;
   // The same into `phi`, already n × n (no allocation: for per-epoch loops).
   void WriteDense(Eigen::MatrixXd& phi) const;
+  TransitionView View() const { return {A, Eigen::Map<const Eigen::MatrixXd>(B.data(), B.rows(), B.cols()), D}; }
 };
 
 // The interval's transition and noise, Φ = [A B; 0 D], Q = [Qnn Qns; Qnsᵀ Qss].
