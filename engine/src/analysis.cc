@@ -462,6 +462,20 @@ void NoteUnsurveyedHeading(const BenchRun& run, const ErrorModel& model, std::ve
       UnsurveyedHeadingSigmaRad(model, run.metadata.site), kUnsurveyedHeadingLimitRad));
 }
 
+// Model A's analysis, or model B with the warm-ups that explain A's failures
+// at the run's start (pipeline::ExplainTheStartByWarmUps).
+absl::StatusOr<Analysis> ModelAOrItsStartExplained(const pipeline::RunContext& context,
+                                                   pipeline::ScannedModelA model_a) {
+  auto settled = pipeline::ExplainTheStartByWarmUps(context, model_a);
+  if (!settled.ok()) return settled.status();
+  if (settled->has_value()) return **std::move(settled);
+  Analysis only_a;
+  only_a.report = std::move(model_a.report);
+  only_a.model = model_a.pass.model;
+  if (context.options.keep_series) pipeline::FillSeries(model_a.pass, only_a.series);
+  return only_a;
+}
+
 }  // namespace
 
 absl::StatusOr<Analysis> Analyze(const BenchRun& run, const AnalysisRequest& request,
@@ -556,11 +570,7 @@ absl::StatusOr<Analysis> Analyze(BenchRun&& input, const AnalysisRequest& reques
   } else if (!request.add_effects.empty()) {
     out = pipeline::AddAndCompare(context, request.add_effects, std::move(model_a));
   } else {
-    Analysis only_a;
-    only_a.report = std::move(model_a.report);
-    only_a.model = a->pass.model;
-    if (options.keep_series) pipeline::FillSeries(a->pass, only_a.series);
-    out = std::move(only_a);
+    out = ModelAOrItsStartExplained(context, std::move(model_a));
   }
   if (!out.ok()) return out.status();
   out->report.allan = std::move(allan);

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <numbers>
 #include <optional>
@@ -151,6 +152,38 @@ std::string BenchMotionLine(const AnalysisReport& r) {
       largest->start_s, kSensorChannelNames[static_cast<size_t>(largest->sensor_channel)]);
 }
 
+// The warm-ups the model carries (model_change.h, ExplainTheStartByWarmUps)
+// whose start value the run determines (beyond 1.96 SE), the clearest three:
+// what the unit does after power-up, which the verdict takes as the unit's
+// own. Empty when there is none.
+std::string SettlingLine(const AnalysisReport& r) {
+  constexpr double kDetermined = 1.96;  // two-sided 95 %
+  struct Settling {
+    SensorChannel channel;
+    double start_si, z, tau_s;
+  };
+  std::vector<Settling> settling;
+  for (const ParameterEstimate& p : r.identified) {
+    SensorChannel channel;
+    const double z = std::abs(p.value / p.std_error);
+    if (p.name.find("_warm_up.") == std::string::npos || !ChannelOf(p.name, channel) || !(z > kDetermined)) continue;
+    // The model names a warm-up with its time constant: "gyro_warm_up.x@516".
+    const auto named = std::find_if(r.model_effects.begin(), r.model_effects.end(),
+                                    [&](const std::string& e) { return e.starts_with(p.name + "@"); });
+    if (named == r.model_effects.end()) continue;
+    settling.push_back({channel, p.value, z, std::strtod(named->c_str() + p.name.size() + 1, nullptr)});
+  }
+  if (settling.empty()) return "";
+  std::sort(settling.begin(), settling.end(), [](const Settling& a, const Settling& b) { return a.z > b.z; });
+  settling.resize(std::min<std::size_t>(settling.size(), kMaxFindings));
+  std::vector<std::string> parts;
+  for (const Settling& s : settling) {
+    parts.push_back(absl::StrFormat("%s from %s with τ %.0f s", SensorName(s.channel), Reading(s.channel, s.start_si),
+                                    s.tau_s));
+  }
+  return "  it settles after power-up, which its model carries: " + absl::StrJoin(parts, ", ");
+}
+
 std::string VerdictLine(const AnalysisReport& r, int faults, double family_wise_alpha) {
   const std::string fit = absl::StrFormat("NIS %.3f, band %.3f–%.3f", r.nis_mean, r.nis_band_low, r.nis_band_high);
   // FAULTY without a fault effect is the moving-window test's verdict: its
@@ -251,10 +284,14 @@ std::vector<std::string> PlainWordsVerdict(const AnalysisReport& report, const R
   }
 
   std::vector<std::string> lines = {VerdictLine(report, faults, family_wise_alpha)};
-  // The verdict, its findings, where the bench moved, and what to do.
-  const std::size_t room = kPlainWordsMaxLines - 2 - (report.bench_motion.empty() ? 0 : 1);
+  // The verdict, its findings, how it settles after power-up, where the bench
+  // moved, and what to do.
+  const std::string settling = SettlingLine(report);
+  const std::size_t room =
+      kPlainWordsMaxLines - 2 - (report.bench_motion.empty() ? 0 : 1) - (settling.empty() ? 0 : 1);
   findings.resize(std::min(findings.size(), room));
   lines.insert(lines.end(), findings.begin(), findings.end());
+  if (!settling.empty()) lines.push_back(settling);
   if (!report.bench_motion.empty()) lines.push_back(BenchMotionLine(report));
   std::string to_do;
   if (faults > 0) {

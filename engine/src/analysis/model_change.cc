@@ -5,6 +5,8 @@
 #include <limits>
 #include <optional>
 
+#include "absl/strings/str_cat.h"
+
 namespace insdiag::engine::pipeline {
 
 // The identified parameters of a model that took structures of `found`:
@@ -273,6 +275,57 @@ absl::StatusOr<Analysis> AddAndCompare(const RunContext& c, const std::vector<st
   out.base_report = std::move(a.report);
   if (options.keep_series) FillSeries(*b, out.series);
   return out;
+}
+
+namespace {
+
+// Model A's failures all begin within `start_span_s` of the run's start and
+// nothing else counts against it.
+bool FailsOnlyAtItsStart(const AnalysisReport& report, double run_start_s, double start_span_s, double alpha) {
+  if (report.verdict == Verdict::kGood || report.faults.empty()) return false;
+  for (const FaultInterval& f : report.faults) {
+    if (f.start_s > run_start_s + start_span_s) return false;
+  }
+  return std::none_of(report.effect_candidates.begin(), report.effect_candidates.end(),
+                      [&](const EffectCandidate& e) { return e.SignificantAt(alpha); });
+}
+
+// The listed warm-ups worth their two parameters by the BIC, as selectors at
+// their time constants ("gyro_warm_up.x@516").
+std::vector<std::string> WarmUpsLoweringTheBic(const AnalysisReport& report) {
+  std::vector<std::string> out;
+  for (const EffectCandidate& e : report.effect_candidates) {
+    if (!e.time_constant_s.has_value() || !e.identifiable || !(e.predicted_delta_bic < 0.0)) continue;
+    out.push_back(e.name + "@" + std::to_string(std::lround(*e.time_constant_s)));
+  }
+  return out;
+}
+
+}  // namespace
+
+absl::StatusOr<std::optional<Analysis>> ExplainTheStartByWarmUps(const RunContext& c, const ScannedModelA& a) {
+  const double alpha = c.options.finder.family_wise_alpha;
+  const double run_start_s = c.run.samples.front().t_s;
+  const double start_span_s = c.options.onset_scan.min_side_s;
+  if (!FailsOnlyAtItsStart(a.report, run_start_s, start_span_s, alpha)) return std::nullopt;
+  const std::vector<std::string> warm_ups = WarmUpsLoweringTheBic(a.report);
+  if (warm_ups.empty()) return std::nullopt;
+  auto b = AddAndCompare(c, warm_ups, ScannedModelA{a.pass, a.found, a.report, a.identified, a.notes});
+  if (!b.ok()) return b.status();
+  const AnalysisReport& r = b->report;
+  const bool better = static_cast<int>(r.verdict) < static_cast<int>(a.report.verdict);
+  const bool fails_at_start = std::any_of(r.faults.begin(), r.faults.end(), [&](const FaultInterval& f) {
+    return f.start_s <= run_start_s + start_span_s;
+  });
+  const bool finding = std::any_of(r.effect_candidates.begin(), r.effect_candidates.end(),
+                                   [&](const EffectCandidate& e) { return e.SignificantAt(alpha); });
+  if (!better || fails_at_start || finding) return std::nullopt;
+  std::string carried;
+  for (const std::string& w : warm_ups) carried += (carried.empty() ? "" : ", ") + w;
+  b->report.notes.push_back(absl::StrCat(
+      "the unit settles after power-up: model A failed only within its first ", start_span_s,
+      " s, and with its warm-ups carried (", carried, ") no failure remains there and nothing is found"));
+  return std::optional<Analysis>(*std::move(b));
 }
 
 }  // namespace insdiag::engine::pipeline

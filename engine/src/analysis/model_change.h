@@ -32,6 +32,16 @@ absl::StatusOr<Analysis> Discover(const RunContext& c, ScannedModelA a);
 // Model B = A + `effects`, its report compared with A's.
 absl::StatusOr<Analysis> AddAndCompare(const RunContext& c, const std::vector<std::string>& effects, ScannedModelA a);
 
+// A unit that settles after power-up fails at its start: the filter, started
+// from the run's mean biases, meets the start's. When model A's only failures
+// begin within the span at the start that no onset can be placed in
+// (onset_scan.min_side_s), it has no finding, and warm-ups are listed that
+// lower the BIC (Schwarz, Ann. Stat. 6(2), 1978), model B carries them at
+// their listed time constants. B is the analysis when its verdict is better
+// and it has neither a failure in that span nor a finding; otherwise nullopt
+// (model A stands, with its warm-ups listed for the user to add).
+absl::StatusOr<std::optional<Analysis>> ExplainTheStartByWarmUps(const RunContext& c, const ScannedModelA& a);
+
 // The identified parameters of a model that took structures of `found`:
 // what the likelihood identified with each (a walk's K or a pair's σ₂, τ₂
 // and period, and the drift σ fitted with it) replaces the earlier estimate
