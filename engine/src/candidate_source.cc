@@ -6,7 +6,7 @@
 namespace insdiag::engine {
 namespace {
 
-constexpr std::array<std::pair<CandidateSource, std::string_view>, 5> kNames = {{
+constexpr std::array<std::pair<CandidateSource, std::string_view>, 5> kSourceNames = {{
     {CandidateSource::kScore, "SCORE"},
     {CandidateSource::kStructure, "STRUCTURE"},
     {CandidateSource::kLikelihood, "LIKELIHOOD"},
@@ -17,14 +17,14 @@ constexpr std::array<std::pair<CandidateSource, std::string_view>, 5> kNames = {
 }  // namespace
 
 std::string_view CandidateSourceName(CandidateSource source) {
-  for (const auto& [s, name] : kNames) {
+  for (const auto& [s, name] : kSourceNames) {
     if (s == source) return name;
   }
   return "";
 }
 
 std::optional<CandidateSource> CandidateSourceNamed(std::string_view name) {
-  for (const auto& [s, n] : kNames) {
+  for (const auto& [s, n] : kSourceNames) {
     if (n == name) return s;
   }
   return std::nullopt;

@@ -8,7 +8,7 @@
 namespace insdiag::engine {
 namespace {
 
-constexpr std::array<std::pair<EstimationMethod, std::string_view>, 5> kNames = {{
+constexpr std::array<std::pair<EstimationMethod, std::string_view>, 5> kMethodNames = {{
     {EstimationMethod::kAutocorrelation, "ACF"},
     {EstimationMethod::kAllan, "ALLAN"},
     {EstimationMethod::kFilterState, "FILTER"},
@@ -19,14 +19,14 @@ constexpr std::array<std::pair<EstimationMethod, std::string_view>, 5> kNames = 
 }  // namespace
 
 std::string_view MethodName(EstimationMethod method) {
-  for (const auto& [m, name] : kNames) {
+  for (const auto& [m, name] : kMethodNames) {
     if (m == method) return name;
   }
   return "";
 }
 
 std::optional<EstimationMethod> MethodNamed(std::string_view name) {
-  for (const auto& [m, text] : kNames) {
+  for (const auto& [m, text] : kMethodNames) {
     if (text == name) return m;
   }
   return std::nullopt;
