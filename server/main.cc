@@ -101,13 +101,12 @@ void AddOptions(CLI::App& app, DaemonSettings& s) {
       ->capture_default_str();
 }
 
-// The workers' settings from the command line's; false when one is out of range.
+// The workers' and the fleet views' settings from the command line's; false when one is out of range.
 bool SetWorkerOptions(DaemonSettings& s) {
   if (s.workers < 0 || s.lease_s <= 0 || s.fleet_refresh_s < 0) return false;
   s.options.workers.workers = s.workers;
   s.options.workers.lease = std::chrono::milliseconds(static_cast<long>(s.lease_s * 1000));
-  s.options.workers.fleet_refresh =
-      std::chrono::milliseconds(static_cast<long>(s.fleet_refresh_s * 1000));
+  s.options.fleet_refresh = std::chrono::milliseconds(static_cast<long>(s.fleet_refresh_s * 1000));
   return true;
 }
 

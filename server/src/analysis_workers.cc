@@ -10,7 +10,6 @@
 #include "insdiag/engine/analysis.h"
 #include "insdiag/engine/model/parameters.h"
 #include "insdiag/engine/status_macros.h"
-#include "insdiag/kb/fleet_store.h"
 #include "insdiag/kb/run_store.h"
 #include "insdiag/server/server_log.h"
 #include "insdiag/server/unit_type_models.h"
@@ -48,7 +47,6 @@ void AnalysisWorkers::Start() {
   if (started_) return;
   started_ = true;
   for (int i = 0; i < options_.workers; ++i) threads_.emplace_back([this, i] { Loop(i); });
-  threads_.emplace_back([this] { Maintain(); });
 }
 
 void AnalysisWorkers::Stop() {
@@ -96,16 +94,6 @@ void AnalysisWorkers::Loop(int index) {
       continue;
     }
     RunJob(**job, owner);
-  }
-}
-
-void AnalysisWorkers::Maintain() {
-  if (options_.fleet_refresh.count() <= 0) return;
-  kb::FleetStore fleet(pool_);
-  while (SleepFor(options_.fleet_refresh)) {
-    if (auto refreshed = fleet.RefreshViews(); !refreshed.ok()) {
-      Log(LogLevel::kError, absl::StrCat("fleet views not refreshed: ", refreshed.status().message()));
-    }
   }
 }
 

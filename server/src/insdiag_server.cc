@@ -20,6 +20,7 @@
 #include "insdiag/kb/run_store.h"
 #include "insdiag/server/access_guard.h"
 #include "insdiag/server/analysis_workers.h"
+#include "insdiag/server/fleet_view_refresher.h"
 #include "insdiag/server/grpc_services.h"
 #include "insdiag/server/metrics.h"
 #include "insdiag/server/rest_gateway.h"
@@ -36,7 +37,7 @@
 
 namespace insdiag::server {
 
-// What the gRPC server serves, and the analysis workers.
+// What the gRPC server serves, the analysis workers and the fleet views' refresh.
 struct InsdiagServer::Services {
   Services(kb::ConnectionPool& pool, const Options& options)
       : connection_pool(pool), access_store(pool), guard(access_store), access(access_store), access_grpc(access, guard), store(pool, options.read_pool),
@@ -47,7 +48,8 @@ struct InsdiagServer::Services {
         knowledge(catalogue_store, failure_record_store, diagnosis_store, unit_history_store), knowledge_grpc(knowledge, guard),
         test_reports(analyses, runs, knowledge, TestReportService::Options{}), analyses_grpc(analyses, test_reports, guard, stopping),
         fleet_store(options.read_pool != nullptr ? *options.read_pool : pool), fleet_grpc(fleet_store, guard),
-        live(runs, analyses, pool, LiveRunService::Options{}), live_grpc(live, guard, stopping), workers(pool, options.workers, &metrics) {}
+        live(runs, analyses, pool, LiveRunService::Options{}), live_grpc(live, guard, stopping), workers(pool, options.workers, &metrics),
+        fleet_refresher(pool, options.fleet_refresh) {}
   // What GET /metrics answers: the counters, then the queue and the pool as they are.
   std::string RenderMetrics() {
     Metrics::Gauges gauges;
@@ -88,6 +90,7 @@ struct InsdiagServer::Services {
   LiveRunService live;
   LiveRunServiceGrpc live_grpc;
   AnalysisWorkers workers;
+  FleetViewRefresher fleet_refresher;  // on the primary: a replica cannot refresh
 };
 
 InsdiagServer::InsdiagServer() = default;
@@ -182,6 +185,7 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
   INSDIAG_RETURN_IF_ERROR(server->StartHttp(options));
   server->StartHealthWatch(pool, options.health_poll);
   server->services_->workers.Start();
+  server->services_->fleet_refresher.Start();
   return server;
 }
 
@@ -300,6 +304,7 @@ void InsdiagServer::Shutdown() {
     if (services_) {
       services_->stopping = true;
       services_->workers.Stop();
+      services_->fleet_refresher.Stop();
     }
     // HTTP first: its handlers call into the gRPC server.
     if (http_) {

@@ -10,8 +10,7 @@
 // its queryable parts and the residual series are stored in one transaction.
 // Engine refusals (INVALID_ARGUMENT, FAILED_PRECONDITION) fail the job;
 // other errors put it back in the queue while attempts remain. Every worker
-// also reaps jobs whose lease expired (their worker died), and one thread
-// refreshes the fleet's materialised views periodically.
+// also reaps jobs whose lease expired (their worker died).
 #pragma once
 
 #include <atomic>
@@ -35,7 +34,6 @@ class AnalysisWorkers {
     int workers = 1;                                // 0: claim nothing (API only)
     std::chrono::milliseconds lease{30'000};        // a dead worker's job is taken up after this
     std::chrono::milliseconds poll{250};            // idle workers look for jobs this often
-    std::chrono::milliseconds fleet_refresh{600'000};  // 0: never refresh the fleet views
   };
 
   // `metrics` (may be null) counts each job's outcome and duration.
@@ -50,7 +48,6 @@ class AnalysisWorkers {
 
  private:
   void Loop(int index);
-  void Maintain();
   void RunJob(const kb::ClaimedJob& job, const std::string& owner);
   // RunJob's outcome: "succeeded", "failed", "retried" (queued again), "cancelled" or "lost".
   std::string_view RunJobOutcome(const kb::ClaimedJob& job, const std::string& owner);

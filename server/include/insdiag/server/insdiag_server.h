@@ -40,8 +40,11 @@ class InsdiagServer {
     int grpc_port = 50051;  // 0: any free port (see grpc_port())
     int http_port = 8080;   // 0: any free port (see http_port())
     std::size_t max_upload_samples = 20'000'000;
-    // The analysis worker pool (analysis_workers.h): workers, lease, poll, fleet-view refresh.
+    // The analysis worker pool (analysis_workers.h): workers, lease, poll.
     AnalysisWorkers::Options workers;
+    // How often the fleet statistics' materialised views are refreshed
+    // (fleet_view_refresher.h); 0: never.
+    std::chrono::milliseconds fleet_refresh{600'000};
     std::chrono::milliseconds watch_poll{250};
     // Upsert the built-in unit types and failure modes at start.
     bool seed_knowledge_base = true;
