@@ -3,28 +3,64 @@
 #include <absl/strings/str_cat.h>
 #include <unistd.h>
 
-#include <exception>
-
 #include "insdiag/api/report_codec.h"
-#include "insdiag/api/resource_names.h"
-#include "insdiag/engine/analysis.h"
-#include "insdiag/engine/model/parameters.h"
 #include "insdiag/engine/status_macros.h"
-#include "insdiag/kb/run_store.h"
+#include "insdiag/server/analysis_job.h"
 #include "insdiag/server/server_log.h"
-#include "insdiag/server/unit_type_models.h"
 
 namespace insdiag::server {
 namespace {
 
 constexpr std::chrono::milliseconds kProgressInterval{300};
 
-// Engine refusals are properties of the input: retrying cannot help.
-bool Retryable(const absl::Status& status) {
-  return status.code() != absl::StatusCode::kInvalidArgument &&
-         status.code() != absl::StatusCode::kFailedPrecondition && status.code() != absl::StatusCode::kNotFound &&
-         status.code() != absl::StatusCode::kOutOfRange;
-}
+// Renews a job's lease every lease/3 on a thread of its own until Finish(),
+// and keeps what the store says of the lease: lost (expired and reaped) or
+// asked to cancel. Progress updates report the same and are noted too.
+class LeaseHeartbeat {
+ public:
+  LeaseHeartbeat(kb::AnalysisStore& store, const std::string& analysis_id, const std::string& owner,
+                 std::chrono::milliseconds lease)
+      : store_(store), analysis_id_(analysis_id), owner_(owner), lease_(lease), thread_([this] { Run(); }) {}
+  ~LeaseHeartbeat() { Finish(); }
+  LeaseHeartbeat(const LeaseHeartbeat&) = delete;
+  LeaseHeartbeat& operator=(const LeaseHeartbeat&) = delete;
+
+  void Note(const kb::LeaseState& state) {
+    if (!state.owned) lost_ = true;
+    if (state.cancel_requested) cancelled_ = true;
+  }
+  bool lost() const { return lost_; }
+  bool cancelled() const { return cancelled_; }
+
+  void Finish() {
+    {
+      std::lock_guard lock(mutex_);
+      done_ = true;
+    }
+    wake_.notify_all();
+    if (thread_.joinable()) thread_.join();
+  }
+
+ private:
+  void Run() {
+    std::unique_lock lock(mutex_);
+    while (!wake_.wait_for(lock, lease_ / 3, [this] { return done_; })) {
+      // The database away: try again at the next beat; the lease may still hold.
+      if (auto state = store_.Heartbeat(analysis_id_, owner_, lease_); state.ok()) Note(*state);
+    }
+  }
+
+  kb::AnalysisStore& store_;
+  const std::string& analysis_id_;
+  const std::string& owner_;
+  const std::chrono::milliseconds lease_;
+  std::atomic<bool> lost_{false};
+  std::atomic<bool> cancelled_{false};
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool done_ = false;
+  std::thread thread_;  // last: it starts once everything above is built
+};
 
 std::string HostName() {
   char name[256] = {};
@@ -105,96 +141,26 @@ void AnalysisWorkers::RunJob(const kb::ClaimedJob& job, const std::string& owner
 }
 
 std::string_view AnalysisWorkers::RunJobOutcome(const kb::ClaimedJob& job, const std::string& owner) {
-  std::atomic<bool> cancelled{false};
-  std::atomic<bool> lost{false};
-  std::atomic<bool> done{false};
-  std::mutex heartbeat_mutex;
-  std::condition_variable heartbeat_wake;
-  std::thread heartbeat([&] {
-    std::unique_lock lock(heartbeat_mutex);
-    while (!heartbeat_wake.wait_for(lock, options_.lease / 3, [&] { return done.load(); })) {
-      auto state = store_.Heartbeat(job.analysis_id, owner, options_.lease);
-      if (!state.ok()) continue;  // the database is away: try again; the lease may still hold
-      if (!state->owned) lost = true;
-      if (state->cancel_requested) cancelled = true;
-    }
-  });
-  const auto finish_heartbeat = [&] {
-    {
-      std::lock_guard lock(heartbeat_mutex);
-      done = true;
-    }
-    heartbeat_wake.notify_all();
-    heartbeat.join();
+  LeaseHeartbeat heartbeat(store_, job.analysis_id, owner, options_.lease);
+  auto last_progress = std::chrono::steady_clock::now() - kProgressInterval;
+  auto progress = [&](double fraction, std::string_view stage) {
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_progress < kProgressInterval && fraction < 1.0) return;
+    last_progress = now;
+    auto state = store_.UpdateProgress(job.analysis_id, owner, fraction, std::string(stage), options_.lease);
+    if (state.ok()) heartbeat.Note(*state);
   };
-
-  absl::Status status = [&]() -> absl::Status {
-    kb::RunStore runs(pool_);
-    INSDIAG_ASSIGN_OR_RETURN(auto stored, runs.Get(job.run_id));
-    engine::BenchRun run;
-    run.metadata = stored.metadata;
-    run.has_temperature = stored.has_temperature;
-    run.samples.reserve(static_cast<std::size_t>(stored.sample_count));
-    if (auto read = runs.ReadSamples(job.run_id, 1 << 16,
-                                     [&](std::span<const engine::ImuSample> samples) {
-                                       run.samples.insert(run.samples.end(), samples.begin(), samples.end());
-                                       return true;
-                                     });
-        !read.ok()) {
-      return read;
-    }
-    engine::AnalysisRequest request;
-    const v1::ErrorModel& asked = job.spec.model();
-    request.add_effects.assign(asked.effects().begin(), asked.effects().end());
-    request.baseline_effects.assign(job.spec.baseline().effects().begin(), job.spec.baseline().effects().end());
-    request.discover = job.spec.discover();
-    if (!job.spec.base_analysis().empty()) {
-      INSDIAG_ASSIGN_OR_RETURN(
-          auto base_id, api::ResourceId(job.spec.base_analysis(), api::kAnalyses, "base_analysis"));
-      INSDIAG_ASSIGN_OR_RETURN(auto base, store_.Get(base_id, true));
-      INSDIAG_ASSIGN_OR_RETURN(auto identified, api::IdentifiedModelOf(base.report()));
-      request.identified_base = std::move(identified);
-    }
-    auto nominal = NominalModelOfUnitType(pool_, run.metadata.unit_type);
-    if (!nominal.ok()) return nominal.status();
-    request.nominal = *std::move(nominal);
-    if (asked.parameters_size() > 0) {
-      if (!request.nominal) request.nominal = engine::ErrorModel{};
-      for (const auto& p : asked.parameters()) {
-        if (auto set = engine::SetParameter(p.name(), p.value(), *request.nominal); !set.ok()) {
-          return absl::InvalidArgumentError(absl::StrCat("analysis.model.parameters: ", set.message()));
-        }
-      }
-    }
-    engine::AnalysisOptions options;
-    options.keep_series = true;
-    auto last_progress = std::chrono::steady_clock::now() - kProgressInterval;
-    options.progress = [&](double fraction, std::string_view stage) {
-      const auto now = std::chrono::steady_clock::now();
-      if (now - last_progress < kProgressInterval && fraction < 1.0) return;
-      last_progress = now;
-      auto state = store_.UpdateProgress(job.analysis_id, owner, fraction, std::string(stage), options_.lease);
-      if (state.ok()) {
-        if (!state->owned) lost = true;
-        if (state->cancel_requested) cancelled = true;
-      }
-    };
-    absl::StatusOr<engine::Analysis> analysis = absl::InternalError("the engine did not run");
-    try {
-      analysis = engine::Analyze(std::move(run), request, options);
-    } catch (const std::exception& e) {
-      return absl::InternalError(absl::StrCat("the engine failed: ", e.what()));
-    }
-    if (!analysis.ok()) return analysis.status();
-    if (lost || cancelled) return absl::OkStatus();
-    return store_.Complete(job.analysis_id, owner, api::ToProto(analysis->report, analysis->model), &analysis->series);
+  const absl::Status status = [&]() -> absl::Status {
+    INSDIAG_ASSIGN_OR_RETURN(engine::Analysis analysis, RunAnalysisJob(pool_, job.run_id, job.spec, progress));
+    if (heartbeat.lost() || heartbeat.cancelled()) return absl::OkStatus();
+    return store_.Complete(job.analysis_id, owner, api::ToProto(analysis.report, analysis.model), &analysis.series);
   }();
-  finish_heartbeat();
-  if (lost) {
+  heartbeat.Finish();
+  if (heartbeat.lost()) {
     Log(LogLevel::kWarning, absl::StrCat(owner, ": lost the lease of analyses/", job.analysis_id, "; result dropped"));
     return "lost";
   }
-  if (cancelled) {
+  if (heartbeat.cancelled()) {
     (void)store_.MarkCancelled(job.analysis_id, owner);
     return "cancelled";
   }

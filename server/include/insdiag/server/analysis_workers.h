@@ -2,14 +2,13 @@
 // analyses (kb/analysis_store.h), run the engine on them and store the
 // results. Any number of insdiagd processes on one database share the queue.
 //
-// Per job: load the run and its samples; the a-priori model is the run's
-// datasheet, completed from the run's unit type's nominal model in the
-// knowledge base (else the engine identifies); engine::Analyze with a
-// progress callback (throttled into the row); a heartbeat renews the lease
-// every lease/3 and notices cancellation or a lost lease; then the report,
-// its queryable parts and the residual series are stored in one transaction.
-// Engine refusals (INVALID_ARGUMENT, FAILED_PRECONDITION) fail the job;
-// other errors put it back in the queue while attempts remain. Every worker
+// Per job: what the job does (analysis_job.h: the run read back, the
+// engine's request from the job's spec, the engine run) with its progress
+// throttled into the row, while a heartbeat renews the lease every lease/3
+// and notices cancellation or a lost lease; then the report, its queryable
+// parts and the residual series are stored in one transaction. Refusals of
+// the input fail the job; other errors put it back in the queue while
+// attempts remain (Retryable). Every worker
 // also reaps jobs whose lease expired (their worker died).
 #pragma once
 

@@ -1,0 +1,42 @@
+// What one queued analysis does, apart from the worker pool that claims it
+// (analysis_workers.h) and keeps its lease: the job's spec mapped to the
+// engine's request, the stored run read back, the engine run, and which
+// failures are worth another attempt.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include <absl/status/status.h>
+#include <absl/status/statusor.h>
+
+#include "insdiag/engine/analysis.h"
+#include "insdiag/kb/connection_pool.h"
+#include "insdiag/v1/analyses.pb.h"
+
+namespace insdiag::server {
+
+// The engine's request for `spec`: the effects to add (model B) or the loop
+// to walk, model A's baseline effects, and the a-priori model: the unit
+// type's nominal model (`nominal`, none when the knowledge base has none)
+// with the spec's parameter overrides on it. `base_report`: the earlier
+// analysis `spec.base_analysis` names, whose identified model is model A
+// (null when it names none). INVALID_ARGUMENT names the spec's field.
+absl::StatusOr<engine::AnalysisRequest> EngineRequestOf(const v1::AnalysisSpec& spec,
+                                                         std::optional<engine::ErrorModel> nominal,
+                                                         const v1::AnalysisReport* base_report);
+
+// An error that another attempt may not meet: anything but the engine's and
+// the store's refusals of their input, which are properties of the input.
+bool Retryable(const absl::Status& status);
+
+// The job's analysis: the run `run_id` read from the store, the base
+// analysis and the unit type's nominal model looked up, the engine run on
+// them. `progress` receives the engine's stages.
+absl::StatusOr<engine::Analysis> RunAnalysisJob(kb::ConnectionPool& pool, const std::string& run_id,
+                                                const v1::AnalysisSpec& spec,
+                                                std::function<void(double, std::string_view)> progress);
+
+}  // namespace insdiag::server
