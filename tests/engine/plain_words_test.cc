@@ -179,5 +179,31 @@ TEST(PlainWords, AWholeRunOutsideItsBandSaysWhichWayAndWhere) {
   EXPECT_THAT(lines[1], HasSubstr("vibration or motion"));
 }
 
+// A unit whose model carries its warm-ups (the analysis took them to
+// explain a failing start): the plain words say how it settles after
+// power-up, in °/h or mg with each time constant, naming only the start
+// values the run determines beyond 1.96 SE, and the verdict stays GOOD.
+TEST(PlainWords, AWarmUpTheModelCarriesIsSaidHowTheUnitSettles) {
+  AnalysisReport good;
+  good.verdict = Verdict::kGood;
+  good.model_effects = {"gyro_turn_on_bias.x", "gyro_warm_up.x@516", "acc_turn_on_bias.y", "acc_warm_up.y@518"};
+  ParameterEstimate gyro;
+  gyro.name = "gyro_warm_up.x";
+  gyro.value = 186.0 * kRadSPerDegH;
+  gyro.std_error = 30.0 * kRadSPerDegH;
+  ParameterEstimate acc;  // 0.7 mg ± 36 mg: the run does not tell it
+  acc.name = "acc_warm_up.y";
+  acc.value = -0.007;
+  acc.std_error = 0.36;
+  good.identified = {gyro, acc};
+  const std::vector<std::string> lines = PlainWordsVerdict(good, StepRun(), 0.01);
+  ASSERT_EQ(lines.size(), 3u);
+  EXPECT_THAT(lines[0], StartsWith("GOOD: "));
+  EXPECT_THAT(lines[1], HasSubstr("settles after power-up"));
+  EXPECT_THAT(lines[1], HasSubstr("gyro x from 186 °/h with τ 516 s"));
+  EXPECT_THAT(lines[1], ::testing::Not(HasSubstr("accelerometer")));
+  EXPECT_THAT(lines[2], HasSubstr("nothing"));
+}
+
 }  // namespace
 }  // namespace insdiag::engine
