@@ -5,12 +5,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <limits>
 #include <numbers>
 #include <optional>
 #include <set>
 
+#include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/model/parameter_key.h"
 #include "insdiag/engine/monitor/monitoring.h"
 
@@ -163,15 +163,22 @@ std::string SettlingLine(const AnalysisReport& r) {
     double start_si, z, tau_s;
   };
   std::vector<Settling> settling;
-  for (const ParameterEstimate& p : r.identified) {
+  // The model names a warm-up with its time constant, "gyro_warm_up.x@516"
+  // (ErrorModel::EffectNames); its start value is among the estimates.
+  for (const std::string& effect : r.model_effects) {
+    const auto terms = ParseEffectSelector(effect);
+    const auto tau_s = ParseOnset(effect);
+    if (!terms.ok() || terms->size() != 1 || terms->front().family->kind != EffectKind::kTransient ||
+        !tau_s.ok() || !tau_s->has_value()) {
+      continue;
+    }
+    const std::string name = terms->front().Name();
+    const auto start = std::find_if(r.identified.begin(), r.identified.end(),
+                                    [&](const ParameterEstimate& p) { return p.name == name; });
     SensorChannel channel;
-    const double z = std::abs(p.value / p.std_error);
-    if (p.name.find("_warm_up.") == std::string::npos || !ChannelOf(p.name, channel) || !(z > kDetermined)) continue;
-    // The model names a warm-up with its time constant: "gyro_warm_up.x@516".
-    const auto named = std::find_if(r.model_effects.begin(), r.model_effects.end(),
-                                    [&](const std::string& e) { return e.starts_with(p.name + "@"); });
-    if (named == r.model_effects.end()) continue;
-    settling.push_back({channel, p.value, z, std::strtod(named->c_str() + p.name.size() + 1, nullptr)});
+    if (start == r.identified.end() || !ChannelOf(name, channel)) continue;
+    const double z = std::abs(start->value / start->std_error);
+    if (z > kDetermined) settling.push_back({channel, start->value, z, **tau_s});
   }
   if (settling.empty()) return "";
   std::sort(settling.begin(), settling.end(), [](const Settling& a, const Settling& b) { return a.z > b.z; });

@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_join.h"
 
 namespace insdiag::engine::pipeline {
 
@@ -27,6 +28,29 @@ std::vector<ParameterEstimate> WithTakenStructures(std::vector<ParameterEstimate
   return identified;
 }
 
+namespace {
+
+// Where a term placed in time is put: at the value the selector names (a
+// fault's onset, a warm-up's time constant), else at the scan's; `candidate`
+// is the scan's estimate of the term that states such a value, null if none.
+struct ScannedPlacement {
+  const EffectCandidate* candidate = nullptr;
+  std::optional<double> value;
+};
+
+ScannedPlacement PlacementOf(const Findings& found, const EffectTerm& term,
+                             std::optional<double> EffectCandidate::*placed_at, std::optional<double> named) {
+  const auto c = std::find_if(found.candidates.begin(), found.candidates.end(), [&](const EffectCandidate& x) {
+    return x.name == term.Name() && (x.*placed_at).has_value();
+  });
+  ScannedPlacement out;
+  if (c != found.candidates.end()) out.candidate = &*c;
+  out.value = named.has_value() ? named : out.candidate != nullptr ? out.candidate->*placed_at : std::nullopt;
+  return out;
+}
+
+}  // namespace
+
 // Model `base` plus `selectors`, with priors from what model A's scan and
 // correlation processing found; anything not found gets the diffuse prior.
 absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& base,
@@ -41,32 +65,23 @@ absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& ba
     if (model.FindEffect(term) >= 0) continue;
     if (term.family->kind == EffectKind::kFault) {
       // At the onset named, else at the scan's: prior wide against the scan's estimate.
-      const auto c = std::find_if(
-          found.candidates.begin(), found.candidates.end(),
-          [&](const EffectCandidate& x) { return x.name == term.Name() && x.onset_s.has_value(); });
-      const std::optional<double> onset_s = named.onset_s.has_value()     ? named.onset_s
-                                            : c != found.candidates.end() ? c->onset_s
-                                                                          : std::nullopt;
-      if (c == found.candidates.end() || !onset_s.has_value()) {
-        fallback.push_back({term.Name(), term, onset_s, std::nullopt});
+      const ScannedPlacement at = PlacementOf(found, term, &EffectCandidate::onset_s, named.onset_s);
+      if (at.candidate == nullptr || !at.value.has_value()) {
+        fallback.push_back({term.Name(), term, at.value, std::nullopt});
         continue;
       }
-      model.effects.push_back(FaultEffectAt(term, *onset_s, c->estimate, c->std_error, options));
+      model.effects.push_back(FaultEffectAt(term, *at.value, at.candidate->estimate, at.candidate->std_error, options));
       continue;
     }
     if (term.family->kind == EffectKind::kTransient) {
       // At the time constant named, else at the scan's, with its steady value beside it.
-      const auto c = std::find_if(
-          found.candidates.begin(), found.candidates.end(),
-          [&](const EffectCandidate& x) { return x.name == term.Name() && x.time_constant_s.has_value(); });
-      const std::optional<double> tau_s = named.time_constant_s.has_value() ? named.time_constant_s
-                                          : c != found.candidates.end()     ? c->time_constant_s
-                                                                            : std::nullopt;
-      if (c == found.candidates.end() || !tau_s.has_value()) {
-        fallback.push_back({term.Name(), term, std::nullopt, tau_s});
+      const ScannedPlacement at = PlacementOf(found, term, &EffectCandidate::time_constant_s, named.time_constant_s);
+      if (at.candidate == nullptr || !at.value.has_value()) {
+        fallback.push_back({term.Name(), term, std::nullopt, at.value});
         continue;
       }
-      AddWarmUp(term, *tau_s, PriorSigmaAroundEstimate(c->estimate, c->std_error, options), model);
+      AddWarmUp(term, *at.value, PriorSigmaAroundEstimate(at.candidate->estimate, at.candidate->std_error, options),
+                model);
       continue;
     }
     auto structure =
@@ -279,15 +294,28 @@ absl::StatusOr<Analysis> AddAndCompare(const RunContext& c, const std::vector<st
 
 namespace {
 
-// Model A's failures all begin within `start_span_s` of the run's start and
-// nothing else counts against it.
-bool FailsOnlyAtItsStart(const AnalysisReport& report, double run_start_s, double start_span_s, double alpha) {
-  if (report.verdict == Verdict::kGood || report.faults.empty()) return false;
-  for (const FaultInterval& f : report.faults) {
-    if (f.start_s > run_start_s + start_span_s) return false;
-  }
-  return std::none_of(report.effect_candidates.begin(), report.effect_candidates.end(),
-                      [&](const EffectCandidate& e) { return e.SignificantAt(alpha); });
+// A candidate of the report stands as a finding at family-wise `alpha`.
+bool HasFinding(const AnalysisReport& report, double alpha) {
+  return std::any_of(report.effect_candidates.begin(), report.effect_candidates.end(),
+                     [&](const EffectCandidate& e) { return e.SignificantAt(alpha); });
+}
+
+// A failure interval of the report begins no later than `until_s`.
+bool FailsBy(const AnalysisReport& report, double until_s) {
+  return std::any_of(report.faults.begin(), report.faults.end(),
+                     [&](const FaultInterval& f) { return f.start_s <= until_s; });
+}
+
+// A failure interval of the report begins after `after_s`.
+bool FailsAfter(const AnalysisReport& report, double after_s) {
+  return std::any_of(report.faults.begin(), report.faults.end(),
+                     [&](const FaultInterval& f) { return f.start_s > after_s; });
+}
+
+// The model fails, only by `until_s`, and nothing else counts against it.
+bool FailsOnlyBy(const AnalysisReport& report, double until_s, double alpha) {
+  return report.verdict != Verdict::kGood && FailsBy(report, until_s) && !FailsAfter(report, until_s) &&
+         !HasFinding(report, alpha);
 }
 
 // The listed warm-ups worth their two parameters by the BIC, as selectors at
@@ -305,26 +333,20 @@ std::vector<std::string> WarmUpsLoweringTheBic(const AnalysisReport& report) {
 
 absl::StatusOr<std::optional<Analysis>> ExplainTheStartByWarmUps(const RunContext& c, const ScannedModelA& a) {
   const double alpha = c.options.finder.family_wise_alpha;
-  const double run_start_s = c.run.samples.front().t_s;
   const double start_span_s = c.options.onset_scan.min_side_s;
-  if (!FailsOnlyAtItsStart(a.report, run_start_s, start_span_s, alpha)) return std::nullopt;
+  const double start_span_end_s = c.run.samples.front().t_s + start_span_s;
+  if (!FailsOnlyBy(a.report, start_span_end_s, alpha)) return std::nullopt;
   const std::vector<std::string> warm_ups = WarmUpsLoweringTheBic(a.report);
   if (warm_ups.empty()) return std::nullopt;
   auto b = AddAndCompare(c, warm_ups, ScannedModelA{a.pass, a.found, a.report, a.identified, a.notes});
   if (!b.ok()) return b.status();
   const AnalysisReport& r = b->report;
   const bool better = static_cast<int>(r.verdict) < static_cast<int>(a.report.verdict);
-  const bool fails_at_start = std::any_of(r.faults.begin(), r.faults.end(), [&](const FaultInterval& f) {
-    return f.start_s <= run_start_s + start_span_s;
-  });
-  const bool finding = std::any_of(r.effect_candidates.begin(), r.effect_candidates.end(),
-                                   [&](const EffectCandidate& e) { return e.SignificantAt(alpha); });
-  if (!better || fails_at_start || finding) return std::nullopt;
-  std::string carried;
-  for (const std::string& w : warm_ups) carried += (carried.empty() ? "" : ", ") + w;
+  if (!better || FailsBy(r, start_span_end_s) || HasFinding(r, alpha)) return std::nullopt;
   b->report.notes.push_back(absl::StrCat(
       "the unit settles after power-up: model A failed only within its first ", start_span_s,
-      " s, and with its warm-ups carried (", carried, ") no failure remains there and nothing is found"));
+      " s, and with its warm-ups carried (", absl::StrJoin(warm_ups, ", "),
+      ") no failure remains there and nothing is found"));
   return std::optional<Analysis>(*std::move(b));
 }
 
