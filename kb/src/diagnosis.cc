@@ -11,6 +11,7 @@
 #include <numbers>
 #include <set>
 
+#include "densities.h"
 #include "failure_mode_data.h"
 #include "insdiag/api/json.h"
 #include "insdiag/api/resource_names.h"
@@ -18,29 +19,17 @@
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/model/parameter_key.h"
 #include "insdiag/engine/stats/distributions.h"
+#include "joint_evidence.h"
 
 namespace insdiag::kb {
 namespace {
 
+using internal::LogAddExp;
+using internal::LogBroad;
+using internal::LogNormalPdf;
+
 constexpr char kHealthy[] = "healthy";
 constexpr char kUnknown[] = "unknown";
-
-double LogNormalPdf(double x, double mean, double variance) {
-  const double d = x - mean;
-  return -0.5 * (std::log(2.0 * std::numbers::pi * variance) + d * d / variance);
-}
-
-double LogCauchyPdf(double x, double scale) {
-  return -std::log(std::numbers::pi * scale * (1.0 + (x / scale) * (x / scale)));
-}
-
-// log(e^a + e^b) without overflow.
-double LogAddExp(double a, double b) {
-  if (a == -INFINITY) return b;
-  if (b == -INFINITY) return a;
-  const double m = std::max(a, b);
-  return m + std::log(std::exp(a - m) + std::exp(b - m));
-}
 
 std::string ScaleName(Scale scale) {
   switch (scale) {
@@ -51,15 +40,6 @@ std::string ScaleName(Scale scale) {
   return "";
 }
 
-double BroadScale(Scale scale, const v1::DiagnosisSettings& s) {
-  switch (scale) {
-    case Scale::kLogRatio: return s.broad_log_ratio();
-    case Scale::kTolerance: return s.broad_tolerance();
-    case Scale::kZ: return s.broad_z();
-  }
-  return s.broad_z();
-}
-
 double HealthyLog(const EvidenceTerm& t) {
   return LogNormalPdf(t.x, 0.0, t.healthy_sd * t.healthy_sd + t.measurement_sd * t.measurement_sd);
 }
@@ -68,9 +48,7 @@ double HealthyLog(const EvidenceTerm& t) {
 // the hypothesis does not name.
 double ContaminatedLog(const EvidenceTerm& t, double eps, const v1::DiagnosisSettings& s) {
   if (eps <= 0.0) return HealthyLog(t);
-  const double b = BroadScale(t.scale, s);
-  return LogAddExp(std::log1p(-eps) + HealthyLog(t),
-                   std::log(eps) + LogCauchyPdf(t.x, std::sqrt(b * b + t.measurement_sd * t.measurement_sd)));
+  return LogAddExp(std::log1p(-eps) + HealthyLog(t), std::log(eps) + LogBroad(t, s));
 }
 
 // The sensor axis a term reads: "gyro_bias_gm.x.sigma" → "gyro.x"; a
@@ -448,6 +426,81 @@ void AddStructuresTheLoopAdded(const v1::AnalysisReport& report,
   }
 }
 
+// Pairs a drift's σ and τ where the report identified them together and
+// both stand against a nominal on the log-ratio scale; a term whose partner
+// is missing is weighed alone.
+void PairJointlyIdentified(const v1::AnalysisReport& report, Evidence& evidence) {
+  std::map<std::string, std::size_t> index;
+  for (std::size_t i = 0; i < evidence.terms.size(); ++i) index.emplace(evidence.terms[i].name, i);
+  for (const auto& p : report.identified()) {
+    if (!p.has_log_correlation() || !(std::abs(p.log_correlation()) < 1.0)) continue;
+    const auto a = index.find(p.name());
+    const auto b = index.find(p.jointly_with());
+    if (a == index.end() || b == index.end() || a->second == b->second) continue;
+    EvidenceTerm& first = evidence.terms[a->second];
+    EvidenceTerm& second = evidence.terms[b->second];
+    if (first.scale != Scale::kLogRatio || second.scale != Scale::kLogRatio) continue;
+    first.jointly_with = second.name;
+    second.jointly_with = first.name;
+    first.measurement_correlation = second.measurement_correlation = p.log_correlation();
+  }
+}
+
+bool IsDriftSigma(const std::string& name) {
+  const std::optional<engine::ParameterKey> key = engine::ParseParameterKey(name);
+  return key && absl::EndsWith(key->family, "_bias_gm") && key->field == engine::ParameterField::kSigma;
+}
+
+// Each drift's distance from nominal as one test: d² = xᵀ(diag(s_h²) + M)⁻¹x,
+// χ² on two degrees of freedom for σ and τ together, on one for σ alone,
+// Holm-adjusted over the unit's drifts (Holm, Scand. J. Statist. 6(2),
+// 1979). A drift that wandered along the ridge is as far as its
+// well-measured direction says, not as its two wide marginals do.
+void TestDrifts(const v1::DiagnosisSettings& settings, Evidence& evidence) {
+  struct DriftTest {
+    std::size_t sigma = 0;
+    std::optional<std::size_t> tau;
+    double statistic = 0.0;
+    int dof = 1;
+    double p_value = 1.0;
+  };
+  std::map<std::string, std::size_t> index;
+  for (std::size_t i = 0; i < evidence.terms.size(); ++i) index.emplace(evidence.terms[i].name, i);
+  std::vector<DriftTest> tests;
+  for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
+    const EvidenceTerm& t = evidence.terms[i];
+    if (!IsDriftSigma(t.name) || t.scale != Scale::kLogRatio || !t.trend_of.empty()) continue;
+    DriftTest test;
+    test.sigma = i;
+    if (const auto partner = index.find(t.jointly_with); !t.jointly_with.empty() && partner != index.end()) {
+      test.tau = partner->second;
+      test.statistic = internal::PairDistanceSquared(t, evidence.terms[partner->second], t.measurement_correlation);
+      test.dof = 2;
+    } else {
+      test.statistic = t.x * t.x / (t.healthy_sd * t.healthy_sd + t.measurement_sd * t.measurement_sd);
+    }
+    test.p_value = engine::stats::ChiSquareSurvival(test.statistic, test.dof);
+    tests.push_back(test);
+  }
+  std::vector<std::size_t> order(tests.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return tests[a].p_value < tests[b].p_value; });
+  double running = 0.0;
+  for (std::size_t rank = 0; rank < order.size(); ++rank) {
+    DriftTest& test = tests[order[rank]];
+    running = std::max(running, std::min(1.0, static_cast<double>(order.size() - rank) * test.p_value));
+    const bool significant = running < settings.significance_level();
+    EvidenceTerm& sigma = evidence.terms[test.sigma];
+    sigma.significant = significant;
+    absl::StrAppend(&sigma.line,
+                    absl::StrFormat("; the drift %s: χ²%s = %.3g from nominal, Holm p = %.2g over %d drifts%s",
+                                    test.tau ? "with its τ" : "alone", test.dof == 2 ? "₂" : "₁",
+                                    test.statistic, running, static_cast<int>(order.size()),
+                                    significant ? ", significant" : ""));
+    if (test.tau) evidence.terms[*test.tau].significant = significant;
+  }
+}
+
 }  // namespace
 
 Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType& unit_type,
@@ -480,6 +533,8 @@ Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType
                     v1::IdentifiedParameter::Method_Name(p.method()) , ")");
     evidence.terms.push_back(std::move(t));
   }
+  PairJointlyIdentified(report, evidence);
+  TestDrifts(settings, evidence);
   AddStructuresTheLoopAdded(report, settings, seen, evidence);
   int significant_candidates = 0;
   for (const auto& c : report.effect_candidates()) {
@@ -601,23 +656,99 @@ struct Contamination {
   std::vector<double> knock_on, incidental;
 };
 
+// The index of each term's partner when two are weighed jointly
+// (EvidenceTerm::jointly_with), else nullopt.
+std::vector<std::optional<std::size_t>> PartnersOf(const Evidence& evidence) {
+  std::map<std::string, std::size_t> index;
+  for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
+    if (evidence.terms[i].trend_of.empty()) index.emplace(evidence.terms[i].name, i);
+  }
+  std::vector<std::optional<std::size_t>> out(evidence.terms.size());
+  for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
+    const EvidenceTerm& t = evidence.terms[i];
+    if (t.jointly_with.empty() || !t.trend_of.empty()) continue;
+    if (const auto it = index.find(t.jointly_with); it != index.end() && it->second != i) out[i] = it->second;
+  }
+  return out;
+}
+
+// A pair's joint density, its first term read by `first_reader` and its
+// second by `second_reader` (nullptr: left at healthy, off with probability
+// `off_probability`).
+double LogPair(const Evidence& evidence, std::size_t first, std::size_t second,
+               const v1::Signature* first_reader, const v1::Signature* second_reader, double off_probability,
+               const v1::DiagnosisSettings& settings) {
+  return internal::LogPairDensity({internal::PairComponent{&evidence.terms[first], first_reader, off_probability},
+                                   internal::PairComponent{&evidence.terms[second], second_reader, off_probability}},
+                                  evidence.terms[first].measurement_correlation, settings);
+}
+
+// Per term, its log-likelihood under `healthy` and off as a knock-on or by
+// chance; a pair's joint value stands at its first term, 0 at its second.
+struct TermLikelihoods {
+  std::vector<double> healthy;
+  Contamination contamination;
+};
+
+TermLikelihoods LikelihoodsOfTerms(const Evidence& evidence,
+                                   const std::vector<std::optional<std::size_t>>& partners,
+                                   const v1::DiagnosisSettings& settings) {
+  TermLikelihoods out;
+  for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
+    const EvidenceTerm& t = evidence.terms[i];
+    if (!partners[i]) {
+      out.healthy.push_back(HealthyLog(t));
+      out.contamination.knock_on.push_back(ContaminatedLog(t, settings.contamination(), settings));
+      out.contamination.incidental.push_back(ContaminatedLog(t, settings.incidental_contamination(), settings));
+    } else if (*partners[i] > i) {
+      const std::size_t j = *partners[i];
+      out.healthy.push_back(LogPair(evidence, i, j, nullptr, nullptr, 0.0, settings));
+      out.contamination.knock_on.push_back(LogPair(evidence, i, j, nullptr, nullptr, settings.contamination(), settings));
+      out.contamination.incidental.push_back(
+          LogPair(evidence, i, j, nullptr, nullptr, settings.incidental_contamination(), settings));
+    } else {
+      out.healthy.push_back(0.0);
+      out.contamination.knock_on.push_back(0.0);
+      out.contamination.incidental.push_back(0.0);
+    }
+  }
+  return out;
+}
+
 // A failure mode's log-likelihood: its signature's terms, its trends, and
 // every other term as a knock-on on the sensor axes the signature reads and
 // as incidental elsewhere, so that a mode's odds against `healthy` do not
 // fall with the number of terms it does not read.
 double ModeLogLikelihood(const v1::FailureMode& mode, const Evidence& evidence,
+                         const std::vector<std::optional<std::size_t>>& partners,
                          const Contamination& contamination, const v1::DiagnosisSettings& settings,
                          std::vector<std::string>& trend_lines) {
   std::vector<bool> covered(evidence.terms.size(), false);
+  std::vector<const v1::Signature*> pair_readers(evidence.terms.size(), nullptr);
   std::set<std::string> own_sensor_axes;  // the sensor axes the signature reads
   double ll = 0.0;
   for (const auto& term : mode.signature()) {
-    const auto members = Members(term, evidence);
-    for (const auto* t : members) {
-      covered[static_cast<std::size_t>(t - evidence.terms.data())] = true;
+    std::vector<const EvidenceTerm*> alone;
+    for (const auto* t : Members(term, evidence)) {
+      const auto i = static_cast<std::size_t>(t - evidence.terms.data());
+      covered[i] = true;
       own_sensor_axes.insert(SensorAxisOf(t->name));
+      if (partners[i]) {
+        pair_readers[i] = &term;
+      } else {
+        alone.push_back(t);
+      }
     }
-    if (!members.empty()) ll += LogSignatureTerm(term, members, settings);
+    if (!alone.empty()) ll += LogSignatureTerm(term, alone, settings);
+  }
+  // A pair the signature reads in part or whole: jointly, its unread term
+  // off as a knock-on (it is on the same sensor axis).
+  for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
+    if (!partners[i] || *partners[i] < i) continue;
+    const std::size_t j = *partners[i];
+    if (pair_readers[i] == nullptr && pair_readers[j] == nullptr) continue;
+    covered[i] = covered[j] = true;
+    ll += LogPair(evidence, i, j, pair_readers[i], pair_readers[j], settings.contamination(), settings);
   }
   ll += LogTrendTerms(mode, evidence, settings, covered, trend_lines);
   for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
@@ -693,14 +824,13 @@ v1::Diagnosis Diagnose(const Evidence& evidence, std::span<const v1::FailureMode
                    {absl::StrCat("verdict ", v1::AnalysisReport::Verdict_Name(evidence.verdict),
                                  ", and no identified parameter or effect candidate to say why")}));
   } else {
+    const std::vector<std::optional<std::size_t>> partners = PartnersOf(evidence);
+    const TermLikelihoods terms = LikelihoodsOfTerms(evidence, partners, settings);
+    const Contamination& contamination = terms.contamination;
     double healthy_ll = 0.0, unknown_ll = 0.0;
-    Contamination contamination;
-    for (const auto& t : evidence.terms) {
-      healthy_ll += HealthyLog(t);
-      contamination.knock_on.push_back(ContaminatedLog(t, settings.contamination(), settings));
-      contamination.incidental.push_back(
-          ContaminatedLog(t, settings.incidental_contamination(), settings));
-      unknown_ll += contamination.knock_on.back();
+    for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
+      healthy_ll += terms.healthy[i];
+      unknown_ll += contamination.knock_on[i];
     }
     std::vector<std::string> healthy_lines = {absl::StrCat(evidence.terms.size(), " evidence terms; furthest from nominal:")};
     for (auto& l : LargestDeviations(evidence, 3)) healthy_lines.push_back(std::move(l));
@@ -712,7 +842,7 @@ v1::Diagnosis Diagnose(const Evidence& evidence, std::span<const v1::FailureMode
     for (std::size_t m = 0; m < modes.size(); ++m) {
       const auto& mode = modes[m];
       std::vector<std::string> trend_lines;
-      const double ll = ModeLogLikelihood(mode, evidence, contamination, settings, trend_lines);
+      const double ll = ModeLogLikelihood(mode, evidence, partners, contamination, settings, trend_lines);
       const double p = total_rate > 0 ? (1.0 - u) * p_any * rates[m] / total_rate : 0.0;
       std::vector<std::string> lines = ModeEvidenceLines(mode, evidence);
       for (auto& line : trend_lines) lines.push_back(std::move(line));

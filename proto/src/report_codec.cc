@@ -143,6 +143,10 @@ void Fill(const engine::ParameterEstimate& p, v1::IdentifiedParameter* ip) {
   const Observability o = ObservabilityOf(p);
   ip->set_observability(o.verdict);
   ip->set_observability_note(o.note);
+  if (!p.jointly_with.empty() && std::isfinite(p.log_correlation)) {
+    ip->set_jointly_with(p.jointly_with);
+    ip->set_log_correlation(p.log_correlation);
+  }
 }
 
 // Unit of a correlation fit's parameter for a drift of `sensor`.
@@ -303,6 +307,10 @@ absl::StatusOr<engine::IdentifiedModel> IdentifiedModelOf(const v1::AnalysisRepo
     e.method = MethodOf(p.method());
     e.unit = p.unit();
     if (p.has_a_priori()) e.a_priori = p.a_priori();
+    if (p.has_log_correlation()) {
+      e.jointly_with = p.jointly_with();
+      e.log_correlation = p.log_correlation();
+    }
     out.identified.push_back(std::move(e));
   }
   for (const v1::EffectCandidate& c : report.effect_candidates()) {

@@ -8,6 +8,12 @@ duration:
 | turns     | 300 s still, then yaw turns at 10 °/s: +360°, −360°, +90° with holds of 60–120 s |
 | positions | a multi-position drift test: 16 static positions, roll 0/90/180/270° × yaw 0/90/180/270°, 200 s each, moves at 10 °/s |
 | mixed     | holds, a 15 °/s yaw turn, roll tilts to 90°, 180°, 360°, a 20 °/s yaw turn back |
+| tilted    | a long drift test at oblique positions: roll 35°, 125°, 215°, 305° × yaw 45°, 165°, 285°, 600 s each, moves at 5 °/s |
+| tilted-turns | a long drift test turning while tilted: at roll 30°, 150°, 240° and 330° the table turns about yaw for 1200 s at 3 °/s, then back at 3 °/s for 600 s, with 120-s holds between |
+
+The last two are drift tests of several hours: every sensor axis sees a
+changing share of gravity and of the earth's rate, none of them at the
+right angles of `positions`.
 
 Rate changes are instantaneous (the rate steps within one sample) unless a
 ramp acceleration is given; with `jitter_s` every hold is lengthened by a
@@ -29,6 +35,11 @@ PROFILES = {
     "mixed": [("hold", 120.0), ("yaw", 360.0, 15.0), ("hold", 60.0), ("roll", 90.0, 10.0), ("hold", 200.0),
               ("yaw", 180.0, 10.0), ("hold", 200.0), ("roll", 90.0, 10.0), ("hold", 200.0), ("roll", 180.0, 10.0),
               ("yaw", -540.0, 20.0), ("hold", 120.0)],
+    "tilted": [step for roll in (35.0, 125.0, 215.0, 305.0) for yaw in (45.0, 165.0, 285.0)
+               for step in (("to", yaw, roll, 5.0), ("hold", 600.0))],
+    "tilted-turns": [step for roll in (30.0, 150.0, 240.0, 330.0)
+                     for step in (("to", 0.0, roll, 5.0), ("hold", 120.0), ("yaw", 3600.0, 3.0), ("hold", 120.0),
+                                  ("yaw", -1800.0, 3.0), ("hold", 120.0))],
 }
 
 

@@ -51,9 +51,9 @@ double ProbabilityOf(const v1::Diagnosis& d, const std::string& mode) {
 }
 
 TEST(FailureModeCatalogueTest,
-     Ins2000HasSeventeenArguedModesWhoseTermsTheUnitTypeOrTheEngineNames) {
+     Ins2000HasTwentyArguedModesWhoseTermsTheUnitTypeOrTheEngineNames) {
   const auto& f = Ins2000();
-  EXPECT_EQ(f.catalogue.modes_size(), 17);
+  EXPECT_EQ(f.catalogue.modes_size(), 20);
   std::set<std::string> roles;
   std::set<std::string> nominal;
   for (const auto& p : f.unit_type.nominal()) nominal.insert(p.name());
@@ -135,9 +135,10 @@ TEST(DiagnosisTest, ArwUpOnAllGyrosAndVrwUpOnAllAccelerometersPointsAtThePowerSu
 
 TEST(DiagnosisTest, EvidenceNoModeExplainsGoesToUnknown) {
   v1::AnalysisReport report = NominalReport();
-  // A drift correlation time 20× nominal with its σ unchanged: no mode predicts it.
-  auto* tau = Identified(report, "gyro_bias_gm.z.tau");
-  tau->set_value(20.0 * Nominal("gyro_bias_gm.z.tau"));
+  // An accelerometer drift's correlation time 20× nominal with its σ
+  // unchanged: no mode predicts it.
+  auto* tau = Identified(report, "acc_bias_gm.z.tau");
+  tau->set_value(20.0 * Nominal("acc_bias_gm.z.tau"));
   tau->set_std_error(0.1 * tau->value());
   EXPECT_EQ(DiagnoseReport(report).candidates(0).module(), "unknown") << DiagnoseReport(report).DebugString();
 }

@@ -62,12 +62,14 @@ absl::StatusOr<DriftLikelihoodResult> FitDrifts(const EpochRun& run, const Error
     const auto i = static_cast<Eigen::Index>(j);
     const bool with_tau = j + 1 < parameters.size() && parameters[j + 1].kind == Kind::kTau;
     std::vector<double> log_se;
+    double log_correlation = std::numeric_limits<double>::quiet_NaN();
     if (with_tau) {
       auto information = em.BlockInformation(*theta, {i, i + 1}, l0);
       if (!information.ok()) return information.status();
       if ((*information)(0, 0) > 0.0 && information->determinant() > 0.0) {
         const Eigen::MatrixXd covariance = information->inverse();
         log_se = {std::sqrt(covariance(0, 0)), std::sqrt(covariance(1, 1))};
+        log_correlation = covariance(0, 1) / (log_se[0] * log_se[1]);
       }
     } else {
       auto information = em.Information(*theta, i, l0);
@@ -87,6 +89,10 @@ absl::StatusOr<DriftLikelihoodResult> FitDrifts(const EpochRun& run, const Error
         continue;
       }
       out.identified.push_back(EstimateOf(q, std::exp((*theta)[i + static_cast<Eigen::Index>(k)]), log_se[k], a_priori));
+      if (with_tau) {
+        out.identified.back().jointly_with = NameOf(parameters[j + 1 - k]);
+        out.identified.back().log_correlation = log_correlation;
+      }
     }
   }
   if (any_flat) {

@@ -43,6 +43,13 @@ struct ParameterEstimate {
   // of the two (NaN and empty for other methods).
   double max_correlation = std::numeric_limits<double>::quiet_NaN();
   std::string correlated_with;
+  // A drift's σ and τ identified together by likelihood: the other one's
+  // name, and the correlation of the two estimates' log errors from their
+  // joint observed information. Over a run of a few correlation times the
+  // two trade along a ridge (ρ near +1), so only the pair says how far the
+  // drift is from another (NaN and empty for every other estimate).
+  std::string jointly_with;
+  double log_correlation = std::numeric_limits<double>::quiet_NaN();
 };
 
 // A filter-estimated parameter is observable from the run when the run's

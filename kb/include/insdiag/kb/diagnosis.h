@@ -14,6 +14,14 @@
 // Healthy units scatter with s_h: `healthy_tolerance_sd`, a fraction of
 // ln(1 + T/v₀) on the log scale, `healthy_z_sd` for standard scores.
 //
+// A drift's σ and τ identified together are one bivariate term: their
+// measurement errors correlate (ρ, the report's log_correlation), and every
+// hypothesis's density of the two is jointly Gaussian with the measurement
+// covariance added (kb/src/joint_evidence.h, docs/DIAGNOSIS.md). Each drift's
+// distance from nominal, d² = xᵀ(diag(s_h²) + M)⁻¹x, is tested as χ² on its
+// degrees of freedom (2 for a pair, 1 for σ alone), Holm-adjusted over the
+// unit's drifts; the result is the drift's `significant` and its line.
+//
 // Likelihood of the evidence under a hypothesis (products over terms):
 //   healthy  every term  N(x; 0, s_h² + s_m²)
 //   unknown  every term  (1 − ε) N(x; 0, s_h² + s_m²) + ε Cauchy(x; 0, √(b² + s_m²))
@@ -74,6 +82,12 @@ struct EvidenceTerm {
   // A trend term (unit_history.h): the parameter whose slope over the unit's
   // own runs x is the standard score of. Empty for every other term.
   std::string trend_of;
+  // A term measured together with another (a drift's σ with its τ): the
+  // other's name, and the correlation of the two measurement errors; the
+  // pair is weighed jointly (kb/src/joint_evidence.h). Empty for a term
+  // measured alone.
+  std::string jointly_with;
+  double measurement_correlation = 0.0;
 };
 
 struct Evidence {

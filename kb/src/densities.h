@@ -1,0 +1,46 @@
+// The diagnosis's one-dimensional densities in log form (docs/DIAGNOSIS.md).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "insdiag/kb/diagnosis.h"
+
+namespace insdiag::kb::internal {
+
+inline double LogNormalPdf(double x, double mean, double variance) {
+  const double d = x - mean;
+  return -0.5 * (std::log(2.0 * std::numbers::pi * variance) + d * d / variance);
+}
+
+inline double LogCauchyPdf(double x, double scale) {
+  return -std::log(std::numbers::pi * scale * (1.0 + (x / scale) * (x / scale)));
+}
+
+// log(e^a + e^b) without overflow.
+inline double LogAddExp(double a, double b) {
+  if (a == -INFINITY) return b;
+  if (b == -INFINITY) return a;
+  const double m = std::max(a, b);
+  return m + std::log(std::exp(a - m) + std::exp(b - m));
+}
+
+// The broad density's scale b of a term's scale: where evidence that is off
+// for a reason no hypothesis names may lie.
+inline double BroadScale(Scale scale, const v1::DiagnosisSettings& s) {
+  switch (scale) {
+    case Scale::kLogRatio: return s.broad_log_ratio();
+    case Scale::kTolerance: return s.broad_tolerance();
+    case Scale::kZ: return s.broad_z();
+  }
+  return s.broad_z();
+}
+
+// The broad density of a term: Cauchy(x; 0, √(b² + s_m²)).
+inline double LogBroad(const EvidenceTerm& t, const v1::DiagnosisSettings& s) {
+  const double b = BroadScale(t.scale, s);
+  return LogCauchyPdf(t.x, std::sqrt(b * b + t.measurement_sd * t.measurement_sd));
+}
+
+}  // namespace insdiag::kb::internal
