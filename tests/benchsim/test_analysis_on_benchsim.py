@@ -590,3 +590,62 @@ class RealLikeUnitsThatWarmUp(unittest.TestCase):
                 if carried is not None and truth[i]:  # a gyro's start value to within a factor of two of the truth
                     self.assertGreater(carried["value"] / truth[i], 0.5, (seed, axis, carried))
                     self.assertLess(carried["value"] / truth[i], 2.0, (seed, axis, carried))
+
+
+DIAGNOSE_REPORT = os.environ.get("INSDIAG_DIAGNOSE_REPORT",
+                                 os.path.join(ROOT, "build", "tools", "insdiag-diagnose-report"))
+
+
+def split_into_files(run_csv, parts, directory):
+    """The run as `parts` files of consecutive samples, each with the run's
+    header, as a bench that records one file per stretch of a long test writes them."""
+    with open(run_csv) as f:
+        lines = f.readlines()
+    metadata = [line for line in lines if line.startswith("#")]
+    header = lines[len(metadata)]
+    rows = lines[len(metadata) + 1:]
+    paths = []
+    for i in range(parts):
+        path = os.path.join(directory, f"part{i}.csv")
+        with open(path, "w") as f:
+            f.writelines(metadata + [header] + rows[i * len(rows) // parts:(i + 1) * len(rows) // parts])
+        paths.append(path)
+    return paths
+
+
+@unittest.skipUnless(os.path.exists(CLI) and os.path.exists(DIAGNOSE_REPORT),
+                     f"no insdiag CLI at {CLI} or no insdiag-diagnose-report at {DIAGNOSE_REPORT}")
+class LongDriftTestSplitOverFiles(unittest.TestCase):
+    """A four-hour drift test of an INS-2000 unit without a datasheet, on the
+    independent simulator's `tilted-turns` profile (turning about the vertical
+    while tilted), recorded as three files, joined (`insdiag join`), analysed
+    as the server does for a diagnosis (`--discover`) and diagnosed against the
+    built-in failure modes. A unit whose x gyro drift σ has tripled is named
+    first by its gyro; its healthy twin (the same seed) is healthy. The rates
+    over seeds, sensors, profiles and rates are scripts/drift_test_sweep.py's
+    (docs/FAULT_SCENARIOS.md, "Long drift tests"): one case of each claim here."""
+
+    def diagnose_joined(self, fault):
+        with tempfile.TemporaryDirectory() as d:
+            run = os.path.join(d, "run.csv")
+            args = ["--out", run, "--preset", "nav", "--profile", "tilted-turns", "--rate-hz", "10",
+                    "--duration", "14400", "--seed", "7101", "--datasheet", "no", "--unit-type", "INS-2000"]
+            if benchsim.main(args + (["--fault", fault] if fault else [])) != 0:
+                raise RuntimeError("the simulator refused its arguments")
+            joined = os.path.join(d, "joined.csv")
+            subprocess.run([CLI, "join", *split_into_files(run, 3, d), "-o", joined], check=True,
+                           capture_output=True, text=True)
+            report = os.path.join(d, "joined.json")
+            with open(report, "w") as out:
+                subprocess.run([CLI, "analyze", joined, "--discover", "--json", "--unit-type", "INS-2000"],
+                               stdout=out, check=True, text=True)
+            done = subprocess.run([DIAGNOSE_REPORT, report], capture_output=True, text=True, check=True)
+        diagnosis = json.loads(done.stdout)
+        ranked = sorted(diagnosis["candidates"], key=lambda c: -c.get("probability", 0.0))
+        return [(c["module"], round(c.get("probability", 0.0), 3)) for c in ranked[:3]]
+
+    def test_a_tripled_gyro_drift_is_named_by_its_gyro_and_its_healthy_twin_is_healthy(self):
+        faulty = self.diagnose_joined("gyro_bias_gm.x.sigma*3")
+        self.assertEqual(faulty[0][0], "gyro.x", faulty)
+        healthy = self.diagnose_joined(None)
+        self.assertEqual(healthy[0][0], "healthy", healthy)
