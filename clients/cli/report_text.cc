@@ -44,11 +44,11 @@ void PrintReport(const engine::AnalysisReport& r, std::ostream& out) {
   out << "run: " << r.samples << " samples over " << absl::StrFormat("%.0f", r.duration_s)
       << " s at " << absl::StrFormat("%.4g", r.sample_rate_hz) << " Hz, updates every "
       << absl::StrFormat("%.3g", r.update_interval_s) << " s\n";
-  out << "NIS mean " << absl::StrFormat("%.4f", r.nis_mean) << " (band "
+  out << "NIS mean " << absl::StrFormat("%.4f", r.fit.nis_mean) << " (band "
       << absl::StrFormat("%.4f", r.nis_band_low) << " … "
       << absl::StrFormat("%.4f", r.nis_band_high) << "), log-likelihood "
-      << absl::StrFormat("%.2f", r.log_likelihood) << ", AIC " << absl::StrFormat("%.2f", r.aic)
-      << ", BIC " << absl::StrFormat("%.2f", r.bic) << "\n\n";
+      << absl::StrFormat("%.2f", r.fit.log_likelihood) << ", AIC " << absl::StrFormat("%.2f", r.fit.aic)
+      << ", BIC " << absl::StrFormat("%.2f", r.fit.bic) << "\n\n";
   out << "channel   unit   residual RMS   fit %   NIS mean   whiteness p   β²>γ²\n";
   for (const auto& c : r.channels) {
     out << absl::StrFormat("%-8s  %-5s  %12.4g  %6.1f  %9.4f  %12.3g  %5.1f%%\n", c.name, c.unit,
@@ -127,11 +127,11 @@ void PrintReport(const engine::AnalysisReport& r, std::ostream& out) {
     out << "\nbefore → after (added:";
     for (const auto& e : c.added_effects) out << " " << e;
     out << ")\n";
-    out << "  NIS mean " << absl::StrFormat("%.4f", c.nis_mean_before) << " → "
-        << absl::StrFormat("%.4f", c.nis_mean_after) << ", AIC "
-        << absl::StrFormat("%.1f", c.aic_before) << " → " << absl::StrFormat("%.1f", c.aic_after)
-        << ", BIC " << absl::StrFormat("%.1f", c.bic_before) << " → "
-        << absl::StrFormat("%.1f", c.bic_after) << "\n";
+    out << "  NIS mean " << absl::StrFormat("%.4f", c.before.nis_mean) << " → "
+        << absl::StrFormat("%.4f", c.after.nis_mean) << ", AIC "
+        << absl::StrFormat("%.1f", c.before.aic) << " → " << absl::StrFormat("%.1f", c.after.aic)
+        << ", BIC " << absl::StrFormat("%.1f", c.before.bic) << " → "
+        << absl::StrFormat("%.1f", c.after.bic) << "\n";
     out << "  2ΔlogL realised " << absl::StrFormat("%.1f", c.realized_lr)
         << ", predicted by the score test " << absl::StrFormat("%.1f", c.predicted_lr) << "\n";
     out << "  channel   RMS before → after        NIS before → after   whiteness p before → after\n";
@@ -151,7 +151,7 @@ void PrintReport(const engine::AnalysisReport& r, std::ostream& out) {
       out << "  step " << d.step << ": + " << d.effect << " (statistic "
           << absl::StrFormat("%.1f", d.statistic) << ", Holm p "
           << absl::StrFormat("%.2g", d.p_value) << ")  → NIS "
-          << absl::StrFormat("%.4f", d.nis_mean) << ", AIC " << absl::StrFormat("%.1f", d.aic)
+          << absl::StrFormat("%.4f", d.fit.nis_mean) << ", AIC " << absl::StrFormat("%.1f", d.fit.aic)
           << "\n";
       for (const auto& e : d.estimates) {
         out << "      " << e.name << " = " << absl::StrFormat("%.4g", e.value) << " ± "

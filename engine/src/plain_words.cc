@@ -135,7 +135,7 @@ std::string ChannelsOutsideTheirBand(const AnalysisReport& r, double family_wise
   return absl::StrJoin(parts, ", ");
 }
 
-bool QuieterThanItsModel(const AnalysisReport& r) { return r.nis_mean < r.nis_band_low; }
+bool QuieterThanItsModel(const AnalysisReport& r) { return r.fit.nis_mean < r.nis_band_low; }
 
 // Where the bench moved, how long in all, and by which channel's samples.
 std::string BenchMotionLine(const AnalysisReport& r) {
@@ -192,7 +192,7 @@ std::string SettlingLine(const AnalysisReport& r) {
 }
 
 std::string VerdictLine(const AnalysisReport& r, int faults, double family_wise_alpha) {
-  const std::string fit = absl::StrFormat("NIS %.3f, band %.3f–%.3f", r.nis_mean, r.nis_band_low, r.nis_band_high);
+  const std::string fit = absl::StrFormat("NIS %.3f, band %.3f–%.3f", r.fit.nis_mean, r.nis_band_low, r.nis_band_high);
   // FAULTY without a fault effect is the moving-window test's verdict: its
   // gradual intervals say where.
   const Misfit misfit = MisfitOf(r, /*gradual_only=*/r.verdict == Verdict::kFaulty);

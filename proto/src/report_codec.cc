@@ -208,6 +208,16 @@ void Fill(const engine::ident::AllanChannel& ch, const std::vector<engine::Param
   }
 }
 
+// The fit's four figures into a message that carries them as its own
+// fields (a report, a discovery step).
+template <typename Message>
+void FillFit(const engine::FitMetrics& fit, Message* out) {
+  out->set_nis_mean(fit.nis_mean);
+  out->set_log_likelihood(fit.log_likelihood);
+  out->set_aic(fit.aic);
+  out->set_bic(fit.bic);
+}
+
 void Fill(const engine::ModelComparison& in, v1::ModelComparison* out) {
   for (const auto& e : in.baseline_effects) out->add_baseline_effects(e);
   for (const auto& e : in.added_effects) out->add_added_effects(e);
@@ -223,14 +233,14 @@ void Fill(const engine::ModelComparison& in, v1::ModelComparison* out) {
     cc->set_fit_percent_before(c.before.fit_percent);
     cc->set_fit_percent_after(c.after.fit_percent);
   }
-  out->set_nis_mean_before(in.nis_mean_before);
-  out->set_nis_mean_after(in.nis_mean_after);
-  out->set_log_likelihood_before(in.log_likelihood_before);
-  out->set_log_likelihood_after(in.log_likelihood_after);
-  out->set_aic_before(in.aic_before);
-  out->set_aic_after(in.aic_after);
-  out->set_bic_before(in.bic_before);
-  out->set_bic_after(in.bic_after);
+  out->set_nis_mean_before(in.before.nis_mean);
+  out->set_nis_mean_after(in.after.nis_mean);
+  out->set_log_likelihood_before(in.before.log_likelihood);
+  out->set_log_likelihood_after(in.after.log_likelihood);
+  out->set_aic_before(in.before.aic);
+  out->set_aic_after(in.after.aic);
+  out->set_bic_before(in.before.bic);
+  out->set_bic_after(in.after.bic);
   out->set_realized_lr(in.realized_lr);
   out->set_predicted_lr(Finite(in.predicted_lr));
 }
@@ -243,10 +253,7 @@ void Fill(const engine::DiscoveryStep& in, v1::DiscoveryStep* out) {
   out->set_unit(in.unit);
   out->set_statistic(Finite(in.statistic));
   out->set_p_value(in.p_value);
-  out->set_nis_mean(in.nis_mean);
-  out->set_log_likelihood(in.log_likelihood);
-  out->set_aic(in.aic);
-  out->set_bic(in.bic);
+  FillFit(in.fit, out);
   for (const engine::ChannelFit& c : in.channels) Fill(c, out->add_channels());
   for (const engine::ParameterEstimate& e : in.estimates) Fill(e, out->add_estimates());
 }
@@ -337,10 +344,7 @@ v1::AnalysisReport ToProto(const engine::AnalysisReport& r, const engine::ErrorM
   out.set_verdict(ToProto(r.verdict));
   *out.mutable_model() = ToProto(model);
   for (const engine::ChannelFit& c : r.channels) Fill(c, out.add_channels());
-  out.set_nis_mean(r.nis_mean);
-  out.set_log_likelihood(r.log_likelihood);
-  out.set_aic(r.aic);
-  out.set_bic(r.bic);
+  FillFit(r.fit, &out);
   for (const engine::FaultInterval& f : r.faults) *out.add_fault_intervals() = ToProto(f);
   for (const engine::BenchMotion& m : r.bench_motion) {
     v1::BenchMotion* b = out.add_bench_motion();

@@ -264,8 +264,8 @@ TEST_P(HiddenFamily, RankedFirstAndAddingItFitsTheRun) {
   char row[640];
   std::snprintf(row, sizeof row, "SCENARIO|%s|%s|%s|%s|%d|%s|%.3f → %.3f [%.3f, %.3f]|%.1f → %.1f|%s", c.term.c_str(),
                 c.profile.c_str(), top->name.c_str(), (by_term || by_family) ? "yes" : "no", RankOf(ra, c.term),
-                estimate_text.c_str(), rb.comparison->nis_mean_before, rb.comparison->nis_mean_after, rb.nis_band_low,
-                rb.nis_band_high, rb.comparison->aic_before, rb.comparison->aic_after,
+                estimate_text.c_str(), rb.comparison->before.nis_mean, rb.comparison->after.nis_mean, rb.nis_band_low,
+                rb.nis_band_high, rb.comparison->before.aic, rb.comparison->after.aic,
                 own != nullptr ? std::to_string(own->p_value_holm).c_str() : "-");
   std::printf("%s\n", row);
   RecordProperty("row", row);
@@ -273,9 +273,9 @@ TEST_P(HiddenFamily, RankedFirstAndAddingItFitsTheRun) {
   EXPECT_TRUE(by_term || by_family) << "top term " << top->name << " (p_holm " << top->p_value_holm
                                     << "), top family " << (top_family ? top_family->name : "none");
   EXPECT_LT(top->p_value_holm, alpha);
-  EXPECT_GE(rb.nis_mean, rb.nis_band_low);
-  EXPECT_LE(rb.nis_mean, rb.nis_band_high);
-  EXPECT_LT(rb.comparison->aic_after, rb.comparison->aic_before);
+  EXPECT_GE(rb.fit.nis_mean, rb.nis_band_low);
+  EXPECT_LE(rb.fit.nis_mean, rb.nis_band_high);
+  EXPECT_LT(rb.comparison->after.aic, rb.comparison->before.aic);
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -345,11 +345,11 @@ TEST_P(HiddenBiasRandomWalk, FoundByLikelihoodAndAddingItFitsTheRun) {
   const AnalysisReport& rb = b->report;
   ASSERT_TRUE(rb.comparison.has_value());
   std::printf("SCENARIO|%s|NIS %.4f → %.4f [%.4f, %.4f]|AIC %.1f → %.1f\n", c.term.c_str(),
-              rb.comparison->nis_mean_before, rb.comparison->nis_mean_after, rb.nis_band_low, rb.nis_band_high,
-              rb.comparison->aic_before, rb.comparison->aic_after);
-  EXPECT_GE(rb.nis_mean, rb.nis_band_low);
-  EXPECT_LE(rb.nis_mean, rb.nis_band_high);
-  EXPECT_LT(rb.comparison->aic_after, rb.comparison->aic_before);
+              rb.comparison->before.nis_mean, rb.comparison->after.nis_mean, rb.nis_band_low, rb.nis_band_high,
+              rb.comparison->before.aic, rb.comparison->after.aic);
+  EXPECT_GE(rb.fit.nis_mean, rb.nis_band_low);
+  EXPECT_LE(rb.fit.nis_mean, rb.nis_band_high);
+  EXPECT_LT(rb.comparison->after.aic, rb.comparison->before.aic);
   // The model takes the likelihood's K, and reports it.
   const auto k = std::find_if(rb.identified.begin(), rb.identified.end(),
                               [&](const ParameterEstimate& e) { return e.name == c.term + ".density"; });
@@ -398,7 +398,7 @@ TEST(NoHiddenEffect, NothingSignificantAtTheFamilyWiseLevel) {
     const auto significant = Significant(a->report, alpha);
     const EffectCandidate* top = TopTerm(a->report);
     std::printf("NULL|%d|%s|%.4g|%zu|%.3f\n", 100 + seed, top ? top->name.c_str() : "-", top ? top->p_value_holm : 1.0,
-                significant.size(), a->report.nis_mean);
+                significant.size(), a->report.fit.nis_mean);
     if (!significant.empty()) {
       ++with_significant;
       for (const auto& s : significant) std::printf("  significant: %s\n", s.c_str());
@@ -441,8 +441,8 @@ TEST(BaseReport, IsTheReportOfTheAnalysisWithoutTheAddedEffects) {
   ASSERT_TRUE(added->base_report.has_value());
   const AnalysisReport& a = *added->base_report;
   const AnalysisReport& b = alone->report;
-  EXPECT_EQ(a.nis_mean, b.nis_mean);
-  EXPECT_EQ(a.log_likelihood, b.log_likelihood);
+  EXPECT_EQ(a.fit.nis_mean, b.fit.nis_mean);
+  EXPECT_EQ(a.fit.log_likelihood, b.fit.log_likelihood);
   ASSERT_EQ(a.effect_candidates.size(), b.effect_candidates.size());
   for (size_t i = 0; i < a.effect_candidates.size(); ++i) {
     EXPECT_EQ(a.effect_candidates[i].name, b.effect_candidates[i].name);
@@ -451,7 +451,7 @@ TEST(BaseReport, IsTheReportOfTheAnalysisWithoutTheAddedEffects) {
   ASSERT_EQ(a.identified.size(), b.identified.size());
   for (size_t i = 0; i < a.identified.size(); ++i) EXPECT_EQ(a.identified[i].value, b.identified[i].value);
   // The request's own report is model B's, not A's.
-  EXPECT_NE(added->report.log_likelihood, b.log_likelihood);
+  EXPECT_NE(added->report.fit.log_likelihood, b.fit.log_likelihood);
 }
 
 // Adding an effect to the model an earlier analysis identified, carried
@@ -479,10 +479,10 @@ TEST(IncrementalAdd, ReportsWhatTheWholeAnalysisReports) {
   const AnalysisReport& b = whole->report;
   const AnalysisReport& b_again = incremental->report;
   EXPECT_TRUE(incremental->model == whole->model);
-  EXPECT_EQ(b_again.log_likelihood, b.log_likelihood);
-  EXPECT_EQ(b_again.nis_mean, b.nis_mean);
+  EXPECT_EQ(b_again.fit.log_likelihood, b.fit.log_likelihood);
+  EXPECT_EQ(b_again.fit.nis_mean, b.fit.nis_mean);
   ASSERT_TRUE(b_again.comparison.has_value() && b.comparison.has_value());
-  EXPECT_EQ(b_again.comparison->log_likelihood_before, b.comparison->log_likelihood_before);
+  EXPECT_EQ(b_again.comparison->before.log_likelihood, b.comparison->before.log_likelihood);
   EXPECT_EQ(b_again.comparison->predicted_lr, b.comparison->predicted_lr);
   ASSERT_EQ(b_again.effect_candidates.size(), b.effect_candidates.size());
   for (size_t i = 0; i < b.effect_candidates.size(); ++i) {
@@ -626,12 +626,12 @@ TEST(TwoHiddenEffects, DiscoveredInTwoSteps) {
   ASSERT_TRUE(a.ok()) << a.status();
   const AnalysisReport& r = a->report;
   for (const DiscoveryStep& d : r.discovery) {
-    std::printf("DISCOVERY|%d|%s|%.4g ± %.2g|%.3f|%.1f\n", d.step, d.effect.c_str(), d.estimate, d.std_error, d.nis_mean,
-                d.aic);
+    std::printf("DISCOVERY|%d|%s|%.4g ± %.2g|%.3f|%.1f\n", d.step, d.effect.c_str(), d.estimate, d.std_error, d.fit.nis_mean,
+                d.fit.aic);
   }
   if (r.comparison.has_value()) {
-    std::printf("DISCOVERY|total|NIS %.3f → %.3f|AIC %.1f → %.1f\n", r.comparison->nis_mean_before,
-                r.comparison->nis_mean_after, r.comparison->aic_before, r.comparison->aic_after);
+    std::printf("DISCOVERY|total|NIS %.3f → %.3f|AIC %.1f → %.1f\n", r.comparison->before.nis_mean,
+                r.comparison->after.nis_mean, r.comparison->before.aic, r.comparison->after.aic);
   }
   ASSERT_EQ(r.discovery.size(), 2u);
   const bool gyro_then_acc = Names(r.discovery[0].effect, gyro_term) && Names(r.discovery[1].effect, acc_term);
@@ -649,8 +649,8 @@ TEST(TwoHiddenEffects, DiscoveredInTwoSteps) {
   }
   const auto remaining = Significant(r, options.finder.family_wise_alpha);
   EXPECT_TRUE(remaining.empty()) << remaining.front();
-  EXPECT_GE(r.nis_mean, r.nis_band_low);
-  EXPECT_LE(r.nis_mean, r.nis_band_high);
+  EXPECT_GE(r.fit.nis_mean, r.nis_band_low);
+  EXPECT_LE(r.fit.nis_mean, r.nis_band_high);
 }
 
 }  // namespace

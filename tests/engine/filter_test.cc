@@ -58,8 +58,8 @@ TEST_P(TrueModelConsistency, NisInItsBandAndSmoothedDriftsWithinThreeSigma) {
   const AnalysisReport& r = analysis->report;
   // The mean of N χ²(1) values lies in [χ²_N(α/2), χ²_N(1 − α/2)]/N with probability 1 − α.
   const int n = r.scalar_updates;
-  EXPECT_GT(r.nis_mean, stats::ChiSquareQuantile(0.0005, n) / n);
-  EXPECT_LT(r.nis_mean, stats::ChiSquareQuantile(0.9995, n) / n);
+  EXPECT_GT(r.fit.nis_mean, stats::ChiSquareQuantile(0.0005, n) / n);
+  EXPECT_LT(r.fit.nis_mean, stats::ChiSquareQuantile(0.9995, n) / n);
   for (const ChannelFit& c : r.channels) {
     if (c.count == 0) continue;  // the attitude of a run whose encoders are not read: nothing to fit
     const double low = stats::ChiSquareQuantile(0.001 / 2, c.count) / c.count;
@@ -305,8 +305,8 @@ TEST(Spikes, AreFlaggedAsOutliersAndDoNotCorruptTheEstimatesAfterThem) {
   // Only those four: no false alarms elsewhere, and no gradual failure.
   EXPECT_EQ(r.faults.size(), unit.spikes.size());
   EXPECT_EQ(r.verdict, Verdict::kOperable);
-  EXPECT_GT(r.nis_mean, r.nis_band_low);
-  EXPECT_LT(r.nis_mean, r.nis_band_high);
+  EXPECT_GT(r.fit.nis_mean, r.nis_band_low);
+  EXPECT_LT(r.fit.nis_mean, r.nis_band_high);
 
   // The estimates after the spikes stay with the truth.
   const ErrorModel model = testing::TrueBaseModel(unit);

@@ -29,7 +29,7 @@ TEST(NoiseRetuneTest, RealRecordNisNearOne) {
   ASSERT_TRUE(run.ok()) << run.status();
   auto a = Analyze(*run, AnalysisRequest{}, AnalysisOptions{});
   ASSERT_TRUE(a.ok()) << a.status();
-  std::printf("NIS mean %.3f\n", a->report.nis_mean);
+  std::printf("NIS mean %.3f\n", a->report.fit.nis_mean);
   bool retuned = false;
   for (const std::string& n : a->report.notes) {
     if (n.find("re-tuned by maximum likelihood") != std::string::npos) {
@@ -38,7 +38,7 @@ TEST(NoiseRetuneTest, RealRecordNisNearOne) {
     }
   }
   EXPECT_TRUE(retuned);
-  EXPECT_NEAR(a->report.nis_mean, 1.0, 0.2);
+  EXPECT_NEAR(a->report.fit.nis_mean, 1.0, 0.2);
 }
 
 // The maximum-likelihood re-tuning of noise terms set from Allan bounds
@@ -164,7 +164,7 @@ TEST(ReferenceNoiseTest, ABenchThatSwaysHasItsReferenceNoiseMeasuredAndASteadyOn
           std::string(b == Bench::kSteady ? "steady" : b == Bench::kSwaying ? "swaying" : "heaving") + ", seed " +
           std::to_string(seed) + ": reference position σ " + std::to_string(fitted.horizontal_position_sigma_m) +
           " m across, " + std::to_string(fitted.vertical_position_sigma_m) + " m along the vertical, NIS " +
-          std::to_string(a->report.nis_mean);
+          std::to_string(a->report.fit.nis_mean);
       std::printf("%s\n", label.c_str());
       if (b == Bench::kSteady) {
         EXPECT_NE(a->report.verdict, Verdict::kFaulty) << label;

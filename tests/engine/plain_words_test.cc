@@ -163,7 +163,7 @@ TEST(PlainWords, AWholeRunOutsideItsBandSaysWhichWayAndWhere) {
     return c;
   };
   report.channels = {channel("lat", 0.35), channel("lon", 0.98), channel("vel_d", 0.6)};
-  report.nis_mean = 0.64;
+  report.fit.nis_mean = 0.64;
   std::vector<std::string> lines = PlainWordsVerdict(report, StepRun(), 0.01);
   ASSERT_EQ(lines.size(), 2u);
   EXPECT_THAT(lines[0], HasSubstr("quieter than its model"));
@@ -172,7 +172,7 @@ TEST(PlainWords, AWholeRunOutsideItsBandSaysWhichWayAndWhere) {
   EXPECT_THAT(lines[1], HasSubstr("nothing on the unit"));
 
   report.channels = {channel("vel_n", 1.7), channel("lat", 1.02)};
-  report.nis_mean = 1.3;
+  report.fit.nis_mean = 1.3;
   lines = PlainWordsVerdict(report, StepRun(), 0.01);
   EXPECT_THAT(lines[0], HasSubstr("noisier than its model"));
   EXPECT_THAT(lines[0], HasSubstr("most on vel_n (NIS 1.70)"));

@@ -39,7 +39,7 @@ AnalysisReport AnalysisOf(const BenchRun& run) {
   if (!analysis.ok()) return {};
   const AnalysisReport& r = analysis->report;
   std::printf("%s: verdict %s, NIS %.3f (band %.3f–%.3f), %zu fault intervals\n", run.metadata.unit_serial.c_str(),
-              VerdictName(r.verdict), r.nis_mean, r.nis_band_low, r.nis_band_high, r.faults.size());
+              VerdictName(r.verdict), r.fit.nis_mean, r.nis_band_low, r.nis_band_high, r.faults.size());
   return analysis->report;
 }
 

@@ -148,7 +148,7 @@ TEST(WarmUpScan, AddedAsTheCandidateSaysTheModelExplainsTheStart) {
   ASSERT_TRUE(b.ok()) << b.status();
   ASSERT_TRUE(b->report.comparison.has_value());
   const ModelComparison& c = *b->report.comparison;
-  EXPECT_GT(2.0 * (c.log_likelihood_after - c.log_likelihood_before), 0.75 * listed->statistic);
+  EXPECT_GT(2.0 * (c.after.log_likelihood - c.before.log_likelihood), 0.75 * listed->statistic);
   EXPECT_GE(b->model.FindEffect(TermOf("acc_warm_up.y")), 0);
   EXPECT_GE(b->model.FindEffect(TermOf("acc_turn_on_bias.y")), 0);
 }

@@ -138,15 +138,9 @@ ModelComparison Compare(const ModelPass& a, const ModelPass& b, const AnalysisRe
   for (size_t i = 0; i < ra.channels.size() && i < rb.channels.size(); ++i) {
     c.channels.push_back({ra.channels[i].name, ra.channels[i], rb.channels[i]});
   }
-  c.nis_mean_before = ra.nis_mean;
-  c.nis_mean_after = rb.nis_mean;
-  c.log_likelihood_before = ra.log_likelihood;
-  c.log_likelihood_after = rb.log_likelihood;
-  c.aic_before = ra.aic;
-  c.aic_after = rb.aic;
-  c.bic_before = ra.bic;
-  c.bic_after = rb.bic;
-  c.realized_lr = 2.0 * (rb.log_likelihood - ra.log_likelihood);
+  c.before = ra.fit;
+  c.after = rb.fit;
+  c.realized_lr = 2.0 * (rb.fit.log_likelihood - ra.fit.log_likelihood);
   c.predicted_lr = predicted_lr;
   return c;
 }
@@ -215,10 +209,7 @@ DiscoveryStep StepOf(int step, const EffectCandidate& top, const AnalysisReport&
       d.std_error = e.std_error;
     }
   }
-  d.nis_mean = next_report.nis_mean;
-  d.log_likelihood = next_report.log_likelihood;
-  d.aic = next_report.aic;
-  d.bic = next_report.bic;
+  d.fit = next_report.fit;
   d.channels = next_report.channels;
   return d;
 }

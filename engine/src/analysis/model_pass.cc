@@ -135,13 +135,14 @@ void FillFit(const ModelPass& pass, const BenchRun& run, const AnalysisOptions& 
   r.model_effects = pass.model.EffectNames();
   r.parameter_count = pass.model.ParameterCount();
   r.channels = m.channels;
-  r.nis_mean = m.nis_mean;
+  r.fit.nis_mean = m.nis_mean;
   r.nis_band_low = m.nis_band_low;
   r.nis_band_high = m.nis_band_high;
-  r.log_likelihood = pass.log_likelihood;
+  r.fit.log_likelihood = pass.log_likelihood;
   r.scalar_updates = pass.forward.scalar_updates;
-  r.aic = 2.0 * r.parameter_count - 2.0 * r.log_likelihood;
-  r.bic = r.parameter_count * std::log(static_cast<double>(std::max(1, r.scalar_updates))) - 2.0 * r.log_likelihood;
+  r.fit.aic = 2.0 * r.parameter_count - 2.0 * r.fit.log_likelihood;
+  r.fit.bic = r.parameter_count * std::log(static_cast<double>(std::max(1, r.scalar_updates))) -
+              2.0 * r.fit.log_likelihood;
   r.gamma2 = m.gamma2;
   r.eta2 = m.eta2;
   r.faults = m.faults;

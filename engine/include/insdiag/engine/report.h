@@ -96,15 +96,24 @@ struct ChannelComparison {
   ChannelFit after;
 };
 
+// How well a model fits a run: the mean NIS, the innovations' (profile)
+// log-likelihood ℓ and the information criteria on it, AIC = 2k − 2ℓ
+// (Akaike, IEEE Trans. AC 19(6), 1974) and BIC = k ln N − 2ℓ (Schwarz,
+// Ann. Stat. 6(2), 1978), k the model's parameters and N its scalar updates.
+struct FitMetrics {
+  double nis_mean = 0.0;
+  double log_likelihood = 0.0;
+  double aic = 0.0;
+  double bic = 0.0;
+};
+
 // Model B (this report's) against model A on the same run.
 struct ModelComparison {
   std::vector<std::string> baseline_effects;  // A
   std::vector<std::string> added_effects;     // B = A + these
   std::vector<ChannelComparison> channels;
-  double nis_mean_before = 0.0, nis_mean_after = 0.0;
-  double log_likelihood_before = 0.0, log_likelihood_after = 0.0;
-  double aic_before = 0.0, aic_after = 0.0;
-  double bic_before = 0.0, bic_after = 0.0;
+  FitMetrics before;  // A
+  FitMetrics after;   // B
   double realized_lr = 0.0;   // 2 (logL_B − logL_A)
   double predicted_lr = 0.0;  // model A's score statistic for the added effects
 };
@@ -117,10 +126,7 @@ struct DiscoveryStep {
   std::string unit;
   double statistic = 0.0;
   double p_value = 0.0;
-  double nis_mean = 0.0;
-  double log_likelihood = 0.0;
-  double aic = 0.0;
-  double bic = 0.0;
+  FitMetrics fit;  // of the model after the step
   std::vector<ChannelFit> channels;
   std::vector<ParameterEstimate> estimates;  // of the added terms, after the step
 };
@@ -130,12 +136,10 @@ struct AnalysisReport {
   std::vector<std::string> model_effects;
   int parameter_count = 0;
   std::vector<ChannelFit> channels;
-  double nis_mean = 0.0;
+  FitMetrics fit;
+  // The band the mean NIS of a model that holds lies in (at the family-wise level).
   double nis_band_low = 0.0;
   double nis_band_high = 0.0;
-  double log_likelihood = 0.0;
-  double aic = 0.0;
-  double bic = 0.0;
   int scalar_updates = 0;
   double gamma2 = 0.0;
   double eta2 = 0.0;
