@@ -146,6 +146,15 @@ struct Retargeted {
     return faults_flagged && !a_priori.FromAllanFit();
   }
 
+  // Whether the drifts held for flagged faults are a class prior's: a unit
+  // type's nominal model, no datasheet of the unit's own. Whether the
+  // faults or wider drifts explain the flags is then a test (as where the
+  // run overturned the nominal drifts), not a given: a unit whose drift σ
+  // tripled trips the monitor as a fault would.
+  bool HoldsAClassPriorsDriftsForFlaggedFaults(const APriori& a_priori) const {
+    return HoldsDriftsForFlaggedFaults(a_priori) && !a_priori.FromDatasheet();
+  }
+
   // Whether both sides of a fault's test identify drifts the model's own
   // final identification left: the set the misfit's competition took, or
   // the drifts held for flagged faults.
@@ -534,7 +543,8 @@ void AddFaultsOfTheIdentifiedDrifts(const RunContext& c, const ErrorModel& model
 // 2Δℓ is largest among those that stand, or, of those within 2 of it that
 // the run cannot tell apart, the one its sensor's raw samples show
 // (finder/fault_findings.h, IsLikelierLookAlike).
-void TestFaultsAgainstDrifts(const RunContext& c, const Retargeted& retargeted,
+// True when a fault stands.
+bool TestFaultsAgainstDrifts(const RunContext& c, const Retargeted& retargeted,
                              double log_likelihood_without, Identification& id,
                              std::vector<std::string>& notes) {
   FaultAgainstDriftsTest* best = nullptr;
@@ -555,7 +565,7 @@ void TestFaultsAgainstDrifts(const RunContext& c, const Retargeted& retargeted,
         stands ? "it stands against the drifts identified from decades" : "their misfit"));
     if (stands && (best == nullptr || t.statistic > best->statistic)) best = &t;
   }
-  if (best == nullptr) return;
+  if (best == nullptr) return false;
   if (SeenInRawSamples(*best->fault, c.raw_samples.changes) == nullptr) {
     FaultAgainstDriftsTest* seen = nullptr;
     for (FaultAgainstDriftsTest& t : tests) {
@@ -573,12 +583,14 @@ void TestFaultsAgainstDrifts(const RunContext& c, const Retargeted& retargeted,
   notes.insert(notes.end(), best->notes.begin(), best->notes.end());
   id.model = std::move(best->with_fault.model);
   id.identified = std::move(best->with_fault.identified);
+  return true;
 }
 
 // The faults of a class prior's drifts and of the drifts identified from
 // them, each tested against the drifts identified beside it; one
 // forward pass of the identified model serves the scan and the likelihood
-// the tests are against.
+// the tests are against. Drifts held for flagged faults of which none
+// stands take their own estimates: they were held for nothing.
 void TestFaultsAgainstTheIdentifiedDrifts(const RunContext& c, Retargeted& retargeted,
                                           Identification& id, std::vector<std::string>& notes) {
   auto forward = RunForwardFilter(c.epochs, id.model);
@@ -594,17 +606,26 @@ void TestFaultsAgainstTheIdentifiedDrifts(const RunContext& c, Retargeted& retar
   // left, the side without the fault is fitted alike: else the statistic
   // counts what those drifts gain as the fault's (a healthy run's ramp
   // stood at 2Δℓ = 20.2, 17.4 of it the drifts').
+  std::optional<Identification> without;
+  std::vector<std::string> without_notes;
   if (retargeted.FaultTestIdentifiesMoreDrifts(c.a_priori)) {
-    Identification without;
-    without.model = id.model;
-    without.identified = id.identified;
-    std::vector<std::string> ignored;
-    IdentifyFinalDrifts(c, retargeted, without, ignored, /*both_sides_of_a_fault_test=*/true);
-    if (auto l = ProfileLogLikelihood(c.epochs, without.model); l.ok()) {
+    without = Identification{};
+    without->model = id.model;
+    without->identified = id.identified;
+    IdentifyFinalDrifts(c, retargeted, *without, without_notes, /*both_sides_of_a_fault_test=*/true);
+    if (auto l = ProfileLogLikelihood(c.epochs, without->model); l.ok()) {
       log_likelihood_without = std::max(log_likelihood_without, *l);
     }
   }
-  TestFaultsAgainstDrifts(c, retargeted, log_likelihood_without, id, notes);
+  const bool a_fault_stands = TestFaultsAgainstDrifts(c, retargeted, log_likelihood_without, id, notes);
+  if (!a_fault_stands && without.has_value() && retargeted.HoldsDriftsForFlaggedFaults(c.a_priori)) {
+    notes.push_back(
+        "no flagged fault stands against the drifts identified beside it: model A has the drifts "
+        "identified without one");
+    notes.insert(notes.end(), without_notes.begin(), without_notes.end());
+    id.model = std::move(without->model);
+    id.identified = std::move(without->identified);
+  }
 }
 
 }  // namespace
@@ -622,7 +643,8 @@ absl::StatusOr<Identification> IdentifyModel(const RunContext& c, const std::opt
   if (!retargeted->deferred) {
     IdentifyFinalDrifts(c, *retargeted, id, notes);
     // Drifts re-tuned from the unit's own specification keep what the scan finds beside them.
-    if (retargeted->DriftsFromAClassPrior(c.a_priori))
+    if (retargeted->DriftsFromAClassPrior(c.a_priori) ||
+        retargeted->HoldsAClassPriorsDriftsForFlaggedFaults(c.a_priori))
       TestFaultsAgainstTheIdentifiedDrifts(c, *retargeted, id, notes);
     KeepQuantisationTheInnovationsSupport(c, QuantisationTest::kAfterTheDrifts, id.model,
                                           id.identified, notes);
