@@ -380,8 +380,8 @@ EvidenceTerm AgainstNominal(const std::string& name, double value, double std_er
 // A candidate's standard score as evidence.
 // A random structure (a walk, a second-order pair): its magnitude is
 // bounded at zero, so estimate over SE is positive whatever the unit and
-// no standard score (a pair whose own test gave p = 1 had 6.6 SE, and
-// named the wrong gyro); the z of its likelihood-ratio test's p-value is.
+// no standard score (a pair its own test does not support can stand several
+// SE from zero); the z of its likelihood-ratio test's p-value is.
 // Without a standard error, the z of the same two-sided p-value: √χ² on
 // one degree of freedom, and on more not an inflated √χ² (a pair's 2Δℓ
 // has three). A fault from the onset scan: its estimate over its SE is

@@ -79,7 +79,7 @@ TEST_F(KnowledgeBaseTest, SeedsTheUnitTypeAndItsFailureModes) {
   EXPECT_GT(type->nominal_size(), 50);
   auto modes = catalogue_->ListFailureModes("unitTypes/INS-2000", "");
   ASSERT_TRUE(modes.ok());
-  EXPECT_EQ(modes->size(), 41u);  // 12 per-axis modes × 3 axes + 5 unit-level modes
+  EXPECT_EQ(modes->size(), 50u);  // 15 per-axis modes × 3 axes + 5 unit-level modes
   auto card = catalogue_->ListFailureModes("", "interface_card");
   EXPECT_EQ(card->size(), 2u);
   EXPECT_EQ(catalogue_->GetFailureMode("failureModes/nope").status().code(), absl::StatusCode::kNotFound);

@@ -132,8 +132,8 @@ struct Retargeted {
   // Whether the drifts were identified from a class prior (an Allan fit, a
   // unit type's nominal model) rather than re-tuned from the unit's own
   // datasheet: a fault may be inside them. A datasheet's drifts re-tuned by
-  // likelihood stay the unit's specification; testing faults against them
-  // called a healthy accelerometer's step at p 0.004 on a gyro drift σ × 10.
+  // likelihood stay the unit's specification: a fault tested against drifts
+  // the datasheet does not allow would be credited with their misfit.
   bool DriftsFromAClassPrior(const APriori& a_priori) const {
     return a_priori.FromAllanFit() || (drifts_by_likelihood && !a_priori.FromDatasheet());
   }
@@ -210,11 +210,10 @@ absl::StatusOr<ident::DriftLikelihoodResult> DriftsBesideTheCandidate(const RunC
 // Whether the drifts of a class prior are off beside the best candidate as
 // well: the drifts identified with the candidate in the model (`beside`),
 // against the model with the candidate alone (χ² at the family-wise level, as
-// ApplyDriftLikelihood). A unit of ten times its type's nominal drift with a
-// bias step has both; the candidate winning the comparison of the two
-// explanations alone left its drifts at the type's nominal, and the scan
-// against them named walks and steps on every sensor (a 0.5 °/h gyro step
-// came fifth behind an accelerometer walk).
+// ApplyDriftLikelihood). A unit can be both far from its type's drifts and
+// faulty; the comparison of the two explanations alone picks one, and
+// drifts left at the type's nominal beside a fault leave a misfit that the
+// scan reads as walks and steps on every sensor, ranking the fault among them.
 bool DriftsOffBesideTheCandidate(const RunContext& c,
                                  const absl::StatusOr<ident::DriftLikelihoodResult>& beside) {
   return beside.ok() && !beside->identified.empty() &&
@@ -258,9 +257,8 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
   }
   // What the likelihood measures of the drifts beside a fault: a jump or a
   // ramp from an onset is not a stationary drift's variance, and drifts
-  // identified without it take it on (a gyro's jump of 60 drift σ became
-  // that gyro's drift at 40 × its σ and τ 3·10⁵ s, and its knock-on tilt
-  // another gyro's at 8 ×).
+  // identified without it take it on: a jump reads as a wider, far slower
+  // drift of its own sensor, and the tilt it leaves as other sensors' drifts.
   const EffectFamily* family = FindEffectFamily(best.family);
   const bool fault = family != nullptr && family->kind == EffectKind::kFault;
   std::optional<absl::StatusOr<ident::DriftLikelihoodResult>> beside;
@@ -299,8 +297,8 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
   // for the diagnosis whichever explanation wins. Beside a fault, the
   // drifts identified with it in the model. Beside any other candidate, the
   // drifts' own estimates: a term that follows the table's motion is how a
-  // wider drift shows (a gyro-x drift σ × 3 on a multi-position test scored
-  // as a g-sensitivity, and beside it the drift looked nominal), and a walk
+  // wider drift shows on a multi-position test (it scores as a
+  // g-sensitivity, and beside that term the drift looks nominal), and a walk
   // shares the drift's slow variance.
   const ident::DriftLikelihoodResult* reported = !fault ? &*ml : beside->ok() ? &**beside : nullptr;
   if (reported == nullptr) return false;
@@ -470,11 +468,9 @@ void IdentifyFinalDrifts(const RunContext& c, const Retargeted& retargeted, Iden
 }
 
 // A bias step or ramp found against a class prior's drifts, tested against
-// the drifts identified without it. Drifts identified from decades take a
-// step as a slower, wider drift (a 50 °/h MEMS gyro step became a drift σ × 6
-// with τ × 17, and the step's scan on that model stayed below its level; a
-// 0.5 °/h step of a 0.1 °/h gyro labelled with a type of 0.01 °/h became a
-// drift σ × 2.4), so the drifts are identified again with the fault in the model
+// the drifts identified without it. Drifts identified from starts decades
+// apart take a step as a slower, wider drift, and the step's scan on that
+// model falls below its level, so the drifts are identified again with the fault in the model
 // at the scan's onset, and the two fitted likelihoods decide: the fault
 // stands when 2Δℓ exceeds the onset scan's own bound (Davies over the onsets,
 // Bonferroni over the fault terms) — the likelihood ratio fitted on both
@@ -518,9 +514,8 @@ FaultAgainstDriftsTest TestFaultAgainstDrifts(const RunContext& c, const Retarge
 // bias step inside the static segments raises their Allan curve
 // as a rate random walk does (a step's Allan variance grows with the cluster
 // time), so the placeholder drift is already wide and slow, the first scan
-// does not flag the step, and the drifts identified from there keep it (a
-// 50 °/h MEMS gyro step became a drift of τ 2400 s for one of 100 s, and the
-// step's scan on that model stayed at 2Δℓ = 11). The identified model's own
+// does not flag the step, and the drifts identified from there keep it as a
+// slower drift, the step's scan on that model below its level. The identified model's own
 // onset scan still peaks near the step: its most significant step and ramp
 // not tested already join the faults tested against the drifts identified
 // beside them, whose level decides. Each costs one drift identification.
@@ -604,8 +599,8 @@ void TestFaultsAgainstTheIdentifiedDrifts(const RunContext& c, Retargeted& retar
   double log_likelihood_without = ProfileLogLikelihood(*forward, id.model);
   // Where the fault's side identifies drifts the model's own identification
   // left, the side without the fault is fitted alike: else the statistic
-  // counts what those drifts gain as the fault's (a healthy run's ramp
-  // stood at 2Δℓ = 20.2, 17.4 of it the drifts').
+  // counts what those drifts gain as the fault's, and a healthy unit's ramp
+  // stands on the drifts' gain.
   std::optional<Identification> without;
   std::vector<std::string> without_notes;
   if (retargeted.FaultTestIdentifiesMoreDrifts(c.a_priori)) {

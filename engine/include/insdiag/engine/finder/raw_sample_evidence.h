@@ -17,7 +17,7 @@
 // attitude, a vertical gyro's through gyrocompassing: a slow rise of the
 // horizontal velocity errors that any unmodelled slow change there imitates.
 // On a still table an accelerometer's ramp is explained almost as well by a
-// z gyro bias of 3.6 °/h, eighty times the raw samples' bound on it. A
+// vertical gyro bias many times the raw samples' bound on it. A
 // constant-bias candidate (a family of regressor kOne) whose one-step
 // estimate β̂ ± SE disagrees with the raw samples',
 //   |β̂ − b̂| / √(SE² + SE_raw²) > Φ⁻¹(1 − α / 2m)

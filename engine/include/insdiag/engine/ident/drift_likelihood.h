@@ -208,9 +208,9 @@ struct DriftStartOptions {
   // And from the drifts the static segments' Allan curve gives
   // (ErrorModelFromAllan), where the model's are a class prior the run may
   // be far from: every other start climbs from the prior's side, and the
-  // grid weighs one drift at a time beside the others' prior values (a
-  // tactical unit labelled with a type of a tenth its drift σ ended on a
-  // local maximum 2Δℓ = 20 below its own drifts').
+  // grid weighs one drift at a time beside the others' prior values, so a
+  // unit far from its label's drifts on every axis can end on a local
+  // maximum well below its own drifts'.
   std::optional<std::array<GaussMarkov, DriftAxis::kCount>> raw_sample_drifts;
 };
 

@@ -27,8 +27,8 @@
 // `standard_errors` of its own standard error — and every batch of the
 // static time holds at least `batch_share` of it, on the same side. A
 // constant is there from turn-on; a bias step inside the run moves the mean
-// of the static samples as far (a 0.5 °/h step of a gyro labelled with a type
-// whose drift is 0.01 °/h put it at 30 drift σ) while the batches before the
+// of the static samples as far (tens of drift σ where the label's drift is
+// far below the unit's) while the batches before the
 // step sit near zero, and removing that mean leaves two levels that neither
 // the drift nor the step explains. The analysis removes the
 // dominant biases from the samples and reports them as identified turn-on
