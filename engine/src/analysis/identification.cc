@@ -395,11 +395,12 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std
     // the model (the unit's a-priori model fits), else a new one.
     if (scan_a_priori) id.scanned = ScannedModel{std::move(*pass), std::move(found), std::move(found_notes)};
     id.model = step.model;
-    // The correlation estimates replace the last ones, and the likelihood's
-    // of a drift that the re-tuned model now resolves.
+    // The correlation estimates replace those of the drifts they re-tune. A
+    // drift this pass did not resolve keeps its value in the model, and so
+    // the estimate that gave it (an earlier pass's, or the likelihood's).
     std::erase_if(id.identified, [&](const ParameterEstimate& p) {
-      return p.method == EstimationMethod::kAutocorrelation || std::any_of(step.identified.begin(), step.identified.end(),
-                                              [&](const ParameterEstimate& q) { return q.name == p.name; });
+      return std::any_of(step.identified.begin(), step.identified.end(),
+                         [&](const ParameterEstimate& q) { return q.name == p.name; });
     });
     id.identified.insert(id.identified.end(), step.identified.begin(), step.identified.end());
     if (step.settled && !reference_changed) break;
