@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 #include "insdiag/kb/diagnosis.h"
 
@@ -24,6 +25,19 @@ inline double LogAddExp(double a, double b) {
   if (b == -INFINITY) return a;
   const double m = std::max(a, b);
   return m + std::log(std::exp(a - m) + std::exp(b - m));
+}
+
+// A healthy unit's variance of a term: its scatter and its measurement's,
+// s_h² + s_m².
+inline double HealthyVariance(const EvidenceTerm& t) {
+  return t.healthy_sd * t.healthy_sd + t.measurement_sd * t.measurement_sd;
+}
+
+// The signs of the change a signature term's direction allows.
+inline std::vector<double> SignsOf(v1::Signature::Direction d) {
+  if (d == v1::Signature::UP) return {1.0};
+  if (d == v1::Signature::DOWN) return {-1.0};
+  return {1.0, -1.0};
 }
 
 // The broad density's scale b of a term's scale: where evidence that is off

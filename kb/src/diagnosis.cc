@@ -44,7 +44,7 @@ std::string ScaleName(Scale scale) {
 }
 
 double HealthyLog(const EvidenceTerm& t) {
-  return LogNormalPdf(t.x, 0.0, t.healthy_sd * t.healthy_sd + t.measurement_sd * t.measurement_sd);
+  return LogNormalPdf(t.x, 0.0, internal::HealthyVariance(t));
 }
 
 // (1 − ε) healthy + ε broad: evidence off, with probability ε, for a reason
@@ -59,12 +59,6 @@ double ContaminatedLog(const EvidenceTerm& t, double eps, const v1::DiagnosisSet
 std::string SensorAxisOf(const std::string& term_name) {
   const std::optional<engine::ParameterKey> key = engine::ParseParameterKey(term_name);
   return key ? key->SensorAxis() : "";
-}
-
-std::vector<double> Signs(v1::Signature::Direction d) {
-  if (d == v1::Signature::UP) return {1.0};
-  if (d == v1::Signature::DOWN) return {-1.0};
-  return {1.0, -1.0};
 }
 
 bool IsFamily(const std::string& parameter) { return absl::EndsWith(parameter, ".*"); }
@@ -124,7 +118,7 @@ double LogPresentScore(double x, const std::vector<double>& signs, double change
 
 double LogSignatureTerm(const v1::Signature& term, const std::vector<const EvidenceTerm*>& members,
                         const v1::DiagnosisSettings& settings) {
-  const auto signs = Signs(term.direction());
+  const auto signs = internal::SignsOf(term.direction());
   const double log_share = -std::log(static_cast<double>(signs.size()));
   if (term.common() && members.size() > 1) {
     double total = -INFINITY;
@@ -148,7 +142,7 @@ double LogSignatureTerm(const v1::Signature& term, const std::vector<const Evide
 // standard score about ±μ_T with spread s_T (DiagnosisSettings.trend_z_*),
 // or more: a score of a present effect (LogPresentScore).
 double LogTrendTerm(const v1::Signature& term, const EvidenceTerm& t, const v1::DiagnosisSettings& settings) {
-  return LogPresentScore(t.x, Signs(term.direction()), settings.trend_z_change(),
+  return LogPresentScore(t.x, internal::SignsOf(term.direction()), settings.trend_z_change(),
                          settings.trend_z_spread(), t.healthy_sd * t.healthy_sd,
                          settings.present_score_octaves());
 }
@@ -380,22 +374,6 @@ struct Contamination {
   std::vector<double> knock_on, incidental;
 };
 
-// The index of each term's partner when two are weighed jointly
-// (EvidenceTerm::jointly_with), else nullopt.
-std::vector<std::optional<std::size_t>> PartnersOf(const Evidence& evidence) {
-  std::map<std::string, std::size_t> index;
-  for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
-    if (evidence.terms[i].trend_of.empty()) index.emplace(evidence.terms[i].name, i);
-  }
-  std::vector<std::optional<std::size_t>> out(evidence.terms.size());
-  for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
-    const EvidenceTerm& t = evidence.terms[i];
-    if (t.jointly_with.empty() || !t.trend_of.empty()) continue;
-    if (const auto it = index.find(t.jointly_with); it != index.end() && it->second != i) out[i] = it->second;
-  }
-  return out;
-}
-
 // A pair's joint density, its first term read by `first_reader` and its
 // second by `second_reader` (nullptr: left at healthy, off with probability
 // `off_probability`).
@@ -548,7 +526,7 @@ v1::Diagnosis Diagnose(const Evidence& evidence, std::span<const v1::FailureMode
                    {absl::StrCat("verdict ", v1::AnalysisReport::Verdict_Name(evidence.verdict),
                                  ", and no identified parameter or effect candidate to say why")}));
   } else {
-    const std::vector<std::optional<std::size_t>> partners = PartnersOf(evidence);
+    const std::vector<std::optional<std::size_t>> partners = internal::PartnersOf(evidence);
     const TermLikelihoods terms = LikelihoodsOfTerms(evidence, partners, settings);
     const Contamination& contamination = terms.contamination;
     double healthy_ll = 0.0, unknown_ll = 0.0;

@@ -14,6 +14,7 @@
 #include <optional>
 #include <set>
 
+#include "densities.h"
 #include "evidence_text.h"
 #include "insdiag/engine/candidate_source.h"
 #include "insdiag/engine/model/effect_catalogue.h"
@@ -147,8 +148,7 @@ void AddStructuresTheLoopAdded(const v1::AnalysisReport& report,
 // both stand against a nominal on the log-ratio scale; a term whose partner
 // is missing is weighed alone.
 void PairJointlyIdentified(const v1::AnalysisReport& report, Evidence& evidence) {
-  std::map<std::string, std::size_t> index;
-  for (std::size_t i = 0; i < evidence.terms.size(); ++i) index.emplace(evidence.terms[i].name, i);
+  const std::map<std::string, std::size_t> index = internal::TermsByName(evidence);
   for (const auto& p : report.identified()) {
     if (!p.has_log_correlation() || !(std::abs(p.log_correlation()) < 1.0)) continue;
     const auto a = index.find(p.name());
@@ -179,40 +179,36 @@ void TestDrifts(const v1::DiagnosisSettings& settings, Evidence& evidence) {
     std::optional<std::size_t> tau;
     double statistic = 0.0;
     int dof = 1;
-    double p_value = 1.0;
   };
-  std::map<std::string, std::size_t> index;
-  for (std::size_t i = 0; i < evidence.terms.size(); ++i) index.emplace(evidence.terms[i].name, i);
+  const std::vector<std::optional<std::size_t>> partners = internal::PartnersOf(evidence);
   std::vector<DriftTest> tests;
+  std::vector<double> p_values;
   for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
     const EvidenceTerm& t = evidence.terms[i];
     if (!IsDriftSigma(t.name) || t.scale != Scale::kLogRatio || !t.trend_of.empty()) continue;
     DriftTest test;
     test.sigma = i;
-    if (const auto partner = index.find(t.jointly_with); !t.jointly_with.empty() && partner != index.end()) {
-      test.tau = partner->second;
-      test.statistic = internal::PairDistanceSquared(t, evidence.terms[partner->second], t.measurement_correlation);
+    test.tau = partners[i];
+    if (test.tau) {
+      test.statistic = internal::PairDistanceSquared(t, evidence.terms[*test.tau], t.measurement_correlation);
       test.dof = 2;
     } else {
-      test.statistic = t.x * t.x / (t.healthy_sd * t.healthy_sd + t.measurement_sd * t.measurement_sd);
+      test.statistic = t.x * t.x / internal::HealthyVariance(t);
     }
-    test.p_value = engine::stats::ChiSquareSurvival(test.statistic, test.dof);
     tests.push_back(test);
+    p_values.push_back(engine::stats::ChiSquareSurvival(test.statistic, test.dof));
   }
-  std::vector<std::size_t> order(tests.size());
-  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return tests[a].p_value < tests[b].p_value; });
-  double running = 0.0;
-  for (std::size_t rank = 0; rank < order.size(); ++rank) {
-    DriftTest& test = tests[order[rank]];
-    running = std::max(running, std::min(1.0, static_cast<double>(order.size() - rank) * test.p_value));
-    const bool significant = running < settings.significance_level();
+  std::vector<double> holm(p_values.size());
+  engine::stats::HolmAdjust(p_values, holm);
+  for (std::size_t k = 0; k < tests.size(); ++k) {
+    const DriftTest& test = tests[k];
+    const bool significant = holm[k] < settings.significance_level();
     EvidenceTerm& sigma = evidence.terms[test.sigma];
     sigma.significant = significant;
     absl::StrAppend(&sigma.line,
                     absl::StrFormat("; the drift %s: χ²%s = %.3g from nominal, Holm p = %.2g over %d drifts%s",
                                     test.tau ? "with its τ" : "alone", test.dof == 2 ? "₂" : "₁",
-                                    test.statistic, running, static_cast<int>(order.size()),
+                                    test.statistic, holm[k], static_cast<int>(tests.size()),
                                     significant ? ", significant" : ""));
     if (test.tau) evidence.terms[*test.tau].significant = significant;
   }

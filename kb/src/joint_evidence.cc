@@ -8,14 +8,11 @@
 namespace insdiag::kb::internal {
 namespace {
 
-std::vector<double> SignsOf(const v1::Signature& s) {
-  if (s.direction() == v1::Signature::UP) return {s.change()};
-  if (s.direction() == v1::Signature::DOWN) return {-s.change()};
-  return {s.change(), -s.change()};
-}
-
-double HealthyVariance(const EvidenceTerm& t) {
-  return t.healthy_sd * t.healthy_sd + t.measurement_sd * t.measurement_sd;
+// The means a signature term allows: its change in each direction.
+std::vector<double> MeansOf(const v1::Signature& s) {
+  std::vector<double> means = SignsOf(s.direction());
+  for (double& m : means) m *= s.change();
+  return means;
 }
 
 // log N₂(x; μ, C) for a 2 × 2 covariance given by its entries.
@@ -27,13 +24,32 @@ double LogBivariateNormal(double x1, double x2, double c11, double c12, double c
 
 }  // namespace
 
+std::map<std::string, std::size_t> TermsByName(const Evidence& evidence) {
+  std::map<std::string, std::size_t> index;
+  for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
+    if (evidence.terms[i].trend_of.empty()) index.emplace(evidence.terms[i].name, i);
+  }
+  return index;
+}
+
+std::vector<std::optional<std::size_t>> PartnersOf(const Evidence& evidence) {
+  const std::map<std::string, std::size_t> index = TermsByName(evidence);
+  std::vector<std::optional<std::size_t>> out(evidence.terms.size());
+  for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
+    const EvidenceTerm& t = evidence.terms[i];
+    if (t.jointly_with.empty() || !t.trend_of.empty()) continue;
+    if (const auto it = index.find(t.jointly_with); it != index.end() && it->second != i) out[i] = it->second;
+  }
+  return out;
+}
+
 double LogPairDensity(const std::array<PairComponent, 2>& c, double correlation,
                       const v1::DiagnosisSettings& settings) {
   const EvidenceTerm& a = *c[0].term;
   const EvidenceTerm& b = *c[1].term;
   const double covariance = correlation * a.measurement_sd * b.measurement_sd;
-  const std::vector<double> means_a = c[0].reader ? SignsOf(*c[0].reader) : std::vector<double>{0.0};
-  const std::vector<double> means_b = c[1].reader ? SignsOf(*c[1].reader) : std::vector<double>{0.0};
+  const std::vector<double> means_a = c[0].reader ? MeansOf(*c[0].reader) : std::vector<double>{0.0};
+  const std::vector<double> means_b = c[1].reader ? MeansOf(*c[1].reader) : std::vector<double>{0.0};
   const double spread_a = c[0].reader ? c[0].reader->spread() : 0.0;
   const double spread_b = c[1].reader ? c[1].reader->spread() : 0.0;
   const double var_a = HealthyVariance(a) + spread_a * spread_a;

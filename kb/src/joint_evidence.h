@@ -10,11 +10,21 @@
 
 #include <array>
 #include <cstddef>
+#include <map>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "insdiag/kb/diagnosis.h"
 
 namespace insdiag::kb::internal {
+
+// The evidence's own terms (not the unit's trends) by name.
+std::map<std::string, std::size_t> TermsByName(const Evidence& evidence);
+
+// The index of each term's partner when two are weighed jointly
+// (EvidenceTerm::jointly_with), else nullopt.
+std::vector<std::optional<std::size_t>> PartnersOf(const Evidence& evidence);
 
 // What one hypothesis says of one term of a pair.
 struct PairComponent {

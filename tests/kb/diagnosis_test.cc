@@ -24,24 +24,12 @@ using testing::Ins2000;
 using testing::NominalReport;
 using testing::Identified;
 using testing::Candidate;
+using testing::DiagnoseReport;
+using testing::TermNamed;
 using testing::Nominal;
 using testing::Tolerance;
 
 using ::testing::HasSubstr;
-
-v1::Diagnosis DiagnoseReport(const v1::AnalysisReport& report, PriorInputs prior = {}) {
-  const auto& f = Ins2000();
-  return Diagnose(EvidenceFromReport(report, f.unit_type, f.catalogue.settings()), f.modes, f.catalogue.settings(),
-                  prior);
-}
-
-// The evidence term named `name`, or nullptr.
-const EvidenceTerm* TermNamed(const Evidence& evidence, const std::string& name) {
-  for (const EvidenceTerm& t : evidence.terms) {
-    if (t.name == name) return &t;
-  }
-  return nullptr;
-}
 
 double ProbabilityOf(const v1::Diagnosis& d, const std::string& mode) {
   for (const auto& h : d.hypotheses()) {

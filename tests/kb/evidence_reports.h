@@ -91,6 +91,21 @@ inline v1::IdentifiedParameter* Identified(v1::AnalysisReport& r, const std::str
   return nullptr;
 }
 
+// The report diagnosed against INS-2000's built-in modes with `prior`.
+inline v1::Diagnosis DiagnoseReport(const v1::AnalysisReport& report, PriorInputs prior = {}) {
+  const auto& f = Ins2000();
+  return Diagnose(EvidenceFromReport(report, f.unit_type, f.catalogue.settings()), f.modes,
+                  f.catalogue.settings(), prior);
+}
+
+// The evidence term named `name`, or nullptr.
+inline const EvidenceTerm* TermNamed(const Evidence& evidence, const std::string& name) {
+  for (const EvidenceTerm& t : evidence.terms) {
+    if (t.name == name) return &t;
+  }
+  return nullptr;
+}
+
 inline v1::EffectCandidate* Candidate(v1::AnalysisReport& r, const std::string& name) {
   for (auto& c : *r.mutable_effect_candidates()) {
     if (c.name() == name) return &c;

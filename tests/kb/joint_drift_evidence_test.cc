@@ -17,16 +17,12 @@
 namespace insdiag::kb {
 namespace {
 
+using testing::DiagnoseReport;
 using testing::Identified;
 using testing::Ins2000;
 using testing::Nominal;
 using testing::NominalReport;
-
-v1::Diagnosis DiagnoseReport(const v1::AnalysisReport& report) {
-  const auto& f = Ins2000();
-  return Diagnose(EvidenceFromReport(report, f.unit_type, f.catalogue.settings()), f.modes,
-                  f.catalogue.settings(), PriorInputs{});
-}
+using testing::TermNamed;
 
 // Sets a drift's σ and τ to `sigma_ratio` and `tau_ratio` × nominal with
 // relative standard errors (the SEs of their logs) and the correlation of
@@ -47,13 +43,6 @@ void SetDrift(v1::AnalysisReport& report, const std::string& drift, double sigma
   }
   sigma->set_jointly_with(tau->name());
   tau->set_jointly_with(sigma->name());
-}
-
-const EvidenceTerm* TermNamed(const Evidence& e, const std::string& name) {
-  for (const auto& t : e.terms) {
-    if (t.name == name) return &t;
-  }
-  return nullptr;
 }
 
 // A drift test of a gyro whose drift σ tripled (τ unchanged), the estimate
