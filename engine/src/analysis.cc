@@ -72,16 +72,19 @@ absl::StatusOr<ErrorModel> APrioriModel(const BenchRun& run, const std::optional
 // on the Allan analysis's static segments when it ran.
 ident::RemovedConstants RemoveDominantConstants(BenchRun& run, const std::optional<ident::AllanResult>& allan,
                                                 const pipeline::APriori& a_priori, const AnalysisOptions& options,
-                                                std::vector<std::string>& notes) {
+                                                DecisionLog& decisions) {
   const ident::ConstantPrior prior = a_priori.FromAllanFit() ? ident::ConstantPrior::kNone
                                                          : ident::ConstantPrior::kBoundedByDrift;
+  std::vector<std::string> notes;
+  ident::RemovedConstants removed;
   if (allan.has_value()) {
-    return ident::RemoveDominantConstants(run, allan->segments, a_priori.model, options.dominant_constants, prior,
-                                          notes);
+    removed = ident::RemoveDominantConstants(run, allan->segments, a_priori.model, options.dominant_constants, prior,
+                                             notes);
+  } else if (auto segments = ident::FindStaticSegments(run, options.allan); segments.ok()) {
+    removed = ident::RemoveDominantConstants(run, *segments, a_priori.model, options.dominant_constants, prior, notes);
   }
-  auto segments = ident::FindStaticSegments(run, options.allan);
-  if (!segments.ok()) return {};
-  return ident::RemoveDominantConstants(run, *segments, a_priori.model, options.dominant_constants, prior, notes);
+  decisions.NoteEach(notes);
+  return removed;
 }
 
 absl::Status AddEffects(const BenchRun& run, const std::vector<std::string>& selectors, double update_interval_s,
@@ -162,13 +165,13 @@ using pipeline::Progress;
 
 // The Allan analysis of the run's static segments, when identification runs.
 std::optional<ident::AllanResult> AllanOfStaticSegments(const BenchRun& run, const AnalysisOptions& options,
-                                                        std::vector<std::string>& notes) {
+                                                        DecisionLog& decisions) {
   if (!options.identify) return std::nullopt;
   auto allan = ident::AllanAnalysis(run, options.allan);
   if (allan.ok()) {
     for (const ident::AllanChannel& ch : allan->channels) {
       for (const ident::RateJump& j : ch.jumps) {
-        notes.push_back(
+        decisions.Note(
             absl::StrFormat("the Allan analysis cut %s's static segment at %.1f s, where its "
                             "rate's mean jumps by %.3g %s (z %.1f): "
                             "a step is not noise, and the curve leaves it out",
@@ -176,7 +179,7 @@ std::optional<ident::AllanResult> AllanOfStaticSegments(const BenchRun& run, con
       }
       if (ch.ramp_evidence.has_value() && !ch.ramps.empty()) {
         const ident::RateRamp& ramp = ch.ramps.front();
-        notes.push_back(absl::StrFormat(
+        decisions.Note(absl::StrFormat(
             "the Allan analysis took a ramp out of %s's static segments: its Allan variance at "
             "τ %.0f s is %.3g times its Hadamard variance (z %.1f), which no noise of the model "
             "exceeds twice; the rate ramps by %.3g %s/s from %.1f s",
@@ -186,7 +189,7 @@ std::optional<ident::AllanResult> AllanOfStaticSegments(const BenchRun& run, con
     }
     return *std::move(allan);
   }
-  notes.push_back("no Allan analysis: " + std::string(allan.status().message()));
+  decisions.Note("no Allan analysis: " + std::string(allan.status().message()));
   return std::nullopt;
 }
 
@@ -327,7 +330,7 @@ std::array<double, DriftAxis::kCount> CountedQuantisationOf(const std::optional<
 // a unit far from it shows as a re-tuned drift or as effects near it.
 absl::StatusOr<pipeline::APriori> ChooseAPrioriModel(const BenchRun& run, const AnalysisRequest& request,
                                                      std::optional<ident::AllanResult>& allan,
-                                                     const AnalysisOptions& options, std::vector<std::string>& notes) {
+                                                     const AnalysisOptions& options, DecisionLog& decisions) {
   pipeline::APriori out;
   out.drift_starts = options.drift_starts;
   auto model = APrioriModel(run, request.nominal, options.reference);
@@ -339,7 +342,7 @@ absl::StatusOr<pipeline::APriori> ChooseAPrioriModel(const BenchRun& run, const 
     out.model = *std::move(model);
     return out;
   }
-  allan = AllanOfStaticSegments(run, options, notes);
+  allan = AllanOfStaticSegments(run, options, decisions);
   if (model.ok()) {
     const auto beyond = allan.has_value() ? DepartureBeyondSearch(*allan, *model, out.drift_starts,
                                                                   options.monitor.family_wise_alpha)
@@ -350,7 +353,7 @@ absl::StatusOr<pipeline::APriori> ChooseAPrioriModel(const BenchRun& run, const 
       out.model = *std::move(model);
       return out;
     }
-    notes.push_back(absl::StrFormat(
+    decisions.Note(absl::StrFormat(
         "the run's Allan deviation on %s at τ %.3g s is %.3g times the unit type's nominal model at "
         "the family-wise confidence bound: further than the drift identification searches from it. "
         "The unit is analysed as one without a unit type: the a-priori model comes from its Allan "
@@ -360,15 +363,17 @@ absl::StatusOr<pipeline::APriori> ChooseAPrioriModel(const BenchRun& run, const 
     // Neither source: say why the run's own noise could not stand in.
     return absl::Status(model.status().code(),
                         absl::StrCat(model.status().message(), "; nor can the run's own Allan deviation stand in (",
-                                     notes.empty() ? "" : notes.back(), ")"));
+                                     decisions.empty() ? "" : decisions.notes().back(), ")"));
   }
   const ReferenceAccuracy& reference = model.ok() ? model->reference : options.reference;
-  auto from_allan = ident::ErrorModelFromAllan(*allan, reference, &notes);
+  std::vector<std::string> allan_fit_notes;
+  auto from_allan = ident::ErrorModelFromAllan(*allan, reference, &allan_fit_notes);
+  decisions.NoteEach(allan_fit_notes);
   if (!from_allan.ok()) return from_allan.status();
   out.model = *std::move(from_allan);
   out.source = pipeline::APrioriSource::kAllanFit;
   if (!model.ok()) {
-    notes.push_back(
+    decisions.Note(
         "the run has no complete datasheet and no nominal model: the a-priori model comes from its "
         "Allan deviation");
   }
@@ -381,7 +386,7 @@ absl::StatusOr<pipeline::APriori> ChooseAPrioriModel(const BenchRun& run, const 
 // (STATIC) and the filter's estimates of the model's constant effects
 // (FILTER, from model A's pass).
 pipeline::Identification IdentifiedEarlier(const IdentifiedModel& earlier, const ErrorModel& base,
-                                           std::vector<std::string>& notes) {
+                                           DecisionLog& decisions) {
   pipeline::Identification out;
   out.model = earlier.model;
   for (const ModelEffect& e : base.effects) {
@@ -392,17 +397,17 @@ pipeline::Identification IdentifiedEarlier(const IdentifiedModel& earlier, const
       out.identified.push_back(p);
     }
   }
-  notes.push_back("model A is the model an earlier analysis of this run identified: it was not identified again");
+  decisions.Note("model A is the model an earlier analysis of this run identified: it was not identified again");
   return out;
 }
 
 // Model A: the identified model's final pass with the missing-effect scan,
 // or the identification's scanned pass when it is of the same model.
 absl::StatusOr<pipeline::ScannedModel> ScanModelA(const pipeline::RunContext& c, const AnalysisRequest& request,
-                                                  pipeline::Identification& id, std::vector<std::string>& notes) {
+                                                  pipeline::Identification& id, DecisionLog& decisions) {
   Progress(c.options, 0.65, "missing-effect scan");
   if (id.scanned.has_value() && id.scanned->pass.model == id.model) {
-    notes.insert(notes.end(), id.scanned->notes.begin(), id.scanned->notes.end());
+    decisions.Append(id.scanned->decisions);
     return std::move(*id.scanned);
   }
   auto pass = pipeline::RunPass(c.run, c.epochs, id.model, c.samples, c.options, /*with_scan=*/true);
@@ -411,11 +416,11 @@ absl::StatusOr<pipeline::ScannedModel> ScanModelA(const pipeline::RunContext& c,
   pipeline::SettledStructures settled;
   if (request.identified_base.has_value() && !c.options.retest_settled_structures) {
     settled.candidates = request.identified_base->structure_outcomes;
-    notes.push_back("model A's likelihood tests of walks and second-order drifts ran again only where the earlier "
+    decisions.Note("model A's likelihood tests of walks and second-order drifts ran again only where the earlier "
                     "analysis found a structure or did not test one");
   }
   pipeline::ScannedModel a;
-  a.found = pipeline::FindMissingEffects(c, *pass, c.options, &notes, settled);
+  a.found = pipeline::FindMissingEffects(c, *pass, c.options, &decisions, settled);
   a.pass = *std::move(pass);
   return a;
 }
@@ -423,13 +428,13 @@ absl::StatusOr<pipeline::ScannedModel> ScanModelA(const pipeline::RunContext& c,
 // The options with the update interval this run is filtered at
 // (UpdateIntervalForRun), and a note where it is not the one asked for.
 AnalysisOptions WithTheRunsUpdateInterval(const AnalysisOptions& requested, const BenchRun& run,
-                                          std::vector<std::string>& notes) {
+                                          DecisionLog& decisions) {
   AnalysisOptions out = requested;
   const double sample_interval_s = run.NominalIntervalS();
   out.filter.update_interval_s =
       UpdateIntervalForRun(requested.filter.update_interval_s, sample_interval_s);
   if (out.filter.update_interval_s != requested.filter.update_interval_s) {
-    notes.push_back(
+    decisions.Note(
         absl::StrFormat("updates every %.3g s (two samples) for the %.3g s asked: "
                         "with one sample an update interval, the position and velocity innovations "
                         "are multiples of one another and the six channels carry three dimensions",
@@ -440,11 +445,11 @@ AnalysisOptions WithTheRunsUpdateInterval(const AnalysisOptions& requested, cons
 
 // The encoders' readout noise, unless the model states it: the attitude
 // channels' noise, and what "the table stands still" tolerates (epoch_run.h).
-void MeasureAttitudeReadout(const BenchRun& run, ErrorModel& model, std::vector<std::string>& notes) {
+void MeasureAttitudeReadout(const BenchRun& run, ErrorModel& model, DecisionLog& decisions) {
   if (!run.ReferenceAttitudeIsRead() || model.reference.attitude_readout_sigma_rad > 0.0) return;
   model.reference.attitude_readout_sigma_rad = nav::AttitudeReadoutNoiseRad(run);
   if (model.reference.attitude_readout_sigma_rad > 0.0) {
-    notes.push_back(absl::StrFormat(
+    decisions.Note(absl::StrFormat(
         "the table's encoders read the attitude with a noise of %.3g rad (from the reference's second differences)",
         model.reference.attitude_readout_sigma_rad));
   }
@@ -453,9 +458,9 @@ void MeasureAttitudeReadout(const BenchRun& run, ErrorModel& model, std::vector<
 // What the filter starts from where the run says its heading was not
 // surveyed (bench_run.h): the user reads why the horizontal gyros' constant
 // terms come with the heading's uncertainty.
-void NoteUnsurveyedHeading(const BenchRun& run, const ErrorModel& model, std::vector<std::string>& notes) {
+void NoteUnsurveyedHeading(const BenchRun& run, const ErrorModel& model, DecisionLog& decisions) {
   if (run.metadata.AttitudeAccuracy().heading_surveyed) return;
-  notes.push_back(absl::StrFormat(
+  decisions.Note(absl::StrFormat(
       "the bench did not survey the heading: the filter starts it with σ %.3g rad, as gyro-compassing the start "
       "leaves it with this model's drifts (at most %.3g rad); at rest a heading error reads as a horizontal gyro bias "
       "of up to Ω cos L, so those two are told apart only where the table turns",
@@ -487,8 +492,8 @@ absl::StatusOr<Analysis> Analyze(BenchRun&& input, const AnalysisRequest& reques
                                  const AnalysisOptions& requested_options) {
   if (auto st = requested_options.Validate(); !st.ok()) return st;
   if (input.samples.size() < 2) return absl::InvalidArgumentError("the run has fewer than two samples");
-  std::vector<std::string> notes;
-  const AnalysisOptions options = WithTheRunsUpdateInterval(requested_options, input, notes);
+  DecisionLog decisions;
+  const AnalysisOptions options = WithTheRunsUpdateInterval(requested_options, input, decisions);
 
   Progress(options, 0.0, "screening samples");
   // The samples are screened and their dominant constants removed in place:
@@ -511,12 +516,12 @@ absl::StatusOr<Analysis> Analyze(BenchRun&& input, const AnalysisRequest& reques
 
   Progress(options, 0.05, "Allan deviation and the run condensed to its epochs");
   std::optional<ident::AllanResult> allan;
-  auto a_priori = ChooseAPrioriModel(run, request, allan, options, notes);
+  auto a_priori = ChooseAPrioriModel(run, request, allan, options, decisions);
   if (!a_priori.ok()) return a_priori.status();
-  MeasureAttitudeReadout(run, a_priori->model, notes);
-  NoteUnsurveyedHeading(run, a_priori->model, notes);
+  MeasureAttitudeReadout(run, a_priori->model, decisions);
+  NoteUnsurveyedHeading(run, a_priori->model, decisions);
   const ident::RemovedConstants removed_constants =
-      options.remove_dominant_constants ? RemoveDominantConstants(run, allan, *a_priori, options, notes)
+      options.remove_dominant_constants ? RemoveDominantConstants(run, allan, *a_priori, options, decisions)
                                         : ident::RemovedConstants{};
   ErrorModel base = a_priori->model;
   if (auto st = AddEffects(run, request.baseline_effects, options.filter.update_interval_s,
@@ -530,13 +535,13 @@ absl::StatusOr<Analysis> Analyze(BenchRun&& input, const AnalysisRequest& reques
   // need it first: identification and the report take it (the dominant
   // constants removed leave an Allan deviation as it was).
   absl::StatusOr<EpochRun> epochs;
-  std::vector<std::string> allan_notes;
+  DecisionLog allan_notes;
   numerics::InParallel(
       [&] { epochs = CondenseRun(run, base, options.filter.update_interval_s, &compensations); },
       [&] {
         if (a_priori->FromDatasheet()) allan = AllanOfStaticSegments(run, options, allan_notes);
       });
-  notes.insert(notes.end(), allan_notes.begin(), allan_notes.end());
+  decisions.Append(allan_notes);
   if (!epochs.ok()) return epochs.status();
   a_priori->counted_quantisation = CountedQuantisationOf(allan);
   const RawSampleEvidence raw_samples = RawSampleEvidenceOf(run, allan, a_priori->model, options);
@@ -549,20 +554,20 @@ absl::StatusOr<Analysis> Analyze(BenchRun&& input, const AnalysisRequest& reques
   pipeline::Identification identification;
   identification.model = std::move(base);
   if (request.identified_base.has_value()) {
-    identification = IdentifiedEarlier(*request.identified_base, identification.model, notes);
+    identification = IdentifiedEarlier(*request.identified_base, identification.model, decisions);
   } else if (options.identify) {
-    auto identified = pipeline::IdentifyModel(context, allan, identification.model, notes);
+    auto identified = pipeline::IdentifyModel(context, allan, identification.model, decisions);
     if (!identified.ok()) return identified.status();
     identification = *std::move(identified);
   }
 
-  auto a = ScanModelA(context, request, identification, notes);
+  auto a = ScanModelA(context, request, identification, decisions);
   if (!a.ok()) return a.status();
   std::vector<ParameterEstimate> identified = std::move(identification.identified);
   identified.insert(identified.begin(), removed_constants.estimates.begin(), removed_constants.estimates.end());
   pipeline::ScannedModelA model_a{a->pass, a->found,
-                                  pipeline::ReportOf(context, a->pass, a->found, identified, notes),
-                                  identified, notes};
+                                  pipeline::ReportOf(context, a->pass, a->found, identified, decisions),
+                                  identified, decisions};
 
   absl::StatusOr<Analysis> out;
   if (request.discover) {

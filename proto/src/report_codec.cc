@@ -292,6 +292,50 @@ engine::EffectCandidate CandidateOf(const v1::EffectCandidate& in) {
   return out;
 }
 
+
+v1::Decision::Kind ToProto(engine::DecisionKind kind) {
+  switch (kind) {
+    case engine::DecisionKind::kDriftsIdentified:
+      return v1::Decision::DRIFTS_IDENTIFIED;
+    case engine::DecisionKind::kDriftsNotIdentifiable:
+      return v1::Decision::DRIFTS_NOT_IDENTIFIABLE;
+    case engine::DecisionKind::kDriftErrorsWidened:
+      return v1::Decision::DRIFT_ERRORS_WIDENED;
+    case engine::DecisionKind::kDriftsOverCandidate:
+      return v1::Decision::DRIFTS_OVER_CANDIDATE;
+    case engine::DecisionKind::kFaultAgainstDrifts:
+      return v1::Decision::FAULT_AGAINST_DRIFTS;
+    case engine::DecisionKind::kReferenceNoiseRaised:
+      return v1::Decision::REFERENCE_NOISE_RAISED;
+    case engine::DecisionKind::kNoiseRetuned:
+      break;
+  }
+  return v1::Decision::NOISE_RETUNED;
+}
+
+void Fill(const engine::Decision& d, v1::Decision* out) {
+  out->set_kind(ToProto(d.kind));
+  for (const std::string& s : d.subjects) out->add_subjects(s);
+  out->set_scope(d.scope);
+  if (std::isfinite(d.statistic)) out->set_statistic(d.statistic);
+  out->set_degrees_of_freedom(d.degrees_of_freedom);
+  if (std::isfinite(d.level)) out->set_level(d.level);
+  if (std::isfinite(d.p_value)) out->set_p_value(d.p_value);
+  out->set_adopted(d.adopted);
+  for (const engine::WeighedAlternative& a : d.rejected) {
+    v1::Decision::Alternative* alternative = out->add_rejected();
+    alternative->set_name(a.name);
+    if (std::isfinite(a.statistic)) alternative->set_statistic(a.statistic);
+  }
+  for (const auto& [name, value] : d.measures) {
+    v1::Decision::Measure* m = out->add_measures();
+    m->set_name(name);
+    m->set_value(value);
+  }
+  for (const std::string& q : d.qualifiers) out->add_qualifiers(q);
+  out->set_note(engine::RenderNote(d));
+}
+
 }  // namespace
 
 absl::StatusOr<engine::IdentifiedModel> IdentifiedModelOf(const v1::AnalysisReport& report) {
@@ -366,6 +410,7 @@ v1::AnalysisReport ToProto(const engine::AnalysisReport& r, const engine::ErrorM
   for (const auto& l : r.discrepancies) Fill(l, out.add_discrepancies());
   for (const auto& n : r.notes) out.add_notes(n);
   for (const auto& line : r.plain_words) out.add_plain_words(line);
+  for (const engine::Decision& d : r.decisions) Fill(d, out.add_decisions());
   out.set_duration_s(r.duration_s);
   out.set_sample_count(static_cast<int64_t>(r.samples));
   out.set_sample_rate_hz(r.sample_rate_hz);

@@ -35,6 +35,33 @@ TEST(ReportCodec, UntestedCandidateIsFlaggedAndItsUnknownErrorIsFinite) {
 }
 
 
+// What the engine decided reaches API clients as records: the kind, its
+// test, what it rejected, and the note the report's notes carry for it.
+TEST(ReportCodec, DecisionsCarryTheirKindTestAndNote) {
+  engine::Decision d;
+  d.kind = engine::DecisionKind::kDriftsOverCandidate;
+  d.subjects = {"gyro_bias_gm.x.sigma", "gyro_bias_gm.x.tau"};
+  d.statistic = -115.5;
+  d.adopted = true;
+  d.rejected = {{"gyro_scale_factor.z", -4.1}};
+  engine::AnalysisReport report;
+  report.decisions = {d};
+  const v1::AnalysisReport out = ToProto(report, engine::ErrorModel{});
+  ASSERT_EQ(out.decisions_size(), 1);
+  const v1::Decision& carried = out.decisions(0);
+  EXPECT_EQ(carried.kind(), v1::Decision::DRIFTS_OVER_CANDIDATE);
+  EXPECT_EQ(carried.subjects_size(), 2);
+  EXPECT_TRUE(carried.adopted());
+  EXPECT_EQ(carried.statistic(), -115.5);
+  EXPECT_FALSE(carried.has_p_value());  // none was weighed: absent, not 0
+  ASSERT_EQ(carried.rejected_size(), 1);
+  EXPECT_EQ(carried.rejected(0).name(), "gyro_scale_factor.z");
+  EXPECT_EQ(carried.note(), engine::RenderNote(d));
+  const auto json = ToJson(carried, /*pretty=*/false);
+  ASSERT_TRUE(json.ok()) << json.status();
+  EXPECT_NE(json->find("\"kind\":\"DRIFTS_OVER_CANDIDATE\""), std::string::npos) << *json;
+}
+
 engine::ParameterEstimate FilterConstant(std::string name, double std_error, double prior_std, double correlation,
                                          std::string correlated_with = "") {
   engine::ParameterEstimate p;

@@ -31,11 +31,10 @@ TEST(NoiseRetuneTest, RealRecordNisNearOne) {
   ASSERT_TRUE(a.ok()) << a.status();
   std::printf("NIS mean %.3f\n", a->report.fit.nis_mean);
   bool retuned = false;
-  for (const std::string& n : a->report.notes) {
-    if (n.find("re-tuned by maximum likelihood") != std::string::npos) {
-      retuned = true;
-      std::printf("%s\n", n.c_str());
-    }
+  for (const Decision& d : a->report.decisions) {
+    if (d.kind != DecisionKind::kNoiseRetuned) continue;
+    retuned = true;
+    std::printf("%s\n", RenderNote(d).c_str());
   }
   EXPECT_TRUE(retuned);
   EXPECT_NEAR(a->report.fit.nis_mean, 1.0, 0.2);
@@ -121,8 +120,8 @@ void AddSway(BenchRun& run, const Eigen::Vector3d& sway_m, std::uint64_t seed) {
 }
 
 bool SaysTheReferenceNoiseWasRaised(const AnalysisReport& report) {
-  return std::any_of(report.notes.begin(), report.notes.end(), [](const std::string& n) {
-    return n.find("the reference noise was raised") != std::string::npos;
+  return std::any_of(report.decisions.begin(), report.decisions.end(), [](const Decision& d) {
+    return d.kind == DecisionKind::kReferenceNoiseRaised && d.adopted;
   });
 }
 

@@ -144,7 +144,7 @@ void ConfirmFaultsOutsideTheLinearRange(const BenchRun& run, const ModelPass& a,
 // Further faults re-tested beside the ones that stand (header).
 std::vector<FaultFinding> FaultsThatStandTogether(const RunContext& c, const ModelPass& pass,
                                                   std::vector<FaultFinding> findings,
-                                                  std::vector<std::string>& notes) {
+                                                  DecisionLog& decisions) {
   if (findings.size() < 2) return findings;
   const double alpha = c.options.finder.family_wise_alpha;
   const int fault_terms = static_cast<int>(pass.onsets.size());
@@ -159,11 +159,11 @@ std::vector<FaultFinding> FaultsThatStandTogether(const RunContext& c, const Mod
       for (const FaultFinding& s : standing)
         absl::StrAppend(&before, before.empty() ? "" : ", ", s.term.Name());
       if (!p.ok()) {
-        notes.push_back(
+        decisions.Note(
             absl::StrFormat("%s at %.0f s could not be tested beside %s (%s): it stands",
                             f.term.Name(), f.onset_s, before, p.status().message()));
       } else if (!(*p < alpha)) {
-        notes.push_back(absl::StrFormat(
+        decisions.Note(absl::StrFormat(
             "%s at %.0f s is not a further fault: with %s in the model its onset scan gives p %.2g "
             "(over the %d fault terms), above %.2g: it stood for what the missing %s left in the "
             "innovations",

@@ -11,6 +11,7 @@
 
 #include "analysis/model_pass.h"
 #include "analysis/run_context.h"
+#include "insdiag/engine/decision.h"
 #include "insdiag/engine/finder/fault_findings.h"
 
 namespace insdiag::engine::pipeline {
@@ -39,6 +40,6 @@ void ConfirmFaultsOutsideTheLinearRange(const BenchRun& run, const ModelPass& a,
 // evidence, not the innovations', and stands as it is.
 std::vector<FaultFinding> FaultsThatStandTogether(const RunContext& c, const ModelPass& pass,
                                                   std::vector<FaultFinding> findings,
-                                                  std::vector<std::string>& notes);
+                                                  DecisionLog& decisions);
 
 }  // namespace insdiag::engine::pipeline

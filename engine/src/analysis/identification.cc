@@ -21,28 +21,29 @@ namespace {
 // against `reference` (ident::WidenErrorsToTheLikelihoodRatio), with a note
 // naming the drifts widened.
 void WidenErrorsOrSay(const EpochRun& epochs, const ErrorModel& reference, ident::DriftLikelihoodResult& ml,
-                      std::vector<std::string>& notes) {
+                      DecisionLog& decisions) {
   auto widened = ident::WidenErrorsToTheLikelihoodRatio(epochs, reference, ml);
   if (!widened.ok()) {
-    notes.push_back("the drift estimates' standard errors were not checked against their likelihood ratio: " +
+    decisions.Note("the drift estimates' standard errors were not checked against their likelihood ratio: " +
                     std::string(widened.status().message()));
     return;
   }
   if (widened->empty()) return;
-  std::string names;
-  for (const std::string& n : *widened) names += (names.empty() ? "" : ", ") + n;
-  notes.push_back("standard errors widened to the likelihood ratio against the a-priori values (the curvature at "
-                  "the estimate understated how flat the likelihood stays along the σ–τ ridge): " + names);
+  Decision d;
+  d.kind = DecisionKind::kDriftErrorsWidened;
+  d.subjects = *std::move(widened);
+  d.adopted = true;
+  decisions.Record(std::move(d));
 }
 
 // The drifts whose likelihood estimates the raw samples refuted: a note on
 // each, and no earlier estimate of them kept (it was fitted as they were).
 void NoteDriftsHeldByRawSamples(const ident::DriftLikelihoodResult& ml,
                                 std::vector<ParameterEstimate>& identified,
-                                std::vector<std::string>& notes) {
+                                DecisionLog& decisions) {
   for (const ident::HeldDrift& h : ml.held_by_raw_samples) {
     const std::string_view unit = UnitsOf(h.drift.sensor).rate;
-    notes.push_back(
+    decisions.Note(
         absl::StrFormat("%s: the innovations' likelihood peaks at σ %.3g %s, τ %.3g s, whose Allan "
                         "variance at a cluster time of %.3g s is %.3g "
                         "times what the static segments' raw samples allow at the family-wise "
@@ -78,12 +79,12 @@ bool RejectsTheModelsValues(const ident::DriftLikelihoodResult& ml, double alpha
 // a bound of the static segments) has nothing the data must overturn: it
 // takes the estimates whatever the statistic.
 bool ApplyDriftLikelihood(const ident::DriftLikelihoodResult& ml, double alpha, bool placeholders, ErrorModel& base,
-                          std::vector<ParameterEstimate>& identified, std::vector<std::string>& notes) {
+                          std::vector<ParameterEstimate>& identified, DecisionLog& decisions) {
   if (!ml.not_identifiable.empty()) {
-    std::string names;
-    for (const std::string& n : ml.not_identifiable) names += (names.empty() ? "" : ", ") + n;
-    notes.push_back("not identifiable with this run's motion (the innovations' likelihood is flat in them): " +
-                    names);
+    Decision flat;
+    flat.kind = DecisionKind::kDriftsNotIdentifiable;
+    flat.subjects = ml.not_identifiable;
+    decisions.Record(std::move(flat));
     // An earlier estimate of them (the common re-tune of an Allan fit's
     // placeholders) held everything else fixed: its standard error says
     // nothing of what the run cannot tell, so it is not reported.
@@ -91,26 +92,26 @@ bool ApplyDriftLikelihood(const ident::DriftLikelihoodResult& ml, double alpha, 
       return std::find(ml.not_identifiable.begin(), ml.not_identifiable.end(), q.name) != ml.not_identifiable.end();
     });
   }
-  NoteDriftsHeldByRawSamples(ml, identified, notes);
+  NoteDriftsHeldByRawSamples(ml, identified, decisions);
   if (ml.identified.empty()) return false;
   for (const ParameterEstimate& p : ml.identified) {
     std::erase_if(identified, [&](const ParameterEstimate& q) { return q.name == p.name; });
     identified.push_back(p);
   }
-  const double statistic = DriftStatistic(ml);
-  const auto dof = static_cast<int>(ml.identified.size());
   const bool rejects = RejectsTheModelsValues(ml, alpha);
   const bool takes = rejects || placeholders;
   if (takes) base = ml.model;
-  std::string names;
-  for (const ParameterEstimate& p : ml.identified) names += (names.empty() ? "" : ", ") + p.name;
-  notes.push_back("drift parameters identified by likelihood of the innovations: " + names +
-                  absl::StrFormat(" (EM, %d iterations%s, %d filter passes): 2Δℓ = %.1f against χ²(%d) at %.2g — ",
-                                  ml.iterations, ml.converged ? "" : ", not converged", ml.filter_passes, statistic,
-                                  dof, alpha) +
-                  (rejects        ? "the model takes the estimates"
-                   : placeholders ? "the model's values were the Allan fit's placeholders: it takes the estimates"
-                                  : "the data do not reject the model's values, kept"));
+  Decision d;
+  d.kind = DecisionKind::kDriftsIdentified;
+  d.statistic = DriftStatistic(ml);
+  d.degrees_of_freedom = static_cast<int>(ml.identified.size());
+  d.level = alpha;
+  d.adopted = takes;
+  d.measures = {{"iterations", ml.iterations}, {"filter_passes", ml.filter_passes}};
+  for (const ParameterEstimate& p : ml.identified) d.subjects.push_back(p.name);
+  if (!ml.converged) d.qualifiers.emplace_back("not_converged");
+  if (takes && !rejects) d.qualifiers.emplace_back("placeholders");
+  decisions.Record(std::move(d));
   return takes;
 }
 
@@ -186,12 +187,12 @@ std::vector<OnsetFit> MostSignificantStepAndRamp(const std::vector<OnsetFit>& on
 // standard errors checked against the likelihood ratio.
 absl::StatusOr<ident::DriftLikelihoodResult> DriftsFromStarts(const RunContext& c,
                                                               const ErrorModel& model,
-                                                              std::vector<std::string>& notes) {
+                                                              DecisionLog& decisions) {
   auto ml =
       ident::IdentifyDriftsFromStarts(c.epochs, model, c.a_priori.model, DriftSelection::Every(),
                                       c.a_priori.drift_starts, c.drift_ceilings, c.options.drift_likelihood);
   if (ml.ok()) ml = ident::KeepDriftsWorthTheirParameters(c.epochs, model, *std::move(ml));
-  if (ml.ok()) WidenErrorsOrSay(c.epochs, c.a_priori.model, *ml, notes);
+  if (ml.ok()) WidenErrorsOrSay(c.epochs, c.a_priori.model, *ml, decisions);
   return ml;
 }
 
@@ -203,7 +204,7 @@ absl::StatusOr<ident::DriftLikelihoodResult> DriftsBesideTheCandidate(const RunC
                                                                       const ErrorModel& base) {
   auto with_candidate = ExtendModel(c.run, base, {best.name}, pass, found, c.options);
   if (!with_candidate.ok()) return with_candidate.status();
-  std::vector<std::string> fit_notes;
+  DecisionLog fit_notes;
   return DriftsFromStarts(c, *with_candidate, fit_notes);
 }
 
@@ -234,25 +235,36 @@ bool DriftsOffBesideTheCandidate(const RunContext& c,
 bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass,
                                       const Findings& found, const EffectCandidate& best,
                                       ErrorModel& base, std::vector<ParameterEstimate>& identified,
-                                      std::vector<std::string>& notes) {
+                                      DecisionLog& decisions) {
   const AnalysisOptions& options = c.options;
   const double log_n = std::log(static_cast<double>(std::max(1, pass.forward.scalar_updates)));
-  auto ml = DriftsFromStarts(c, base, notes);
+  auto ml = DriftsFromStarts(c, base, decisions);
   if (!ml.ok()) {
-    notes.push_back("the drifts were not identified against the candidates: " + std::string(ml.status().message()));
+    decisions.Note("the drifts were not identified against the candidates: " + std::string(ml.status().message()));
     return false;
   }
   if (ml->identified.empty()) {
-    notes.push_back("no drift's σ and τ by likelihood are worth their parameters against the candidates");
+    decisions.Note("no drift's σ and τ by likelihood are worth their parameters against the candidates");
     return false;
   }
   const double drift_bic = -DriftStatistic(*ml) + static_cast<double>(ml->identified.size()) * log_n;
+  // The drifts against the best candidate by ΔBIC: the candidate is the
+  // alternative a drift explanation rejects.
+  const auto over_candidate = [&](bool adopted, std::vector<std::string> qualifiers,
+                                  std::vector<std::pair<std::string, double>> measures) {
+    Decision d;
+    d.kind = DecisionKind::kDriftsOverCandidate;
+    d.statistic = drift_bic;
+    d.adopted = adopted;
+    d.rejected = {{best.name, best.predicted_delta_bic}};
+    d.measures = std::move(measures);
+    d.qualifiers = std::move(qualifiers);
+    for (const ParameterEstimate& p : ml->identified) d.subjects.push_back(p.name);
+    decisions.Record(std::move(d));
+  };
   if (drift_bic < best.predicted_delta_bic &&
-      ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, c.a_priori.FromAllanFit(), base, identified, notes)) {
-    notes.push_back(absl::StrFormat("the a-priori model's misfit is the drifts' σ rather than a missing effect (ΔBIC "
-                                    "%.1f against the best candidate's %.1f): the model takes them and is scanned "
-                                    "again",
-                                    drift_bic, best.predicted_delta_bic));
+      ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, c.a_priori.FromAllanFit(), base, identified, decisions)) {
+    over_candidate(true, {}, {});
     return true;
   }
   // What the likelihood measures of the drifts beside a fault: a jump or a
@@ -265,7 +277,7 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
   if (!c.a_priori.FromDatasheet() || fault) {
     beside = DriftsBesideTheCandidate(c, pass, found, best, base);
     if (!beside->ok()) {
-      notes.push_back("the drifts were not identified beside " + best.name + ": " +
+      decisions.Note("the drifts were not identified beside " + best.name + ": " +
                       std::string(beside->status().message()));
     }
   }
@@ -277,18 +289,15 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
   if (!c.a_priori.FromDatasheet() && DriftsOffBesideTheCandidate(c, *beside)) {
     const double statistic = DriftStatistic(**beside);
     const auto dof = static_cast<int>((*beside)->identified.size());
-    notes.push_back(absl::StrFormat(
+    decisions.Note(absl::StrFormat(
         "the drifts' σ and τ identified beside %s (%d parameters, EM %d iterations, "
         "%d filter passes) still raise the likelihood by 2Δℓ = %.1f, beyond χ²(%d) at %.2g: "
         "the a-priori model's misfit is its drifts as well",
         best.name, dof, (*beside)->iterations, (*beside)->filter_passes, statistic, dof,
         options.monitor.family_wise_alpha));
     if (ApplyDriftLikelihood(*ml, options.monitor.family_wise_alpha, c.a_priori.FromAllanFit(), base,
-                             identified, notes)) {
-      notes.push_back(absl::StrFormat(
-          "the model takes the drifts' own estimates (ΔBIC %.1f; the best candidate's "
-          "%.1f) and is scanned again",
-          drift_bic, best.predicted_delta_bic));
+                             identified, decisions)) {
+      over_candidate(true, {"beside_the_candidate_too"}, {});
       return true;
     }
   }
@@ -306,22 +315,15 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
     std::erase_if(identified, [&](const ParameterEstimate& q) { return q.name == p.name; });
     identified.push_back(p);
   }
-  const std::string standing = absl::StrFormat(
-      "the drifts' σ and τ by likelihood (%zu parameters worth their cost) reach ΔBIC %.1f "
-      "against the best candidate's %.1f: the candidates stand",
-      ml->identified.size(), drift_bic, best.predicted_delta_bic);
+  const auto parameters = static_cast<double>(ml->identified.size());
   if (!fault) {
-    notes.push_back(standing +
-                    ", and the drift estimates are reported beside the a-priori model's values");
+    over_candidate(false, {}, {{"parameters", parameters}});
   } else if (reported->identified.empty()) {
-    notes.push_back(standing + "; beside " + best.name +
-                    " no drift's σ and τ are worth their parameters");
+    over_candidate(false, {"none_beside_the_fault"}, {{"parameters", parameters}});
   } else {
-    notes.push_back(
-        standing +
-        absl::StrFormat(", and the drift estimates identified beside %s (%zu parameters) "
-                        "are reported beside the a-priori model's values",
-                        best.name, reported->identified.size()));
+    over_candidate(false, {"reported_beside_the_fault"},
+                   {{"parameters", parameters},
+                    {"parameters_beside_the_fault", static_cast<double>(reported->identified.size())}});
   }
   return false;
 }
@@ -331,7 +333,7 @@ bool ChooseDriftsOverTheBestCandidate(const RunContext& c, const ModelPass& pass
 // missing effects: parameters identified under a model whose structure is
 // wrong soak up the missing effect (a drift widened to carry a scale-factor
 // error), so the retargeting waits until the structure is complete.
-absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std::vector<std::string>& notes) {
+absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, DecisionLog& decisions) {
   const AnalysisOptions& options = c.options;
   Retargeted out;
   for (int it = 0; it < options.max_retarget_iterations; ++it) {
@@ -344,9 +346,11 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std
     // analysed) or a guess from them, and its misfit shows as effects. Its
     // drifts are re-tuned by the whole run before the scan.
     const bool scan_a_priori = first && !c.a_priori.FromAllanFit();
-    std::vector<std::string> found_notes;
+    DecisionLog found_notes;
+    std::vector<std::string> correlation_notes;
     out.drifts = ident::CorrelateDrifts(pass->forward, pass->smoothed, *pass->layout, options.correlation,
-                                        scan_a_priori ? &found_notes : nullptr);
+                                        scan_a_priori ? &correlation_notes : nullptr);
+    found_notes.NoteEach(correlation_notes);
     // A bias step or ramp the onset scan finds counts too (Bonferroni over its terms).
     const auto family_wise = [&](const OnsetFit& f) {
       return f.p_value * static_cast<double>(pass->onsets.size()) < options.finder.family_wise_alpha;
@@ -368,11 +372,11 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std
       best = LowestBicSignificant(found.candidates, found.families, options);
     }
     if (best != nullptr) {
-      if (ChooseDriftsOverTheBestCandidate(c, *pass, found, *best, id.model, id.identified, notes)) {
+      if (ChooseDriftsOverTheBestCandidate(c, *pass, found, *best, id.model, id.identified, decisions)) {
         out.drifts_by_likelihood = true;
         continue;
       }
-      notes.push_back("the a-priori model lacks significant effects: the drift and reference-noise parameters "
+      decisions.Note("the a-priori model lacks significant effects: the drift and reference-noise parameters "
                       "are not re-tuned on this model (they would absorb what the effects explain); they are "
                       "identified when the analysis starts from a model with the effects (baseline effects)");
       id.scanned = ScannedModel{std::move(*pass), std::move(found), std::move(found_notes)};
@@ -390,7 +394,7 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std
     // have their likelihood values (FitReferenceNoiseToTheIdentifiedModel).
     const bool reference_changed =
         !out.DriftsFromAClassPrior(c.a_priori) &&
-        FitReferenceNoiseTheInnovationsReject(c, pass->forward, pass->model, step.model, notes);
+        FitReferenceNoiseTheInnovationsReject(c, pass->forward, pass->model, step.model, decisions);
     // Nothing significant: the report's scan when nothing below re-tunes
     // the model (the unit's a-priori model fits), else a new one.
     if (scan_a_priori) id.scanned = ScannedModel{std::move(*pass), std::move(found), std::move(found_notes)};
@@ -405,7 +409,7 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, std
     id.identified.insert(id.identified.end(), step.identified.begin(), step.identified.end());
     if (step.settled && !reference_changed) break;
     if (it + 1 == options.max_retarget_iterations) {
-      notes.push_back("the identified drift parameters had not settled after " +
+      decisions.Note("the identified drift parameters had not settled after " +
                       std::to_string(options.max_retarget_iterations) + " iterations");
     }
   }
@@ -454,16 +458,16 @@ absl::StatusOr<ident::DriftLikelihoodResult> IdentifyDriftSet(const RunContext& 
 // fault's test against the drifts: a drift that took the fault in is
 // identified again beside it, and the model without the fault is fitted alike.
 void IdentifyFinalDrifts(const RunContext& c, const Retargeted& retargeted, Identification& id,
-                         std::vector<std::string>& notes, bool both_sides_of_a_fault_test = false) {
+                         DecisionLog& decisions, bool both_sides_of_a_fault_test = false) {
   for (const bool resolved_set : {false, true}) {
     if (!resolved_set && retargeted.drifts_by_likelihood && !both_sides_of_a_fault_test) continue;
     auto ml = IdentifyDriftSet(c, id.model, retargeted, resolved_set, both_sides_of_a_fault_test);
-    if (ml.ok()) WidenErrorsOrSay(c.epochs, c.a_priori.model, *ml, notes);
+    if (ml.ok()) WidenErrorsOrSay(c.epochs, c.a_priori.model, *ml, decisions);
     if (!ml.ok()) {
-      notes.push_back("the drifts were not identified by likelihood: " + std::string(ml.status().message()));
+      decisions.Note("the drifts were not identified by likelihood: " + std::string(ml.status().message()));
     } else {
       ApplyDriftLikelihood(*ml, c.options.monitor.family_wise_alpha, c.a_priori.FromAllanFit(), id.model, id.identified,
-                           notes);
+                           decisions);
     }
   }
 }
@@ -481,7 +485,7 @@ void IdentifyFinalDrifts(const RunContext& c, const Retargeted& retargeted, Iden
 struct FaultAgainstDriftsTest {
   const OnsetFit* fault = nullptr;
   Identification with_fault;  // the drifts identified beside it (the fault in the model)
-  std::vector<std::string> notes;
+  DecisionLog decisions;
   double statistic = 0.0;
   double p_value = 1.0;
   bool tested = false;
@@ -496,11 +500,12 @@ FaultAgainstDriftsTest TestFaultAgainstDrifts(const RunContext& c, const Retarge
   t.with_fault.identified = id.identified;
   t.with_fault.model.effects.push_back(
       FaultEffectAt(fault.term, fault.onset_s, fault.estimate, fault.std_error, c.options));
-  IdentifyFinalDrifts(c, retargeted, t.with_fault, t.notes, /*both_sides_of_a_fault_test=*/true);
+  IdentifyFinalDrifts(c, retargeted, t.with_fault, t.decisions, /*both_sides_of_a_fault_test=*/true);
   auto with = ProfileLogLikelihood(c.epochs, t.with_fault.model);
   if (!with.ok()) {
-    t.notes = {fault.term.Name() + " against the identified drifts: not tested (" +
-               std::string(with.status().message()) + ")"};
+    t.decisions = DecisionLog{};
+    t.decisions.Note(fault.term.Name() + " against the identified drifts: not tested (" +
+                     std::string(with.status().message()) + ")");
     return t;
   }
   t.tested = true;
@@ -542,7 +547,7 @@ void AddFaultsOfTheIdentifiedDrifts(const RunContext& c, const ErrorModel& model
 // True when a fault stands.
 bool TestFaultsAgainstDrifts(const RunContext& c, const Retargeted& retargeted,
                              double log_likelihood_without, Identification& id,
-                             std::vector<std::string>& notes) {
+                             DecisionLog& decisions) {
   FaultAgainstDriftsTest* best = nullptr;
   std::vector<FaultAgainstDriftsTest> tests;
   for (const OnsetFit& f : retargeted.faults_to_test) {
@@ -550,15 +555,20 @@ bool TestFaultsAgainstDrifts(const RunContext& c, const Retargeted& retargeted,
   }
   for (FaultAgainstDriftsTest& t : tests) {
     if (!t.tested) {
-      notes.insert(notes.end(), t.notes.begin(), t.notes.end());
+      decisions.Append(t.decisions);
       continue;
     }
     const bool stands = t.p_value < c.options.finder.family_wise_alpha;
-    notes.push_back(absl::StrFormat(
-        "%s at %.0f s, tested with the drifts identified beside it: 2Δℓ = %.1f (p = "
-        "%.2g over the onsets and fault terms) — %s",
-        t.fault->term.Name(), t.fault->onset_s, t.statistic, t.p_value,
-        stands ? "it stands against the drifts identified from decades" : "their misfit"));
+    Decision d;
+    d.kind = DecisionKind::kFaultAgainstDrifts;
+    d.subjects = {t.fault->term.Name()};
+    d.statistic = t.statistic;
+    d.degrees_of_freedom = 1;
+    d.level = c.options.finder.family_wise_alpha;
+    d.p_value = t.p_value;
+    d.adopted = stands;
+    d.measures = {{"onset_s", t.fault->onset_s}};
+    decisions.Record(std::move(d));
     if (stands && (best == nullptr || t.statistic > best->statistic)) best = &t;
   }
   if (best == nullptr) return false;
@@ -575,8 +585,8 @@ bool TestFaultsAgainstDrifts(const RunContext& c, const Retargeted& retargeted,
     }
     if (seen != nullptr) best = seen;
   }
-  notes.push_back("model A has the drifts identified beside " + best->fault->term.Name());
-  notes.insert(notes.end(), best->notes.begin(), best->notes.end());
+  decisions.Note("model A has the drifts identified beside " + best->fault->term.Name());
+  decisions.Append(best->decisions);
   id.model = std::move(best->with_fault.model);
   id.identified = std::move(best->with_fault.identified);
   return true;
@@ -588,10 +598,10 @@ bool TestFaultsAgainstDrifts(const RunContext& c, const Retargeted& retargeted,
 // the tests are against. Drifts held for flagged faults of which none
 // stands take their own estimates: they were held for nothing.
 void TestFaultsAgainstTheIdentifiedDrifts(const RunContext& c, Retargeted& retargeted,
-                                          Identification& id, std::vector<std::string>& notes) {
+                                          Identification& id, DecisionLog& decisions) {
   auto forward = RunForwardFilter(c.epochs, id.model);
   if (!forward.ok()) {
-    notes.push_back("faults against the drifts identified from a class prior: not tested (" +
+    decisions.Note("faults against the drifts identified from a class prior: not tested (" +
                     std::string(forward.status().message()) + ")");
     return;
   }
@@ -603,7 +613,7 @@ void TestFaultsAgainstTheIdentifiedDrifts(const RunContext& c, Retargeted& retar
   // counts what those drifts gain as the fault's, and a healthy unit's ramp
   // stands on the drifts' gain.
   std::optional<Identification> without;
-  std::vector<std::string> without_notes;
+  DecisionLog without_notes;
   if (retargeted.FaultTestIdentifiesMoreDrifts(c.a_priori)) {
     without = Identification{};
     without->model = id.model;
@@ -613,12 +623,12 @@ void TestFaultsAgainstTheIdentifiedDrifts(const RunContext& c, Retargeted& retar
       log_likelihood_without = std::max(log_likelihood_without, *l);
     }
   }
-  const bool a_fault_stands = TestFaultsAgainstDrifts(c, retargeted, log_likelihood_without, id, notes);
+  const bool a_fault_stands = TestFaultsAgainstDrifts(c, retargeted, log_likelihood_without, id, decisions);
   if (!a_fault_stands && without.has_value() && retargeted.HoldsDriftsForFlaggedFaults(c.a_priori)) {
-    notes.push_back(
+    decisions.Note(
         "no flagged fault stands against the drifts identified beside it: model A has the drifts "
         "identified without one");
-    notes.insert(notes.end(), without_notes.begin(), without_notes.end());
+    decisions.Append(without_notes);
     id.model = std::move(without->model);
     id.identified = std::move(without->identified);
   }
@@ -627,26 +637,26 @@ void TestFaultsAgainstTheIdentifiedDrifts(const RunContext& c, Retargeted& retar
 }  // namespace
 
 absl::StatusOr<Identification> IdentifyModel(const RunContext& c, const std::optional<ident::AllanResult>& allan,
-                                             ErrorModel base, std::vector<std::string>& notes) {
+                                             ErrorModel base, DecisionLog& decisions) {
   Identification id;
   if (allan.has_value()) id.identified = ApplyAllanNoise(c, *allan, base);
   KeepQuantisationTheInnovationsSupport(c, QuantisationTest::kBeforeTheDrifts, base, id.identified,
-                                        notes);
-  RetuneUnresolvedNoise(c, allan, base, id.identified, notes);
+                                        decisions);
+  RetuneUnresolvedNoise(c, allan, base, id.identified, decisions);
   id.model = std::move(base);
-  auto retargeted = Retarget(c, id, notes);
+  auto retargeted = Retarget(c, id, decisions);
   if (!retargeted.ok()) return retargeted.status();
   if (!retargeted->deferred) {
-    IdentifyFinalDrifts(c, *retargeted, id, notes);
+    IdentifyFinalDrifts(c, *retargeted, id, decisions);
     // Drifts re-tuned from the unit's own specification keep what the scan finds beside them.
     if (retargeted->DriftsFromAClassPrior(c.a_priori) ||
         retargeted->HoldsAClassPriorsDriftsForFlaggedFaults(c.a_priori))
-      TestFaultsAgainstTheIdentifiedDrifts(c, *retargeted, id, notes);
+      TestFaultsAgainstTheIdentifiedDrifts(c, *retargeted, id, decisions);
     KeepQuantisationTheInnovationsSupport(c, QuantisationTest::kAfterTheDrifts, id.model,
-                                          id.identified, notes);
+                                          id.identified, decisions);
   }
   if (retargeted->DriftsFromAClassPrior(c.a_priori) && !retargeted->deferred) {
-    if (auto fitted = FitReferenceNoiseToTheIdentifiedModel(c, id.model, notes); !fitted.ok())
+    if (auto fitted = FitReferenceNoiseToTheIdentifiedModel(c, id.model, decisions); !fitted.ok())
       return fitted;
   }
   return id;

@@ -16,6 +16,7 @@
 
 #include "analysis/missing_effects.h"
 #include "analysis/run_context.h"
+#include "insdiag/engine/decision.h"
 #include "insdiag/engine/ident/allan.h"
 
 namespace insdiag::engine::pipeline {
@@ -31,6 +32,6 @@ struct Identification {
 
 // Identifies `base` (the a-priori model with the baseline effects) on the run.
 absl::StatusOr<Identification> IdentifyModel(const RunContext& c, const std::optional<ident::AllanResult>& allan,
-                                             ErrorModel base, std::vector<std::string>& notes);
+                                             ErrorModel base, DecisionLog& decisions);
 
 }  // namespace insdiag::engine::pipeline

@@ -296,7 +296,7 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
                                                             const AnalysisOptions& options,
                                                             const SettledStructures& settled,
                                                             StructureOutcomes& outcomes,
-                                                            std::vector<std::string>* notes) {
+                                                            DecisionLog* decisions) {
   std::vector<StructureProposal> out;
   const DriftSelection every_axis = DriftSelection::Every();
   DriftSelection unresolved;
@@ -365,8 +365,8 @@ std::vector<StructureProposal> LikelihoodStructureProposals(const EpochRun& epoc
     if (!fits[t].has_value()) continue;
     const absl::StatusOr<ident::DriftLikelihoodResult>& fitted = *fits[t];
     if (!fitted.ok()) {
-      if (notes != nullptr) {
-        notes->push_back(std::string("no likelihood test of ") + test.what + ": " +
+      if (decisions != nullptr) {
+        decisions->Note(std::string("no likelihood test of ") + test.what + ": " +
                          std::string(fitted.status().message()));
       }
       continue;
@@ -418,11 +418,11 @@ std::vector<EffectCandidate> MergeCandidates(std::vector<EffectCandidate> terms,
 // stand together, and the fault effects of its model whose estimates differ
 // from zero.
 std::vector<FaultFinding> FaultFindings(const RunContext& c, const ModelPass& pass,
-                                        const Findings& found, std::vector<std::string>& notes) {
+                                        const Findings& found, DecisionLog& decisions) {
   const AnalysisOptions& options = c.options;
   const double alpha = options.finder.family_wise_alpha;
   std::vector<FaultFinding> findings =
-      FaultsThatStandTogether(c, pass, SignificantFaults(found.candidates, alpha), notes);
+      FaultsThatStandTogether(c, pass, SignificantFaults(found.candidates, alpha), decisions);
   const int K = pass.forward.epochs();
   if (K == 0) return findings;
   for (const SensorState& s : pass.layout->sensor_states()) {
@@ -440,7 +440,7 @@ std::vector<FaultFinding> FaultFindings(const RunContext& c, const ModelPass& pa
 
 // `drifts`: correlation processing of this pass's smoothed drifts.
 Findings FindMissingEffects(const RunContext& context, const ModelPass& pass, std::vector<DriftCorrelation> drifts,
-                            const AnalysisOptions& options, std::vector<std::string>* notes,
+                            const AnalysisOptions& options, DecisionLog* decisions,
                             const SettledStructures& settled) {
   const BenchRun& run = context.run;
   const EpochRun& epochs = context.epochs;
@@ -464,7 +464,7 @@ Findings FindMissingEffects(const RunContext& context, const ModelPass& pass, st
   StructureOutcomes likelihood_outcomes, correlation_outcomes;
   std::vector<StructureProposal> proposals = LikelihoodStructureProposals(
       epochs, pass, a_priori, f.drifts, constant_significant, screen_alpha, context.drift_ceilings, options, settled,
-      likelihood_outcomes, notes);
+      likelihood_outcomes, decisions);
   for (StructureProposal& p : ProposeStructures(f.drifts, run.DurationS(), screen_alpha, correlation_outcomes)) {
     if (std::none_of(proposals.begin(), proposals.end(),
                      [&](const StructureProposal& o) { return o.effect.term == p.effect.term; })) {
@@ -524,10 +524,12 @@ Findings FindMissingEffects(const RunContext& context, const ModelPass& pass, st
 }
 
 Findings FindMissingEffects(const RunContext& c, const ModelPass& pass, const AnalysisOptions& options,
-                            std::vector<std::string>* notes, const SettledStructures& settled) {
-  return FindMissingEffects(
-      c, pass, ident::CorrelateDrifts(pass.forward, pass.smoothed, *pass.layout, options.correlation, notes),
-      options, notes, settled);
+                            DecisionLog* decisions, const SettledStructures& settled) {
+  std::vector<std::string> correlation_notes;
+  auto drifts = ident::CorrelateDrifts(pass.forward, pass.smoothed, *pass.layout, options.correlation,
+                                       decisions != nullptr ? &correlation_notes : nullptr);
+  if (decisions != nullptr) decisions->NoteEach(correlation_notes);
+  return FindMissingEffects(c, pass, std::move(drifts), options, decisions, settled);
 }
 
 bool AddsOnlyDeterministicEffects(const std::vector<std::string>& selectors) {
@@ -576,11 +578,11 @@ const EffectCandidate* NextDiscovery(const Findings& found, const AnalysisOption
 
 // The report of one scanned pass.
 AnalysisReport ReportOf(const RunContext& c, const ModelPass& pass, const Findings& found,
-                        const std::vector<ParameterEstimate>& identified, const std::vector<std::string>& notes) {
+                        const std::vector<ParameterEstimate>& identified, const DecisionLog& decisions) {
   AnalysisReport r;
   FillFit(pass, c.run, c.options, r);
   r.bench_motion = c.samples.bench_motion;
-  std::vector<std::string> fault_notes;
+  DecisionLog fault_notes;
   ReportFaults(FaultFindings(c, pass, found, fault_notes), c.run.samples.back().t_s, r);
   r.effect_candidates = found.candidates;
   r.family_candidates = found.families;
@@ -596,13 +598,15 @@ AnalysisReport ReportOf(const RunContext& c, const ModelPass& pass, const Findin
       unobservable += absl::StrFormat(" (only with %s: correlation %+.3f)", e.correlated_with, e.max_correlation);
     }
   }
-  r.notes = notes;
-  r.notes.insert(r.notes.end(), fault_notes.begin(), fault_notes.end());
+  DecisionLog all = decisions;
+  all.Append(fault_notes);
   if (!unobservable.empty()) {
-    r.notes.push_back("not observable from this run (inseparable from another state, or a standard error above "
-                      "half the prior's): " + unobservable +
-                      "; a test that moves the unit through more positions or turns tells them");
+    all.Note("not observable from this run (inseparable from another state, or a standard error above "
+             "half the prior's): " + unobservable +
+             "; a test that moves the unit through more positions or turns tells them");
   }
+  r.notes = all.notes();
+  r.decisions = all.decisions();
   return r;
 }
 

@@ -10,6 +10,7 @@
 
 #include "analysis/model_pass.h"
 #include "analysis/run_context.h"
+#include "insdiag/engine/decision.h"
 #include "insdiag/engine/ident/correlation.h"
 #include "insdiag/engine/ident/drift_likelihood.h"
 
@@ -58,7 +59,7 @@ bool AddsOnlyDeterministicEffects(const std::vector<std::string>& selectors);
 struct ScannedModel {
   ModelPass pass;
   Findings found;
-  std::vector<std::string> notes;
+  DecisionLog decisions;
 };
 
 // The missing effects of a scanned pass of the run `c`, under `options`
@@ -66,11 +67,11 @@ struct ScannedModel {
 // processing of this pass's smoothed drifts. The likelihood does not test
 // again the structures `settled` holds; the report takes their outcomes.
 Findings FindMissingEffects(const RunContext& c, const ModelPass& pass, std::vector<DriftCorrelation> drifts,
-                            const AnalysisOptions& options, std::vector<std::string>* notes,
+                            const AnalysisOptions& options, DecisionLog* decisions,
                             const SettledStructures& settled = {});
 // The same, correlating the pass's drifts first.
 Findings FindMissingEffects(const RunContext& c, const ModelPass& pass, const AnalysisOptions& options,
-                            std::vector<std::string>* notes, const SettledStructures& settled = {});
+                            DecisionLog* decisions, const SettledStructures& settled = {});
 
 // The significant, identifiable candidate whose predicted ΔBIC is lowest,
 // among single terms and whole families; nullptr when none is significant.
@@ -86,6 +87,6 @@ DriftSelection ResolvedDrifts(const std::vector<DriftCorrelation>& drifts);
 
 // The report of one scanned pass.
 AnalysisReport ReportOf(const RunContext& c, const ModelPass& pass, const Findings& found,
-                        const std::vector<ParameterEstimate>& identified, const std::vector<std::string>& notes);
+                        const std::vector<ParameterEstimate>& identified, const DecisionLog& decisions);
 
 }  // namespace insdiag::engine::pipeline

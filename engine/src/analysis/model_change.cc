@@ -236,9 +236,9 @@ absl::StatusOr<Analysis> Discover(const RunContext& c, ScannedModelA a) {
         !options.retest_settled_structures && AddsOnlyDeterministicEffects({top->name})
             ? SettledStructures{found.candidates, "the model before " + top->name + " was added"}
             : SettledStructures{};
-    Findings next_found = FindMissingEffects(c, *next, options, &a.notes, settled);
+    Findings next_found = FindMissingEffects(c, *next, options, &a.decisions, settled);
     identified = WithTakenStructures(std::move(identified), next->model, found);
-    AnalysisReport next_report = ReportOf(c, *next, next_found, identified, a.notes);
+    AnalysisReport next_report = ReportOf(c, *next, next_found, identified, a.decisions);
     report.discovery.push_back(StepOf(step, *top, next_report));
     next_report.discovery = report.discovery;
     latest = std::move(*next);
@@ -268,9 +268,9 @@ absl::StatusOr<Analysis> AddAndCompare(const RunContext& c, const std::vector<st
   const SettledStructures settled = !options.retest_settled_structures && AddsOnlyDeterministicEffects(effects)
                                         ? SettledStructures{a.found.candidates, "model A, without the added effects"}
                                         : SettledStructures{};
-  const Findings found_b = FindMissingEffects(c, *b, options, &a.notes, settled);
+  const Findings found_b = FindMissingEffects(c, *b, options, &a.decisions, settled);
   Analysis out;
-  out.report = ReportOf(c, *b, found_b, WithTakenStructures(a.identified, b->model, a.found), a.notes);
+  out.report = ReportOf(c, *b, found_b, WithTakenStructures(a.identified, b->model, a.found), a.decisions);
   std::vector<std::string> added;
   for (const std::string& e : b->model.EffectNames()) {
     if (a.pass.model.FindEffect(*ParseEffectSelector(e)->begin()) < 0) added.push_back(e);
@@ -329,7 +329,7 @@ absl::StatusOr<std::optional<Analysis>> ExplainTheStartByWarmUps(const RunContex
   if (!FailsOnlyBy(a.report, start_span_end_s, alpha)) return std::nullopt;
   const std::vector<std::string> warm_ups = WarmUpsLoweringTheBic(a.report);
   if (warm_ups.empty()) return std::nullopt;
-  auto b = AddAndCompare(c, warm_ups, ScannedModelA{a.pass, a.found, a.report, a.identified, a.notes});
+  auto b = AddAndCompare(c, warm_ups, ScannedModelA{a.pass, a.found, a.report, a.identified, a.decisions});
   if (!b.ok()) return b.status();
   const AnalysisReport& r = b->report;
   const bool better = static_cast<int>(r.verdict) < static_cast<int>(a.report.verdict);

@@ -22,7 +22,7 @@ struct ScannedModelA {
   const Findings& found;
   AnalysisReport report;
   std::vector<ParameterEstimate> identified;
-  std::vector<std::string> notes;
+  DecisionLog decisions;
 };
 
 // Walks the loop from model A; the analysis's report is the last model's,

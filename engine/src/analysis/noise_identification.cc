@@ -33,7 +33,7 @@ std::vector<ParameterEstimate> ApplyAllanNoise(const RunContext& c, const ident:
 void KeepQuantisationTheInnovationsSupport(const RunContext& c, QuantisationTest when,
                                            ErrorModel& model,
                                            std::vector<ParameterEstimate>& identified,
-                                           std::vector<std::string>& notes) {
+                                           DecisionLog& decisions) {
   Eigen::Vector3d stated = c.a_priori.FromAllanFit() ? Eigen::Vector3d::Zero()
                                                  : Eigen::Vector3d(c.a_priori.model.acc.quantization);
   for (int axis = 0; axis < 3; ++axis) {
@@ -58,7 +58,7 @@ void KeepQuantisationTheInnovationsSupport(const RunContext& c, QuantisationTest
       when == QuantisationTest::kBeforeTheDrifts ? "the a-priori drifts" : "the identified drifts";
   if (statistic > 0.0) {
     if (when == QuantisationTest::kAfterTheDrifts) {
-      notes.push_back(
+      decisions.Note(
           absl::StrFormat("the Allan fit's accelerometer quantisation (%s) is in the model: "
                           "with %s the innovations' likelihood prefers it, 2Δℓ = %.1f",
                           axes, against, statistic));
@@ -70,7 +70,7 @@ void KeepQuantisationTheInnovationsSupport(const RunContext& c, QuantisationTest
     const std::string name = QuantizationName({Sensor::kAccelerometer, axis});
     std::erase_if(identified, [&](const ParameterEstimate& p) { return p.name == name; });
   }
-  notes.push_back(
+  decisions.Note(
       absl::StrFormat("the Allan fit's accelerometer quantisation (%s) is not in the model: "
                       "with %s the innovations' likelihood is higher without it (2Δℓ = %.1f); "
                       "over the static segments' few short cluster times it stood for the "
@@ -80,7 +80,7 @@ void KeepQuantisationTheInnovationsSupport(const RunContext& c, QuantisationTest
 
 bool FitReferenceNoiseTheInnovationsReject(const RunContext& c, const ForwardPass& forward,
                                            const ErrorModel& passed, ErrorModel& model,
-                                           std::vector<std::string>& notes) {
+                                           DecisionLog& decisions) {
   const double alpha = c.options.monitor.family_wise_alpha;
   const ident::ReferenceNoiseExcess excess = ident::ScreenReferenceNoise(forward, alpha, passed);
   if (!excess.Any()) return false;
@@ -109,39 +109,31 @@ bool FitReferenceNoiseTheInnovationsReject(const RunContext& c, const ForwardPas
     sigma = std::exp(log_sigma);
   }
   if (!failure.ok()) {
-    notes.push_back("the reference noise was not fitted: " + std::string(failure.message()));
+    decisions.Note("the reference noise was not fitted: " + std::string(failure.message()));
     return false;
   }
-  std::string changes;
+  Decision d;
+  d.kind = DecisionKind::kReferenceNoiseRaised;
+  d.statistic = 2.0 * (best - before);
+  d.degrees_of_freedom = fitted_groups;
+  d.level = alpha;
   for (const ident::ReferenceChannelGroup& g : ident::kReferenceChannelGroups) {
     const double from = passed.reference.*g.sigma, to = fitted.reference.*g.sigma;
-    if (to != from) {
-      absl::StrAppendFormat(&changes, "%s%s %.3g → %.3g %s", changes.empty() ? "" : ", ", g.name,
-                            from, to, g.unit);
-    }
+    if (to == from) continue;
+    d.subjects.emplace_back(g.name);
+    d.measures.emplace_back(std::string(g.name) + ".before", from);
+    d.measures.emplace_back(std::string(g.name) + ".after", to);
   }
-  const double statistic = 2.0 * (best - before);
-  const double critical = stats::ChiSquareQuantile(1.0 - alpha, fitted_groups);
-  if (statistic > critical) {
-    model.reference = fitted.reference;
-    notes.push_back(absl::StrFormat(
-        "the innovations exceed their predicted variance: the reference noise was raised by "
-        "maximum likelihood (%s; 2Δℓ = %.1f against χ²(%d) at %.2g) — the unit moved in ways "
-        "the bench's reference did not record (sway, vibration)",
-        changes, statistic, fitted_groups, alpha));
-    return true;
-  }
-  notes.push_back(absl::StrFormat(
-      "the innovations exceed their predicted variance, but not as a noise of the bench's "
-      "reference: its likelihood's best value%s gains 2Δℓ = %.1f against χ²(%d) at %.2g; "
-      "the reference accuracy is kept",
-      changes.empty() ? "" : " (" + changes + ")", statistic, fitted_groups, alpha));
-  return false;
+  d.adopted = d.statistic > stats::ChiSquareQuantile(1.0 - alpha, fitted_groups);
+  if (d.adopted) model.reference = fitted.reference;
+  const bool raised = d.adopted;
+  decisions.Record(std::move(d));
+  return raised;
 }
 
 void RetuneUnresolvedNoise(const RunContext& c, const std::optional<ident::AllanResult>& allan,
                            ErrorModel& base, std::vector<ParameterEstimate>& identified,
-                           std::vector<std::string>& notes) {
+                           DecisionLog& decisions) {
   const ident::UnresolvedNoise unresolved = c.a_priori.FromAllanFit() && allan.has_value()
                                                 ? ident::UnresolvedAllanTerms(*allan)
                                                 : ident::UnresolvedNoise{};
@@ -149,24 +141,27 @@ void RetuneUnresolvedNoise(const RunContext& c, const std::optional<ident::Allan
   Progress(c.options, 0.08, "maximum-likelihood noise scale");
   auto scaled = ident::ScaleUnresolvedNoise(c.epochs, base, unresolved, c.options.noise_scale);
   if (!scaled.ok()) {
-    notes.push_back("the noise terms set from Allan bounds were not re-tuned: " +
+    decisions.Note("the noise terms set from Allan bounds were not re-tuned: " +
                     std::string(scaled.status().message()));
     return;
   }
   base = scaled->model;
   for (const ident::NoiseScaleGroup& g : scaled->groups) {
-    std::string terms;
-    for (const std::string& t : g.terms) terms += (terms.empty() ? "" : ", ") + t;
     const bool seeded = g.name.ends_with("seed");
     const bool white = g.name.find("white") != std::string::npos;
-    notes.push_back("re-tuned by maximum likelihood of the innovations, " + g.name + " (" + terms +
-                    (seeded && white ? ", resolved by the Allan fit of the raw samples): "
-                     : seeded        ? ", seeded by the Allan fit, not resolved by correlation processing): "
-                            : ", set from Allan bounds): ") +
-                    absl::StrFormat("× %.3g (SE of ln: %.2g)%s", g.scale, g.log_std_error,
-                                    g.at_limit ? ", at the search range's limit" : ""));
+    Decision d;
+    d.kind = DecisionKind::kNoiseRetuned;
+    d.subjects = g.terms;
+    d.scope = g.name;
+    d.adopted = true;
+    d.measures = {{"scale", g.scale}, {"log_std_error", g.log_std_error}};
+    d.qualifiers.emplace_back(seeded && white ? "resolved_by_the_allan_fit"
+                              : seeded        ? "seeded_by_the_allan_fit"
+                                              : "set_from_allan_bounds");
+    if (g.at_limit) d.qualifiers.emplace_back("at_the_search_limit");
+    decisions.Record(std::move(d));
   }
-  notes.push_back(absl::StrFormat(
+  decisions.Note(absl::StrFormat(
       "the innovations' log-likelihood rose by %.1f after %d filter passes",
       scaled->log_likelihood_after - scaled->log_likelihood_before, scaled->filter_passes));
   for (const ParameterEstimate& p : scaled->identified) {
@@ -176,11 +171,11 @@ void RetuneUnresolvedNoise(const RunContext& c, const std::optional<ident::Allan
 }
 
 absl::Status FitReferenceNoiseToTheIdentifiedModel(const RunContext& c, ErrorModel& model,
-                                                   std::vector<std::string>& notes) {
+                                                   DecisionLog& decisions) {
   auto pass = RunForwardFilter(c.epochs, model);
   if (!pass.ok()) return pass.status();
   const ErrorModel passed = model;
-  FitReferenceNoiseTheInnovationsReject(c, *pass, passed, model, notes);
+  FitReferenceNoiseTheInnovationsReject(c, *pass, passed, model, decisions);
   return absl::OkStatus();
 }
 

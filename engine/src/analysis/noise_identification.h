@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "analysis/run_context.h"
+#include "insdiag/engine/decision.h"
 #include "insdiag/engine/filter/forward_filter.h"
 #include "insdiag/engine/ident/allan.h"
 
@@ -38,7 +39,7 @@ enum class QuantisationTest { kBeforeTheDrifts, kAfterTheDrifts };
 void KeepQuantisationTheInnovationsSupport(const RunContext& c, QuantisationTest when,
                                            ErrorModel& model,
                                            std::vector<ParameterEstimate>& identified,
-                                           std::vector<std::string>& notes);
+                                           DecisionLog& decisions);
 
 // The bench's reference noise, where the innovations reject its stated
 // accuracy. Covariance matching (ident::ScreenReferenceNoise) flags the
@@ -55,7 +56,7 @@ void KeepQuantisationTheInnovationsSupport(const RunContext& c, QuantisationTest
 // `forward` ran; `model` takes the fitted reference. True when it did.
 bool FitReferenceNoiseTheInnovationsReject(const RunContext& c, const ForwardPass& forward,
                                            const ErrorModel& passed, ErrorModel& model,
-                                           std::vector<std::string>& notes);
+                                           DecisionLog& decisions);
 
 // Terms the Allan fit left at bounds: nothing else re-tunes them (the ACF
 // retargeting needs a resolved drift, the Allan fit a resolved density), and
@@ -63,11 +64,11 @@ bool FitReferenceNoiseTheInnovationsReject(const RunContext& c, const ForwardPas
 // maximum likelihood (retarget.h).
 void RetuneUnresolvedNoise(const RunContext& c, const std::optional<ident::AllanResult>& allan,
                            ErrorModel& base, std::vector<ParameterEstimate>& identified,
-                           std::vector<std::string>& notes);
+                           DecisionLog& decisions);
 
 // The reference noise of a model whose drifts were identified from a class
 // prior, against one pass of that model (FitReferenceNoiseTheInnovationsReject).
 absl::Status FitReferenceNoiseToTheIdentifiedModel(const RunContext& c, ErrorModel& model,
-                                                   std::vector<std::string>& notes);
+                                                   DecisionLog& decisions);
 
 }  // namespace insdiag::engine::pipeline

@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 
+#include "insdiag/engine/decision.h"
 #include "insdiag/engine/ident/allan.h"
 #include "insdiag/engine/parameter_estimate.h"
 #include "insdiag/engine/ident/correlation.h"
@@ -155,6 +156,8 @@ struct AnalysisReport {
   // (plain_words.h); the notes below are the engine's detail.
   std::vector<std::string> plain_words;
   std::vector<std::string> notes;  // what the engine wants the user to know (e.g. a fallback it took)
+  // What the analysis decided, as data; each decision's note is among `notes`.
+  std::vector<Decision> decisions;
   std::vector<DriftCorrelation> correlation;
   std::optional<ident::AllanResult> allan;
   std::optional<ModelComparison> comparison;

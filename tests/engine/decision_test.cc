@@ -1,0 +1,108 @@
+// The analysis's decisions as data (engine/include/insdiag/engine/decision.h):
+// each kind renders the note the report carries, from its fields alone, and
+// a log keeps notes and decisions in the order they were made.
+#include "insdiag/engine/decision.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+namespace insdiag::engine {
+namespace {
+
+bool Contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+Decision FaultTest(bool stands) {
+  Decision d;
+  d.kind = DecisionKind::kFaultAgainstDrifts;
+  d.subjects = {"gyro_bias_step.x"};
+  d.statistic = 58.74;
+  d.degrees_of_freedom = 1;
+  d.level = 0.01;
+  d.p_value = stands ? 9.3e-12 : 1.0;
+  d.adopted = stands;
+  d.measures = {{"onset_s", 62.4}};
+  return d;
+}
+
+TEST(DecisionTest, AFaultTestSaysWhereItStandsAndWhereItIsTheDriftsMisfit) {
+  const std::string stands = RenderNote(FaultTest(true));
+  EXPECT_TRUE(Contains(stands, "gyro_bias_step.x at 62 s")) << stands;
+  EXPECT_TRUE(Contains(stands, "2Δℓ = 58.7 (p = 9.3e-12")) << stands;
+  EXPECT_TRUE(Contains(stands, "it stands against the drifts")) << stands;
+  const std::string misfit = RenderNote(FaultTest(false));
+  EXPECT_TRUE(Contains(misfit, "— their misfit")) << misfit;
+  EXPECT_EQ(FaultTest(true).Measure("onset_s"), 62.4);
+  EXPECT_FALSE(FaultTest(true).Measure("iterations").has_value());
+}
+
+TEST(DecisionTest, DriftsIdentifiedRenderTheirTestAndWhatTheModelDid) {
+  Decision d;
+  d.kind = DecisionKind::kDriftsIdentified;
+  d.subjects = {"gyro_bias_gm.x.sigma", "gyro_bias_gm.x.tau"};
+  d.statistic = 140.4;
+  d.degrees_of_freedom = 2;
+  d.level = 0.01;
+  d.measures = {{"iterations", 148}, {"filter_passes", 537}};
+  d.adopted = true;
+  EXPECT_EQ(RenderNote(d),
+            "drift parameters identified by likelihood of the innovations: gyro_bias_gm.x.sigma, "
+            "gyro_bias_gm.x.tau (EM, 148 iterations, 537 filter passes): 2Δℓ = 140.4 against χ²(2) at 0.01 — "
+            "the model takes the estimates");
+  d.qualifiers = {"not_converged", "placeholders"};
+  EXPECT_TRUE(Contains(RenderNote(d), "148 iterations, not converged"));
+  EXPECT_TRUE(Contains(RenderNote(d), "the Allan fit's placeholders: it takes the estimates"));
+  d.adopted = false;
+  EXPECT_TRUE(Contains(RenderNote(d), "the data do not reject the model's values, kept"));
+}
+
+TEST(DecisionTest, TheDriftsOverACandidateNameTheCandidateTheyRejected) {
+  Decision d;
+  d.kind = DecisionKind::kDriftsOverCandidate;
+  d.statistic = -115.5;
+  d.rejected = {{"gyro_scale_factor.z", -4.1}};
+  d.adopted = true;
+  EXPECT_TRUE(Contains(RenderNote(d), "(ΔBIC -115.5 against the best candidate's -4.1): the model takes them"));
+  d.adopted = false;
+  d.measures = {{"parameters", 2}};
+  EXPECT_TRUE(Contains(RenderNote(d), "(2 parameters worth their cost) reach ΔBIC -115.5 against the best "
+                                      "candidate's -4.1: the candidates stand"));
+}
+
+TEST(DecisionTest, TheReferenceNoiseListsEachRaisedGroupInItsUnit) {
+  Decision d;
+  d.kind = DecisionKind::kReferenceNoiseRaised;
+  d.subjects = {"vertical position"};
+  d.measures = {{"vertical position.before", 1e-6}, {"vertical position.after", 6.33e-5}};
+  d.statistic = 167.7;
+  d.degrees_of_freedom = 2;
+  d.level = 0.01;
+  d.adopted = true;
+  EXPECT_TRUE(Contains(RenderNote(d), "raised by maximum likelihood (vertical position 1e-06 → 6.33e-05 m; "
+                                      "2Δℓ = 167.7 against χ²(2) at 0.01)"))
+      << RenderNote(d);
+  d.adopted = false;
+  EXPECT_TRUE(Contains(RenderNote(d), "the reference accuracy is kept"));
+}
+
+TEST(DecisionTest, ALogKeepsNotesAndDecisionsInTheOrderMade) {
+  DecisionLog log;
+  log.Note("first, a note");
+  log.Record(FaultTest(false));
+  DecisionLog later;
+  later.Record(FaultTest(true));
+  later.NoteEach({"last", "notes"});
+  log.Append(later);
+  ASSERT_EQ(log.notes().size(), 5u);
+  EXPECT_EQ(log.notes()[0], "first, a note");
+  EXPECT_EQ(log.notes()[1], RenderNote(FaultTest(false)));
+  EXPECT_EQ(log.notes()[2], RenderNote(FaultTest(true)));
+  EXPECT_EQ(log.notes()[4], "notes");
+  ASSERT_EQ(log.decisions().size(), 2u);
+  EXPECT_FALSE(log.decisions()[0].adopted);
+  EXPECT_TRUE(log.decisions()[1].adopted);
+  EXPECT_EQ(DecisionKindName(log.decisions()[1].kind), "fault_against_drifts");
+}
+
+}  // namespace
+}  // namespace insdiag::engine
