@@ -191,6 +191,48 @@ std::string SettlingLine(const AnalysisReport& r) {
   return "  it settles after power-up, which its model carries: " + absl::StrJoin(parts, ", ");
 }
 
+// The drifts the run's data took over its specified values (a datasheet's,
+// a unit type's): the last identification whose likelihood-ratio test
+// rejected them at the family-wise level (a DRIFTS_IDENTIFIED decision
+// adopted on the data; an Allan fit's values are no specification the unit
+// departs from), and of its σ estimates the two
+// farthest from their a-priori values whose 95 % intervals leave them out.
+// A healthy unit's drifts pass that test, so a line here is the run's
+// evidence, not a chance departure. Empty when there is none.
+std::string DriftsLine(const AnalysisReport& r) {
+  constexpr int kMostDrifts = 2;
+  const Decision* taken = nullptr;
+  for (const Decision& d : r.decisions) {
+    if (d.kind == DecisionKind::kDriftsIdentified && d.adopted && !d.Qualified("allan_fit_prior")) taken = &d;
+  }
+  if (taken == nullptr) return "";
+  std::vector<const ParameterEstimate*> departed;
+  for (const ParameterEstimate& p : r.identified) {
+    const bool tested = std::find(taken->subjects.begin(), taken->subjects.end(), p.name) != taken->subjects.end();
+    if (!tested || !p.name.ends_with(".sigma") || !(p.a_priori > 0.0) || !(p.value > 0.0)) continue;
+    if (p.ci95_low <= p.a_priori && p.a_priori <= p.ci95_high) continue;
+    departed.push_back(&p);
+  }
+  if (departed.empty()) return "";
+  const auto departure = [](const ParameterEstimate* p) { return std::abs(std::log(p->value / p->a_priori)); };
+  std::sort(departed.begin(), departed.end(),
+            [&](const ParameterEstimate* a, const ParameterEstimate* b) { return departure(a) > departure(b); });
+  departed.resize(std::min<std::size_t>(departed.size(), kMostDrifts));
+  std::vector<std::string> drifts;
+  for (const ParameterEstimate* p : departed) {
+    SensorChannel channel;
+    if (!ChannelOf(p->name, channel)) continue;
+    drifts.push_back(absl::StrFormat("%s drift σ %s against %s (%.2g ×)", SensorName(channel),
+                                     Reading(channel, p->value), Reading(channel, p->a_priori),
+                                     p->value / p->a_priori));
+  }
+  if (drifts.empty()) return "";
+  return absl::StrFormat(
+      "  its drifts are not its model's (2Δℓ %.1f against χ²(%d) at %.2g): %s; the diagnosis weighs them against "
+      "the failure modes",
+      taken->statistic, taken->degrees_of_freedom, taken->level, absl::StrJoin(drifts, ", "));
+}
+
 std::string VerdictLine(const AnalysisReport& r, int faults, double family_wise_alpha) {
   const std::string fit = absl::StrFormat("NIS %.3f, band %.3f–%.3f", r.fit.nis_mean, r.nis_band_low, r.nis_band_high);
   // FAULTY without a fault effect is the moving-window test's verdict: its
@@ -294,10 +336,12 @@ std::vector<std::string> PlainWordsVerdict(const AnalysisReport& report, const R
   // The verdict, its findings, how it settles after power-up, where the bench
   // moved, and what to do.
   const std::string settling = SettlingLine(report);
-  const std::size_t room =
-      kPlainWordsMaxLines - 2 - (report.bench_motion.empty() ? 0 : 1) - (settling.empty() ? 0 : 1);
+  const std::string drifts = DriftsLine(report);
+  const std::size_t room = kPlainWordsMaxLines - 2 - (report.bench_motion.empty() ? 0 : 1) -
+                           (settling.empty() ? 0 : 1) - (drifts.empty() ? 0 : 1);
   findings.resize(std::min(findings.size(), room));
   lines.insert(lines.end(), findings.begin(), findings.end());
+  if (!drifts.empty()) lines.push_back(drifts);
   if (!settling.empty()) lines.push_back(settling);
   if (!report.bench_motion.empty()) lines.push_back(BenchMotionLine(report));
   std::string to_do;

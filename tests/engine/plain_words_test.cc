@@ -109,6 +109,43 @@ TEST(PlainWords, NeverMoreThanFiveLinesAndAGoodUnitNeedsNothing) {
   EXPECT_THAT(lines[1], HasSubstr("nothing"));
 }
 
+// A unit whose drift the run's data took over its model's (the
+// likelihood-ratio test of the model's drifts rejected them) is told so with
+// the drift that departs, in °/h against the model's value; drifts against
+// an Allan fit's values (no specification), or kept, say nothing of the unit.
+TEST(PlainWords, DriftsTheDataTookOverTheModelsAreNamed) {
+  ParameterEstimate sigma;
+  sigma.name = "gyro_bias_gm.x.sigma";
+  sigma.value = 0.03 * kRadSPerDegH;
+  sigma.a_priori = 0.01 * kRadSPerDegH;
+  sigma.ci95_low = 0.02 * kRadSPerDegH;
+  sigma.ci95_high = 0.045 * kRadSPerDegH;
+  ParameterEstimate within = sigma;  // a drift whose interval holds its model's value
+  within.name = "gyro_bias_gm.y.sigma";
+  within.ci95_low = 0.005 * kRadSPerDegH;
+  Decision taken;
+  taken.kind = DecisionKind::kDriftsIdentified;
+  taken.subjects = {sigma.name, within.name};
+  taken.statistic = 126.1;
+  taken.degrees_of_freedom = 2;
+  taken.level = 0.01;
+  taken.adopted = true;
+  AnalysisReport report;
+  report.verdict = Verdict::kGood;
+  report.identified = {sigma, within};
+  report.decisions = {taken};
+  std::vector<std::string> lines = PlainWordsVerdict(report, StepRun(), 0.01);
+  ASSERT_EQ(lines.size(), 3u);
+  EXPECT_THAT(lines[1], HasSubstr("2Δℓ 126.1 against χ²(2) at 0.01"));
+  EXPECT_THAT(lines[1], HasSubstr("gyro x drift σ 0.03 °/h against 0.01 °/h (3 ×)"));
+  EXPECT_THAT(lines[1], ::testing::Not(HasSubstr("gyro y")));
+  report.decisions.front().qualifiers = {"allan_fit_prior"};
+  EXPECT_EQ(PlainWordsVerdict(report, StepRun(), 0.01).size(), 2u);
+  report.decisions.front().qualifiers.clear();
+  report.decisions.front().adopted = false;
+  EXPECT_EQ(PlainWordsVerdict(report, StepRun(), 0.01).size(), 2u);
+}
+
 // A constant the model lacks is no fault: the plain words say what to add,
 // the loop's next step.
 TEST(PlainWords, AMissingConstantIsToBeAddedNotAModuleToCheck) {

@@ -111,6 +111,7 @@ bool ApplyDriftLikelihood(const ident::DriftLikelihoodResult& ml, double alpha, 
   for (const ParameterEstimate& p : ml.identified) d.subjects.push_back(p.name);
   if (!ml.converged) d.qualifiers.emplace_back("not_converged");
   if (takes && !rejects) d.qualifiers.emplace_back("placeholders");
+  if (placeholders) d.qualifiers.emplace_back("allan_fit_prior");
   decisions.Record(std::move(d));
   return takes;
 }

@@ -64,7 +64,8 @@ struct Decision {
   // ("onset_s", "iterations", "filter_passes").
   std::vector<std::pair<std::string, double>> measures;
   // The reason in the decision's own terms where its kind has more than one
-  // ("placeholders": the model's values were the Allan fit's; "not_converged").
+  // ("allan_fit_prior": the model's values were an Allan fit's, no
+  // specification; "placeholders": taken on that alone; "not_converged").
   std::vector<std::string> qualifiers;
 
   std::optional<double> Measure(std::string_view name) const;
