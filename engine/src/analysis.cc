@@ -353,12 +353,14 @@ absl::StatusOr<pipeline::APriori> ChooseAPrioriModel(const BenchRun& run, const 
       out.model = *std::move(model);
       return out;
     }
-    decisions.Note(absl::StrFormat(
-        "the run's Allan deviation on %s at τ %.3g s is %.3g times the unit type's nominal model at "
-        "the family-wise confidence bound: further than the drift identification searches from it. "
-        "The unit is analysed as one without a unit type: the a-priori model comes from its Allan "
-        "deviation",
-        beyond->channel, beyond->tau_s, beyond->ratio));
+    Decision set_aside;
+    set_aside.kind = DecisionKind::kUnitTypeSetAside;
+    set_aside.subjects = {beyond->channel};
+    set_aside.level = options.monitor.family_wise_alpha;
+    set_aside.adopted = true;
+    set_aside.rejected = {{"unit type's nominal model", beyond->ratio}};
+    set_aside.measures = {{"tau_s", beyond->tau_s}, {"ratio", beyond->ratio}};
+    decisions.Record(std::move(set_aside));
   } else if (!allan.has_value()) {
     // Neither source: say why the run's own noise could not stand in.
     return absl::Status(model.status().code(),

@@ -109,9 +109,11 @@ std::string_view DecisionKindName(DecisionKind kind) {
     case DecisionKind::kReferenceNoiseRaised:
       return "reference_noise_raised";
     case DecisionKind::kNoiseRetuned:
+      return "noise_retuned";
+    case DecisionKind::kUnitTypeSetAside:
       break;
   }
-  return "noise_retuned";
+  return "unit_type_set_aside";
 }
 
 std::optional<double> Decision::Measure(std::string_view name) const {
@@ -146,9 +148,16 @@ std::string RenderNote(const Decision& d) {
     case DecisionKind::kReferenceNoiseRaised:
       return ReferenceNoiseRaised(d);
     case DecisionKind::kNoiseRetuned:
+      return NoiseRetuned(d);
+    case DecisionKind::kUnitTypeSetAside:
       break;
   }
-  return NoiseRetuned(d);
+  return absl::StrFormat(
+      "the run's Allan deviation on %s at τ %.3g s is %.3g times the unit type's nominal model at "
+      "the family-wise confidence bound: further than the drift identification searches from it. "
+      "The unit is analysed as one without a unit type: the a-priori model comes from its Allan "
+      "deviation",
+      Names(d), MeasureOr(d, "tau_s"), MeasureOr(d, "ratio"));
 }
 
 void DecisionLog::Record(Decision decision) {

@@ -308,9 +308,11 @@ v1::Decision::Kind ToProto(engine::DecisionKind kind) {
     case engine::DecisionKind::kReferenceNoiseRaised:
       return v1::Decision::REFERENCE_NOISE_RAISED;
     case engine::DecisionKind::kNoiseRetuned:
+      return v1::Decision::NOISE_RETUNED;
+    case engine::DecisionKind::kUnitTypeSetAside:
       break;
   }
-  return v1::Decision::NOISE_RETUNED;
+  return v1::Decision::UNIT_TYPE_SET_ASIDE;
 }
 
 void Fill(const engine::Decision& d, v1::Decision* out) {

@@ -39,6 +39,11 @@ enum class DecisionKind {
   // Noise terms an Allan fit set from bounds or seeded, scaled together by
   // likelihood (measures "scale" and "log_std_error").
   kNoiseRetuned,
+  // The unit type's nominal model set aside for the run's own Allan fit:
+  // the run's Allan deviation on a channel (the subject) departs from it
+  // beyond what the drift identification searches (measures "tau_s",
+  // "ratio"; the unit type is the rejected alternative).
+  kUnitTypeSetAside,
 };
 
 // The kind's stable name in the report ("drifts_identified", …).
