@@ -92,6 +92,25 @@ std::string NoiseRetuned(const Decision& d) {
                                       d.Qualified("at_the_search_limit") ? ", at the search range's limit" : ""));
 }
 
+std::string QuantisationKept(const Decision& d) {
+  std::string axes;
+  for (const std::string& name : d.subjects) {
+    absl::StrAppendFormat(&axes, "%s%c %.3g m/s", axes.empty() ? "" : ", ", name.back(), MeasureOr(d, name));
+  }
+  const char* against = d.Qualified("before_the_drifts") ? "the a-priori drifts" : "the identified drifts";
+  if (d.adopted) {
+    return absl::StrFormat(
+        "the Allan fit's accelerometer quantisation (%s) is in the model: with %s the innovations' likelihood "
+        "prefers it, 2Δℓ = %.1f",
+        axes, against, d.statistic);
+  }
+  return absl::StrFormat(
+      "the Allan fit's accelerometer quantisation (%s) is not in the model: with %s the innovations' likelihood "
+      "is higher without it (2Δℓ = %.1f); over the static segments' few short cluster times it stood for the "
+      "white noise and the drift's rise",
+      axes, against, -d.statistic);
+}
+
 }  // namespace
 
 std::string_view DecisionKindName(DecisionKind kind) {
@@ -111,9 +130,13 @@ std::string_view DecisionKindName(DecisionKind kind) {
     case DecisionKind::kNoiseRetuned:
       return "noise_retuned";
     case DecisionKind::kUnitTypeSetAside:
+      return "unit_type_set_aside";
+    case DecisionKind::kQuantisationKept:
+      return "quantisation_kept";
+    case DecisionKind::kStartExplainedByWarmUps:
       break;
   }
-  return "unit_type_set_aside";
+  return "start_explained_by_warm_ups";
 }
 
 std::optional<double> Decision::Measure(std::string_view name) const {
@@ -149,6 +172,12 @@ std::string RenderNote(const Decision& d) {
       return ReferenceNoiseRaised(d);
     case DecisionKind::kNoiseRetuned:
       return NoiseRetuned(d);
+    case DecisionKind::kQuantisationKept:
+      return QuantisationKept(d);
+    case DecisionKind::kStartExplainedByWarmUps:
+      return absl::StrCat("the unit settles after power-up: model A failed only within its first ",
+                          MeasureOr(d, "start_span_s"), " s, and with its warm-ups carried (", Names(d),
+                          ") no failure remains there and nothing is found");
     case DecisionKind::kUnitTypeSetAside:
       break;
   }

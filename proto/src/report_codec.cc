@@ -310,9 +310,13 @@ v1::Decision::Kind ToProto(engine::DecisionKind kind) {
     case engine::DecisionKind::kNoiseRetuned:
       return v1::Decision::NOISE_RETUNED;
     case engine::DecisionKind::kUnitTypeSetAside:
+      return v1::Decision::UNIT_TYPE_SET_ASIDE;
+    case engine::DecisionKind::kQuantisationKept:
+      return v1::Decision::QUANTISATION_KEPT;
+    case engine::DecisionKind::kStartExplainedByWarmUps:
       break;
   }
-  return v1::Decision::UNIT_TYPE_SET_ASIDE;
+  return v1::Decision::START_EXPLAINED_BY_WARM_UPS;
 }
 
 void Fill(const engine::Decision& d, v1::Decision* out) {

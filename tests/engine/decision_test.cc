@@ -5,7 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <string>
+#include <string_view>
+#include <vector>
 
 namespace insdiag::engine {
 namespace {
@@ -83,6 +86,43 @@ TEST(DecisionTest, TheReferenceNoiseListsEachRaisedGroupInItsUnit) {
       << RenderNote(d);
   d.adopted = false;
   EXPECT_TRUE(Contains(RenderNote(d), "the reference accuracy is kept"));
+}
+
+TEST(DecisionTest, QuantisationAndWarmUpsRenderWhatTheyWeighed) {
+  Decision q;
+  q.kind = DecisionKind::kQuantisationKept;
+  q.subjects = {"acc_quantization.x", "acc_quantization.z"};
+  q.measures = {{"acc_quantization.x", 0.00125}, {"acc_quantization.z", 0.00131}};
+  q.qualifiers = {"after_the_drifts"};
+  q.statistic = 68858.2;
+  q.adopted = true;
+  EXPECT_EQ(RenderNote(q), "the Allan fit's accelerometer quantisation (x 0.00125 m/s, z 0.00131 m/s) is in the "
+                           "model: with the identified drifts the innovations' likelihood prefers it, 2Δℓ = 68858.2");
+  q.adopted = false;
+  q.statistic = -3.5;
+  q.qualifiers = {"before_the_drifts"};
+  EXPECT_TRUE(Contains(RenderNote(q), "is not in the model: with the a-priori drifts the innovations' likelihood "
+                                      "is higher without it (2Δℓ = 3.5)"));
+  Decision w;
+  w.kind = DecisionKind::kStartExplainedByWarmUps;
+  w.subjects = {"gyro_warm_up.x@516"};
+  w.measures = {{"start_span_s", 120}};
+  w.adopted = true;
+  EXPECT_EQ(RenderNote(w), "the unit settles after power-up: model A failed only within its first 120 s, and with "
+                           "its warm-ups carried (gyro_warm_up.x@516) no failure remains there and nothing is found");
+}
+
+// Every kind has its own stable name and a note.
+TEST(DecisionTest, EveryKindHasItsOwnNameAndANote) {
+  std::vector<std::string_view> names;
+  for (int k = 0; k <= static_cast<int>(DecisionKind::kStartExplainedByWarmUps); ++k) {
+    Decision d;
+    d.kind = static_cast<DecisionKind>(k);
+    names.push_back(DecisionKindName(d.kind));
+    EXPECT_FALSE(RenderNote(d).empty()) << names.back();
+  }
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(std::unique(names.begin(), names.end()), names.end());
 }
 
 TEST(DecisionTest, ALogKeepsNotesAndDecisionsInTheOrderMade) {

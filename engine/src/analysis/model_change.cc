@@ -334,10 +334,14 @@ absl::StatusOr<std::optional<Analysis>> ExplainTheStartByWarmUps(const RunContex
   const AnalysisReport& r = b->report;
   const bool better = static_cast<int>(r.verdict) < static_cast<int>(a.report.verdict);
   if (!better || FailsBy(r, start_span_end_s) || HasFinding(r, alpha)) return std::nullopt;
-  b->report.notes.push_back(absl::StrCat(
-      "the unit settles after power-up: model A failed only within its first ", start_span_s,
-      " s, and with its warm-ups carried (", absl::StrJoin(warm_ups, ", "),
-      ") no failure remains there and nothing is found"));
+  Decision settles;
+  settles.kind = DecisionKind::kStartExplainedByWarmUps;
+  settles.subjects = warm_ups;
+  settles.adopted = true;
+  settles.rejected = {{"model A's failure", std::numeric_limits<double>::quiet_NaN()}};
+  settles.measures = {{"start_span_s", start_span_s}};
+  b->report.notes.push_back(RenderNote(settles));
+  b->report.decisions.push_back(std::move(settles));
   return std::optional<Analysis>(*std::move(b));
 }
 

@@ -47,22 +47,20 @@ void KeepQuantisationTheInnovationsSupport(const RunContext& c, QuantisationTest
   const auto with_it = ProfileLogLikelihood(c.epochs, model);
   const auto without_it = ProfileLogLikelihood(c.epochs, without);
   if (!with_it.ok() || !without_it.ok()) return;
-  const double statistic = 2.0 * (*with_it - *without_it);
-  std::string axes;
+  Decision d;
+  d.kind = DecisionKind::kQuantisationKept;
+  d.statistic = 2.0 * (*with_it - *without_it);
+  d.adopted = d.statistic > 0.0;
+  d.qualifiers = {when == QuantisationTest::kBeforeTheDrifts ? "before_the_drifts" : "after_the_drifts"};
+  d.rejected = {{"the model without it", -d.statistic}};
   for (int axis = 0; axis < 3; ++axis) {
     if (model.acc.quantization[axis] == stated[axis]) continue;
-    absl::StrAppendFormat(&axes, "%s%s %.3g m/s", axes.empty() ? "" : ", ",
-                          AxisLabel(AxisSet::kSingle, axis, axis), model.acc.quantization[axis]);
+    d.subjects.push_back(QuantizationName({Sensor::kAccelerometer, axis}));
+    d.measures.emplace_back(d.subjects.back(), model.acc.quantization[axis]);
   }
-  const std::string_view against =
-      when == QuantisationTest::kBeforeTheDrifts ? "the a-priori drifts" : "the identified drifts";
-  if (statistic > 0.0) {
-    if (when == QuantisationTest::kAfterTheDrifts) {
-      decisions.Note(
-          absl::StrFormat("the Allan fit's accelerometer quantisation (%s) is in the model: "
-                          "with %s the innovations' likelihood prefers it, 2Δℓ = %.1f",
-                          axes, against, statistic));
-    }
+  if (d.adopted) {
+    // Kept before the drifts is weighed again after them; the report says the last.
+    if (when == QuantisationTest::kAfterTheDrifts) decisions.Record(std::move(d));
     return;
   }
   model = std::move(without);
@@ -70,12 +68,7 @@ void KeepQuantisationTheInnovationsSupport(const RunContext& c, QuantisationTest
     const std::string name = QuantizationName({Sensor::kAccelerometer, axis});
     std::erase_if(identified, [&](const ParameterEstimate& p) { return p.name == name; });
   }
-  decisions.Note(
-      absl::StrFormat("the Allan fit's accelerometer quantisation (%s) is not in the model: "
-                      "with %s the innovations' likelihood is higher without it (2Δℓ = %.1f); "
-                      "over the static segments' few short cluster times it stood for the "
-                      "white noise and the drift's rise",
-                      axes, against, -statistic));
+  decisions.Record(std::move(d));
 }
 
 bool FitReferenceNoiseTheInnovationsReject(const RunContext& c, const ForwardPass& forward,

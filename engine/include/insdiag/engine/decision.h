@@ -44,6 +44,15 @@ enum class DecisionKind {
   // beyond what the drift identification searches (measures "tau_s",
   // "ratio"; the unit type is the rejected alternative).
   kUnitTypeSetAside,
+  // An Allan fit's accelerometer quantisation (subjects: its parameters,
+  // each a measure in m/s) kept where the innovations' likelihood prefers
+  // it, by 2Δℓ with and without it; qualifier "after_the_drifts" or
+  // "before_the_drifts" says which drifts it was weighed beside.
+  kQuantisationKept,
+  // Model A failed only within the run's first `start_span_s` and the
+  // warm-ups (subjects) carried in model B leave no failure there: the
+  // unit settling after power-up, not a fault.
+  kStartExplainedByWarmUps,
 };
 
 // The kind's stable name in the report ("drifts_identified", …).
