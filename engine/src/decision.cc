@@ -113,32 +113,6 @@ std::string QuantisationKept(const Decision& d) {
 
 }  // namespace
 
-std::string_view DecisionKindName(DecisionKind kind) {
-  switch (kind) {
-    case DecisionKind::kDriftsIdentified:
-      return "drifts_identified";
-    case DecisionKind::kDriftsNotIdentifiable:
-      return "drifts_not_identifiable";
-    case DecisionKind::kDriftErrorsWidened:
-      return "drift_errors_widened";
-    case DecisionKind::kDriftsOverCandidate:
-      return "drifts_over_candidate";
-    case DecisionKind::kFaultAgainstDrifts:
-      return "fault_against_drifts";
-    case DecisionKind::kReferenceNoiseRaised:
-      return "reference_noise_raised";
-    case DecisionKind::kNoiseRetuned:
-      return "noise_retuned";
-    case DecisionKind::kUnitTypeSetAside:
-      return "unit_type_set_aside";
-    case DecisionKind::kQuantisationKept:
-      return "quantisation_kept";
-    case DecisionKind::kStartExplainedByWarmUps:
-      break;
-  }
-  return "start_explained_by_warm_ups";
-}
-
 std::optional<double> Decision::Measure(std::string_view name) const {
   for (const auto& [n, v] : measures) {
     if (n == name) return v;

@@ -292,7 +292,6 @@ engine::EffectCandidate CandidateOf(const v1::EffectCandidate& in) {
   return out;
 }
 
-
 v1::Decision::Kind ToProto(engine::DecisionKind kind) {
   switch (kind) {
     case engine::DecisionKind::kDriftsIdentified:

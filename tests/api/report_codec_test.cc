@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <limits>
+#include <set>
 
 #include "insdiag/api/json.h"
 
@@ -60,6 +61,23 @@ TEST(ReportCodec, DecisionsCarryTheirKindTestAndNote) {
   const auto json = ToJson(carried, /*pretty=*/false);
   ASSERT_TRUE(json.ok()) << json.status();
   EXPECT_NE(json->find("\"kind\":\"DRIFTS_OVER_CANDIDATE\""), std::string::npos) << *json;
+}
+
+// Every kind of decision has its own name in the report.
+TEST(ReportCodec, EveryDecisionKindHasItsOwnName) {
+  engine::AnalysisReport report;
+  for (int k = 0; k <= static_cast<int>(engine::DecisionKind::kStartExplainedByWarmUps); ++k) {
+    engine::Decision d;
+    d.kind = static_cast<engine::DecisionKind>(k);
+    report.decisions.push_back(d);
+  }
+  const v1::AnalysisReport out = ToProto(report, engine::ErrorModel{});
+  std::set<int> kinds;
+  for (const v1::Decision& d : out.decisions()) {
+    EXPECT_NE(d.kind(), v1::Decision::KIND_UNSPECIFIED);
+    kinds.insert(d.kind());
+  }
+  EXPECT_EQ(kinds.size(), report.decisions.size());
 }
 
 engine::ParameterEstimate FilterConstant(std::string name, double std_error, double prior_std, double correlation,

@@ -348,10 +348,7 @@ absl::StatusOr<Retargeted> Retarget(const RunContext& c, Identification& id, Dec
     // drifts are re-tuned by the whole run before the scan.
     const bool scan_a_priori = first && !c.a_priori.FromAllanFit();
     DecisionLog found_notes;
-    std::vector<std::string> correlation_notes;
-    out.drifts = ident::CorrelateDrifts(pass->forward, pass->smoothed, *pass->layout, options.correlation,
-                                        scan_a_priori ? &correlation_notes : nullptr);
-    found_notes.NoteEach(correlation_notes);
+    out.drifts = CorrelateDrifts(*pass, options, scan_a_priori ? &found_notes : nullptr);
     // A bias step or ramp the onset scan finds counts too (Bonferroni over its terms).
     const auto family_wise = [&](const OnsetFit& f) {
       return f.p_value * static_cast<double>(pass->onsets.size()) < options.finder.family_wise_alpha;

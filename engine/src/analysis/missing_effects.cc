@@ -523,13 +523,18 @@ Findings FindMissingEffects(const RunContext& context, const ModelPass& pass, st
   return f;
 }
 
+std::vector<DriftCorrelation> CorrelateDrifts(const ModelPass& pass, const AnalysisOptions& options,
+                                              DecisionLog* decisions) {
+  std::vector<std::string> notes;
+  auto drifts = ident::CorrelateDrifts(pass.forward, pass.smoothed, *pass.layout, options.correlation,
+                                       decisions != nullptr ? &notes : nullptr);
+  if (decisions != nullptr) decisions->NoteEach(notes);
+  return drifts;
+}
+
 Findings FindMissingEffects(const RunContext& c, const ModelPass& pass, const AnalysisOptions& options,
                             DecisionLog* decisions, const SettledStructures& settled) {
-  std::vector<std::string> correlation_notes;
-  auto drifts = ident::CorrelateDrifts(pass.forward, pass.smoothed, *pass.layout, options.correlation,
-                                       decisions != nullptr ? &correlation_notes : nullptr);
-  if (decisions != nullptr) decisions->NoteEach(correlation_notes);
-  return FindMissingEffects(c, pass, std::move(drifts), options, decisions, settled);
+  return FindMissingEffects(c, pass, CorrelateDrifts(pass, options, decisions), options, decisions, settled);
 }
 
 bool AddsOnlyDeterministicEffects(const std::vector<std::string>& selectors) {

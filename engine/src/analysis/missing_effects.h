@@ -69,6 +69,10 @@ struct ScannedModel {
 Findings FindMissingEffects(const RunContext& c, const ModelPass& pass, std::vector<DriftCorrelation> drifts,
                             const AnalysisOptions& options, DecisionLog* decisions,
                             const SettledStructures& settled = {});
+// Correlation processing of the pass's smoothed drifts (seed eq. 8–9), its
+// prose into `decisions` where given.
+std::vector<DriftCorrelation> CorrelateDrifts(const ModelPass& pass, const AnalysisOptions& options,
+                                              DecisionLog* decisions);
 // The same, correlating the pass's drifts first.
 Findings FindMissingEffects(const RunContext& c, const ModelPass& pass, const AnalysisOptions& options,
                             DecisionLog* decisions, const SettledStructures& settled = {});

@@ -55,9 +55,6 @@ enum class DecisionKind {
   kStartExplainedByWarmUps,
 };
 
-// The kind's stable name in the report ("drifts_identified", …).
-std::string_view DecisionKindName(DecisionKind kind);
-
 // An alternative a decision weighed, with its statistic in the decision's terms.
 struct WeighedAlternative {
   std::string name;
