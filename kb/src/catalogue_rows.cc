@@ -7,6 +7,8 @@
 #include "insdiag/api/resource_names.h"
 #include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/diagnosis.h"
+#include "insdiag/kb/failure_mode_catalogue.h"
+#include "insdiag/kb/knowledge_messages.h"
 #include "store_util.h"
 
 namespace insdiag::kb::internal {
@@ -15,27 +17,28 @@ std::string UnitTypeId(const std::string& name) {
   return api::IdOrSelf(name, api::kUnitTypes);
 }
 
-absl::StatusOr<v1::UnitType> LoadUnitType(Connection& db, const std::string& id) {
+absl::StatusOr<UnitType> LoadUnitType(Connection& db, const std::string& id) {
   INSDIAG_ASSIGN_OR_RETURN(
       auto rows, db.Exec("SELECT display_name, description FROM unit_types WHERE unit_type = $1",
                          {Param::Text(id)}));
   if (rows.rows() == 0)
     return absl::NotFoundError(
         absl::StrCat(api::ResourceName(api::kUnitTypes, id), " does not exist"));
-  v1::UnitType t;
-  t.set_name(api::ResourceName(api::kUnitTypes, id));
-  t.set_display_name(rows.String(0, 0));
-  t.set_description(rows.String(0, 1));
+  UnitType t;
+  t.name = api::ResourceName(api::kUnitTypes, id);
+  t.display_name = rows.String(0, 0);
+  t.description = rows.String(0, 1);
   INSDIAG_ASSIGN_OR_RETURN(auto nominal,
                            db.Exec("SELECT parameter, value, tolerance, unit FROM "
                                    "nominal_parameters WHERE unit_type = $1 ORDER BY position",
                                    {Param::Text(id)}));
   for (int r = 0; r < nominal.rows(); ++r) {
-    auto* p = t.add_nominal();
-    p->set_name(nominal.String(r, 0));
-    p->set_value(DoubleOr0(nominal, r, 1));
-    p->set_tolerance(DoubleOr0(nominal, r, 2));
-    p->set_unit(nominal.String(r, 3));
+    NominalParameter p;
+    p.name = nominal.String(r, 0);
+    p.value = DoubleOr0(nominal, r, 1);
+    p.tolerance = DoubleOr0(nominal, r, 2);
+    p.unit = nominal.String(r, 3);
+    t.nominal.push_back(std::move(p));
   }
   return t;
 }
@@ -49,7 +52,7 @@ absl::StatusOr<double> FleetExposure(Connection& db, const std::string& unit_typ
 
 absl::StatusOr<UnitTypeSettings> SettingsFor(const std::string& unit_type_id) {
   if (auto own = BuiltinFailureModeCatalogue(unit_type_id); own.ok())
-    return UnitTypeSettings{(*own)->settings(), ""};
+    return UnitTypeSettings{SettingsOf((*own)->settings()), ""};
   auto fallback = BuiltinFailureModeCatalogue(kDefaultSettingsUnitType);
   if (!fallback.ok()) {
     return absl::FailedPreconditionError(absl::StrCat(
@@ -57,14 +60,14 @@ absl::StatusOr<UnitTypeSettings> SettingsFor(const std::string& unit_type_id) {
         kDefaultSettingsUnitType, ", whose diagnosis settings apply then"));
   }
   return UnitTypeSettings{
-      (*fallback)->settings(),
+      SettingsOf((*fallback)->settings()),
       absl::StrCat("unit type '", unit_type_id,
                    "' has no built-in failure-mode catalogue: diagnosed with ",
                    kDefaultSettingsUnitType,
                    "'s settings (healthy spreads, contamination, significance level)")};
 }
 
-absl::StatusOr<std::vector<v1::FailureMode>> LoadModes(Connection& db, const std::string& unit_type_id,
+absl::StatusOr<std::vector<FailureMode>> LoadModes(Connection& db, const std::string& unit_type_id,
                                                        const std::string& role, const std::string& only_mode) {
   INSDIAG_ASSIGN_OR_RETURN(auto rows,
                            db.Exec("SELECT f.failure_mode, f.unit_type, f.module_role, "
@@ -78,22 +81,22 @@ absl::StatusOr<std::vector<v1::FailureMode>> LoadModes(Connection& db, const std
                                    "f.unit_type, f.module_role, f.failure_mode",
                                    {Param::TextOrNull(unit_type_id), Param::TextOrNull(role),
                                     Param::TextOrNull(only_mode)}));
-  std::vector<v1::FailureMode> modes;
+  std::vector<FailureMode> modes;
   std::map<std::string, std::size_t> index;
   std::map<std::string, double> exposure;
-  std::map<std::string, v1::DiagnosisSettings> settings;
+  std::map<std::string, DiagnosisSettings> settings;
   for (int r = 0; r < rows.rows(); ++r) {
-    v1::FailureMode m;
-    m.set_name(api::ResourceName(api::kFailureModes, rows.String(r, 0)));
+    FailureMode m;
+    m.name = api::ResourceName(api::kFailureModes, rows.String(r, 0));
     const std::string type = rows.String(r, 1);
-    m.set_unit_type(api::ResourceName(api::kUnitTypes, type));
-    m.set_module_role(rows.String(r, 2));
-    m.set_display_name(rows.String(r, 3));
-    m.set_description(rows.String(r, 4));
-    m.set_expert_rate_per_million_hours(DoubleOr0(rows, r, 5) * 1e6);
-    m.set_weibull_shape(DoubleOr0(rows, r, 6));
-    m.set_weibull_scale_hours(DoubleOr0(rows, r, 7));
-    m.set_confirmed_failures(IntOr0(rows, r, 8));
+    m.unit_type = api::ResourceName(api::kUnitTypes, type);
+    m.module_role = rows.String(r, 2);
+    m.display_name = rows.String(r, 3);
+    m.description = rows.String(r, 4);
+    m.expert_rate_per_million_hours = DoubleOr0(rows, r, 5) * 1e6;
+    m.weibull_shape = DoubleOr0(rows, r, 6);
+    m.weibull_scale_hours = DoubleOr0(rows, r, 7);
+    m.confirmed_failures = IntOr0(rows, r, 8);
     if (!exposure.contains(type)) {
       // Once per unit type: the fleet's hours, and its catalogue's settings (parsed from JSON).
       INSDIAG_ASSIGN_OR_RETURN(auto hours, FleetExposure(db, type));
@@ -101,8 +104,7 @@ absl::StatusOr<std::vector<v1::FailureMode>> LoadModes(Connection& db, const std
       INSDIAG_ASSIGN_OR_RETURN(auto type_settings, SettingsFor(type));
       settings[type] = type_settings.settings;
     }
-    m.set_rate_per_million_hours(
-        1e6 * ModeRatePerHour(m, m.confirmed_failures(), exposure[type], settings[type]));
+    m.rate_per_million_hours = 1e6 * ModeRatePerHour(m, m.confirmed_failures, exposure[type], settings[type]);
     index[rows.String(r, 0)] = modes.size();
     modes.push_back(std::move(m));
   }
@@ -117,19 +119,19 @@ absl::StatusOr<std::vector<v1::FailureMode>> LoadModes(Connection& db, const std
               "ORDER BY failure_mode, position",
               {Param::TextArray(ids)}));
   for (int r = 0; r < terms.rows(); ++r) {
-    auto* s = modes[index[terms.String(r, 0)]].add_signature();
-    s->set_parameter(terms.String(r, 1));
-    v1::Signature::Direction d = v1::Signature::EITHER;
-    v1::Signature::Direction_Parse(terms.String(r, 2), &d);
-    s->set_direction(d);
-    s->set_scale(terms.String(r, 3));
-    s->set_common(terms.Bool(r, 4));
-    s->set_fraction(DoubleOr0(terms, r, 5));
-    s->set_expert_change(DoubleOr0(terms, r, 6));
-    s->set_expert_spread(DoubleOr0(terms, r, 7));
-    s->set_change(DoubleOr0(terms, r, 8));
-    s->set_spread(DoubleOr0(terms, r, 9));
-    s->set_confirmed_cases(static_cast<int>(IntOr0(terms, r, 10)));
+    // The table's checks admit only the names these parse.
+    Signature s;
+    s.parameter = terms.String(r, 1);
+    s.direction = DirectionNamed(terms.String(r, 2)).value_or(Direction::kEither);
+    s.scale = ScaleNamed(terms.String(r, 3)).value_or(Scale::kTolerance);
+    s.common = terms.Bool(r, 4);
+    s.fraction = DoubleOr0(terms, r, 5);
+    s.expert_change = DoubleOr0(terms, r, 6);
+    s.expert_spread = DoubleOr0(terms, r, 7);
+    s.change = DoubleOr0(terms, r, 8);
+    s.spread = DoubleOr0(terms, r, 9);
+    s.confirmed_cases = static_cast<int>(IntOr0(terms, r, 10));
+    modes[index[terms.String(r, 0)]].signature.push_back(std::move(s));
   }
   return modes;
 }

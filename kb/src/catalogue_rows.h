@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "insdiag/kb/pg.h"
-#include "insdiag/v1/knowledge.pb.h"
+#include "insdiag/kb/knowledge.h"
 
 namespace insdiag::kb::internal {
 
@@ -16,7 +16,7 @@ namespace insdiag::kb::internal {
 std::string UnitTypeId(const std::string& name);
 
 // The unit type with its nominal values, in order; NOT_FOUND.
-absl::StatusOr<v1::UnitType> LoadUnitType(Connection& db, const std::string& id);
+absl::StatusOr<UnitType> LoadUnitType(Connection& db, const std::string& id);
 
 // The fleet's operating hours of a unit type.
 absl::StatusOr<double> FleetExposure(Connection& db, const std::string& unit_type_id);
@@ -28,7 +28,7 @@ inline constexpr char kDefaultSettingsUnitType[] = "INS-2000";
 // The diagnosis constants a unit type is diagnosed with, and, when they are
 // not its own, a note for the diagnosis that says whose they are.
 struct UnitTypeSettings {
-  v1::DiagnosisSettings settings;
+  DiagnosisSettings settings;
   std::string note;
 };
 
@@ -39,7 +39,7 @@ absl::StatusOr<UnitTypeSettings> SettingsFor(const std::string& unit_type_id);
 
 // The failure modes with their signatures, confirmed counts and current
 // rates; each filter ("" for any) narrows: unit type, module role, one mode.
-absl::StatusOr<std::vector<v1::FailureMode>> LoadModes(Connection& db, const std::string& unit_type_id,
+absl::StatusOr<std::vector<FailureMode>> LoadModes(Connection& db, const std::string& unit_type_id,
                                                        const std::string& role, const std::string& only_mode);
 
 }  // namespace insdiag::kb::internal

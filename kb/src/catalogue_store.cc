@@ -7,7 +7,8 @@
 #include "catalogue_rows.h"
 #include "insdiag/api/resource_names.h"
 #include "insdiag/engine/status_macros.h"
-#include "insdiag/kb/diagnosis.h"
+#include "insdiag/kb/failure_mode_catalogue.h"
+#include "insdiag/kb/knowledge_messages.h"
 #include "store_util.h"
 
 namespace insdiag::kb {
@@ -19,28 +20,24 @@ using internal::LoadUnitType;
 using internal::Micros;
 using internal::UnitTypeId;
 
-const char* DirectionName(v1::Signature::Direction d) {
-  return d == v1::Signature::UP ? "UP" : d == v1::Signature::DOWN ? "DOWN" : "EITHER";
-}
-
 // Upserts the unit type and replaces its nominal values.
-absl::Status UpsertUnitType(Connection& db, const v1::UnitType& t) {
-  const std::string id = UnitTypeId(t.name());
+absl::Status UpsertUnitType(Connection& db, const UnitType& t) {
+  const std::string id = UnitTypeId(t.name);
   INSDIAG_RETURN_IF_ERROR(
       db.Exec("INSERT INTO unit_types (unit_type, display_name, description) VALUES ($1, $2, $3) "
               "ON CONFLICT (unit_type) DO UPDATE SET display_name = EXCLUDED.display_name, "
               "description = EXCLUDED.description, update_time = now()",
-              {Param::Text(id), Param::Text(t.display_name()), Param::Text(t.description())}));
+              {Param::Text(id), Param::Text(t.display_name), Param::Text(t.description)}));
   INSDIAG_RETURN_IF_ERROR(
       db.Exec("DELETE FROM nominal_parameters WHERE unit_type = $1", {Param::Text(id)}));
   int position = 0;
-  for (const auto& p : t.nominal()) {
+  for (const NominalParameter& p : t.nominal) {
     INSDIAG_RETURN_IF_ERROR(
         db.Exec("INSERT INTO nominal_parameters (unit_type, parameter, value, tolerance, unit, "
                 "position) "
                 "VALUES ($1, $2, $3, $4, $5, $6)",
-                {Param::Text(id), Param::Text(p.name()), Param::Double(p.value()),
-                 Param::Double(p.tolerance()), Param::Text(p.unit()), Param::Int(position++)}));
+                {Param::Text(id), Param::Text(p.name), Param::Double(p.value),
+                 Param::Double(p.tolerance), Param::Text(p.unit), Param::Int(position++)}));
   }
   return absl::OkStatus();
 }
@@ -48,8 +45,8 @@ absl::Status UpsertUnitType(Connection& db, const v1::UnitType& t) {
 // Upserts an expanded failure mode. Its signature terms are replaced only
 // when the expert's values changed: otherwise they keep what confirmed
 // cases refined.
-absl::Status UpsertFailureMode(Connection& db, const v1::FailureMode& mode) {
-  const std::string id = api::IdOrSelf(mode.name(), api::kFailureModes);
+absl::Status UpsertFailureMode(Connection& db, const FailureMode& mode) {
+  const std::string id = api::IdOrSelf(mode.name, api::kFailureModes);
   auto upserted = db.Exec(
       "INSERT INTO failure_modes (failure_mode, unit_type, module_role, display_name, description, "
       "expert_rate_per_hour, weibull_shape, weibull_scale_hours) VALUES ($1, $2, $3, $4, $5, $6, $7, $8) "
@@ -57,16 +54,16 @@ absl::Status UpsertFailureMode(Connection& db, const v1::FailureMode& mode) {
       "EXCLUDED.module_role, display_name = EXCLUDED.display_name, description = EXCLUDED.description, "
       "expert_rate_per_hour = EXCLUDED.expert_rate_per_hour, weibull_shape = EXCLUDED.weibull_shape, "
       "weibull_scale_hours = EXCLUDED.weibull_scale_hours",
-      {Param::Text(id), Param::Text(UnitTypeId(mode.unit_type())), Param::Text(mode.module_role()),
-       Param::Text(mode.display_name()), Param::Text(mode.description()),
-       Param::Double(mode.expert_rate_per_million_hours() * 1e-6), Param::Double(mode.weibull_shape()),
-       Param::Double(mode.weibull_scale_hours())});
+      {Param::Text(id), Param::Text(UnitTypeId(mode.unit_type)), Param::Text(mode.module_role),
+       Param::Text(mode.display_name), Param::Text(mode.description),
+       Param::Double(mode.expert_rate_per_million_hours * 1e-6), Param::Double(mode.weibull_shape),
+       Param::Double(mode.weibull_scale_hours)});
   if (!upserted.ok()) return upserted.status();
   std::vector<std::string> wanted;
-  for (const auto& s : mode.signature()) {
-    wanted.push_back(absl::StrCat(s.parameter(), "|", DirectionName(s.direction()), "|", s.scale(), "|",
-                                  BoolText(s.common()), "|", s.fraction(), "|", s.expert_change(), "|",
-                                  s.expert_spread()));
+  for (const Signature& s : mode.signature) {
+    wanted.push_back(absl::StrCat(s.parameter, "|", DirectionName(s.direction), "|", ScaleName(s.scale), "|",
+                                  BoolText(s.common), "|", s.fraction, "|", s.expert_change, "|",
+                                  s.expert_spread));
   }
   INSDIAG_ASSIGN_OR_RETURN(auto existing,
                            db.Exec("SELECT parameter || '|' || direction || '|' || scale || '|' || "
@@ -81,16 +78,16 @@ absl::Status UpsertFailureMode(Connection& db, const v1::FailureMode& mode) {
   INSDIAG_RETURN_IF_ERROR(
       db.Exec("DELETE FROM signature_terms WHERE failure_mode = $1", {Param::Text(id)}));
   int position = 0;
-  for (const auto& s : mode.signature()) {
+  for (const Signature& s : mode.signature) {
     INSDIAG_RETURN_IF_ERROR(
         db.Exec("INSERT INTO signature_terms (failure_mode, position, parameter, direction, scale, "
                 "common, fraction, "
                 "expert_change, expert_spread, change, spread) VALUES ($1, $2, $3, $4, $5, $6, $7, "
                 "$8, $9, $8, $9)",
-                {Param::Text(id), Param::Int(position++), Param::Text(s.parameter()),
-                 Param::Text(DirectionName(s.direction())), Param::Text(s.scale()),
-                 Param::Text(BoolText(s.common())), Param::Double(s.fraction()),
-                 Param::Double(s.expert_change()), Param::Double(s.expert_spread())}));
+                {Param::Text(id), Param::Int(position++), Param::Text(s.parameter),
+                 Param::Text(DirectionName(s.direction)), Param::Text(ScaleName(s.scale)),
+                 Param::Text(BoolText(s.common)), Param::Double(s.fraction),
+                 Param::Double(s.expert_change), Param::Double(s.expert_spread)}));
   }
   return absl::OkStatus();
 }
@@ -121,29 +118,29 @@ absl::Status CatalogueStore::Seed(std::span<const v1::UnitType> unit_types,
     INSDIAG_RETURN_IF_ERROR(db->Exec("SELECT pg_advisory_xact_lock($1)",
                                      {Param::Int(AdvisoryLockKey("insdiag.seed"))}));
     for (const auto& t : unit_types) {
-      INSDIAG_RETURN_IF_ERROR(UpsertUnitType(*db, t));
+      INSDIAG_RETURN_IF_ERROR(UpsertUnitType(*db, UnitTypeOf(t)));
     }
     for (const auto& catalogue : catalogues) {
       INSDIAG_ASSIGN_OR_RETURN(auto modes, ExpandCatalogue(catalogue));
       for (const auto& mode : modes) {
-        INSDIAG_RETURN_IF_ERROR(UpsertFailureMode(*db, mode));
+        INSDIAG_RETURN_IF_ERROR(UpsertFailureMode(*db, FailureModeOf(mode)));
       }
     }
     return absl::OkStatus();
   });
 }
 
-absl::StatusOr<v1::UnitType> CatalogueStore::GetUnitType(const std::string& name) {
+absl::StatusOr<UnitType> CatalogueStore::GetUnitType(const std::string& name) {
   INSDIAG_ASSIGN_OR_RETURN(auto id, api::ResourceId(name, api::kUnitTypes, "name"));
   INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
   return LoadUnitType(*db, id);
 }
 
-absl::StatusOr<std::vector<v1::UnitType>> CatalogueStore::ListUnitTypes() {
+absl::StatusOr<std::vector<UnitType>> CatalogueStore::ListUnitTypes() {
   INSDIAG_ASSIGN_OR_RETURN(auto db, list_pool_.Acquire());
   INSDIAG_ASSIGN_OR_RETURN(auto rows,
                            db->Exec("SELECT unit_type FROM unit_types ORDER BY unit_type"));
-  std::vector<v1::UnitType> out;
+  std::vector<UnitType> out;
   for (int r = 0; r < rows.rows(); ++r) {
     INSDIAG_ASSIGN_OR_RETURN(auto t, LoadUnitType(*db, rows.String(r, 0)));
     out.push_back(std::move(t));
@@ -220,7 +217,7 @@ absl::StatusOr<std::vector<v1::Module>> CatalogueStore::ListModules(const std::s
   return out;
 }
 
-absl::StatusOr<v1::FailureMode> CatalogueStore::GetFailureMode(const std::string& name) {
+absl::StatusOr<FailureMode> CatalogueStore::GetFailureMode(const std::string& name) {
   INSDIAG_ASSIGN_OR_RETURN(auto id, api::ResourceId(name, api::kFailureModes, "name"));
   INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
   INSDIAG_ASSIGN_OR_RETURN(auto modes, LoadModes(*db, "", "", id));
@@ -228,7 +225,7 @@ absl::StatusOr<v1::FailureMode> CatalogueStore::GetFailureMode(const std::string
   return modes.front();
 }
 
-absl::StatusOr<std::vector<v1::FailureMode>> CatalogueStore::ListFailureModes(const std::string& unit_type,
+absl::StatusOr<std::vector<FailureMode>> CatalogueStore::ListFailureModes(const std::string& unit_type,
                                                                               const std::string& module_role) {
   INSDIAG_ASSIGN_OR_RETURN(auto db, list_pool_.Acquire());
   return LoadModes(*db, unit_type.empty() ? "" : UnitTypeId(unit_type), module_role, "");

@@ -34,25 +34,25 @@ inline double HealthyVariance(const EvidenceTerm& t) {
 }
 
 // The signs of the change a signature term's direction allows.
-inline std::vector<double> SignsOf(v1::Signature::Direction d) {
-  if (d == v1::Signature::UP) return {1.0};
-  if (d == v1::Signature::DOWN) return {-1.0};
+inline std::vector<double> SignsOf(Direction d) {
+  if (d == Direction::kUp) return {1.0};
+  if (d == Direction::kDown) return {-1.0};
   return {1.0, -1.0};
 }
 
 // The broad density's scale b of a term's scale: where evidence that is off
 // for a reason no hypothesis names may lie.
-inline double BroadScale(Scale scale, const v1::DiagnosisSettings& s) {
+inline double BroadScale(Scale scale, const DiagnosisSettings& s) {
   switch (scale) {
-    case Scale::kLogRatio: return s.broad_log_ratio();
-    case Scale::kTolerance: return s.broad_tolerance();
-    case Scale::kZ: return s.broad_z();
+    case Scale::kLogRatio: return s.broad_log_ratio;
+    case Scale::kTolerance: return s.broad_tolerance;
+    case Scale::kZ: return s.broad_z;
   }
-  return s.broad_z();
+  return s.broad_z;
 }
 
 // The broad density of a term: Cauchy(x; 0, √(b² + s_m²)).
-inline double LogBroad(const EvidenceTerm& t, const v1::DiagnosisSettings& s) {
+inline double LogBroad(const EvidenceTerm& t, const DiagnosisSettings& s) {
   const double b = BroadScale(t.scale, s);
   return LogCauchyPdf(t.x, std::sqrt(b * b + t.measurement_sd * t.measurement_sd));
 }

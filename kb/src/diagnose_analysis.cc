@@ -6,14 +6,14 @@
 
 namespace insdiag::kb {
 
-v1::Diagnosis DiagnoseInputs(const DiagnosisInputs& in) {
+Diagnosis DiagnoseInputs(const DiagnosisInputs& in) {
   Evidence observed = EvidenceFromReport(in.report, in.unit_type, in.settings);
   if (!in.history_note.empty()) observed.notes.push_back(in.history_note);
   for (const EvidenceTerm& t : in.history_trends) observed.terms.push_back(t);
   if (!in.settings_note.empty()) observed.notes.push_back(in.settings_note);
-  v1::Diagnosis diagnosis = Diagnose(observed, in.modes, in.settings, in.prior);
-  diagnosis.set_analysis(in.analysis_name);
-  diagnosis.set_unit(api::ResourceName(api::kUnits, in.serial));
+  Diagnosis diagnosis = Diagnose(observed, in.modes, in.settings, in.prior);
+  diagnosis.analysis = in.analysis_name;
+  diagnosis.unit = api::ResourceName(api::kUnits, in.serial);
   return diagnosis;
 }
 

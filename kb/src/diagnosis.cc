@@ -4,7 +4,6 @@
 #include <absl/strings/str_cat.h>
 #include <absl/strings/str_format.h>
 #include <absl/strings/str_join.h>
-#include <absl/strings/str_replace.h>
 
 #include <algorithm>
 #include <cmath>
@@ -13,9 +12,6 @@
 
 #include "densities.h"
 #include "evidence_text.h"
-#include "failure_mode_data.h"
-#include "insdiag/api/json.h"
-#include "insdiag/api/resource_names.h"
 #include "insdiag/engine/candidate_source.h"
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/model/parameter_key.h"
@@ -34,22 +30,13 @@ using internal::SignedFormat;
 constexpr char kHealthy[] = "healthy";
 constexpr char kUnknown[] = "unknown";
 
-std::string ScaleName(Scale scale) {
-  switch (scale) {
-    case Scale::kLogRatio: return "log_ratio";
-    case Scale::kTolerance: return "tolerance";
-    case Scale::kZ: return "z";
-  }
-  return "";
-}
-
 double HealthyLog(const EvidenceTerm& t) {
   return LogNormalPdf(t.x, 0.0, internal::HealthyVariance(t));
 }
 
 // (1 − ε) healthy + ε broad: evidence off, with probability ε, for a reason
 // the hypothesis does not name.
-double ContaminatedLog(const EvidenceTerm& t, double eps, const v1::DiagnosisSettings& s) {
+double ContaminatedLog(const EvidenceTerm& t, double eps, const DiagnosisSettings& s) {
   if (eps <= 0.0) return HealthyLog(t);
   return LogAddExp(std::log1p(-eps) + HealthyLog(t), std::log(eps) + LogBroad(t, s));
 }
@@ -63,10 +50,10 @@ std::string SensorAxisOf(const std::string& term_name) {
 
 bool IsFamily(const std::string& parameter) { return absl::EndsWith(parameter, ".*"); }
 
-std::vector<const EvidenceTerm*> Members(const v1::Signature& term, const Evidence& evidence) {
+std::vector<const EvidenceTerm*> Members(const Signature& term, const Evidence& evidence) {
   std::vector<const EvidenceTerm*> out;
   for (const auto& t : evidence.terms) {
-    if (t.trend_of.empty() && SignatureCovers(term.parameter(), t.name) && ScaleName(t.scale) == term.scale()) {
+    if (t.trend_of.empty() && SignatureCovers(term.parameter, t.name) && t.scale == term.scale) {
       out.push_back(&t);
     }
   }
@@ -116,22 +103,22 @@ double LogPresentScore(double x, const std::vector<double>& signs, double change
   return total;
 }
 
-double LogSignatureTerm(const v1::Signature& term, const std::vector<const EvidenceTerm*>& members,
-                        const v1::DiagnosisSettings& settings) {
-  const auto signs = internal::SignsOf(term.direction());
+double LogSignatureTerm(const Signature& term, const std::vector<const EvidenceTerm*>& members,
+                        const DiagnosisSettings& settings) {
+  const auto signs = internal::SignsOf(term.direction);
   const double log_share = -std::log(static_cast<double>(signs.size()));
-  if (term.common() && members.size() > 1) {
+  if (term.common && members.size() > 1) {
     double total = -INFINITY;
-    for (double sign : signs) total = LogAddExp(total, log_share + LogCommonShift(members, sign * term.change(), term.spread()));
+    for (double sign : signs) total = LogAddExp(total, log_share + LogCommonShift(members, sign * term.change, term.spread));
     return total;
   }
-  const double q = term.fraction() > 0.0 ? std::min(term.fraction(), 1.0) : 1.0;
+  const double q = term.fraction > 0.0 ? std::min(term.fraction, 1.0) : 1.0;
   double sum = 0.0;
   for (const auto* t : members) {
     const double extra_var = t->healthy_sd * t->healthy_sd + t->measurement_sd * t->measurement_sd;
-    const int octaves = t->scale == Scale::kZ ? settings.present_score_octaves() : 0;
+    const int octaves = t->scale == Scale::kZ ? settings.present_score_octaves : 0;
     const double moved =
-        LogPresentScore(t->x, signs, term.change(), term.spread(), extra_var, octaves);
+        LogPresentScore(t->x, signs, term.change, term.spread, extra_var, octaves);
     sum += q < 1.0 ? LogAddExp(std::log(q) + moved, std::log1p(-q) + HealthyLog(*t)) : moved;
   }
   return sum;
@@ -141,39 +128,39 @@ double LogSignatureTerm(const v1::Signature& term, const std::vector<const Evide
 // developing over the unit's runs moves it in the term's direction, its
 // standard score about ±μ_T with spread s_T (DiagnosisSettings.trend_z_*),
 // or more: a score of a present effect (LogPresentScore).
-double LogTrendTerm(const v1::Signature& term, const EvidenceTerm& t, const v1::DiagnosisSettings& settings) {
-  return LogPresentScore(t.x, internal::SignsOf(term.direction()), settings.trend_z_change(),
-                         settings.trend_z_spread(), t.healthy_sd * t.healthy_sd,
-                         settings.present_score_octaves());
+double LogTrendTerm(const Signature& term, const EvidenceTerm& t, const DiagnosisSettings& settings) {
+  return LogPresentScore(t.x, internal::SignsOf(term.direction), settings.trend_z_change,
+                         settings.trend_z_spread, t.healthy_sd * t.healthy_sd,
+                         settings.present_score_octaves);
 }
 
 // The signature term of `mode` that reads the parameter trend term `t` is
 // the trend of, or nullptr.
-const v1::Signature* TrendReader(const v1::FailureMode& mode, const EvidenceTerm& t) {
+const Signature* TrendReader(const FailureMode& mode, const EvidenceTerm& t) {
   if (t.trend_of.empty()) return nullptr;
-  for (const auto& term : mode.signature()) {
-    if (SignatureCovers(term.parameter(), t.trend_of)) return &term;
+  for (const auto& term : mode.signature) {
+    if (SignatureCovers(term.parameter, t.trend_of)) return &term;
   }
   return nullptr;
 }
 
 // The unit's own significant trends in parameters the mode's signature
 // reads: their log-likelihood, each marked `covered`, with its line.
-double LogTrendTerms(const v1::FailureMode& mode, const Evidence& evidence, const v1::DiagnosisSettings& settings,
+double LogTrendTerms(const FailureMode& mode, const Evidence& evidence, const DiagnosisSettings& settings,
                      std::vector<bool>& covered, std::vector<std::string>& lines) {
   double ll = 0.0;
   for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
-    const v1::Signature* reader = TrendReader(mode, evidence.terms[i]);
+    const Signature* reader = TrendReader(mode, evidence.terms[i]);
     if (reader == nullptr) continue;
     covered[i] = true;
     ll += LogTrendTerm(*reader, evidence.terms[i], settings);
-    lines.push_back(absl::StrCat(evidence.terms[i].line, ", as a developing ", reader->parameter(), " shift predicts"));
+    lines.push_back(absl::StrCat(evidence.terms[i].line, ", as a developing ", reader->parameter, " shift predicts"));
   }
   return ll;
 }
 
 // "gyro_scale_factor.{x,y,z}: +9.6, +9.5, +9.7 tolerance units" for a family.
-std::string FamilyLine(const v1::Signature& term, const std::vector<const EvidenceTerm*>& members) {
+std::string FamilyLine(const Signature& term, const std::vector<const EvidenceTerm*>& members) {
   std::vector<std::string> axes, values;
   bool all_significant = true;
   int positive = 0;
@@ -185,9 +172,9 @@ std::string FamilyLine(const v1::Signature& term, const std::vector<const Eviden
                                           std::abs(t->x) > 3.0 * std::max(t->measurement_sd, 1e-12));
     positive += t->x > 0 ? 1 : 0;
   }
-  const std::string family = term.parameter().substr(0, term.parameter().size() - 2);
-  const char* unit = term.scale() == "log_ratio" ? " (log-ratio to nominal)"
-                     : term.scale() == "z"       ? " standard errors"
+  const std::string family = term.parameter.substr(0, term.parameter.size() - 2);
+  const char* unit = term.scale == Scale::kLogRatio ? " (log-ratio to nominal)"
+                     : term.scale == Scale::kZ       ? " standard errors"
                                                  : " tolerance units";
   std::string line = absl::StrCat(family, ".{", absl::StrJoin(axes, ","), "}: ", absl::StrJoin(values, ", "), unit);
   if (members.size() > 1 && (positive == 0 || positive == static_cast<int>(members.size()))) {
@@ -197,15 +184,15 @@ std::string FamilyLine(const v1::Signature& term, const std::vector<const Eviden
   return line;
 }
 
-std::vector<std::string> ModeEvidenceLines(const v1::FailureMode& mode, const Evidence& evidence) {
+std::vector<std::string> ModeEvidenceLines(const FailureMode& mode, const Evidence& evidence) {
   std::vector<std::string> lines;
-  for (const auto& term : mode.signature()) {
+  for (const auto& term : mode.signature) {
     const auto members = Members(term, evidence);
     if (members.empty()) {
-      lines.push_back(absl::StrCat(term.parameter(), ": not measured by this analysis"));
+      lines.push_back(absl::StrCat(term.parameter, ": not measured by this analysis"));
       continue;
     }
-    if (IsFamily(term.parameter()) && members.size() > 1) lines.push_back(FamilyLine(term, members));
+    if (IsFamily(term.parameter) && members.size() > 1) lines.push_back(FamilyLine(term, members));
     for (const auto* t : members) lines.push_back(t->line);
   }
   return lines;
@@ -226,82 +213,9 @@ std::vector<std::string> LargestDeviations(const Evidence& evidence, std::size_t
   return lines;
 }
 
-std::string ModuleOfHypothesis(const v1::Hypothesis& h) { return h.module(); }
+std::string ModuleOfHypothesis(const Hypothesis& h) { return h.module; }
 
 }  // namespace
-
-const std::vector<v1::FailureModeCatalogue>& BuiltinFailureModeCatalogues() {
-  // Parsed once: the diagnosis's settings are read from them for every request.
-  static const std::vector<v1::FailureModeCatalogue> catalogues = [] {
-    std::vector<v1::FailureModeCatalogue> out;
-    for (const std::string_view json : kFailureModeJson) {
-      v1::FailureModeCatalogue catalogue;
-      // The files are part of the build and parsed by a unit test.
-      if (api::FromJson(json, &catalogue).ok()) out.push_back(std::move(catalogue));
-    }
-    return out;
-  }();
-  return catalogues;
-}
-
-absl::StatusOr<const v1::FailureModeCatalogue*> BuiltinFailureModeCatalogue(
-    const std::string& unit_type) {
-  const std::string name = api::IdOrSelf(unit_type, api::kUnitTypes);
-  for (const auto& catalogue : BuiltinFailureModeCatalogues()) {
-    if (catalogue.unit_type() == name) return &catalogue;
-  }
-  return absl::NotFoundError(absl::StrCat("no failure modes for unit type '", unit_type, "'"));
-}
-
-absl::StatusOr<std::vector<v1::FailureMode>> ExpandCatalogue(const v1::FailureModeCatalogue& catalogue) {
-  std::vector<v1::FailureMode> out;
-  std::set<std::string> seen;
-  for (const auto& tmpl : catalogue.modes()) {
-    const auto bad = [&](const std::string& field, const std::string& why) {
-      return absl::InvalidArgumentError(
-          absl::StrCat("failure modes of ", catalogue.unit_type(), ": mode '", tmpl.id(), "': ", field, ": ", why));
-    };
-    if (tmpl.id().empty()) return bad("id", "is empty");
-    if (tmpl.rate_per_million_hours() <= 0) return bad("ratePerMillionHours", "must be positive");
-    if (tmpl.weibull_shape() <= 0 || tmpl.weibull_scale_hours() <= 0) return bad("weibull", "must be positive");
-    if (tmpl.signature().empty()) return bad("signature", "is empty");
-    std::vector<std::string> axes(tmpl.axes().begin(), tmpl.axes().end());
-    if (axes.empty()) axes.push_back("");
-    for (const std::string& axis : axes) {
-      const auto fill = [&](const std::string& text) {
-        return axis.empty() ? text : absl::StrReplaceAll(text, {{"{i}", axis}});
-      };
-      v1::FailureMode mode;
-      mode.set_name(api::ResourceName(api::kFailureModes, fill(tmpl.id())));
-      if (!seen.insert(mode.name()).second) return bad("id", "expands to a name used twice");
-      mode.set_module_role(fill(tmpl.module_role()));
-      mode.set_display_name(axis.empty() ? tmpl.display_name() : absl::StrCat(tmpl.display_name(), " (", axis, ")"));
-      mode.set_description(tmpl.description());
-      mode.set_unit_type(api::ResourceName(api::kUnitTypes, catalogue.unit_type()));
-      mode.set_expert_rate_per_million_hours(tmpl.rate_per_million_hours());
-      mode.set_rate_per_million_hours(tmpl.rate_per_million_hours());
-      mode.set_weibull_shape(tmpl.weibull_shape());
-      mode.set_weibull_scale_hours(tmpl.weibull_scale_hours());
-      for (const auto& sig : tmpl.signature()) {
-        if (sig.scale() != "log_ratio" && sig.scale() != "tolerance" && sig.scale() != "z") {
-          return bad("signature.scale", absl::StrCat("'", sig.scale(), "' is not log_ratio, tolerance or z"));
-        }
-        if (sig.direction() == v1::Signature::DIRECTION_UNSPECIFIED) return bad("signature.direction", "is missing");
-        if (sig.change() < 0 || sig.spread() <= 0) {
-          return bad("signature", absl::StrCat(sig.parameter(), ": change must be ≥ 0 and spread > 0"));
-        }
-        v1::Signature* term = mode.add_signature();
-        *term = sig;
-        term->set_parameter(fill(sig.parameter()));
-        term->set_expert_change(sig.change());
-        term->set_expert_spread(sig.spread());
-        if (term->fraction() <= 0.0) term->set_fraction(1.0);
-      }
-      out.push_back(std::move(mode));
-    }
-  }
-  return out;
-}
 
 bool SignatureCovers(const std::string& pattern, const std::string& name) {
   if (!IsFamily(pattern)) return pattern == name;
@@ -311,15 +225,15 @@ bool SignatureCovers(const std::string& pattern, const std::string& name) {
   return family && key && key->family == family->family && key->IsBareTerm() && !key->axes.empty();
 }
 
-DiagnosisHeadline HeadlineOf(const v1::Diagnosis& diagnosis) {
+DiagnosisHeadline HeadlineOf(const Diagnosis& diagnosis) {
   DiagnosisHeadline out;
   double healthy = 0.0;
-  for (const auto& h : diagnosis.hypotheses()) {
-    if (h.failure_mode() == kHealthy) healthy = h.probability();
+  for (const Hypothesis& h : diagnosis.hypotheses) {
+    if (h.failure_mode == kHealthy) healthy = h.probability;
   }
   out.fault_probability = 1.0 - healthy;
-  for (const auto& c : diagnosis.candidates()) {
-    if (c.module() != kHealthy) {
+  for (const Candidate& c : diagnosis.candidates) {
+    if (c.module != kHealthy) {
       out.top = &c;
       break;
     }
@@ -327,10 +241,10 @@ DiagnosisHeadline HeadlineOf(const v1::Diagnosis& diagnosis) {
   return out;
 }
 
-double ModeRatePerHour(const v1::FailureMode& mode, std::int64_t confirmed_failures, double fleet_exposure_hours,
-                       const v1::DiagnosisSettings& settings) {
-  const double h0 = settings.expert_pseudo_hours();
-  const double expert_per_hour = mode.expert_rate_per_million_hours() * 1e-6;
+double ModeRatePerHour(const FailureMode& mode, std::int64_t confirmed_failures, double fleet_exposure_hours,
+                       const DiagnosisSettings& settings) {
+  const double h0 = settings.expert_pseudo_hours;
+  const double expert_per_hour = mode.expert_rate_per_million_hours * 1e-6;
   return (static_cast<double>(confirmed_failures) + expert_per_hour * h0) / (std::max(fleet_exposure_hours, 0.0) + h0);
 }
 
@@ -338,33 +252,34 @@ namespace {
 
 // A hypothesis with its log-posterior and the lines that say why.
 struct ScoredHypothesis {
-  v1::Hypothesis hypothesis;
+  Hypothesis hypothesis;
   std::vector<std::string> evidence;
   double log_posterior = 0.0;
 };
 
-ScoredHypothesis Hypothesis(const std::string& name, const std::string& module, double prior,
-                            double log_likelihood, std::vector<std::string> lines) {
+ScoredHypothesis Scored(const std::string& name, const std::string& module, double prior,
+                        double log_likelihood, std::vector<std::string> lines) {
   ScoredHypothesis s;
-  s.hypothesis.set_failure_mode(name);
-  s.hypothesis.set_module(module);
-  s.hypothesis.set_prior(prior);
-  s.hypothesis.set_log_likelihood(log_likelihood);
+  s.hypothesis.failure_mode = name;
+  s.hypothesis.module = module;
+  s.hypothesis.prior = prior;
+  s.hypothesis.log_likelihood = log_likelihood;
   s.evidence = std::move(lines);
   s.log_posterior = std::log(prior) + log_likelihood;
   return s;
 }
 
-void CopyEvidence(const Evidence& evidence, v1::Diagnosis& out) {
-  for (const auto& note : evidence.notes) out.add_notes(note);
-  for (const auto& t : evidence.terms) {
-    v1::EvidenceItem* item = out.add_evidence();
-    item->set_name(t.name);
-    item->set_scale(ScaleName(t.scale));
-    item->set_value(t.x);
-    item->set_measurement_sd(t.measurement_sd);
-    item->set_healthy_sd(t.healthy_sd);
-    item->set_significant(t.significant);
+void CopyEvidence(const Evidence& evidence, Diagnosis& out) {
+  out.notes = evidence.notes;
+  for (const EvidenceTerm& t : evidence.terms) {
+    EvidenceItem item;
+    item.name = t.name;
+    item.scale = t.scale;
+    item.value = t.x;
+    item.measurement_sd = t.measurement_sd;
+    item.healthy_sd = t.healthy_sd;
+    item.significant = t.significant;
+    out.evidence.push_back(std::move(item));
   }
 }
 
@@ -378,8 +293,8 @@ struct Contamination {
 // second by `second_reader` (nullptr: left at healthy, off with probability
 // `off_probability`).
 double LogPair(const Evidence& evidence, std::size_t first, std::size_t second,
-               const v1::Signature* first_reader, const v1::Signature* second_reader, double off_probability,
-               const v1::DiagnosisSettings& settings) {
+               const Signature* first_reader, const Signature* second_reader, double off_probability,
+               const DiagnosisSettings& settings) {
   return internal::LogPairDensity({internal::PairComponent{&evidence.terms[first], first_reader, off_probability},
                                    internal::PairComponent{&evidence.terms[second], second_reader, off_probability}},
                                   evidence.terms[first].measurement_correlation, settings);
@@ -394,20 +309,20 @@ struct TermLikelihoods {
 
 TermLikelihoods LikelihoodsOfTerms(const Evidence& evidence,
                                    const std::vector<std::optional<std::size_t>>& partners,
-                                   const v1::DiagnosisSettings& settings) {
+                                   const DiagnosisSettings& settings) {
   TermLikelihoods out;
   for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
     const EvidenceTerm& t = evidence.terms[i];
     if (!partners[i]) {
       out.healthy.push_back(HealthyLog(t));
-      out.contamination.knock_on.push_back(ContaminatedLog(t, settings.contamination(), settings));
-      out.contamination.incidental.push_back(ContaminatedLog(t, settings.incidental_contamination(), settings));
+      out.contamination.knock_on.push_back(ContaminatedLog(t, settings.contamination, settings));
+      out.contamination.incidental.push_back(ContaminatedLog(t, settings.incidental_contamination, settings));
     } else if (*partners[i] > i) {
       const std::size_t j = *partners[i];
       out.healthy.push_back(LogPair(evidence, i, j, nullptr, nullptr, 0.0, settings));
-      out.contamination.knock_on.push_back(LogPair(evidence, i, j, nullptr, nullptr, settings.contamination(), settings));
+      out.contamination.knock_on.push_back(LogPair(evidence, i, j, nullptr, nullptr, settings.contamination, settings));
       out.contamination.incidental.push_back(
-          LogPair(evidence, i, j, nullptr, nullptr, settings.incidental_contamination(), settings));
+          LogPair(evidence, i, j, nullptr, nullptr, settings.incidental_contamination, settings));
     } else {
       out.healthy.push_back(0.0);
       out.contamination.knock_on.push_back(0.0);
@@ -421,15 +336,15 @@ TermLikelihoods LikelihoodsOfTerms(const Evidence& evidence,
 // every other term as a knock-on on the sensor axes the signature reads and
 // as incidental elsewhere, so that a mode's odds against `healthy` do not
 // fall with the number of terms it does not read.
-double ModeLogLikelihood(const v1::FailureMode& mode, const Evidence& evidence,
+double ModeLogLikelihood(const FailureMode& mode, const Evidence& evidence,
                          const std::vector<std::optional<std::size_t>>& partners,
-                         const Contamination& contamination, const v1::DiagnosisSettings& settings,
+                         const Contamination& contamination, const DiagnosisSettings& settings,
                          std::vector<std::string>& trend_lines) {
   std::vector<bool> covered(evidence.terms.size(), false);
-  std::vector<const v1::Signature*> pair_readers(evidence.terms.size(), nullptr);
+  std::vector<const Signature*> pair_readers(evidence.terms.size(), nullptr);
   std::set<std::string> own_sensor_axes;  // the sensor axes the signature reads
   double ll = 0.0;
-  for (const auto& term : mode.signature()) {
+  for (const auto& term : mode.signature) {
     std::vector<const EvidenceTerm*> alone;
     for (const auto* t : Members(term, evidence)) {
       const auto i = static_cast<std::size_t>(t - evidence.terms.data());
@@ -450,7 +365,7 @@ double ModeLogLikelihood(const v1::FailureMode& mode, const Evidence& evidence,
     const std::size_t j = *partners[i];
     if (pair_readers[i] == nullptr && pair_readers[j] == nullptr) continue;
     covered[i] = covered[j] = true;
-    ll += LogPair(evidence, i, j, pair_readers[i], pair_readers[j], settings.contamination(), settings);
+    ll += LogPair(evidence, i, j, pair_readers[i], pair_readers[j], settings.contamination, settings);
   }
   ll += LogTrendTerms(mode, evidence, settings, covered, trend_lines);
   for (std::size_t i = 0; i < evidence.terms.size(); ++i) {
@@ -465,19 +380,19 @@ double ModeLogLikelihood(const v1::FailureMode& mode, const Evidence& evidence,
 // The hypotheses normalised (log-sum-exp), most probable first, and the
 // modules ranked by the sum over their modes; a module's most probable mode
 // speaks for it.
-void RankHypothesesAndModules(std::vector<ScoredHypothesis>& scored, v1::Diagnosis& out) {
+void RankHypothesesAndModules(std::vector<ScoredHypothesis>& scored, Diagnosis& out) {
   double log_total = -INFINITY;
   for (const auto& s : scored) log_total = LogAddExp(log_total, s.log_posterior);
-  for (auto& s : scored) s.hypothesis.set_probability(std::exp(s.log_posterior - log_total));
+  for (auto& s : scored) s.hypothesis.probability = std::exp(s.log_posterior - log_total);
   std::stable_sort(scored.begin(), scored.end(),
                    [](const ScoredHypothesis& a, const ScoredHypothesis& b) {
-                     return a.hypothesis.probability() > b.hypothesis.probability();
+                     return a.hypothesis.probability > b.hypothesis.probability;
                    });
   std::map<std::string, std::pair<double, const ScoredHypothesis*>> modules;
   for (const auto& s : scored) {
-    *out.add_hypotheses() = s.hypothesis;
+    out.hypotheses.push_back(s.hypothesis);
     auto& [p, best] = modules[ModuleOfHypothesis(s.hypothesis)];
-    p += s.hypothesis.probability();
+    p += s.hypothesis.probability;
     if (best == nullptr) best = &s;
   }
   std::vector<std::pair<std::string, std::pair<double, const ScoredHypothesis*>>> ranked(
@@ -485,45 +400,46 @@ void RankHypothesesAndModules(std::vector<ScoredHypothesis>& scored, v1::Diagnos
   std::stable_sort(ranked.begin(), ranked.end(),
                    [](const auto& a, const auto& b) { return a.second.first > b.second.first; });
   for (const auto& [module, entry] : ranked) {
-    v1::Candidate* c = out.add_candidates();
-    c->set_module(module);
-    c->set_failure_mode(entry.second->hypothesis.failure_mode());
-    c->set_probability(entry.first);
-    for (const auto& line : entry.second->evidence) c->add_evidence(line);
+    Candidate c;
+    c.module = module;
+    c.failure_mode = entry.second->hypothesis.failure_mode;
+    c.probability = entry.first;
+    c.evidence = entry.second->evidence;
+    out.candidates.push_back(std::move(c));
   }
 }
 
 }  // namespace
 
-v1::Diagnosis Diagnose(const Evidence& evidence, std::span<const v1::FailureMode> modes,
-                       const v1::DiagnosisSettings& settings, const PriorInputs& prior) {
-  v1::Diagnosis out;
+Diagnosis Diagnose(const Evidence& evidence, std::span<const FailureMode> modes,
+                       const DiagnosisSettings& settings, const PriorInputs& prior) {
+  Diagnosis out;
   CopyEvidence(evidence, out);
 
   // Priors.
   std::vector<double> rates;
   double total_rate = 0.0;
   for (const auto& mode : modes) {
-    const auto it = prior.confirmed_failures.find(mode.name());
+    const auto it = prior.confirmed_failures.find(mode.name);
     rates.push_back(ModeRatePerHour(mode, it == prior.confirmed_failures.end() ? 0 : it->second,
                                     prior.fleet_exposure_hours, settings));
     total_rate += rates.back();
   }
-  const double exposure = std::max(prior.exposure_hours, settings.minimum_exposure_hours());
-  const double u = settings.unknown_prior();
+  const double exposure = std::max(prior.exposure_hours, settings.minimum_exposure_hours);
+  const double u = settings.unknown_prior;
   const double p_any = -std::expm1(-total_rate * exposure);
 
   std::vector<ScoredHypothesis> scored;
   if (evidence.terms.empty()) {
     // Without evidence the modes cannot be told apart: healthy or unknown, by the verdict.
-    const bool good = evidence.verdict == v1::AnalysisReport::GOOD;
+    const bool good = evidence.verdict == engine::Verdict::kGood;
     // A finite stand-in for log 0 (JSON has no infinities).
     scored.push_back(
-        Hypothesis(kHealthy, kHealthy, (1.0 - u), good ? 0.0 : -1e300,
+        Scored(kHealthy, kHealthy, (1.0 - u), good ? 0.0 : -1e300,
                    {good ? "verdict GOOD: the model fits the run" : "the verdict is not GOOD"}));
     scored.push_back(
-        Hypothesis(kUnknown, kUnknown, u, 0.0,
-                   {absl::StrCat("verdict ", v1::AnalysisReport::Verdict_Name(evidence.verdict),
+        Scored(kUnknown, kUnknown, u, 0.0,
+                   {absl::StrCat("verdict ", evidence.verdict ? engine::VerdictName(*evidence.verdict) : "VERDICT_UNSPECIFIED",
                                  ", and no identified parameter or effect candidate to say why")}));
   } else {
     const std::vector<std::optional<std::size_t>> partners = internal::PartnersOf(evidence);
@@ -537,10 +453,10 @@ v1::Diagnosis Diagnose(const Evidence& evidence, std::span<const v1::FailureMode
     std::vector<std::string> healthy_lines = {absl::StrCat(evidence.terms.size(), " evidence terms; furthest from nominal:")};
     for (auto& l : LargestDeviations(evidence, 3)) healthy_lines.push_back(std::move(l));
     scored.push_back(
-        Hypothesis(kHealthy, kHealthy, (1.0 - u) * (1.0 - p_any), healthy_ll, healthy_lines));
+        Scored(kHealthy, kHealthy, (1.0 - u) * (1.0 - p_any), healthy_ll, healthy_lines));
     std::vector<std::string> unknown_lines = {"evidence no failure mode of this unit type explains:"};
     for (auto& l : LargestDeviations(evidence, 3)) unknown_lines.push_back(std::move(l));
-    scored.push_back(Hypothesis(kUnknown, kUnknown, u, unknown_ll, unknown_lines));
+    scored.push_back(Scored(kUnknown, kUnknown, u, unknown_ll, unknown_lines));
     for (std::size_t m = 0; m < modes.size(); ++m) {
       const auto& mode = modes[m];
       std::vector<std::string> trend_lines;
@@ -548,41 +464,41 @@ v1::Diagnosis Diagnose(const Evidence& evidence, std::span<const v1::FailureMode
       const double p = total_rate > 0 ? (1.0 - u) * p_any * rates[m] / total_rate : 0.0;
       std::vector<std::string> lines = ModeEvidenceLines(mode, evidence);
       for (auto& line : trend_lines) lines.push_back(std::move(line));
-      scored.push_back(Hypothesis(mode.name(), mode.module_role(), p, ll, std::move(lines)));
+      scored.push_back(Scored(mode.name, mode.module_role, p, ll, std::move(lines)));
     }
   }
   RankHypothesesAndModules(scored, out);
   return out;
 }
 
-std::optional<double> CaseValue(const v1::Signature& term, const Evidence& evidence) {
+std::optional<double> CaseValue(const Signature& term, const Evidence& evidence) {
   const auto members = Members(term, evidence);
   if (members.empty()) return std::nullopt;
   double sum = 0.0;
   for (const auto* t : members) sum += t->x;
   const double mean = sum / static_cast<double>(members.size());
-  switch (term.direction()) {
-    case v1::Signature::UP: return mean;
-    case v1::Signature::DOWN: return -mean;
-    default: break;
+  switch (term.direction) {
+    case Direction::kUp: return mean;
+    case Direction::kDown: return -mean;
+    case Direction::kEither: break;
   }
-  if (term.common()) return std::abs(mean);
+  if (term.common) return std::abs(mean);
   double abs_sum = 0.0;
   for (const auto* t : members) abs_sum += std::abs(t->x);
   return abs_sum / static_cast<double>(members.size());
 }
 
-v1::Signature RefineSignature(const v1::Signature& term, std::span<const double> case_values,
-                              const v1::DiagnosisSettings& settings) {
-  v1::Signature out = term;
-  const double mu0 = term.expert_change();
-  const double s0 = term.expert_spread();
-  const double k0 = settings.expert_signature_weight();
+Signature RefineSignature(const Signature& term, std::span<const double> case_values,
+                              const DiagnosisSettings& settings) {
+  Signature out = term;
+  const double mu0 = term.expert_change;
+  const double s0 = term.expert_spread;
+  const double k0 = settings.expert_signature_weight;
   const double n = static_cast<double>(case_values.size());
-  out.set_confirmed_cases(static_cast<int>(case_values.size()));
+  out.confirmed_cases = static_cast<int>(case_values.size());
   if (case_values.empty()) {
-    out.set_change(mu0);
-    out.set_spread(s0);
+    out.change = mu0;
+    out.spread = s0;
     return out;
   }
   double mean = 0.0;
@@ -592,8 +508,8 @@ v1::Signature RefineSignature(const v1::Signature& term, std::span<const double>
   for (double c : case_values) ss += (c - mean) * (c - mean);
   const double mu = (k0 * mu0 + n * mean) / (k0 + n);
   const double s2 = (k0 * s0 * s0 + ss + k0 * n * (mean - mu0) * (mean - mu0) / (k0 + n)) / (k0 + n);
-  out.set_change(std::max(mu, 0.0));
-  out.set_spread(std::sqrt(s2));
+  out.change = std::max(mu, 0.0);
+  out.spread = std::sqrt(s2);
   return out;
 }
 

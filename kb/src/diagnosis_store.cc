@@ -11,6 +11,7 @@
 #include "insdiag/api/resource_names.h"
 #include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/diagnosis.h"
+#include "insdiag/kb/knowledge_messages.h"
 #include "insdiag/kb/unit_history.h"
 #include "report_rows.h"
 #include "signature_refinement.h"
@@ -101,7 +102,8 @@ absl::StatusOr<DiagnosisInputs> DiagnosisStore::LoadInputs(const std::string& an
         api::ResourceName(api::kUnits, in.serial), " has no unit type (its runs name none): ",
         "there is no nominal model to diagnose against"));
   }
-  INSDIAG_ASSIGN_OR_RETURN(in.report, LoadReport(*db, in.analysis_id));
+  INSDIAG_ASSIGN_OR_RETURN(const v1::AnalysisReport report, LoadReport(*db, in.analysis_id));
+  in.report = FindingsOf(report);
   auto unit_type = LoadUnitType(*db, type_id);
   if (!unit_type.ok()) {
     if (unit_type.status().code() == absl::StatusCode::kNotFound) {
@@ -121,26 +123,27 @@ absl::StatusOr<DiagnosisInputs> DiagnosisStore::LoadInputs(const std::string& an
   const double previous = internal::DoubleOr0(unit, 0, 4);
   in.prior.exposure_hours = std::max(hours - previous, 0.0);
   in.prior.fleet_exposure_hours = fleet;
-  for (const auto& m : in.modes) in.prior.confirmed_failures[m.name()] = m.confirmed_failures();
+  for (const FailureMode& m : in.modes) in.prior.confirmed_failures[m.name] = m.confirmed_failures;
   INSDIAG_RETURN_IF_ERROR(LoadHistoryEvidence(*db, in));
   return in;
 }
 
 
-absl::StatusOr<v1::Diagnosis> DiagnosisStore::Store(const DiagnosisInputs& in, v1::Diagnosis diagnosis) {
+absl::StatusOr<v1::Diagnosis> DiagnosisStore::Store(const DiagnosisInputs& in, const Diagnosis& made_diagnosis) {
   INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
   std::string id;
+  v1::Diagnosis diagnosis = ToProto(made_diagnosis);
   const absl::Status status = db->InTransaction([&]() -> absl::Status {
     INSDIAG_ASSIGN_OR_RETURN(auto made,
                              db->Exec("SELECT gen_random_uuid()::text, " + Micros("now()")));
     id = made.String(0, 0);
     diagnosis.set_name(api::ResourceName(api::kDiagnoses, id));
     *diagnosis.mutable_create_time() = internal::TimestampOfMicros(internal::IntOr0(made, 0, 1));
-    const DiagnosisHeadline headline = HeadlineOf(diagnosis);
-    const v1::Candidate* top = headline.top;
+    const DiagnosisHeadline headline = HeadlineOf(made_diagnosis);
+    const Candidate* top = headline.top;
     std::string body;
     diagnosis.SerializeToString(&body);
-    std::vector<std::string> notes(diagnosis.notes().begin(), diagnosis.notes().end());
+    const std::vector<std::string>& notes = made_diagnosis.notes;
     auto inserted = db->Exec(
         "INSERT INTO diagnoses (diagnosis_id, analysis_id, unit_id, fault_probability, top_module, "
         "top_failure_mode, "
@@ -148,21 +151,20 @@ absl::StatusOr<v1::Diagnosis> DiagnosisStore::Store(const DiagnosisInputs& in, v
         "$7, $8, $9::text[], "
         "to_timestamp($10::double precision / 1000000))",
         {Param::Text(id), Param::Text(in.analysis_id), Param::Text(in.unit_id),
-         Param::Double(headline.fault_probability), Param::Text(top ? top->module() : ""),
-         Param::Text(top ? top->failure_mode() : ""), Param::Double(top ? top->probability() : 0.0),
+         Param::Double(headline.fault_probability), Param::Text(top ? top->module : ""),
+         Param::Text(top ? top->failure_mode : ""), Param::Double(top ? top->probability : 0.0),
          Param::Bytes(body), Param::TextArray(notes),
          Param::Int(internal::MicrosOf(diagnosis.create_time()))});
     if (!inserted.ok()) return inserted.status();
     int rank = 0;
-    for (const auto& c : diagnosis.candidates()) {
-      std::vector<std::string> evidence(c.evidence().begin(), c.evidence().end());
+    for (const Candidate& c : made_diagnosis.candidates) {
       INSDIAG_RETURN_IF_ERROR(
           db->Exec("INSERT INTO diagnosis_candidates (diagnosis_id, rank, module, "
                    "failure_mode, probability, evidence) "
                    "VALUES ($1::uuid, $2, $3, $4, $5, $6::text[])",
-                   {Param::Text(id), Param::Int(rank++), Param::Text(c.module()),
-                    Param::Text(c.failure_mode()), Param::Double(c.probability()),
-                    Param::TextArray(evidence)}));
+                   {Param::Text(id), Param::Int(rank++), Param::Text(c.module),
+                    Param::Text(c.failure_mode), Param::Double(c.probability),
+                    Param::TextArray(c.evidence)}));
     }
     return absl::OkStatus();
   });

@@ -46,13 +46,13 @@ double StandardScoreOfPValue(double p_value) {
 // An evidence term on the standard-score scale: a healthy unit scatters as N(0, 1).
 EvidenceTerm StandardScoreTerm(const std::string& name, double estimate, double std_error, const std::string& unit,
                                double z, bool significant, const std::string& suffix,
-                               const v1::DiagnosisSettings& settings) {
+                               const DiagnosisSettings& settings) {
   EvidenceTerm t;
   t.name = name;
   t.scale = Scale::kZ;
   t.x = z;
   t.measurement_sd = 0.0;
-  t.healthy_sd = settings.healthy_z_sd();
+  t.healthy_sd = settings.healthy_z_sd;
   t.significant = significant;
   t.tolerance_units = 0.0;
   t.line = absl::StrCat(name, ": estimate ", Format(estimate), std_error > 0 ? absl::StrCat(" ± ", Format(std_error)) : "",
@@ -66,31 +66,31 @@ namespace {
 
 // A value against its nominal, on the scale the nominal calls for.
 EvidenceTerm AgainstNominal(const std::string& name, double value, double std_error,
-                            const v1::NominalParameter& n, const std::string& unit,
-                            const v1::DiagnosisSettings& settings) {
+                            const NominalParameter& n, const std::string& unit,
+                            const DiagnosisSettings& settings) {
   EvidenceTerm t;
   t.name = name;
-  t.tolerance_units = (value - n.value()) / n.tolerance();
+  t.tolerance_units = (value - n.value) / n.tolerance;
   const double se = std::isfinite(std_error) && std_error > 0 ? std_error : 0.0;
-  const std::string u = unit.empty() ? n.unit() : unit;
+  const std::string u = unit.empty() ? n.unit : unit;
   const std::string se_text = se > 0 ? absl::StrCat(" ± ", Format(se)) : "";
-  if (n.value() > 0 && value > 0) {
+  if (n.value > 0 && value > 0) {
     t.scale = Scale::kLogRatio;
-    t.x = std::log(value / n.value());
+    t.x = std::log(value / n.value);
     t.measurement_sd = se / value;
-    t.healthy_sd = settings.healthy_log_ratio_fraction() * std::log1p(n.tolerance() / n.value());
+    t.healthy_sd = settings.healthy_log_ratio_fraction * std::log1p(n.tolerance / n.value);
     t.line =
         absl::StrCat(name, " = ", Format(value), se_text, " ", u, ", ",
-                     absl::StrFormat("%.2g", value / n.value()), "× nominal ", Format(n.value()),
+                     absl::StrFormat("%.2g", value / n.value), "× nominal ", Format(n.value),
                      " (", SignedFormat(t.tolerance_units), " tolerance units)");
   } else {
     t.scale = Scale::kTolerance;
     t.x = t.tolerance_units;
-    t.measurement_sd = se / n.tolerance();
-    t.healthy_sd = settings.healthy_tolerance_sd();
+    t.measurement_sd = se / n.tolerance;
+    t.healthy_sd = settings.healthy_tolerance_sd;
     t.line = absl::StrCat(name, " = ", SignedFormat(value), se_text, (u.empty() ? "" : " "), u,
                           " (", SignedFormat(t.tolerance_units), " tolerance units, tolerance ",
-                          Format(n.tolerance()), ")");
+                          Format(n.tolerance), ")");
   }
   return t;
 }
@@ -107,17 +107,17 @@ EvidenceTerm AgainstNominal(const std::string& name, double value, double std_er
 // p-value (Davies' bound over the onsets) is what a healthy unit
 // scatters like N(0, 1); so is that of a ramp the raw samples show (its
 // test picked the channel and the onset).
-double CandidateStandardScore(const v1::EffectCandidate& c) {
+double CandidateStandardScore(const CandidateFinding& c) {
   const auto z_of_p = [&] {
-    return std::copysign(StandardScoreOfPValue(c.p_value()), c.estimate());
+    return std::copysign(StandardScoreOfPValue(c.p_value), c.estimate);
   };
-  const std::optional<engine::CandidateSource> source = engine::CandidateSourceNamed(c.source());
+  const std::optional<engine::CandidateSource> source = engine::CandidateSourceNamed(c.source);
   const bool structure = source && engine::IsStructureSource(*source);
   const bool fault = source && engine::IsFaultTestSource(*source);
   return fault || structure  ? z_of_p()
-         : c.std_error() > 0 ? c.estimate() / c.std_error()
-         : c.degrees_of_freedom() <= 1
-             ? std::copysign(std::sqrt(std::max(c.statistic(), 0.0)), c.estimate())
+         : c.std_error > 0 ? c.estimate / c.std_error
+         : c.degrees_of_freedom <= 1
+             ? std::copysign(std::sqrt(std::max(c.statistic, 0.0)), c.estimate)
              : z_of_p();
 }
 
@@ -125,21 +125,21 @@ double CandidateStandardScore(const v1::EffectCandidate& c) {
 // model, so no candidate scores it and the model lists only its density; the
 // test that added it does score it, as it scored the candidate before
 // (z of its Holm-adjusted p-value: a conservative score).
-void AddStructuresTheLoopAdded(const v1::AnalysisReport& report,
-                               const v1::DiagnosisSettings& settings, std::set<std::string>& seen,
+void AddStructuresTheLoopAdded(const ReportFindings& report,
+                               const DiagnosisSettings& settings, std::set<std::string>& seen,
                                Evidence& evidence) {
-  const auto& effects = report.model().effects();
-  for (const auto& step : report.discovery()) {
-    const std::string& name = step.effect();
+  const std::vector<std::string>& effects = report.model_effects;
+  for (const LoopStep& step : report.discovery) {
+    const std::string& name = step.effect;
     const bool in_model = std::find(effects.begin(), effects.end(), name) != effects.end();
     if (!IsEffectOfKind(name, engine::EffectKind::kRandom) || !in_model ||
         !seen.insert(name).second)
       continue;
     evidence.terms.push_back(StandardScoreTerm(
-        name, step.estimate(), step.std_error(), step.unit(), StandardScoreOfPValue(step.p_value()),
+        name, step.estimate, step.std_error, step.unit, StandardScoreOfPValue(step.p_value),
         true,
-        absl::StrFormat(", in the model (added by the loop at step %d, Holm p = %.2g)", step.step(),
-                        step.p_value()),
+        absl::StrFormat(", in the model (added by the loop at step %d, Holm p = %.2g)", step.step,
+                        step.p_value),
         settings));
   }
 }
@@ -147,19 +147,19 @@ void AddStructuresTheLoopAdded(const v1::AnalysisReport& report,
 // Pairs a drift's σ and τ where the report identified them together and
 // both stand against a nominal on the log-ratio scale; a term whose partner
 // is missing is weighed alone.
-void PairJointlyIdentified(const v1::AnalysisReport& report, Evidence& evidence) {
+void PairJointlyIdentified(const ReportFindings& report, Evidence& evidence) {
   const std::map<std::string, std::size_t> index = internal::TermsByName(evidence);
-  for (const auto& p : report.identified()) {
-    if (!p.has_log_correlation() || !(std::abs(p.log_correlation()) < 1.0)) continue;
-    const auto a = index.find(p.name());
-    const auto b = index.find(p.jointly_with());
+  for (const IdentifiedFinding& p : report.identified) {
+    if (!p.log_correlation || !(std::abs(*p.log_correlation) < 1.0)) continue;
+    const auto a = index.find(p.name);
+    const auto b = index.find(p.jointly_with);
     if (a == index.end() || b == index.end() || a->second == b->second) continue;
     EvidenceTerm& first = evidence.terms[a->second];
     EvidenceTerm& second = evidence.terms[b->second];
     if (first.scale != Scale::kLogRatio || second.scale != Scale::kLogRatio) continue;
     first.jointly_with = second.name;
     second.jointly_with = first.name;
-    first.measurement_correlation = second.measurement_correlation = p.log_correlation();
+    first.measurement_correlation = second.measurement_correlation = *p.log_correlation;
   }
 }
 
@@ -173,7 +173,7 @@ bool IsDriftSigma(const std::string& name) {
 // Holm-adjusted over the unit's drifts (Holm, Scand. J. Statist. 6(2),
 // 1979). A drift that wandered along the ridge is as far as its
 // well-measured direction says, not as its two wide marginals do.
-void TestDrifts(const v1::DiagnosisSettings& settings, Evidence& evidence) {
+void TestDrifts(const DiagnosisSettings& settings, Evidence& evidence) {
   struct DriftTest {
     std::size_t sigma = 0;
     std::optional<std::size_t> tau;
@@ -202,7 +202,7 @@ void TestDrifts(const v1::DiagnosisSettings& settings, Evidence& evidence) {
   engine::stats::HolmAdjust(p_values, holm);
   for (std::size_t k = 0; k < tests.size(); ++k) {
     const DriftTest& test = tests[k];
-    const bool significant = holm[k] < settings.significance_level();
+    const bool significant = holm[k] < settings.significance_level;
     EvidenceTerm& sigma = evidence.terms[test.sigma];
     sigma.significant = significant;
     absl::StrAppend(&sigma.line,
@@ -216,52 +216,51 @@ void TestDrifts(const v1::DiagnosisSettings& settings, Evidence& evidence) {
 
 }  // namespace
 
-Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType& unit_type,
-                            const v1::DiagnosisSettings& settings) {
+Evidence EvidenceFromReport(const ReportFindings& report, const UnitType& unit_type,
+                            const DiagnosisSettings& settings) {
   Evidence evidence;
-  evidence.verdict = report.verdict();
-  std::map<std::string, const v1::NominalParameter*> nominal;
-  for (const auto& p : unit_type.nominal()) nominal[p.name()] = &p;
+  evidence.verdict = report.verdict;
+  std::map<std::string, const NominalParameter*> nominal;
+  for (const NominalParameter& p : unit_type.nominal) nominal[p.name] = &p;
   std::set<std::string> seen;
   std::vector<std::string> unknown_names;
 
-  for (const auto& p : report.identified()) {
-    const auto it = nominal.find(p.name());
-    if (it == nominal.end() && IsEffectOfKind(p.name(), engine::EffectKind::kFault) &&
-        p.std_error() > 0 && seen.insert(p.name()).second) {
+  for (const IdentifiedFinding& p : report.identified) {
+    const auto it = nominal.find(p.name);
+    if (it == nominal.end() && IsEffectOfKind(p.name, engine::EffectKind::kFault) &&
+        p.std_error > 0 && seen.insert(p.name).second) {
       // A fault the model holds (added at its onset): nominally absent, its
       // estimate in standard errors.
-      evidence.terms.push_back(StandardScoreTerm(p.name(), p.value(), p.std_error(), p.unit(),
-                                                 p.value() / p.std_error(), true, ", in the model", settings));
+      evidence.terms.push_back(StandardScoreTerm(p.name, p.value, p.std_error, p.unit,
+                                                 p.value / p.std_error, true, ", in the model", settings));
       continue;
     }
     if (it == nominal.end()) {
-      unknown_names.push_back(p.name());
+      unknown_names.push_back(p.name);
       continue;
     }
-    if (!seen.insert(p.name()).second) continue;
+    if (!seen.insert(p.name).second) continue;
     EvidenceTerm t =
-        AgainstNominal(p.name(), p.value(), p.std_error(), *it->second, p.unit(), settings);
-    absl::StrAppend(&t.line, ", identified (",
-                    v1::IdentifiedParameter::Method_Name(p.method()) , ")");
+        AgainstNominal(p.name, p.value, p.std_error, *it->second, p.unit, settings);
+    absl::StrAppend(&t.line, ", identified (", p.method, ")");
     evidence.terms.push_back(std::move(t));
   }
   PairJointlyIdentified(report, evidence);
   TestDrifts(settings, evidence);
   AddStructuresTheLoopAdded(report, settings, seen, evidence);
   int significant_candidates = 0;
-  for (const auto& c : report.effect_candidates()) {
+  for (const CandidateFinding& c : report.candidates) {
     // A candidate no test measured is no evidence either way.
-    if (!c.identifiable() || c.not_tested() || !seen.insert(c.name()).second) continue;
-    const bool significant = c.p_value_holm() < settings.significance_level();
+    if (!c.identifiable || c.not_tested || !seen.insert(c.name).second) continue;
+    const bool significant = c.p_value_holm < settings.significance_level;
     significant_candidates += significant ? 1 : 0;
     const std::string verdict =
-        significant ? absl::StrFormat(", significant (Holm p = %.2g)", c.p_value_holm())
-                    : absl::StrFormat(", not significant (Holm p = %.2g)", c.p_value_holm());
-    const auto it = nominal.find(c.name());
+        significant ? absl::StrFormat(", significant (Holm p = %.2g)", c.p_value_holm)
+                    : absl::StrFormat(", not significant (Holm p = %.2g)", c.p_value_holm);
+    const auto it = nominal.find(c.name);
     if (it != nominal.end()) {
       EvidenceTerm t =
-          AgainstNominal(c.name(), c.estimate(), c.std_error(), *it->second, c.unit(), settings);
+          AgainstNominal(c.name, c.estimate, c.std_error, *it->second, c.unit, settings);
       t.significant = significant;
       absl::StrAppend(&t.line, verdict);
       evidence.terms.push_back(std::move(t));
@@ -269,8 +268,8 @@ Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType
     }
     const double z = CandidateStandardScore(c);
     std::string where;
-    if (c.has_onset_s()) where = absl::StrFormat(" from %.0f ± %.0f s", c.onset_s(), c.onset_std_s());
-    evidence.terms.push_back(StandardScoreTerm(c.name(), c.estimate(), c.std_error(), c.unit(), z, significant,
+    if (c.onset_s) where = absl::StrFormat(" from %.0f ± %.0f s", *c.onset_s, c.onset_std_s);
+    evidence.terms.push_back(StandardScoreTerm(c.name, c.estimate, c.std_error, c.unit, z, significant,
                                                where + verdict, settings));
   }
   // Candidates scanned against one model are each tested beside that model
@@ -287,7 +286,7 @@ Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType
         significant_candidates));
   }
   if (!unknown_names.empty()) {
-    evidence.notes.push_back(absl::StrCat("identified parameters without a nominal value in ", unit_type.name(),
+    evidence.notes.push_back(absl::StrCat("identified parameters without a nominal value in ", unit_type.name,
                                           " are not used: ", absl::StrJoin(unknown_names, ", ")));
   }
   if (evidence.terms.empty()) {

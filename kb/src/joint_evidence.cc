@@ -9,9 +9,9 @@ namespace insdiag::kb::internal {
 namespace {
 
 // The means a signature term allows: its change in each direction.
-std::vector<double> MeansOf(const v1::Signature& s) {
-  std::vector<double> means = SignsOf(s.direction());
-  for (double& m : means) m *= s.change();
+std::vector<double> MeansOf(const Signature& s) {
+  std::vector<double> means = SignsOf(s.direction);
+  for (double& m : means) m *= s.change;
   return means;
 }
 
@@ -44,14 +44,14 @@ std::vector<std::optional<std::size_t>> PartnersOf(const Evidence& evidence) {
 }
 
 double LogPairDensity(const std::array<PairComponent, 2>& c, double correlation,
-                      const v1::DiagnosisSettings& settings) {
+                      const DiagnosisSettings& settings) {
   const EvidenceTerm& a = *c[0].term;
   const EvidenceTerm& b = *c[1].term;
   const double covariance = correlation * a.measurement_sd * b.measurement_sd;
   const std::vector<double> means_a = c[0].reader ? MeansOf(*c[0].reader) : std::vector<double>{0.0};
   const std::vector<double> means_b = c[1].reader ? MeansOf(*c[1].reader) : std::vector<double>{0.0};
-  const double spread_a = c[0].reader ? c[0].reader->spread() : 0.0;
-  const double spread_b = c[1].reader ? c[1].reader->spread() : 0.0;
+  const double spread_a = c[0].reader ? c[0].reader->spread : 0.0;
+  const double spread_b = c[1].reader ? c[1].reader->spread : 0.0;
   const double var_a = HealthyVariance(a) + spread_a * spread_a;
   const double var_b = HealthyVariance(b) + spread_b * spread_b;
   // The Gaussian part of each kept subset, averaged over the directions.

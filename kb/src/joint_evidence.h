@@ -32,7 +32,7 @@ struct PairComponent {
   // The signature term that reads it (expected change, spread, directions),
   // or nullptr: the hypothesis leaves it at healthy, off with probability
   // `off_probability` for a reason it does not name.
-  const v1::Signature* reader = nullptr;
+  const Signature* reader = nullptr;
   double off_probability = 0.0;
 };
 
@@ -44,7 +44,7 @@ struct PairComponent {
 // with nothing read and ε = 0 it is healthy's N(x; 0, diag(s_h²) + M).
 // For one term alone this is the per-term density of diagnosis.h.
 double LogPairDensity(const std::array<PairComponent, 2>& components, double correlation,
-                      const v1::DiagnosisSettings& settings);
+                      const DiagnosisSettings& settings);
 
 // The squared distance of the pair from nominal for a healthy unit,
 // d² = xᵀ(diag(s_h²) + M)⁻¹x: χ² on two degrees of freedom.

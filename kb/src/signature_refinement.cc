@@ -5,6 +5,7 @@
 #include "catalogue_rows.h"
 #include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/diagnosis.h"
+#include "insdiag/kb/knowledge_messages.h"
 #include "report_rows.h"
 
 namespace insdiag::kb::internal {
@@ -12,11 +13,11 @@ namespace insdiag::kb::internal {
 absl::Status RefineModeSignature(Connection& db, const std::string& mode_id) {
   INSDIAG_ASSIGN_OR_RETURN(auto modes, LoadModes(db, "", "", mode_id));
   if (modes.empty()) return absl::OkStatus();
-  const v1::FailureMode& mode = modes.front();
-  const std::string type_id = UnitTypeId(mode.unit_type());
+  const FailureMode& mode = modes.front();
+  const std::string type_id = UnitTypeId(mode.unit_type);
   INSDIAG_ASSIGN_OR_RETURN(auto unit_type, LoadUnitType(db, type_id));
   INSDIAG_ASSIGN_OR_RETURN(auto type_settings, SettingsFor(type_id));
-  const v1::DiagnosisSettings& settings = type_settings.settings;
+  const DiagnosisSettings& settings = type_settings.settings;
   INSDIAG_ASSIGN_OR_RETURN(auto cases,
                            db.Exec("SELECT DISTINCT analysis_id::text FROM failure_records WHERE "
                                    "failure_mode = $1 AND confirmed "
@@ -26,21 +27,22 @@ absl::Status RefineModeSignature(Connection& db, const std::string& mode_id) {
   for (int r = 0; r < cases.rows(); ++r) {
     auto report = LoadReport(db, cases.String(r, 0));
     if (!report.ok()) continue;  // a case whose analysis is gone no longer refines
-    evidence.push_back(EvidenceFromReport(*report, unit_type, settings));
+    evidence.push_back(EvidenceFromReport(FindingsOf(*report), unit_type, settings));
   }
-  for (int position = 0; position < mode.signature_size(); ++position) {
+  for (int position = 0; position < static_cast<int>(mode.signature.size()); ++position) {
+    const Signature& term = mode.signature[static_cast<std::size_t>(position)];
     std::vector<double> values;
     for (const auto& e : evidence) {
-      if (auto v = CaseValue(mode.signature(position), e)) values.push_back(*v);
+      if (auto v = CaseValue(term, e)) values.push_back(*v);
     }
-    const v1::Signature refined = RefineSignature(mode.signature(position), values, settings);
+    const Signature refined = RefineSignature(term, values, settings);
     INSDIAG_ASSIGN_OR_RETURN(
         auto updated,
         db.Exec("UPDATE signature_terms SET change = $3, spread = $4, confirmed_cases = $5 WHERE "
                 "failure_mode = $1 AND "
                 "position = $2",
-                {Param::Text(mode_id), Param::Int(position), Param::Double(refined.change()),
-                 Param::Double(refined.spread()), Param::Int(refined.confirmed_cases())}));
+                {Param::Text(mode_id), Param::Int(position), Param::Double(refined.change),
+                 Param::Double(refined.spread), Param::Int(refined.confirmed_cases)}));
   }
   return db.Exec("UPDATE failure_modes SET update_time = now() WHERE failure_mode = $1", {Param::Text(mode_id)})
       .status();

@@ -176,9 +176,9 @@ v1::UnitParameterStatistics ParameterStatisticsOf(std::span<const HistoryPoint> 
 }
 
 std::vector<EvidenceTerm> TrendEvidence(std::span<const v1::UnitParameterHistory> parameters,
-                                        const v1::DiagnosisSettings& settings) {
+                                        const DiagnosisSettings& settings) {
   std::vector<EvidenceTerm> out;
-  if (settings.trend_z_spread() <= 0.0) return out;
+  if (settings.trend_z_spread <= 0.0) return out;
   std::vector<const v1::UnitParameterHistory*> fitted;
   std::vector<double> p_values;
   for (const auto& p : parameters) {
@@ -189,7 +189,7 @@ std::vector<EvidenceTerm> TrendEvidence(std::span<const v1::UnitParameterHistory
   std::vector<double> holm(p_values.size());
   stats::HolmAdjust(p_values, holm);
   for (std::size_t i = 0; i < fitted.size(); ++i) {
-    if (holm[i] >= settings.significance_level()) continue;
+    if (holm[i] >= settings.significance_level) continue;
     const v1::UnitParameterHistory& p = *fitted[i];
     const v1::UnitTrendFit& trend = p.statistics().trend();
     EvidenceTerm t;
@@ -201,7 +201,7 @@ std::vector<EvidenceTerm> TrendEvidence(std::span<const v1::UnitParameterHistory
     t.x = std::copysign(-stats::NormalQuantile(0.5 * std::clamp(trend.p_value(), 1e-300, 1.0)),
                         trend.slope_per_day());
     t.measurement_sd = 0.0;
-    t.healthy_sd = settings.healthy_z_sd();
+    t.healthy_sd = settings.healthy_z_sd;
     t.significant = true;
     const std::string unit = p.unit().empty() ? "" : absl::StrCat(" ", p.unit());
     t.line = absl::StrFormat("%s: trend over the unit's %d runs %+.3g ± %.2g%s per day (z = %.1f, Holm p = %.2g), "

@@ -16,7 +16,7 @@
 
 #include "insdiag/api/unit_types.h"
 #include "insdiag/engine/status_macros.h"
-#include "insdiag/kb/diagnosis.h"
+#include "insdiag/kb/failure_mode_catalogue.h"
 #include "insdiag/kb/run_store.h"
 #include "insdiag/server/access_guard.h"
 #include "insdiag/server/analysis_workers.h"

@@ -11,6 +11,7 @@
 #include "insdiag/engine/model/effect_catalogue.h"
 #include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/diagnose_analysis.h"
+#include "insdiag/kb/knowledge_messages.h"
 #include "insdiag/server/display_series.h"
 
 namespace insdiag::server {
@@ -208,14 +209,15 @@ absl::StatusOr<v1::DisplaySeries> AnalysisService::ReadDisplaySeries(const v1::R
 }
 
 absl::StatusOr<v1::UnitType> KnowledgeService::GetUnitType(const v1::GetUnitTypeRequest& request) {
-  return catalogue_.GetUnitType(request.name());
+  INSDIAG_ASSIGN_OR_RETURN(const kb::UnitType unit_type, catalogue_.GetUnitType(request.name()));
+  return kb::ToProto(unit_type);
 }
 
 absl::StatusOr<v1::ListUnitTypesResponse> KnowledgeService::ListUnitTypes(const v1::ListUnitTypesRequest& request) {
   INSDIAG_RETURN_IF_ERROR(CheckPageSize(request.page_size()));
   INSDIAG_ASSIGN_OR_RETURN(auto types, catalogue_.ListUnitTypes());
   v1::ListUnitTypesResponse response;
-  for (auto& t : types) *response.add_unit_types() = std::move(t);
+  for (const kb::UnitType& t : types) *response.add_unit_types() = kb::ToProto(t);
   return response;
 }
 
@@ -251,12 +253,13 @@ absl::StatusOr<v1::ListFailureModesResponse> KnowledgeService::ListFailureModes(
   INSDIAG_ASSIGN_OR_RETURN(auto modes,
                            catalogue_.ListFailureModes(request.unit_type(), request.module_role()));
   v1::ListFailureModesResponse response;
-  for (auto& m : modes) *response.add_failure_modes() = std::move(m);
+  for (const kb::FailureMode& m : modes) *response.add_failure_modes() = kb::ToProto(m);
   return response;
 }
 
 absl::StatusOr<v1::FailureMode> KnowledgeService::GetFailureMode(const v1::GetFailureModeRequest& request) {
-  return catalogue_.GetFailureMode(request.name());
+  INSDIAG_ASSIGN_OR_RETURN(const kb::FailureMode mode, catalogue_.GetFailureMode(request.name()));
+  return kb::ToProto(mode);
 }
 
 absl::StatusOr<v1::FailureRecord> KnowledgeService::CreateFailureRecord(const v1::CreateFailureRecordRequest& request) {

@@ -5,6 +5,7 @@
 #include "insdiag/api/resource_names.h"
 #include "insdiag/api/unit_types.h"
 #include "insdiag/kb/catalogue_store.h"
+#include "insdiag/kb/knowledge_messages.h"
 
 namespace insdiag::server {
 
@@ -18,7 +19,7 @@ absl::StatusOr<std::optional<engine::ErrorModel>> NominalModelOfUnitType(kb::Con
     if (code == absl::StatusCode::kNotFound || code == absl::StatusCode::kInvalidArgument) return std::nullopt;
     return found.status();
   }
-  auto nominal = api::BaseModelOf(*found);
+  auto nominal = api::BaseModelOf(kb::ToProto(*found));
   if (!nominal.ok()) return std::nullopt;
   return *std::move(nominal);
 }

@@ -31,9 +31,9 @@ using testing::Tolerance;
 
 using ::testing::HasSubstr;
 
-double ProbabilityOf(const v1::Diagnosis& d, const std::string& mode) {
-  for (const auto& h : d.hypotheses()) {
-    if (h.failure_mode() == mode) return h.probability();
+double ProbabilityOf(const Diagnosis& d, const std::string& mode) {
+  for (const auto& h : d.hypotheses) {
+    if (h.failure_mode == mode) return h.probability;
   }
   return 0.0;
 }
@@ -44,17 +44,17 @@ TEST(FailureModeCatalogueTest,
   EXPECT_EQ(f.catalogue.modes_size(), 20);
   std::set<std::string> roles;
   std::set<std::string> nominal;
-  for (const auto& p : f.unit_type.nominal()) nominal.insert(p.name());
+  for (const auto& p : f.unit_type.nominal) nominal.insert(p.name);
   for (const auto& m : f.modes) {
-    roles.insert(m.module_role());
-    EXPECT_GT(m.description().size(), 100u) << m.name() << ": argue the physics";
-    for (const auto& s : m.signature()) {
-      if (s.scale() == "z") continue;  // structure effects: standard scores, no nominal needed
-      const std::string family = s.parameter().substr(0, s.parameter().find('.'));
-      bool known = nominal.contains(s.parameter());
-      for (const auto& n : nominal) known = known || (s.parameter().ends_with(".*") && n.rfind(family + ".", 0) == 0);
+    roles.insert(m.module_role);
+    EXPECT_GT(m.description.size(), 100u) << m.name << ": argue the physics";
+    for (const auto& s : m.signature) {
+      if (s.scale == Scale::kZ) continue;  // structure effects: standard scores, no nominal needed
+      const std::string family = s.parameter.substr(0, s.parameter.find('.'));
+      bool known = nominal.contains(s.parameter);
+      for (const auto& n : nominal) known = known || (s.parameter.ends_with(".*") && n.rfind(family + ".", 0) == 0);
       if (family.find("quantization") != std::string::npos) continue;  // INS-2000 has no nominal quantisation yet
-      EXPECT_TRUE(known) << m.name() << ": " << s.parameter() << " has no nominal value in INS-2000";
+      EXPECT_TRUE(known) << m.name << ": " << s.parameter << " has no nominal value in INS-2000";
     }
   }
   EXPECT_EQ(roles, (std::set<std::string>{"gyro.x", "gyro.y", "gyro.z", "acc.x", "acc.y", "acc.z", "interface_card",
@@ -62,10 +62,10 @@ TEST(FailureModeCatalogueTest,
 }
 
 TEST(DiagnosisTest, HealthyUnitsTopHypothesisIsHealthy) {
-  const v1::Diagnosis d = DiagnoseReport(NominalReport());
-  ASSERT_GT(d.candidates_size(), 0);
-  EXPECT_EQ(d.candidates(0).module(), "healthy");
-  EXPECT_GT(d.candidates(0).probability(), 0.5);
+  const Diagnosis d = DiagnoseReport(NominalReport());
+  ASSERT_GT(d.candidates.size(), 0);
+  EXPECT_EQ(d.candidates[0].module, "healthy");
+  EXPECT_GT(d.candidates[0].probability, 0.5);
 }
 
 TEST(DiagnosisTest, TripledGyroXDriftSigmaPointsAtGyroX) {
@@ -74,11 +74,11 @@ TEST(DiagnosisTest, TripledGyroXDriftSigmaPointsAtGyroX) {
   ASSERT_NE(sigma, nullptr);
   sigma->set_value(3.0 * Nominal("gyro_bias_gm.x.sigma"));
   sigma->set_std_error(0.12 * sigma->value());
-  const v1::Diagnosis d = DiagnoseReport(report);
-  ASSERT_GT(d.candidates_size(), 0);
-  EXPECT_EQ(d.candidates(0).module(), "gyro.x") << d.DebugString();
-  EXPECT_EQ(d.candidates(0).failure_mode(), "failureModes/dtg-bearing-wear.x");
-  EXPECT_THAT(d.candidates(0).evidence(), ::testing::Contains(HasSubstr("3× nominal")));
+  const Diagnosis d = DiagnoseReport(report);
+  ASSERT_GT(d.candidates.size(), 0);
+  EXPECT_EQ(d.candidates[0].module, "gyro.x") << ToProto(d).DebugString();
+  EXPECT_EQ(d.candidates[0].failure_mode, "failureModes/dtg-bearing-wear.x");
+  EXPECT_THAT(d.candidates[0].evidence, ::testing::Contains(HasSubstr("3× nominal")));
 }
 
 TEST(DiagnosisTest, CommonGyroScaleFactorShiftPointsAtTheInterfaceCard) {
@@ -92,10 +92,10 @@ TEST(DiagnosisTest, CommonGyroScaleFactorShiftPointsAtTheInterfaceCard) {
     c->set_p_value(1e-12);
     c->set_p_value_holm(1e-10);
   }
-  const v1::Diagnosis d = DiagnoseReport(report);
-  ASSERT_GT(d.candidates_size(), 0);
-  EXPECT_EQ(d.candidates(0).module(), "interface_card") << d.DebugString();
-  EXPECT_THAT(d.candidates(0).evidence(), ::testing::Contains(HasSubstr("all positive, significant")));
+  const Diagnosis d = DiagnoseReport(report);
+  ASSERT_GT(d.candidates.size(), 0);
+  EXPECT_EQ(d.candidates[0].module, "interface_card") << ToProto(d).DebugString();
+  EXPECT_THAT(d.candidates[0].evidence, ::testing::Contains(HasSubstr("all positive, significant")));
 }
 
 TEST(DiagnosisTest, OneAxisScaleFactorShiftPointsAtThatGyroNotTheInterfaceCard) {
@@ -104,9 +104,9 @@ TEST(DiagnosisTest, OneAxisScaleFactorShiftPointsAtThatGyroNotTheInterfaceCard) 
   c->set_estimate(5.0 * Tolerance("gyro_scale_factor.y"));
   c->set_std_error(0.2 * Tolerance("gyro_scale_factor.y"));
   c->set_p_value_holm(1e-10);
-  const v1::Diagnosis d = DiagnoseReport(report);
-  EXPECT_EQ(d.candidates(0).module(), "gyro.y") << d.DebugString();
-  EXPECT_EQ(d.candidates(0).failure_mode(), "failureModes/dtg-torquer-scale-shift.y");
+  const Diagnosis d = DiagnoseReport(report);
+  EXPECT_EQ(d.candidates[0].module, "gyro.y") << ToProto(d).DebugString();
+  EXPECT_EQ(d.candidates[0].failure_mode, "failureModes/dtg-torquer-scale-shift.y");
 }
 
 TEST(DiagnosisTest, ArwUpOnAllGyrosAndVrwUpOnAllAccelerometersPointsAtThePowerSupply) {
@@ -118,7 +118,7 @@ TEST(DiagnosisTest, ArwUpOnAllGyrosAndVrwUpOnAllAccelerometersPointsAtThePowerSu
       p->set_std_error(0.1 * p->value());
     }
   }
-  EXPECT_EQ(DiagnoseReport(report).candidates(0).module(), "power_supply");
+  EXPECT_EQ(DiagnoseReport(report).candidates[0].module, "power_supply");
 }
 
 TEST(DiagnosisTest, EvidenceNoModeExplainsGoesToUnknown) {
@@ -128,7 +128,7 @@ TEST(DiagnosisTest, EvidenceNoModeExplainsGoesToUnknown) {
   auto* tau = Identified(report, "acc_bias_gm.z.tau");
   tau->set_value(20.0 * Nominal("acc_bias_gm.z.tau"));
   tau->set_std_error(0.1 * tau->value());
-  EXPECT_EQ(DiagnoseReport(report).candidates(0).module(), "unknown") << DiagnoseReport(report).DebugString();
+  EXPECT_EQ(DiagnoseReport(report).candidates[0].module, "unknown") << ToProto(DiagnoseReport(report)).DebugString();
 }
 
 // A bias jump added to the model at its onset scores its estimate over its
@@ -147,9 +147,9 @@ TEST(DiagnosisTest, AJumpInTheModelPointsAtItsModeHoweverStronglyItIsMeasured) {
     jump->set_value(-z * jump->std_error());
     jump->set_unit("rad/s");
     jump->set_method(v1::IdentifiedParameter::FILTER);
-    const v1::Diagnosis d = DiagnoseReport(report);
-    EXPECT_EQ(d.hypotheses(0).failure_mode(), "failureModes/dtg-rotor-mass-shift.x")
-        << "z " << z << d.DebugString();
+    const Diagnosis d = DiagnoseReport(report);
+    EXPECT_EQ(d.hypotheses[0].failure_mode, "failureModes/dtg-rotor-mass-shift.x")
+        << "z " << z << ToProto(d).DebugString();
     const double p = ProbabilityOf(d, "failureModes/dtg-rotor-mass-shift.x");
     EXPECT_GE(p, previous - 0.02) << "a stronger detection counted against the mode at z " << z;
     previous = p;
@@ -190,12 +190,12 @@ TEST(DiagnosisTest, AWalkInTheBiasPointsAtThatSensorsWanderingBiasModeFoundOrInT
         c->set_p_value_holm(kPValue);
         c->set_identifiable(true);
       }
-      const v1::Diagnosis d = DiagnoseReport(report);
-      ASSERT_GT(d.candidates_size(), 0);
-      EXPECT_EQ(d.hypotheses(0).failure_mode(), mode)
+      const Diagnosis d = DiagnoseReport(report);
+      ASSERT_GT(d.candidates.size(), 0);
+      EXPECT_EQ(d.hypotheses[0].failure_mode, mode)
           << walk << (in_model ? " in the model" : " found") << "\n"
-          << d.DebugString();
-      EXPECT_EQ(d.candidates(0).module(), module) << walk;
+          << ToProto(d).DebugString();
+      EXPECT_EQ(d.candidates[0].module, module) << walk;
     }
   }
 }
@@ -206,7 +206,7 @@ TEST(DiagnosisTest, SaysWhenTheAnalysedModelLeavesSeveralSignificantEffects) {
   v1::AnalysisReport report = NominalReport();
   const auto& f = Ins2000();
   const auto notes_of = [&] {
-    return EvidenceFromReport(report, f.unit_type, f.catalogue.settings()).notes;
+    return EvidenceFromReport(FindingsOf(report), f.unit_type, f.settings).notes;
   };
   v1::EffectCandidate* x = Candidate(report, "gyro_scale_factor.x");
   v1::EffectCandidate* y = Candidate(report, "gyro_scale_factor.y");
@@ -243,7 +243,7 @@ TEST(DiagnosisTest, UntestedStructuresAreNoEvidenceAndScreenedOnesWeighByTheirPV
   screened->set_p_value_holm(1.0);
   screened->set_identifiable(true);
   const auto& f = Ins2000();
-  const Evidence evidence = EvidenceFromReport(report, f.unit_type, f.catalogue.settings());
+  const Evidence evidence = EvidenceFromReport(FindingsOf(report), f.unit_type, f.settings);
   const EvidenceTerm* x = TermNamed(evidence, "gyro_bias_second_order.x");
   const EvidenceTerm* y = TermNamed(evidence, "gyro_bias_second_order.y");
   EXPECT_EQ(x, nullptr) << "an untested candidate counted as evidence";
@@ -270,7 +270,7 @@ TEST(DiagnosisTest, AStructureWeighsByItsTestNotByItsEstimateOverItsError) {
     c->set_identifiable(true);
   }
   const auto& f = Ins2000();
-  const Evidence evidence = EvidenceFromReport(report, f.unit_type, f.catalogue.settings());
+  const Evidence evidence = EvidenceFromReport(FindingsOf(report), f.unit_type, f.settings);
   const EvidenceTerm* pair = TermNamed(evidence, "gyro_bias_second_order.y");
   const EvidenceTerm* walk = TermNamed(evidence, "gyro_bias_rw.z");
   ASSERT_NE(pair, nullptr);
@@ -279,21 +279,21 @@ TEST(DiagnosisTest, AStructureWeighsByItsTestNotByItsEstimateOverItsError) {
   EXPECT_NEAR(walk->x, 4.892, 1e-3);  // Φ⁻¹(1 − 1e-6/2)
   // The pair alone leaves a nominal unit healthy.
   report.mutable_effect_candidates()->RemoveLast();
-  const v1::Diagnosis d = DiagnoseReport(report);
-  ASSERT_GT(d.candidates_size(), 0);
-  EXPECT_EQ(d.candidates(0).module(), "healthy");
+  const Diagnosis d = DiagnoseReport(report);
+  ASSERT_GT(d.candidates.size(), 0);
+  EXPECT_EQ(d.candidates[0].module, "healthy");
 }
 
 TEST(DiagnosisTest, ReportWithoutEvidenceIsHealthyWhenGoodAndUnknownOtherwise) {
   v1::AnalysisReport report;
   report.set_verdict(v1::AnalysisReport::GOOD);
-  v1::Diagnosis d = DiagnoseReport(report);
-  EXPECT_EQ(d.candidates(0).module(), "healthy");
-  EXPECT_THAT(d.notes(), ::testing::Contains(HasSubstr("no identified parameters")));
+  Diagnosis d = DiagnoseReport(report);
+  EXPECT_EQ(d.candidates[0].module, "healthy");
+  EXPECT_THAT(d.notes, ::testing::Contains(HasSubstr("no identified parameters")));
   report.set_verdict(v1::AnalysisReport::FAULTY);
   d = DiagnoseReport(report);
-  EXPECT_EQ(d.candidates(0).module(), "unknown");
-  EXPECT_NEAR(d.candidates(0).probability(), 1.0, 1e-9);
+  EXPECT_EQ(d.candidates[0].module, "unknown");
+  EXPECT_NEAR(d.candidates[0].probability, 1.0, 1e-9);
 }
 
 TEST(DiagnosisTest, ConfirmedFailuresRaiseTheModesPriorAndProbability) {
@@ -312,18 +312,18 @@ TEST(DiagnosisTest, ConfirmedFailuresRaiseTheModesPriorAndProbability) {
 TEST(DiagnosisTest, ModeProbabilitiesSumToOneAndModulesSumTheirModes) {
   v1::AnalysisReport report = NominalReport();
   Identified(report, "acc_bias_gm.z.sigma")->set_value(2.5 * Nominal("acc_bias_gm.z.sigma"));
-  const v1::Diagnosis d = DiagnoseReport(report);
+  const Diagnosis d = DiagnoseReport(report);
   double total = 0.0, modules = 0.0;
-  for (const auto& h : d.hypotheses()) total += h.probability();
-  for (const auto& c : d.candidates()) modules += c.probability();
+  for (const auto& h : d.hypotheses) total += h.probability;
+  for (const auto& c : d.candidates) modules += c.probability;
   EXPECT_NEAR(total, 1.0, 1e-9);
   EXPECT_NEAR(modules, 1.0, 1e-9);
-  EXPECT_EQ(d.candidates(0).module(), "acc.z") << d.DebugString();
+  EXPECT_EQ(d.candidates[0].module, "acc.z") << ToProto(d).DebugString();
 }
 
-double LogLikelihoodOf(const v1::Diagnosis& d, const std::string& hypothesis) {
-  for (const auto& h : d.hypotheses()) {
-    if (h.failure_mode() == hypothesis) return h.log_likelihood();
+double LogLikelihoodOf(const Diagnosis& d, const std::string& hypothesis) {
+  for (const auto& h : d.hypotheses) {
+    if (h.failure_mode == hypothesis) return h.log_likelihood;
   }
   ADD_FAILURE() << hypothesis << " is not a hypothesis";
   return 0.0;
@@ -331,17 +331,17 @@ double LogLikelihoodOf(const v1::Diagnosis& d, const std::string& hypothesis) {
 
 Evidence NominalEvidence() {
   const auto& f = Ins2000();
-  return EvidenceFromReport(NominalReport(), f.unit_type, f.catalogue.settings());
+  return EvidenceFromReport(FindingsOf(NominalReport()), f.unit_type, f.settings);
 }
 
-v1::Diagnosis DiagnoseEvidence(const Evidence& evidence) {
+Diagnosis DiagnoseEvidence(const Evidence& evidence) {
   const auto& f = Ins2000();
-  return Diagnose(evidence, f.modes, f.catalogue.settings(), {});
+  return Diagnose(evidence, f.modes, f.settings, {});
 }
 
 // log L(mode) − log L(healthy): the evidence's odds for the mode.
 double LogOddsAgainstHealthy(const Evidence& evidence, const std::string& mode) {
-  const v1::Diagnosis d = DiagnoseEvidence(evidence);
+  const Diagnosis d = DiagnoseEvidence(evidence);
   return LogLikelihoodOf(d, mode) - LogLikelihoodOf(d, "healthy");
 }
 
@@ -361,8 +361,8 @@ void AddNominalTerms(Evidence& evidence, const std::string& sensor, const std::s
 // fault's knock-on, which costs a little per term (Occam's factor).
 TEST(DiagnosisTest, AModesOddsAgainstHealthyDoNotFallWithTermsOffItsSensorAxes) {
   const std::string mode = "failureModes/dtg-bearing-wear.x";
-  const double incidental = Ins2000().catalogue.settings().incidental_contamination();
-  const double knock_on = Ins2000().catalogue.settings().contamination();
+  const double incidental = Ins2000().settings.incidental_contamination;
+  const double knock_on = Ins2000().settings.contamination;
   const Evidence base = NominalEvidence();
   const double before = LogOddsAgainstHealthy(base, mode);
 
@@ -393,7 +393,7 @@ TEST(DiagnosisTest, HealthyScatterIsDiagnosedHealthyFirstInAtLeastNinetyFivePerc
   constexpr int kDraws = 400;
   int healthy_first = 0;
   for (int i = 0; i < kDraws; ++i) {
-    healthy_first += DiagnoseEvidence(HealthyScatter(rng)).candidates(0).module() == "healthy";
+    healthy_first += DiagnoseEvidence(HealthyScatter(rng)).candidates[0].module == "healthy";
   }
   EXPECT_GE(healthy_first, 0.95 * kDraws) << healthy_first << " of " << kDraws;
 }
@@ -419,11 +419,11 @@ RankRates TripledDriftSigmaRanks(double relative_se, int draws, std::uint64_t se
       t.measurement_sd = relative_se;
       t.x = std::log(3.0) + relative_se * unit(rng);
     }
-    const v1::Diagnosis d = DiagnoseEvidence(e);
-    rates.first += d.candidates(0).module() == "gyro." + axis;
-    for (const auto& c : d.candidates()) {
-      if (c.module() == "healthy" || c.module() == "unknown") continue;
-      rates.first_fault += c.module() == "gyro." + axis;
+    const Diagnosis d = DiagnoseEvidence(e);
+    rates.first += d.candidates[0].module == "gyro." + axis;
+    for (const auto& c : d.candidates) {
+      if (c.module == "healthy" || c.module == "unknown") continue;
+      rates.first_fault += c.module == "gyro." + axis;
       break;
     }
   }
@@ -444,22 +444,22 @@ TEST(DiagnosisTest, ATripledDriftSigmaPointsAtThatGyroAndRanksItFirstOnceMeasure
 }
 
 TEST(RefineSignatureTest, ConfirmedCasesPullTheExpectedChangeTowardsThemWithTheExpertAsPrior) {
-  v1::Signature term;
-  term.set_parameter("gyro_bias_gm.x.sigma");
-  term.set_direction(v1::Signature::UP);
-  term.set_scale("log_ratio");
-  term.set_expert_change(1.0);
-  term.set_expert_spread(0.45);
-  v1::DiagnosisSettings settings;
-  settings.set_expert_signature_weight(3);
+  Signature term;
+  term.parameter = "gyro_bias_gm.x.sigma";
+  term.direction = Direction::kUp;
+  term.scale = Scale::kLogRatio;
+  term.expert_change = 1.0;
+  term.expert_spread = 0.45;
+  DiagnosisSettings settings;
+  settings.expert_signature_weight = 3;
   const std::vector<double> cases = {1.6, 1.5, 1.7};
-  const v1::Signature refined = RefineSignature(term, cases, settings);
+  const Signature refined = RefineSignature(term, cases, settings);
   // μ = (3·1.0 + 3·1.6)/6 = 1.3
-  EXPECT_NEAR(refined.change(), 1.3, 1e-12);
-  EXPECT_EQ(refined.confirmed_cases(), 3);
+  EXPECT_NEAR(refined.change, 1.3, 1e-12);
+  EXPECT_EQ(refined.confirmed_cases, 3);
   // s² = (3·0.45² + 0.02 + 3·3·0.36/6)/6
-  EXPECT_NEAR(refined.spread(), std::sqrt((3 * 0.2025 + 0.02 + 0.54) / 6.0), 1e-12);
-  EXPECT_EQ(RefineSignature(term, {}, settings).change(), 1.0);
+  EXPECT_NEAR(refined.spread, std::sqrt((3 * 0.2025 + 0.02 + 0.54) / 6.0), 1e-12);
+  EXPECT_EQ(RefineSignature(term, {}, settings).change, 1.0);
 }
 
 }  // namespace

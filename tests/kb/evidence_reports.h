@@ -10,13 +10,16 @@
 
 #include "insdiag/api/unit_types.h"
 #include "insdiag/kb/diagnosis.h"
+#include "insdiag/kb/failure_mode_catalogue.h"
+#include "insdiag/kb/knowledge_messages.h"
 
 namespace insdiag::kb::testing {
 
 struct Fixture {
-  v1::UnitType unit_type;
-  v1::FailureModeCatalogue catalogue;
-  std::vector<v1::FailureMode> modes;
+  UnitType unit_type;
+  v1::FailureModeCatalogue catalogue;  // as the experts write it
+  DiagnosisSettings settings;
+  std::vector<FailureMode> modes;
 };
 
 inline const Fixture& Ins2000() {
@@ -24,29 +27,30 @@ inline const Fixture& Ins2000() {
     Fixture out;
     auto type = api::BuiltinUnitType("INS-2000");
     EXPECT_TRUE(type.ok()) << type.status();
-    out.unit_type = *type;
+    out.unit_type = UnitTypeOf(*type);
     auto catalogue = BuiltinFailureModeCatalogue("INS-2000");
     EXPECT_TRUE(catalogue.ok()) << catalogue.status();
     out.catalogue = **catalogue;
+    out.settings = SettingsOf(out.catalogue.settings());
     auto modes = ExpandCatalogue(out.catalogue);
     EXPECT_TRUE(modes.ok()) << modes.status();
-    out.modes = *modes;
+    for (const v1::FailureMode& mode : *modes) out.modes.push_back(FailureModeOf(mode));
     return out;
   }();
   return f;
 }
 
 inline double Nominal(const std::string& name) {
-  for (const auto& p : Ins2000().unit_type.nominal()) {
-    if (p.name() == name) return p.value();
+  for (const NominalParameter& p : Ins2000().unit_type.nominal) {
+    if (p.name == name) return p.value;
   }
   ADD_FAILURE() << "no nominal " << name;
   return 0.0;
 }
 
 inline double Tolerance(const std::string& name) {
-  for (const auto& p : Ins2000().unit_type.nominal()) {
-    if (p.name() == name) return p.tolerance();
+  for (const NominalParameter& p : Ins2000().unit_type.nominal) {
+    if (p.name == name) return p.tolerance;
   }
   ADD_FAILURE() << "no tolerance " << name;
   return 1.0;
@@ -58,26 +62,26 @@ inline double Tolerance(const std::string& name) {
 inline v1::AnalysisReport NominalReport() {
   v1::AnalysisReport report;
   report.set_verdict(v1::AnalysisReport::GOOD);
-  for (const auto& p : Ins2000().unit_type.nominal()) {
-    if (p.value() > 0) {
+  for (const NominalParameter& p : Ins2000().unit_type.nominal) {
+    if (p.value > 0) {
       auto* id = report.add_identified();
-      id->set_name(p.name());
-      id->set_value(p.value());
-      const bool tau = p.name().find(".tau") != std::string::npos;
-      id->set_std_error(p.value() * (tau ? 0.3 : 0.12));
-      id->set_method(p.name().find("_gm") != std::string::npos ? v1::IdentifiedParameter::ACF
-                                                               : v1::IdentifiedParameter::ALLAN);
-      id->set_unit(p.unit());
+      id->set_name(p.name);
+      id->set_value(p.value);
+      const bool tau = p.name.find(".tau") != std::string::npos;
+      id->set_std_error(p.value * (tau ? 0.3 : 0.12));
+      id->set_method(p.name.find("_gm") != std::string::npos ? v1::IdentifiedParameter::ACF
+                                                             : v1::IdentifiedParameter::ALLAN);
+      id->set_unit(p.unit);
     } else {
       auto* c = report.add_effect_candidates();
-      c->set_name(p.name());
-      c->set_family(p.name().substr(0, p.name().find('.')));
-      c->set_estimate(0.05 * p.tolerance());
-      c->set_std_error(0.1 * p.tolerance());
+      c->set_name(p.name);
+      c->set_family(p.name.substr(0, p.name.find('.')));
+      c->set_estimate(0.05 * p.tolerance);
+      c->set_std_error(0.1 * p.tolerance);
       c->set_p_value(0.6);
       c->set_p_value_holm(1.0);
       c->set_identifiable(true);
-      c->set_unit(p.unit());
+      c->set_unit(p.unit);
       c->set_source("SCORE");
     }
   }
@@ -91,11 +95,16 @@ inline v1::IdentifiedParameter* Identified(v1::AnalysisReport& r, const std::str
   return nullptr;
 }
 
-// The report diagnosed against INS-2000's built-in modes with `prior`.
-inline v1::Diagnosis DiagnoseReport(const v1::AnalysisReport& report, PriorInputs prior = {}) {
+// The report's evidence against INS-2000's nominal values.
+inline Evidence EvidenceOf(const v1::AnalysisReport& report) {
   const auto& f = Ins2000();
-  return Diagnose(EvidenceFromReport(report, f.unit_type, f.catalogue.settings()), f.modes,
-                  f.catalogue.settings(), prior);
+  return EvidenceFromReport(FindingsOf(report), f.unit_type, f.settings);
+}
+
+// The report diagnosed against INS-2000's built-in modes with `prior`.
+inline Diagnosis DiagnoseReport(const v1::AnalysisReport& report, PriorInputs prior = {}) {
+  const auto& f = Ins2000();
+  return Diagnose(EvidenceOf(report), f.modes, f.settings, prior);
 }
 
 // The evidence term named `name`, or nullptr.

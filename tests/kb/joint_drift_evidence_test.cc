@@ -53,12 +53,12 @@ void SetDrift(v1::AnalysisReport& report, const std::string& drift, double sigma
 TEST(JointDriftEvidenceTest, ADriftFarAcrossTheRidgeIsEvidenceThoughEachMarginalIsWide) {
   v1::AnalysisReport joint = NominalReport();
   SetDrift(joint, "gyro_bias_gm.x", 4.9, 0.48, 2.7, 1.0, 0.95);
-  const v1::Diagnosis d = DiagnoseReport(joint);
-  EXPECT_EQ(d.candidates(0).module(), "gyro.x") << d.DebugString();
-  EXPECT_GT(d.candidates(0).probability(), 0.8);
+  const Diagnosis d = DiagnoseReport(joint);
+  EXPECT_EQ(d.candidates[0].module, "gyro.x") << ToProto(d).DebugString();
+  EXPECT_GT(d.candidates[0].probability, 0.8);
 
   const auto& f = Ins2000();
-  const Evidence e = EvidenceFromReport(joint, f.unit_type, f.catalogue.settings());
+  const Evidence e = EvidenceFromReport(FindingsOf(joint), f.unit_type, f.settings);
   const EvidenceTerm* sigma = TermNamed(e, "gyro_bias_gm.x.sigma");
   ASSERT_NE(sigma, nullptr);
   EXPECT_EQ(sigma->jointly_with, "gyro_bias_gm.x.tau");
@@ -71,16 +71,16 @@ TEST(JointDriftEvidenceTest, ADriftFarAcrossTheRidgeIsEvidenceThoughEachMarginal
     p.clear_log_correlation();
     p.clear_jointly_with();
   }
-  const Evidence separate = EvidenceFromReport(apart, f.unit_type, f.catalogue.settings());
+  const Evidence separate = EvidenceFromReport(FindingsOf(apart), f.unit_type, f.settings);
   const EvidenceTerm* separate_sigma = TermNamed(separate, "gyro_bias_gm.x.sigma");
   ASSERT_NE(separate_sigma, nullptr);
   EXPECT_TRUE(separate_sigma->jointly_with.empty());
   double apart_probability = 0.0;
-  const v1::Diagnosis apart_diagnosis = DiagnoseReport(apart);
-  for (const auto& c : apart_diagnosis.candidates()) {
-    if (c.module() == "gyro.x") apart_probability = c.probability();
+  const Diagnosis apart_diagnosis = DiagnoseReport(apart);
+  for (const auto& c : apart_diagnosis.candidates) {
+    if (c.module == "gyro.x") apart_probability = c.probability;
   }
-  EXPECT_LT(apart_probability, d.candidates(0).probability() - 0.3);
+  EXPECT_LT(apart_probability, d.candidates[0].probability - 0.3);
 }
 
 // Healthy drifts scattered by the measurement along a tight ridge
@@ -92,7 +92,7 @@ TEST(JointDriftEvidenceTest, ADriftFarAcrossTheRidgeIsEvidenceThoughEachMarginal
 // level) passes the bound of 2.5 % with probability below 0.04.
 TEST(JointDriftEvidenceTest, HealthyDriftsWanderingAlongTheRidgeStayHealthyAtTheTestsLevel) {
   const auto& f = Ins2000();
-  const double level = f.catalogue.settings().significance_level();
+  const double level = f.settings.significance_level;
   std::mt19937_64 rng(20261207);
   std::normal_distribution<double> unit(0.0, 1.0);
   constexpr int kDraws = 400;
@@ -101,7 +101,7 @@ TEST(JointDriftEvidenceTest, HealthyDriftsWanderingAlongTheRidgeStayHealthyAtThe
   for (int i = 0; i < kDraws; ++i) {
     v1::AnalysisReport report = NominalReport();
     SetDrift(report, "gyro_bias_gm.y", 1.0, kSigmaLogSe, 1.0, kTauLogSe, kRho);
-    const Evidence nominal = EvidenceFromReport(report, f.unit_type, f.catalogue.settings());
+    const Evidence nominal = EvidenceFromReport(FindingsOf(report), f.unit_type, f.settings);
     const EvidenceTerm* nominal_sigma = TermNamed(nominal, "gyro_bias_gm.y.sigma");
     const EvidenceTerm* nominal_tau = TermNamed(nominal, "gyro_bias_gm.y.tau");
     ASSERT_NE(nominal_sigma, nullptr);
@@ -115,11 +115,11 @@ TEST(JointDriftEvidenceTest, HealthyDriftsWanderingAlongTheRidgeStayHealthyAtThe
     // The reported SE is relative to the reported value: set it so that the
     // SE of the log is the stated one.
     SetDrift(report, "gyro_bias_gm.y", std::exp(xs), kSigmaLogSe, std::exp(xt), kTauLogSe, kRho);
-    const Evidence e = EvidenceFromReport(report, f.unit_type, f.catalogue.settings());
+    const Evidence e = EvidenceFromReport(FindingsOf(report), f.unit_type, f.settings);
     const EvidenceTerm* sigma = TermNamed(e, "gyro_bias_gm.y.sigma");
     ASSERT_NE(sigma, nullptr);
     false_alarms += sigma->significant ? 1 : 0;
-    healthy_first += DiagnoseReport(report).candidates(0).module() == "healthy" ? 1 : 0;
+    healthy_first += DiagnoseReport(report).candidates[0].module == "healthy" ? 1 : 0;
   }
   EXPECT_GE(healthy_first, 0.95 * kDraws) << healthy_first << " of " << kDraws;
   EXPECT_LE(false_alarms, 2.5 * level * kDraws) << false_alarms << " of " << kDraws;
@@ -132,14 +132,14 @@ TEST(JointDriftEvidenceTest, EachDriftChangeOnOneSensorNamesThatSensor) {
   {
     v1::AnalysisReport r = NominalReport();
     SetDrift(r, "gyro_bias_gm.z", 1.0, 0.3, 10.0, 0.35, 0.7);
-    const v1::Diagnosis d = DiagnoseReport(r);
-    EXPECT_EQ(d.candidates(0).module(), "gyro.z") << d.DebugString();
-    EXPECT_EQ(d.candidates(0).failure_mode(), "failureModes/dtg-thermal-path-loss.z");
+    const Diagnosis d = DiagnoseReport(r);
+    EXPECT_EQ(d.candidates[0].module, "gyro.z") << ToProto(d).DebugString();
+    EXPECT_EQ(d.candidates[0].failure_mode, "failureModes/dtg-thermal-path-loss.z");
   }
   {
     v1::AnalysisReport r = NominalReport();
     SetDrift(r, "acc_bias_gm.y", 3.0, 0.35, 1.0, 0.6, 0.98);
-    EXPECT_EQ(DiagnoseReport(r).candidates(0).module(), "acc.y") << DiagnoseReport(r).DebugString();
+    EXPECT_EQ(DiagnoseReport(r).candidates[0].module, "acc.y") << ToProto(DiagnoseReport(r)).DebugString();
   }
   for (const auto& [name, module, mode] :
        {std::tuple{"gyro_arw.x", "gyro.x", "failureModes/dtg-pickoff-noise.x"},
@@ -148,9 +148,9 @@ TEST(JointDriftEvidenceTest, EachDriftChangeOnOneSensorNamesThatSensor) {
     auto* p = Identified(r, name);
     p->set_value(2.0 * Nominal(name));
     p->set_std_error(0.01 * p->value());
-    const v1::Diagnosis d = DiagnoseReport(r);
-    EXPECT_EQ(d.candidates(0).module(), module) << d.DebugString();
-    EXPECT_EQ(d.candidates(0).failure_mode(), mode);
+    const Diagnosis d = DiagnoseReport(r);
+    EXPECT_EQ(d.candidates[0].module, module) << ToProto(d).DebugString();
+    EXPECT_EQ(d.candidates[0].failure_mode, mode);
   }
 }
 

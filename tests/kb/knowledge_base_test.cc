@@ -6,11 +6,12 @@
 #include <gtest/gtest.h>
 
 #include "evidence_reports.h"
-#include "insdiag/kb/diagnose_analysis.h"
 #include "insdiag/kb/analysis_store.h"
 #include "insdiag/kb/catalogue_store.h"
+#include "insdiag/kb/diagnose_analysis.h"
 #include "insdiag/kb/diagnosis.h"
 #include "insdiag/kb/diagnosis_store.h"
+#include "insdiag/kb/failure_mode_catalogue.h"
 #include "insdiag/kb/failure_record_store.h"
 #include "insdiag/kb/fleet_store.h"
 #include "insdiag/kb/run_store.h"
@@ -76,7 +77,7 @@ class KnowledgeBaseTest : public insdiag::testing::DatabaseTest {
 TEST_F(KnowledgeBaseTest, SeedsTheUnitTypeAndItsFailureModes) {
   auto type = catalogue_->GetUnitType("unitTypes/INS-2000");
   ASSERT_TRUE(type.ok()) << type.status();
-  EXPECT_GT(type->nominal_size(), 50);
+  EXPECT_GT(type->nominal.size(), 50u);
   auto modes = catalogue_->ListFailureModes("unitTypes/INS-2000", "");
   ASSERT_TRUE(modes.ok());
   EXPECT_EQ(modes->size(), 50u);  // 15 per-axis modes × 3 axes + 5 unit-level modes
@@ -143,9 +144,9 @@ TEST_F(KnowledgeBaseTest, ConfirmingADiagnosisWritesAFailureRecordAndRaisesLater
   EXPECT_EQ(records->first[0].module(), "units/INS-0002/modules/gyro.x");
   EXPECT_EQ(records->first[0].analysis(), first);
   auto mode = catalogue_->GetFailureMode("failureModes/dtg-bearing-wear.x");
-  EXPECT_EQ(mode->confirmed_failures(), 1);
-  EXPECT_EQ(mode->signature(0).confirmed_cases(), 1);
-  EXPECT_NE(mode->signature(0).change(), mode->signature(0).expert_change());
+  EXPECT_EQ(mode->confirmed_failures, 1);
+  EXPECT_EQ(mode->signature[0].confirmed_cases, 1);
+  EXPECT_NE(mode->signature[0].change, mode->signature[0].expert_change);
 
   // Another unit with the same evidence: the mode is now more probable.
   auto later = AnalysisDiagnoser(*diagnoses_).Diagnose(StoreAnalysis("INS-0003", WornGyroX()));
@@ -159,7 +160,7 @@ TEST_F(KnowledgeBaseTest, ConfirmingADiagnosisWritesAFailureRecordAndRaisesLater
   auto rejected = diagnoses_->Resolve(resolve);
   ASSERT_TRUE(rejected.ok()) << rejected.status();
   EXPECT_FALSE(rejected->confirmed());
-  EXPECT_EQ(catalogue_->GetFailureMode("failureModes/dtg-bearing-wear.x")->confirmed_failures(), 1);
+  EXPECT_EQ(catalogue_->GetFailureMode("failureModes/dtg-bearing-wear.x")->confirmed_failures, 1);
 
   FleetStore fleet(pool());
   auto stats = fleet.GetFleetStatistics({});
@@ -206,7 +207,7 @@ TEST_F(KnowledgeBaseTest, ACorrectedRecordKeepsItsReplacedVersionAndCountsAsCorr
   auto confirmed_count = [&] {
     auto mode = catalogue_->GetFailureMode("failureModes/acc-bias-shift.x");
     EXPECT_TRUE(mode.ok()) << mode.status();
-    return mode.ok() ? mode->confirmed_failures() : -1;
+    return mode.ok() ? mode->confirmed_failures : -1;
   };
   EXPECT_EQ(confirmed_count(), 1);
 

@@ -8,9 +8,10 @@
 #include <random>
 
 #include "evidence_reports.h"
-#include "insdiag/kb/diagnose_analysis.h"
 #include "insdiag/kb/catalogue_store.h"
+#include "insdiag/kb/diagnose_analysis.h"
 #include "insdiag/kb/diagnosis_store.h"
+#include "insdiag/kb/failure_mode_catalogue.h"
 #include "insdiag/kb/unit_history.h"
 #include "insdiag/kb/unit_history_store.h"
 #include "support/database_fixture.h"

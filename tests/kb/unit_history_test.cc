@@ -197,24 +197,24 @@ std::vector<v1::UnitParameterHistory> History(int runs, const std::string& drift
   return out;
 }
 
-v1::Diagnosis DiagnoseWithHistory(const v1::AnalysisReport& report, const std::vector<v1::UnitParameterHistory>* history) {
+Diagnosis DiagnoseWithHistory(const v1::AnalysisReport& report, const std::vector<v1::UnitParameterHistory>* history) {
   const auto& f = Ins2000();
-  Evidence evidence = EvidenceFromReport(report, f.unit_type, f.catalogue.settings());
+  Evidence evidence = EvidenceFromReport(FindingsOf(report), f.unit_type, f.settings);
   if (history != nullptr) {
-    for (auto& t : TrendEvidence(*history, f.catalogue.settings())) evidence.terms.push_back(std::move(t));
+    for (auto& t : TrendEvidence(*history, f.settings)) evidence.terms.push_back(std::move(t));
   }
-  return Diagnose(evidence, f.modes, f.catalogue.settings(), {});
+  return Diagnose(evidence, f.modes, f.settings, {});
 }
 
-int RankOf(const v1::Diagnosis& d, const std::string& module) {
-  for (int i = 0; i < d.candidates_size(); ++i) {
-    if (d.candidates(i).module() == module) return i;
+std::size_t RankOf(const Diagnosis& d, const std::string& module) {
+  for (std::size_t i = 0; i < d.candidates.size(); ++i) {
+    if (d.candidates[i].module == module) return i;
   }
-  return d.candidates_size();
+  return d.candidates.size();
 }
 
-double ModuleProbability(const v1::Diagnosis& d, const std::string& module) {
-  return d.candidates(RankOf(d, module)).probability();
+double ModuleProbability(const Diagnosis& d, const std::string& module) {
+  return d.candidates.at(RankOf(d, module)).probability;
 }
 
 TEST(UnitHistoryDiagnosisTest, AGrowingDriftOverTheUnitsRunsRanksItsGyroHigherThanTheLastRunAlone) {
@@ -223,40 +223,40 @@ TEST(UnitHistoryDiagnosisTest, AGrowingDriftOverTheUnitsRunsRanksItsGyroHigherTh
   v1::AnalysisReport report = NominalReport();
   Identified(report, sigma)->set_value(1.6 * Nominal(sigma));
   Identified(report, sigma)->set_std_error(0.12 * 1.6 * Nominal(sigma));
-  const v1::Diagnosis alone = DiagnoseWithHistory(report, nullptr);
+  const Diagnosis alone = DiagnoseWithHistory(report, nullptr);
   const auto history = History(10, sigma, 0.8, 1.6, 11);
-  const auto trends = TrendEvidence(history, Ins2000().catalogue.settings());
+  const auto trends = TrendEvidence(history, Ins2000().settings);
   ASSERT_EQ(trends.size(), 1u);
   EXPECT_EQ(trends[0].trend_of, sigma);
   EXPECT_GT(trends[0].x, 0.0);
-  const v1::Diagnosis with_history = DiagnoseWithHistory(report, &history);
-  EXPECT_LT(RankOf(with_history, "gyro.x"), RankOf(alone, "gyro.x")) << with_history.DebugString();
+  const Diagnosis with_history = DiagnoseWithHistory(report, &history);
+  EXPECT_LT(RankOf(with_history, "gyro.x"), RankOf(alone, "gyro.x")) << ToProto(with_history).DebugString();
   EXPECT_EQ(RankOf(with_history, "gyro.x"), 0);
   EXPECT_GT(ModuleProbability(with_history, "gyro.x"), ModuleProbability(alone, "gyro.x"));
   // The diagnosis says why.
   bool explained = false;
-  for (const auto& line : with_history.candidates(0).evidence()) {
+  for (const auto& line : with_history.candidates[0].evidence) {
     explained = explained || (line.find(sigma + ": trend over the unit's 10 runs") != std::string::npos);
   }
-  EXPECT_TRUE(explained) << with_history.candidates(0).DebugString();
+  EXPECT_TRUE(explained) << ToProto(with_history).DebugString();
 }
 
 TEST(UnitHistoryDiagnosisTest, AStableUnitsHistoryLeavesItsDiagnosisUnchanged) {
   const v1::AnalysisReport report = NominalReport();
   const auto history = History(10, "", 1.0, 1.0, 12);
-  EXPECT_TRUE(TrendEvidence(history, Ins2000().catalogue.settings()).empty());
-  const v1::Diagnosis alone = DiagnoseWithHistory(report, nullptr);
-  const v1::Diagnosis with_history = DiagnoseWithHistory(report, &history);
-  ASSERT_EQ(alone.hypotheses_size(), with_history.hypotheses_size());
-  for (int i = 0; i < alone.hypotheses_size(); ++i) {
-    EXPECT_EQ(alone.hypotheses(i).failure_mode(), with_history.hypotheses(i).failure_mode());
-    EXPECT_EQ(alone.hypotheses(i).probability(), with_history.hypotheses(i).probability());
+  EXPECT_TRUE(TrendEvidence(history, Ins2000().settings).empty());
+  const Diagnosis alone = DiagnoseWithHistory(report, nullptr);
+  const Diagnosis with_history = DiagnoseWithHistory(report, &history);
+  ASSERT_EQ(alone.hypotheses.size(), with_history.hypotheses.size());
+  for (std::size_t i = 0; i < alone.hypotheses.size(); ++i) {
+    EXPECT_EQ(alone.hypotheses[i].failure_mode, with_history.hypotheses[i].failure_mode);
+    EXPECT_EQ(alone.hypotheses[i].probability, with_history.hypotheses[i].probability);
   }
 }
 
 TEST(UnitHistoryDiagnosisTest, SettingsWithoutATrendModelTakeNoEvidenceFromTheHistory) {
-  v1::DiagnosisSettings settings = Ins2000().catalogue.settings();
-  settings.set_trend_z_spread(0.0);
+  DiagnosisSettings settings = Ins2000().settings;
+  settings.trend_z_spread = 0.0;
   EXPECT_TRUE(TrendEvidence(History(10, "gyro_bias_gm.x.sigma", 0.8, 1.6, 11), settings).empty());
 }
 

@@ -18,10 +18,11 @@
 
 #include <absl/strings/str_cat.h>
 
-#include "insdiag/api/resource_names.h"
 #include "insdiag/api/json.h"
+#include "insdiag/api/resource_names.h"
 #include "insdiag/client/unary.h"
 #include "insdiag/kb/diagnosis.h"
+#include "insdiag/kb/failure_mode_catalogue.h"
 #include "insdiag/kb/fleet_generator.h"
 #include "insdiag/server/insdiag_server.h"
 #include "insdiag/v1/fleet.grpc.pb.h"

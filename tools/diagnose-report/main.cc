@@ -12,10 +12,13 @@
 #include <fstream>
 #include <iostream>
 #include <sstream>
+#include <vector>
 
 #include "insdiag/api/json.h"
 #include "insdiag/api/unit_types.h"
 #include "insdiag/kb/diagnosis.h"
+#include "insdiag/kb/failure_mode_catalogue.h"
+#include "insdiag/kb/knowledge_messages.h"
 
 namespace {
 
@@ -55,12 +58,16 @@ int main(int argc, char** argv) {
   auto modes = insdiag::kb::ExpandCatalogue(**catalogue);
   if (!modes.ok()) return Fail("failure modes", modes.status());
 
-  const insdiag::v1::DiagnosisSettings& settings = (*catalogue)->settings();
-  insdiag::kb::PriorInputs prior;
+  namespace kb = insdiag::kb;
+  const kb::DiagnosisSettings settings = kb::SettingsOf((*catalogue)->settings());
+  std::vector<kb::FailureMode> failure_modes;
+  for (const auto& mode : *modes) failure_modes.push_back(kb::FailureModeOf(mode));
+  kb::PriorInputs prior;
   prior.exposure_hours = exposure_hours;
-  const insdiag::v1::Diagnosis diagnosis = insdiag::kb::Diagnose(
-      insdiag::kb::EvidenceFromReport(report, *unit_type, settings), *modes, settings, prior);
-  auto json = insdiag::api::ToJson(diagnosis, /*pretty=*/true);
+  const kb::Diagnosis diagnosis = kb::Diagnose(
+      kb::EvidenceFromReport(kb::FindingsOf(report), kb::UnitTypeOf(*unit_type), settings), failure_modes,
+      settings, prior);
+  auto json = insdiag::api::ToJson(kb::ToProto(diagnosis), /*pretty=*/true);
   if (!json.ok()) return Fail("diagnosis", json.status());
   std::cout << *json << "\n";
   return 0;

@@ -16,6 +16,7 @@
 #include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/copy_text.h"
 #include "insdiag/kb/diagnosis.h"
+#include "insdiag/kb/knowledge_messages.h"
 
 namespace insdiag::kb::generator {
 namespace {
@@ -131,7 +132,7 @@ class Writer {
   Uuid RunId(const Test& t) const { return MakeId(m_.salt, kRunIds, static_cast<std::uint64_t>(t.global)); }
   Uuid AnalysisId(const Test& t) const { return MakeId(m_.salt, kAnalysisIds, static_cast<std::uint64_t>(t.global)); }
   Uuid DiagnosisId(std::int64_t d) const { return MakeId(m_.salt, kDiagnosisIds, static_cast<std::uint64_t>(d)); }
-  v1::Diagnosis DiagnosisOf(std::size_t d) const;
+  Diagnosis DiagnosisOf(std::size_t d) const;
 
   Connection& db_;
   const Model& m_;
@@ -197,7 +198,7 @@ absl::Status Writer::Prepare() {
     UnitPlan& u = plan_.units[i];
     prior_.fleet_exposure_hours += u.end_hours;
     for (const auto& f : u.failures) {
-      if (f.realised) ++prior_.confirmed_failures[m_.modes[static_cast<std::size_t>(f.mode)].name()];
+      if (f.realised) ++prior_.confirmed_failures[m_.modes[static_cast<std::size_t>(f.mode)].name];
     }
     for (std::size_t t = 0; t < u.tests.size(); ++t) {
       if (!Diagnosed(u, t)) continue;
@@ -306,7 +307,7 @@ void Writer::EmitCandidates(std::size_t g, std::string& buffer) const {
   }
 }
 
-v1::Diagnosis Writer::DiagnosisOf(std::size_t d) const {
+Diagnosis Writer::DiagnosisOf(std::size_t d) const {
   const auto [unit, test] = diagnosed_[d];
   const UnitPlan& u = plan_.units[static_cast<std::size_t>(unit)];
   const Test& t = u.tests[static_cast<std::size_t>(test)];
@@ -314,12 +315,10 @@ v1::Diagnosis Writer::DiagnosisOf(std::size_t d) const {
       ReportOf(m_, Measure(m_, plan_, static_cast<std::size_t>(unit), static_cast<std::size_t>(test)));
   PriorInputs prior = prior_;
   prior.exposure_hours = t.hours - (test > 0 ? u.tests[static_cast<std::size_t>(test) - 1].hours : 0.0);
-  v1::Diagnosis diagnosis =
-      Diagnose(EvidenceFromReport(report, m_.unit_type, m_.settings), m_.modes, m_.settings, prior);
-  diagnosis.set_name(absl::StrCat("diagnoses/", UuidText(DiagnosisId(t.diagnosis))));
-  diagnosis.set_analysis(absl::StrCat("analyses/", UuidText(AnalysisId(t))));
-  diagnosis.set_unit(absl::StrCat("units/", u.serial));
-  *diagnosis.mutable_create_time() = google::protobuf::util::TimeUtil::MicrosecondsToTimestamp(t.time_us);
+  Diagnosis diagnosis =
+      Diagnose(EvidenceFromReport(FindingsOf(report), m_.unit_type, m_.settings), m_.modes, m_.settings, prior);
+  diagnosis.analysis = absl::StrCat("analyses/", UuidText(AnalysisId(t)));
+  diagnosis.unit = absl::StrCat("units/", u.serial);
   return diagnosis;
 }
 
@@ -329,22 +328,26 @@ void Writer::EmitDiagnosis(std::size_t d, std::string& buffer, std::string& cand
   const auto [unit, test] = diagnosed_[d];
   const UnitPlan& u = plan_.units[static_cast<std::size_t>(unit)];
   const Test& t = u.tests[static_cast<std::size_t>(test)];
-  const v1::Diagnosis diagnosis = DiagnosisOf(d);
+  const Diagnosis diagnosis = DiagnosisOf(d);
   int rank = 0;
-  for (const auto& c : diagnosis.candidates()) {
+  for (const Candidate& c : diagnosis.candidates) {
     CopyRow row(candidates);
-    row.Id(DiagnosisId(t.diagnosis)).Int(rank++).Text(c.module()).Text(c.failure_mode()).Double(c.probability());
-    row.TextArray(std::vector<std::string>(c.evidence().begin(), c.evidence().end()));
+    row.Id(DiagnosisId(t.diagnosis)).Int(rank++).Text(c.module).Text(c.failure_mode).Double(c.probability);
+    row.TextArray(c.evidence);
     row.End();
   }
   const DiagnosisHeadline headline = HeadlineOf(diagnosis);
+  // Kept as the API shows it, named and timed as the diagnosis store does.
+  v1::Diagnosis shown = ToProto(diagnosis);
+  shown.set_name(absl::StrCat("diagnoses/", UuidText(DiagnosisId(t.diagnosis))));
+  *shown.mutable_create_time() = google::protobuf::util::TimeUtil::MicrosecondsToTimestamp(t.time_us);
   std::string body;
-  diagnosis.SerializeToString(&body);
+  shown.SerializeToString(&body);
   CopyRow row(buffer);
   row.Id(DiagnosisId(t.diagnosis)).Id(AnalysisId(t)).Int(u.unit_id).Double(headline.fault_probability);
-  row.Text(headline.top ? headline.top->module() : "").Text(headline.top ? headline.top->failure_mode() : "");
-  row.Double(headline.top ? headline.top->probability() : 0.0).Bytes(body);
-  row.TextArray(std::vector<std::string>(diagnosis.notes().begin(), diagnosis.notes().end())).Time(t.time_us);
+  row.Text(headline.top ? headline.top->module : "").Text(headline.top ? headline.top->failure_mode : "");
+  row.Double(headline.top ? headline.top->probability : 0.0).Bytes(body);
+  row.TextArray(diagnosis.notes).Time(t.time_us);
   row.End();
 }
 

@@ -61,9 +61,9 @@ TestValues Measure(const Model& m, const Plan& plan, std::size_t unit, std::size
   bool significant = false;
   for (std::size_t i = 0; i < m.effects.size(); ++i) {
     const EffectTerm& e = m.effects[i];
-    v.effect_x[i] += (e.scored() ? m.settings.healthy_z_sd() : m.settings.healthy_tolerance_sd()) * rng.Normal();
+    v.effect_x[i] += (e.scored() ? m.settings.healthy_z_sd : m.settings.healthy_tolerance_sd) * rng.Normal();
     if (e.scored()) {
-      significant = significant || PValue(v.effect_x[i]) * m_tests < m.settings.significance_level();
+      significant = significant || PValue(v.effect_x[i]) * m_tests < m.settings.significance_level;
     } else {
       worst = std::max(worst, std::abs(v.effect_x[i]));
       excess += std::pow(std::max(std::abs(v.effect_x[i]) - 1.0, 0.0), 2);

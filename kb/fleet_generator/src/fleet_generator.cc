@@ -16,6 +16,7 @@
 #include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/catalogue_store.h"
 #include "insdiag/kb/diagnosis.h"
+#include "insdiag/kb/failure_mode_catalogue.h"
 #include "insdiag/kb/diagnosis_store.h"
 #include "insdiag/kb/fleet_store.h"
 
@@ -151,7 +152,7 @@ absl::StatusOr<GeneratedFleet> GenerateFleet(ConnectionPool& pool, const FleetGe
     return s;
   }
   generator::FillTruth(m, plan, out);
-  INSDIAG_RETURN_IF_ERROR(UpdateDerivedState(pool, *db, options, m.unit_type.name(), progress));
+  INSDIAG_RETURN_IF_ERROR(UpdateDerivedState(pool, *db, options, m.unit_type.name, progress));
   return out;
 }
 

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "insdiag/kb/fleet_generator.h"
+#include "insdiag/kb/knowledge.h"
 #include "insdiag/kb/pg.h"
 #include "insdiag/v1/analyses.pb.h"
 #include "insdiag/v1/knowledge.pb.h"
@@ -105,7 +106,7 @@ enum class TermKind { kIdentified, kEffect };
 
 // How one signature term of a mode moves the evidence.
 struct SignatureTargets {
-  v1::Signature term;
+  Signature term;
   TermKind kind = TermKind::kIdentified;
   std::vector<int> members;
 };
@@ -124,11 +125,11 @@ struct Shift {
 };
 
 struct Model {
-  v1::UnitType unit_type;
+  UnitType unit_type;
   std::string unit_type_id;
-  v1::DiagnosisSettings settings;
+  DiagnosisSettings settings;
   v1::FleetProfile profile;
-  std::vector<v1::FailureMode> modes;
+  std::vector<FailureMode> modes;
   std::vector<ModeModel> mode_models;
   std::vector<std::string> roles;
   std::vector<std::vector<int>> modes_of_role;

@@ -15,6 +15,8 @@
 #include "insdiag/engine/model/parameter_key.h"
 #include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/diagnosis.h"
+#include "insdiag/kb/failure_mode_catalogue.h"
+#include "insdiag/kb/knowledge_messages.h"
 
 namespace insdiag::kb::generator {
 namespace {
@@ -34,20 +36,20 @@ std::string FamilyOf(const std::string& name) {
   return key ? key->family : name;
 }
 
-std::string ModeId(const v1::FailureMode& mode) { return api::IdOrSelf(mode.name(), api::kFailureModes); }
+std::string ModeId(const FailureMode& mode) { return api::IdOrSelf(mode.name, api::kFailureModes); }
 
 // The unit type, its failure modes and diagnosis settings, and the fleet
 // profile (the options' or the built-in one).
 absl::Status LoadData(const FleetGeneratorOptions& options, Model& m) {
   auto unit_type = api::BuiltinUnitType(options.unit_type);
   if (!unit_type.ok()) return unit_type.status();
-  m.unit_type = *unit_type;
-  m.unit_type_id = api::IdOrSelf(m.unit_type.name(), api::kUnitTypes);
+  m.unit_type = UnitTypeOf(*unit_type);
+  m.unit_type_id = api::IdOrSelf(m.unit_type.name, api::kUnitTypes);
   INSDIAG_ASSIGN_OR_RETURN(auto catalogue, BuiltinFailureModeCatalogue(m.unit_type_id));
-  m.settings = catalogue->settings();
+  m.settings = SettingsOf(catalogue->settings());
   auto modes = ExpandCatalogue(*catalogue);
   if (!modes.ok()) return modes.status();
-  m.modes = *modes;
+  for (const v1::FailureMode& mode : *modes) m.modes.push_back(FailureModeOf(mode));
   if (options.profile) {
     m.profile = *options.profile;
   } else {
@@ -77,53 +79,49 @@ absl::Status ValidateProfile(const v1::FleetProfile& p, const std::string& unit_
 // scores (standard scores).
 void AddTerms(Model& m) {
   const v1::FleetProfile& p = m.profile;
-  for (const auto& n : m.unit_type.nominal()) {
-    if (n.value() > 0) {
-      IdentifiedTerm t;
-      t.name = n.name();
-      t.unit = n.unit();
-      t.nominal = n.value();
-      t.tolerance = n.tolerance();
-      t.healthy_sd = m.settings.healthy_log_ratio_fraction() * std::log1p(n.tolerance() / n.value());
+  for (const NominalParameter& n : m.unit_type.nominal) {
+    if (n.value > 0) {
       // The engine identifies Gauss–Markov drifts by correlation processing,
       // noise densities by Allan variance.
-      t.method = absl::StrContains(n.name(), "_gm.") ? "ACF" : "ALLAN";
+      const char* method = absl::StrContains(n.name, "_gm.") ? "ACF" : "ALLAN";
+      const double healthy_sd = m.settings.healthy_log_ratio_fraction * std::log1p(n.tolerance / n.value);
+      IdentifiedTerm t{n.name, n.unit, method, n.value, n.tolerance, healthy_sd, -1, 0};
       for (int a = 0; a < p.ageing_size(); ++a) {
-        if (GlobMatches(p.ageing(a).parameter(), n.name())) t.ageing = a;
+        if (GlobMatches(p.ageing(a).parameter(), n.name)) t.ageing = a;
       }
       m.identified.push_back(std::move(t));
     } else {
-      m.effects.push_back({n.name(), FamilyOf(n.name()), n.unit(), n.tolerance(), 0.0});
+      m.effects.push_back({n.name, FamilyOf(n.name), n.unit, n.tolerance, 0.0});
     }
   }
   // Effects without a tolerance that a signature scores (standard scores).
   for (const auto& mode : m.modes) {
-    for (const auto& s : mode.signature()) {
-      if (s.scale() != "z" || absl::EndsWith(s.parameter(), ".*")) continue;
+    for (const Signature& s : mode.signature) {
+      if (s.scale != Scale::kZ || absl::EndsWith(s.parameter, ".*")) continue;
       const bool known = std::any_of(m.effects.begin(), m.effects.end(),
-                                     [&](const EffectTerm& e) { return e.name == s.parameter(); });
-      const auto se = p.effect_std_errors().find(FamilyOf(s.parameter()));
+                                     [&](const EffectTerm& e) { return e.name == s.parameter; });
+      const auto se = p.effect_std_errors().find(FamilyOf(s.parameter));
       if (known || se == p.effect_std_errors().end()) continue;
-      m.effects.push_back({s.parameter(), FamilyOf(s.parameter()), "", 0.0, se->second});
+      m.effects.push_back({s.parameter, FamilyOf(s.parameter), "", 0.0, se->second});
     }
   }
 }
 
 // The measured terms a signature term moves: identified parameters for a
 // log ratio, effects of the matching scale otherwise.
-SignatureTargets TargetsOf(const Model& m, const v1::Signature& s) {
+SignatureTargets TargetsOf(const Model& m, const Signature& s) {
   SignatureTargets targets;
   targets.term = s;
-  if (s.scale() == "log_ratio") {
+  if (s.scale == Scale::kLogRatio) {
     targets.kind = TermKind::kIdentified;
     for (std::size_t i = 0; i < m.identified.size(); ++i) {
-      if (SignatureCovers(s.parameter(), m.identified[i].name)) targets.members.push_back(static_cast<int>(i));
+      if (SignatureCovers(s.parameter, m.identified[i].name)) targets.members.push_back(static_cast<int>(i));
     }
   } else {
     targets.kind = TermKind::kEffect;
     for (std::size_t i = 0; i < m.effects.size(); ++i) {
-      const bool scale_fits = (s.scale() == "z") == m.effects[i].scored();
-      if (scale_fits && SignatureCovers(s.parameter(), m.effects[i].name)) {
+      const bool scale_fits = (s.scale == Scale::kZ) == m.effects[i].scored();
+      if (scale_fits && SignatureCovers(s.parameter, m.effects[i].name)) {
         targets.members.push_back(static_cast<int>(i));
       }
     }
@@ -137,20 +135,20 @@ absl::Status AddModeModels(Model& m) {
   for (const auto& mode : m.modes) {
     ModeModel mm;
     mm.id = ModeId(mode);
-    const auto role = std::find(m.roles.begin(), m.roles.end(), mode.module_role());
+    const auto role = std::find(m.roles.begin(), m.roles.end(), mode.module_role);
     if (role == m.roles.end()) {
-      return absl::FailedPreconditionError(absl::StrCat(mode.name(), ": module role '", mode.module_role(),
+      return absl::FailedPreconditionError(absl::StrCat(mode.name, ": module role '", mode.module_role,
                                                         "' is not in the knowledge base's module_roles"));
     }
     mm.role = static_cast<int>(role - m.roles.begin());
-    mm.shape = mode.weibull_shape();
-    mm.scale_hours = mode.weibull_scale_hours();
-    mm.expert_rate = mode.expert_rate_per_million_hours() * 1e-6;
-    for (const auto& s : mode.signature()) {
+    mm.shape = mode.weibull_shape;
+    mm.scale_hours = mode.weibull_scale_hours;
+    mm.expert_rate = mode.expert_rate_per_million_hours * 1e-6;
+    for (const Signature& s : mode.signature) {
       SignatureTargets targets = TargetsOf(m, s);
       if (targets.members.empty()) {
-        m.notes.push_back(absl::StrCat(mode.name(), ": signature term ", s.parameter(), " (", s.scale(),
-                                       ") has no measurable counterpart in ", m.unit_type.name(),
+        m.notes.push_back(absl::StrCat(mode.name, ": signature term ", s.parameter, " (", ScaleName(s.scale),
+                                       ") has no measurable counterpart in ", m.unit_type.name,
                                        " and the fleet profile: its failures show no precursor there"));
         continue;
       }

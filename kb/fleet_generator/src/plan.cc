@@ -31,22 +31,22 @@ std::string BatchName(absl::CivilMonth month, int batch_months) {
 // The shifts of one failure's signature at its full size.
 std::vector<Shift> DrawShifts(const ModeModel& mode, Rng& rng) {
   std::vector<Shift> shifts;
-  const auto sign = [&](v1::Signature::Direction d) {
-    if (d == v1::Signature::UP) return 1.0;
-    if (d == v1::Signature::DOWN) return -1.0;
+  const auto sign = [&](Direction d) {
+    if (d == Direction::kUp) return 1.0;
+    if (d == Direction::kDown) return -1.0;
     return rng.Uniform() < 0.5 ? 1.0 : -1.0;
   };
   for (const auto& t : mode.terms) {
-    const v1::Signature& s = t.term;
-    if (s.common() && t.members.size() > 1) {
-      const double value = sign(s.direction()) * (s.change() + s.spread() * rng.Normal());
+    const Signature& s = t.term;
+    if (s.common && t.members.size() > 1) {
+      const double value = sign(s.direction) * (s.change + s.spread * rng.Normal());
       for (int member : t.members) shifts.push_back({t.kind, member, value});
       continue;
     }
-    const double q = s.fraction() > 0 ? std::min(s.fraction(), 1.0) : 1.0;
+    const double q = s.fraction > 0 ? std::min(s.fraction, 1.0) : 1.0;
     for (int member : t.members) {
       if (rng.Uniform() >= q) continue;
-      shifts.push_back({t.kind, member, sign(s.direction()) * (s.change() + s.spread() * rng.Normal())});
+      shifts.push_back({t.kind, member, sign(s.direction) * (s.change + s.spread * rng.Normal())});
     }
   }
   return shifts;

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "insdiag/kb/connection_pool.h"
+#include "insdiag/kb/knowledge.h"
 #include "insdiag/kb/page_query.h"
 #include "insdiag/v1/knowledge.pb.h"
 
@@ -30,8 +31,8 @@ class CatalogueStore {
   // the expert's values changed.
   absl::Status Seed(std::span<const v1::UnitType> unit_types, std::span<const v1::FailureModeCatalogue> catalogues);
 
-  absl::StatusOr<v1::UnitType> GetUnitType(const std::string& name);  // unitTypes/{t}
-  absl::StatusOr<std::vector<v1::UnitType>> ListUnitTypes();
+  absl::StatusOr<UnitType> GetUnitType(const std::string& name);  // unitTypes/{t}
+  absl::StatusOr<std::vector<UnitType>> ListUnitTypes();
   absl::StatusOr<v1::Unit> GetUnit(const std::string& name);  // units/{serial}
   absl::StatusOr<std::pair<std::vector<v1::Unit>, std::string>> ListUnits(const PageQuery& page,
                                                                           const std::string& unit_type,
@@ -39,8 +40,8 @@ class CatalogueStore {
   // Installation history, by role then installation.
   absl::StatusOr<std::vector<v1::Module>> ListModules(const std::string& unit_name);
 
-  absl::StatusOr<v1::FailureMode> GetFailureMode(const std::string& name);
-  absl::StatusOr<std::vector<v1::FailureMode>> ListFailureModes(const std::string& unit_type,
+  absl::StatusOr<FailureMode> GetFailureMode(const std::string& name);
+  absl::StatusOr<std::vector<FailureMode>> ListFailureModes(const std::string& unit_type,
                                                                 const std::string& module_role);
 
  private:

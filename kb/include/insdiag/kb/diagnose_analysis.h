@@ -14,7 +14,7 @@
 namespace insdiag::kb {
 
 // The evidence and the diagnosis of loaded inputs, free of SQL.
-v1::Diagnosis DiagnoseInputs(const DiagnosisInputs& inputs);
+Diagnosis DiagnoseInputs(const DiagnosisInputs& inputs);
 
 class AnalysisDiagnoser {
  public:

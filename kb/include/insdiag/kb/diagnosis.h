@@ -62,12 +62,59 @@
 #include <string>
 #include <vector>
 
-#include "insdiag/v1/analyses.pb.h"
-#include "insdiag/v1/knowledge.pb.h"
+#include "insdiag/engine/monitor/monitoring.h"
+#include "insdiag/kb/knowledge.h"
 
 namespace insdiag::kb {
 
-enum class Scale { kLogRatio, kTolerance, kZ };
+// What the diagnosis reads of an analysis report
+// (proto/insdiag/v1/analyses.proto, AnalysisReport): its verdict, the
+// parameters it identified, the effect candidates it tested and the effects
+// the discovery loop added.
+struct IdentifiedFinding {
+  std::string name;  // "gyro_bias_gm.x.sigma"
+  double value = 0.0;
+  double std_error = 0.0;
+  std::string unit;
+  std::string method;  // how it was identified: "ACF", "ALLAN", "FILTER", "ML", "STATIC"
+  // Identified together with `jointly_with`: the correlation of the two
+  // estimates' errors on the log scale.
+  std::string jointly_with;
+  std::optional<double> log_correlation;
+};
+
+struct CandidateFinding {
+  std::string name;
+  double estimate = 0.0;
+  double std_error = 0.0;
+  std::string unit;
+  double statistic = 0.0;
+  int degrees_of_freedom = 0;
+  double p_value = 0.0;
+  double p_value_holm = 0.0;
+  std::string source;  // engine/candidate_source.h's names
+  bool identifiable = false;
+  bool not_tested = false;
+  std::optional<double> onset_s;
+  double onset_std_s = 0.0;
+};
+
+struct LoopStep {
+  int step = 0;
+  std::string effect;  // added at this step
+  double estimate = 0.0;
+  double std_error = 0.0;
+  std::string unit;
+  double p_value = 0.0;  // Holm-adjusted
+};
+
+struct ReportFindings {
+  std::optional<engine::Verdict> verdict;  // absent: the report states none
+  std::vector<IdentifiedFinding> identified;
+  std::vector<CandidateFinding> candidates;
+  std::vector<std::string> model_effects;  // the effects of the model that made the report
+  std::vector<LoopStep> discovery;
+};
 
 // One observed quantity of the evidence.
 struct EvidenceTerm {
@@ -92,25 +139,13 @@ struct EvidenceTerm {
 
 struct Evidence {
   std::vector<EvidenceTerm> terms;
-  v1::AnalysisReport::Verdict verdict = v1::AnalysisReport::VERDICT_UNSPECIFIED;
+  std::optional<engine::Verdict> verdict;
   std::vector<std::string> notes;
 };
 
-// The unit types' failure modes as data (data/failure-modes/*.json, built in).
-const std::vector<v1::FailureModeCatalogue>& BuiltinFailureModeCatalogues();
-// The catalogue of one unit type (display or resource name), one of
-// BuiltinFailureModeCatalogues(); NOT_FOUND when none.
-absl::StatusOr<const v1::FailureModeCatalogue*> BuiltinFailureModeCatalogue(
-    const std::string& unit_type);
-
-// The catalogue's templates expanded per axis into failure modes
-// (failureModes/{id}), signatures at the expert's values. INVALID_ARGUMENT
-// naming the mode and field for a malformed template.
-absl::StatusOr<std::vector<v1::FailureMode>> ExpandCatalogue(const v1::FailureModeCatalogue& catalogue);
-
 // The evidence of one report against the unit type's nominal values.
-Evidence EvidenceFromReport(const v1::AnalysisReport& report, const v1::UnitType& unit_type,
-                            const v1::DiagnosisSettings& settings);
+Evidence EvidenceFromReport(const ReportFindings& report, const UnitType& unit_type,
+                            const DiagnosisSettings& settings);
 
 // What the prior needs from the fleet and the unit.
 struct PriorInputs {
@@ -121,10 +156,10 @@ struct PriorInputs {
 
 // Ranks the hypotheses and modules. `modes` are the unit type's failure
 // modes (current signatures). The result's candidates[] (modules, healthy,
-// unknown) and hypotheses[] are sorted, most probable first; name, analysis
-// and times are left for the caller.
-v1::Diagnosis Diagnose(const Evidence& evidence, std::span<const v1::FailureMode> modes,
-                       const v1::DiagnosisSettings& settings, const PriorInputs& prior);
+// unknown) and hypotheses[] are sorted, most probable first; analysis and
+// unit are left for the caller.
+Diagnosis Diagnose(const Evidence& evidence, std::span<const FailureMode> modes,
+                   const DiagnosisSettings& settings, const PriorInputs& prior);
 
 // Whether signature parameter `pattern` covers evidence term `name`: the
 // same name, or for a family "f.*" a term "f.<one part>".
@@ -134,22 +169,22 @@ bool SignatureCovers(const std::string& pattern, const std::string& name);
 // module that is not `healthy` (nullptr when there is none).
 struct DiagnosisHeadline {
   double fault_probability = 0.0;
-  const v1::Candidate* top = nullptr;
+  const Candidate* top = nullptr;
 };
-DiagnosisHeadline HeadlineOf(const v1::Diagnosis& diagnosis);
+DiagnosisHeadline HeadlineOf(const Diagnosis& diagnosis);
 
 // The prior rate λ_m per hour of one mode (see above).
-double ModeRatePerHour(const v1::FailureMode& mode, std::int64_t confirmed_failures, double fleet_exposure_hours,
-                       const v1::DiagnosisSettings& settings);
+double ModeRatePerHour(const FailureMode& mode, std::int64_t confirmed_failures, double fleet_exposure_hours,
+                       const DiagnosisSettings& settings);
 
 // The oriented value of one signature term in a confirmed case's evidence
 // (UP: x, DOWN: −x, EITHER: |x|; families: the mean over their terms), or
 // nullopt when the evidence does not measure it.
-std::optional<double> CaseValue(const v1::Signature& term, const Evidence& evidence);
+std::optional<double> CaseValue(const Signature& term, const Evidence& evidence);
 
 // The term with change and spread refined by the confirmed cases' values
 // (expert values kept in expert_change / expert_spread).
-v1::Signature RefineSignature(const v1::Signature& term, std::span<const double> case_values,
-                              const v1::DiagnosisSettings& settings);
+Signature RefineSignature(const Signature& term, std::span<const double> case_values,
+                          const DiagnosisSettings& settings);
 
 }  // namespace insdiag::kb

@@ -33,10 +33,10 @@ struct DiagnosisInputs {
   std::string analysis_id;
   std::string unit_id;
   std::string serial;
-  v1::AnalysisReport report;
-  v1::UnitType unit_type;
-  std::vector<v1::FailureMode> modes;
-  v1::DiagnosisSettings settings;
+  ReportFindings report;
+  UnitType unit_type;
+  std::vector<FailureMode> modes;
+  DiagnosisSettings settings;
   std::string settings_note;  // when the unit type's catalogue has none and a default's apply
   PriorInputs prior;
   // The unit's own significant trends up to this analysis, and what its
@@ -57,7 +57,8 @@ class DiagnosisStore {
   // no known unit type.
   absl::StatusOr<DiagnosisInputs> LoadInputs(const std::string& analysis_name);
   // Stores the diagnosis made from `inputs`, naming it and its create time.
-  absl::StatusOr<v1::Diagnosis> Store(const DiagnosisInputs& inputs, v1::Diagnosis diagnosis);
+  // The stored diagnosis as the API shows it.
+  absl::StatusOr<v1::Diagnosis> Store(const DiagnosisInputs& inputs, const Diagnosis& diagnosis);
   absl::StatusOr<v1::Diagnosis> Get(const std::string& name);
   absl::StatusOr<std::pair<std::vector<v1::Diagnosis>, std::string>> List(const DiagnosisQuery& query);
   // Writes the failure record (confirmed, or no fault found) and, when

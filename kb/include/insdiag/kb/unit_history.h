@@ -85,6 +85,6 @@ double StudentTwoSidedPValue(double t, double dof);
 // named "<parameter>.trend" with `trend_of` set. None when the settings
 // have no trend model (trend_z_spread ≤ 0).
 std::vector<EvidenceTerm> TrendEvidence(std::span<const v1::UnitParameterHistory> parameters,
-                                        const v1::DiagnosisSettings& settings);
+                                        const DiagnosisSettings& settings);
 
 }  // namespace insdiag::kb

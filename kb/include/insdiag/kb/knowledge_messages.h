@@ -1,0 +1,31 @@
+// The knowledge base's terms (kb/knowledge.h, kb/diagnosis.h) to and from
+// the API's messages (proto/insdiag/v1/knowledge.proto, analyses.proto):
+// where the stores read the expert catalogues, keep diagnoses in the API's
+// form and answer with messages.
+#pragma once
+
+#include "insdiag/kb/diagnosis.h"
+#include "insdiag/kb/knowledge.h"
+#include "insdiag/v1/analyses.pb.h"
+#include "insdiag/v1/knowledge.pb.h"
+
+namespace insdiag::kb {
+
+UnitType UnitTypeOf(const v1::UnitType& message);
+v1::UnitType ToProto(const UnitType& unit_type);
+
+// A scale outside log_ratio, tolerance and z (the catalogue and the
+// database refuse them) reads as tolerance; a missing direction as either.
+Signature SignatureOf(const v1::Signature& message);
+v1::Signature ToProto(const Signature& signature);
+FailureMode FailureModeOf(const v1::FailureMode& message);
+v1::FailureMode ToProto(const FailureMode& mode);
+
+DiagnosisSettings SettingsOf(const v1::DiagnosisSettings& message);
+
+// Name, create time and resolution are the store's.
+v1::Diagnosis ToProto(const Diagnosis& diagnosis);
+
+ReportFindings FindingsOf(const v1::AnalysisReport& report);
+
+}  // namespace insdiag::kb
