@@ -13,6 +13,7 @@
 #include <array>
 #include <cerrno>
 #include <cstring>
+#include <string_view>
 #include <tuple>
 
 #include "insdiag/api/limits.h"
@@ -25,7 +26,6 @@ namespace insdiag::kb {
 namespace {
 
 using internal::Micros;
-using internal::TimestampOfMicros;
 
 constexpr char kSecretPrefix[] = "insdiag_";
 constexpr int kSecretBytes = 32;
@@ -39,25 +39,29 @@ absl::StatusOr<std::string> NewSecret() {
                       absl::WebSafeBase64Escape(std::string(reinterpret_cast<const char*>(bytes.data()), kSecretBytes)));
 }
 
-v1::Role RoleOf(std::string_view name) {
-  v1::Role role = v1::ROLE_UNSPECIFIED;
-  v1::Role_Parse(std::string(name), &role);
-  return role;
+// The stored names, which are also the API's (insdiag.v1.Role), by Role.
+constexpr std::array<std::string_view, 5> kRoleNames = {"ROLE_UNSPECIFIED", "VIEWER", "OPERATOR", "ENGINEER",
+                                                        "ADMIN"};
+
+// A time as text PostgreSQL reads ("2024-01-31 12:00:00.000000+00"), to the
+// microsecond it keeps.
+std::string TimeText(absl::Time t) {
+  return absl::FormatTime("%Y-%m-%d %H:%M:%E6S+00", absl::FromUnixMicros(absl::ToUnixMicros(t)), absl::UTCTimeZone());
 }
 
 const std::string kTokenColumns = absl::StrCat(
     "SELECT token_id::text, display_name, role, creator, ", Micros("create_time"), ", ", Micros("expire_time"), ", ",
     Micros("revoke_time"), " FROM access_tokens ");
 
-v1::Token TokenFromRow(const Result& rows, int r) {
-  v1::Token token;
-  token.set_name(absl::StrCat("tokens/", rows.String(r, 0)));
-  token.set_display_name(rows.String(r, 1));
-  token.set_role(RoleOf(rows.Get(r, 2)));
-  token.set_creator(rows.String(r, 3));
-  *token.mutable_create_time() = TimestampOfMicros(internal::IntOr0(rows, r, 4));
-  if (!rows.IsNull(r, 5)) *token.mutable_expire_time() = TimestampOfMicros(internal::IntOr0(rows, r, 5));
-  if (!rows.IsNull(r, 6)) *token.mutable_revoke_time() = TimestampOfMicros(internal::IntOr0(rows, r, 6));
+Token TokenFromRow(const Result& rows, int r) {
+  Token token;
+  token.name = absl::StrCat("tokens/", rows.String(r, 0));
+  token.display_name = rows.String(r, 1);
+  token.role = RoleFromName(rows.Get(r, 2));
+  token.creator = rows.String(r, 3);
+  token.create_time = absl::FromUnixMicros(internal::IntOr0(rows, r, 4));
+  if (!rows.IsNull(r, 5)) token.expire_time = absl::FromUnixMicros(internal::IntOr0(rows, r, 5));
+  if (!rows.IsNull(r, 6)) token.revoke_time = absl::FromUnixMicros(internal::IntOr0(rows, r, 6));
   return token;
 }
 
@@ -80,9 +84,19 @@ absl::Status WriteOwnerOnlyFile(const std::filesystem::path& path, const std::st
 
 }  // namespace
 
-std::string RoleName(v1::Role role) { return v1::Role_Name(role); }
+std::string RoleName(Role role) {
+  const auto index = static_cast<std::size_t>(role);
+  return index < kRoleNames.size() ? std::string(kRoleNames[index]) : "";
+}
 
-absl::StatusOr<v1::Caller> AccessStore::Authenticate(const std::string& secret) {
+Role RoleFromName(std::string_view name) {
+  for (std::size_t i = 0; i < kRoleNames.size(); ++i) {
+    if (kRoleNames[i] == name) return static_cast<Role>(i);
+  }
+  return Role::kUnspecified;
+}
+
+absl::StatusOr<Caller> AccessStore::Authenticate(const std::string& secret) {
   if (!absl::StartsWith(secret, kSecretPrefix)) {
     return absl::UnauthenticatedError("the bearer token is not an insdiag token (they start with insdiag_)");
   }
@@ -96,19 +110,18 @@ absl::StatusOr<v1::Caller> AccessStore::Authenticate(const std::string& secret) 
   const std::string name = absl::StrCat("tokens/", rows.String(0, 0));
   if (rows.Bool(0, 3)) return absl::UnauthenticatedError(absl::StrCat(name, " has been revoked"));
   if (rows.Bool(0, 4)) return absl::UnauthenticatedError(absl::StrCat(name, " has expired"));
-  v1::Caller caller;
-  caller.set_token(name);
-  caller.set_display_name(rows.String(0, 1));
-  caller.set_role(RoleOf(rows.Get(0, 2)));
+  Caller caller;
+  caller.token = name;
+  caller.display_name = rows.String(0, 1);
+  caller.role = RoleFromName(rows.Get(0, 2));
   return caller;
 }
 
 namespace {
 
 // An expiry in the future and at most api::kMaxTokenLifetimeDays ahead.
-absl::Status CheckExpiry(const google::protobuf::Timestamp& expiry) {
+absl::Status CheckExpiry(absl::Time when) {
   const absl::Time now = absl::Now();
-  const absl::Time when = absl::FromUnixSeconds(expiry.seconds()) + absl::Nanoseconds(expiry.nanos());
   if (when <= now) return absl::InvalidArgumentError("token.expire_time: must be in the future");
   if (when > now + absl::Hours(24 * api::kMaxTokenLifetimeDays)) {
     return absl::InvalidArgumentError(absl::StrCat("token.expire_time: ", absl::FormatTime(absl::RFC3339_sec, when, absl::UTCTimeZone()),
@@ -120,12 +133,12 @@ absl::Status CheckExpiry(const google::protobuf::Timestamp& expiry) {
 
 }  // namespace
 
-absl::StatusOr<v1::CreatedToken> AccessStore::CreateToken(const v1::Token& token, const std::string& creator) {
-  if (token.display_name().empty()) return absl::InvalidArgumentError("token.display_name: required");
-  if (token.role() == v1::ROLE_UNSPECIFIED || !v1::Role_IsValid(token.role())) {
+absl::StatusOr<CreatedToken> AccessStore::CreateToken(const Token& token, const std::string& creator) {
+  if (token.display_name.empty()) return absl::InvalidArgumentError("token.display_name: required");
+  if (token.role < Role::kViewer || token.role > Role::kAdmin) {
     return absl::InvalidArgumentError("token.role: one of VIEWER, OPERATOR, ENGINEER, ADMIN");
   }
-  if (token.has_expire_time()) INSDIAG_RETURN_IF_ERROR(CheckExpiry(token.expire_time()));
+  if (token.expire_time.has_value()) INSDIAG_RETURN_IF_ERROR(CheckExpiry(*token.expire_time));
   INSDIAG_ASSIGN_OR_RETURN(auto secret, NewSecret());
   INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
   auto rows =
@@ -135,19 +148,18 @@ absl::StatusOr<v1::CreatedToken> AccessStore::CreateToken(const v1::Token& token
                             "OR $5::timestamptz > now() "
                             "RETURNING *) ",
                             absl::StrReplaceAll(kTokenColumns, {{"access_tokens", "made"}})),
-               {Param::Text(token.display_name()), Param::Text(RoleName(token.role())),
+               {Param::Text(token.display_name), Param::Text(RoleName(token.role)),
                 Param::Bytes(api::Sha256(secret)), Param::Text(creator),
-                token.has_expire_time() ? Param::Text(internal::TimestampText(token.expire_time()))
-                                        : Param::Null()});
+                token.expire_time.has_value() ? Param::Text(TimeText(*token.expire_time)) : Param::Null()});
   if (!rows.ok()) return rows.status();
   if (rows->rows() == 0) return absl::InvalidArgumentError("token.expire_time: must be in the future");
-  v1::CreatedToken created;
-  *created.mutable_token() = TokenFromRow(*rows, 0);
-  created.set_secret(secret);
+  CreatedToken created;
+  created.token = TokenFromRow(*rows, 0);
+  created.secret = secret;
   return created;
 }
 
-absl::StatusOr<std::pair<std::vector<v1::Token>, std::string>> AccessStore::ListTokens(const PageQuery& page) {
+absl::StatusOr<std::pair<std::vector<Token>, std::string>> AccessStore::ListTokens(const PageQuery& page) {
   const int size = internal::ClampPageSize(page.page_size);
   std::vector<Param> params = {Param::Int(size + 1)};
   INSDIAG_ASSIGN_OR_RETURN(const std::string after,
@@ -157,7 +169,7 @@ absl::StatusOr<std::pair<std::vector<v1::Token>, std::string>> AccessStore::List
   INSDIAG_ASSIGN_OR_RETURN(
       auto rows, db->Exec(absl::StrCat(kTokenColumns, "WHERE ", after, " ORDER BY create_time DESC, token_id DESC LIMIT $1"),
                           params));
-  std::vector<v1::Token> tokens;
+  std::vector<Token> tokens;
   const int shown = std::min(rows.rows(), size);
   for (int r = 0; r < shown; ++r) tokens.push_back(TokenFromRow(rows, r));
   std::string next;
@@ -166,7 +178,7 @@ absl::StatusOr<std::pair<std::vector<v1::Token>, std::string>> AccessStore::List
   return std::make_pair(std::move(tokens), next);
 }
 
-absl::StatusOr<v1::Token> AccessStore::RevokeToken(const std::string& name) {
+absl::StatusOr<Token> AccessStore::RevokeToken(const std::string& name) {
   INSDIAG_ASSIGN_OR_RETURN(auto id, internal::UuidOf(name, api::kTokens, "name"));
   INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
   INSDIAG_ASSIGN_OR_RETURN(
@@ -204,7 +216,7 @@ absl::StatusOr<bool> AccessStore::CreateFirstAdminToken(const std::filesystem::p
 absl::Status AccessStore::RecordAuditEvent(const AuditedCall& call) {
   std::optional<std::string> token_id;
   if (call.caller.has_value()) {
-    auto id = internal::UuidOf(call.caller->token(), api::kTokens, "token");
+    auto id = internal::UuidOf(call.caller->token, api::kTokens, "token");
     if (id.ok()) token_id = *id;
   }
   INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
@@ -214,15 +226,15 @@ absl::Status AccessStore::RecordAuditEvent(const AuditedCall& call) {
           "message) "
           "VALUES ($1::uuid, $2, $3, $4, $5, $6, $7, $8)",
           {token_id ? Param::Text(*token_id) : Param::Null(),
-           Param::Text(call.caller ? call.caller->display_name() : ""),
-           Param::Text(call.caller ? RoleName(call.caller->role()) : ""), Param::Text(call.method),
+           Param::Text(call.caller ? call.caller->display_name : ""),
+           Param::Text(call.caller ? RoleName(call.caller->role) : ""), Param::Text(call.method),
            Param::Text(call.resource), Param::Text(call.peer),
            Param::Text(absl::StatusCodeToString(call.outcome.code())),
            Param::Text(std::string(call.outcome.message()))})
       .status();
 }
 
-absl::StatusOr<std::pair<std::vector<v1::AuditEvent>, std::string>> AccessStore::ListAuditEvents(
+absl::StatusOr<std::pair<std::vector<AuditEvent>, std::string>> AccessStore::ListAuditEvents(
     const AuditQuery& query) {
   const int size = internal::ClampPageSize(query.page.page_size);
   std::optional<std::string> token_id;
@@ -246,20 +258,20 @@ absl::StatusOr<std::pair<std::vector<v1::AuditEvent>, std::string>> AccessStore:
               "WHERE ($2::text IS NULL OR resource = $2) AND ($3::uuid IS NULL OR token_id = $3) AND ",
               after, " ORDER BY event_id DESC LIMIT $1"),
           params));
-  std::vector<v1::AuditEvent> events;
+  std::vector<AuditEvent> events;
   const int shown = std::min(rows.rows(), size);
   for (int r = 0; r < shown; ++r) {
-    v1::AuditEvent& e = events.emplace_back();
-    e.set_name(absl::StrCat("auditEvents/", rows.String(r, 0)));
-    *e.mutable_event_time() = TimestampOfMicros(internal::IntOr0(rows, r, 1));
-    if (!rows.Get(r, 2).empty()) e.set_token(absl::StrCat("tokens/", rows.String(r, 2)));
-    e.set_display_name(rows.String(r, 3));
-    e.set_role(RoleOf(rows.Get(r, 4)));
-    e.set_method(rows.String(r, 5));
-    e.set_resource(rows.String(r, 6));
-    e.set_peer(rows.String(r, 7));
-    e.set_code(rows.String(r, 8));
-    e.set_message(rows.String(r, 9));
+    AuditEvent& e = events.emplace_back();
+    e.name = absl::StrCat("auditEvents/", rows.String(r, 0));
+    e.event_time = absl::FromUnixMicros(internal::IntOr0(rows, r, 1));
+    if (!rows.Get(r, 2).empty()) e.token = absl::StrCat("tokens/", rows.String(r, 2));
+    e.display_name = rows.String(r, 3);
+    e.role = RoleFromName(rows.Get(r, 4));
+    e.method = rows.String(r, 5);
+    e.resource = rows.String(r, 6);
+    e.peer = rows.String(r, 7);
+    e.code = rows.String(r, 8);
+    e.message = rows.String(r, 9);
   }
   std::string next;
   if (rows.rows() > size) next = internal::EncodeToken("", rows.String(shown - 1, 0));

@@ -8,6 +8,7 @@
 
 #include <random>
 
+#include "access_codec.h"
 #include "insdiag/server/server_log.h"
 
 namespace insdiag::server {
@@ -85,18 +86,19 @@ std::string AccessGuard::PeerOf(const grpc::ServerContext& context) const {
   return context.peer();
 }
 
-absl::StatusOr<v1::Caller> AccessGuard::Admit(const grpc::ServerContext& context, absl::string_view method) {
+absl::StatusOr<kb::Caller> AccessGuard::Admit(const grpc::ServerContext& context, absl::string_view method) {
   const v1::AccessRule* rule = RuleOf(method);
   // Fail closed: CheckEveryMethodHasARule keeps this from happening.
   if (rule == nullptr || rule->role() == v1::ROLE_UNSPECIFIED) {
     return absl::PermissionDeniedError(absl::StrCat(method, " has no access rule"));
   }
-  const absl::StatusOr<v1::Caller> who = Authenticate(Metadata(context, "authorization"));
+  const kb::Role least_role = RoleOf(rule->role());
+  const absl::StatusOr<kb::Caller> who = Authenticate(Metadata(context, "authorization"));
   absl::Status admitted = who.status();
-  if (who.ok() && who->role() < rule->role()) {
-    admitted = absl::PermissionDeniedError(absl::StrCat(method, " needs the role ", kb::RoleName(rule->role()),
-                                                        " or above; ", who->token(), " (", who->display_name(),
-                                                        ") has ", kb::RoleName(who->role())));
+  if (who.ok() && who->role < least_role) {
+    admitted = absl::PermissionDeniedError(absl::StrCat(method, " needs the role ", kb::RoleName(least_role),
+                                                        " or above; ", who->token, " (", who->display_name,
+                                                        ") has ", kb::RoleName(who->role)));
   }
   if (admitted.ok()) return who;
   if (rule->writes()) {
@@ -110,7 +112,7 @@ absl::StatusOr<v1::Caller> AccessGuard::Admit(const grpc::ServerContext& context
   return admitted;
 }
 
-absl::StatusOr<v1::Caller> AccessGuard::Authenticate(absl::string_view authorization) {
+absl::StatusOr<kb::Caller> AccessGuard::Authenticate(absl::string_view authorization) {
   if (authorization.empty()) {
     return absl::UnauthenticatedError(
         "no bearer token: send 'authorization: Bearer <token>' (the CLI takes --token or $INSDIAG_TOKEN)");
@@ -122,7 +124,7 @@ absl::StatusOr<v1::Caller> AccessGuard::Authenticate(absl::string_view authoriza
   return store_.Authenticate(std::string(absl::StripAsciiWhitespace(authorization.substr(kScheme.size()))));
 }
 
-void AccessGuard::Audit(const grpc::ServerContext& context, absl::string_view method, const v1::Caller& caller,
+void AccessGuard::Audit(const grpc::ServerContext& context, absl::string_view method, const kb::Caller& caller,
                         const Message* request, const Message* response, const absl::Status& outcome) {
   const v1::AccessRule* rule = RuleOf(method);
   if (rule == nullptr || !rule->writes()) return;

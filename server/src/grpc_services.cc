@@ -57,19 +57,19 @@ grpc::Status RunServiceGrpc::UploadRun(grpc::ServerContext* context,
 
 grpc::Status RunServiceGrpc::GetRun(grpc::ServerContext* context, const v1::GetRunRequest* request, v1::Run* response) {
   return guard_.Unary(*context, MethodName(kRunService, "GetRun"), *request, response,
-                      [&](const v1::Caller&) { return runs_.GetRun(*request); });
+                      [&](const kb::Caller&) { return runs_.GetRun(*request); });
 }
 
 grpc::Status RunServiceGrpc::ListRuns(grpc::ServerContext* context, const v1::ListRunsRequest* request,
                                       v1::ListRunsResponse* response) {
   return guard_.Unary(*context, MethodName(kRunService, "ListRuns"), *request, response,
-                      [&](const v1::Caller&) { return runs_.ListRuns(*request); });
+                      [&](const kb::Caller&) { return runs_.ListRuns(*request); });
 }
 
 grpc::Status RunServiceGrpc::DeleteRun(grpc::ServerContext* context, const v1::DeleteRunRequest* request,
                                        google::protobuf::Empty* response) {
   return guard_.Unary(*context, MethodName(kRunService, "DeleteRun"), *request, response,
-                      [&](const v1::Caller&) -> absl::StatusOr<google::protobuf::Empty> {
+                      [&](const kb::Caller&) -> absl::StatusOr<google::protobuf::Empty> {
                         INSDIAG_RETURN_IF_ERROR(runs_.DeleteRun(*request));
                         return google::protobuf::Empty();
                       });
@@ -100,7 +100,7 @@ grpc::Status LiveRunServiceGrpc::MonitorRun(grpc::ServerContext* context,
 grpc::Status LiveRunServiceGrpc::ListLiveRuns(grpc::ServerContext* context, const v1::ListLiveRunsRequest* request,
                                               v1::ListLiveRunsResponse* response) {
   return guard_.Unary(*context, MethodName(kLiveRunService, "ListLiveRuns"), *request, response,
-                      [&](const v1::Caller&) { return live_.ListLiveRuns(*request); });
+                      [&](const kb::Caller&) { return live_.ListLiveRuns(*request); });
 }
 
 grpc::Status LiveRunServiceGrpc::WatchLiveRun(grpc::ServerContext* context, const v1::WatchLiveRunRequest* request,
@@ -114,13 +114,13 @@ grpc::Status LiveRunServiceGrpc::WatchLiveRun(grpc::ServerContext* context, cons
 #define INSDIAG_DELEGATE(Class, service, target, Name, Request, Response)                                       \
   grpc::Status Class::Name(grpc::ServerContext* context, const v1::Request* request, v1::Response* response) { \
     return guard_.Unary(*context, MethodName(service, #Name), *request, response,                              \
-                        [&](const v1::Caller&) { return target.Name(*request); });                              \
+                        [&](const kb::Caller&) { return target.Name(*request); });                              \
   }
 // As INSDIAG_DELEGATE, passing the caller on: `target.Name(*request, caller)`.
 #define INSDIAG_DELEGATE_WITH_CALLER(Class, service, target, Name, Request, Response)                            \
   grpc::Status Class::Name(grpc::ServerContext* context, const v1::Request* request, v1::Response* response) { \
     return guard_.Unary(*context, MethodName(service, #Name), *request, response,                              \
-                        [&](const v1::Caller& caller) { return target.Name(*request, caller); });               \
+                        [&](const kb::Caller& caller) { return target.Name(*request, caller); });               \
   }
 
 INSDIAG_DELEGATE(AnalysisServiceGrpc, kAnalysisService, analyses_, CreateAnalysis, CreateAnalysisRequest, Analysis)
@@ -169,7 +169,7 @@ INSDIAG_DELEGATE_WITH_CALLER(AccessServiceGrpc, kAccessService, access_, ListAud
 grpc::Status AnalysisServiceGrpc::GetTestReport(grpc::ServerContext* context, const v1::GetTestReportRequest* request,
                                                 google::api::HttpBody* response) {
   return guard_.Unary(*context, MethodName(kAnalysisService, "GetTestReport"), *request, response,
-                      [&](const v1::Caller&) { return test_reports_.GetTestReport(*request); });
+                      [&](const kb::Caller&) { return test_reports_.GetTestReport(*request); });
 }
 
 grpc::Status AnalysisServiceGrpc::WatchAnalysis(grpc::ServerContext* context, const v1::WatchAnalysisRequest* request,

@@ -6,6 +6,7 @@
 #include <map>
 #include <thread>
 
+#include "access_codec.h"
 #include "insdiag/api/report_codec.h"
 #include "insdiag/api/resource_names.h"
 #include "insdiag/engine/model/effect_catalogue.h"
@@ -320,32 +321,34 @@ absl::StatusOr<v1::Diagnosis> KnowledgeService::ResolveDiagnosis(const v1::Resol
   return diagnoses_.Resolve(request);
 }
 
-absl::StatusOr<v1::Caller> AccessService::GetCaller(const v1::GetCallerRequest&, const v1::Caller& caller) {
-  return caller;
+absl::StatusOr<v1::Caller> AccessService::GetCaller(const v1::GetCallerRequest&, const kb::Caller& caller) {
+  return ToProto(caller);
 }
 
 absl::StatusOr<v1::CreatedToken> AccessService::CreateToken(const v1::CreateTokenRequest& request,
-                                                            const v1::Caller& caller) {
-  return store_.CreateToken(request.token(), caller.token());
+                                                            const kb::Caller& caller) {
+  INSDIAG_ASSIGN_OR_RETURN(auto created, store_.CreateToken(FromProto(request.token()), caller.token));
+  return ToProto(created);
 }
 
 absl::StatusOr<v1::ListTokensResponse> AccessService::ListTokens(const v1::ListTokensRequest& request,
-                                                                 const v1::Caller&) {
+                                                                 const kb::Caller&) {
   INSDIAG_RETURN_IF_ERROR(CheckPageSize(request.page_size()));
   INSDIAG_ASSIGN_OR_RETURN(auto page, store_.ListTokens({.page_size = request.page_size(),
                                                          .page_token = request.page_token()}));
   v1::ListTokensResponse response;
-  for (auto& token : page.first) *response.add_tokens() = std::move(token);
+  for (const kb::Token& token : page.first) *response.add_tokens() = ToProto(token);
   response.set_next_page_token(page.second);
   return response;
 }
 
-absl::StatusOr<v1::Token> AccessService::RevokeToken(const v1::RevokeTokenRequest& request, const v1::Caller&) {
-  return store_.RevokeToken(request.name());
+absl::StatusOr<v1::Token> AccessService::RevokeToken(const v1::RevokeTokenRequest& request, const kb::Caller&) {
+  INSDIAG_ASSIGN_OR_RETURN(auto revoked, store_.RevokeToken(request.name()));
+  return ToProto(revoked);
 }
 
 absl::StatusOr<v1::ListAuditEventsResponse> AccessService::ListAuditEvents(const v1::ListAuditEventsRequest& request,
-                                                                           const v1::Caller&) {
+                                                                           const kb::Caller&) {
   INSDIAG_RETURN_IF_ERROR(CheckPageSize(request.page_size()));
   INSDIAG_ASSIGN_OR_RETURN(auto page,
                            store_.ListAuditEvents({.page = {.page_size = request.page_size(),
@@ -353,7 +356,7 @@ absl::StatusOr<v1::ListAuditEventsResponse> AccessService::ListAuditEvents(const
                                                    .resource = request.resource(),
                                                    .token = request.token()}));
   v1::ListAuditEventsResponse response;
-  for (auto& event : page.first) *response.add_audit_events() = std::move(event);
+  for (const kb::AuditEvent& event : page.first) *response.add_audit_events() = ToProto(event);
   response.set_next_page_token(page.second);
   return response;
 }

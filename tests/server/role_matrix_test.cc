@@ -263,12 +263,12 @@ class RoleMatrixTest : public ServerTest {
 
   std::string FreshToken() {
     kb::AccessStore store(pool());
-    v1::Token token;
-    token.set_display_name("to be revoked");
-    token.set_role(v1::VIEWER);
+    kb::Token token;
+    token.display_name = "to be revoked";
+    token.role = kb::Role::kViewer;
     auto made = store.CreateToken(token, "role matrix");
     EXPECT_TRUE(made.ok()) << made.status();
-    return made.ok() ? made->token().name() : "";
+    return made.ok() ? made->token.name : "";
   }
 
   // A whole test as the bench streams it: the metadata with its planned

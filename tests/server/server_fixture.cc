@@ -2,16 +2,18 @@
 
 #include <gtest/gtest.h>
 
+#include "access_codec.h"
+
 namespace insdiag::testing {
 
 std::string MakeToken(kb::ConnectionPool& pool, v1::Role role, const std::string& display_name) {
   kb::AccessStore store(pool);
-  v1::Token token;
-  token.set_display_name(display_name.empty() ? "test " + v1::Role_Name(role) : display_name);
-  token.set_role(role);
+  kb::Token token;
+  token.display_name = display_name.empty() ? "test " + v1::Role_Name(role) : display_name;
+  token.role = server::RoleOf(role);
   auto created = store.CreateToken(token, "test fixture");
   EXPECT_TRUE(created.ok()) << created.status();
-  return created.ok() ? created->secret() : "";
+  return created.ok() ? created->secret : "";
 }
 
 void ServerTest::SetUp() {

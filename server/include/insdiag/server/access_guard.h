@@ -48,12 +48,12 @@ class AccessGuard {
   // The caller, admitted to `method` ("insdiag.v1.RunService.DeleteRun"):
   // UNAUTHENTICATED without a valid bearer token, PERMISSION_DENIED for a
   // role below the method's. A refused call of a writing method is audited.
-  absl::StatusOr<v1::Caller> Admit(const grpc::ServerContext& context, absl::string_view method);
+  absl::StatusOr<kb::Caller> Admit(const grpc::ServerContext& context, absl::string_view method);
 
   // Records the outcome of an admitted call when the method writes. The
   // resource is the request's `name`, else the response's (or its first
   // message field's) `name`, else the request's `parent`.
-  void Audit(const grpc::ServerContext& context, absl::string_view method, const v1::Caller& caller,
+  void Audit(const grpc::ServerContext& context, absl::string_view method, const kb::Caller& caller,
              const google::protobuf::Message* request, const google::protobuf::Message* response,
              const absl::Status& outcome);
 
@@ -73,7 +73,7 @@ class AccessGuard {
  private:
   const v1::AccessRule* RuleOf(absl::string_view method) const;
   // The caller of an `authorization` value "Bearer <secret>".
-  absl::StatusOr<v1::Caller> Authenticate(absl::string_view authorization);
+  absl::StatusOr<kb::Caller> Authenticate(absl::string_view authorization);
   std::string PeerOf(const grpc::ServerContext& context) const;
 
   kb::AccessStore& store_;

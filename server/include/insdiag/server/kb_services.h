@@ -91,12 +91,12 @@ class AccessService {
  public:
   explicit AccessService(kb::AccessStore& store) : store_(store) {}
 
-  absl::StatusOr<v1::Caller> GetCaller(const v1::GetCallerRequest& request, const v1::Caller& caller);
-  absl::StatusOr<v1::CreatedToken> CreateToken(const v1::CreateTokenRequest& request, const v1::Caller& caller);
-  absl::StatusOr<v1::ListTokensResponse> ListTokens(const v1::ListTokensRequest& request, const v1::Caller& caller);
-  absl::StatusOr<v1::Token> RevokeToken(const v1::RevokeTokenRequest& request, const v1::Caller& caller);
+  absl::StatusOr<v1::Caller> GetCaller(const v1::GetCallerRequest& request, const kb::Caller& caller);
+  absl::StatusOr<v1::CreatedToken> CreateToken(const v1::CreateTokenRequest& request, const kb::Caller& caller);
+  absl::StatusOr<v1::ListTokensResponse> ListTokens(const v1::ListTokensRequest& request, const kb::Caller& caller);
+  absl::StatusOr<v1::Token> RevokeToken(const v1::RevokeTokenRequest& request, const kb::Caller& caller);
   absl::StatusOr<v1::ListAuditEventsResponse> ListAuditEvents(const v1::ListAuditEventsRequest& request,
-                                                              const v1::Caller& caller);
+                                                              const kb::Caller& caller);
 
  private:
   kb::AccessStore& store_;

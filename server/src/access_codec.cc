@@ -1,0 +1,110 @@
+#include "access_codec.h"
+
+#include <absl/time/time.h>
+#include <google/protobuf/timestamp.pb.h>
+
+#include <cstdint>
+
+namespace insdiag::server {
+namespace {
+
+google::protobuf::Timestamp TimestampOf(absl::Time time) {
+  google::protobuf::Timestamp timestamp;
+  const std::int64_t seconds = absl::ToUnixSeconds(time);  // rounds down: nanos stay in [0, 1e9)
+  timestamp.set_seconds(seconds);
+  timestamp.set_nanos(static_cast<std::int32_t>((time - absl::FromUnixSeconds(seconds)) / absl::Nanoseconds(1)));
+  return timestamp;
+}
+
+absl::Time TimeOf(const google::protobuf::Timestamp& timestamp) {
+  return absl::FromUnixSeconds(timestamp.seconds()) + absl::Nanoseconds(timestamp.nanos());
+}
+
+}  // namespace
+
+kb::Role RoleOf(v1::Role role) {
+  switch (role) {
+    case v1::VIEWER:
+      return kb::Role::kViewer;
+    case v1::OPERATOR:
+      return kb::Role::kOperator;
+    case v1::ENGINEER:
+      return kb::Role::kEngineer;
+    case v1::ADMIN:
+      return kb::Role::kAdmin;
+    default:
+      return kb::Role::kUnspecified;
+  }
+}
+
+v1::Role ToProto(kb::Role role) {
+  switch (role) {
+    case kb::Role::kViewer:
+      return v1::VIEWER;
+    case kb::Role::kOperator:
+      return v1::OPERATOR;
+    case kb::Role::kEngineer:
+      return v1::ENGINEER;
+    case kb::Role::kAdmin:
+      return v1::ADMIN;
+    case kb::Role::kUnspecified:
+      break;
+  }
+  return v1::ROLE_UNSPECIFIED;
+}
+
+v1::Caller ToProto(const kb::Caller& caller) {
+  v1::Caller message;
+  message.set_token(caller.token);
+  message.set_display_name(caller.display_name);
+  message.set_role(ToProto(caller.role));
+  return message;
+}
+
+v1::Token ToProto(const kb::Token& token) {
+  v1::Token message;
+  message.set_name(token.name);
+  message.set_display_name(token.display_name);
+  message.set_role(ToProto(token.role));
+  *message.mutable_create_time() = TimestampOf(token.create_time);
+  if (token.expire_time.has_value()) *message.mutable_expire_time() = TimestampOf(*token.expire_time);
+  if (token.revoke_time.has_value()) *message.mutable_revoke_time() = TimestampOf(*token.revoke_time);
+  message.set_creator(token.creator);
+  return message;
+}
+
+v1::CreatedToken ToProto(const kb::CreatedToken& created) {
+  v1::CreatedToken message;
+  *message.mutable_token() = ToProto(created.token);
+  message.set_secret(created.secret);
+  return message;
+}
+
+v1::AuditEvent ToProto(const kb::AuditEvent& event) {
+  v1::AuditEvent message;
+  message.set_name(event.name);
+  *message.mutable_event_time() = TimestampOf(event.event_time);
+  message.set_token(event.token);
+  message.set_display_name(event.display_name);
+  message.set_role(ToProto(event.role));
+  message.set_method(event.method);
+  message.set_resource(event.resource);
+  message.set_peer(event.peer);
+  message.set_code(event.code);
+  message.set_message(event.message);
+  return message;
+}
+
+kb::Token FromProto(const v1::Token& token) {
+  kb::Token domain;
+  domain.name = token.name();
+  domain.display_name = token.display_name();
+  domain.role = RoleOf(token.role());
+  domain.create_time = TimeOf(token.create_time());
+  if (token.has_expire_time()) domain.expire_time = TimeOf(token.expire_time());
+  if (token.has_revoke_time()) domain.revoke_time = TimeOf(token.revoke_time());
+  domain.creator = token.creator();
+  return domain;
+}
+
+}  // namespace insdiag::server
