@@ -321,6 +321,16 @@ std::array<double, DriftAxis::kCount> CountedQuantisationOf(const std::optional<
   return counted;
 }
 
+// Where model A's a-priori values came from (DecisionKind::kAPrioriModel).
+void RecordAPrioriSource(DecisionLog& decisions, std::string source, std::string why = "") {
+  Decision d;
+  d.kind = DecisionKind::kAPrioriModel;
+  d.adopted = true;
+  d.qualifiers.push_back(std::move(source));
+  if (!why.empty()) d.qualifiers.push_back(std::move(why));
+  decisions.Record(std::move(d));
+}
+
 // The a-priori model: the datasheet; else the unit type's nominal model,
 // unless the run's Allan deviation puts the unit beyond the drift search's
 // reach from it; else the Allan fit. The Allan analysis, which `allan`
@@ -340,6 +350,7 @@ absl::StatusOr<pipeline::APriori> ChooseAPrioriModel(const BenchRun& run, const 
     out.drift_starts.grid_tau_points = 0;
     out.source = pipeline::APrioriSource::kDatasheet;
     out.model = *std::move(model);
+    RecordAPrioriSource(decisions, "datasheet");
     return out;
   }
   allan = AllanOfStaticSegments(run, options, decisions);
@@ -351,6 +362,7 @@ absl::StatusOr<pipeline::APriori> ChooseAPrioriModel(const BenchRun& run, const 
       if (allan.has_value())
         out.drift_starts.raw_sample_drifts = DriftsOfTheAllanFit(*allan, model->reference);
       out.model = *std::move(model);
+      RecordAPrioriSource(decisions, "nominal");
       return out;
     }
     Decision set_aside;
@@ -374,11 +386,7 @@ absl::StatusOr<pipeline::APriori> ChooseAPrioriModel(const BenchRun& run, const 
   if (!from_allan.ok()) return from_allan.status();
   out.model = *std::move(from_allan);
   out.source = pipeline::APrioriSource::kAllanFit;
-  if (!model.ok()) {
-    decisions.Note(
-        "the run has no complete datasheet and no nominal model: the a-priori model comes from its "
-        "Allan deviation");
-  }
+  RecordAPrioriSource(decisions, "allan_fit", model.ok() ? "" : "no_specification");
   return out;
 }
 
@@ -399,7 +407,7 @@ pipeline::Identification IdentifiedEarlier(const IdentifiedModel& earlier, const
       out.identified.push_back(p);
     }
   }
-  decisions.Note("model A is the model an earlier analysis of this run identified: it was not identified again");
+  RecordAPrioriSource(decisions, "earlier_analysis");
   return out;
 }
 

@@ -111,6 +111,24 @@ std::string QuantisationKept(const Decision& d) {
       axes, against, -d.statistic);
 }
 
+std::string APrioriModel(const Decision& d) {
+  if (d.Qualified("datasheet")) {
+    return "the a-priori model is the run's datasheet: its drifts are the unit's own specification";
+  }
+  if (d.Qualified("nominal")) {
+    return "the a-priori model is the nominal model given for the unit (its unit type's, or the request's): a "
+           "class prior the drift identification searches from";
+  }
+  if (d.Qualified("earlier_analysis")) {
+    return "model A is the model an earlier analysis of this run identified: it was not identified again";
+  }
+  if (d.Qualified("no_specification")) {
+    return "the run has no complete datasheet and no nominal model: the a-priori model comes from its Allan "
+           "deviation";
+  }
+  return "the a-priori model comes from the run's Allan deviation";
+}
+
 }  // namespace
 
 std::optional<double> Decision::Measure(std::string_view name) const {
@@ -152,6 +170,8 @@ std::string RenderNote(const Decision& d) {
       return absl::StrCat("the unit settles after power-up: model A failed only within its first ",
                           MeasureOr(d, "start_span_s"), " s, and with its warm-ups carried (", Names(d),
                           ") no failure remains there and nothing is found");
+    case DecisionKind::kAPrioriModel:
+      return APrioriModel(d);
     case DecisionKind::kUnitTypeSetAside:
       break;
   }

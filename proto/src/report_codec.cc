@@ -312,6 +312,8 @@ v1::Decision::Kind ToProto(engine::DecisionKind kind) {
       return v1::Decision::UNIT_TYPE_SET_ASIDE;
     case engine::DecisionKind::kQuantisationKept:
       return v1::Decision::QUANTISATION_KEPT;
+    case engine::DecisionKind::kAPrioriModel:
+      return v1::Decision::A_PRIORI_MODEL;
     case engine::DecisionKind::kStartExplainedByWarmUps:
       break;
   }

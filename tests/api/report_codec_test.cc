@@ -66,7 +66,7 @@ TEST(ReportCodec, DecisionsCarryTheirKindTestAndNote) {
 // Every kind of decision has its own name in the report.
 TEST(ReportCodec, EveryDecisionKindHasItsOwnName) {
   engine::AnalysisReport report;
-  for (int k = 0; k <= static_cast<int>(engine::DecisionKind::kStartExplainedByWarmUps); ++k) {
+  for (int k = 0; k <= static_cast<int>(engine::DecisionKind::kAPrioriModel); ++k) {
     engine::Decision d;
     d.kind = static_cast<engine::DecisionKind>(k);
     report.decisions.push_back(d);

@@ -114,7 +114,7 @@ TEST(DecisionTest, QuantisationAndWarmUpsRenderWhatTheyWeighed) {
 // Every kind has a note of its own (its name in the report: ReportCodec).
 TEST(DecisionTest, EveryKindHasItsOwnNote) {
   std::vector<std::string> notes;
-  for (int k = 0; k <= static_cast<int>(DecisionKind::kStartExplainedByWarmUps); ++k) {
+  for (int k = 0; k <= static_cast<int>(DecisionKind::kAPrioriModel); ++k) {
     Decision d;
     d.kind = static_cast<DecisionKind>(k);
     notes.push_back(RenderNote(d));

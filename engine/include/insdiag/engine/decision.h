@@ -53,6 +53,13 @@ enum class DecisionKind {
   // warm-ups (subjects) carried in model B leave no failure there: the
   // unit settling after power-up, not a fault.
   kStartExplainedByWarmUps,
+  // Where model A's a-priori values came from, as one qualifier:
+  // "datasheet" (the unit's own specification), "nominal" (the nominal
+  // model given for it, its unit type's: a class prior), "allan_fit" (the run's own Allan
+  // deviation; "no_specification" where the run had neither of the
+  // others) or "earlier_analysis" (the model an earlier analysis of the run
+  // identified, not identified again).
+  kAPrioriModel,
 };
 
 // An alternative a decision weighed, with its statistic in the decision's terms.
