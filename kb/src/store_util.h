@@ -2,6 +2,7 @@
 #pragma once
 
 #include <absl/status/statusor.h>
+#include <absl/time/time.h>
 #include <google/protobuf/timestamp.pb.h>
 
 #include <cstdint>
@@ -25,6 +26,7 @@ std::string Micros(const std::string& column);
 google::protobuf::Timestamp TimestampOfMicros(std::int64_t micros);
 // A Timestamp as text PostgreSQL reads ("2024-01-31 12:00:00.000000+00").
 std::string TimestampText(const google::protobuf::Timestamp& t);
+std::string TimestampText(absl::Time t);  // to the microsecond, as the above
 std::int64_t MicrosOf(const google::protobuf::Timestamp& t);
 
 // Keyset page tokens: opaque base64 of "a|b".

@@ -4,6 +4,7 @@
 
 #include <atomic>
 
+#include "fleet_codec.h"
 #include "insdiag/engine/status_macros.h"
 #include "insdiag/server/status_mapping.h"
 
@@ -122,6 +123,16 @@ grpc::Status LiveRunServiceGrpc::WatchLiveRun(grpc::ServerContext* context, cons
     return guard_.Unary(*context, MethodName(service, #Name), *request, response,                              \
                         [&](const kb::Caller& caller) { return target.Name(*request, caller); });               \
   }
+// As INSDIAG_DELEGATE over a store of domain values: the request mapped to
+// its query and the result to the response (FromProto, ToProto).
+#define INSDIAG_DELEGATE_MAPPED(Class, service, target, Name, Request, Response)                               \
+  grpc::Status Class::Name(grpc::ServerContext* context, const v1::Request* request, v1::Response* response) { \
+    return guard_.Unary(*context, MethodName(service, #Name), *request, response,                              \
+                        [&](const v1::Caller&) -> absl::StatusOr<v1::Response> {                               \
+                          INSDIAG_ASSIGN_OR_RETURN(auto result, target.Name(FromProto(*request)));              \
+                          return ToProto(result);                                                              \
+                        });                                                                                    \
+  }
 
 INSDIAG_DELEGATE(AnalysisServiceGrpc, kAnalysisService, analyses_, CreateAnalysis, CreateAnalysisRequest, Analysis)
 INSDIAG_DELEGATE(AnalysisServiceGrpc, kAnalysisService, analyses_, GetAnalysis, GetAnalysisRequest, Analysis)
@@ -147,14 +158,17 @@ INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, CreateDiag
 INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, GetDiagnosis, GetDiagnosisRequest, Diagnosis)
 INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, ListDiagnoses, ListDiagnosesRequest, ListDiagnosesResponse)
 INSDIAG_DELEGATE(KnowledgeServiceGrpc, kKnowledgeService, knowledge_, ResolveDiagnosis, ResolveDiagnosisRequest, Diagnosis)
-INSDIAG_DELEGATE(FleetServiceGrpc, kFleetService, fleet_, GetFleetStatistics, GetFleetStatisticsRequest, FleetStatistics)
-INSDIAG_DELEGATE(FleetServiceGrpc, kFleetService, fleet_, ListFailureCounts, ListFailureCountsRequest, ListFailureCountsResponse)
-INSDIAG_DELEGATE(FleetServiceGrpc, kFleetService, fleet_, GetFailurePareto, GetFailureParetoRequest, FailurePareto)
-INSDIAG_DELEGATE(FleetServiceGrpc, kFleetService, fleet_, GetWeibullFit, GetWeibullFitRequest, WeibullFit)
-INSDIAG_DELEGATE(FleetServiceGrpc, kFleetService, fleet_, ListParameterTrends, ListParameterTrendsRequest,
-                 ListParameterTrendsResponse)
-INSDIAG_DELEGATE(FleetServiceGrpc, kFleetService, fleet_, GetParameterTrend, GetParameterTrendRequest, ParameterTrend)
-INSDIAG_DELEGATE(FleetServiceGrpc, kFleetService, fleet_, RankUnits, RankUnitsRequest, RankUnitsResponse)
+INSDIAG_DELEGATE_MAPPED(FleetServiceGrpc, kFleetService, fleet_, GetFleetStatistics, GetFleetStatisticsRequest,
+                        FleetStatistics)
+INSDIAG_DELEGATE_MAPPED(FleetServiceGrpc, kFleetService, fleet_, ListFailureCounts, ListFailureCountsRequest,
+                        ListFailureCountsResponse)
+INSDIAG_DELEGATE_MAPPED(FleetServiceGrpc, kFleetService, fleet_, GetFailurePareto, GetFailureParetoRequest, FailurePareto)
+INSDIAG_DELEGATE_MAPPED(FleetServiceGrpc, kFleetService, fleet_, GetWeibullFit, GetWeibullFitRequest, WeibullFit)
+INSDIAG_DELEGATE_MAPPED(FleetServiceGrpc, kFleetService, fleet_, ListParameterTrends, ListParameterTrendsRequest,
+                        ListParameterTrendsResponse)
+INSDIAG_DELEGATE_MAPPED(FleetServiceGrpc, kFleetService, fleet_, GetParameterTrend, GetParameterTrendRequest,
+                        ParameterTrend)
+INSDIAG_DELEGATE_MAPPED(FleetServiceGrpc, kFleetService, fleet_, RankUnits, RankUnitsRequest, RankUnitsResponse)
 
 INSDIAG_DELEGATE_WITH_CALLER(AccessServiceGrpc, kAccessService, access_, GetCaller, GetCallerRequest, Caller)
 INSDIAG_DELEGATE_WITH_CALLER(AccessServiceGrpc, kAccessService, access_, CreateToken, CreateTokenRequest, CreatedToken)
@@ -165,6 +179,7 @@ INSDIAG_DELEGATE_WITH_CALLER(AccessServiceGrpc, kAccessService, access_, ListAud
 
 #undef INSDIAG_DELEGATE
 #undef INSDIAG_DELEGATE_WITH_CALLER
+#undef INSDIAG_DELEGATE_MAPPED
 
 grpc::Status AnalysisServiceGrpc::GetTestReport(grpc::ServerContext* context, const v1::GetTestReportRequest* request,
                                                 google::api::HttpBody* response) {

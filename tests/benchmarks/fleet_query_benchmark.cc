@@ -1,7 +1,8 @@
 // fleet_query_benchmark — times every FleetService query (the store calls the
-// server's handlers delegate to: SQL, the life statistics' fits) against a
-// knowledge base holding a generated fleet (scripts/fleet-benchmark.sh
-// prepares one with insdiag-fleet: 10,000 units, 1,000,000 analyses).
+// server's handlers delegate to: SQL and the life statistics' fits, not the
+// mapping to insdiag.v1) against a knowledge base holding a generated fleet
+// (scripts/fleet-benchmark.sh prepares one with insdiag-fleet: 10,000 units,
+// 1,000,000 analyses).
 //
 //   fleet_query_benchmark --database-url URL [--repetitions N] [--budget-ms MS]
 //
@@ -69,107 +70,107 @@ int main(int argc, char** argv) {
   const std::string type = "unitTypes/INS-2000";
 
   // Page tokens and a unit and a batch to ask about, from the data.
-  v1::ListParameterTrendsRequest points;
-  points.set_unit_type(type);
-  points.set_parameter("gyro_bias_gm.x.sigma");
-  points.set_page_size(100);
+  kb::ParameterPointQuery points;
+  points.unit_type = type;
+  points.parameter = "gyro_bias_gm.x.sigma";
+  points.page.page_size = 100;
   std::string deep_token;
   for (int page = 0; page < 50; ++page) {
     auto listed = fleet.ListParameterTrends(points);
-    if (!listed.ok() || listed->next_page_token().empty()) break;
-    points.set_page_token(listed->next_page_token());
-    deep_token = listed->next_page_token();
+    if (!listed.ok() || listed->next_page_token.empty()) break;
+    points.page.page_token = listed->next_page_token;
+    deep_token = listed->next_page_token;
   }
-  v1::RankUnitsRequest rank;
-  rank.set_unit_type(type);
+  kb::UnitRankingQuery rank;
+  rank.unit_type = type;
   auto first_rank = fleet.RankUnits(rank);
-  if (!first_rank.ok() || first_rank->units().empty()) {
+  if (!first_rank.ok() || first_rank->units.empty()) {
     std::cerr << "no ranked units: generate a fleet first (scripts/fleet-benchmark.sh)\n";
     return 1;
   }
-  const std::string rank_token = first_rank->next_page_token();
-  const std::string unit = first_rank->units(0).unit();
-  const std::string batch = first_rank->units(0).batch();
+  const std::string rank_token = first_rank->next_page_token;
+  const std::string unit = first_rank->units.front().unit;
+  const std::string batch = first_rank->units.front().batch;
 
   std::vector<Query> queries;
   queries.push_back({"GetFleetStatistics (whole fleet)", [&] { return StatusOf(fleet.GetFleetStatistics({})); }});
   queries.push_back({"GetFleetStatistics (unit type)", [&] {
-                       v1::GetFleetStatisticsRequest r;
-                       r.set_unit_type(type);
+                       kb::FleetStatisticsQuery r;
+                       r.unit_type = type;
                        return StatusOf(fleet.GetFleetStatistics(r));
                      }});
   queries.push_back({"ListFailureCounts (month × mode × type × batch)", [&] {
-                       v1::ListFailureCountsRequest r;
-                       r.set_unit_type(type);
+                       kb::FailureCountQuery r;
+                       r.unit_type = type;
                        return StatusOf(fleet.ListFailureCounts(r));
                      }});
   queries.push_back({"ListFailureCounts (year, one mode)", [&] {
-                       v1::ListFailureCountsRequest r;
-                       r.set_period("year");
-                       r.set_failure_mode("failureModes/dtg-bearing-wear.x");
+                       kb::FailureCountQuery r;
+                       r.period = "year";
+                       r.failure_mode = "failureModes/dtg-bearing-wear.x";
                        return StatusOf(fleet.ListFailureCounts(r));
                      }});
   queries.push_back({"GetFailurePareto", [&] {
-                       v1::GetFailureParetoRequest r;
-                       r.set_unit_type(type);
+                       kb::FailureParetoQuery r;
+                       r.unit_type = type;
                        return StatusOf(fleet.GetFailurePareto(r));
                      }});
   queries.push_back({"GetWeibullFit (gyro.x, any mode)", [&] {
-                       v1::GetWeibullFitRequest r;
-                       r.set_unit_type(type);
-                       r.set_module_role("gyro.x");
+                       kb::WeibullFitQuery r;
+                       r.unit_type = type;
+                       r.module_role = "gyro.x";
                        return StatusOf(fleet.GetWeibullFit(r));
                      }});
   queries.push_back({"GetWeibullFit (gyro.x, dtg-bearing-wear.x)", [&] {
-                       v1::GetWeibullFitRequest r;
-                       r.set_module_role("gyro.x");
-                       r.set_failure_mode("failureModes/dtg-bearing-wear.x");
+                       kb::WeibullFitQuery r;
+                       r.module_role = "gyro.x";
+                       r.failure_mode = "failureModes/dtg-bearing-wear.x";
                        return StatusOf(fleet.GetWeibullFit(r));
                      }});
   queries.push_back({"GetWeibullFit (power_supply, any mode)", [&] {
-                       v1::GetWeibullFitRequest r;
-                       r.set_module_role("power_supply");
+                       kb::WeibullFitQuery r;
+                       r.module_role = "power_supply";
                        return StatusOf(fleet.GetWeibullFit(r));
                      }});
   queries.push_back({"GetParameterTrend (all batches)", [&] {
-                       v1::GetParameterTrendRequest r;
-                       r.set_unit_type(type);
-                       r.set_parameter("gyro_bias_gm.x.sigma");
+                       kb::ParameterTrendQuery r;
+                       r.unit_type = type;
+                       r.parameter = "gyro_bias_gm.x.sigma";
                        return StatusOf(fleet.GetParameterTrend(r));
                      }});
   queries.push_back({"GetParameterTrend (one batch)", [&] {
-                       v1::GetParameterTrendRequest r;
-                       r.set_unit_type(type);
-                       r.set_parameter("acc_vrw.z");
-                       r.set_batch(batch);
+                       kb::ParameterTrendQuery r;
+                       r.unit_type = type;
+                       r.parameter = "acc_vrw.z";
+                       r.batch = batch;
                        return StatusOf(fleet.GetParameterTrend(r));
                      }});
   queries.push_back({"ListParameterTrends (first page)", [&] {
-                       v1::ListParameterTrendsRequest r;
-                       r.set_unit_type(type);
-                       r.set_parameter("gyro_arw.y");
+                       kb::ParameterPointQuery r;
+                       r.unit_type = type;
+                       r.parameter = "gyro_arw.y";
                        return StatusOf(fleet.ListParameterTrends(r));
                      }});
   queries.push_back({"ListParameterTrends (page 51 of 100 points)", [&] {
-                       v1::ListParameterTrendsRequest r;
-                       r.set_unit_type(type);
-                       r.set_parameter("gyro_bias_gm.x.sigma");
-                       r.set_page_size(100);
-                       r.set_page_token(deep_token);
+                       kb::ParameterPointQuery r;
+                       r.unit_type = type;
+                       r.parameter = "gyro_bias_gm.x.sigma";
+                       r.page.page_size = 100;
+                       r.page.page_token = deep_token;
                        return StatusOf(fleet.ListParameterTrends(r));
                      }});
   queries.push_back({"ListParameterTrends (one unit)", [&] {
-                       v1::ListParameterTrendsRequest r;
-                       r.set_unit_type(type);
-                       r.set_parameter("gyro_bias_gm.z.tau");
-                       r.set_unit(unit);
-                       r.set_page_size(1000);
+                       kb::ParameterPointQuery r;
+                       r.unit_type = type;
+                       r.parameter = "gyro_bias_gm.z.tau";
+                       r.unit = unit;
+                       r.page.page_size = 1000;
                        return StatusOf(fleet.ListParameterTrends(r));
                      }});
   queries.push_back({"RankUnits (first page)", [&] { return StatusOf(fleet.RankUnits(rank)); }});
   queries.push_back({"RankUnits (second page)", [&] {
-                       v1::RankUnitsRequest r = rank;
-                       r.set_page_token(rank_token);
+                       kb::UnitRankingQuery r = rank;
+                       r.page.page_token = rank_token;
                        return StatusOf(fleet.RankUnits(r));
                      }});
 

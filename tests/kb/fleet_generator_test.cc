@@ -203,33 +203,33 @@ TEST_F(FleetGeneratorTest, GeneratedHistoryReadsBackThroughTheStoresAndEveryStat
   FleetStore stats(pool());
   auto statistics = stats.GetFleetStatistics({});
   ASSERT_TRUE(statistics.ok()) << statistics.status();
-  EXPECT_EQ(statistics->unit_count(), fleet.units);
-  EXPECT_EQ(statistics->analysis_count(), fleet.analyses);
-  EXPECT_EQ(statistics->failure_count(), fleet.confirmed_failures);
-  EXPECT_EQ(statistics->no_fault_found_count(), fleet.no_fault_found);
+  EXPECT_EQ(statistics->unit_count, fleet.units);
+  EXPECT_EQ(statistics->analysis_count, fleet.analyses);
+  EXPECT_EQ(statistics->failure_count, fleet.confirmed_failures);
+  EXPECT_EQ(statistics->no_fault_found_count, fleet.no_fault_found);
   auto counts = stats.ListFailureCounts({});
   ASSERT_TRUE(counts.ok()) << counts.status();
-  EXPECT_EQ(counts->total(), fleet.confirmed_failures);
+  EXPECT_EQ(counts->total, fleet.confirmed_failures);
   auto pareto = stats.GetFailurePareto({});
   ASSERT_TRUE(pareto.ok());
-  EXPECT_EQ(pareto->total_failures(), fleet.confirmed_failures);
-  v1::GetParameterTrendRequest trend;
-  trend.set_unit_type("unitTypes/INS-2000");
-  trend.set_parameter("gyro_bias_gm.x.sigma");
+  EXPECT_EQ(pareto->total_failures, fleet.confirmed_failures);
+  ParameterTrendQuery trend;
+  trend.unit_type = "unitTypes/INS-2000";
+  trend.parameter = "gyro_bias_gm.x.sigma";
   auto buckets = stats.GetParameterTrend(trend);
   ASSERT_TRUE(buckets.ok()) << buckets.status();
   std::int64_t bucketed = 0;
-  for (const auto& b : buckets->buckets()) bucketed += b.count();
+  for (const TrendBucket& b : buckets->buckets) bucketed += b.count;
   EXPECT_EQ(bucketed, fleet.analyses);
-  v1::ListParameterTrendsRequest points;
-  points.set_unit_type("unitTypes/INS-2000");
-  points.set_parameter("gyro_arw.z");
+  ParameterPointQuery points;
+  points.unit_type = "unitTypes/INS-2000";
+  points.parameter = "gyro_arw.z";
   auto listed = stats.ListParameterTrends(points);
   ASSERT_TRUE(listed.ok()) << listed.status();
-  EXPECT_EQ(listed->points_size(), 50);
+  EXPECT_EQ(listed->points.size(), 50u);
   auto ranked = stats.RankUnits({});
   ASSERT_TRUE(ranked.ok()) << ranked.status();
-  EXPECT_EQ(ranked->units_size(), 50);
+  EXPECT_EQ(ranked->units.size(), 50u);
 }
 
 TEST_F(FleetGeneratorTest, RefusesBadOptions) {

@@ -165,15 +165,16 @@ TEST_F(KnowledgeBaseTest, ConfirmingADiagnosisWritesAFailureRecordAndRaisesLater
   FleetStore fleet(pool());
   auto stats = fleet.GetFleetStatistics({});
   ASSERT_TRUE(stats.ok()) << stats.status();
-  EXPECT_EQ(stats->failure_count(), 1);
-  EXPECT_EQ(stats->no_fault_found_count(), 1);
+  EXPECT_EQ(stats->failure_count, 1);
+  EXPECT_EQ(stats->no_fault_found_count, 1);
   auto pareto = fleet.GetFailurePareto({});
   ASSERT_TRUE(pareto.ok());
-  EXPECT_EQ(pareto->entries(0).failure_mode(), "failureModes/dtg-bearing-wear.x");
-  EXPECT_EQ(pareto->entries(0).failures(), 1);
+  ASSERT_FALSE(pareto->entries.empty());
+  EXPECT_EQ(pareto->entries[0].failure_mode, "failureModes/dtg-bearing-wear.x");
+  EXPECT_EQ(pareto->entries[0].failures, 1);
   auto ranked = fleet.RankUnits({});
   ASSERT_TRUE(ranked.ok()) << ranked.status();
-  EXPECT_EQ(ranked->units_size(), 3);
+  EXPECT_EQ(ranked->units.size(), 3u);
 }
 
 TEST_F(KnowledgeBaseTest, RefusesMalformedRecordsNamingTheField) {

@@ -1,16 +1,15 @@
 // Fleet statistics (docs/FLEET.md): SQL over the knowledge base, the heavy
 // aggregates materialised (fleet_counts, parameter_trend_buckets; refreshed
-// by RefreshViews), life statistics fitted here (kb/reliability.h).
-// `unit_type` arguments are unitTypes/{t}; empty means the whole fleet.
+// by RefreshViews), life statistics fitted here (kb/reliability.h). The
+// queries and results are in kb/fleet_statistics.h. A malformed query is
+// refused INVALID_ARGUMENT naming its field.
 #pragma once
 
 #include <absl/status/status.h>
 #include <absl/status/statusor.h>
 
-#include <string>
-
 #include "insdiag/kb/connection_pool.h"
-#include "insdiag/v1/fleet.pb.h"
+#include "insdiag/kb/fleet_statistics.h"
 
 namespace insdiag::kb {
 
@@ -18,14 +17,14 @@ class FleetStore {
  public:
   explicit FleetStore(ConnectionPool& pool) : pool_(pool) {}
 
-  absl::StatusOr<v1::FleetStatistics> GetFleetStatistics(const v1::GetFleetStatisticsRequest& request);
-  absl::StatusOr<v1::ListFailureCountsResponse> ListFailureCounts(const v1::ListFailureCountsRequest& request);
-  absl::StatusOr<v1::FailurePareto> GetFailurePareto(const v1::GetFailureParetoRequest& request);
+  absl::StatusOr<FleetStatistics> GetFleetStatistics(const FleetStatisticsQuery& query);
+  absl::StatusOr<FailureCounts> ListFailureCounts(const FailureCountQuery& query);
+  absl::StatusOr<FailurePareto> GetFailurePareto(const FailureParetoQuery& query);
   // FAILED_PRECONDITION when the data hold fewer than 2 failures.
-  absl::StatusOr<v1::WeibullFit> GetWeibullFit(const v1::GetWeibullFitRequest& request);
-  absl::StatusOr<v1::ListParameterTrendsResponse> ListParameterTrends(const v1::ListParameterTrendsRequest& request);
-  absl::StatusOr<v1::ParameterTrend> GetParameterTrend(const v1::GetParameterTrendRequest& request);
-  absl::StatusOr<v1::RankUnitsResponse> RankUnits(const v1::RankUnitsRequest& request);
+  absl::StatusOr<WeibullFit> GetWeibullFit(const WeibullFitQuery& query);
+  absl::StatusOr<ParameterPointPage> ListParameterTrends(const ParameterPointQuery& query);
+  absl::StatusOr<ParameterTrend> GetParameterTrend(const ParameterTrendQuery& query);
+  absl::StatusOr<UnitRankingPage> RankUnits(const UnitRankingQuery& query);
 
   // Refreshes the materialised views; `concurrently`, readers are not
   // blocked (slower: the new contents are diffed into the old). Skipped,
