@@ -52,8 +52,10 @@ google::protobuf::Timestamp TimestampOfMicros(std::int64_t micros) {
 
 std::int64_t MicrosOf(const google::protobuf::Timestamp& t) { return t.seconds() * 1'000'000 + t.nanos() / 1000; }
 
-std::string TimestampText(const google::protobuf::Timestamp& t) {
-  return absl::FormatTime("%Y-%m-%d %H:%M:%E6S+00", absl::FromUnixMicros(MicrosOf(t)), absl::UTCTimeZone());
+std::string TimestampText(const google::protobuf::Timestamp& t) { return TimeText(absl::FromUnixMicros(MicrosOf(t))); }
+
+std::string TimeText(absl::Time t) {
+  return absl::FormatTime("%Y-%m-%d %H:%M:%E6S+00", absl::FromUnixMicros(absl::ToUnixMicros(t)), absl::UTCTimeZone());
 }
 
 std::string EncodeToken(const std::string& a, const std::string& b) {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <absl/status/statusor.h>
+#include <absl/time/time.h>
 #include <google/protobuf/timestamp.pb.h>
 
 #include <cstdint>
@@ -26,6 +27,8 @@ google::protobuf::Timestamp TimestampOfMicros(std::int64_t micros);
 // A Timestamp as text PostgreSQL reads ("2024-01-31 12:00:00.000000+00").
 std::string TimestampText(const google::protobuf::Timestamp& t);
 std::int64_t MicrosOf(const google::protobuf::Timestamp& t);
+// A time as that text, to the microsecond (rounded down).
+std::string TimeText(absl::Time t);
 
 // Keyset page tokens: opaque base64 of "a|b".
 std::string EncodeToken(const std::string& a, const std::string& b);
