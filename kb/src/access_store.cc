@@ -43,12 +43,6 @@ absl::StatusOr<std::string> NewSecret() {
 constexpr std::array<std::string_view, 5> kRoleNames = {"ROLE_UNSPECIFIED", "VIEWER", "OPERATOR", "ENGINEER",
                                                         "ADMIN"};
 
-// A time as text PostgreSQL reads ("2024-01-31 12:00:00.000000+00"), to the
-// microsecond it keeps.
-std::string TimeText(absl::Time t) {
-  return absl::FormatTime("%Y-%m-%d %H:%M:%E6S+00", absl::FromUnixMicros(absl::ToUnixMicros(t)), absl::UTCTimeZone());
-}
-
 const std::string kTokenColumns = absl::StrCat(
     "SELECT token_id::text, display_name, role, creator, ", Micros("create_time"), ", ", Micros("expire_time"), ", ",
     Micros("revoke_time"), " FROM access_tokens ");
@@ -150,7 +144,7 @@ absl::StatusOr<CreatedToken> AccessStore::CreateToken(const Token& token, const 
                             absl::StrReplaceAll(kTokenColumns, {{"access_tokens", "made"}})),
                {Param::Text(token.display_name), Param::Text(RoleName(token.role)),
                 Param::Bytes(api::Sha256(secret)), Param::Text(creator),
-                token.expire_time.has_value() ? Param::Text(TimeText(*token.expire_time)) : Param::Null()});
+                token.expire_time.has_value() ? Param::Text(internal::TimeText(*token.expire_time)) : Param::Null()});
   if (!rows.ok()) return rows.status();
   if (rows->rows() == 0) return absl::InvalidArgumentError("token.expire_time: must be in the future");
   CreatedToken created;

@@ -1,6 +1,7 @@
 #include "insdiag/kb/catalogue_store.h"
 
 #include <absl/strings/str_cat.h>
+#include <absl/time/time.h>
 
 #include <algorithm>
 
@@ -96,16 +97,15 @@ constexpr char kUnitColumns[] =
     "SELECT serial, coalesce(unit_type, ''), operating_hours, (extract(epoch FROM create_time) * 1000000)::bigint, "
     "coalesce(batch, ''), (extract(epoch FROM commission_time) * 1000000)::bigint, retired_time IS NOT NULL FROM units ";
 
-v1::Unit UnitFromRow(const Result& rows, int r) {
-  v1::Unit u;
-  u.set_name(api::ResourceName(api::kUnits, rows.String(r, 0)));
-  if (!rows.String(r, 1).empty())
-    u.set_unit_type(api::ResourceName(api::kUnitTypes, rows.String(r, 1)));
-  u.set_operating_hours(internal::DoubleOr0(rows, r, 2));
-  *u.mutable_create_time() = internal::TimestampOfMicros(internal::IntOr0(rows, r, 3));
-  u.set_batch(rows.String(r, 4));
-  if (!rows.IsNull(r, 5)) *u.mutable_commission_time() = internal::TimestampOfMicros(internal::IntOr0(rows, r, 5));
-  u.set_retired(rows.Bool(r, 6));
+Unit UnitFromRow(const Result& rows, int r) {
+  Unit u;
+  u.name = api::ResourceName(api::kUnits, rows.String(r, 0));
+  if (!rows.String(r, 1).empty()) u.unit_type = api::ResourceName(api::kUnitTypes, rows.String(r, 1));
+  u.operating_hours = internal::DoubleOr0(rows, r, 2);
+  u.create_time = absl::FromUnixMicros(internal::IntOr0(rows, r, 3));
+  u.batch = rows.String(r, 4);
+  if (!rows.IsNull(r, 5)) u.commission_time = absl::FromUnixMicros(internal::IntOr0(rows, r, 5));
+  u.retired = rows.Bool(r, 6);
   return u;
 }
 
@@ -148,7 +148,7 @@ absl::StatusOr<std::vector<UnitType>> CatalogueStore::ListUnitTypes() {
   return out;
 }
 
-absl::StatusOr<v1::Unit> CatalogueStore::GetUnit(const std::string& name) {
+absl::StatusOr<Unit> CatalogueStore::GetUnit(const std::string& name) {
   auto serial = api::ResourceId(name, api::kUnits, "name");
   if (!serial.ok()) return serial.status();
   INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
@@ -158,9 +158,9 @@ absl::StatusOr<v1::Unit> CatalogueStore::GetUnit(const std::string& name) {
   return UnitFromRow(rows, 0);
 }
 
-absl::StatusOr<std::pair<std::vector<v1::Unit>, std::string>> CatalogueStore::ListUnits(const PageQuery& page,
-                                                                                         const std::string& unit_type,
-                                                                                         const std::string& batch) {
+absl::StatusOr<std::pair<std::vector<Unit>, std::string>> CatalogueStore::ListUnits(const PageQuery& page,
+                                                                                     const std::string& unit_type,
+                                                                                     const std::string& batch) {
   const int size = internal::ClampPageSize(page.page_size);
   std::vector<Param> params = {Param::Int(size + 1),
                                Param::TextOrNull(unit_type.empty() ? "" : UnitTypeId(unit_type)),
@@ -175,7 +175,7 @@ absl::StatusOr<std::pair<std::vector<v1::Unit>, std::string>> CatalogueStore::Li
                             "WHERE ($2::text IS NULL OR unit_type = $2) AND ($3::text IS NULL OR batch = $3) AND ",
                             after, " ORDER BY serial LIMIT $1"),
                params));
-  std::vector<v1::Unit> units;
+  std::vector<Unit> units;
   const int shown = std::min(rows.rows(), size);
   for (int r = 0; r < shown; ++r) units.push_back(UnitFromRow(rows, r));
   std::string next;
@@ -183,7 +183,7 @@ absl::StatusOr<std::pair<std::vector<v1::Unit>, std::string>> CatalogueStore::Li
   return std::make_pair(std::move(units), next);
 }
 
-absl::StatusOr<std::vector<v1::Module>> CatalogueStore::ListModules(const std::string& unit_name) {
+absl::StatusOr<std::vector<Module>> CatalogueStore::ListModules(const std::string& unit_name) {
   auto serial = api::ResourceId(unit_name, api::kUnits, "parent");
   if (!serial.ok()) return serial.status();
   INSDIAG_ASSIGN_OR_RETURN(auto db, list_pool_.Acquire());
@@ -199,20 +199,18 @@ absl::StatusOr<std::vector<v1::Module>> CatalogueStore::ListModules(const std::s
               ", coalesce(removed_hours, 0), coalesce(removal_reason, ''), removed_time IS NULL "
               "FROM modules WHERE unit_id = $1 ORDER BY role, installed_hours, module_id"),
           {Param::Text(unit.String(0, 0))}));
-  std::vector<v1::Module> out;
+  std::vector<Module> out;
   for (int r = 0; r < rows.rows(); ++r) {
-    v1::Module m;
-    m.set_name(api::ModuleName(*serial, rows.String(r, 0)));
-    m.set_role(rows.String(r, 0));
-    m.set_part_serial(rows.String(r, 1));
-    *m.mutable_installed_time() = internal::TimestampOfMicros(internal::IntOr0(rows, r, 2));
-    m.set_installed_hours(internal::DoubleOr0(rows, r, 3));
-    if (!rows.IsNull(r, 4))
-      *m.mutable_removed_time() = internal::TimestampOfMicros(internal::IntOr0(rows, r, 4));
-    m.set_removed_hours(internal::DoubleOr0(rows, r, 5));
-    m.set_removal_reason(rows.String(r, 6));
-    m.set_current(rows.Bool(r, 7));
-    out.push_back(std::move(m));
+    Module& m = out.emplace_back();
+    m.name = api::ModuleName(*serial, rows.String(r, 0));
+    m.role = rows.String(r, 0);
+    m.part_serial = rows.String(r, 1);
+    m.installed_time = absl::FromUnixMicros(internal::IntOr0(rows, r, 2));
+    m.installed_hours = internal::DoubleOr0(rows, r, 3);
+    if (!rows.IsNull(r, 4)) m.removed_time = absl::FromUnixMicros(internal::IntOr0(rows, r, 4));
+    m.removed_hours = internal::DoubleOr0(rows, r, 5);
+    m.removal_reason = rows.String(r, 6);
+    m.current = rows.Bool(r, 7);
   }
   return out;
 }

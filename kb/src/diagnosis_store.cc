@@ -11,6 +11,7 @@
 #include "insdiag/api/resource_names.h"
 #include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/diagnosis.h"
+#include "insdiag/kb/failure_record.h"
 #include "insdiag/kb/knowledge_messages.h"
 #include "insdiag/kb/unit_history.h"
 #include "report_rows.h"
@@ -249,13 +250,13 @@ absl::StatusOr<v1::Diagnosis> DiagnosisStore::Resolve(const v1::ResolveDiagnosis
       return fits;
     }
     INSDIAG_ASSIGN_OR_RETURN(auto module_id, CurrentModule(*db, unit_id, request.module()));
-    v1::FailureRecord record;
-    record.set_operating_hours(internal::DoubleOr0(row, 0, 3));
-    record.set_confirmed(request.confirmed());
-    record.set_no_fault_found(!request.confirmed());
-    record.set_repaired(request.confirmed() && !request.repair_action().empty());
-    record.set_repair_action(request.repair_action());
-    record.set_notes(request.notes());
+    FailureRecord record;
+    record.operating_hours = internal::DoubleOr0(row, 0, 3);
+    record.confirmed = request.confirmed();
+    record.no_fault_found = !request.confirmed();
+    record.repaired = request.confirmed() && !request.repair_action().empty();
+    record.repair_action = request.repair_action();
+    record.notes = request.notes();
     INSDIAG_ASSIGN_OR_RETURN(auto written, InsertFailureRecord(*db, module_id, unit_id, record,
                                                                mode_id, row.String(0, 0), id));
     INSDIAG_RETURN_IF_ERROR(

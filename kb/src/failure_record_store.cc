@@ -2,6 +2,7 @@
 
 #include <absl/strings/match.h>
 #include <absl/strings/str_cat.h>
+#include <absl/time/time.h>
 
 #include <algorithm>
 
@@ -30,52 +31,48 @@ constexpr char kRecordColumns[] =
     "coalesce(r.diagnosis_id::text, ''), r.notes, r.record_time::text, r.revision "
     "FROM failure_records r JOIN modules m USING (module_id) JOIN units u ON u.unit_id = r.unit_id ";
 
-v1::FailureRecord RecordFromRow(const Result& rows, int r) {
-  v1::FailureRecord f;
-  f.set_name(api::ResourceName(api::kFailureRecords, rows.String(r, 0)));
-  f.set_module(api::ModuleName(rows.String(r, 1), rows.String(r, 2)));
-  if (!rows.String(r, 3).empty())
-    f.set_failure_mode(api::ResourceName(api::kFailureModes, rows.String(r, 3)));
-  if (!rows.String(r, 4).empty())
-    f.set_analysis(api::ResourceName(api::kAnalyses, rows.String(r, 4)));
-  f.set_operating_hours(internal::DoubleOr0(rows, r, 5));
-  f.set_confirmed(rows.Bool(r, 6));
-  f.set_repaired(rows.Bool(r, 7));
-  f.set_censored(rows.Bool(r, 8));
-  *f.mutable_record_time() = internal::TimestampOfMicros(internal::IntOr0(rows, r, 9));
-  f.set_no_fault_found(rows.Bool(r, 10));
-  f.set_repair_action(rows.String(r, 11));
-  *f.mutable_detected_time() = internal::TimestampOfMicros(internal::IntOr0(rows, r, 12));
-  if (!rows.String(r, 13).empty())
-    f.set_diagnosis(api::ResourceName(api::kDiagnoses, rows.String(r, 13)));
-  f.set_notes(rows.String(r, 14));
-  f.set_revision(static_cast<int>(internal::IntOr0(rows, r, 16)));
+FailureRecord RecordFromRow(const Result& rows, int r) {
+  FailureRecord f;
+  f.name = api::ResourceName(api::kFailureRecords, rows.String(r, 0));
+  f.module = api::ModuleName(rows.String(r, 1), rows.String(r, 2));
+  if (!rows.String(r, 3).empty()) f.failure_mode = api::ResourceName(api::kFailureModes, rows.String(r, 3));
+  if (!rows.String(r, 4).empty()) f.analysis = api::ResourceName(api::kAnalyses, rows.String(r, 4));
+  f.operating_hours = internal::DoubleOr0(rows, r, 5);
+  f.confirmed = rows.Bool(r, 6);
+  f.repaired = rows.Bool(r, 7);
+  f.censored = rows.Bool(r, 8);
+  f.record_time = absl::FromUnixMicros(internal::IntOr0(rows, r, 9));
+  f.no_fault_found = rows.Bool(r, 10);
+  f.repair_action = rows.String(r, 11);
+  f.detected_time = absl::FromUnixMicros(internal::IntOr0(rows, r, 12));
+  if (!rows.String(r, 13).empty()) f.diagnosis = api::ResourceName(api::kDiagnoses, rows.String(r, 13));
+  f.notes = rows.String(r, 14);
+  f.revision = static_cast<int>(internal::IntOr0(rows, r, 16));
   return f;
 }
 
 // A record's facts, checked before any database work: its failure mode's id
 // ("" for none), or INVALID_ARGUMENT naming the field.
-absl::StatusOr<std::string> CheckedFacts(const v1::FailureRecord& facts) {
+absl::StatusOr<std::string> CheckedFacts(const FailureRecord& facts) {
   std::string mode_id;
-  if (!facts.failure_mode().empty()) {
-    auto id =
-        api::ResourceId(facts.failure_mode(), api::kFailureModes, "failure_record.failure_mode");
+  if (!facts.failure_mode.empty()) {
+    auto id = api::ResourceId(facts.failure_mode, api::kFailureModes, "failure_record.failure_mode");
     if (!id.ok()) return id.status();
     mode_id = *id;
   }
-  if (facts.confirmed() && mode_id.empty()) {
+  if (facts.confirmed && mode_id.empty()) {
     return absl::InvalidArgumentError("failure_record.failure_mode: a confirmed failure names its failure mode");
   }
-  if (facts.confirmed() && facts.no_fault_found()) {
+  if (facts.confirmed && facts.no_fault_found) {
     return absl::InvalidArgumentError("failure_record.no_fault_found: a confirmed failure cannot be no-fault-found");
   }
-  if (!(facts.operating_hours() >= 0)) {
+  if (!(facts.operating_hours >= 0)) {
     return absl::InvalidArgumentError("failure_record.operating_hours: must be 0 or more");
   }
   return mode_id;
 }
 
-absl::StatusOr<v1::FailureRecord> GetRecord(Connection& db, const std::string& id) {
+absl::StatusOr<FailureRecord> GetRecord(Connection& db, const std::string& id) {
   INSDIAG_ASSIGN_OR_RETURN(
       auto rows,
       db.Exec(absl::StrCat(kRecordColumns, "WHERE r.record_id = $1::uuid"), {Param::Text(id)}));
@@ -87,17 +84,15 @@ absl::StatusOr<v1::FailureRecord> GetRecord(Connection& db, const std::string& i
 
 }  // namespace
 
-absl::StatusOr<v1::FailureRecord> FailureRecordStore::Create(const v1::FailureRecord& record) {
-  INSDIAG_ASSIGN_OR_RETURN(auto module,
-                           api::ParseModuleName(record.module(), "failure_record.module"));
+absl::StatusOr<FailureRecord> FailureRecordStore::Create(const FailureRecord& record) {
+  INSDIAG_ASSIGN_OR_RETURN(auto module, api::ParseModuleName(record.module, "failure_record.module"));
   const std::string& serial = module.unit;
   const std::string& role = module.role;
   INSDIAG_ASSIGN_OR_RETURN(auto checked_mode, CheckedFacts(record));
   const std::string mode_id = checked_mode;
   std::string analysis_id;
-  if (!record.analysis().empty()) {
-    INSDIAG_ASSIGN_OR_RETURN(
-        auto id, internal::UuidOf(record.analysis(), api::kAnalyses, "failure_record.analysis"));
+  if (!record.analysis.empty()) {
+    INSDIAG_ASSIGN_OR_RETURN(auto id, internal::UuidOf(record.analysis, api::kAnalyses, "failure_record.analysis"));
     analysis_id = id;
   }
   INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
@@ -109,7 +104,7 @@ absl::StatusOr<v1::FailureRecord> FailureRecordStore::Create(const v1::FailureRe
       return absl::NotFoundError(absl::StrCat("failure_record.module: units/", serial, " does not exist"));
     }
     INSDIAG_RETURN_IF_ERROR(CheckModuleRole(*db, role, "failure_record.module"));
-    if (auto fits = CheckModeOfRole(*db, mode_id, record.failure_mode(), role, "failure_record.failure_mode");
+    if (auto fits = CheckModeOfRole(*db, mode_id, record.failure_mode, role, "failure_record.failure_mode");
         !fits.ok()) {
       return fits;
     }
@@ -118,20 +113,20 @@ absl::StatusOr<v1::FailureRecord> FailureRecordStore::Create(const v1::FailureRe
     auto written = InsertFailureRecord(*db, module_id, unit_id, record, mode_id, analysis_id, "");
     if (!written.ok()) {
       if (written.status().code() == absl::StatusCode::kFailedPrecondition && !analysis_id.empty()) {
-        return absl::NotFoundError(absl::StrCat("failure_record.analysis: ", record.analysis(), " does not exist"));
+        return absl::NotFoundError(absl::StrCat("failure_record.analysis: ", record.analysis, " does not exist"));
       }
       return written.status();
     }
     id = *written;
-    if (record.confirmed()) return RefineModeSignature(*db, mode_id);
+    if (record.confirmed) return RefineModeSignature(*db, mode_id);
     return absl::OkStatus();
   });
   if (!status.ok()) return status;
   return GetRecord(*db, id);
 }
 
-absl::StatusOr<v1::FailureRecord> FailureRecordStore::Correct(const std::string& name, const v1::FailureRecord& facts,
-                                                              const std::string& reason) {
+absl::StatusOr<FailureRecord> FailureRecordStore::Correct(const std::string& name, const FailureRecord& facts,
+                                                          const std::string& reason) {
   INSDIAG_ASSIGN_OR_RETURN(auto id, internal::UuidOf(name, api::kFailureRecords, "name"));
   if (reason.empty()) return absl::InvalidArgumentError("reason: required (why the record was wrong)");
   INSDIAG_ASSIGN_OR_RETURN(auto checked_mode, CheckedFacts(facts));
@@ -146,7 +141,7 @@ absl::StatusOr<v1::FailureRecord> FailureRecordStore::Correct(const std::string&
     if (current.rows() == 0) return absl::NotFoundError(absl::StrCat(name, " does not exist"));
     const std::string old_mode = current.String(0, 0), role = current.String(0, 1);
     const bool was_confirmed = current.Bool(0, 2);
-    if (auto fits = CheckModeOfRole(*db, mode_id, facts.failure_mode(), role, "failure_record.failure_mode");
+    if (auto fits = CheckModeOfRole(*db, mode_id, facts.failure_mode, role, "failure_record.failure_mode");
         !fits.ok()) {
       return fits;
     }
@@ -167,25 +162,24 @@ absl::StatusOr<v1::FailureRecord> FailureRecordStore::Correct(const std::string&
         "detected_time = coalesce($10::timestamptz, detected_time), record_time = now(), revision "
         "= revision + 1 "
         "WHERE record_id = $1::uuid",
-        {Param::Text(id), Param::TextOrNull(mode_id), Param::Double(facts.operating_hours()),
-         Param::Text(BoolText(facts.confirmed())), Param::Text(BoolText(facts.no_fault_found())),
-         Param::Text(BoolText(facts.censored())), Param::Text(BoolText(facts.repaired())),
-         Param::Text(facts.repair_action()), Param::Text(facts.notes()),
-         facts.has_detected_time() ? Param::Text(internal::TimestampText(facts.detected_time()))
-                                   : Param::Null()});
+        {Param::Text(id), Param::TextOrNull(mode_id), Param::Double(facts.operating_hours),
+         Param::Text(BoolText(facts.confirmed)), Param::Text(BoolText(facts.no_fault_found)),
+         Param::Text(BoolText(facts.censored)), Param::Text(BoolText(facts.repaired)),
+         Param::Text(facts.repair_action), Param::Text(facts.notes),
+         facts.detected_time.has_value() ? Param::Text(internal::TimeText(*facts.detected_time)) : Param::Null()});
     if (!updated.ok()) return updated.status();
     // The signatures learn from confirmed cases: a mode the record leaves or joins is refined again.
     if (was_confirmed && !old_mode.empty()) {
       INSDIAG_RETURN_IF_ERROR(RefineModeSignature(*db, old_mode));
     }
-    if (facts.confirmed() && mode_id != old_mode) return RefineModeSignature(*db, mode_id);
+    if (facts.confirmed && mode_id != old_mode) return RefineModeSignature(*db, mode_id);
     return absl::OkStatus();
   });
   if (!status.ok()) return status;
   return GetRecord(*db, id);
 }
 
-absl::StatusOr<std::vector<v1::FailureRecordRevision>> FailureRecordStore::ListRevisions(
+absl::StatusOr<std::vector<FailureRecordRevision>> FailureRecordStore::ListRevisions(
     const std::string& name) {
   INSDIAG_ASSIGN_OR_RETURN(auto id, internal::UuidOf(name, api::kFailureRecords, "name"));
   INSDIAG_ASSIGN_OR_RETURN(auto db, list_pool_.Acquire());
@@ -200,31 +194,30 @@ absl::StatusOr<std::vector<v1::FailureRecordRevision>> FailureRecordStore::ListR
                             ", reason FROM failure_record_revisions WHERE record_id = $1::uuid "
                             "ORDER BY revision"),
                {Param::Text(id)}));
-  std::vector<v1::FailureRecordRevision> revisions;
+  std::vector<FailureRecordRevision> revisions;
   for (int r = 0; r < rows.rows(); ++r) {
-    v1::FailureRecordRevision& v = revisions.emplace_back();
-    v1::FailureRecord& f = *v.mutable_failure_record();
+    FailureRecordRevision& v = revisions.emplace_back();
+    FailureRecord& f = v.failure_record;
     f = current;  // name, module, analysis and diagnosis do not change
-    f.set_revision(static_cast<int>(internal::IntOr0(rows, r, 0)));
-    f.clear_failure_mode();
-    if (!rows.String(r, 1).empty())
-      f.set_failure_mode(api::ResourceName(api::kFailureModes, rows.String(r, 1)));
-    f.set_operating_hours(internal::DoubleOr0(rows, r, 2));
-    f.set_confirmed(rows.Bool(r, 3));
-    f.set_no_fault_found(rows.Bool(r, 4));
-    f.set_censored(rows.Bool(r, 5));
-    f.set_repaired(rows.Bool(r, 6));
-    f.set_repair_action(rows.String(r, 7));
-    f.set_notes(rows.String(r, 8));
-    *f.mutable_detected_time() = internal::TimestampOfMicros(internal::IntOr0(rows, r, 9));
-    *f.mutable_record_time() = internal::TimestampOfMicros(internal::IntOr0(rows, r, 10));
-    *v.mutable_superseded_time() = internal::TimestampOfMicros(internal::IntOr0(rows, r, 11));
-    v.set_reason(rows.String(r, 12));
+    f.revision = static_cast<int>(internal::IntOr0(rows, r, 0));
+    f.failure_mode.clear();
+    if (!rows.String(r, 1).empty()) f.failure_mode = api::ResourceName(api::kFailureModes, rows.String(r, 1));
+    f.operating_hours = internal::DoubleOr0(rows, r, 2);
+    f.confirmed = rows.Bool(r, 3);
+    f.no_fault_found = rows.Bool(r, 4);
+    f.censored = rows.Bool(r, 5);
+    f.repaired = rows.Bool(r, 6);
+    f.repair_action = rows.String(r, 7);
+    f.notes = rows.String(r, 8);
+    f.detected_time = absl::FromUnixMicros(internal::IntOr0(rows, r, 9));
+    f.record_time = absl::FromUnixMicros(internal::IntOr0(rows, r, 10));
+    v.superseded_time = absl::FromUnixMicros(internal::IntOr0(rows, r, 11));
+    v.reason = rows.String(r, 12);
   }
   return revisions;
 }
 
-absl::StatusOr<std::pair<std::vector<v1::FailureRecord>, std::string>> FailureRecordStore::List(
+absl::StatusOr<std::pair<std::vector<FailureRecord>, std::string>> FailureRecordStore::List(
     const FailureRecordQuery& query) {
   const int size = internal::ClampPageSize(query.page.page_size);
   std::string serial, role, mode_id;
@@ -257,7 +250,7 @@ absl::StatusOr<std::pair<std::vector<v1::FailureRecord>, std::string>> FailureRe
               "AND ($4::text IS NULL OR r.failure_mode = $4) AND ",
               after, " ORDER BY r.record_time DESC, r.record_id DESC LIMIT $1"),
           params));
-  std::vector<v1::FailureRecord> out;
+  std::vector<FailureRecord> out;
   const int shown = std::min(rows.rows(), size);
   for (int r = 0; r < shown; ++r) out.push_back(RecordFromRow(rows, r));
   std::string next;

@@ -50,7 +50,7 @@ absl::StatusOr<std::int64_t> CurrentModule(Connection& db, std::int64_t unit_id,
 }
 
 absl::StatusOr<std::string> InsertFailureRecord(Connection& db, std::int64_t module_id, std::int64_t unit_id,
-                                                const v1::FailureRecord& f, const std::string& mode_id,
+                                                const FailureRecord& f, const std::string& mode_id,
                                                 const std::string& analysis_id, const std::string& diagnosis_id) {
   auto rows = db.Exec(
       "INSERT INTO failure_records (module_id, unit_id, failure_mode, analysis_id, diagnosis_id, detected_time, "
@@ -59,10 +59,10 @@ absl::StatusOr<std::string> InsertFailureRecord(Connection& db, std::int64_t mod
       "RETURNING record_id::text",
       {Param::Int(module_id), Param::Int(unit_id), Param::TextOrNull(mode_id), Param::TextOrNull(analysis_id),
        Param::TextOrNull(diagnosis_id),
-       f.has_detected_time() ? Param::Text(TimestampText(f.detected_time())) : Param::Null(),
-       Param::Double(f.operating_hours()), Param::Text(BoolText(f.confirmed())),
-       Param::Text(BoolText(f.no_fault_found())), Param::Text(BoolText(f.censored())),
-       Param::Text(BoolText(f.repaired())), Param::Text(f.repair_action()), Param::Text(f.notes())});
+       f.detected_time.has_value() ? Param::Text(TimeText(*f.detected_time)) : Param::Null(),
+       Param::Double(f.operating_hours), Param::Text(BoolText(f.confirmed)),
+       Param::Text(BoolText(f.no_fault_found)), Param::Text(BoolText(f.censored)),
+       Param::Text(BoolText(f.repaired)), Param::Text(f.repair_action), Param::Text(f.notes)});
   if (!rows.ok()) return rows.status();
   return rows->String(0, 0);
 }

@@ -9,8 +9,8 @@
 #include <cstdint>
 #include <string>
 
+#include "insdiag/kb/failure_record.h"
 #include "insdiag/kb/pg.h"
-#include "insdiag/v1/knowledge.pb.h"
 
 namespace insdiag::kb::internal {
 
@@ -27,10 +27,10 @@ absl::Status CheckModeOfRole(Connection& db, const std::string& mode_id, const s
 // modules when it has none yet).
 absl::StatusOr<std::int64_t> CurrentModule(Connection& db, std::int64_t unit_id, const std::string& role);
 
-// Inserts a checked record and returns its id; "" for no mode, analysis or
-// diagnosis.
+// Inserts a checked record's facts and returns its id; "" for no mode,
+// analysis or diagnosis.
 absl::StatusOr<std::string> InsertFailureRecord(Connection& db, std::int64_t module_id, std::int64_t unit_id,
-                                                const v1::FailureRecord& f, const std::string& mode_id,
+                                                const FailureRecord& f, const std::string& mode_id,
                                                 const std::string& analysis_id, const std::string& diagnosis_id);
 
 }  // namespace insdiag::kb::internal

@@ -33,7 +33,7 @@ absl::StatusOr<std::string> ModeFilter(const std::string& failure_mode) {
 constexpr double kSecondsPerYear = 365.25 * 86400.0;
 
 Param TimeOrNull(const std::optional<absl::Time>& time) {
-  return time.has_value() ? Param::Text(internal::TimestampText(*time)) : Param::Null();
+  return time.has_value() ? Param::Text(internal::TimeText(*time)) : Param::Null();
 }
 
 }  // namespace

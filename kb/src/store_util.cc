@@ -52,9 +52,11 @@ google::protobuf::Timestamp TimestampOfMicros(std::int64_t micros) {
 
 std::int64_t MicrosOf(const google::protobuf::Timestamp& t) { return t.seconds() * 1'000'000 + t.nanos() / 1000; }
 
-std::string TimestampText(const google::protobuf::Timestamp& t) { return TimestampText(absl::FromUnixMicros(MicrosOf(t))); }
+std::string TimestampText(const google::protobuf::Timestamp& t) { return TimeText(absl::FromUnixMicros(MicrosOf(t))); }
 
-std::string TimestampText(absl::Time t) { return absl::FormatTime("%Y-%m-%d %H:%M:%E6S+00", t, absl::UTCTimeZone()); }
+std::string TimeText(absl::Time t) {
+  return absl::FormatTime("%Y-%m-%d %H:%M:%E6S+00", absl::FromUnixMicros(absl::ToUnixMicros(t)), absl::UTCTimeZone());
+}
 
 std::string EncodeToken(const std::string& a, const std::string& b) {
   return absl::WebSafeBase64Escape(absl::StrCat(a, "|", b));

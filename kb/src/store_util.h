@@ -26,8 +26,9 @@ std::string Micros(const std::string& column);
 google::protobuf::Timestamp TimestampOfMicros(std::int64_t micros);
 // A Timestamp as text PostgreSQL reads ("2024-01-31 12:00:00.000000+00").
 std::string TimestampText(const google::protobuf::Timestamp& t);
-std::string TimestampText(absl::Time t);  // to the microsecond, as the above
 std::int64_t MicrosOf(const google::protobuf::Timestamp& t);
+// A time as that text, to the microsecond (rounded down).
+std::string TimeText(absl::Time t);
 
 // Keyset page tokens: opaque base64 of "a|b".
 std::string EncodeToken(const std::string& a, const std::string& b);

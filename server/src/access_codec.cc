@@ -1,26 +1,8 @@
 #include "access_codec.h"
 
-#include <absl/time/time.h>
-#include <google/protobuf/timestamp.pb.h>
-
-#include <cstdint>
+#include "time_codec.h"
 
 namespace insdiag::server {
-namespace {
-
-google::protobuf::Timestamp TimestampOf(absl::Time time) {
-  google::protobuf::Timestamp timestamp;
-  const std::int64_t seconds = absl::ToUnixSeconds(time);  // rounds down: nanos stay in [0, 1e9)
-  timestamp.set_seconds(seconds);
-  timestamp.set_nanos(static_cast<std::int32_t>((time - absl::FromUnixSeconds(seconds)) / absl::Nanoseconds(1)));
-  return timestamp;
-}
-
-absl::Time TimeOf(const google::protobuf::Timestamp& timestamp) {
-  return absl::FromUnixSeconds(timestamp.seconds()) + absl::Nanoseconds(timestamp.nanos());
-}
-
-}  // namespace
 
 kb::Role RoleOf(v1::Role role) {
   switch (role) {

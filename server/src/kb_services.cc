@@ -14,6 +14,7 @@
 #include "insdiag/kb/diagnose_analysis.h"
 #include "insdiag/kb/knowledge_messages.h"
 #include "insdiag/server/display_series.h"
+#include "knowledge_codec.h"
 
 namespace insdiag::server {
 namespace {
@@ -227,7 +228,8 @@ absl::StatusOr<v1::UnitHistory> KnowledgeService::GetUnitHistory(const v1::GetUn
 }
 
 absl::StatusOr<v1::Unit> KnowledgeService::GetUnit(const v1::GetUnitRequest& request) {
-  return catalogue_.GetUnit(request.name());
+  INSDIAG_ASSIGN_OR_RETURN(const kb::Unit unit, catalogue_.GetUnit(request.name()));
+  return ToProto(unit);
 }
 
 absl::StatusOr<v1::ListUnitsResponse> KnowledgeService::ListUnits(const v1::ListUnitsRequest& request) {
@@ -236,7 +238,7 @@ absl::StatusOr<v1::ListUnitsResponse> KnowledgeService::ListUnits(const v1::List
                            catalogue_.ListUnits({request.page_size(), request.page_token()},
                                                 request.unit_type(), request.batch()));
   v1::ListUnitsResponse response;
-  for (auto& u : page.first) *response.add_units() = std::move(u);
+  for (const kb::Unit& u : page.first) *response.add_units() = ToProto(u);
   response.set_next_page_token(page.second);
   return response;
 }
@@ -244,7 +246,7 @@ absl::StatusOr<v1::ListUnitsResponse> KnowledgeService::ListUnits(const v1::List
 absl::StatusOr<v1::ListModulesResponse> KnowledgeService::ListModules(const v1::ListModulesRequest& request) {
   INSDIAG_ASSIGN_OR_RETURN(auto modules, catalogue_.ListModules(request.parent()));
   v1::ListModulesResponse response;
-  for (auto& m : modules) *response.add_modules() = std::move(m);
+  for (const kb::Module& m : modules) *response.add_modules() = ToProto(m);
   return response;
 }
 
@@ -264,19 +266,22 @@ absl::StatusOr<v1::FailureMode> KnowledgeService::GetFailureMode(const v1::GetFa
 }
 
 absl::StatusOr<v1::FailureRecord> KnowledgeService::CreateFailureRecord(const v1::CreateFailureRecordRequest& request) {
-  return records_.Create(request.failure_record());
+  INSDIAG_ASSIGN_OR_RETURN(const kb::FailureRecord created, records_.Create(FromProto(request.failure_record())));
+  return ToProto(created);
 }
 
 absl::StatusOr<v1::FailureRecord> KnowledgeService::CorrectFailureRecord(
     const v1::CorrectFailureRecordRequest& request) {
-  return records_.Correct(request.name(), request.failure_record(), request.reason());
+  INSDIAG_ASSIGN_OR_RETURN(const kb::FailureRecord corrected,
+                           records_.Correct(request.name(), FromProto(request.failure_record()), request.reason()));
+  return ToProto(corrected);
 }
 
 absl::StatusOr<v1::ListFailureRecordRevisionsResponse> KnowledgeService::ListFailureRecordRevisions(
     const v1::ListFailureRecordRevisionsRequest& request) {
   INSDIAG_ASSIGN_OR_RETURN(auto revisions, records_.ListRevisions(request.name()));
   v1::ListFailureRecordRevisionsResponse response;
-  for (auto& revision : revisions) *response.add_revisions() = std::move(revision);
+  for (const kb::FailureRecordRevision& revision : revisions) *response.add_revisions() = ToProto(revision);
   return response;
 }
 
@@ -290,7 +295,7 @@ absl::StatusOr<v1::ListFailureRecordsResponse> KnowledgeService::ListFailureReco
   query.failure_mode = request.failure_mode();
   INSDIAG_ASSIGN_OR_RETURN(auto page, records_.List(query));
   v1::ListFailureRecordsResponse response;
-  for (auto& r : page.first) *response.add_failure_records() = std::move(r);
+  for (const kb::FailureRecord& r : page.first) *response.add_failure_records() = ToProto(r);
   response.set_next_page_token(page.second);
   return response;
 }

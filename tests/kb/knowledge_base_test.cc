@@ -23,6 +23,9 @@ namespace {
 
 using namespace std::chrono_literals;
 
+std::string NameOf(const FailureRecord& record) { return record.name; }
+std::string NameOf(const v1::Diagnosis& diagnosis) { return diagnosis.name(); }
+
 class KnowledgeBaseTest : public insdiag::testing::DatabaseTest {
  protected:
   void SetUp() override {
@@ -90,7 +93,7 @@ TEST_F(KnowledgeBaseTest, ARunOfANewSerialRegistersTheUnitWithItsModules) {
   StoreAnalysis("INS-0001", testing::NominalReport());
   auto unit = catalogue_->GetUnit("units/INS-0001");
   ASSERT_TRUE(unit.ok()) << unit.status();
-  EXPECT_EQ(unit->unit_type(), "unitTypes/INS-2000");
+  EXPECT_EQ(unit->unit_type, "unitTypes/INS-2000");
   auto modules = catalogue_->ListModules("units/INS-0001");
   ASSERT_TRUE(modules.ok());
   EXPECT_EQ(modules->size(), 10u);
@@ -140,9 +143,9 @@ TEST_F(KnowledgeBaseTest, ConfirmingADiagnosisWritesAFailureRecordAndRaisesLater
   auto records = records_->List(unit_records);
   ASSERT_TRUE(records.ok());
   ASSERT_EQ(records->first.size(), 1u);
-  EXPECT_TRUE(records->first[0].confirmed());
-  EXPECT_EQ(records->first[0].module(), "units/INS-0002/modules/gyro.x");
-  EXPECT_EQ(records->first[0].analysis(), first);
+  EXPECT_TRUE(records->first[0].confirmed);
+  EXPECT_EQ(records->first[0].module, "units/INS-0002/modules/gyro.x");
+  EXPECT_EQ(records->first[0].analysis, first);
   auto mode = catalogue_->GetFailureMode("failureModes/dtg-bearing-wear.x");
   EXPECT_EQ(mode->confirmed_failures, 1);
   EXPECT_EQ(mode->signature[0].confirmed_cases, 1);
@@ -179,16 +182,16 @@ TEST_F(KnowledgeBaseTest, ConfirmingADiagnosisWritesAFailureRecordAndRaisesLater
 
 TEST_F(KnowledgeBaseTest, RefusesMalformedRecordsNamingTheField) {
   StoreAnalysis("INS-0005", testing::NominalReport());
-  v1::FailureRecord record;
-  record.set_module("units/INS-0005/modules/gyro.x");
-  record.set_confirmed(true);
+  FailureRecord record;
+  record.module = "units/INS-0005/modules/gyro.x";
+  record.confirmed = true;
   EXPECT_THAT(records_->Create(record).status().message(),
               ::testing::HasSubstr("failure_record.failure_mode"));
-  record.set_failure_mode("failureModes/acc-bias-shift.x");
+  record.failure_mode = "failureModes/acc-bias-shift.x";
   EXPECT_THAT(records_->Create(record).status().message(), ::testing::HasSubstr("is a failure of acc.x"));
-  record.set_module("units/INS-0005/modules/wheel");
+  record.module = "units/INS-0005/modules/wheel";
   EXPECT_EQ(records_->Create(record).status().code(), absl::StatusCode::kInvalidArgument);
-  record.set_module("units/INS-0005/modules/acc.x");
+  record.module = "units/INS-0005/modules/acc.x";
   auto ok = records_->Create(record);
   EXPECT_TRUE(ok.ok()) << ok.status();
 }
@@ -197,14 +200,15 @@ TEST_F(KnowledgeBaseTest, RefusesMalformedRecordsNamingTheField) {
 // version it replaced with its reason: the FRACAS history is never lost.
 TEST_F(KnowledgeBaseTest, ACorrectedRecordKeepsItsReplacedVersionAndCountsAsCorrected) {
   StoreAnalysis("INS-0006", testing::NominalReport());
-  v1::FailureRecord record;
-  record.set_module("units/INS-0006/modules/acc.x");
-  record.set_confirmed(true);
-  record.set_failure_mode("failureModes/acc-bias-shift.x");
-  record.set_operating_hours(1200.0);
+  FailureRecord record;
+  record.module = "units/INS-0006/modules/acc.x";
+  record.confirmed = true;
+  record.failure_mode = "failureModes/acc-bias-shift.x";
+  record.operating_hours = 1200.0;
   auto created = records_->Create(record);
   ASSERT_TRUE(created.ok()) << created.status();
-  EXPECT_EQ(created->revision(), 1);
+  EXPECT_EQ(created->revision, 1);
+  EXPECT_EQ(created->detected_time, created->record_time) << "an unset detected time is the time of writing";
   auto confirmed_count = [&] {
     auto mode = catalogue_->GetFailureMode("failureModes/acc-bias-shift.x");
     EXPECT_TRUE(mode.ok()) << mode.status();
@@ -213,37 +217,38 @@ TEST_F(KnowledgeBaseTest, ACorrectedRecordKeepsItsReplacedVersionAndCountsAsCorr
   EXPECT_EQ(confirmed_count(), 1);
 
   // The bench found nothing after all.
-  v1::FailureRecord facts;
-  facts.set_no_fault_found(true);
-  facts.set_operating_hours(1250.0);
-  facts.set_notes("retest passed");
-  EXPECT_EQ(records_->Correct(created->name(), facts, "").status().code(),
+  FailureRecord facts;
+  facts.no_fault_found = true;
+  facts.operating_hours = 1250.0;
+  facts.notes = "retest passed";
+  EXPECT_EQ(records_->Correct(created->name, facts, "").status().code(),
             absl::StatusCode::kInvalidArgument) << "a correction without a reason";
-  auto corrected = records_->Correct(created->name(), facts, "retest on bench 2 found no fault");
+  auto corrected = records_->Correct(created->name, facts, "retest on bench 2 found no fault");
   ASSERT_TRUE(corrected.ok()) << corrected.status();
-  EXPECT_EQ(corrected->revision(), 2);
-  EXPECT_FALSE(corrected->confirmed());
-  EXPECT_TRUE(corrected->no_fault_found());
-  EXPECT_EQ(corrected->module(), created->module());
+  EXPECT_EQ(corrected->revision, 2);
+  EXPECT_FALSE(corrected->confirmed);
+  EXPECT_TRUE(corrected->no_fault_found);
+  EXPECT_EQ(corrected->module, created->module);
+  EXPECT_EQ(corrected->detected_time, created->detected_time) << "an unset detected time is kept";
   EXPECT_EQ(confirmed_count(), 0) << "counts read the corrected record";
 
-  auto history = records_->ListRevisions(created->name());
+  auto history = records_->ListRevisions(created->name);
   ASSERT_TRUE(history.ok()) << history.status();
   ASSERT_EQ(history->size(), 1u);
-  const v1::FailureRecordRevision& was = history->front();
-  EXPECT_EQ(was.failure_record().revision(), 1);
-  EXPECT_TRUE(was.failure_record().confirmed());
-  EXPECT_EQ(was.failure_record().failure_mode(), "failureModes/acc-bias-shift.x");
-  EXPECT_EQ(was.failure_record().operating_hours(), 1200.0);
-  EXPECT_EQ(was.reason(), "retest on bench 2 found no fault");
+  const FailureRecordRevision& was = history->front();
+  EXPECT_EQ(was.failure_record.revision, 1);
+  EXPECT_TRUE(was.failure_record.confirmed);
+  EXPECT_EQ(was.failure_record.failure_mode, "failureModes/acc-bias-shift.x");
+  EXPECT_EQ(was.failure_record.operating_hours, 1200.0);
+  EXPECT_EQ(was.reason, "retest on bench 2 found no fault");
 
   // A mode of another module is refused and changes nothing.
-  facts.set_no_fault_found(false);
-  facts.set_confirmed(true);
-  facts.set_failure_mode("failureModes/dtg-bearing-wear.x");
-  EXPECT_EQ(records_->Correct(created->name(), facts, "wrong").status().code(),
+  facts.no_fault_found = false;
+  facts.confirmed = true;
+  facts.failure_mode = "failureModes/dtg-bearing-wear.x";
+  EXPECT_EQ(records_->Correct(created->name, facts, "wrong").status().code(),
             absl::StatusCode::kInvalidArgument);
-  EXPECT_EQ(records_->ListRevisions(created->name())->size(), 1u);
+  EXPECT_EQ(records_->ListRevisions(created->name)->size(), 1u);
   EXPECT_EQ(records_->Correct("failureRecords/00000000-0000-4000-8000-000000000000", facts, "x")
                 .status().code(),
             absl::StatusCode::kNotFound);
@@ -257,9 +262,9 @@ TEST_F(KnowledgeBaseTest, ListsRecordsAndDiagnosesPageByPage) {
   for (int i = 0; i < 3; ++i) analyses.push_back(StoreAnalysis("INS-0007", testing::NominalReport()));
   for (const auto& analysis : analyses) {
     ASSERT_TRUE(AnalysisDiagnoser(*diagnoses_).Diagnose(analysis).ok());
-    v1::FailureRecord record;
-    record.set_module(unit + "/modules/acc.x");
-    record.set_analysis(analysis);
+    FailureRecord record;
+    record.module = unit + "/modules/acc.x";
+    record.analysis = analysis;
     ASSERT_TRUE(records_->Create(record).ok());
   }
   // The names of every page of `list(query)`, `page_size` at a time.
@@ -270,7 +275,7 @@ TEST_F(KnowledgeBaseTest, ListsRecordsAndDiagnosesPageByPage) {
       auto page = list(query);
       EXPECT_TRUE(page.ok()) << page.status();
       if (!page.ok()) break;
-      for (const auto& item : page->first) out.push_back(item.name());
+      for (const auto& item : page->first) out.push_back(NameOf(item));
       if (page->second.empty()) break;
       query.page.page_token = page->second;
     }

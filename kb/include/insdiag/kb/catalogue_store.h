@@ -33,12 +33,13 @@ class CatalogueStore {
 
   absl::StatusOr<UnitType> GetUnitType(const std::string& name);  // unitTypes/{t}
   absl::StatusOr<std::vector<UnitType>> ListUnitTypes();
-  absl::StatusOr<v1::Unit> GetUnit(const std::string& name);  // units/{serial}
-  absl::StatusOr<std::pair<std::vector<v1::Unit>, std::string>> ListUnits(const PageQuery& page,
-                                                                          const std::string& unit_type,
-                                                                          const std::string& batch);
+  absl::StatusOr<Unit> GetUnit(const std::string& name);  // units/{serial}
+  // By serial; each filter (unitTypes/{t}, a batch) applies when not empty.
+  absl::StatusOr<std::pair<std::vector<Unit>, std::string>> ListUnits(const PageQuery& page,
+                                                                      const std::string& unit_type,
+                                                                      const std::string& batch);
   // Installation history, by role then installation.
-  absl::StatusOr<std::vector<v1::Module>> ListModules(const std::string& unit_name);
+  absl::StatusOr<std::vector<Module>> ListModules(const std::string& unit_name);
 
   absl::StatusOr<FailureMode> GetFailureMode(const std::string& name);
   absl::StatusOr<std::vector<FailureMode>> ListFailureModes(const std::string& unit_type,

@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "insdiag/kb/connection_pool.h"
+#include "insdiag/kb/failure_record.h"
 #include "insdiag/kb/page_query.h"
-#include "insdiag/v1/knowledge.pb.h"
 
 namespace insdiag::kb {
 
@@ -34,15 +34,19 @@ class FailureRecordStore {
 
   // INVALID_ARGUMENT naming the field for a malformed record; NOT_FOUND for
   // an unknown module, mode or analysis.
-  absl::StatusOr<v1::FailureRecord> Create(const v1::FailureRecord& record);
-  // The record takes `facts` (see CorrectFailureRecordRequest), and the
-  // version it replaces is kept with `reason`, in one transaction; confirmed
-  // modes it leaves or joins are refined again.
-  absl::StatusOr<v1::FailureRecord> Correct(const std::string& name, const v1::FailureRecord& facts,
-                                            const std::string& reason);
+  // `record`'s name, diagnosis, record time and revision are the store's to
+  // set.
+  absl::StatusOr<FailureRecord> Create(const FailureRecord& record);
+  // The record takes `facts` (failure_mode, operating_hours, detected_time
+  // when set, confirmed, no_fault_found, censored, repaired, repair_action,
+  // notes; the rest is ignored), and the version it replaces is kept with
+  // `reason`, in one transaction; confirmed modes it leaves or joins are
+  // refined again.
+  absl::StatusOr<FailureRecord> Correct(const std::string& name, const FailureRecord& facts,
+                                        const std::string& reason);
   // The versions a record replaced, oldest first.
-  absl::StatusOr<std::vector<v1::FailureRecordRevision>> ListRevisions(const std::string& name);
-  absl::StatusOr<std::pair<std::vector<v1::FailureRecord>, std::string>> List(const FailureRecordQuery& query);
+  absl::StatusOr<std::vector<FailureRecordRevision>> ListRevisions(const std::string& name);
+  absl::StatusOr<std::pair<std::vector<FailureRecord>, std::string>> List(const FailureRecordQuery& query);
 
  private:
   ConnectionPool& pool_;

@@ -1,10 +1,13 @@
 // The knowledge base's own terms for what the diagnosis reads and makes: a
 // unit type's nominal values, its failure modes and their signatures, the
-// diagnosis's constants, and the diagnosis itself (docs/DIAGNOSIS.md). Plain
-// values: the diagnosis's math (kb/diagnosis.h) works on these, and the API's
-// messages are mapped to and from them where they are read and written
-// (kb/knowledge_messages.h).
+// diagnosis's constants, and the diagnosis itself (docs/DIAGNOSIS.md); and
+// the fleet's units and their modules. Plain values: the diagnosis's math
+// (kb/diagnosis.h) works on these, and the API's messages are mapped to and
+// from them where they are read and written (kb/knowledge_messages.h; units
+// and modules at the server's edge, server/src/knowledge_codec.h).
 #pragma once
+
+#include <absl/time/time.h>
 
 #include <cstdint>
 #include <optional>
@@ -39,6 +42,30 @@ struct UnitType {
   std::string display_name;
   std::vector<NominalParameter> nominal;
   std::string description;
+};
+
+// A unit of the fleet, registered by its first run.
+struct Unit {
+  std::string name;       // units/{serial}
+  std::string unit_type;  // unitTypes/{unit_type}; empty when the unit's runs never named one
+  double operating_hours = 0.0;
+  absl::Time create_time;
+  std::string batch;  // production batch, e.g. "2023Q2"
+  std::optional<absl::Time> commission_time;
+  bool retired = false;  // withdrawn from service (its modules are censored there)
+};
+
+// A replaceable part of a unit in one role, from installation to removal.
+struct Module {
+  std::string name;  // units/{unit}/modules/{role}
+  std::string role;  // gyro.x … acc.z, interface_card, control_card, coupler, power_supply
+  std::string part_serial;
+  absl::Time installed_time;
+  double installed_hours = 0.0;  // the unit's operating hours at installation
+  std::optional<absl::Time> removed_time;  // none: still installed
+  double removed_hours = 0.0;
+  std::string removal_reason;
+  bool current = false;  // the part in the role now
 };
 
 // Which way a failure moves a signature term.

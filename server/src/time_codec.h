@@ -1,0 +1,15 @@
+// Times between the knowledge base's absl::Time and the API's
+// google.protobuf.Timestamp, for the codecs at the API edge.
+#pragma once
+
+#include <absl/time/time.h>
+#include <google/protobuf/timestamp.pb.h>
+
+namespace insdiag::server {
+
+// Nanoseconds kept; before the epoch the seconds round down, so that nanos
+// stay in [0, 1e9) as the message requires.
+google::protobuf::Timestamp TimestampOf(absl::Time time);
+absl::Time TimeOf(const google::protobuf::Timestamp& timestamp);
+
+}  // namespace insdiag::server
