@@ -65,7 +65,7 @@ absl::Status LoadHistoryEvidence(Connection& db, DiagnosisInputs& in) {
                            internal::LoadParameterHistories(db, scope, HistoryOptions()));
   std::vector<EvidenceTerm> trends = TrendEvidence(history, in.settings);
   int runs = 0;
-  for (const auto& p : history) runs = std::max(runs, p.statistics().count());
+  for (const auto& p : history) runs = std::max(runs, p.statistics.count);
   if (runs < 3) return absl::OkStatus();  // no trend to test yet
   std::vector<std::string> names;
   for (const auto& t : trends) names.push_back(t.trend_of);

@@ -1,6 +1,7 @@
 #include "history_rows.h"
 
 #include <absl/strings/str_cat.h>
+#include <absl/time/time.h>
 
 #include "insdiag/api/resource_names.h"
 #include "insdiag/engine/model/parameters.h"
@@ -8,8 +9,8 @@
 
 namespace insdiag::kb::internal {
 
-absl::StatusOr<std::vector<v1::UnitParameterHistory>> LoadParameterHistories(Connection& db, const HistoryScope& scope,
-                                                                         const HistoryOptions& options) {
+absl::StatusOr<std::vector<ParameterHistory>> LoadParameterHistories(Connection& db, const HistoryScope& scope,
+                                                                     const HistoryOptions& options) {
   // One analysis per run: the cut-off analysis for its own run, else the
   // run's latest succeeded one (a model B or a discovery's last step
   // carries the fullest model).
@@ -30,30 +31,30 @@ absl::StatusOr<std::vector<v1::UnitParameterHistory>> LoadParameterHistories(Con
        scope.only_parameters.empty() ? Param::Null() : Param::TextArray(scope.only_parameters)});
   if (!rows.ok()) return rows.status();
   constexpr double kMicrosPerDay = 86400e6;
-  std::vector<v1::UnitParameterHistory> out;
+  std::vector<ParameterHistory> out;
   std::int64_t first_micros = 0;
   for (int r = 0; r < rows->rows(); ++r) {
     const std::string name = rows->String(r, 0);
-    if (out.empty() || out.back().name() != name) {
-      v1::UnitParameterHistory& p = out.emplace_back();
-      p.set_name(name);
-      p.set_unit(engine::ParameterUnit(name));
-      p.set_turn_on_bias(IsTurnOnBias(name));
+    if (out.empty() || out.back().name != name) {
+      ParameterHistory& p = out.emplace_back();
+      p.name = name;
+      p.unit = engine::ParameterUnit(name);
+      p.turn_on_bias = IsTurnOnBias(name);
       first_micros = IntOr0(*rows, r, 3);
     }
-    v1::RunParameterPoint* point = out.back().add_points();
-    point->set_run(api::ResourceName(api::kRuns, rows->String(r, 1)));
-    point->set_analysis(api::ResourceName(api::kAnalyses, rows->String(r, 2)));
+    RunParameterPoint& point = out.back().points.emplace_back();
+    point.run = api::ResourceName(api::kRuns, rows->String(r, 1));
+    point.analysis = api::ResourceName(api::kAnalyses, rows->String(r, 2));
     const std::int64_t micros = IntOr0(*rows, r, 3);
-    *point->mutable_test_time() = TimestampOfMicros(micros);
-    point->set_days(static_cast<double>(micros - first_micros) / kMicrosPerDay);
-    point->set_value(DoubleOr0(*rows, r, 4));
-    point->set_std_error(DoubleOr0(*rows, r, 5));
+    point.test_time = absl::FromUnixMicros(micros);
+    point.days = static_cast<double>(micros - first_micros) / kMicrosPerDay;
+    point.value = DoubleOr0(*rows, r, 4);
+    point.std_error = DoubleOr0(*rows, r, 5);
   }
   for (auto& p : out) {
     std::vector<HistoryPoint> points;
-    for (const auto& q : p.points()) points.push_back({q.days(), q.value(), q.std_error()});
-    *p.mutable_statistics() = ParameterStatisticsOf(points, p.turn_on_bias(), options);
+    for (const auto& q : p.points) points.push_back({q.days, q.value, q.std_error});
+    p.statistics = ParameterStatisticsOf(points, p.turn_on_bias, options);
   }
   return out;
 }

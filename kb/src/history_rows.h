@@ -9,7 +9,6 @@
 
 #include "insdiag/kb/pg.h"
 #include "insdiag/kb/unit_history.h"
-#include "insdiag/v1/history.pb.h"
 
 namespace insdiag::kb::internal {
 
@@ -27,7 +26,7 @@ struct HistoryScope {
 
 // Each parameter's points (oldest first, days from its first point) and
 // statistics, by parameter name; the unit of each from the engine's model.
-absl::StatusOr<std::vector<v1::UnitParameterHistory>> LoadParameterHistories(Connection& db, const HistoryScope& scope,
-                                                                         const HistoryOptions& options);
+absl::StatusOr<std::vector<ParameterHistory>> LoadParameterHistories(Connection& db, const HistoryScope& scope,
+                                                                     const HistoryOptions& options);
 
 }  // namespace insdiag::kb::internal

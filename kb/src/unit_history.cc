@@ -72,8 +72,8 @@ bool IsTurnOnBias(const std::string& parameter) {
          family->regressor == engine::Regressor::kOne;
 }
 
-v1::UnitTrendFit FitTrend(std::span<const HistoryPoint> points, const HistoryOptions& options) {
-  v1::UnitTrendFit fit;
+TrendFit FitTrend(std::span<const HistoryPoint> points, const HistoryOptions& options) {
+  TrendFit fit;
   const std::size_t n = points.size();
   if (n < 3) return fit;
   const bool weighted = AllErrorsKnown(points);
@@ -99,19 +99,19 @@ v1::UnitTrendFit FitTrend(std::span<const HistoryPoint> points, const HistoryOpt
   }
   const double dof = static_cast<double>(n - 2);
   const double alpha = 1.0 - options.confidence;
-  fit.set_fitted(true);
-  fit.set_weighted(weighted);
-  fit.set_slope_per_day(slope);
-  fit.set_intercept(intercept);
-  fit.set_chi_square(chi_square);
-  fit.set_degrees_of_freedom(static_cast<int>(n - 2));
-  fit.set_birge_ratio(1.0);
+  fit.fitted = true;
+  fit.weighted = weighted;
+  fit.slope_per_day = slope;
+  fit.intercept = intercept;
+  fit.chi_square = chi_square;
+  fit.degrees_of_freedom = static_cast<int>(n - 2);
+  fit.birge_ratio = 1.0;
   double se = std::sqrt(s / delta);
   if (weighted) {
-    fit.set_scatter_p_value(stats::ChiSquareSurvival(chi_square, dof));
-    fit.set_excess_scatter(fit.scatter_p_value() < alpha);
-    if (fit.excess_scatter()) fit.set_birge_ratio(std::max(1.0, std::sqrt(chi_square / dof)));
-    se *= fit.birge_ratio();
+    fit.scatter_p_value = stats::ChiSquareSurvival(chi_square, dof);
+    fit.excess_scatter = fit.scatter_p_value < alpha;
+    if (fit.excess_scatter) fit.birge_ratio = std::max(1.0, std::sqrt(chi_square / dof));
+    se *= fit.birge_ratio;
   } else {
     // Equal weights: the residuals alone tell the points' scatter — but not
     // below the values' rounding, or a parameter reported at one value in
@@ -119,24 +119,24 @@ v1::UnitTrendFit FitTrend(std::span<const HistoryPoint> points, const HistoryOpt
     double largest = 0.0;
     for (const auto& p : points) largest = std::max(largest, std::abs(p.value));
     const double rounding = kRoundingUlps * std::numeric_limits<double>::epsilon() * largest;
-    fit.set_scatter_p_value(1.0);
+    fit.scatter_p_value = 1.0;
     se *= std::max(std::sqrt(chi_square / dof), rounding);
   }
-  fit.set_slope_std_error_per_day(se);
-  const bool student = !weighted || fit.excess_scatter();
+  fit.slope_std_error_per_day = se;
+  const bool student = !weighted || fit.excess_scatter;
   if (se > 0.0) {
-    fit.set_p_value(student ? StudentTwoSidedPValue(slope / se, dof) : TwoSidedNormalPValue(slope / se));
+    fit.p_value = student ? StudentTwoSidedPValue(slope / se, dof) : TwoSidedNormalPValue(slope / se);
   } else {
-    fit.set_p_value(slope == 0.0 ? 1.0 : 0.0);  // points exactly on a line
+    fit.p_value = slope == 0.0 ? 1.0 : 0.0;  // points exactly on a line
   }
   return fit;
 }
 
-v1::UnitParameterStatistics ParameterStatisticsOf(std::span<const HistoryPoint> points, bool turn_on_bias,
-                                              const HistoryOptions& options) {
-  v1::UnitParameterStatistics out;
+ParameterStatistics ParameterStatisticsOf(std::span<const HistoryPoint> points, bool turn_on_bias,
+                                          const HistoryOptions& options) {
+  ParameterStatistics out;
   const std::size_t n = points.size();
-  out.set_count(static_cast<int>(n));
+  out.count = static_cast<int>(n);
   if (n == 0) return out;
   double sum = 0.0, se_square_sum = 0.0;
   for (const auto& p : points) {
@@ -144,18 +144,18 @@ v1::UnitParameterStatistics ParameterStatisticsOf(std::span<const HistoryPoint> 
     se_square_sum += KnownError(p.std_error) ? p.std_error * p.std_error : 0.0;
   }
   const double mean = sum / static_cast<double>(n);
-  out.set_mean(mean);
-  out.set_rms_std_error(std::sqrt(se_square_sum / static_cast<double>(n)));
-  *out.mutable_trend() = FitTrend(points, options);
+  out.mean = mean;
+  out.rms_std_error = std::sqrt(se_square_sum / static_cast<double>(n));
+  out.trend = FitTrend(points, options);
   if (n < 2) return out;
   double squares = 0.0;
   for (const auto& p : points) squares += (p.value - mean) * (p.value - mean);
   const double dof = static_cast<double>(n - 1);
   const double sd = std::sqrt(squares / dof);
   const double alpha = 1.0 - options.confidence;
-  out.set_run_to_run_sd(sd);
-  out.set_run_to_run_sd_low(sd * std::sqrt(dof / stats::ChiSquareQuantile(1.0 - 0.5 * alpha, dof)));
-  out.set_run_to_run_sd_high(sd * std::sqrt(dof / stats::ChiSquareQuantile(0.5 * alpha, dof)));
+  out.run_to_run_sd = sd;
+  out.run_to_run_sd_low = sd * std::sqrt(dof / stats::ChiSquareQuantile(1.0 - 0.5 * alpha, dof));
+  out.run_to_run_sd_high = sd * std::sqrt(dof / stats::ChiSquareQuantile(0.5 * alpha, dof));
   if (turn_on_bias && AllErrorsKnown(points)) {
     double sw = 0.0, sw2 = 0.0, swy = 0.0;
     for (const auto& p : points) {
@@ -170,44 +170,44 @@ v1::UnitParameterStatistics ParameterStatisticsOf(std::span<const HistoryPoint> 
       const double r = p.value - weighted_mean;
       q += r * r / (p.std_error * p.std_error);
     }
-    out.set_turn_on_to_turn_on_sd(std::sqrt(std::max(0.0, (q - dof) / (sw - sw2 / sw))));
+    out.turn_on_to_turn_on_sd = std::sqrt(std::max(0.0, (q - dof) / (sw - sw2 / sw)));
   }
   return out;
 }
 
-std::vector<EvidenceTerm> TrendEvidence(std::span<const v1::UnitParameterHistory> parameters,
+std::vector<EvidenceTerm> TrendEvidence(std::span<const ParameterHistory> parameters,
                                         const DiagnosisSettings& settings) {
   std::vector<EvidenceTerm> out;
   if (settings.trend_z_spread <= 0.0) return out;
-  std::vector<const v1::UnitParameterHistory*> fitted;
+  std::vector<const ParameterHistory*> fitted;
   std::vector<double> p_values;
   for (const auto& p : parameters) {
-    if (!p.statistics().trend().fitted()) continue;
+    if (!p.statistics.trend.has_value() || !p.statistics.trend->fitted) continue;
     fitted.push_back(&p);
-    p_values.push_back(p.statistics().trend().p_value());
+    p_values.push_back(p.statistics.trend->p_value);
   }
   std::vector<double> holm(p_values.size());
   stats::HolmAdjust(p_values, holm);
   for (std::size_t i = 0; i < fitted.size(); ++i) {
     if (holm[i] >= settings.significance_level) continue;
-    const v1::UnitParameterHistory& p = *fitted[i];
-    const v1::UnitTrendFit& trend = p.statistics().trend();
+    const ParameterHistory& p = *fitted[i];
+    const TrendFit& trend = *p.statistics.trend;
     EvidenceTerm t;
-    t.name = absl::StrCat(p.name(), ".trend");
-    t.trend_of = p.name();
+    t.name = absl::StrCat(p.name, ".trend");
+    t.trend_of = p.name;
     t.scale = Scale::kZ;
     // The standard score of the slope's own two-sided p-value (normal or
     // Student's t), so that a healthy unit's scatters as N(0, 1).
-    t.x = std::copysign(-stats::NormalQuantile(0.5 * std::clamp(trend.p_value(), 1e-300, 1.0)),
-                        trend.slope_per_day());
+    t.x = std::copysign(-stats::NormalQuantile(0.5 * std::clamp(trend.p_value, 1e-300, 1.0)),
+                        trend.slope_per_day);
     t.measurement_sd = 0.0;
     t.healthy_sd = settings.healthy_z_sd;
     t.significant = true;
-    const std::string unit = p.unit().empty() ? "" : absl::StrCat(" ", p.unit());
+    const std::string unit = p.unit.empty() ? "" : absl::StrCat(" ", p.unit);
     t.line = absl::StrFormat("%s: trend over the unit's %d runs %+.3g ± %.2g%s per day (z = %.1f, Holm p = %.2g), "
                              "significant",
-                             p.name(), p.statistics().count(), trend.slope_per_day(),
-                             trend.slope_std_error_per_day(), unit, t.x, holm[i]);
+                             p.name, p.statistics.count, trend.slope_per_day,
+                             trend.slope_std_error_per_day, unit, t.x, holm[i]);
     out.push_back(std::move(t));
   }
   return out;

@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "access_codec.h"
+#include "history_codec.h"
 #include "insdiag/api/report_codec.h"
 #include "insdiag/api/resource_names.h"
 #include "insdiag/engine/model/effect_catalogue.h"
@@ -224,7 +225,8 @@ absl::StatusOr<v1::ListUnitTypesResponse> KnowledgeService::ListUnitTypes(const 
 }
 
 absl::StatusOr<v1::UnitHistory> KnowledgeService::GetUnitHistory(const v1::GetUnitHistoryRequest& request) {
-  return history_.Get(request);
+  INSDIAG_ASSIGN_OR_RETURN(const kb::UnitHistory history, history_.Get(UnitHistoryQueryOf(request)));
+  return ToProto(history);
 }
 
 absl::StatusOr<v1::Unit> KnowledgeService::GetUnit(const v1::GetUnitRequest& request) {

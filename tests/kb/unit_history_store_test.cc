@@ -80,76 +80,79 @@ TEST_F(UnitHistoryStoreTest, ReturnsTheRunsInTestOrderWithEachParametersPointsAn
   AnalyseRun(runs[0], Report(0.8, bias_points[0].value, bias_se));
 
   UnitHistoryStore store(pool());
-  v1::GetUnitHistoryRequest request;
-  request.set_unit("units/INS-H1");
-  auto history = store.Get(request);
+  UnitHistoryQuery query;
+  query.unit = "units/INS-H1";
+  auto history = store.Get(query);
   ASSERT_TRUE(history.ok()) << history.status();
-  EXPECT_EQ(history->unit_type(), "unitTypes/INS-2000");
-  EXPECT_EQ(history->run_count(), 6);
-  EXPECT_EQ(history->analysed_run_count(), 6);
-  ASSERT_EQ(history->runs_size(), 6);
-  for (int i = 0; i < 6; ++i) EXPECT_EQ(history->runs(i).run(), "runs/" + runs[i]);
-  ASSERT_EQ(history->runs(0).analyses_size(), 2);
-  EXPECT_FALSE(history->runs(0).analyses(0).counted());
-  EXPECT_TRUE(history->runs(0).analyses(1).counted());
+  EXPECT_EQ(history->unit_type, "unitTypes/INS-2000");
+  EXPECT_EQ(history->run_count, 6);
+  EXPECT_EQ(history->analysed_run_count, 6);
+  ASSERT_EQ(history->runs.size(), 6u);
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(history->runs[i].run, "runs/" + runs[i]);
+  ASSERT_EQ(history->runs[0].analyses.size(), 2u);
+  EXPECT_FALSE(history->runs[0].analyses[0].counted);
+  EXPECT_TRUE(history->runs[0].analyses[1].counted);
 
-  const v1::UnitParameterHistory* sigma = nullptr;
-  const v1::UnitParameterHistory* bias = nullptr;
-  for (const auto& p : history->parameters()) {
-    if (p.name() == kSigma) sigma = &p;
-    if (p.name() == kTurnOn) bias = &p;
+  const ParameterHistory* sigma = nullptr;
+  const ParameterHistory* bias = nullptr;
+  for (const auto& p : history->parameters) {
+    if (p.name == kSigma) sigma = &p;
+    if (p.name == kTurnOn) bias = &p;
   }
   ASSERT_NE(sigma, nullptr);
   ASSERT_NE(bias, nullptr);
-  EXPECT_EQ(sigma->unit(), "rad/s");
-  EXPECT_FALSE(sigma->turn_on_bias());
-  EXPECT_TRUE(bias->turn_on_bias());
-  ASSERT_EQ(sigma->points_size(), 6);
+  EXPECT_EQ(sigma->unit, "rad/s");
+  EXPECT_FALSE(sigma->turn_on_bias);
+  EXPECT_TRUE(bias->turn_on_bias);
+  ASSERT_EQ(sigma->points.size(), 6u);
   for (int i = 0; i < 6; ++i) {
-    EXPECT_NEAR(sigma->points(i).days(), kDaysBetweenRuns * i, 1e-9);
-    EXPECT_EQ(sigma->points(i).run(), "runs/" + runs[i]);
+    EXPECT_NEAR(sigma->points[i].days, kDaysBetweenRuns * i, 1e-9);
+    EXPECT_EQ(sigma->points[i].run, "runs/" + runs[i]);
   }
   // The statistics are those of the points as stored.
-  const v1::UnitParameterStatistics expected = ParameterStatisticsOf(sigma_points, false, HistoryOptions());
-  EXPECT_NEAR(sigma->statistics().trend().slope_per_day(), expected.trend().slope_per_day(), 1e-20);
-  EXPECT_NEAR(sigma->statistics().run_to_run_sd(), expected.run_to_run_sd(), 1e-20);
-  EXPECT_LT(sigma->statistics().trend().p_value(), 1e-3);
-  const v1::UnitParameterStatistics bias_expected = ParameterStatisticsOf(bias_points, true, HistoryOptions());
-  ASSERT_TRUE(bias->statistics().has_turn_on_to_turn_on_sd());
-  EXPECT_NEAR(bias->statistics().turn_on_to_turn_on_sd(), bias_expected.turn_on_to_turn_on_sd(), 1e-18);
-  EXPECT_NEAR(bias->statistics().run_to_run_sd(), bias_expected.run_to_run_sd(), 1e-18);
-  EXPECT_GT(bias->statistics().turn_on_to_turn_on_sd(), 0.0);
+  const ParameterStatistics expected = ParameterStatisticsOf(sigma_points, false, HistoryOptions());
+  ASSERT_TRUE(sigma->statistics.trend.has_value() && expected.trend.has_value());
+  EXPECT_NEAR(sigma->statistics.trend->slope_per_day, expected.trend->slope_per_day, 1e-20);
+  EXPECT_NEAR(sigma->statistics.run_to_run_sd, expected.run_to_run_sd, 1e-20);
+  EXPECT_LT(sigma->statistics.trend->p_value, 1e-3);
+  const ParameterStatistics bias_expected = ParameterStatisticsOf(bias_points, true, HistoryOptions());
+  ASSERT_TRUE(bias->statistics.turn_on_to_turn_on_sd.has_value());
+  ASSERT_TRUE(bias_expected.turn_on_to_turn_on_sd.has_value());
+  EXPECT_NEAR(*bias->statistics.turn_on_to_turn_on_sd, *bias_expected.turn_on_to_turn_on_sd, 1e-18);
+  EXPECT_NEAR(bias->statistics.run_to_run_sd, bias_expected.run_to_run_sd, 1e-18);
+  EXPECT_GT(*bias->statistics.turn_on_to_turn_on_sd, 0.0);
 }
 
 TEST_F(UnitHistoryStoreTest, PagesTheRunsAndFiltersTheParametersAndRefusesWhatItCannotRead) {
   for (int i = 0; i < 5; ++i) StoreRunAndAnalysis("INS-H2", kDaysBetweenRuns * i, Report(1.0, 0.0, 1e-7));
   UnitHistoryStore store(pool());
-  v1::GetUnitHistoryRequest request;
-  request.set_unit("units/INS-H2");
-  request.set_page_size(3);
-  request.add_parameters(kSigma);
-  auto first = store.Get(request);
+  UnitHistoryQuery query;
+  query.unit = "units/INS-H2";
+  query.page_size = 3;
+  query.parameters.push_back(kSigma);
+  auto first = store.Get(query);
   ASSERT_TRUE(first.ok()) << first.status();
-  EXPECT_EQ(first->runs_size(), 3);
-  ASSERT_FALSE(first->next_page_token().empty());
-  ASSERT_EQ(first->parameters_size(), 1);
-  EXPECT_EQ(first->parameters(0).points_size(), 5);  // the statistics cover every run
-  request.set_page_token(first->next_page_token());
-  auto second = store.Get(request);
+  EXPECT_EQ(first->runs.size(), 3u);
+  ASSERT_FALSE(first->next_page_token.empty());
+  ASSERT_EQ(first->parameters.size(), 1u);
+  EXPECT_EQ(first->parameters[0].points.size(), 5u);  // the statistics cover every run
+  query.page_token = first->next_page_token;
+  auto second = store.Get(query);
   ASSERT_TRUE(second.ok()) << second.status();
-  EXPECT_EQ(second->runs_size(), 2);
-  EXPECT_TRUE(second->next_page_token().empty());
-  EXPECT_NE(second->runs(0).run(), first->runs(2).run());
+  EXPECT_EQ(second->runs.size(), 2u);
+  EXPECT_TRUE(second->next_page_token.empty());
+  EXPECT_NE(second->runs[0].run, first->runs[2].run);
 
-  request.set_unit("units/NOPE");
-  request.clear_page_token();
-  EXPECT_EQ(store.Get(request).status().code(), absl::StatusCode::kNotFound);
-  request.set_unit("units/INS-H2");
-  request.set_confidence(1.5);
-  EXPECT_EQ(store.Get(request).status().code(), absl::StatusCode::kInvalidArgument);
-  request.set_confidence(0.0);
-  request.set_page_token("not-a-token");
-  EXPECT_EQ(store.Get(request).status().code(), absl::StatusCode::kInvalidArgument);
+  query.unit = "units/NOPE";
+  query.page_token.clear();
+  EXPECT_EQ(store.Get(query).status(), absl::NotFoundError("units/NOPE does not exist"));
+  query.unit = "units/INS-H2";
+  query.confidence = 1.5;
+  EXPECT_EQ(store.Get(query).status(),
+            absl::InvalidArgumentError("confidence: must lie strictly between 0 and 1"));
+  query.confidence = 0.0;
+  query.page_token = "not-a-token";
+  EXPECT_EQ(store.Get(query).status().code(), absl::StatusCode::kInvalidArgument);
 }
 
 double ModuleProbability(const v1::Diagnosis& d, const std::string& module) {

@@ -56,27 +56,27 @@ TEST(UnitHistoryStatisticsTest, StudentTailMatchesClosedFormsOnOneTwoAndThreeDeg
 
 TEST(UnitHistoryStatisticsTest, RunToRunRepeatabilityIsTheSampleSdWithItsChiSquareInterval) {
   const auto points = Points({0, 1, 2, 3, 4}, {1, 2, 3, 4, 5}, 0.5);
-  const v1::UnitParameterStatistics s = ParameterStatisticsOf(points, false, HistoryOptions());
-  EXPECT_EQ(s.count(), 5);
-  EXPECT_DOUBLE_EQ(s.mean(), 3.0);
+  const ParameterStatistics s = ParameterStatisticsOf(points, false, HistoryOptions());
+  EXPECT_EQ(s.count, 5);
+  EXPECT_DOUBLE_EQ(s.mean, 3.0);
   const double sd = std::sqrt(10.0 / 4.0);
-  EXPECT_NEAR(s.run_to_run_sd(), sd, 1e-12);
+  EXPECT_NEAR(s.run_to_run_sd, sd, 1e-12);
   // χ² quantiles on 4 degrees of freedom at 0.975 and 0.025 (tabled: 11.1433, 0.484419).
-  EXPECT_NEAR(s.run_to_run_sd_low(), sd * std::sqrt(4.0 / 11.143287), 1e-5);
-  EXPECT_NEAR(s.run_to_run_sd_high(), sd * std::sqrt(4.0 / 0.4844186), 1e-5);
-  EXPECT_NEAR(s.rms_std_error(), 0.5, 1e-12);
-  EXPECT_FALSE(s.has_turn_on_to_turn_on_sd());
+  EXPECT_NEAR(s.run_to_run_sd_low, sd * std::sqrt(4.0 / 11.143287), 1e-5);
+  EXPECT_NEAR(s.run_to_run_sd_high, sd * std::sqrt(4.0 / 0.4844186), 1e-5);
+  EXPECT_NEAR(s.rms_std_error, 0.5, 1e-12);
+  EXPECT_FALSE(s.turn_on_to_turn_on_sd.has_value());
 }
 
 TEST(UnitHistoryStatisticsTest, TurnOnToTurnOnRepeatabilityRemovesTheIdentificationError) {
   // Equal SEs σ: DerSimonian–Laird's τ² reduces to s² − σ².
   const auto points = Points({0, 1, 2, 3, 4}, {1, 2, 3, 4, 5}, 1.0);
-  const v1::UnitParameterStatistics s = ParameterStatisticsOf(points, true, HistoryOptions());
-  ASSERT_TRUE(s.has_turn_on_to_turn_on_sd());
-  EXPECT_NEAR(s.turn_on_to_turn_on_sd(), std::sqrt(2.5 - 1.0), 1e-12);
+  const ParameterStatistics s = ParameterStatisticsOf(points, true, HistoryOptions());
+  ASSERT_TRUE(s.turn_on_to_turn_on_sd.has_value());
+  EXPECT_NEAR(*s.turn_on_to_turn_on_sd, std::sqrt(2.5 - 1.0), 1e-12);
   // SEs larger than the scatter explain all of it.
   const auto noisy = Points({0, 1, 2, 3, 4}, {1, 2, 3, 4, 5}, 3.0);
-  EXPECT_EQ(ParameterStatisticsOf(noisy, true, HistoryOptions()).turn_on_to_turn_on_sd(), 0.0);
+  EXPECT_EQ(ParameterStatisticsOf(noisy, true, HistoryOptions()).turn_on_to_turn_on_sd, 0.0);
   EXPECT_TRUE(IsTurnOnBias("gyro_turn_on_bias.x"));
   EXPECT_TRUE(IsTurnOnBias("acc_turn_on_bias.z"));
   EXPECT_FALSE(IsTurnOnBias("gyro_scale_factor.x"));
@@ -93,48 +93,48 @@ std::vector<HistoryPoint> LineWithResiduals(double intercept, double slope, doub
 }
 
 TEST(UnitHistoryStatisticsTest, WeightedTrendMatchesTheClosedFormWhenTheSesExplainTheScatter) {
-  const v1::UnitTrendFit fit = FitTrend(LineWithResiduals(2.0, 0.05, 0.1, 0.1), HistoryOptions());
-  ASSERT_TRUE(fit.fitted());
-  EXPECT_TRUE(fit.weighted());
-  EXPECT_NEAR(fit.slope_per_day(), 0.05, 1e-12);
-  EXPECT_NEAR(fit.intercept(), 2.0, 1e-12);
-  EXPECT_NEAR(fit.slope_std_error_per_day(), 0.1 / std::sqrt(10.0), 1e-12);
-  EXPECT_NEAR(fit.chi_square(), 4.0, 1e-9);
-  EXPECT_EQ(fit.degrees_of_freedom(), 3);
-  EXPECT_NEAR(fit.scatter_p_value(), engine::stats::ChiSquareSurvival(4.0, 3), 1e-12);
-  EXPECT_FALSE(fit.excess_scatter());
-  EXPECT_EQ(fit.birge_ratio(), 1.0);
+  const TrendFit fit = FitTrend(LineWithResiduals(2.0, 0.05, 0.1, 0.1), HistoryOptions());
+  ASSERT_TRUE(fit.fitted);
+  EXPECT_TRUE(fit.weighted);
+  EXPECT_NEAR(fit.slope_per_day, 0.05, 1e-12);
+  EXPECT_NEAR(fit.intercept, 2.0, 1e-12);
+  EXPECT_NEAR(fit.slope_std_error_per_day, 0.1 / std::sqrt(10.0), 1e-12);
+  EXPECT_NEAR(fit.chi_square, 4.0, 1e-9);
+  EXPECT_EQ(fit.degrees_of_freedom, 3);
+  EXPECT_NEAR(fit.scatter_p_value, engine::stats::ChiSquareSurvival(4.0, 3), 1e-12);
+  EXPECT_FALSE(fit.excess_scatter);
+  EXPECT_EQ(fit.birge_ratio, 1.0);
   const double z = 0.05 / (0.1 / std::sqrt(10.0));
-  EXPECT_NEAR(fit.p_value(), 2.0 * engine::stats::NormalCdf(-z), 1e-12);
+  EXPECT_NEAR(fit.p_value, 2.0 * engine::stats::NormalCdf(-z), 1e-12);
 }
 
 TEST(UnitHistoryStatisticsTest, ExcessScatterInflatesTheSlopesErrorByTheBirgeRatioAndTestsWithStudent) {
-  const v1::UnitTrendFit fit = FitTrend(LineWithResiduals(2.0, 0.05, 0.3, 0.1), HistoryOptions());
-  ASSERT_TRUE(fit.fitted());
-  EXPECT_NEAR(fit.chi_square(), 36.0, 1e-9);
-  EXPECT_TRUE(fit.excess_scatter());
-  EXPECT_NEAR(fit.birge_ratio(), std::sqrt(12.0), 1e-12);
+  const TrendFit fit = FitTrend(LineWithResiduals(2.0, 0.05, 0.3, 0.1), HistoryOptions());
+  ASSERT_TRUE(fit.fitted);
+  EXPECT_NEAR(fit.chi_square, 36.0, 1e-9);
+  EXPECT_TRUE(fit.excess_scatter);
+  EXPECT_NEAR(fit.birge_ratio, std::sqrt(12.0), 1e-12);
   const double se = 0.1 / std::sqrt(10.0) * std::sqrt(12.0);
-  EXPECT_NEAR(fit.slope_std_error_per_day(), se, 1e-12);
-  EXPECT_NEAR(fit.p_value(), StudentClosedForm(0.05 / se, 3), 1e-12);
+  EXPECT_NEAR(fit.slope_std_error_per_day, se, 1e-12);
+  EXPECT_NEAR(fit.p_value, StudentClosedForm(0.05 / se, 3), 1e-12);
 }
 
 TEST(UnitHistoryStatisticsTest, WithoutStandardErrorsTheTrendIsOrdinaryLeastSquares) {
-  const v1::UnitTrendFit fit = FitTrend(LineWithResiduals(2.0, 0.05, 0.1, 0.0), HistoryOptions());
-  ASSERT_TRUE(fit.fitted());
-  EXPECT_FALSE(fit.weighted());
+  const TrendFit fit = FitTrend(LineWithResiduals(2.0, 0.05, 0.1, 0.0), HistoryOptions());
+  ASSERT_TRUE(fit.fitted);
+  EXPECT_FALSE(fit.weighted);
   // σ_b² = (Σr²/ν)/Σ(t − t̄)² = (0.04/3)/10.
   const double se = std::sqrt(0.04 / 3.0 / 10.0);
-  EXPECT_NEAR(fit.slope_std_error_per_day(), se, 1e-12);
-  EXPECT_NEAR(fit.p_value(), StudentClosedForm(0.05 / se, 3), 1e-12);
+  EXPECT_NEAR(fit.slope_std_error_per_day, se, 1e-12);
+  EXPECT_NEAR(fit.p_value, StudentClosedForm(0.05 / se, 3), 1e-12);
   // One value in every run, without SEs: no trend, whatever the rounding.
-  const v1::UnitTrendFit constant = FitTrend(Points({0, 3.3, 7.1, 9.9}, {4.84813681109536e-08, 4.84813681109536e-08,
+  const TrendFit constant = FitTrend(Points({0, 3.3, 7.1, 9.9}, {4.84813681109536e-08, 4.84813681109536e-08,
                                                                         4.84813681109536e-08, 4.84813681109536e-08},
                                                     0.0),
                                              HistoryOptions());
-  EXPECT_GT(constant.p_value(), 0.01);
-  EXPECT_FALSE(FitTrend(Points({0, 1}, {1, 2}, 0.1), HistoryOptions()).fitted());
-  EXPECT_FALSE(FitTrend(Points({3, 3, 3}, {1, 2, 3}, 0.1), HistoryOptions()).fitted());
+  EXPECT_GT(constant.p_value, 0.01);
+  EXPECT_FALSE(FitTrend(Points({0, 1}, {1, 2}, 0.1), HistoryOptions()).fitted);
+  EXPECT_FALSE(FitTrend(Points({3, 3, 3}, {1, 2, 3}, 0.1), HistoryOptions()).fitted);
 }
 
 // On seeded simulated histories of a stable parameter the trend's p-value is
@@ -149,9 +149,9 @@ TEST(UnitHistoryStatisticsTest, SimulatedStableHistoriesKeepTheTestsLevelAndTheI
   for (int h = 0; h < kHistories; ++h) {
     std::vector<HistoryPoint> points;
     for (int i = 0; i < 8; ++i) points.push_back({7.0 * i + 3.0 * unit(rng) * 0.1, 5.0 + kSigma * unit(rng), kSigma});
-    const v1::UnitParameterStatistics s = ParameterStatisticsOf(points, false, HistoryOptions());
-    rejected += s.trend().p_value() < 0.05;
-    covered += s.run_to_run_sd_low() <= kSigma && kSigma <= s.run_to_run_sd_high();
+    const ParameterStatistics s = ParameterStatisticsOf(points, false, HistoryOptions());
+    rejected += s.trend->p_value < 0.05;
+    covered += s.run_to_run_sd_low <= kSigma && kSigma <= s.run_to_run_sd_high;
   }
   // Binomial(4000, 0.05): sd 0.0034.
   EXPECT_NEAR(static_cast<double>(rejected) / kHistories, 0.05, 0.012);
@@ -160,7 +160,7 @@ TEST(UnitHistoryStatisticsTest, SimulatedStableHistoriesKeepTheTestsLevelAndTheI
   for (int h = 0; h < 200; ++h) {
     std::vector<HistoryPoint> points;
     for (int i = 0; i < 8; ++i) points.push_back({7.0 * i, 5.0 + 0.02 * 7.0 * i + kSigma * unit(rng), kSigma});
-    found += FitTrend(points, HistoryOptions()).p_value() < 0.01;
+    found += FitTrend(points, HistoryOptions()).p_value < 0.01;
   }
   // z = 0.02·√2058/0.2 ≈ 4.5 against 2.58: a power of about 0.97.
   EXPECT_GE(found, 180);
@@ -171,33 +171,33 @@ TEST(UnitHistoryStatisticsTest, SimulatedStableHistoriesKeepTheTestsLevelAndTheI
 // A history of `runs` runs a week apart: every identified parameter of the
 // nominal report scattering by its SE around nominal (seeded), and
 // `drifting` growing linearly from `start` to `end` × nominal.
-std::vector<v1::UnitParameterHistory> History(int runs, const std::string& drifting, double start, double end,
-                                          std::uint64_t seed) {
+std::vector<ParameterHistory> History(int runs, const std::string& drifting, double start, double end,
+                                     std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> unit(0.0, 1.0);
-  std::vector<v1::UnitParameterHistory> out;
+  std::vector<ParameterHistory> out;
   const v1::AnalysisReport nominal = NominalReport();
   for (const auto& p : nominal.identified()) {
-    v1::UnitParameterHistory& h = out.emplace_back();
-    h.set_name(p.name());
-    h.set_unit(p.unit());
+    ParameterHistory& h = out.emplace_back();
+    h.name = p.name();
+    h.unit = p.unit();
     std::vector<HistoryPoint> points;
     for (int i = 0; i < runs; ++i) {
       const double factor = p.name() == drifting ? start + (end - start) * i / (runs - 1) : 1.0;
       const double value = p.value() * factor;
       const double se = p.std_error() / p.value() * value;
       points.push_back({7.0 * i, value + se * unit(rng), se});
-      v1::RunParameterPoint* point = h.add_points();
-      point->set_days(points.back().days);
-      point->set_value(points.back().value);
-      point->set_std_error(se);
+      RunParameterPoint& point = h.points.emplace_back();
+      point.days = points.back().days;
+      point.value = points.back().value;
+      point.std_error = se;
     }
-    *h.mutable_statistics() = ParameterStatisticsOf(points, false, HistoryOptions());
+    h.statistics = ParameterStatisticsOf(points, false, HistoryOptions());
   }
   return out;
 }
 
-Diagnosis DiagnoseWithHistory(const v1::AnalysisReport& report, const std::vector<v1::UnitParameterHistory>* history) {
+Diagnosis DiagnoseWithHistory(const v1::AnalysisReport& report, const std::vector<ParameterHistory>* history) {
   const auto& f = Ins2000();
   Evidence evidence = EvidenceFromReport(FindingsOf(report), f.unit_type, f.settings);
   if (history != nullptr) {

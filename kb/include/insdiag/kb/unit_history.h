@@ -42,14 +42,14 @@
 // p-value over the unit's parameters is below the significance level.
 #pragma once
 
+#include <absl/time/time.h>
+
 #include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "insdiag/kb/diagnosis.h"
-#include "insdiag/v1/history.pb.h"
-#include "insdiag/v1/knowledge.pb.h"
 
 namespace insdiag::kb {
 
@@ -64,13 +64,68 @@ struct HistoryOptions {
   bool Validate() const { return confidence > 0.0 && confidence < 1.0; }
 };
 
+// The weighted straight line through a parameter's points (the trend above).
+// Not fitted (below 3 points, or all on one day): every field zero.
+struct TrendFit {
+  bool fitted = false;
+  // true: weights 1/SE²; false: equal weights (some run gave no SE).
+  bool weighted = false;
+  double slope_per_day = 0.0;
+  // Its standard error, multiplied by the Birge ratio when the scatter
+  // exceeds what the SEs explain.
+  double slope_std_error_per_day = 0.0;
+  double intercept = 0.0;  // the value at day 0
+  double p_value = 0.0;    // two-sided, slope = 0
+  double chi_square = 0.0;  // of the residuals, in units of the SEs
+  int degrees_of_freedom = 0;
+  double scatter_p_value = 0.0;  // P(χ² ≥ chi_square) when the SEs explain the scatter
+  bool excess_scatter = false;   // scatter_p_value below 1 − confidence
+  // max(1, √(χ²/dof)) on weighted fits with excess scatter; 1 on other fitted ones.
+  double birge_ratio = 0.0;
+};
+
+// One parameter's statistics across its points; the values in the
+// parameter's unit.
+struct ParameterStatistics {
+  int count = 0;
+  double mean = 0.0;
+  // Run-to-run repeatability: the sample standard deviation and its χ²
+  // interval (count ≥ 2; zero otherwise).
+  double run_to_run_sd = 0.0;
+  double run_to_run_sd_low = 0.0;
+  double run_to_run_sd_high = 0.0;
+  double rms_std_error = 0.0;  // of the points' standard errors (unknown ones as 0)
+  // DerSimonian–Laird τ: only for a turn-on bias with every SE known (count ≥ 2).
+  std::optional<double> turn_on_to_turn_on_sd;
+  std::optional<TrendFit> trend;  // none without points
+};
+
+// One run's value of a parameter: the run's latest succeeded analysis.
+struct RunParameterPoint {
+  std::string run;       // runs/{run}
+  std::string analysis;  // analyses/{analysis}
+  absl::Time test_time;  // the run's test time, else its upload
+  double days = 0.0;     // since the unit's first point of this parameter
+  double value = 0.0;
+  double std_error = 0.0;  // 0 when the analysis gave none
+};
+
+// A parameter over a unit's runs.
+struct ParameterHistory {
+  std::string name;  // "gyro_turn_on_bias.x", "gyro_bias_gm.x.sigma"
+  std::string unit;  // of value and std_error, e.g. "rad/s"
+  bool turn_on_bias = false;  // IsTurnOnBias(name)
+  std::vector<RunParameterPoint> points;  // oldest first
+  ParameterStatistics statistics;
+};
+
 // Every statistic of one parameter's points (in time order or not).
 // `turn_on_bias` asks for the turn-on-to-turn-on repeatability.
-v1::UnitParameterStatistics ParameterStatisticsOf(std::span<const HistoryPoint> points, bool turn_on_bias,
-                                              const HistoryOptions& options);
+ParameterStatistics ParameterStatisticsOf(std::span<const HistoryPoint> points, bool turn_on_bias,
+                                          const HistoryOptions& options);
 
 // The weighted straight line alone (count ≥ 3; `fitted` false otherwise).
-v1::UnitTrendFit FitTrend(std::span<const HistoryPoint> points, const HistoryOptions& options);
+TrendFit FitTrend(std::span<const HistoryPoint> points, const HistoryOptions& options);
 
 // Whether `parameter` ("gyro_turn_on_bias.x") is a turn-on bias: a constant
 // catalogue effect on the sensor's own output (regressor 1).
@@ -84,7 +139,7 @@ double StudentTwoSidedPValue(double t, double dof);
 // the parameters with a fitted trend, at settings.significance_level()),
 // named "<parameter>.trend" with `trend_of` set. None when the settings
 // have no trend model (trend_z_spread ≤ 0).
-std::vector<EvidenceTerm> TrendEvidence(std::span<const v1::UnitParameterHistory> parameters,
+std::vector<EvidenceTerm> TrendEvidence(std::span<const ParameterHistory> parameters,
                                         const DiagnosisSettings& settings);
 
 }  // namespace insdiag::kb

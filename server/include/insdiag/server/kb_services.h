@@ -21,6 +21,7 @@
 #include "insdiag/v1/access.pb.h"
 #include "insdiag/v1/analyses.pb.h"
 #include "insdiag/v1/fleet.pb.h"
+#include "insdiag/v1/history.pb.h"
 #include "insdiag/v1/knowledge.pb.h"
 
 namespace insdiag::server {
