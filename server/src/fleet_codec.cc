@@ -4,26 +4,9 @@
 
 #include <cstdint>
 
+#include "time_codec.h"
+
 namespace insdiag::server {
-namespace {
-
-// The store reads times to the microsecond (PostgreSQL's resolution): a
-// request's timestamp is taken as its whole microseconds.
-absl::Time TimeOf(const google::protobuf::Timestamp& timestamp) {
-  return absl::FromUnixMicros(timestamp.seconds() * 1'000'000 + timestamp.nanos() / 1000);
-}
-
-google::protobuf::Timestamp TimestampOf(absl::Time time) {
-  google::protobuf::Timestamp timestamp;
-  const std::int64_t seconds = absl::ToUnixSeconds(time);
-  timestamp.set_seconds(seconds);
-  timestamp.set_nanos(
-      static_cast<int>((time - absl::FromUnixSeconds(seconds)) / absl::Nanoseconds(1)));
-  return timestamp;
-}
-
-}  // namespace
-
 kb::FleetStatisticsQuery FromProto(const v1::GetFleetStatisticsRequest& request) {
   kb::FleetStatisticsQuery query;
   query.unit_type = request.unit_type();
@@ -35,8 +18,8 @@ kb::FailureCountQuery FromProto(const v1::ListFailureCountsRequest& request) {
   kb::FailureCountQuery query;
   query.unit_type = request.unit_type();
   query.period = request.period();
-  if (request.has_start_time()) query.start_time = TimeOf(request.start_time());
-  if (request.has_end_time()) query.end_time = TimeOf(request.end_time());
+  if (request.has_start_time()) query.start_time = MicrosecondTimeOf(request.start_time());
+  if (request.has_end_time()) query.end_time = MicrosecondTimeOf(request.end_time());
   query.failure_mode = request.failure_mode();
   query.batch = request.batch();
   return query;

@@ -128,7 +128,7 @@ grpc::Status LiveRunServiceGrpc::WatchLiveRun(grpc::ServerContext* context, cons
 #define INSDIAG_DELEGATE_MAPPED(Class, service, target, Name, Request, Response)                               \
   grpc::Status Class::Name(grpc::ServerContext* context, const v1::Request* request, v1::Response* response) { \
     return guard_.Unary(*context, MethodName(service, #Name), *request, response,                              \
-                        [&](const v1::Caller&) -> absl::StatusOr<v1::Response> {                               \
+                        [&](const kb::Caller&) -> absl::StatusOr<v1::Response> {                               \
                           INSDIAG_ASSIGN_OR_RETURN(auto result, target.Name(FromProto(*request)));              \
                           return ToProto(result);                                                              \
                         });                                                                                    \

@@ -6,17 +6,10 @@
 #include <cstdint>
 
 #include "insdiag/api/report_codec.h"
+#include "time_codec.h"
 
 namespace insdiag::server {
 namespace {
-
-google::protobuf::Timestamp TimestampOf(absl::Time time) {
-  google::protobuf::Timestamp timestamp;
-  const std::int64_t seconds = absl::ToUnixSeconds(time);  // rounds down: nanos stay in [0, 1e9)
-  timestamp.set_seconds(seconds);
-  timestamp.set_nanos(static_cast<std::int32_t>((time - absl::FromUnixSeconds(seconds)) / absl::Nanoseconds(1)));
-  return timestamp;
-}
 
 v1::RunParameterPoint ToProto(const kb::RunParameterPoint& point) {
   v1::RunParameterPoint message;

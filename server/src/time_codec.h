@@ -11,5 +11,8 @@ namespace insdiag::server {
 // stay in [0, 1e9) as the message requires.
 google::protobuf::Timestamp TimestampOf(absl::Time time);
 absl::Time TimeOf(const google::protobuf::Timestamp& timestamp);
+// A request's time to the whole microsecond the database keeps
+// (seconds·10⁶ + nanos/10³, as the stores have always read a Timestamp).
+absl::Time MicrosecondTimeOf(const google::protobuf::Timestamp& timestamp);
 
 }  // namespace insdiag::server
