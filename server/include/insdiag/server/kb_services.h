@@ -1,7 +1,9 @@
-// The methods of insdiag.v1.AnalysisService, KnowledgeService,
-// FleetService and AccessService, once, independent of transport: requests in, responses or
-// absl::Status out, over the knowledge base's stores. The gRPC face adapts
-// them (grpc_services.h); REST reaches them through gRPC (rest_gateway.h).
+// The methods of insdiag.v1.AnalysisService, KnowledgeService and
+// AccessService, once, independent of transport: requests in, responses or
+// absl::Status out, over the knowledge base's stores, each mapped at the
+// call (the codecs in server/src). The gRPC face adapts them
+// (grpc_services.h), and maps FleetService's over the fleet store itself;
+// REST reaches them through gRPC (rest_gateway.h).
 #pragma once
 
 #include <absl/functional/function_ref.h>
@@ -16,11 +18,9 @@
 #include "insdiag/kb/catalogue_store.h"
 #include "insdiag/kb/diagnosis_store.h"
 #include "insdiag/kb/failure_record_store.h"
-#include "insdiag/kb/fleet_store.h"
 #include "insdiag/kb/unit_history_store.h"
 #include "insdiag/v1/access.pb.h"
 #include "insdiag/v1/analyses.pb.h"
-#include "insdiag/v1/fleet.pb.h"
 #include "insdiag/v1/history.pb.h"
 #include "insdiag/v1/knowledge.pb.h"
 
