@@ -17,9 +17,9 @@ Diagnosis DiagnoseInputs(const DiagnosisInputs& in) {
   return diagnosis;
 }
 
-absl::StatusOr<v1::Diagnosis> AnalysisDiagnoser::Diagnose(const std::string& analysis_name) {
+absl::StatusOr<StoredDiagnosis> AnalysisDiagnoser::Diagnose(const std::string& analysis_name) {
   INSDIAG_ASSIGN_OR_RETURN(const DiagnosisInputs inputs, store_.LoadInputs(analysis_name));
-  return store_.Store(inputs, DiagnoseInputs(inputs));
+  return store_.Store(inputs, DiagnoseInputs(inputs), encode_);
 }
 
 }  // namespace insdiag::kb

@@ -11,8 +11,8 @@
 #include "insdiag/api/resource_names.h"
 #include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/diagnosis.h"
-#include "insdiag/kb/failure_record.h"
 #include "insdiag/kb/knowledge_messages.h"
+#include "insdiag/kb/failure_record.h"
 #include "insdiag/kb/unit_history.h"
 #include "report_rows.h"
 #include "signature_refinement.h"
@@ -34,7 +34,7 @@ using internal::RefineModeSignature;
 using internal::SettingsFor;
 using internal::UnitTypeId;
 
-absl::StatusOr<v1::Diagnosis> LoadDiagnosis(Connection& db, const std::string& id) {
+absl::StatusOr<StoredDiagnosis> LoadDiagnosis(Connection& db, const std::string& id) {
   INSDIAG_ASSIGN_OR_RETURN(
       auto rows,
       db.Exec("SELECT d.body, coalesce(d.record_id::text, ''), coalesce(r.confirmed, false), "
@@ -45,12 +45,13 @@ absl::StatusOr<v1::Diagnosis> LoadDiagnosis(Connection& db, const std::string& i
   if (rows.rows() == 0)
     return absl::NotFoundError(
         absl::StrCat(api::ResourceName(api::kDiagnoses, id), " does not exist"));
-  v1::Diagnosis d;
-  d.ParseFromString(std::string(rows.Get(0, 0)));
+  StoredDiagnosis d;
+  d.name = api::ResourceName(api::kDiagnoses, id);
+  d.encoded = std::string(rows.Get(0, 0));
   if (!rows.Get(0, 1).empty()) {
-    d.set_failure_record(api::ResourceName(api::kFailureRecords, rows.String(0, 1)));
-    d.set_confirmed(rows.Get(0, 2) == std::string_view("\x01", 1));
-    d.set_resolved_module(rows.String(0, 3));
+    d.failure_record = api::ResourceName(api::kFailureRecords, rows.String(0, 1));
+    d.confirmed = rows.Get(0, 2) == std::string_view("\x01", 1);
+    d.resolved_module = rows.String(0, 3);
   }
   return d;
 }
@@ -130,21 +131,19 @@ absl::StatusOr<DiagnosisInputs> DiagnosisStore::LoadInputs(const std::string& an
 }
 
 
-absl::StatusOr<v1::Diagnosis> DiagnosisStore::Store(const DiagnosisInputs& in, const Diagnosis& made_diagnosis) {
+absl::StatusOr<StoredDiagnosis> DiagnosisStore::Store(const DiagnosisInputs& in, const Diagnosis& diagnosis,
+                                                      const DiagnosisEncoder& encode) {
   INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
-  std::string id;
-  v1::Diagnosis diagnosis = ToProto(made_diagnosis);
+  StoredDiagnosis stored;
   const absl::Status status = db->InTransaction([&]() -> absl::Status {
     INSDIAG_ASSIGN_OR_RETURN(auto made,
                              db->Exec("SELECT gen_random_uuid()::text, " + Micros("now()")));
-    id = made.String(0, 0);
-    diagnosis.set_name(api::ResourceName(api::kDiagnoses, id));
-    *diagnosis.mutable_create_time() = internal::TimestampOfMicros(internal::IntOr0(made, 0, 1));
-    const DiagnosisHeadline headline = HeadlineOf(made_diagnosis);
+    const std::string id = made.String(0, 0);
+    const std::int64_t create_micros = internal::IntOr0(made, 0, 1);
+    stored.name = api::ResourceName(api::kDiagnoses, id);
+    stored.encoded = encode(diagnosis, stored.name, absl::FromUnixMicros(create_micros));
+    const DiagnosisHeadline headline = HeadlineOf(diagnosis);
     const Candidate* top = headline.top;
-    std::string body;
-    diagnosis.SerializeToString(&body);
-    const std::vector<std::string>& notes = made_diagnosis.notes;
     auto inserted = db->Exec(
         "INSERT INTO diagnoses (diagnosis_id, analysis_id, unit_id, fault_probability, top_module, "
         "top_failure_mode, "
@@ -154,11 +153,10 @@ absl::StatusOr<v1::Diagnosis> DiagnosisStore::Store(const DiagnosisInputs& in, c
         {Param::Text(id), Param::Text(in.analysis_id), Param::Text(in.unit_id),
          Param::Double(headline.fault_probability), Param::Text(top ? top->module : ""),
          Param::Text(top ? top->failure_mode : ""), Param::Double(top ? top->probability : 0.0),
-         Param::Bytes(body), Param::TextArray(notes),
-         Param::Int(internal::MicrosOf(diagnosis.create_time()))});
+         Param::Bytes(stored.encoded), Param::TextArray(diagnosis.notes), Param::Int(create_micros)});
     if (!inserted.ok()) return inserted.status();
     int rank = 0;
-    for (const Candidate& c : made_diagnosis.candidates) {
+    for (const Candidate& c : diagnosis.candidates) {
       INSDIAG_RETURN_IF_ERROR(
           db->Exec("INSERT INTO diagnosis_candidates (diagnosis_id, rank, module, "
                    "failure_mode, probability, evidence) "
@@ -170,16 +168,16 @@ absl::StatusOr<v1::Diagnosis> DiagnosisStore::Store(const DiagnosisInputs& in, c
     return absl::OkStatus();
   });
   if (!status.ok()) return status;
-  return diagnosis;
+  return stored;
 }
 
-absl::StatusOr<v1::Diagnosis> DiagnosisStore::Get(const std::string& name) {
+absl::StatusOr<StoredDiagnosis> DiagnosisStore::Get(const std::string& name) {
   INSDIAG_ASSIGN_OR_RETURN(auto id, internal::UuidOf(name, api::kDiagnoses, "name"));
   INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
   return LoadDiagnosis(*db, id);
 }
 
-absl::StatusOr<std::pair<std::vector<v1::Diagnosis>, std::string>> DiagnosisStore::List(
+absl::StatusOr<std::pair<std::vector<StoredDiagnosis>, std::string>> DiagnosisStore::List(
     const DiagnosisQuery& query) {
   const int size = internal::ClampPageSize(query.page.page_size);
   std::string analysis_id, serial;
@@ -204,7 +202,7 @@ absl::StatusOr<std::pair<std::vector<v1::Diagnosis>, std::string>> DiagnosisStor
                             "NULL OR u.serial = $3) AND ",
                             after, " ORDER BY d.create_time DESC, d.diagnosis_id DESC LIMIT $1"),
                params));
-  std::vector<v1::Diagnosis> out;
+  std::vector<StoredDiagnosis> out;
   const int shown = std::min(rows.rows(), size);
   for (int r = 0; r < shown; ++r) {
     INSDIAG_ASSIGN_OR_RETURN(auto d, LoadDiagnosis(*db, rows.String(r, 0)));
@@ -216,18 +214,18 @@ absl::StatusOr<std::pair<std::vector<v1::Diagnosis>, std::string>> DiagnosisStor
   return std::make_pair(std::move(out), next);
 }
 
-absl::StatusOr<v1::Diagnosis> DiagnosisStore::Resolve(const v1::ResolveDiagnosisRequest& request) {
-  INSDIAG_ASSIGN_OR_RETURN(auto id, internal::UuidOf(request.name(), api::kDiagnoses, "name"));
-  if (request.module().empty()) {
+absl::StatusOr<StoredDiagnosis> DiagnosisStore::Resolve(const DiagnosisResolution& request) {
+  INSDIAG_ASSIGN_OR_RETURN(auto id, internal::UuidOf(request.name, api::kDiagnoses, "name"));
+  if (request.module.empty()) {
     return absl::InvalidArgumentError("module: the module found faulty (or suspected) is required");
   }
   std::string mode_id;
-  if (!request.failure_mode().empty()) {
+  if (!request.failure_mode.empty()) {
     INSDIAG_ASSIGN_OR_RETURN(
-        auto m, api::ResourceId(request.failure_mode(), api::kFailureModes, "failure_mode"));
+        auto m, api::ResourceId(request.failure_mode, api::kFailureModes, "failure_mode"));
     mode_id = m;
   }
-  if (request.confirmed() && mode_id.empty()) {
+  if (request.confirmed && mode_id.empty()) {
     return absl::InvalidArgumentError("failure_mode: a confirmed diagnosis names the failure mode found");
   }
   INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
@@ -240,29 +238,29 @@ absl::StatusOr<v1::Diagnosis> DiagnosisStore::Resolve(const v1::ResolveDiagnosis
                                       "WHERE d.diagnosis_id = $1::uuid FOR UPDATE OF d",
                                       {Param::Text(id)}));
     if (row.rows() == 0)
-      return absl::NotFoundError(absl::StrCat(request.name(), " does not exist"));
+      return absl::NotFoundError(absl::StrCat(request.name, " does not exist"));
     if (row.Bool(0, 2))
-      return absl::FailedPreconditionError(absl::StrCat(request.name(), " is already resolved"));
+      return absl::FailedPreconditionError(absl::StrCat(request.name, " is already resolved"));
     INSDIAG_ASSIGN_OR_RETURN(auto unit_id, row.Int(0, 1));
-    INSDIAG_RETURN_IF_ERROR(CheckModuleRole(*db, request.module(), "module"));
-    if (auto fits = CheckModeOfRole(*db, mode_id, request.failure_mode(), request.module(), "failure_mode");
+    INSDIAG_RETURN_IF_ERROR(CheckModuleRole(*db, request.module, "module"));
+    if (auto fits = CheckModeOfRole(*db, mode_id, request.failure_mode, request.module, "failure_mode");
         !fits.ok()) {
       return fits;
     }
-    INSDIAG_ASSIGN_OR_RETURN(auto module_id, CurrentModule(*db, unit_id, request.module()));
+    INSDIAG_ASSIGN_OR_RETURN(auto module_id, CurrentModule(*db, unit_id, request.module));
     FailureRecord record;
     record.operating_hours = internal::DoubleOr0(row, 0, 3);
-    record.confirmed = request.confirmed();
-    record.no_fault_found = !request.confirmed();
-    record.repaired = request.confirmed() && !request.repair_action().empty();
-    record.repair_action = request.repair_action();
-    record.notes = request.notes();
+    record.confirmed = request.confirmed;
+    record.no_fault_found = !request.confirmed;
+    record.repaired = request.confirmed && !request.repair_action.empty();
+    record.repair_action = request.repair_action;
+    record.notes = request.notes;
     INSDIAG_ASSIGN_OR_RETURN(auto written, InsertFailureRecord(*db, module_id, unit_id, record,
                                                                mode_id, row.String(0, 0), id));
     INSDIAG_RETURN_IF_ERROR(
         db->Exec("UPDATE diagnoses SET record_id = $2::uuid WHERE diagnosis_id = $1::uuid",
                  {Param::Text(id), Param::Text(written)}));
-    if (request.confirmed()) return RefineModeSignature(*db, mode_id);
+    if (request.confirmed) return RefineModeSignature(*db, mode_id);
     return absl::OkStatus();
   });
   if (!status.ok()) return status;

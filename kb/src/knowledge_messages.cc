@@ -1,5 +1,8 @@
 #include "insdiag/kb/knowledge_messages.h"
 
+#include <absl/strings/str_cat.h>
+
+#include <cstdint>
 #include <optional>
 
 namespace insdiag::kb {
@@ -177,6 +180,37 @@ v1::Diagnosis ToProto(const Diagnosis& diagnosis) {
     item->set_significant(e.significant);
   }
   return out;
+}
+
+std::string EncodeDiagnosis(const Diagnosis& diagnosis, const std::string& name, absl::Time create_time) {
+  v1::Diagnosis message = ToProto(diagnosis);
+  message.set_name(name);
+  // Whole seconds rounded down and the microseconds after them, as the store keeps the time.
+  const std::int64_t micros = absl::ToUnixMicros(create_time);
+  std::int64_t seconds = micros / 1'000'000;
+  std::int64_t rest = micros % 1'000'000;
+  if (rest < 0) {
+    rest += 1'000'000;
+    --seconds;
+  }
+  message.mutable_create_time()->set_seconds(seconds);
+  message.mutable_create_time()->set_nanos(static_cast<std::int32_t>(rest * 1000));
+  std::string bytes;
+  message.SerializeToString(&bytes);
+  return bytes;
+}
+
+absl::StatusOr<v1::Diagnosis> DecodeDiagnosis(const StoredDiagnosis& stored) {
+  v1::Diagnosis message;
+  if (!message.ParseFromString(stored.encoded)) {
+    return absl::InternalError(absl::StrCat(stored.name, ": the stored diagnosis cannot be read"));
+  }
+  if (!stored.failure_record.empty()) {
+    message.set_failure_record(stored.failure_record);
+    message.set_confirmed(stored.confirmed);
+    message.set_resolved_module(stored.resolved_module);
+  }
+  return message;
 }
 
 ReportFindings FindingsOf(const v1::AnalysisReport& report) {

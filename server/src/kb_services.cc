@@ -304,11 +304,14 @@ absl::StatusOr<v1::ListFailureRecordsResponse> KnowledgeService::ListFailureReco
 
 absl::StatusOr<v1::Diagnosis> KnowledgeService::CreateDiagnosis(const v1::CreateDiagnosisRequest& request) {
   if (request.analysis().empty()) return absl::InvalidArgumentError("analysis: required (analyses/{analysis})");
-  return kb::AnalysisDiagnoser(diagnoses_).Diagnose(request.analysis());
+  INSDIAG_ASSIGN_OR_RETURN(const kb::StoredDiagnosis stored,
+                           kb::AnalysisDiagnoser(diagnoses_, kb::EncodeDiagnosis).Diagnose(request.analysis()));
+  return kb::DecodeDiagnosis(stored);
 }
 
 absl::StatusOr<v1::Diagnosis> KnowledgeService::GetDiagnosis(const v1::GetDiagnosisRequest& request) {
-  return diagnoses_.Get(request.name());
+  INSDIAG_ASSIGN_OR_RETURN(const kb::StoredDiagnosis stored, diagnoses_.Get(request.name()));
+  return kb::DecodeDiagnosis(stored);
 }
 
 absl::StatusOr<v1::ListDiagnosesResponse> KnowledgeService::ListDiagnoses(const v1::ListDiagnosesRequest& request) {
@@ -319,13 +322,16 @@ absl::StatusOr<v1::ListDiagnosesResponse> KnowledgeService::ListDiagnoses(const 
   query.unit = request.unit();
   INSDIAG_ASSIGN_OR_RETURN(auto page, diagnoses_.List(query));
   v1::ListDiagnosesResponse response;
-  for (auto& d : page.first) *response.add_diagnoses() = std::move(d);
+  for (const kb::StoredDiagnosis& stored : page.first) {
+    INSDIAG_ASSIGN_OR_RETURN(*response.add_diagnoses(), kb::DecodeDiagnosis(stored));
+  }
   response.set_next_page_token(page.second);
   return response;
 }
 
 absl::StatusOr<v1::Diagnosis> KnowledgeService::ResolveDiagnosis(const v1::ResolveDiagnosisRequest& request) {
-  return diagnoses_.Resolve(request);
+  INSDIAG_ASSIGN_OR_RETURN(const kb::StoredDiagnosis stored, diagnoses_.Resolve(ResolutionOf(request)));
+  return kb::DecodeDiagnosis(stored);
 }
 
 absl::StatusOr<v1::Caller> AccessService::GetCaller(const v1::GetCallerRequest&, const kb::Caller& caller) {

@@ -78,4 +78,15 @@ kb::FailureRecord FromProto(const v1::FailureRecord& record) {
   return domain;
 }
 
+kb::DiagnosisResolution ResolutionOf(const v1::ResolveDiagnosisRequest& request) {
+  kb::DiagnosisResolution resolution;
+  resolution.name = request.name();
+  resolution.module = request.module();
+  resolution.failure_mode = request.failure_mode();
+  resolution.confirmed = request.confirmed();
+  resolution.repair_action = request.repair_action();
+  resolution.notes = request.notes();
+  return resolution;
+}
+
 }  // namespace insdiag::server

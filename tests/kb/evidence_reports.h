@@ -9,6 +9,8 @@
 #include <vector>
 
 #include "insdiag/api/unit_types.h"
+#include "insdiag/engine/status_macros.h"
+#include "insdiag/kb/diagnose_analysis.h"
 #include "insdiag/kb/diagnosis.h"
 #include "insdiag/kb/failure_mode_catalogue.h"
 #include "insdiag/kb/knowledge_messages.h"
@@ -105,6 +107,12 @@ inline Evidence EvidenceOf(const v1::AnalysisReport& report) {
 inline Diagnosis DiagnoseReport(const v1::AnalysisReport& report, PriorInputs prior = {}) {
   const auto& f = Ins2000();
   return Diagnose(EvidenceOf(report), f.modes, f.settings, prior);
+}
+
+// An analysis diagnosed and stored by `store`, as the API shows the diagnosis.
+inline absl::StatusOr<v1::Diagnosis> DiagnoseStored(DiagnosisStore& store, const std::string& analysis) {
+  INSDIAG_ASSIGN_OR_RETURN(const StoredDiagnosis stored, AnalysisDiagnoser(store, EncodeDiagnosis).Diagnose(analysis));
+  return DecodeDiagnosis(stored);
 }
 
 // The evidence term named `name`, or nullptr.

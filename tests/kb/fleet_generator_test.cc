@@ -7,7 +7,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "insdiag/kb/diagnose_analysis.h"
+#include "evidence_reports.h"
 #include "insdiag/api/resource_names.h"
 #include "insdiag/kb/analysis_store.h"
 #include "insdiag/kb/diagnosis_store.h"
@@ -196,7 +196,7 @@ TEST_F(FleetGeneratorTest, GeneratedHistoryReadsBackThroughTheStoresAndEveryStat
 
   // A new diagnosis of a generated analysis works like any other.
   DiagnosisStore diagnoses(pool());
-  auto diagnosis = AnalysisDiagnoser(diagnoses).Diagnose(analysis->name());
+  auto diagnosis = testing::DiagnoseStored(diagnoses, analysis->name());
   ASSERT_TRUE(diagnosis.ok()) << diagnosis.status();
   EXPECT_FALSE(diagnosis->candidates().empty());
 

@@ -24,10 +24,15 @@ namespace {
 using namespace std::chrono_literals;
 
 std::string NameOf(const FailureRecord& record) { return record.name; }
-std::string NameOf(const v1::Diagnosis& diagnosis) { return diagnosis.name(); }
+std::string NameOf(const StoredDiagnosis& diagnosis) { return diagnosis.name; }
 
 class KnowledgeBaseTest : public insdiag::testing::DatabaseTest {
  protected:
+  // An analysis diagnosed and stored, as the API shows the diagnosis.
+  absl::StatusOr<v1::Diagnosis> Diagnose(const std::string& analysis) {
+    return testing::DiagnoseStored(*diagnoses_, analysis);
+  }
+
   void SetUp() override {
     DatabaseTest::SetUp();
     if (IsSkipped() || HasFatalFailure()) return;
@@ -106,13 +111,13 @@ TEST_F(KnowledgeBaseTest, AUnitTypeWithoutBuiltInFailureModesIsDiagnosedWithSett
   other.set_name("unitTypes/INS-2000-LAB");
   other.set_display_name("INS-2000 (lab variant)");
   ASSERT_TRUE(catalogue_->Seed({&other, 1}, {}).ok());
-  auto diagnosis = AnalysisDiagnoser(*diagnoses_).Diagnose(StoreAnalysis("LAB-0001", WornGyroX(), "INS-2000-LAB"));
+  auto diagnosis = Diagnose(StoreAnalysis("LAB-0001", WornGyroX(), "INS-2000-LAB"));
   ASSERT_TRUE(diagnosis.ok()) << diagnosis.status();
   EXPECT_THAT(diagnosis->notes(),
               ::testing::Contains(::testing::AllOf(
                   ::testing::HasSubstr("'INS-2000-LAB' has no built-in failure-mode"),
                   ::testing::HasSubstr("INS-2000's settings"))));
-  auto own = AnalysisDiagnoser(*diagnoses_).Diagnose(StoreAnalysis("INS-0009", WornGyroX()));
+  auto own = Diagnose(StoreAnalysis("INS-0009", WornGyroX()));
   ASSERT_TRUE(own.ok()) << own.status();
   EXPECT_THAT(
       own->notes(),
@@ -121,21 +126,21 @@ TEST_F(KnowledgeBaseTest, AUnitTypeWithoutBuiltInFailureModesIsDiagnosedWithSett
 
 TEST_F(KnowledgeBaseTest, ConfirmingADiagnosisWritesAFailureRecordAndRaisesLaterPosteriors) {
   const std::string first = StoreAnalysis("INS-0002", WornGyroX());
-  auto diagnosis = AnalysisDiagnoser(*diagnoses_).Diagnose(first);
+  auto diagnosis = Diagnose(first);
   ASSERT_TRUE(diagnosis.ok()) << diagnosis.status();
   EXPECT_EQ(diagnosis->candidates(0).module(), "gyro.x");
   const double before = P(*diagnosis, "failureModes/dtg-bearing-wear.x");
 
-  v1::ResolveDiagnosisRequest resolve;
-  resolve.set_name(diagnosis->name());
-  resolve.set_module("gyro.x");
-  resolve.set_failure_mode("failureModes/dtg-bearing-wear.x");
-  resolve.set_confirmed(true);
-  resolve.set_repair_action("gyro replaced");
+  DiagnosisResolution resolve;
+  resolve.name = diagnosis->name();
+  resolve.module = "gyro.x";
+  resolve.failure_mode = "failureModes/dtg-bearing-wear.x";
+  resolve.confirmed = true;
+  resolve.repair_action = "gyro replaced";
   auto resolved = diagnoses_->Resolve(resolve);
   ASSERT_TRUE(resolved.ok()) << resolved.status();
-  EXPECT_TRUE(resolved->confirmed());
-  EXPECT_FALSE(resolved->failure_record().empty());
+  EXPECT_TRUE(resolved->confirmed);
+  EXPECT_FALSE(resolved->failure_record.empty());
   EXPECT_EQ(diagnoses_->Resolve(resolve).status().code(), absl::StatusCode::kFailedPrecondition);
 
   FailureRecordQuery unit_records;
@@ -152,17 +157,17 @@ TEST_F(KnowledgeBaseTest, ConfirmingADiagnosisWritesAFailureRecordAndRaisesLater
   EXPECT_NE(mode->signature[0].change, mode->signature[0].expert_change);
 
   // Another unit with the same evidence: the mode is now more probable.
-  auto later = AnalysisDiagnoser(*diagnoses_).Diagnose(StoreAnalysis("INS-0003", WornGyroX()));
+  auto later = Diagnose(StoreAnalysis("INS-0003", WornGyroX()));
   ASSERT_TRUE(later.ok());
   EXPECT_GT(P(*later, "failureModes/dtg-bearing-wear.x"), before);
 
   // A rejection is a no-fault-found record and leaves the mode's count alone.
-  auto other = AnalysisDiagnoser(*diagnoses_).Diagnose(StoreAnalysis("INS-0004", WornGyroX()));
-  resolve.set_name(other->name());
-  resolve.set_confirmed(false);
+  auto other = Diagnose(StoreAnalysis("INS-0004", WornGyroX()));
+  resolve.name = other->name();
+  resolve.confirmed = false;
   auto rejected = diagnoses_->Resolve(resolve);
   ASSERT_TRUE(rejected.ok()) << rejected.status();
-  EXPECT_FALSE(rejected->confirmed());
+  EXPECT_FALSE(rejected->confirmed);
   EXPECT_EQ(catalogue_->GetFailureMode("failureModes/dtg-bearing-wear.x")->confirmed_failures, 1);
 
   FleetStore fleet(pool());
@@ -261,7 +266,7 @@ TEST_F(KnowledgeBaseTest, ListsRecordsAndDiagnosesPageByPage) {
   std::vector<std::string> analyses;
   for (int i = 0; i < 3; ++i) analyses.push_back(StoreAnalysis("INS-0007", testing::NominalReport()));
   for (const auto& analysis : analyses) {
-    ASSERT_TRUE(AnalysisDiagnoser(*diagnoses_).Diagnose(analysis).ok());
+    ASSERT_TRUE(Diagnose(analysis).ok());
     FailureRecord record;
     record.module = unit + "/modules/acc.x";
     record.analysis = analysis;

@@ -166,14 +166,14 @@ TEST_F(UnitHistoryStoreTest, AUnitsGrowingDriftStrengthensItsGyroWhileAStableHis
   DiagnosisStore diagnoses(pool());
   const v1::AnalysisReport last = Report(1.6, 0.0, 1e-7);
   // The last run alone, on a unit without history.
-  auto alone = AnalysisDiagnoser(diagnoses).Diagnose(StoreRunAndAnalysis("INS-ALONE", 0.0, last));
+  auto alone = testing::DiagnoseStored(diagnoses, StoreRunAndAnalysis("INS-ALONE", 0.0, last));
   ASSERT_TRUE(alone.ok()) << alone.status();
   // The same last run after five runs with σ growing towards it.
   std::string final_analysis;
   for (int i = 0; i < 6; ++i) {
     final_analysis = StoreRunAndAnalysis("INS-DRIFT", kDaysBetweenRuns * i, i < 5 ? Report(0.8 + 0.16 * i, 0.0, 1e-7) : last);
   }
-  auto drifting = AnalysisDiagnoser(diagnoses).Diagnose(final_analysis);
+  auto drifting = testing::DiagnoseStored(diagnoses, final_analysis);
   ASSERT_TRUE(drifting.ok()) << drifting.status();
   EXPECT_GT(ModuleProbability(*drifting, "gyro.x"), ModuleProbability(*alone, "gyro.x"));
   EXPECT_EQ(drifting->candidates(0).module(), "gyro.x") << drifting->DebugString();
@@ -189,7 +189,7 @@ TEST_F(UnitHistoryStoreTest, AUnitsGrowingDriftStrengthensItsGyroWhileAStableHis
   for (int i = 0; i < 6; ++i) {
     stable_last = StoreRunAndAnalysis("INS-STABLE", kDaysBetweenRuns * i, i < 5 ? Report(1.0 + scatter(rng), 0.0, 1e-7) : last);
   }
-  auto stable = AnalysisDiagnoser(diagnoses).Diagnose(stable_last);
+  auto stable = testing::DiagnoseStored(diagnoses, stable_last);
   ASSERT_TRUE(stable.ok()) << stable.status();
   ASSERT_EQ(stable->hypotheses_size(), alone->hypotheses_size());
   for (int i = 0; i < stable->hypotheses_size(); ++i) {

@@ -5,7 +5,6 @@
 #include <absl/strings/escaping.h>
 #include <absl/strings/str_cat.h>
 #include <absl/strings/str_format.h>
-#include <google/protobuf/util/time_util.h>
 
 #include <chrono>
 #include <map>
@@ -337,12 +336,9 @@ void Writer::EmitDiagnosis(std::size_t d, std::string& buffer, std::string& cand
     row.End();
   }
   const DiagnosisHeadline headline = HeadlineOf(diagnosis);
-  // Kept as the API shows it, named and timed as the diagnosis store does.
-  v1::Diagnosis shown = ToProto(diagnosis);
-  shown.set_name(absl::StrCat("diagnoses/", UuidText(DiagnosisId(t.diagnosis))));
-  *shown.mutable_create_time() = google::protobuf::util::TimeUtil::MicrosecondsToTimestamp(t.time_us);
-  std::string body;
-  shown.SerializeToString(&body);
+  // Kept as the diagnosis store keeps it.
+  const std::string body = EncodeDiagnosis(diagnosis, absl::StrCat("diagnoses/", UuidText(DiagnosisId(t.diagnosis))),
+                                           absl::FromUnixMicros(t.time_us));
   CopyRow row(buffer);
   row.Id(DiagnosisId(t.diagnosis)).Id(AnalysisId(t)).Int(u.unit_id).Double(headline.fault_probability);
   row.Text(headline.top ? headline.top->module : "").Text(headline.top ? headline.top->failure_mode : "");

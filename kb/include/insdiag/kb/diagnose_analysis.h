@@ -7,9 +7,9 @@
 #include <absl/status/statusor.h>
 
 #include <string>
+#include <utility>
 
 #include "insdiag/kb/diagnosis_store.h"
-#include "insdiag/v1/knowledge.pb.h"
 
 namespace insdiag::kb {
 
@@ -18,14 +18,16 @@ Diagnosis DiagnoseInputs(const DiagnosisInputs& inputs);
 
 class AnalysisDiagnoser {
  public:
-  explicit AnalysisDiagnoser(DiagnosisStore& store) : store_(store) {}
+  // `encode` writes the diagnosis as it is kept (the API's encoding, at the edge).
+  AnalysisDiagnoser(DiagnosisStore& store, DiagnosisEncoder encode) : store_(store), encode_(std::move(encode)) {}
 
   // Diagnoses a SUCCEEDED analysis (analyses/{a}) and stores the diagnosis.
   // NOT_FOUND, FAILED_PRECONDITION: as DiagnosisStore::LoadInputs.
-  absl::StatusOr<v1::Diagnosis> Diagnose(const std::string& analysis_name);
+  absl::StatusOr<StoredDiagnosis> Diagnose(const std::string& analysis_name);
 
  private:
   DiagnosisStore& store_;
+  DiagnosisEncoder encode_;
 };
 
 }  // namespace insdiag::kb

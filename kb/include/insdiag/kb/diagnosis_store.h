@@ -8,7 +8,9 @@
 
 #include <absl/status/status.h>
 #include <absl/status/statusor.h>
+#include <absl/time/time.h>
 
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -16,7 +18,6 @@
 #include "insdiag/kb/connection_pool.h"
 #include "insdiag/kb/diagnosis.h"
 #include "insdiag/kb/page_query.h"
-#include "insdiag/v1/knowledge.pb.h"
 
 namespace insdiag::kb {
 
@@ -26,6 +27,34 @@ struct DiagnosisQuery {
   std::string analysis;  // analyses/{a}
   std::string unit;      // units/{u}
 };
+
+// A diagnosis as the knowledge base keeps it: its name, the diagnosis in
+// the API's encoding (which kb keeps and hands back without reading), and
+// how it was resolved (empty until it is).
+struct StoredDiagnosis {
+  std::string name;            // diagnoses/{diagnosis}
+  std::string encoded;         // as the caller's encoder wrote it
+  std::string failure_record;  // failureRecords/{record}, once resolved
+  std::string resolved_module;
+  bool confirmed = false;
+};
+
+// How a diagnosis was settled on the bench: the module found faulty (or
+// suspected), the failure mode found, and whether the fault was confirmed
+// (false: no fault found).
+struct DiagnosisResolution {
+  std::string name;  // diagnoses/{diagnosis}
+  std::string module;
+  std::string failure_mode;  // failureModes/{mode}; required when confirmed
+  bool confirmed = false;
+  std::string repair_action;
+  std::string notes;
+};
+
+// Writes a diagnosis in the API's encoding, with the name and create time
+// the store gives it.
+using DiagnosisEncoder =
+    std::function<std::string(const Diagnosis& diagnosis, const std::string& name, absl::Time create_time)>;
 
 // What the knowledge base holds for diagnosing one analysis.
 struct DiagnosisInputs {
@@ -56,15 +85,17 @@ class DiagnosisStore {
   // analysis; FAILED_PRECONDITION when it has not succeeded or its unit has
   // no known unit type.
   absl::StatusOr<DiagnosisInputs> LoadInputs(const std::string& analysis_name);
-  // Stores the diagnosis made from `inputs`, naming it and its create time.
-  // The stored diagnosis as the API shows it.
-  absl::StatusOr<v1::Diagnosis> Store(const DiagnosisInputs& inputs, const Diagnosis& diagnosis);
-  absl::StatusOr<v1::Diagnosis> Get(const std::string& name);
-  absl::StatusOr<std::pair<std::vector<v1::Diagnosis>, std::string>> List(const DiagnosisQuery& query);
+  // Stores the diagnosis made from `inputs`, naming it and its create time
+  // and keeping it as `encode` writes it.
+  absl::StatusOr<StoredDiagnosis> Store(const DiagnosisInputs& inputs, const Diagnosis& diagnosis,
+                                        const DiagnosisEncoder& encode);
+  absl::StatusOr<StoredDiagnosis> Get(const std::string& name);
+  absl::StatusOr<std::pair<std::vector<StoredDiagnosis>, std::string>> List(const DiagnosisQuery& query);
   // Writes the failure record (confirmed, or no fault found) and, when
   // confirmed, refines the mode's signature with the confirmed cases.
-  // FAILED_PRECONDITION when already resolved.
-  absl::StatusOr<v1::Diagnosis> Resolve(const v1::ResolveDiagnosisRequest& request);
+  // FAILED_PRECONDITION when already resolved; INVALID_ARGUMENT naming the
+  // field for a resolution without a module, or confirmed without a mode.
+  absl::StatusOr<StoredDiagnosis> Resolve(const DiagnosisResolution& resolution);
 
   // Re-derives the signatures of the failure modes with confirmed cases (of
   // one unit type, or all when empty) from those cases, as confirming each

@@ -4,7 +4,13 @@
 // form and answer with messages.
 #pragma once
 
+#include <absl/status/statusor.h>
+#include <absl/time/time.h>
+
+#include <string>
+
 #include "insdiag/kb/diagnosis.h"
+#include "insdiag/kb/diagnosis_store.h"
 #include "insdiag/kb/knowledge.h"
 #include "insdiag/v1/analyses.pb.h"
 #include "insdiag/v1/knowledge.pb.h"
@@ -25,6 +31,11 @@ DiagnosisSettings SettingsOf(const v1::DiagnosisSettings& message);
 
 // Name, create time and resolution are the store's.
 v1::Diagnosis ToProto(const Diagnosis& diagnosis);
+// The diagnosis in the API's encoding with the name and create time the
+// store gives it (a DiagnosisEncoder), and a stored diagnosis as the API
+// shows it, with its resolution; INTERNAL for bytes that are no diagnosis.
+std::string EncodeDiagnosis(const Diagnosis& diagnosis, const std::string& name, absl::Time create_time);
+absl::StatusOr<v1::Diagnosis> DecodeDiagnosis(const StoredDiagnosis& stored);
 
 ReportFindings FindingsOf(const v1::AnalysisReport& report);
 
