@@ -18,7 +18,7 @@
 
 #include "insdiag/api/limits.h"
 #include "insdiag/api/resource_names.h"
-#include "insdiag/api/run_codec.h"
+#include "insdiag/api/sha256.h"
 #include "insdiag/engine/status_macros.h"
 #include "store_util.h"
 

@@ -10,7 +10,7 @@
 #include <map>
 #include <sstream>
 
-#include "insdiag/api/run_codec.h"
+#include "insdiag/api/sha256.h"
 #include "insdiag/engine/status_macros.h"
 
 namespace insdiag::kb {

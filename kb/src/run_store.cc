@@ -11,7 +11,7 @@
 #include <map>
 #include <numbers>
 
-#include "insdiag/api/json.h"
+#include "insdiag/api/json_string.h"
 #include "insdiag/api/resource_names.h"
 #include "insdiag/benchrun/bench_run_validation.h"
 #include "insdiag/engine/status_macros.h"

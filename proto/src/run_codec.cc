@@ -46,13 +46,6 @@ void AppendLittleEndian(double value, std::array<unsigned char, 88>& buffer, std
 
 }  // namespace
 
-std::string Sha256(std::string_view bytes) {
-  std::array<unsigned char, EVP_MAX_MD_SIZE> digest{};
-  unsigned int length = 0;
-  EVP_Digest(bytes.data(), bytes.size(), digest.data(), &length, EVP_sha256(), nullptr);
-  return std::string(reinterpret_cast<const char*>(digest.data()), length);
-}
-
 v1::RunMetadata ToProto(const engine::BenchRunMetadata& metadata, bool has_temperature) {
   v1::RunMetadata out;
   out.set_format(metadata.format);

@@ -1,4 +1,4 @@
-// The v1 API's resource names (proto/include/insdiag/api/resource_names.h).
+// The v1 API's resource names (proto/base/include/insdiag/api/resource_names.h).
 #include "insdiag/api/resource_names.h"
 
 #include <gtest/gtest.h>

@@ -10,7 +10,7 @@
 #include <map>
 
 #include "generator.h"
-#include "insdiag/api/run_codec.h"
+#include "insdiag/api/sha256.h"
 #include "insdiag/engine/candidate_source.h"
 #include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/copy_text.h"

@@ -11,6 +11,8 @@
 #include <string>
 #include <string_view>
 
+#include "insdiag/api/json_string.h"  // JsonString, for JSON written outside a message
+
 namespace insdiag::api {
 
 // Compact single-line JSON unless `pretty`.
@@ -19,10 +21,5 @@ absl::StatusOr<std::string> ToJson(const google::protobuf::Message& message, boo
 // Parses JSON into `message` (cleared first); unknown fields are refused.
 // INVALID_ARGUMENT naming what did not parse.
 absl::Status FromJson(std::string_view json, google::protobuf::Message* message);
-
-// `text` as a JSON string, quotes included: the quote, the backslash and
-// control characters escaped (RFC 8259 §7); UTF-8 passes as it is. For
-// JSON written outside a message (stored metadata, log lines).
-std::string JsonString(std::string_view text);
 
 }  // namespace insdiag::api

@@ -16,6 +16,7 @@
 #include <string_view>
 #include <vector>
 
+#include "insdiag/api/sha256.h"  // Sha256, the digest of bytes
 #include "insdiag/engine/bench_run.h"
 #include "insdiag/v1/runs.pb.h"
 
@@ -30,9 +31,6 @@ engine::BenchRunMetadata FromProto(const v1::RunMetadata& metadata);
 
 v1::Sample ToProto(const engine::ImuSample& sample);
 engine::ImuSample FromProto(const v1::Sample& sample);
-
-// SHA-256 of `bytes`: the 32 raw bytes of the digest.
-std::string Sha256(std::string_view bytes);
 
 // SHA-256 of samples as defined in runs.proto (UploadRunRequest.sha256):
 // per sample the IEEE-754 binary64 little-endian bytes of t, gyro xyz,
