@@ -3,12 +3,11 @@
 #include <absl/strings/str_cat.h>
 
 #include <map>
+#include <optional>
 
 #include "insdiag/api/resource_names.h"
 #include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/diagnosis.h"
-#include "insdiag/kb/failure_mode_catalogue.h"
-#include "insdiag/kb/knowledge_messages.h"
 #include "store_util.h"
 
 namespace insdiag::kb::internal {
@@ -50,17 +49,49 @@ absl::StatusOr<double> FleetExposure(Connection& db, const std::string& unit_typ
   return DoubleOr0(rows, 0, 0);
 }
 
-absl::StatusOr<UnitTypeSettings> SettingsFor(const std::string& unit_type_id) {
-  if (auto own = BuiltinFailureModeCatalogue(unit_type_id); own.ok())
-    return UnitTypeSettings{SettingsOf((*own)->settings()), ""};
-  auto fallback = BuiltinFailureModeCatalogue(kDefaultSettingsUnitType);
-  if (!fallback.ok()) {
+namespace {
+
+// The unit type's row of diagnosis_settings; nullopt when it has none.
+absl::StatusOr<std::optional<DiagnosisSettings>> StoredSettings(Connection& db, const std::string& unit_type_id) {
+  INSDIAG_ASSIGN_OR_RETURN(auto rows, db.Exec(absl::StrCat("SELECT ", kDiagnosisSettingsColumns,
+                                                           " FROM diagnosis_settings WHERE unit_type = $1"),
+                                              {Param::Text(unit_type_id)}));
+  if (rows.rows() == 0) return std::nullopt;
+  int column = 0;
+  const auto next = [&] { return DoubleOr0(rows, 0, column++); };
+  DiagnosisSettings s;
+  s.healthy_tolerance_sd = next();
+  s.healthy_log_ratio_fraction = next();
+  s.healthy_z_sd = next();
+  s.contamination = next();
+  s.broad_log_ratio = next();
+  s.broad_tolerance = next();
+  s.broad_z = next();
+  s.unknown_prior = next();
+  s.minimum_exposure_hours = next();
+  s.expert_pseudo_hours = next();
+  s.expert_signature_weight = next();
+  s.significance_level = next();
+  s.incidental_contamination = next();
+  s.trend_z_change = next();
+  s.trend_z_spread = next();
+  s.present_score_octaves = static_cast<int>(IntOr0(rows, 0, column));
+  return s;
+}
+
+}  // namespace
+
+absl::StatusOr<UnitTypeSettings> SettingsFor(Connection& db, const std::string& unit_type_id) {
+  INSDIAG_ASSIGN_OR_RETURN(auto own, StoredSettings(db, unit_type_id));
+  if (own) return UnitTypeSettings{*own, ""};
+  INSDIAG_ASSIGN_OR_RETURN(auto fallback, StoredSettings(db, kDefaultSettingsUnitType));
+  if (!fallback) {
     return absl::FailedPreconditionError(absl::StrCat(
         "unit type '", unit_type_id, "' has no built-in failure-mode catalogue, and neither has ",
         kDefaultSettingsUnitType, ", whose diagnosis settings apply then"));
   }
   return UnitTypeSettings{
-      SettingsOf((*fallback)->settings()),
+      *fallback,
       absl::StrCat("unit type '", unit_type_id,
                    "' has no built-in failure-mode catalogue: diagnosed with ",
                    kDefaultSettingsUnitType,
@@ -98,10 +129,10 @@ absl::StatusOr<std::vector<FailureMode>> LoadModes(Connection& db, const std::st
     m.weibull_scale_hours = DoubleOr0(rows, r, 7);
     m.confirmed_failures = IntOr0(rows, r, 8);
     if (!exposure.contains(type)) {
-      // Once per unit type: the fleet's hours, and its catalogue's settings (parsed from JSON).
+      // Once per unit type: the fleet's hours, and its diagnosis settings.
       INSDIAG_ASSIGN_OR_RETURN(auto hours, FleetExposure(db, type));
       exposure[type] = hours;
-      INSDIAG_ASSIGN_OR_RETURN(auto type_settings, SettingsFor(type));
+      INSDIAG_ASSIGN_OR_RETURN(auto type_settings, SettingsFor(db, type));
       settings[type] = type_settings.settings;
     }
     m.rate_per_million_hours = 1e6 * ModeRatePerHour(m, m.confirmed_failures, exposure[type], settings[type]);

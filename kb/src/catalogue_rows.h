@@ -1,4 +1,4 @@
-// Reading the catalogue's tables into messages: what the catalogue store
+// Reading the catalogue's tables into kb's values: what the catalogue store
 // serves, and what diagnosing and refining signatures read alongside it.
 #pragma once
 
@@ -21,9 +21,17 @@ absl::StatusOr<UnitType> LoadUnitType(Connection& db, const std::string& id);
 // The fleet's operating hours of a unit type.
 absl::StatusOr<double> FleetExposure(Connection& db, const std::string& unit_type_id);
 
-// The unit type whose built-in catalogue's diagnosis constants apply to a
-// unit type that has no built-in catalogue (one made through the API).
+// The unit type whose diagnosis settings apply to a unit type that has none
+// of its own (one whose catalogue is not built in, made through the API).
 inline constexpr char kDefaultSettingsUnitType[] = "INS-2000";
+
+// The columns of diagnosis_settings (migrations/0006_diagnosis_settings.sql)
+// that hold a DiagnosisSettings, in its fields' order.
+inline constexpr char kDiagnosisSettingsColumns[] =
+    "healthy_tolerance_sd, healthy_log_ratio_fraction, healthy_z_sd, contamination, broad_log_ratio, "
+    "broad_tolerance, broad_z, unknown_prior, minimum_exposure_hours, expert_pseudo_hours, "
+    "expert_signature_weight, significance_level, incidental_contamination, trend_z_change, trend_z_spread, "
+    "present_score_octaves";
 
 // The diagnosis constants a unit type is diagnosed with, and, when they are
 // not its own, a note for the diagnosis that says whose they are.
@@ -32,10 +40,9 @@ struct UnitTypeSettings {
   std::string note;
 };
 
-// The diagnosis constants of the unit type's built-in catalogue, or
-// kDefaultSettingsUnitType's with a note; FAILED_PRECONDITION when neither
-// is built in.
-absl::StatusOr<UnitTypeSettings> SettingsFor(const std::string& unit_type_id);
+// The unit type's stored diagnosis settings, or kDefaultSettingsUnitType's
+// with a note; FAILED_PRECONDITION when neither is stored.
+absl::StatusOr<UnitTypeSettings> SettingsFor(Connection& db, const std::string& unit_type_id);
 
 // The failure modes with their signatures, confirmed counts and current
 // rates; each filter ("" for any) narrows: unit type, module role, one mode.

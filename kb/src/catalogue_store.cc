@@ -1,6 +1,7 @@
 #include "insdiag/kb/catalogue_store.h"
 
 #include <absl/strings/str_cat.h>
+#include <absl/strings/str_split.h>
 #include <absl/time/time.h>
 
 #include <algorithm>
@@ -8,8 +9,6 @@
 #include "catalogue_rows.h"
 #include "insdiag/api/resource_names.h"
 #include "insdiag/engine/status_macros.h"
-#include "insdiag/kb/failure_mode_catalogue.h"
-#include "insdiag/kb/knowledge_messages.h"
 #include "store_util.h"
 
 namespace insdiag::kb {
@@ -93,6 +92,32 @@ absl::Status UpsertFailureMode(Connection& db, const FailureMode& mode) {
   return absl::OkStatus();
 }
 
+// Upserts the unit type's diagnosis settings, in kDiagnosisSettingsColumns' order.
+absl::Status UpsertDiagnosisSettings(Connection& db, const UnitTypeDiagnosisSettings& of_type) {
+  const DiagnosisSettings& s = of_type.settings;
+  std::vector<Param> params = {Param::Text(UnitTypeId(of_type.unit_type))};
+  for (const double value : {s.healthy_tolerance_sd, s.healthy_log_ratio_fraction, s.healthy_z_sd, s.contamination,
+                             s.broad_log_ratio, s.broad_tolerance, s.broad_z, s.unknown_prior,
+                             s.minimum_exposure_hours, s.expert_pseudo_hours, s.expert_signature_weight,
+                             s.significance_level, s.incidental_contamination, s.trend_z_change,
+                             s.trend_z_spread}) {
+    params.push_back(Param::Double(value));
+  }
+  params.push_back(Param::Int(s.present_score_octaves));
+  std::string placeholders;
+  std::string updates;
+  for (std::size_t i = 1; i <= params.size(); ++i) absl::StrAppend(&placeholders, i > 1 ? ", $" : "$", i);
+  for (absl::string_view column : absl::StrSplit(internal::kDiagnosisSettingsColumns, ", ")) {
+    absl::StrAppend(&updates, column, " = EXCLUDED.", column, ", ");
+  }
+  return db
+      .Exec(absl::StrCat("INSERT INTO diagnosis_settings (unit_type, ", internal::kDiagnosisSettingsColumns,
+                         ") VALUES (", placeholders, ") ON CONFLICT (unit_type) DO UPDATE SET ", updates,
+                         "update_time = now()"),
+            params)
+      .status();
+}
+
 constexpr char kUnitColumns[] =
     "SELECT serial, coalesce(unit_type, ''), operating_hours, (extract(epoch FROM create_time) * 1000000)::bigint, "
     "coalesce(batch, ''), (extract(epoch FROM commission_time) * 1000000)::bigint, retired_time IS NOT NULL FROM units ";
@@ -111,20 +136,16 @@ Unit UnitFromRow(const Result& rows, int r) {
 
 }  // namespace
 
-absl::Status CatalogueStore::Seed(std::span<const v1::UnitType> unit_types,
-                                  std::span<const v1::FailureModeCatalogue> catalogues) {
+absl::Status CatalogueStore::Seed(std::span<const UnitType> unit_types, std::span<const FailureMode> failure_modes,
+                                  std::span<const UnitTypeDiagnosisSettings> settings) {
   INSDIAG_ASSIGN_OR_RETURN(auto db, pool_.Acquire());
   return db->InTransaction([&]() -> absl::Status {
     INSDIAG_RETURN_IF_ERROR(db->Exec("SELECT pg_advisory_xact_lock($1)",
                                      {Param::Int(AdvisoryLockKey("insdiag.seed"))}));
-    for (const auto& t : unit_types) {
-      INSDIAG_RETURN_IF_ERROR(UpsertUnitType(*db, UnitTypeOf(t)));
-    }
-    for (const auto& catalogue : catalogues) {
-      INSDIAG_ASSIGN_OR_RETURN(auto modes, ExpandCatalogue(catalogue));
-      for (const auto& mode : modes) {
-        INSDIAG_RETURN_IF_ERROR(UpsertFailureMode(*db, FailureModeOf(mode)));
-      }
+    for (const UnitType& t : unit_types) INSDIAG_RETURN_IF_ERROR(UpsertUnitType(*db, t));
+    for (const FailureMode& mode : failure_modes) INSDIAG_RETURN_IF_ERROR(UpsertFailureMode(*db, mode));
+    for (const UnitTypeDiagnosisSettings& of_type : settings) {
+      INSDIAG_RETURN_IF_ERROR(UpsertDiagnosisSettings(*db, of_type));
     }
     return absl::OkStatus();
   });

@@ -118,7 +118,7 @@ absl::StatusOr<DiagnosisInputs> DiagnosisStore::LoadInputs(const std::string& an
   in.unit_type = *std::move(unit_type);
   INSDIAG_ASSIGN_OR_RETURN(in.modes, LoadModes(*db, type_id, "", ""));
   INSDIAG_ASSIGN_OR_RETURN(auto fleet, FleetExposure(*db, type_id));
-  INSDIAG_ASSIGN_OR_RETURN(auto type_settings, SettingsFor(type_id));
+  INSDIAG_ASSIGN_OR_RETURN(auto type_settings, SettingsFor(*db, type_id));
   in.settings = type_settings.settings;
   in.settings_note = type_settings.note;
   const double hours = internal::DoubleOr0(unit, 0, 3);

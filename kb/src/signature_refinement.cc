@@ -16,7 +16,7 @@ absl::Status RefineModeSignature(Connection& db, const std::string& mode_id) {
   const FailureMode& mode = modes.front();
   const std::string type_id = UnitTypeId(mode.unit_type);
   INSDIAG_ASSIGN_OR_RETURN(auto unit_type, LoadUnitType(db, type_id));
-  INSDIAG_ASSIGN_OR_RETURN(auto type_settings, SettingsFor(type_id));
+  INSDIAG_ASSIGN_OR_RETURN(auto type_settings, SettingsFor(db, type_id));
   const DiagnosisSettings& settings = type_settings.settings;
   INSDIAG_ASSIGN_OR_RETURN(auto cases,
                            db.Exec("SELECT DISTINCT analysis_id::text FROM failure_records WHERE "

@@ -14,9 +14,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "insdiag/api/unit_types.h"
 #include "insdiag/engine/status_macros.h"
-#include "insdiag/kb/failure_mode_catalogue.h"
+#include "insdiag/kb/catalogue_data.h"
 #include "insdiag/kb/run_store.h"
 #include "insdiag/server/access_guard.h"
 #include "insdiag/server/analysis_workers.h"
@@ -169,9 +168,7 @@ absl::StatusOr<std::unique_ptr<InsdiagServer>> InsdiagServer::Start(kb::Connecti
   server->services_ = std::make_unique<Services>(pool, options);
   if (options.seed_knowledge_base) {
     // The built-in unit types and failure modes, upserted idempotently.
-    const auto unit_types = api::BuiltinUnitTypes();
-    const auto& catalogues = kb::BuiltinFailureModeCatalogues();
-    INSDIAG_RETURN_IF_ERROR(server->services_->catalogue_store.Seed(unit_types, catalogues));
+    INSDIAG_RETURN_IF_ERROR(kb::SeedBuiltinCatalogues(server->services_->catalogue_store));
   }
 
   if (auto guarded = AccessGuard::CheckEveryMethodHasARule(ServiceNames()); !guarded.ok())

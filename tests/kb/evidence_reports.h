@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "insdiag/api/unit_types.h"
 #include "insdiag/engine/status_macros.h"
+#include "insdiag/kb/catalogue_data.h"
 #include "insdiag/kb/diagnose_analysis.h"
 #include "insdiag/kb/diagnosis.h"
 #include "insdiag/kb/failure_mode_catalogue.h"
@@ -27,16 +27,14 @@ struct Fixture {
 inline const Fixture& Ins2000() {
   static const Fixture f = [] {
     Fixture out;
-    auto type = api::BuiltinUnitType("INS-2000");
-    EXPECT_TRUE(type.ok()) << type.status();
-    out.unit_type = UnitTypeOf(*type);
+    auto built_in = BuiltinUnitTypeCatalogue("INS-2000");
+    EXPECT_TRUE(built_in.ok()) << built_in.status();
+    out.unit_type = built_in->unit_type;
+    out.settings = built_in->settings;
+    out.modes = built_in->failure_modes;
     auto catalogue = BuiltinFailureModeCatalogue("INS-2000");
     EXPECT_TRUE(catalogue.ok()) << catalogue.status();
     out.catalogue = **catalogue;
-    out.settings = SettingsOf(out.catalogue.settings());
-    auto modes = ExpandCatalogue(out.catalogue);
-    EXPECT_TRUE(modes.ok()) << modes.status();
-    for (const v1::FailureMode& mode : *modes) out.modes.push_back(FailureModeOf(mode));
     return out;
   }();
   return f;

@@ -5,13 +5,16 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <bit>
+#include <cstdint>
+
 #include "evidence_reports.h"
 #include "insdiag/kb/analysis_store.h"
+#include "insdiag/kb/catalogue_data.h"
 #include "insdiag/kb/catalogue_store.h"
 #include "insdiag/kb/diagnose_analysis.h"
 #include "insdiag/kb/diagnosis.h"
 #include "insdiag/kb/diagnosis_store.h"
-#include "insdiag/kb/failure_mode_catalogue.h"
 #include "insdiag/kb/failure_record_store.h"
 #include "insdiag/kb/fleet_store.h"
 #include "insdiag/kb/run_store.h"
@@ -39,10 +42,8 @@ class KnowledgeBaseTest : public insdiag::testing::DatabaseTest {
     catalogue_ = std::make_unique<CatalogueStore>(pool());
     records_ = std::make_unique<FailureRecordStore>(pool());
     diagnoses_ = std::make_unique<DiagnosisStore>(pool());
-    const auto types = api::BuiltinUnitTypes();
-    const auto catalogues = BuiltinFailureModeCatalogues();
-    ASSERT_TRUE(catalogue_->Seed(types, catalogues).ok());
-    ASSERT_TRUE(catalogue_->Seed(types, catalogues).ok()) << "seeding twice is harmless";
+    ASSERT_TRUE(SeedBuiltinCatalogues(*catalogue_).ok());
+    ASSERT_TRUE(SeedBuiltinCatalogues(*catalogue_).ok()) << "seeding twice is harmless";
   }
 
   // A SUCCEEDED analysis of unit `serial` with `report`.
@@ -94,6 +95,42 @@ TEST_F(KnowledgeBaseTest, SeedsTheUnitTypeAndItsFailureModes) {
   EXPECT_EQ(catalogue_->GetFailureMode("failureModes/nope").status().code(), absl::StatusCode::kNotFound);
 }
 
+// Every field, bit for bit: what the diagnosis of a unit reads is what its
+// unit type's catalogue says.
+void ExpectSameSettings(const DiagnosisSettings& read, const DiagnosisSettings& given) {
+  for (double DiagnosisSettings::*field :
+       {&DiagnosisSettings::healthy_tolerance_sd, &DiagnosisSettings::healthy_log_ratio_fraction,
+        &DiagnosisSettings::healthy_z_sd, &DiagnosisSettings::contamination, &DiagnosisSettings::broad_log_ratio,
+        &DiagnosisSettings::broad_tolerance, &DiagnosisSettings::broad_z, &DiagnosisSettings::unknown_prior,
+        &DiagnosisSettings::minimum_exposure_hours, &DiagnosisSettings::expert_pseudo_hours,
+        &DiagnosisSettings::expert_signature_weight, &DiagnosisSettings::significance_level,
+        &DiagnosisSettings::incidental_contamination, &DiagnosisSettings::trend_z_change,
+        &DiagnosisSettings::trend_z_spread}) {
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(read.*field), std::bit_cast<std::uint64_t>(given.*field))
+        << read.*field << " read back, " << given.*field << " given";
+  }
+  EXPECT_EQ(read.present_score_octaves, given.present_score_octaves);
+}
+
+TEST_F(KnowledgeBaseTest, TheDiagnosisSettingsReadBackAsTheCatalogueGivesThem) {
+  const DiagnosisSettings& catalogue = testing::Ins2000().settings;
+  ASSERT_GT(catalogue.healthy_tolerance_sd, 0.0) << "the catalogue's settings are set";
+  auto inputs = diagnoses_->LoadInputs(StoreAnalysis("INS-0010", testing::NominalReport()));
+  ASSERT_TRUE(inputs.ok()) << inputs.status();
+  ExpectSameSettings(inputs->settings, catalogue);
+  EXPECT_EQ(inputs->settings_note, "") << "its own settings";
+
+  // Seeding again with other values replaces them.
+  DiagnosisSettings changed = catalogue;
+  changed.significance_level = 0.1 + 0.2;  // not 0.3: a value with no short decimal
+  changed.present_score_octaves = 7;
+  const UnitTypeDiagnosisSettings seeded{"unitTypes/INS-2000", changed};
+  ASSERT_TRUE(catalogue_->Seed({}, {}, {&seeded, 1}).ok());
+  auto again = diagnoses_->LoadInputs(inputs->analysis_name);
+  ASSERT_TRUE(again.ok()) << again.status();
+  ExpectSameSettings(again->settings, changed);
+}
+
 TEST_F(KnowledgeBaseTest, ARunOfANewSerialRegistersTheUnitWithItsModules) {
   StoreAnalysis("INS-0001", testing::NominalReport());
   auto unit = catalogue_->GetUnit("units/INS-0001");
@@ -107,11 +144,15 @@ TEST_F(KnowledgeBaseTest, ARunOfANewSerialRegistersTheUnitWithItsModules) {
 // A unit type the knowledge base knows but has no built-in failure modes for
 // is diagnosed with the default catalogue's settings, and the diagnosis says so.
 TEST_F(KnowledgeBaseTest, AUnitTypeWithoutBuiltInFailureModesIsDiagnosedWithSettingsItNames) {
-  v1::UnitType other = api::BuiltinUnitTypes().front();
-  other.set_name("unitTypes/INS-2000-LAB");
-  other.set_display_name("INS-2000 (lab variant)");
-  ASSERT_TRUE(catalogue_->Seed({&other, 1}, {}).ok());
-  auto diagnosis = Diagnose(StoreAnalysis("LAB-0001", WornGyroX(), "INS-2000-LAB"));
+  UnitType other = testing::Ins2000().unit_type;
+  other.name = "unitTypes/INS-2000-LAB";
+  other.display_name = "INS-2000 (lab variant)";
+  ASSERT_TRUE(catalogue_->Seed({&other, 1}, {}, {}).ok());
+  const std::string lab_analysis = StoreAnalysis("LAB-0001", WornGyroX(), "INS-2000-LAB");
+  auto inputs = diagnoses_->LoadInputs(lab_analysis);
+  ASSERT_TRUE(inputs.ok()) << inputs.status();
+  ExpectSameSettings(inputs->settings, testing::Ins2000().settings);
+  auto diagnosis = Diagnose(lab_analysis);
   ASSERT_TRUE(diagnosis.ok()) << diagnosis.status();
   EXPECT_THAT(diagnosis->notes(),
               ::testing::Contains(::testing::AllOf(

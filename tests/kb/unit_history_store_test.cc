@@ -11,7 +11,7 @@
 #include "insdiag/kb/catalogue_store.h"
 #include "insdiag/kb/diagnose_analysis.h"
 #include "insdiag/kb/diagnosis_store.h"
-#include "insdiag/kb/failure_mode_catalogue.h"
+#include "insdiag/kb/catalogue_data.h"
 #include "insdiag/kb/unit_history.h"
 #include "insdiag/kb/unit_history_store.h"
 #include "support/database_fixture.h"
@@ -32,7 +32,7 @@ class UnitHistoryStoreTest : public insdiag::testing::DatabaseTest {
     DatabaseTest::SetUp();
     if (IsSkipped() || HasFatalFailure()) return;
     CatalogueStore catalogue(pool());
-    ASSERT_TRUE(catalogue.Seed(api::BuiltinUnitTypes(), BuiltinFailureModeCatalogues()).ok());
+    ASSERT_TRUE(SeedBuiltinCatalogues(catalogue).ok());
   }
 
   std::string StoreRunAndAnalysis(const std::string& serial, double days, const v1::AnalysisReport& report,

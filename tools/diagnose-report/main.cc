@@ -12,12 +12,10 @@
 #include <fstream>
 #include <iostream>
 #include <sstream>
-#include <vector>
 
 #include "insdiag/api/json.h"
-#include "insdiag/api/unit_types.h"
+#include "insdiag/kb/catalogue_data.h"
 #include "insdiag/kb/diagnosis.h"
-#include "insdiag/kb/failure_mode_catalogue.h"
 #include "insdiag/kb/knowledge_messages.h"
 
 namespace {
@@ -51,22 +49,18 @@ int main(int argc, char** argv) {
   insdiag::v1::AnalysisReport report;
   if (auto parsed = insdiag::api::FromJson(text.str(), &report); !parsed.ok()) return Fail(report_path, parsed);
 
-  auto unit_type = insdiag::api::BuiltinUnitType(unit_type_name);
-  if (!unit_type.ok()) return Fail("--unit-type", unit_type.status());
-  auto catalogue = insdiag::kb::BuiltinFailureModeCatalogue(unit_type_name);
-  if (!catalogue.ok()) return Fail("--unit-type", catalogue.status());
-  auto modes = insdiag::kb::ExpandCatalogue(**catalogue);
-  if (!modes.ok()) return Fail("failure modes", modes.status());
-
   namespace kb = insdiag::kb;
-  const kb::DiagnosisSettings settings = kb::SettingsOf((*catalogue)->settings());
-  std::vector<kb::FailureMode> failure_modes;
-  for (const auto& mode : *modes) failure_modes.push_back(kb::FailureModeOf(mode));
+  auto catalogue = kb::BuiltinUnitTypeCatalogue(unit_type_name);
+  if (!catalogue.ok()) {
+    // A malformed built-in template is the build's fault, not the user's choice of unit type.
+    return Fail(catalogue.status().code() == absl::StatusCode::kInvalidArgument ? "failure modes" : "--unit-type",
+                catalogue.status());
+  }
   kb::PriorInputs prior;
   prior.exposure_hours = exposure_hours;
-  const kb::Diagnosis diagnosis = kb::Diagnose(
-      kb::EvidenceFromReport(kb::FindingsOf(report), kb::UnitTypeOf(*unit_type), settings), failure_modes,
-      settings, prior);
+  const kb::Diagnosis diagnosis =
+      kb::Diagnose(kb::EvidenceFromReport(kb::FindingsOf(report), catalogue->unit_type, catalogue->settings),
+                   catalogue->failure_modes, catalogue->settings, prior);
   auto json = insdiag::api::ToJson(kb::ToProto(diagnosis), /*pretty=*/true);
   if (!json.ok()) return Fail("diagnosis", json.status());
   std::cout << *json << "\n";

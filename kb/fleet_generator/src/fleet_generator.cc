@@ -12,11 +12,10 @@
 #include "generator.h"
 #include "insdiag/api/json.h"
 #include "insdiag/api/resource_names.h"
-#include "insdiag/api/unit_types.h"
 #include "insdiag/engine/status_macros.h"
+#include "insdiag/kb/catalogue_data.h"
 #include "insdiag/kb/catalogue_store.h"
 #include "insdiag/kb/diagnosis.h"
-#include "insdiag/kb/failure_mode_catalogue.h"
 #include "insdiag/kb/diagnosis_store.h"
 #include "insdiag/kb/fleet_store.h"
 
@@ -121,8 +120,8 @@ absl::Status FleetGeneratorOptions::Validate() const {
 absl::StatusOr<GeneratedFleet> GenerateFleet(ConnectionPool& pool, const FleetGeneratorOptions& options,
                                              absl::FunctionRef<void(const std::string&)> progress) {
   INSDIAG_RETURN_IF_ERROR(options.Validate());
-  INSDIAG_RETURN_IF_ERROR(
-      CatalogueStore(pool).Seed(api::BuiltinUnitTypes(), BuiltinFailureModeCatalogues()));
+  CatalogueStore catalogue(pool);
+  INSDIAG_RETURN_IF_ERROR(SeedBuiltinCatalogues(catalogue));
   INSDIAG_ASSIGN_OR_RETURN(auto db, pool.Acquire());
   INSDIAG_ASSIGN_OR_RETURN(auto roles, db->Exec("SELECT role FROM module_roles ORDER BY role"));
   std::vector<std::string> role_names;

@@ -11,12 +11,10 @@
 
 #include "generator.h"
 #include "insdiag/api/resource_names.h"
-#include "insdiag/api/unit_types.h"
 #include "insdiag/engine/model/parameter_key.h"
 #include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/diagnosis.h"
-#include "insdiag/kb/failure_mode_catalogue.h"
-#include "insdiag/kb/knowledge_messages.h"
+#include "insdiag/kb/catalogue_data.h"
 
 namespace insdiag::kb::generator {
 namespace {
@@ -41,15 +39,11 @@ std::string ModeId(const FailureMode& mode) { return api::IdOrSelf(mode.name, ap
 // The unit type, its failure modes and diagnosis settings, and the fleet
 // profile (the options' or the built-in one).
 absl::Status LoadData(const FleetGeneratorOptions& options, Model& m) {
-  auto unit_type = api::BuiltinUnitType(options.unit_type);
-  if (!unit_type.ok()) return unit_type.status();
-  m.unit_type = UnitTypeOf(*unit_type);
+  INSDIAG_ASSIGN_OR_RETURN(UnitTypeCatalogue catalogue, BuiltinUnitTypeCatalogue(options.unit_type));
+  m.unit_type = std::move(catalogue.unit_type);
   m.unit_type_id = api::IdOrSelf(m.unit_type.name, api::kUnitTypes);
-  INSDIAG_ASSIGN_OR_RETURN(auto catalogue, BuiltinFailureModeCatalogue(m.unit_type_id));
-  m.settings = SettingsOf(catalogue->settings());
-  auto modes = ExpandCatalogue(*catalogue);
-  if (!modes.ok()) return modes.status();
-  for (const v1::FailureMode& mode : *modes) m.modes.push_back(FailureModeOf(mode));
+  m.settings = catalogue.settings;
+  m.modes = std::move(catalogue.failure_modes);
   if (options.profile) {
     m.profile = *options.profile;
   } else {

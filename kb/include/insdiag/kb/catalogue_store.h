@@ -1,6 +1,8 @@
 // The knowledge base's catalogue: unit types with their nominal values,
 // units and their modules, failure modes with their signatures
-// (migrations/0002_knowledge.sql), and seeding them from the built-in data.
+// (migrations/0002_knowledge.sql), each unit type's diagnosis settings
+// (0006_diagnosis_settings.sql), and seeding them from the expert catalogues
+// (read and expanded at the edge, insdiag/kb/catalogue_data.h).
 #pragma once
 
 #include <absl/status/status.h>
@@ -14,7 +16,6 @@
 #include "insdiag/kb/connection_pool.h"
 #include "insdiag/kb/knowledge.h"
 #include "insdiag/kb/page_query.h"
-#include "insdiag/v1/knowledge.pb.h"
 
 namespace insdiag::kb {
 
@@ -25,11 +26,13 @@ class CatalogueStore {
   explicit CatalogueStore(ConnectionPool& pool, ConnectionPool* list_pool = nullptr)
       : pool_(pool), list_pool_(list_pool != nullptr ? *list_pool : pool) {}
 
-  // Upserts the unit types, their nominal values and their failure modes
-  // (expanded templates), idempotently and under an advisory lock: replicas
-  // starting together seed once. A mode's refined signature is kept unless
-  // the expert's values changed.
-  absl::Status Seed(std::span<const v1::UnitType> unit_types, std::span<const v1::FailureModeCatalogue> catalogues);
+  // Upserts the unit types, their nominal values, their failure modes
+  // (expanded templates) and their diagnosis settings, idempotently and
+  // under an advisory lock: replicas starting together seed once. A mode's
+  // refined signature is kept unless the expert's values changed. Each mode's
+  // and each settings' unit type is one of `unit_types` or already stored.
+  absl::Status Seed(std::span<const UnitType> unit_types, std::span<const FailureMode> failure_modes,
+                    std::span<const UnitTypeDiagnosisSettings> settings);
 
   absl::StatusOr<UnitType> GetUnitType(const std::string& name);  // unitTypes/{t}
   absl::StatusOr<std::vector<UnitType>> ListUnitTypes();

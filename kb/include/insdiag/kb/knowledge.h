@@ -128,6 +128,12 @@ struct DiagnosisSettings {
   int present_score_octaves = 0;
 };
 
+// A unit type's diagnosis constants, as its failure-mode catalogue gives them.
+struct UnitTypeDiagnosisSettings {
+  std::string unit_type;  // unitTypes/{unit_type} or its display name
+  DiagnosisSettings settings;
+};
+
 // One observed quantity of a diagnosis's evidence, as the diagnosis keeps it.
 struct EvidenceItem {
   std::string name;

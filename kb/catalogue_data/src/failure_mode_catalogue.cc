@@ -13,7 +13,7 @@
 namespace insdiag::kb {
 
 const std::vector<v1::FailureModeCatalogue>& BuiltinFailureModeCatalogues() {
-  // Parsed once: the diagnosis's settings are read from them for every request.
+  // Parsed once: tests and the offline diagnosis read them again and again.
   static const std::vector<v1::FailureModeCatalogue> catalogues = [] {
     std::vector<v1::FailureModeCatalogue> out;
     for (const std::string_view json : kFailureModeJson) {

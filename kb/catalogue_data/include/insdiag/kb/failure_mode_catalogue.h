@@ -1,7 +1,8 @@
 // The unit types' failure modes as the experts write them
 // (data/failure-modes/*.json, built in; their format is
 // insdiag.v1.FailureModeCatalogue), and their templates expanded per axis
-// into the failure modes the knowledge base is seeded with.
+// into the failure modes the knowledge base is seeded with. In kb's terms:
+// insdiag/kb/catalogue_data.h.
 #pragma once
 
 #include <absl/status/statusor.h>
