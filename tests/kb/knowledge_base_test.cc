@@ -5,6 +5,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "analysis_codec.h"
 #include "evidence_reports.h"
 #include "insdiag/kb/analysis_store.h"
 #include "insdiag/kb/catalogue_store.h"
@@ -32,8 +33,8 @@ class KnowledgeBaseTest : public insdiag::testing::DatabaseTest {
     DatabaseTest::SetUp();
     if (IsSkipped() || HasFatalFailure()) return;
     catalogue_ = std::make_unique<CatalogueStore>(pool());
-    records_ = std::make_unique<FailureRecordStore>(pool());
-    diagnoses_ = std::make_unique<DiagnosisStore>(pool());
+    records_ = std::make_unique<FailureRecordStore>(pool(), server::DecodeReportFindings);
+    diagnoses_ = std::make_unique<DiagnosisStore>(pool(), server::DecodeReportFindings);
     const auto types = api::BuiltinUnitTypes();
     const auto catalogues = BuiltinFailureModeCatalogues();
     ASSERT_TRUE(catalogue_->Seed(types, catalogues).ok());
@@ -50,11 +51,13 @@ class KnowledgeBaseTest : public insdiag::testing::DatabaseTest {
     auto stored = runs.Create(run, {.sha256 = "x", .request_id = "", .request_fingerprint = ""});
     EXPECT_TRUE(stored.ok()) << stored.status();
     AnalysisStore analyses(pool());
-    auto a = analyses.Create(stored->id, v1::AnalysisSpec(), "");
+    auto a = analyses.Create(stored->id, server::EncodedSpec(v1::AnalysisSpec()), "");
     auto job = analyses.Claim("t", 30s);
     EXPECT_TRUE(job.ok() && job->has_value());
-    EXPECT_TRUE(analyses.Complete((*job)->analysis_id, "t", report, nullptr).ok());
-    return a->name();
+    EXPECT_TRUE(
+        analyses.Complete((*job)->analysis_id, "t", server::EncodedReport(report), server::ReportRowsOf(report), nullptr)
+            .ok());
+    return a->name;
   }
 
   static v1::AnalysisReport WornGyroX() {
