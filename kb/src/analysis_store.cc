@@ -27,45 +27,43 @@ std::string SelectAnalyses(bool include_report) {
                       ", a.create_time::text FROM analyses a JOIN units u ON u.unit_id = a.unit_id ");
 }
 
-v1::Analysis::State StateOf(std::string_view text) {
-  v1::Analysis::State state = v1::Analysis::STATE_UNSPECIFIED;
-  v1::Analysis::State_Parse(std::string(text), &state);
-  return state;
+AnalysisState StateOf(std::string_view text) {
+  for (const AnalysisState state : {AnalysisState::kQueued, AnalysisState::kRunning, AnalysisState::kSucceeded,
+                                    AnalysisState::kFailed, AnalysisState::kCancelled}) {
+    if (text == AnalysisStateName(state)) return state;
+  }
+  return AnalysisState::kUnspecified;
 }
 
-v1::Analysis AnalysisFromRow(const Result& rows, int row) {
-  v1::Analysis a;
-  a.set_name(api::ResourceName(api::kAnalyses, rows.String(row, 0)));
-  a.set_run(api::ResourceName(api::kRuns, rows.String(row, 1)));
+Analysis AnalysisFromRow(const Result& rows, int row) {
+  Analysis a;
+  a.name = api::ResourceName(api::kAnalyses, rows.String(row, 0));
+  a.run = api::ResourceName(api::kRuns, rows.String(row, 1));
   // bytea travels as hex text here: the rest of the row is text.
-  v1::AnalysisSpec spec;
-  spec.ParseFromString(absl::HexStringToBytes(rows.String(row, 3)));
-  *a.mutable_model() = std::move(*spec.mutable_model());
-  if (spec.has_baseline()) *a.mutable_baseline() = std::move(*spec.mutable_baseline());
-  a.set_discover(spec.discover());
-  a.set_base_analysis(spec.base_analysis());
-  a.set_state(StateOf(rows.Get(row, 2)));
-  a.mutable_progress()->set_fraction(internal::DoubleOr0(rows, row, 4));
-  a.mutable_progress()->set_stage(rows.String(row, 5));
-  if (a.state() == v1::Analysis::FAILED) {
-    a.mutable_error()->set_code(static_cast<int>(internal::IntOr0(rows, row, 6)));
-    a.mutable_error()->set_message(rows.String(row, 7));
+  a.encoded_spec = absl::HexStringToBytes(rows.String(row, 3));
+  a.state = StateOf(rows.Get(row, 2));
+  a.progress_fraction = internal::DoubleOr0(rows, row, 4);
+  a.progress_stage = rows.String(row, 5);
+  if (a.state == AnalysisState::kFailed) {
+    a.error = AnalysisError{static_cast<int>(internal::IntOr0(rows, row, 6)), rows.String(row, 7)};
   }
-  a.set_attempts(static_cast<int>(internal::IntOr0(rows, row, 8)));
-  a.set_unit(api::ResourceName(api::kUnits, rows.String(row, 9)));
-  *a.mutable_create_time() = internal::TimestampOfMicros(internal::IntOr0(rows, row, 10));
-  *a.mutable_update_time() = internal::TimestampOfMicros(internal::IntOr0(rows, row, 11));
-  if (!rows.IsNull(row, 12)) a.mutable_report()->ParseFromString(absl::HexStringToBytes(rows.String(row, 12)));
+  a.attempts = static_cast<int>(internal::IntOr0(rows, row, 8));
+  a.unit = api::ResourceName(api::kUnits, rows.String(row, 9));
+  a.create_time = absl::FromUnixMicros(internal::IntOr0(rows, row, 10));
+  a.update_time = absl::FromUnixMicros(internal::IntOr0(rows, row, 11));
+  if (!rows.IsNull(row, 12)) {
+    a.report = StoredReport{absl::HexStringToBytes(rows.String(row, 12)), ReportRows()};
+  }
   return a;
 }
 
 // A SUCCEEDED analysis stored without its report bytes (generated fleet
-// history) gets the report rebuilt from its rows.
-absl::Status CompleteReport(Connection& db, const Result& rows, int row, v1::Analysis& analysis) {
-  if (analysis.state() != v1::Analysis::SUCCEEDED || !rows.IsNull(row, 12)) return absl::OkStatus();
-  auto report = internal::RebuildReport(db, rows.String(row, 0));
-  if (!report.ok()) return report.status();
-  *analysis.mutable_report() = std::move(*report);
+// history) has its report's rows instead.
+absl::Status CompleteReport(Connection& db, const Result& rows, int row, Analysis& analysis) {
+  if (analysis.state != AnalysisState::kSucceeded || !rows.IsNull(row, 12)) return absl::OkStatus();
+  auto report_rows = internal::ReadReportRows(db, rows.String(row, 0));
+  if (!report_rows.ok()) return report_rows.status();
+  analysis.report = StoredReport{std::nullopt, *std::move(report_rows)};
   return absl::OkStatus();
 }
 
@@ -73,6 +71,8 @@ absl::Status CheckId(const std::string& id) {
   if (!internal::IsUuid(id)) return absl::InvalidArgumentError(absl::StrCat("'", id, "' is not an analysis id (a UUID)"));
   return absl::OkStatus();
 }
+
+double Finite(double v) { return std::isfinite(v) ? v : 0.0; }
 
 std::string Millis(std::chrono::milliseconds d) { return std::to_string(d.count()); }
 
@@ -102,81 +102,14 @@ std::string PackSeries(const engine::AnalysisSeries& s) {
   return out;
 }
 
-const char* KindName(v1::FaultInterval::Kind kind) {
-  switch (kind) {
-    case v1::FaultInterval::OUTLIER:
-      return "OUTLIER";
-    case v1::FaultInterval::GRADUAL:
-      return "GRADUAL";
-    case v1::FaultInterval::ABRUPT:
-      return "ABRUPT";
-    default:
-      return "UNSPECIFIED";
-  }
-}
-
-double Finite(double v) { return std::isfinite(v) ? v : 0.0; }
-
-// The report's queryable parts as rows.
-absl::Status StoreReportRows(Connection& db, const std::string& id, const v1::AnalysisReport& report) {
-  for (const auto& c : report.channels()) {
-    auto done = db.Exec(
-        "INSERT INTO channel_metrics (analysis_id, channel, rms, fit_percent, nis_mean, whiteness_p_value, "
-        "sample_count) VALUES ($1::uuid, $2, $3, $4, $5, $6, $7)",
-        {Param::Text(id), Param::Text(c.name()), Param::Double(Finite(c.rms())), Param::Double(Finite(c.fit_percent())),
-         Param::Double(Finite(c.nis_mean())), Param::Double(Finite(c.whiteness_p_value())), Param::Int(c.sample_count())});
-    if (!done.ok()) return done.status();
-  }
-  for (const auto& p : report.identified()) {
-    auto done = db.Exec(
-        "WITH n AS (INSERT INTO parameter_names (name) VALUES ($2) ON CONFLICT (name) DO UPDATE SET name = EXCLUDED.name "
-        "RETURNING parameter_id) "
-        "INSERT INTO identified_parameters (analysis_id, parameter_id, value, std_error, method, a_priori) "
-        "SELECT $1::uuid, parameter_id, $3, $4, $5, $6 FROM n ON CONFLICT DO NOTHING",
-        {Param::Text(id), Param::Text(p.name()), Param::Double(p.value()), Param::Double(p.std_error()),
-         Param::Text(v1::IdentifiedParameter::Method_Name(p.method())),
-         p.has_a_priori() ? Param::Double(p.a_priori()) : Param::Null()});
-    if (!done.ok()) return done.status();
-  }
-  const auto store_candidates = [&](const auto& list, bool per_family) -> absl::Status {
-    for (const auto& c : list) {
-      auto done = db.Exec(
-          "INSERT INTO effect_candidates (analysis_id, name, family, per_family, source, statistic, "
-          "degrees_of_freedom, p_value, p_value_holm, estimate, std_error, unit, identifiable, predicted_delta_aic) "
-          "VALUES ($1::uuid, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14) ON CONFLICT DO NOTHING",
-          {Param::Text(id), Param::Text(c.name()), Param::Text(c.family()), Param::Text(per_family ? "true" : "false"),
-           Param::Text(c.source()), Param::Double(Finite(c.statistic())), Param::Int(c.degrees_of_freedom()),
-           Param::Double(Finite(c.p_value())), Param::Double(Finite(c.p_value_holm())), Param::Double(Finite(c.estimate())),
-           Param::Double(Finite(c.std_error())), Param::Text(c.unit()), Param::Text(c.identifiable() ? "true" : "false"),
-           Param::Double(Finite(c.predicted_delta_aic()))});
-      if (!done.ok()) return done.status();
-    }
-    return absl::OkStatus();
-  };
-  if (auto s = store_candidates(report.effect_candidates(), false); !s.ok()) return s;
-  if (auto s = store_candidates(report.family_candidates(), true); !s.ok()) return s;
-  int position = 0;
-  for (const auto& f : report.fault_intervals()) {
-    auto done = db.Exec(
-        "INSERT INTO fault_intervals (analysis_id, position, channel, start_s, end_s, kind, peak_statistic) "
-        "VALUES ($1::uuid, $2, $3, $4, $5, $6, $7)",
-        {Param::Text(id), Param::Int(position++), Param::Text(f.channel()), Param::Double(f.start_s()),
-         Param::Double(f.end_s()), Param::Text(KindName(f.kind())), Param::Double(Finite(f.peak_statistic()))});
-    if (!done.ok()) return done.status();
-  }
-  return absl::OkStatus();
-}
-
 }  // namespace
 
-absl::StatusOr<v1::Analysis> AnalysisStore::Create(const std::string& run_id, const v1::AnalysisSpec& spec,
-                                                   const std::string& request_id, int max_attempts) {
+absl::StatusOr<Analysis> AnalysisStore::Create(const std::string& run_id, const std::string& encoded_spec,
+                                               const std::string& request_id, int max_attempts) {
   if (!internal::IsUuid(run_id)) return absl::InvalidArgumentError(absl::StrCat("analysis.run: '", run_id, "' is not a run id"));
   auto db = pool_.Acquire();
   if (!db.ok()) return db.status();
-  std::string request_bytes;
-  spec.SerializeToString(&request_bytes);
-  const std::string fingerprint = absl::StrCat(run_id, "|", absl::BytesToHexString(request_bytes));
+  const std::string fingerprint = absl::StrCat(run_id, "|", absl::BytesToHexString(encoded_spec));
   std::string id;
   const absl::Status status = (*db)->InTransaction([&]() -> absl::Status {
     if (!request_id.empty()) {
@@ -199,7 +132,7 @@ absl::StatusOr<v1::Analysis> AnalysisStore::Create(const std::string& run_id, co
         "INSERT INTO analyses (run_id, unit_id, request, request_id, request_fingerprint, max_attempts, unit_hours) "
         "SELECT r.run_id, r.unit_id, $2, $3, $4, $5, u.operating_hours FROM runs r JOIN units u USING (unit_id) "
         "WHERE r.run_id = $1::uuid RETURNING analysis_id::text",
-        {Param::Text(run_id), Param::Bytes(request_bytes), Param::TextOrNull(request_id),
+        {Param::Text(run_id), Param::Bytes(encoded_spec), Param::TextOrNull(request_id),
          Param::TextOrNull(request_id.empty() ? "" : fingerprint), Param::Int(max_attempts)});
     if (!inserted.ok()) return inserted.status();
     if (inserted->rows() == 0)
@@ -214,7 +147,7 @@ absl::StatusOr<v1::Analysis> AnalysisStore::Create(const std::string& run_id, co
   return AnalysisFromRow(*rows, 0);
 }
 
-absl::StatusOr<v1::Analysis> AnalysisStore::Get(const std::string& analysis_id, bool include_report) {
+absl::StatusOr<Analysis> AnalysisStore::Get(const std::string& analysis_id, bool include_report) {
   if (auto s = CheckId(analysis_id); !s.ok()) return s;
   auto db = pool_.Acquire();
   if (!db.ok()) return db.status();
@@ -224,7 +157,7 @@ absl::StatusOr<v1::Analysis> AnalysisStore::Get(const std::string& analysis_id, 
   if (rows->rows() == 0)
     return absl::NotFoundError(
         absl::StrCat(api::ResourceName(api::kAnalyses, analysis_id), " does not exist"));
-  v1::Analysis analysis = AnalysisFromRow(*rows, 0);
+  Analysis analysis = AnalysisFromRow(*rows, 0);
   if (include_report) {
     if (auto s = CompleteReport(**db, *rows, 0, analysis); !s.ok()) return s;
   }
@@ -297,7 +230,7 @@ absl::StatusOr<std::optional<ClaimedJob>> AnalysisStore::Claim(const std::string
   ClaimedJob job;
   job.analysis_id = rows->String(0, 0);
   job.run_id = rows->String(0, 1);
-  job.spec.ParseFromString(absl::HexStringToBytes(rows->String(0, 2)));
+  job.encoded_spec = absl::HexStringToBytes(rows->String(0, 2));
   job.attempt = static_cast<int>(internal::IntOr0(*rows, 0, 3));
   return std::optional<ClaimedJob>(std::move(job));
 }
@@ -336,30 +269,27 @@ absl::StatusOr<LeaseState> AnalysisStore::UpdateProgress(const std::string& anal
 }
 
 absl::Status AnalysisStore::Complete(const std::string& analysis_id, const std::string& owner,
-                                     const v1::AnalysisReport& report, const engine::AnalysisSeries* series) {
+                                     const std::string& encoded_report, const ReportRows& rows,
+                                     const engine::AnalysisSeries* series) {
   auto db = pool_.Acquire();
   if (!db.ok()) return db.status();
-  std::string bytes;
-  report.SerializeToString(&bytes);
   return (*db)->InTransaction([&]() -> absl::Status {
     auto updated = (*db)->Exec(
         "UPDATE analyses SET state = 'SUCCEEDED', report = $3, verdict = $4, nis_mean = $5, log_likelihood = $6, "
         "aic = $7, bic = $8, progress_fraction = 1, progress_stage = 'done', lease_owner = NULL, "
         "lease_expires = NULL, update_time = now(), end_time = now() "
         "WHERE analysis_id = $1::uuid AND state = 'RUNNING' AND lease_owner = $2",
-        {Param::Text(analysis_id), Param::Text(owner), Param::Bytes(bytes),
-         report.verdict() == v1::AnalysisReport::VERDICT_UNSPECIFIED
-             ? Param::Null()
-             : Param::Text(v1::AnalysisReport::Verdict_Name(report.verdict())),
-         Param::Double(Finite(report.nis_mean())), Param::Double(Finite(report.log_likelihood())),
-         Param::Double(Finite(report.aic())), Param::Double(Finite(report.bic()))});
+        {Param::Text(analysis_id), Param::Text(owner), Param::Bytes(encoded_report),
+         rows.verdict.has_value() ? Param::Text(engine::VerdictName(*rows.verdict)) : Param::Null(),
+         Param::Double(Finite(rows.nis_mean)), Param::Double(Finite(rows.log_likelihood)),
+         Param::Double(Finite(rows.aic)), Param::Double(Finite(rows.bic))});
     if (!updated.ok()) return updated.status();
     if (updated->AffectedRows() == 0) {
       return absl::FailedPreconditionError(
           absl::StrCat(api::ResourceName(api::kAnalyses, analysis_id), " is no longer held by ",
                        owner, " (lease lost or cancelled)"));
     }
-    if (auto s = StoreReportRows(**db, analysis_id, report); !s.ok()) return s;
+    if (auto s = internal::WriteReportRows(**db, analysis_id, rows); !s.ok()) return s;
     if (series != nullptr && !series->time_s.empty()) {
       auto stored = (*db)->Exec("INSERT INTO analysis_series (analysis_id, epochs, data) VALUES ($1::uuid, $2, $3)",
                                 {Param::Text(analysis_id), Param::Int(static_cast<std::int64_t>(series->time_s.size())),
@@ -418,7 +348,7 @@ absl::StatusOr<ReapReport> AnalysisStore::Reap() {
   return report;
 }
 
-absl::StatusOr<v1::Analysis> AnalysisStore::Cancel(const std::string& analysis_id) {
+absl::StatusOr<Analysis> AnalysisStore::Cancel(const std::string& analysis_id) {
   if (auto s = CheckId(analysis_id); !s.ok()) return s;
   auto db = pool_.Acquire();
   if (!db.ok()) return db.status();
@@ -434,12 +364,11 @@ absl::StatusOr<v1::Analysis> AnalysisStore::Cancel(const std::string& analysis_i
 
 absl::Status AnalysisStore::ReadSeries(const std::string& analysis_id, const std::vector<std::string>& channels,
                                        std::size_t chunk_points,
-                                       absl::FunctionRef<bool(const v1::ResidualSeriesChunk&)> consume) {
+                                       absl::FunctionRef<bool(std::span<const ResidualPoint>)> consume) {
   auto analysis = Get(analysis_id, false);
   if (!analysis.ok()) return analysis.status();
-  if (analysis->state() != v1::Analysis::SUCCEEDED) {
-    return absl::FailedPreconditionError(absl::StrCat(analysis->name(), " is ",
-                                                      v1::Analysis::State_Name(analysis->state()),
+  if (analysis->state != AnalysisState::kSucceeded) {
+    return absl::FailedPreconditionError(absl::StrCat(analysis->name, " is ", AnalysisStateName(analysis->state),
                                                       "; its series exist once it SUCCEEDED"));
   }
   std::set<std::string> wanted(channels.begin(), channels.end());
@@ -466,28 +395,24 @@ absl::Status AnalysisStore::ReadSeries(const std::string& analysis_id, const std
     return absl::DataLossError("stored series has the wrong size");
   }
   const auto value = [&](std::size_t index) { return GetDouble(data.data() + 8 * index); };
-  v1::ResidualSeriesChunk chunk;
+  std::vector<ResidualPoint> chunk;
   chunk_points = std::max<std::size_t>(chunk_points, 1);
+  chunk.reserve(std::min<std::size_t>(chunk_points, k * stored_channels));
   for (std::size_t c = 0; c < stored_channels; ++c) {
     const std::string name(engine::kChannelNames[c]);
     if (!wanted.empty() && !wanted.contains(name)) continue;
     const std::size_t base = k + 4 * k * c;
     for (std::size_t e = 0; e < k; ++e) {
       if (!(value(base + 3 * k + e) > 0.0)) continue;  // not observed at this epoch (σ = 0)
-      v1::ResidualPoint* p = chunk.add_points();
-      p->set_channel(name);
-      p->set_t(value(e));
-      p->set_measured(value(base + e));
-      p->set_predicted(value(base + k + e));
-      p->set_residual(value(base + 2 * k + e));
-      p->set_sigma3(3.0 * value(base + 3 * k + e));
-      if (static_cast<std::size_t>(chunk.points_size()) >= chunk_points) {
+      chunk.push_back(ResidualPoint{name, value(e), value(base + e), value(base + k + e), value(base + 2 * k + e),
+                                    3.0 * value(base + 3 * k + e)});
+      if (chunk.size() >= chunk_points) {
         if (!consume(chunk)) return absl::OkStatus();
-        chunk.Clear();
+        chunk.clear();
       }
     }
   }
-  if (chunk.points_size() > 0) consume(chunk);
+  if (!chunk.empty()) consume(chunk);
   return absl::OkStatus();
 }
 

@@ -104,8 +104,8 @@ absl::StatusOr<DiagnosisInputs> DiagnosisStore::LoadInputs(const std::string& an
         api::ResourceName(api::kUnits, in.serial), " has no unit type (its runs name none): ",
         "there is no nominal model to diagnose against"));
   }
-  INSDIAG_ASSIGN_OR_RETURN(const v1::AnalysisReport report, LoadReport(*db, in.analysis_id));
-  in.report = FindingsOf(report);
+  INSDIAG_ASSIGN_OR_RETURN(const StoredReport report, LoadReport(*db, in.analysis_id));
+  INSDIAG_ASSIGN_OR_RETURN(in.report, ReportFindingsOf(report, decode_report_));
   auto unit_type = LoadUnitType(*db, type_id);
   if (!unit_type.ok()) {
     if (unit_type.status().code() == absl::StatusCode::kNotFound) {
@@ -260,7 +260,7 @@ absl::StatusOr<StoredDiagnosis> DiagnosisStore::Resolve(const DiagnosisResolutio
     INSDIAG_RETURN_IF_ERROR(
         db->Exec("UPDATE diagnoses SET record_id = $2::uuid WHERE diagnosis_id = $1::uuid",
                  {Param::Text(id), Param::Text(written)}));
-    if (request.confirmed) return RefineModeSignature(*db, mode_id);
+    if (request.confirmed) return RefineModeSignature(*db, mode_id, decode_report_);
     return absl::OkStatus();
   });
   if (!status.ok()) return status;
@@ -277,7 +277,7 @@ absl::Status DiagnosisStore::RefineSignatures(const std::string& unit_type) {
                            {Param::TextOrNull(unit_type.empty() ? "" : UnitTypeId(unit_type))}));
   for (int r = 0; r < modes.rows(); ++r) {
     const std::string mode_id = modes.String(r, 0);
-    INSDIAG_RETURN_IF_ERROR(db->InTransaction([&] { return RefineModeSignature(*db, mode_id); }));
+    INSDIAG_RETURN_IF_ERROR(db->InTransaction([&] { return RefineModeSignature(*db, mode_id, decode_report_); }));
   }
   return absl::OkStatus();
 }

@@ -118,7 +118,7 @@ absl::StatusOr<FailureRecord> FailureRecordStore::Create(const FailureRecord& re
       return written.status();
     }
     id = *written;
-    if (record.confirmed) return RefineModeSignature(*db, mode_id);
+    if (record.confirmed) return RefineModeSignature(*db, mode_id, decode_report_);
     return absl::OkStatus();
   });
   if (!status.ok()) return status;
@@ -170,9 +170,9 @@ absl::StatusOr<FailureRecord> FailureRecordStore::Correct(const std::string& nam
     if (!updated.ok()) return updated.status();
     // The signatures learn from confirmed cases: a mode the record leaves or joins is refined again.
     if (was_confirmed && !old_mode.empty()) {
-      INSDIAG_RETURN_IF_ERROR(RefineModeSignature(*db, old_mode));
+      INSDIAG_RETURN_IF_ERROR(RefineModeSignature(*db, old_mode, decode_report_));
     }
-    if (facts.confirmed && mode_id != old_mode) return RefineModeSignature(*db, mode_id);
+    if (facts.confirmed && mode_id != old_mode) return RefineModeSignature(*db, mode_id, decode_report_);
     return absl::OkStatus();
   });
   if (!status.ok()) return status;

@@ -5,12 +5,11 @@
 #include "catalogue_rows.h"
 #include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/diagnosis.h"
-#include "insdiag/kb/knowledge_messages.h"
 #include "report_rows.h"
 
 namespace insdiag::kb::internal {
 
-absl::Status RefineModeSignature(Connection& db, const std::string& mode_id) {
+absl::Status RefineModeSignature(Connection& db, const std::string& mode_id, const ReportDecoder& decode_report) {
   INSDIAG_ASSIGN_OR_RETURN(auto modes, LoadModes(db, "", "", mode_id));
   if (modes.empty()) return absl::OkStatus();
   const FailureMode& mode = modes.front();
@@ -27,7 +26,9 @@ absl::Status RefineModeSignature(Connection& db, const std::string& mode_id) {
   for (int r = 0; r < cases.rows(); ++r) {
     auto report = LoadReport(db, cases.String(r, 0));
     if (!report.ok()) continue;  // a case whose analysis is gone no longer refines
-    evidence.push_back(EvidenceFromReport(FindingsOf(*report), unit_type, settings));
+    auto findings = ReportFindingsOf(*report, decode_report);
+    if (!findings.ok()) continue;
+    evidence.push_back(EvidenceFromReport(*findings, unit_type, settings));
   }
   for (int position = 0; position < static_cast<int>(mode.signature.size()); ++position) {
     const Signature& term = mode.signature[static_cast<std::size_t>(position)];

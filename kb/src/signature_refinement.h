@@ -8,13 +8,14 @@
 
 #include <string>
 
+#include "insdiag/kb/analysis.h"
 #include "insdiag/kb/pg.h"
 
 namespace insdiag::kb::internal {
 
 // Re-derives the signature of `mode_id` from the expert values and every
-// confirmed case with an analysis (kb/diagnosis.h, RefineSignature). An
-// unknown mode is left alone.
-absl::Status RefineModeSignature(Connection& db, const std::string& mode_id);
+// confirmed case with an analysis (kb/diagnosis.h, RefineSignature), its
+// report's bytes read by `decode_report`. An unknown mode is left alone.
+absl::Status RefineModeSignature(Connection& db, const std::string& mode_id, const ReportDecoder& decode_report);
 
 }  // namespace insdiag::kb::internal

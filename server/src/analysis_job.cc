@@ -6,6 +6,7 @@
 #include <span>
 #include <utility>
 
+#include "analysis_codec.h"
 #include "insdiag/api/report_codec.h"
 #include "insdiag/api/resource_names.h"
 #include "insdiag/engine/model/parameters.h"
@@ -70,7 +71,8 @@ absl::StatusOr<engine::Analysis> RunAnalysisJob(kb::ConnectionPool& pool, const 
   std::optional<v1::Analysis> base;
   if (!spec.base_analysis().empty()) {
     INSDIAG_ASSIGN_OR_RETURN(auto base_id, api::ResourceId(spec.base_analysis(), api::kAnalyses, "base_analysis"));
-    INSDIAG_ASSIGN_OR_RETURN(base, kb::AnalysisStore(pool).Get(base_id, true));
+    INSDIAG_ASSIGN_OR_RETURN(auto stored_base, kb::AnalysisStore(pool).Get(base_id, true));
+    base = ToProto(stored_base);
   }
   INSDIAG_ASSIGN_OR_RETURN(auto nominal, NominalModelOfUnitType(pool, run.metadata.unit_type));
   INSDIAG_ASSIGN_OR_RETURN(

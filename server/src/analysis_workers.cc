@@ -3,6 +3,7 @@
 #include <absl/strings/str_cat.h>
 #include <unistd.h>
 
+#include "analysis_codec.h"
 #include "insdiag/api/report_codec.h"
 #include "insdiag/engine/status_macros.h"
 #include "insdiag/server/analysis_job.h"
@@ -151,9 +152,11 @@ std::string_view AnalysisWorkers::RunJobOutcome(const kb::ClaimedJob& job, const
     if (state.ok()) heartbeat.Note(*state);
   };
   const absl::Status status = [&]() -> absl::Status {
-    INSDIAG_ASSIGN_OR_RETURN(engine::Analysis analysis, RunAnalysisJob(pool_, job.run_id, job.spec, progress));
+    INSDIAG_ASSIGN_OR_RETURN(engine::Analysis analysis,
+                             RunAnalysisJob(pool_, job.run_id, SpecOf(job.encoded_spec), progress));
     if (heartbeat.lost() || heartbeat.cancelled()) return absl::OkStatus();
-    return store_.Complete(job.analysis_id, owner, api::ToProto(analysis.report, analysis.model), &analysis.series);
+    const v1::AnalysisReport report = api::ToProto(analysis.report, analysis.model);
+    return store_.Complete(job.analysis_id, owner, EncodedReport(report), ReportRowsOf(report), &analysis.series);
   }();
   heartbeat.Finish();
   if (heartbeat.lost()) {

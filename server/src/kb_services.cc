@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "access_codec.h"
+#include "analysis_codec.h"
 #include "history_codec.h"
 #include "insdiag/api/report_codec.h"
 #include "insdiag/api/resource_names.h"
@@ -55,7 +56,8 @@ absl::StatusOr<v1::Analysis> AnalysisService::CreateAnalysis(const v1::CreateAna
   if (!request.analysis().base_analysis().empty()) {
     INSDIAG_RETURN_IF_ERROR(CheckBaseAnalysis(request.analysis(), spec));
   }
-  return store_.Create(run_id, spec, request.request_id());
+  INSDIAG_ASSIGN_OR_RETURN(auto created, store_.Create(run_id, EncodedSpec(spec), request.request_id()));
+  return ToProto(created);
 }
 
 // An analysis that starts from an earlier one's identified model: the earlier
@@ -63,7 +65,8 @@ absl::StatusOr<v1::Analysis> AnalysisService::CreateAnalysis(const v1::CreateAna
 absl::Status AnalysisService::CheckBaseAnalysis(const v1::Analysis& asked, v1::AnalysisSpec& spec) {
   INSDIAG_ASSIGN_OR_RETURN(
       auto id, api::ResourceId(asked.base_analysis(), api::kAnalyses, "analysis.base_analysis"));
-  INSDIAG_ASSIGN_OR_RETURN(auto base, store_.Get(id, true));
+  INSDIAG_ASSIGN_OR_RETURN(auto stored_base, store_.Get(id, true));
+  const v1::Analysis base = ToProto(stored_base);
   if (base.run() != asked.run()) {
     return absl::InvalidArgumentError(
         absl::StrCat("analysis.base_analysis: ", asked.base_analysis(), " analysed ", base.run(),
@@ -95,7 +98,8 @@ absl::Status AnalysisService::CheckBaseAnalysis(const v1::Analysis& asked, v1::A
 
 absl::StatusOr<v1::Analysis> AnalysisService::GetAnalysis(const v1::GetAnalysisRequest& request) {
   INSDIAG_ASSIGN_OR_RETURN(auto id, api::ResourceId(request.name(), api::kAnalyses));
-  return store_.Get(id, true);
+  INSDIAG_ASSIGN_OR_RETURN(auto analysis, store_.Get(id, true));
+  return ToProto(analysis);
 }
 
 absl::StatusOr<v1::ListAnalysesResponse> AnalysisService::ListAnalyses(const v1::ListAnalysesRequest& request) {
@@ -115,14 +119,15 @@ absl::StatusOr<v1::ListAnalysesResponse> AnalysisService::ListAnalyses(const v1:
   }
   INSDIAG_ASSIGN_OR_RETURN(auto page, store_.List(query));
   v1::ListAnalysesResponse response;
-  for (auto& a : page.analyses) *response.add_analyses() = std::move(a);
+  for (const kb::Analysis& a : page.analyses) *response.add_analyses() = ToProto(a);
   response.set_next_page_token(page.next_page_token);
   return response;
 }
 
 absl::StatusOr<v1::Analysis> AnalysisService::CancelAnalysis(const v1::CancelAnalysisRequest& request) {
   INSDIAG_ASSIGN_OR_RETURN(auto id, api::ResourceId(request.name(), api::kAnalyses));
-  return store_.Cancel(id);
+  INSDIAG_ASSIGN_OR_RETURN(auto cancelled, store_.Cancel(id));
+  return ToProto(cancelled);
 }
 
 absl::Status AnalysisService::WatchAnalysis(const v1::WatchAnalysisRequest& request,
@@ -131,12 +136,13 @@ absl::Status AnalysisService::WatchAnalysis(const v1::WatchAnalysisRequest& requ
   INSDIAG_ASSIGN_OR_RETURN(auto id, api::ResourceId(request.name(), api::kAnalyses));
   std::string last;
   for (;;) {
-    INSDIAG_ASSIGN_OR_RETURN(auto analysis, store_.Get(id, false));
+    INSDIAG_ASSIGN_OR_RETURN(auto stored, store_.Get(id, false));
+    const v1::Analysis analysis = ToProto(stored);
     const bool terminal = Terminal(analysis.state());
     if (terminal) {
       auto full = store_.Get(id, true);  // the last message carries the report
       if (!full.ok()) return full.status();
-      send(*full);
+      send(ToProto(*full));
       return absl::OkStatus();
     }
     const std::string key = absl::StrCat(analysis.state(), "|", analysis.progress().fraction(), "|",
@@ -157,9 +163,9 @@ absl::Status AnalysisService::ReadResidualSeries(const v1::ReadResidualSeriesReq
     return absl::InvalidArgumentError("chunk_size must be within 0 … 50000");
   }
   const std::vector<std::string> channels(request.channels().begin(), request.channels().end());
-  return store_.ReadSeries(
-      id, channels,
-      request.chunk_size() == 0 ? 5000 : static_cast<std::size_t>(request.chunk_size()), send);
+  return store_.ReadSeries(id, channels,
+                           request.chunk_size() == 0 ? 5000 : static_cast<std::size_t>(request.chunk_size()),
+                           [&](std::span<const kb::ResidualPoint> points) { return send(ToProto(points)); });
 }
 
 absl::StatusOr<v1::DisplaySeries> AnalysisService::ReadDisplaySeries(const v1::ReadDisplaySeriesRequest& request) {
@@ -179,11 +185,11 @@ absl::StatusOr<v1::DisplaySeries> AnalysisService::ReadDisplaySeries(const v1::R
   std::vector<std::string> order;
   std::map<std::string, std::vector<SeriesEpoch>> epochs;
   const std::vector<std::string> channels(request.channels().begin(), request.channels().end());
-  auto read = store_.ReadSeries(id, channels, 50'000, [&](const v1::ResidualSeriesChunk& chunk) {
-    for (const auto& p : chunk.points()) {
-      auto [it, inserted] = epochs.try_emplace(p.channel());
-      if (inserted) order.push_back(p.channel());
-      it->second.push_back({p.t(), p.measured(), p.predicted(), p.residual(), p.sigma3()});
+  auto read = store_.ReadSeries(id, channels, 50'000, [&](std::span<const kb::ResidualPoint> points) {
+    for (const kb::ResidualPoint& p : points) {
+      auto [it, inserted] = epochs.try_emplace(p.channel);
+      if (inserted) order.push_back(p.channel);
+      it->second.push_back({p.t_s, p.measured, p.predicted, p.residual, p.sigma3});
     }
     return true;
   });

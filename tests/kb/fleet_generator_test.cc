@@ -7,6 +7,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "analysis_codec.h"
 #include "evidence_reports.h"
 #include "insdiag/api/resource_names.h"
 #include "insdiag/kb/analysis_store.h"
@@ -183,20 +184,21 @@ TEST_F(FleetGeneratorTest, GeneratedHistoryReadsBackThroughTheStoresAndEveryStat
   auto page = analyses.List(query);
   ASSERT_TRUE(page.ok()) << page.status();
   ASSERT_FALSE(page->analyses.empty());
-  const std::string id = api::IdOrSelf(page->analyses.front().name(), api::kAnalyses);
-  auto analysis = analyses.Get(id, true);
-  ASSERT_TRUE(analysis.ok()) << analysis.status();
-  EXPECT_EQ(analysis->state(), v1::Analysis::SUCCEEDED);
-  EXPECT_EQ(analysis->report().identified_size(), 18);
-  EXPECT_NE(analysis->report().verdict(), v1::AnalysisReport::VERDICT_UNSPECIFIED);
-  EXPECT_GT(analysis->report().nis_mean(), 0.0);
-  ASSERT_FALSE(analysis->report().notes().empty());
-  EXPECT_THAT(analysis->report().notes(0), HasSubstr("rebuilt"));
-  EXPECT_EQ(page->analyses.front().report().identified_size(), 18);
+  const std::string id = api::IdOrSelf(page->analyses.front().name, api::kAnalyses);
+  auto stored = analyses.Get(id, true);
+  ASSERT_TRUE(stored.ok()) << stored.status();
+  const v1::Analysis analysis = server::ToProto(*stored);
+  EXPECT_EQ(analysis.state(), v1::Analysis::SUCCEEDED);
+  EXPECT_EQ(analysis.report().identified_size(), 18);
+  EXPECT_NE(analysis.report().verdict(), v1::AnalysisReport::VERDICT_UNSPECIFIED);
+  EXPECT_GT(analysis.report().nis_mean(), 0.0);
+  ASSERT_FALSE(analysis.report().notes().empty());
+  EXPECT_THAT(analysis.report().notes(0), HasSubstr("rebuilt"));
+  EXPECT_EQ(server::ToProto(page->analyses.front()).report().identified_size(), 18);
 
   // A new diagnosis of a generated analysis works like any other.
-  DiagnosisStore diagnoses(pool());
-  auto diagnosis = testing::DiagnoseStored(diagnoses, analysis->name());
+  DiagnosisStore diagnoses(pool(), server::DecodeReportFindings);
+  auto diagnosis = testing::DiagnoseStored(diagnoses, analysis.name());
   ASSERT_TRUE(diagnosis.ok()) << diagnosis.status();
   EXPECT_FALSE(diagnosis->candidates().empty());
 

@@ -8,6 +8,7 @@
 #include <set>
 #include <thread>
 
+#include "analysis_codec.h"
 #include "insdiag/api/resource_names.h"
 #include "insdiag/kb/analysis_store.h"
 #include "insdiag/kb/run_store.h"
@@ -42,9 +43,9 @@ TEST_F(JobQueueTest, FourConcurrentWorkersRunTwoHundredJobsEachExactlyOnce) {
   AnalysisStore store(pool());
   std::set<std::string> created;
   for (int i = 0; i < 200; ++i) {
-    auto a = store.Create(run, v1::AnalysisSpec(), "");
+    auto a = store.Create(run, "", "");
     ASSERT_TRUE(a.ok()) << a.status();
-    created.insert(api::IdOrSelf(a->name(), api::kAnalyses));
+    created.insert(api::IdOrSelf(a->name, api::kAnalyses));
   }
   auto workers_pool = ConnectionPool::Create({.database_url = database_url(), .max_connections = 8});
   ASSERT_TRUE(workers_pool.ok());
@@ -63,7 +64,9 @@ TEST_F(JobQueueTest, FourConcurrentWorkersRunTwoHundredJobsEachExactlyOnce) {
         if (!job->has_value()) return;
         v1::AnalysisReport report;
         report.set_verdict(v1::AnalysisReport::GOOD);
-        ASSERT_TRUE(mine.Complete((*job)->analysis_id, owner, report, nullptr).ok());
+        ASSERT_TRUE(mine.Complete((*job)->analysis_id, owner, server::EncodedReport(report), server::ReportRowsOf(report),
+                                  nullptr)
+                        .ok());
         std::lock_guard lock(mutex);
         ran.insert((*job)->analysis_id);
         ++per_worker[static_cast<std::size_t>(w)];
@@ -82,7 +85,7 @@ TEST_F(JobQueueTest, FourConcurrentWorkersRunTwoHundredJobsEachExactlyOnce) {
 TEST_F(JobQueueTest, AJobWhoseWorkerStoppedIsTakenUpAgainAndFailsAfterItsLastAttempt) {
   const std::string run = StoreRun();
   AnalysisStore store(pool());
-  auto a = store.Create(run, v1::AnalysisSpec(), "", /*max_attempts=*/2);
+  auto a = store.Create(run, "", "", /*max_attempts=*/2);
   ASSERT_TRUE(a.ok());
   auto first = store.Claim("dead-worker", 1ms);
   ASSERT_TRUE(first.ok() && first->has_value());
@@ -96,47 +99,47 @@ TEST_F(JobQueueTest, AJobWhoseWorkerStoppedIsTakenUpAgainAndFailsAfterItsLastAtt
   ASSERT_TRUE(second.ok() && second->has_value());
   EXPECT_EQ((*second)->attempt, 2);
   // The first worker, back from the dead, cannot overwrite the job.
-  EXPECT_EQ(store.Complete((*first)->analysis_id, "dead-worker", v1::AnalysisReport(), nullptr).code(),
+  EXPECT_EQ(store.Complete((*first)->analysis_id, "dead-worker", "", ReportRows(), nullptr).code(),
             absl::StatusCode::kFailedPrecondition);
   std::this_thread::sleep_for(20ms);
   reaped = store.Reap();
   EXPECT_EQ(reaped->failed, 1);
   auto failed = store.Get((*first)->analysis_id);
   ASSERT_TRUE(failed.ok());
-  EXPECT_EQ(failed->state(), v1::Analysis::FAILED);
-  EXPECT_THAT(failed->error().message(), ::testing::HasSubstr("stopped 2 times"));
+  EXPECT_EQ(failed->state, AnalysisState::kFailed);
+  EXPECT_THAT(failed->error->message, ::testing::HasSubstr("stopped 2 times"));
 }
 
 TEST_F(JobQueueTest, CancelEndsQueuedJobsAtOnceAndRunningOnesThroughTheirWorker) {
   const std::string run = StoreRun();
   AnalysisStore store(pool());
-  auto queued = store.Create(run, v1::AnalysisSpec(), "");
-  auto running = store.Create(run, v1::AnalysisSpec(), "");
+  auto queued = store.Create(run, "", "");
+  auto running = store.Create(run, "", "");
   auto claimed = store.Claim("w", 30s);  // the older one
   ASSERT_TRUE(claimed.ok() && claimed->has_value());
-  EXPECT_EQ((*claimed)->analysis_id, api::IdOrSelf(queued->name(), api::kAnalyses));
-  auto cancelled = store.Cancel(api::IdOrSelf(running->name(), api::kAnalyses));
-  EXPECT_EQ(cancelled->state(), v1::Analysis::CANCELLED);
+  EXPECT_EQ((*claimed)->analysis_id, api::IdOrSelf(queued->name, api::kAnalyses));
+  auto cancelled = store.Cancel(api::IdOrSelf(running->name, api::kAnalyses));
+  EXPECT_EQ(cancelled->state, AnalysisState::kCancelled);
   auto requested = store.Cancel((*claimed)->analysis_id);
-  EXPECT_EQ(requested->state(), v1::Analysis::RUNNING);
+  EXPECT_EQ(requested->state, AnalysisState::kRunning);
   auto beat = store.Heartbeat((*claimed)->analysis_id, "w", 30s);
   EXPECT_TRUE(beat->owned);
   EXPECT_TRUE(beat->cancel_requested);
   ASSERT_TRUE(store.MarkCancelled((*claimed)->analysis_id, "w").ok());
-  EXPECT_EQ(store.Get((*claimed)->analysis_id)->state(), v1::Analysis::CANCELLED);
+  EXPECT_EQ(store.Get((*claimed)->analysis_id)->state, AnalysisState::kCancelled);
 }
 
 TEST_F(JobQueueTest, RequestIdMakesCreationIdempotent) {
   const std::string run = StoreRun();
   AnalysisStore store(pool());
-  auto a = store.Create(run, v1::AnalysisSpec(), "req-1");
-  auto b = store.Create(run, v1::AnalysisSpec(), "req-1");
+  auto a = store.Create(run, "", "req-1");
+  auto b = store.Create(run, "", "req-1");
   ASSERT_TRUE(a.ok() && b.ok());
-  EXPECT_EQ(a->name(), b->name());
+  EXPECT_EQ(a->name, b->name);
   v1::AnalysisSpec other;
   other.mutable_model()->add_effects("gyro_scale_factor");
-  EXPECT_EQ(store.Create(run, other, "req-1").status().code(), absl::StatusCode::kAlreadyExists);
-  EXPECT_EQ(store.Create("00000000-0000-0000-0000-000000000000", other, "").status().code(),
+  EXPECT_EQ(store.Create(run, server::EncodedSpec(other), "req-1").status().code(), absl::StatusCode::kAlreadyExists);
+  EXPECT_EQ(store.Create("00000000-0000-0000-0000-000000000000", server::EncodedSpec(other), "").status().code(),
             absl::StatusCode::kNotFound);
 }
 
@@ -145,7 +148,7 @@ TEST_F(JobQueueTest, RequestIdMakesCreationIdempotent) {
 TEST_F(JobQueueTest, ListsAnalysesNewestFirstPageByPage) {
   const std::string run = StoreRun();
   AnalysisStore store(pool());
-  for (int i = 0; i < 5; ++i) ASSERT_TRUE(store.Create(run, v1::AnalysisSpec(), "").ok());
+  for (int i = 0; i < 5; ++i) ASSERT_TRUE(store.Create(run, "", "").ok());
   const auto names = [&](int page_size) {
     std::vector<std::string> out;
     AnalysisQuery query;
@@ -155,7 +158,7 @@ TEST_F(JobQueueTest, ListsAnalysesNewestFirstPageByPage) {
       auto page = store.List(query);
       EXPECT_TRUE(page.ok()) << page.status();
       if (!page.ok()) break;
-      for (const auto& a : page->analyses) out.push_back(a.name());
+      for (const auto& a : page->analyses) out.push_back(a.name);
       if (page->next_page_token.empty()) break;
       query.page_token = page->next_page_token;
     }

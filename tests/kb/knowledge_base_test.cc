@@ -8,6 +8,7 @@
 #include <bit>
 #include <cstdint>
 
+#include "analysis_codec.h"
 #include "evidence_reports.h"
 #include "insdiag/kb/analysis_store.h"
 #include "insdiag/kb/catalogue_data.h"
@@ -40,8 +41,8 @@ class KnowledgeBaseTest : public insdiag::testing::DatabaseTest {
     DatabaseTest::SetUp();
     if (IsSkipped() || HasFatalFailure()) return;
     catalogue_ = std::make_unique<CatalogueStore>(pool());
-    records_ = std::make_unique<FailureRecordStore>(pool());
-    diagnoses_ = std::make_unique<DiagnosisStore>(pool());
+    records_ = std::make_unique<FailureRecordStore>(pool(), server::DecodeReportFindings);
+    diagnoses_ = std::make_unique<DiagnosisStore>(pool(), server::DecodeReportFindings);
     ASSERT_TRUE(SeedBuiltinCatalogues(*catalogue_).ok());
     ASSERT_TRUE(SeedBuiltinCatalogues(*catalogue_).ok()) << "seeding twice is harmless";
   }
@@ -56,11 +57,13 @@ class KnowledgeBaseTest : public insdiag::testing::DatabaseTest {
     auto stored = runs.Create(run, {.sha256 = "x", .request_id = "", .request_fingerprint = ""});
     EXPECT_TRUE(stored.ok()) << stored.status();
     AnalysisStore analyses(pool());
-    auto a = analyses.Create(stored->id, v1::AnalysisSpec(), "");
+    auto a = analyses.Create(stored->id, server::EncodedSpec(v1::AnalysisSpec()), "");
     auto job = analyses.Claim("t", 30s);
     EXPECT_TRUE(job.ok() && job->has_value());
-    EXPECT_TRUE(analyses.Complete((*job)->analysis_id, "t", report, nullptr).ok());
-    return a->name();
+    EXPECT_TRUE(
+        analyses.Complete((*job)->analysis_id, "t", server::EncodedReport(report), server::ReportRowsOf(report), nullptr)
+            .ok());
+    return a->name;
   }
 
   static v1::AnalysisReport WornGyroX() {

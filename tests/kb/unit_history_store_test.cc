@@ -7,6 +7,7 @@
 
 #include <random>
 
+#include "analysis_codec.h"
 #include "evidence_reports.h"
 #include "insdiag/kb/catalogue_store.h"
 #include "insdiag/kb/diagnose_analysis.h"
@@ -163,7 +164,7 @@ double ModuleProbability(const v1::Diagnosis& d, const std::string& module) {
 }
 
 TEST_F(UnitHistoryStoreTest, AUnitsGrowingDriftStrengthensItsGyroWhileAStableHistoryChangesNothing) {
-  DiagnosisStore diagnoses(pool());
+  DiagnosisStore diagnoses(pool(), server::DecodeReportFindings);
   const v1::AnalysisReport last = Report(1.6, 0.0, 1e-7);
   // The last run alone, on a unit without history.
   auto alone = testing::DiagnoseStored(diagnoses, StoreRunAndAnalysis("INS-ALONE", 0.0, last));

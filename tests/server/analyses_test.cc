@@ -9,6 +9,7 @@
 #include <chrono>
 #include <thread>
 
+#include "analysis_codec.h"
 #include "insdiag/api/resource_names.h"
 #include "insdiag/api/unit_types.h"
 #include "insdiag/engine/model/parameters.h"
@@ -404,9 +405,9 @@ class WorkerKillTest : public DatabaseTest {
     auto stored = runs.Create(run, {.sha256 = "x", .request_id = "", .request_fingerprint = ""});
     EXPECT_TRUE(stored.ok()) << stored.status();
     if (!stored.ok()) return "";
-    auto created = kb::AnalysisStore(pool()).Create(stored->id, v1::AnalysisSpec(), "");
+    auto created = kb::AnalysisStore(pool()).Create(stored->id, server::EncodedSpec(v1::AnalysisSpec()), "");
     EXPECT_TRUE(created.ok()) << created.status();
-    return created.ok() ? api::IdOrSelf(created->name(), api::kAnalyses) : "";
+    return created.ok() ? api::IdOrSelf(created->name, api::kAnalyses) : "";
   }
 
   // An insdiagd with one worker, its files under a directory named `tag`.
@@ -426,7 +427,7 @@ class WorkerKillTest : public DatabaseTest {
   v1::Analysis Job(const std::string& id, bool with_report = false) {
     auto a = kb::AnalysisStore(pool()).Get(id, with_report);
     EXPECT_TRUE(a.ok()) << a.status();
-    return a.ok() ? *a : v1::Analysis();
+    return a.ok() ? server::ToProto(*a) : v1::Analysis();
   }
 
   // Polls until `process`'s worker holds job `id` (RUNNING).

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <string>
 
+#include "analysis_codec.h"  // server/src: the report as the server stores it
 #include "insdiag/kb/analysis_store.h"
 #include "insdiag/kb/run_store.h"
 #include "support/synthetic_run.h"
@@ -19,12 +20,15 @@ inline std::string AnalyseStoredRun(kb::ConnectionPool& pool, const std::string&
                                     const v1::AnalysisReport& report) {
   using namespace std::chrono_literals;
   kb::AnalysisStore analyses(pool);
-  auto a = analyses.Create(run_id, v1::AnalysisSpec(), "");
+  auto a = analyses.Create(run_id, server::EncodedSpec(v1::AnalysisSpec()), "");
   EXPECT_TRUE(a.ok()) << a.status();
   auto job = analyses.Claim("test worker", 30s);
   EXPECT_TRUE(job.ok() && job->has_value());
-  EXPECT_TRUE(analyses.Complete((*job)->analysis_id, "test worker", report, nullptr).ok());
-  return a.ok() ? a->name() : "";
+  EXPECT_TRUE(analyses
+                  .Complete((*job)->analysis_id, "test worker", server::EncodedReport(report),
+                            server::ReportRowsOf(report), nullptr)
+                  .ok());
+  return a.ok() ? a->name : "";
 }
 
 // A run of INS-2000 `serial` tested `days` after 2026-01-05 08:00 UTC, and

@@ -18,11 +18,22 @@
 #include "insdiag/kb/diagnosis.h"
 #include "insdiag/kb/diagnosis_store.h"
 #include "insdiag/kb/fleet_store.h"
+#include "insdiag/kb/knowledge_messages.h"
 
 namespace insdiag::kb {
 namespace {
 
 using generator::kMicrosPerDay;
+
+// What refining the signatures reads of a confirmed case's stored report
+// bytes. The generator's own analyses have none; a database it adds to may
+// hold analyses the server completed. Undecodable bytes read as far as they
+// parse, as the server's decoder reads them.
+absl::StatusOr<ReportFindings> DecodeReportFindings(std::string_view encoded_report) {
+  v1::AnalysisReport report;
+  (void)report.ParseFromArray(encoded_report.data(), static_cast<int>(encoded_report.size()));
+  return FindingsOf(report);
+}
 
 // The test interval: the profile's, or the one that gives the fleet's
 // service time `options.analyses` periodic analyses.
@@ -70,7 +81,7 @@ absl::Status UpdateDerivedState(ConnectionPool& pool, Connection& db, const Flee
   }
   if (options.refine_signatures) {
     if (auto s = timed("refined the failure modes' signatures",
-                       [&] { return DiagnosisStore(pool).RefineSignatures(unit_type); });
+                       [&] { return DiagnosisStore(pool, DecodeReportFindings).RefineSignatures(unit_type); });
         !s.ok()) {
       return s;
     }

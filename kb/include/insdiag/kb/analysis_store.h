@@ -24,12 +24,13 @@
 #include <chrono>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "insdiag/engine/report.h"
+#include "insdiag/kb/analysis.h"
 #include "insdiag/kb/connection_pool.h"
-#include "insdiag/v1/analyses.pb.h"
 
 namespace insdiag::kb {
 
@@ -42,7 +43,7 @@ struct AnalysisQuery {
 };
 
 struct AnalysisPage {
-  std::vector<v1::Analysis> analyses;
+  std::vector<Analysis> analyses;
   std::string next_page_token;
 };
 
@@ -50,7 +51,7 @@ struct AnalysisPage {
 struct ClaimedJob {
   std::string analysis_id;
   std::string run_id;
-  v1::AnalysisSpec spec;
+  std::string encoded_spec;  // as Create stored it
   int attempt = 0;
 };
 
@@ -78,14 +79,15 @@ class AnalysisStore {
   explicit AnalysisStore(ConnectionPool& pool, ConnectionPool* list_pool = nullptr)
       : pool_(pool), list_pool_(list_pool != nullptr ? *list_pool : pool) {}
 
-  // Queues an analysis of runs/{run_id}. With a request id already used for
-  // the same run and spec: that analysis; for another: ALREADY_EXISTS.
-  // NOT_FOUND for an unknown run.
-  absl::StatusOr<v1::Analysis> Create(const std::string& run_id, const v1::AnalysisSpec& spec,
-                                      const std::string& request_id, int max_attempts = 3);
+  // Queues an analysis of runs/{run_id} with its spec as the edge encoded
+  // it (same spec, same bytes). With a request id already used for the same
+  // run and spec: that analysis; for another: ALREADY_EXISTS. NOT_FOUND for
+  // an unknown run.
+  absl::StatusOr<Analysis> Create(const std::string& run_id, const std::string& encoded_spec,
+                                  const std::string& request_id, int max_attempts = 3);
 
   // NOT_FOUND / INVALID_ARGUMENT (malformed id).
-  absl::StatusOr<v1::Analysis> Get(const std::string& analysis_id, bool include_report = true);
+  absl::StatusOr<Analysis> Get(const std::string& analysis_id, bool include_report = true);
   absl::StatusOr<AnalysisPage> List(const AnalysisQuery& query);
 
   // The oldest queued job, now RUNNING under `owner`'s lease; nullopt when none waits.
@@ -96,17 +98,18 @@ class AnalysisStore {
   absl::StatusOr<LeaseState> UpdateProgress(const std::string& analysis_id, const std::string& owner,
                                             double fraction, const std::string& stage,
                                             std::chrono::milliseconds lease);
-  // Stores the report, its queryable parts and the series in one
-  // transaction. FAILED_PRECONDITION when `owner` no longer holds the job.
-  absl::Status Complete(const std::string& analysis_id, const std::string& owner, const v1::AnalysisReport& report,
-                        const engine::AnalysisSeries* series);
+  // Stores the report (its bytes as the edge encoded them), its queryable
+  // rows and the series in one transaction. FAILED_PRECONDITION when `owner`
+  // no longer holds the job.
+  absl::Status Complete(const std::string& analysis_id, const std::string& owner, const std::string& encoded_report,
+                        const ReportRows& rows, const engine::AnalysisSeries* series);
   // FAILED with `error`, or QUEUED again when `retry` and attempts remain.
   absl::Status Fail(const std::string& analysis_id, const std::string& owner, const absl::Status& error, bool retry);
   // Ends a job whose cancellation was requested.
   absl::Status MarkCancelled(const std::string& analysis_id, const std::string& owner);
   absl::StatusOr<ReapReport> Reap();
 
-  absl::StatusOr<v1::Analysis> Cancel(const std::string& analysis_id);
+  absl::StatusOr<Analysis> Cancel(const std::string& analysis_id);
 
   // How many jobs wait and run, and how long the oldest has waited.
   absl::StatusOr<QueueStats> Queue();
@@ -114,7 +117,7 @@ class AnalysisStore {
   // The stored series, `chunk_points` points at a time, channel by channel
   // (only `channels` when not empty). FAILED_PRECONDITION before SUCCEEDED.
   absl::Status ReadSeries(const std::string& analysis_id, const std::vector<std::string>& channels,
-                          std::size_t chunk_points, absl::FunctionRef<bool(const v1::ResidualSeriesChunk&)> consume);
+                          std::size_t chunk_points, absl::FunctionRef<bool(std::span<const ResidualPoint>)> consume);
 
  private:
   ConnectionPool& pool_;

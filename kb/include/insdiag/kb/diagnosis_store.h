@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "insdiag/kb/analysis.h"
 #include "insdiag/kb/connection_pool.h"
 #include "insdiag/kb/diagnosis.h"
 #include "insdiag/kb/page_query.h"
@@ -76,10 +77,11 @@ struct DiagnosisInputs {
 
 class DiagnosisStore {
  public:
+  // `decode_report`: what the diagnosis reads of a stored report's bytes.
   // `list_pool`: where the listings read (a streaming replica of the
   // database, the server's --read-database-url); null: `pool`.
-  explicit DiagnosisStore(ConnectionPool& pool, ConnectionPool* list_pool = nullptr)
-      : pool_(pool), list_pool_(list_pool != nullptr ? *list_pool : pool) {}
+  DiagnosisStore(ConnectionPool& pool, ReportDecoder decode_report, ConnectionPool* list_pool = nullptr)
+      : pool_(pool), list_pool_(list_pool != nullptr ? *list_pool : pool), decode_report_(std::move(decode_report)) {}
 
   // What diagnosing a SUCCEEDED analysis reads. NOT_FOUND for no such
   // analysis; FAILED_PRECONDITION when it has not succeeded or its unit has
@@ -105,6 +107,7 @@ class DiagnosisStore {
  private:
   ConnectionPool& pool_;
   ConnectionPool& list_pool_;
+  ReportDecoder decode_report_;
 };
 
 }  // namespace insdiag::kb

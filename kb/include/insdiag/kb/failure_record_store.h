@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "insdiag/kb/analysis.h"
 #include "insdiag/kb/connection_pool.h"
 #include "insdiag/kb/failure_record.h"
 #include "insdiag/kb/page_query.h"
@@ -27,10 +28,11 @@ struct FailureRecordQuery {
 
 class FailureRecordStore {
  public:
-  // `list_pool`: where the listings read (a streaming replica of the
-  // database, the server's --read-database-url); null: `pool`.
-  explicit FailureRecordStore(ConnectionPool& pool, ConnectionPool* list_pool = nullptr)
-      : pool_(pool), list_pool_(list_pool != nullptr ? *list_pool : pool) {}
+  // `decode_report`: what refining a signature reads of a confirmed case's
+  // stored report bytes. `list_pool`: where the listings read (a streaming
+  // replica of the database, the server's --read-database-url); null: `pool`.
+  FailureRecordStore(ConnectionPool& pool, ReportDecoder decode_report, ConnectionPool* list_pool = nullptr)
+      : pool_(pool), list_pool_(list_pool != nullptr ? *list_pool : pool), decode_report_(std::move(decode_report)) {}
 
   // INVALID_ARGUMENT naming the field for a malformed record; NOT_FOUND for
   // an unknown module, mode or analysis.
@@ -51,6 +53,7 @@ class FailureRecordStore {
  private:
   ConnectionPool& pool_;
   ConnectionPool& list_pool_;
+  ReportDecoder decode_report_;
 };
 
 }  // namespace insdiag::kb
