@@ -11,7 +11,6 @@
 #include "insdiag/api/resource_names.h"
 #include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/diagnosis.h"
-#include "insdiag/kb/knowledge_messages.h"
 #include "insdiag/kb/failure_record.h"
 #include "insdiag/kb/unit_history.h"
 #include "report_rows.h"

@@ -37,23 +37,6 @@ std::string Micros(const std::string& column) {
   return absl::StrCat("(extract(epoch FROM ", column, ") * 1000000)::bigint");
 }
 
-google::protobuf::Timestamp TimestampOfMicros(std::int64_t micros) {
-  google::protobuf::Timestamp t;
-  std::int64_t seconds = micros / 1'000'000;
-  std::int64_t rest = micros % 1'000'000;
-  if (rest < 0) {
-    rest += 1'000'000;
-    --seconds;
-  }
-  t.set_seconds(seconds);
-  t.set_nanos(static_cast<int>(rest * 1000));
-  return t;
-}
-
-std::int64_t MicrosOf(const google::protobuf::Timestamp& t) { return t.seconds() * 1'000'000 + t.nanos() / 1000; }
-
-std::string TimestampText(const google::protobuf::Timestamp& t) { return TimeText(absl::FromUnixMicros(MicrosOf(t))); }
-
 std::string TimeText(absl::Time t) {
   return absl::FormatTime("%Y-%m-%d %H:%M:%E6S+00", absl::FromUnixMicros(absl::ToUnixMicros(t)), absl::UTCTimeZone());
 }

@@ -3,7 +3,6 @@
 
 #include <absl/status/statusor.h>
 #include <absl/time/time.h>
-#include <google/protobuf/timestamp.pb.h>
 
 #include <cstdint>
 #include <string>
@@ -23,11 +22,8 @@ bool IsUuid(std::string_view text);
 
 // SQL expression of a timestamptz column as microseconds since the epoch.
 std::string Micros(const std::string& column);
-google::protobuf::Timestamp TimestampOfMicros(std::int64_t micros);
-// A Timestamp as text PostgreSQL reads ("2024-01-31 12:00:00.000000+00").
-std::string TimestampText(const google::protobuf::Timestamp& t);
-std::int64_t MicrosOf(const google::protobuf::Timestamp& t);
-// A time as that text, to the microsecond (rounded down).
+// A time as text PostgreSQL reads ("2024-01-31 12:00:00.000000+00"), to
+// the microsecond (rounded down).
 std::string TimeText(absl::Time t);
 
 // Keyset page tokens: opaque base64 of "a|b".
