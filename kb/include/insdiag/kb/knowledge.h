@@ -3,8 +3,9 @@
 // diagnosis's constants, and the diagnosis itself (docs/DIAGNOSIS.md); and
 // the fleet's units and their modules. Plain values: the diagnosis's math
 // (kb/diagnosis.h) works on these, and the API's messages are mapped to and
-// from them where they are read and written (kb/knowledge_messages.h; units
-// and modules at the server's edge, server/src/knowledge_codec.h).
+// from them at kb's edge
+// (kb/messages/include/insdiag/kb/knowledge_messages.h; units and modules
+// in server/src/knowledge_codec.h).
 #pragma once
 
 #include <absl/time/time.h>
