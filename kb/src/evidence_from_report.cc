@@ -285,6 +285,16 @@ Evidence EvidenceFromReport(const ReportFindings& report, const UnitType& unit_t
         "that walks the loop (discover) to read them with the first effect in the model",
         significant_candidates));
   }
+  // A unit whose noise the analysis found of another class than its type:
+  // every term reads far from nominal for that reason alone.
+  if (report.unit_type_set_aside.has_value()) {
+    const UnitTypeSetAside& aside = *report.unit_type_set_aside;
+    evidence.notes.push_back(absl::StrFormat(
+        "the analysis set %s's nominal model aside: the run's Allan deviation on %s at τ %.3g s is %.3g times "
+        "it, so the unit's noise is of another class, and every term below reads far from nominal for that "
+        "reason; check the unit's type before reading the modes",
+        unit_type.name, aside.channel, aside.tau_s, aside.ratio));
+  }
   if (!unknown_names.empty()) {
     evidence.notes.push_back(absl::StrCat("identified parameters without a nominal value in ", unit_type.name,
                                           " are not used: ", absl::StrJoin(unknown_names, ", ")));

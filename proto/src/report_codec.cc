@@ -27,6 +27,15 @@ v1::AnalysisReport::Verdict ToProto(engine::Verdict v) {
   return v1::AnalysisReport::VERDICT_UNSPECIFIED;
 }
 
+std::optional<engine::Verdict> VerdictOf(v1::AnalysisReport::Verdict verdict) {
+  switch (verdict) {
+    case v1::AnalysisReport::GOOD: return engine::Verdict::kGood;
+    case v1::AnalysisReport::OPERABLE: return engine::Verdict::kOperable;
+    case v1::AnalysisReport::FAULTY: return engine::Verdict::kFaulty;
+    default: return std::nullopt;
+  }
+}
+
 v1::FaultInterval ToProto(const engine::FaultInterval& f) {
   v1::FaultInterval out;
   out.set_channel(f.channel);

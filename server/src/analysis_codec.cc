@@ -1,5 +1,6 @@
 #include "analysis_codec.h"
 
+#include "insdiag/api/report_codec.h"
 #include "insdiag/kb/knowledge_messages.h"
 #include "time_codec.h"
 
@@ -15,15 +16,6 @@ constexpr char kRebuiltNote[] =
 template <typename Message>
 void ParseAsFarAsItGoes(std::string_view bytes, Message& message) {
   (void)message.ParseFromArray(bytes.data(), static_cast<int>(bytes.size()));
-}
-
-std::optional<engine::Verdict> VerdictOf(v1::AnalysisReport::Verdict verdict) {
-  switch (verdict) {
-    case v1::AnalysisReport::GOOD: return engine::Verdict::kGood;
-    case v1::AnalysisReport::OPERABLE: return engine::Verdict::kOperable;
-    case v1::AnalysisReport::FAULTY: return engine::Verdict::kFaulty;
-    default: return std::nullopt;
-  }
 }
 
 v1::AnalysisReport::Verdict ToProto(std::optional<engine::Verdict> verdict) {
@@ -130,7 +122,7 @@ std::string EncodedReport(const v1::AnalysisReport& report) {
 
 kb::ReportRows ReportRowsOf(const v1::AnalysisReport& report) {
   kb::ReportRows rows;
-  rows.verdict = VerdictOf(report.verdict());
+  rows.verdict = api::VerdictOf(report.verdict());
   rows.nis_mean = report.nis_mean();
   rows.log_likelihood = report.log_likelihood();
   rows.aic = report.aic();

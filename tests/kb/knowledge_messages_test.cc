@@ -7,6 +7,8 @@
 #include <google/protobuf/util/message_differencer.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "evidence_reports.h"
 #include "insdiag/api/unit_types.h"
 #include "insdiag/kb/failure_mode_catalogue.h"
@@ -88,6 +90,34 @@ TEST(KnowledgeMessagesTest, FindingsHoldWhatTheDiagnosisReadsOfAReport) {
 
   report.clear_verdict();
   EXPECT_FALSE(FindingsOf(report).verdict.has_value()) << "an unstated verdict is not read as GOOD";
+}
+
+// The engine's record that it set the unit type aside reaches the
+// diagnosis, which says its evidence reads a unit of another class.
+TEST(KnowledgeMessagesTest, AUnitTypeSetAsideByTheAnalysisIsReadAndTheDiagnosisSaysSo) {
+  v1::AnalysisReport report = testing::NominalReport();
+  EXPECT_FALSE(FindingsOf(report).unit_type_set_aside.has_value());
+  const auto notes_naming_it = [](const Diagnosis& d) {
+    return std::count_if(d.notes.begin(), d.notes.end(),
+                         [](const std::string& n) { return n.find("nominal model aside") != std::string::npos; });
+  };
+  EXPECT_EQ(notes_naming_it(testing::DiagnoseReport(report)), 0);
+
+  v1::Decision* aside = report.add_decisions();
+  aside->set_kind(v1::Decision::UNIT_TYPE_SET_ASIDE);
+  aside->add_subjects("gyro_x");
+  v1::Decision::Measure* tau = aside->add_measures();
+  tau->set_name("tau_s");
+  tau->set_value(10.0);
+  v1::Decision::Measure* ratio = aside->add_measures();
+  ratio->set_name("ratio");
+  ratio->set_value(1200.0);
+  const ReportFindings findings = FindingsOf(report);
+  ASSERT_TRUE(findings.unit_type_set_aside.has_value());
+  EXPECT_EQ(findings.unit_type_set_aside->channel, "gyro_x");
+  EXPECT_EQ(findings.unit_type_set_aside->tau_s, 10.0);
+  EXPECT_EQ(findings.unit_type_set_aside->ratio, 1200.0);
+  EXPECT_EQ(notes_naming_it(testing::DiagnoseReport(report)), 1);
 }
 
 TEST(KnowledgeMessagesTest, ADiagnosisReadsAsTheApiShowsIt) {

@@ -5,17 +5,10 @@
 #include <cstdint>
 #include <optional>
 
+#include "insdiag/api/report_codec.h"
+
 namespace insdiag::kb {
 namespace {
-
-std::optional<engine::Verdict> VerdictOf(v1::AnalysisReport::Verdict verdict) {
-  switch (verdict) {
-    case v1::AnalysisReport::GOOD: return engine::Verdict::kGood;
-    case v1::AnalysisReport::OPERABLE: return engine::Verdict::kOperable;
-    case v1::AnalysisReport::FAULTY: return engine::Verdict::kFaulty;
-    default: return std::nullopt;
-  }
-}
 
 Direction DirectionOf(v1::Signature::Direction direction) {
   switch (direction) {
@@ -215,7 +208,7 @@ absl::StatusOr<v1::Diagnosis> DecodeDiagnosis(const StoredDiagnosis& stored) {
 
 ReportFindings FindingsOf(const v1::AnalysisReport& report) {
   ReportFindings out;
-  out.verdict = VerdictOf(report.verdict());
+  out.verdict = api::VerdictOf(report.verdict());
   for (const auto& p : report.identified()) {
     IdentifiedFinding f;
     f.name = p.name();
@@ -245,6 +238,16 @@ ReportFindings FindingsOf(const v1::AnalysisReport& report) {
     out.candidates.push_back(std::move(f));
   }
   out.model_effects.assign(report.model().effects().begin(), report.model().effects().end());
+  for (const v1::Decision& d : report.decisions()) {
+    if (d.kind() != v1::Decision::UNIT_TYPE_SET_ASIDE || d.subjects().empty()) continue;
+    UnitTypeSetAside aside;
+    aside.channel = d.subjects(0);
+    for (const auto& m : d.measures()) {
+      if (m.name() == "tau_s") aside.tau_s = m.value();
+      if (m.name() == "ratio") aside.ratio = m.value();
+    }
+    out.unit_type_set_aside = std::move(aside);
+  }
   for (const auto& s : report.discovery()) {
     LoopStep step;
     step.step = s.step();

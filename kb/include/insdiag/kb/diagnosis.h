@@ -108,8 +108,18 @@ struct LoopStep {
   double p_value = 0.0;  // Holm-adjusted
 };
 
+// The analysis set the unit type's nominal model aside for the run's own
+// Allan fit (its UNIT_TYPE_SET_ASIDE decision): the channel whose Allan
+// deviation departs from the nominal model, and how far.
+struct UnitTypeSetAside {
+  std::string channel;  // "gyro_x"
+  double tau_s = 0.0;
+  double ratio = 0.0;   // the run's Allan deviation over the nominal model's
+};
+
 struct ReportFindings {
   std::optional<engine::Verdict> verdict;  // absent: the report states none
+  std::optional<UnitTypeSetAside> unit_type_set_aside;
   std::vector<IdentifiedFinding> identified;
   std::vector<CandidateFinding> candidates;
   std::vector<std::string> model_effects;  // the effects of the model that made the report

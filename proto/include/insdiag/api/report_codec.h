@@ -5,6 +5,7 @@
 
 #include <absl/status/statusor.h>
 
+#include <optional>
 #include <string>
 
 #include "insdiag/engine/analysis.h"
@@ -17,6 +18,8 @@ namespace insdiag::api {
 v1::AnalysisReport ToProto(const engine::AnalysisReport& report, const engine::ErrorModel& model);
 v1::ErrorModel ToProto(const engine::ErrorModel& model);
 v1::AnalysisReport::Verdict ToProto(engine::Verdict verdict);
+// The verdict a report states; nullopt for VERDICT_UNSPECIFIED (or a number the API does not define).
+std::optional<engine::Verdict> VerdictOf(v1::AnalysisReport::Verdict verdict);
 v1::FaultInterval ToProto(const engine::FaultInterval& interval);  // a non-finite statistic as 0
 
 // Whether the run tells a parameter (engine::ObservableByRun), and why not:
