@@ -244,10 +244,4 @@ v1::ResidualSeriesChunk ToProto(std::span<const kb::ResidualPoint> points) {
   return chunk;
 }
 
-absl::StatusOr<kb::ReportFindings> DecodeReportFindings(std::string_view encoded_report) {
-  v1::AnalysisReport report;
-  ParseAsFarAsItGoes(encoded_report, report);
-  return kb::FindingsOf(report);
-}
-
 }  // namespace insdiag::server

@@ -41,8 +41,4 @@ v1::Analysis ToProto(const kb::Analysis& analysis);
 v1::Analysis::State ToProto(kb::AnalysisState state);
 v1::ResidualSeriesChunk ToProto(std::span<const kb::ResidualPoint> points);
 
-// What the diagnosis reads of a stored report's bytes (kb::ReportDecoder):
-// the report decoded as far as it parses, its findings.
-absl::StatusOr<kb::ReportFindings> DecodeReportFindings(std::string_view encoded_report);
-
 }  // namespace insdiag::server

@@ -16,6 +16,7 @@
 
 #include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/catalogue_data.h"
+#include "insdiag/kb/knowledge_messages.h"
 #include "insdiag/kb/run_store.h"
 #include "insdiag/server/access_guard.h"
 #include "insdiag/server/analysis_workers.h"
@@ -43,8 +44,8 @@ struct InsdiagServer::Services {
       : connection_pool(pool), access_store(pool), guard(access_store), access(access_store), access_grpc(access, guard), store(pool, options.read_pool),
         runs(store, RunService::Options{options.max_upload_samples}), runs_grpc(runs, guard), analysis_store(pool, options.read_pool),
         analyses(analysis_store, AnalysisService::Options{options.watch_poll}),
-        catalogue_store(pool, options.read_pool), failure_record_store(pool, DecodeReportFindings, options.read_pool),
-        diagnosis_store(pool, DecodeReportFindings, options.read_pool), unit_history_store(pool, options.read_pool),
+        catalogue_store(pool, options.read_pool), failure_record_store(pool, kb::DecodeReportFindings, options.read_pool),
+        diagnosis_store(pool, kb::DecodeReportFindings, options.read_pool), unit_history_store(pool, options.read_pool),
         knowledge(catalogue_store, failure_record_store, diagnosis_store, unit_history_store), knowledge_grpc(knowledge, guard),
         test_reports(analyses, runs, knowledge, TestReportService::Options{}), analyses_grpc(analyses, test_reports, guard, stopping),
         fleet_store(options.read_pool != nullptr ? *options.read_pool : pool), fleet_grpc(fleet_store, guard),

@@ -197,7 +197,7 @@ TEST_F(FleetGeneratorTest, GeneratedHistoryReadsBackThroughTheStoresAndEveryStat
   EXPECT_EQ(server::ToProto(page->analyses.front()).report().identified_size(), 18);
 
   // A new diagnosis of a generated analysis works like any other.
-  DiagnosisStore diagnoses(pool(), server::DecodeReportFindings);
+  DiagnosisStore diagnoses(pool(), DecodeReportFindings);
   auto diagnosis = testing::DiagnoseStored(diagnoses, analysis.name());
   ASSERT_TRUE(diagnosis.ok()) << diagnosis.status();
   EXPECT_FALSE(diagnosis->candidates().empty());

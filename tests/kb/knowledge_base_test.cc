@@ -41,8 +41,8 @@ class KnowledgeBaseTest : public insdiag::testing::DatabaseTest {
     DatabaseTest::SetUp();
     if (IsSkipped() || HasFatalFailure()) return;
     catalogue_ = std::make_unique<CatalogueStore>(pool());
-    records_ = std::make_unique<FailureRecordStore>(pool(), server::DecodeReportFindings);
-    diagnoses_ = std::make_unique<DiagnosisStore>(pool(), server::DecodeReportFindings);
+    records_ = std::make_unique<FailureRecordStore>(pool(), DecodeReportFindings);
+    diagnoses_ = std::make_unique<DiagnosisStore>(pool(), DecodeReportFindings);
     ASSERT_TRUE(SeedBuiltinCatalogues(*catalogue_).ok());
     ASSERT_TRUE(SeedBuiltinCatalogues(*catalogue_).ok()) << "seeding twice is harmless";
   }

@@ -164,7 +164,7 @@ double ModuleProbability(const v1::Diagnosis& d, const std::string& module) {
 }
 
 TEST_F(UnitHistoryStoreTest, AUnitsGrowingDriftStrengthensItsGyroWhileAStableHistoryChangesNothing) {
-  DiagnosisStore diagnoses(pool(), server::DecodeReportFindings);
+  DiagnosisStore diagnoses(pool(), DecodeReportFindings);
   const v1::AnalysisReport last = Report(1.6, 0.0, 1e-7);
   // The last run alone, on a unit without history.
   auto alone = testing::DiagnoseStored(diagnoses, StoreRunAndAnalysis("INS-ALONE", 0.0, last));

@@ -204,7 +204,7 @@ TEST(AnalysisCodec, AReportRebuiltFromItsRowsHasTheirFieldsAndSaysSo) {
 
 TEST(AnalysisCodec, TheFindingsOfRowsAreThoseOfTheReportRebuiltFromThem) {
   const kb::ReportRows rows = ReportRowsOf(ReportWithRows());
-  auto decoded = DecodeReportFindings(EncodedReport(RebuiltReport(rows, "")));
+  auto decoded = kb::DecodeReportFindings(EncodedReport(RebuiltReport(rows, "")));
   ASSERT_TRUE(decoded.ok());
   const kb::ReportFindings from_rows = kb::FindingsOfRows(rows);
   EXPECT_EQ(from_rows.verdict, decoded->verdict);
@@ -245,7 +245,7 @@ TEST(AnalysisCodec, TheFindingsOfRowsAreThoseOfTheReportRebuiltFromThem) {
 
 TEST(AnalysisCodec, TheDecoderReadsAReportsFindings) {
   const v1::AnalysisReport report = ReportWithRows();
-  auto findings = DecodeReportFindings(EncodedReport(report));
+  auto findings = kb::DecodeReportFindings(EncodedReport(report));
   ASSERT_TRUE(findings.ok());
   EXPECT_EQ(findings->verdict, kb::FindingsOf(report).verdict);
   EXPECT_EQ(findings->identified.size(), 2U);

@@ -25,16 +25,6 @@ namespace {
 
 using generator::kMicrosPerDay;
 
-// What refining the signatures reads of a confirmed case's stored report
-// bytes. The generator's own analyses have none; a database it adds to may
-// hold analyses the server completed. Undecodable bytes read as far as they
-// parse, as the server's decoder reads them.
-absl::StatusOr<ReportFindings> DecodeReportFindings(std::string_view encoded_report) {
-  v1::AnalysisReport report;
-  (void)report.ParseFromArray(encoded_report.data(), static_cast<int>(encoded_report.size()));
-  return FindingsOf(report);
-}
-
 // The test interval: the profile's, or the one that gives the fleet's
 // service time `options.analyses` periodic analyses.
 absl::StatusOr<std::int64_t> TestInterval(const FleetGeneratorOptions& options, const generator::Model& m,

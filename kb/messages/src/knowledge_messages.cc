@@ -261,4 +261,10 @@ ReportFindings FindingsOf(const v1::AnalysisReport& report) {
   return out;
 }
 
+absl::StatusOr<ReportFindings> DecodeReportFindings(std::string_view encoded_report) {
+  v1::AnalysisReport report;
+  (void)report.ParseFromArray(encoded_report.data(), static_cast<int>(encoded_report.size()));
+  return FindingsOf(report);
+}
+
 }  // namespace insdiag::kb

@@ -8,6 +8,7 @@
 #include <absl/time/time.h>
 
 #include <string>
+#include <string_view>
 
 #include "insdiag/kb/diagnosis.h"
 #include "insdiag/kb/diagnosis_store.h"
@@ -38,5 +39,9 @@ std::string EncodeDiagnosis(const Diagnosis& diagnosis, const std::string& name,
 absl::StatusOr<v1::Diagnosis> DecodeDiagnosis(const StoredDiagnosis& stored);
 
 ReportFindings FindingsOf(const v1::AnalysisReport& report);
+// What the diagnosis reads of a stored report's bytes (a ReportDecoder,
+// kb/analysis.h): the report decoded as far as it parses — a read never
+// refused a stored report — and its findings.
+absl::StatusOr<ReportFindings> DecodeReportFindings(std::string_view encoded_report);
 
 }  // namespace insdiag::kb
