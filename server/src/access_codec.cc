@@ -1,6 +1,6 @@
 #include "access_codec.h"
 
-#include "time_codec.h"
+#include "insdiag/api/time_codec.h"
 
 namespace insdiag::server {
 
@@ -48,9 +48,9 @@ v1::Token ToProto(const kb::Token& token) {
   message.set_name(token.name);
   message.set_display_name(token.display_name);
   message.set_role(ToProto(token.role));
-  *message.mutable_create_time() = TimestampOf(token.create_time);
-  if (token.expire_time.has_value()) *message.mutable_expire_time() = TimestampOf(*token.expire_time);
-  if (token.revoke_time.has_value()) *message.mutable_revoke_time() = TimestampOf(*token.revoke_time);
+  *message.mutable_create_time() = api::TimestampOf(token.create_time);
+  if (token.expire_time.has_value()) *message.mutable_expire_time() = api::TimestampOf(*token.expire_time);
+  if (token.revoke_time.has_value()) *message.mutable_revoke_time() = api::TimestampOf(*token.revoke_time);
   message.set_creator(token.creator);
   return message;
 }
@@ -65,7 +65,7 @@ v1::CreatedToken ToProto(const kb::CreatedToken& created) {
 v1::AuditEvent ToProto(const kb::AuditEvent& event) {
   v1::AuditEvent message;
   message.set_name(event.name);
-  *message.mutable_event_time() = TimestampOf(event.event_time);
+  *message.mutable_event_time() = api::TimestampOf(event.event_time);
   message.set_token(event.token);
   message.set_display_name(event.display_name);
   message.set_role(ToProto(event.role));
@@ -82,9 +82,9 @@ kb::Token FromProto(const v1::Token& token) {
   domain.name = token.name();
   domain.display_name = token.display_name();
   domain.role = RoleOf(token.role());
-  domain.create_time = TimeOf(token.create_time());
-  if (token.has_expire_time()) domain.expire_time = TimeOf(token.expire_time());
-  if (token.has_revoke_time()) domain.revoke_time = TimeOf(token.revoke_time());
+  domain.create_time = api::TimeOf(token.create_time());
+  if (token.has_expire_time()) domain.expire_time = api::TimeOf(token.expire_time());
+  if (token.has_revoke_time()) domain.revoke_time = api::TimeOf(token.revoke_time());
   domain.creator = token.creator();
   return domain;
 }

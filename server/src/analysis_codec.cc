@@ -1,8 +1,8 @@
 #include "analysis_codec.h"
 
 #include "insdiag/api/report_codec.h"
+#include "insdiag/api/time_codec.h"
 #include "insdiag/kb/knowledge_messages.h"
-#include "time_codec.h"
 
 namespace insdiag::server {
 namespace {
@@ -223,8 +223,8 @@ v1::Analysis ToProto(const kb::Analysis& analysis) {
   }
   a.set_attempts(analysis.attempts);
   a.set_unit(analysis.unit);
-  *a.mutable_create_time() = TimestampOf(analysis.create_time);
-  *a.mutable_update_time() = TimestampOf(analysis.update_time);
+  *a.mutable_create_time() = api::TimestampOf(analysis.create_time);
+  *a.mutable_update_time() = api::TimestampOf(analysis.update_time);
   if (analysis.report.has_value()) *a.mutable_report() = ReportOf(*analysis.report, analysis.encoded_spec);
   return a;
 }

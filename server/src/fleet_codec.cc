@@ -4,9 +4,10 @@
 
 #include <cstdint>
 
-#include "time_codec.h"
+#include "insdiag/api/time_codec.h"
 
 namespace insdiag::server {
+
 kb::FleetStatisticsQuery FromProto(const v1::GetFleetStatisticsRequest& request) {
   kb::FleetStatisticsQuery query;
   query.unit_type = request.unit_type();
@@ -18,8 +19,8 @@ kb::FailureCountQuery FromProto(const v1::ListFailureCountsRequest& request) {
   kb::FailureCountQuery query;
   query.unit_type = request.unit_type();
   query.period = request.period();
-  if (request.has_start_time()) query.start_time = MicrosecondTimeOf(request.start_time());
-  if (request.has_end_time()) query.end_time = MicrosecondTimeOf(request.end_time());
+  if (request.has_start_time()) query.start_time = api::MicrosecondTimeOf(request.start_time());
+  if (request.has_end_time()) query.end_time = api::MicrosecondTimeOf(request.end_time());
   query.failure_mode = request.failure_mode();
   query.batch = request.batch();
   return query;
@@ -88,7 +89,7 @@ v1::FleetStatistics ToProto(const kb::FleetStatistics& statistics) {
   out.set_failure_count(statistics.failure_count);
   out.set_no_fault_found_count(statistics.no_fault_found_count);
   if (statistics.counts_time.has_value())
-    *out.mutable_counts_time() = TimestampOf(*statistics.counts_time);
+    *out.mutable_counts_time() = api::TimestampOf(*statistics.counts_time);
   return out;
 }
 
@@ -100,7 +101,7 @@ v1::ListFailureCountsResponse ToProto(const kb::FailureCounts& counts) {
     c->set_module_role(count.module_role);
     c->set_unit_type(count.unit_type);
     c->set_batch(count.batch);
-    *c->mutable_period_start() = TimestampOf(count.period_start);
+    *c->mutable_period_start() = api::TimestampOf(count.period_start);
     c->set_failures(count.failures);
   }
   out.set_total(counts.total);
@@ -156,7 +157,7 @@ v1::ListParameterTrendsResponse ToProto(const kb::ParameterPointPage& page) {
     p->set_operating_hours(point.operating_hours);
     p->set_value(point.value);
     p->set_std_error(point.std_error);
-    *p->mutable_time() = TimestampOf(point.time);
+    *p->mutable_time() = api::TimestampOf(point.time);
   }
   out.set_next_page_token(page.next_page_token);
   return out;
@@ -172,7 +173,7 @@ v1::ParameterTrend ToProto(const kb::ParameterTrend& trend) {
   for (const kb::TrendBucket& bucket : trend.buckets) {
     v1::TrendBucket* b = out.add_buckets();
     b->set_batch(bucket.batch);
-    *b->mutable_month() = TimestampOf(bucket.month);
+    *b->mutable_month() = api::TimestampOf(bucket.month);
     b->set_count(bucket.count);
     b->set_median(bucket.median);
     b->set_p25(bucket.p25);
@@ -182,7 +183,7 @@ v1::ParameterTrend ToProto(const kb::ParameterTrend& trend) {
   out.set_slope_per_year(trend.slope_per_year);
   out.set_relative_slope_per_year(trend.relative_slope_per_year);
   if (trend.refreshed_time.has_value())
-    *out.mutable_refreshed_time() = TimestampOf(*trend.refreshed_time);
+    *out.mutable_refreshed_time() = api::TimestampOf(*trend.refreshed_time);
   return out;
 }
 

@@ -6,7 +6,7 @@
 #include <cstdint>
 
 #include "insdiag/api/report_codec.h"
-#include "time_codec.h"
+#include "insdiag/api/time_codec.h"
 
 namespace insdiag::server {
 namespace {
@@ -15,7 +15,7 @@ v1::RunParameterPoint ToProto(const kb::RunParameterPoint& point) {
   v1::RunParameterPoint message;
   message.set_run(point.run);
   message.set_analysis(point.analysis);
-  *message.mutable_test_time() = TimestampOf(point.test_time);
+  *message.mutable_test_time() = api::TimestampOf(point.test_time);
   message.set_days(point.days);
   message.set_value(point.value);
   message.set_std_error(point.std_error);
@@ -25,7 +25,7 @@ v1::RunParameterPoint ToProto(const kb::RunParameterPoint& point) {
 v1::HistoryAnalysis ToProto(const kb::HistoryAnalysis& analysis) {
   v1::HistoryAnalysis message;
   message.set_analysis(analysis.analysis);
-  *message.mutable_create_time() = TimestampOf(analysis.create_time);
+  *message.mutable_create_time() = api::TimestampOf(analysis.create_time);
   message.set_verdict(analysis.verdict.has_value() ? api::ToProto(*analysis.verdict)
                                                    : v1::AnalysisReport::VERDICT_UNSPECIFIED);
   message.set_unit_hours(analysis.unit_hours);
@@ -37,7 +37,7 @@ v1::HistoryAnalysis ToProto(const kb::HistoryAnalysis& analysis) {
 v1::HistoryRun ToProto(const kb::HistoryRun& run) {
   v1::HistoryRun message;
   message.set_run(run.run);
-  *message.mutable_test_time() = TimestampOf(run.test_time);
+  *message.mutable_test_time() = api::TimestampOf(run.test_time);
   message.set_duration_s(run.duration_s);
   for (const auto& analysis : run.analyses) *message.add_analyses() = ToProto(analysis);
   return message;

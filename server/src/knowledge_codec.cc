@@ -1,6 +1,6 @@
 #include "knowledge_codec.h"
 
-#include "time_codec.h"
+#include "insdiag/api/time_codec.h"
 
 namespace insdiag::server {
 
@@ -9,9 +9,9 @@ v1::Unit ToProto(const kb::Unit& unit) {
   message.set_name(unit.name);
   message.set_unit_type(unit.unit_type);
   message.set_operating_hours(unit.operating_hours);
-  *message.mutable_create_time() = TimestampOf(unit.create_time);
+  *message.mutable_create_time() = api::TimestampOf(unit.create_time);
   message.set_batch(unit.batch);
-  if (unit.commission_time.has_value()) *message.mutable_commission_time() = TimestampOf(*unit.commission_time);
+  if (unit.commission_time.has_value()) *message.mutable_commission_time() = api::TimestampOf(*unit.commission_time);
   message.set_retired(unit.retired);
   return message;
 }
@@ -21,9 +21,9 @@ v1::Module ToProto(const kb::Module& module) {
   message.set_name(module.name);
   message.set_role(module.role);
   message.set_part_serial(module.part_serial);
-  *message.mutable_installed_time() = TimestampOf(module.installed_time);
+  *message.mutable_installed_time() = api::TimestampOf(module.installed_time);
   message.set_installed_hours(module.installed_hours);
-  if (module.removed_time.has_value()) *message.mutable_removed_time() = TimestampOf(*module.removed_time);
+  if (module.removed_time.has_value()) *message.mutable_removed_time() = api::TimestampOf(*module.removed_time);
   message.set_removed_hours(module.removed_hours);
   message.set_removal_reason(module.removal_reason);
   message.set_current(module.current);
@@ -40,10 +40,10 @@ v1::FailureRecord ToProto(const kb::FailureRecord& record) {
   message.set_confirmed(record.confirmed);
   message.set_repaired(record.repaired);
   message.set_censored(record.censored);
-  *message.mutable_record_time() = TimestampOf(record.record_time);
+  *message.mutable_record_time() = api::TimestampOf(record.record_time);
   message.set_no_fault_found(record.no_fault_found);
   message.set_repair_action(record.repair_action);
-  if (record.detected_time.has_value()) *message.mutable_detected_time() = TimestampOf(*record.detected_time);
+  if (record.detected_time.has_value()) *message.mutable_detected_time() = api::TimestampOf(*record.detected_time);
   message.set_diagnosis(record.diagnosis);
   message.set_notes(record.notes);
   message.set_revision(record.revision);
@@ -53,7 +53,7 @@ v1::FailureRecord ToProto(const kb::FailureRecord& record) {
 v1::FailureRecordRevision ToProto(const kb::FailureRecordRevision& revision) {
   v1::FailureRecordRevision message;
   *message.mutable_failure_record() = ToProto(revision.failure_record);
-  *message.mutable_superseded_time() = TimestampOf(revision.superseded_time);
+  *message.mutable_superseded_time() = api::TimestampOf(revision.superseded_time);
   message.set_reason(revision.reason);
   return message;
 }
@@ -72,8 +72,8 @@ kb::FailureRecord FromProto(const v1::FailureRecord& record) {
   domain.repaired = record.repaired();
   domain.repair_action = record.repair_action();
   domain.notes = record.notes();
-  if (record.has_detected_time()) domain.detected_time = TimeOf(record.detected_time());
-  domain.record_time = TimeOf(record.record_time());
+  if (record.has_detected_time()) domain.detected_time = api::TimeOf(record.detected_time());
+  domain.record_time = api::TimeOf(record.record_time());
   domain.revision = record.revision();
   return domain;
 }

@@ -2,10 +2,10 @@
 
 #include <absl/strings/str_cat.h>
 
-#include <cstdint>
 #include <optional>
 
 #include "insdiag/api/report_codec.h"
+#include "insdiag/api/time_codec.h"
 
 namespace insdiag::kb {
 namespace {
@@ -178,16 +178,7 @@ v1::Diagnosis ToProto(const Diagnosis& diagnosis) {
 std::string EncodeDiagnosis(const Diagnosis& diagnosis, const std::string& name, absl::Time create_time) {
   v1::Diagnosis message = ToProto(diagnosis);
   message.set_name(name);
-  // Whole seconds rounded down and the microseconds after them, as the store keeps the time.
-  const std::int64_t micros = absl::ToUnixMicros(create_time);
-  std::int64_t seconds = micros / 1'000'000;
-  std::int64_t rest = micros % 1'000'000;
-  if (rest < 0) {
-    rest += 1'000'000;
-    --seconds;
-  }
-  message.mutable_create_time()->set_seconds(seconds);
-  message.mutable_create_time()->set_nanos(static_cast<std::int32_t>(rest * 1000));
+  *message.mutable_create_time() = api::TimestampOf(create_time);
   std::string bytes;
   message.SerializeToString(&bytes);
   return bytes;

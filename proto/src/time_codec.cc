@@ -1,8 +1,8 @@
-#include "time_codec.h"
+#include "insdiag/api/time_codec.h"
 
 #include <cstdint>
 
-namespace insdiag::server {
+namespace insdiag::api {
 
 google::protobuf::Timestamp TimestampOf(absl::Time time) {
   google::protobuf::Timestamp timestamp;
@@ -20,4 +20,4 @@ absl::Time MicrosecondTimeOf(const google::protobuf::Timestamp& timestamp) {
   return absl::FromUnixMicros(timestamp.seconds() * 1'000'000 + timestamp.nanos() / 1000);
 }
 
-}  // namespace insdiag::server
+}  // namespace insdiag::api

@@ -1,11 +1,11 @@
-// Times between the knowledge base's absl::Time and the API's
-// google.protobuf.Timestamp, for the codecs at the API edge.
+// Times between absl::Time (the knowledge base's values) and the API's
+// google.protobuf.Timestamp, for every codec at the API's edge.
 #pragma once
 
 #include <absl/time/time.h>
 #include <google/protobuf/timestamp.pb.h>
 
-namespace insdiag::server {
+namespace insdiag::api {
 
 // Nanoseconds kept; before the epoch the seconds round down, so that nanos
 // stay in [0, 1e9) as the message requires.
@@ -15,4 +15,4 @@ absl::Time TimeOf(const google::protobuf::Timestamp& timestamp);
 // (seconds·10⁶ + nanos/10³, as the stores have always read a Timestamp).
 absl::Time MicrosecondTimeOf(const google::protobuf::Timestamp& timestamp);
 
-}  // namespace insdiag::server
+}  // namespace insdiag::api
