@@ -132,4 +132,28 @@ absl::StatusOr<Eigen::VectorXd> FitInto(Maximiser& em, DriftLikelihoodResult& ou
 ParameterEstimate EstimateOf(const Parameter& p, double value, double log_se,
                              const ErrorModel& a_priori);
 
+// An EM fit of drifts whose errors are not taken yet: where several fits
+// compete (starts, a combination), they are compared on their maxima and
+// only the chosen one's information is computed (r(r + 1) passes a drift).
+struct FitWithoutErrors {
+  DriftLikelihoodResult result;  // `identified` and `not_identifiable` empty
+  ErrorModel start;               // the model given: a flat direction keeps its value
+  std::vector<Parameter> parameters;
+  Eigen::VectorXd theta;  // where EM stopped, in the parameters' order
+};
+
+// IdentifyDriftsByLikelihood (drift_likelihood.h) without the errors.
+absl::StatusOr<FitWithoutErrors> FitDriftsWithinCeilings(const EpochRun& run, const ErrorModel& model,
+                                                         const ErrorModel& a_priori, const DriftSelection& which,
+                                                         const DriftSelection& tau_too,
+                                                         const DriftCeilings& ceilings,
+                                                         const DriftLikelihoodOptions& options);
+
+// The fit with its errors: the observed information at θ in ln σ, or in
+// (ln σ, ln τ) jointly where τ is identified too. A drift whose likelihood
+// is flat there keeps the start's values and is listed not identifiable.
+absl::StatusOr<DriftLikelihoodResult> WithErrors(const EpochRun& run, FitWithoutErrors fit,
+                                                 const ErrorModel& a_priori,
+                                                 const DriftLikelihoodOptions& options);
+
 }  // namespace insdiag::engine::ident::drift_em

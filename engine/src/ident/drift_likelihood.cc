@@ -27,80 +27,28 @@ double NestedPValue(const StructureEstimate& s) { return StructurePValue(s.stati
 
 namespace {
 
-// One EM fit of the selected drifts from `model`, with their errors (the
-// header's IdentifyDriftsByLikelihood without the raw samples' ceilings).
-absl::StatusOr<DriftLikelihoodResult> FitDrifts(const EpochRun& run, const ErrorModel& model,
-                                                const ErrorModel& a_priori,
-                                                const DriftSelection& which,
-                                                const DriftSelection& tau_too,
-                                                const DriftLikelihoodOptions& options) {
-  DriftLikelihoodResult out;
-  out.model = model;
-  std::vector<Parameter> parameters;
+// One EM fit of the selected drifts from `model`, without their errors.
+absl::StatusOr<FitWithoutErrors> FitDriftsByEm(const EpochRun& run, const ErrorModel& model,
+                                              const DriftSelection& which, const DriftSelection& tau_too,
+                                              const DriftLikelihoodOptions& options) {
+  FitWithoutErrors fit;
+  fit.result.model = model;
+  fit.start = model;
   for (const DriftAxis d : DriftAxis::All()) {
     // A drift the model leaves out (σ = 0) has no state to identify.
     if (!which.Contains(d) || !HasDrift(model, d)) continue;
-    parameters.push_back({Kind::kSigma, d});
-    if (tau_too.Contains(d)) parameters.push_back({Kind::kTau, d});
+    fit.parameters.push_back({Kind::kSigma, d});
+    if (tau_too.Contains(d)) fit.parameters.push_back({Kind::kTau, d});
   }
-  if (parameters.empty()) {
-    out.converged = true;
-    return out;
+  if (fit.parameters.empty()) {
+    fit.result.converged = true;
+    return fit;
   }
-  Maximiser em(run, model, parameters, options, out);
-  auto theta = FitInto(em, out, &out.log_likelihood_before);
+  Maximiser em(run, model, fit.parameters, options, fit.result);
+  auto theta = FitInto(em, fit.result, &fit.result.log_likelihood_before);
   if (!theta.ok()) return theta.status();
-  const double l0 = out.log_likelihood_after;
-
-  // The curvature at the estimate (observed information) in ln σ, or in
-  // (ln σ, ln τ) jointly where τ is identified too: the two trade along a
-  // ridge, and their errors must show it.
-  bool any_flat = false;
-  for (size_t j = 0; j < parameters.size(); ++j) {
-    const Parameter& p = parameters[j];
-    if (p.kind != Kind::kSigma) continue;
-    const auto i = static_cast<Eigen::Index>(j);
-    const bool with_tau = j + 1 < parameters.size() && parameters[j + 1].kind == Kind::kTau;
-    std::vector<double> log_se;
-    double log_correlation = std::numeric_limits<double>::quiet_NaN();
-    if (with_tau) {
-      auto information = em.BlockInformation(*theta, {i, i + 1}, l0);
-      if (!information.ok()) return information.status();
-      if ((*information)(0, 0) > 0.0 && information->determinant() > 0.0) {
-        const Eigen::MatrixXd covariance = information->inverse();
-        log_se = {std::sqrt(covariance(0, 0)), std::sqrt(covariance(1, 1))};
-        log_correlation = covariance(0, 1) / (log_se[0] * log_se[1]);
-      }
-    } else {
-      auto information = em.Information(*theta, i, l0);
-      if (!information.ok()) return information.status();
-      if (*information > 0.0) log_se = {1.0 / std::sqrt(*information)};
-    }
-    const size_t count = with_tau ? 2 : 1;
-    for (size_t k = 0; k < count; ++k) {
-      const Parameter& q = parameters[j + k];
-      if (log_se.empty()) {
-        // The likelihood is flat here: the run's motion does not make the
-        // drift observable (a level gyro's heading drift on a still table).
-        // Not an estimate — the model keeps its value.
-        ValueOf(out.model, q) = ValueOf(model, q);
-        out.not_identifiable.push_back(NameOf(q));
-        any_flat = true;
-        continue;
-      }
-      out.identified.push_back(EstimateOf(q, std::exp((*theta)[i + static_cast<Eigen::Index>(k)]), log_se[k], a_priori));
-      if (with_tau) {
-        out.identified.back().jointly_with = NameOf(parameters[j + 1 - k]);
-        out.identified.back().log_correlation = log_correlation;
-      }
-    }
-  }
-  if (any_flat) {
-    auto kept = em.LogLikelihood(out.model);
-    if (!kept.ok()) return kept.status();
-    out.log_likelihood_after = *kept;
-  }
-  return out;
+  fit.theta = *std::move(theta);
+  return fit;
 }
 
 // The fit's drifts the ceilings refuse, each with the value it is held at.
@@ -120,45 +68,120 @@ std::vector<HeldDrift> RefutedByRawSamples(const DriftLikelihoodResult& fit,
 
 }  // namespace
 
-absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(
-    const EpochRun& run, const ErrorModel& model, const ErrorModel& a_priori,
-    const DriftSelection& which, const DriftSelection& tau_too, const DriftCeilings& ceilings,
-    const DriftLikelihoodOptions& options) {
+namespace drift_em {
+
+absl::StatusOr<FitWithoutErrors> FitDriftsWithinCeilings(const EpochRun& run, const ErrorModel& model,
+                                                         const ErrorModel& a_priori, const DriftSelection& which,
+                                                         const DriftSelection& tau_too,
+                                                         const DriftCeilings& ceilings,
+                                                         const DriftLikelihoodOptions& options) {
   if (auto st = ValidateOptions(options); !st.ok()) return st;
-  auto fit = FitDrifts(run, model, a_priori, which, tau_too, options);
+  auto fit = FitDriftsByEm(run, model, which, tau_too, options);
   if (!fit.ok()) return fit.status();
   DriftSelection selected = which;
   std::vector<HeldDrift> held;
-  int iterations = fit->iterations, passes = fit->filter_passes;
-  const double before = fit->log_likelihood_before;
+  int iterations = fit->result.iterations, passes = fit->result.filter_passes;
+  const double before = fit->result.log_likelihood_before;
   // Each round holds what the samples refute and fits the rest again; a
   // drift is held once, so at most one round per drift.
-  for (auto refuted = RefutedByRawSamples(*fit, a_priori, selected, ceilings);
+  for (auto refuted = RefutedByRawSamples(fit->result, a_priori, selected, ceilings);
        !refuted.empty();
-       refuted = RefutedByRawSamples(*fit, a_priori, selected, ceilings)) {
-    ErrorModel start = fit->model;
+       refuted = RefutedByRawSamples(fit->result, a_priori, selected, ceilings)) {
+    ErrorModel start = fit->result.model;
     for (const HeldDrift& h : refuted) {
       DriftOf(start, h.drift) = h.held;
       selected.Set(h.drift, false);
       held.push_back(h);
     }
-    fit = FitDrifts(run, start, a_priori, selected, tau_too, options);
+    fit = FitDriftsByEm(run, start, selected, tau_too, options);
     if (!fit.ok()) return fit.status();
-    if (fit->filter_passes == 0) {
+    if (fit->result.filter_passes == 0) {
       // Nothing left to fit: the held model's likelihood still counts.
-      ++fit->filter_passes;
-      auto pass = RunForwardFilter(run, fit->model);
+      ++fit->result.filter_passes;
+      auto pass = RunForwardFilter(run, fit->result.model);
       if (!pass.ok()) return pass.status();
-      fit->log_likelihood_after = pass->log_likelihood;
+      fit->result.log_likelihood_after = pass->log_likelihood;
     }
-    iterations += fit->iterations;
-    passes += fit->filter_passes;
+    iterations += fit->result.iterations;
+    passes += fit->result.filter_passes;
   }
-  fit->held_by_raw_samples = std::move(held);
-  fit->log_likelihood_before = before;
-  fit->iterations = iterations;
-  fit->filter_passes = passes;
+  fit->start = model;
+  fit->result.held_by_raw_samples = std::move(held);
+  fit->result.log_likelihood_before = before;
+  fit->result.iterations = iterations;
+  fit->result.filter_passes = passes;
   return fit;
+}
+
+absl::StatusOr<DriftLikelihoodResult> WithErrors(const EpochRun& run, FitWithoutErrors fit,
+                                                 const ErrorModel& a_priori,
+                                                 const DriftLikelihoodOptions& options) {
+  DriftLikelihoodResult& out = fit.result;
+  if (fit.parameters.empty()) return std::move(out);
+  const std::vector<Parameter>& parameters = fit.parameters;
+  const Eigen::VectorXd& theta = fit.theta;
+  const double l0 = out.log_likelihood_after;
+  Maximiser em(run, out.model, parameters, options, out);
+  // The curvature at the estimate (observed information) in ln σ, or in
+  // (ln σ, ln τ) jointly where τ is identified too: the two trade along a
+  // ridge, and their errors must show it.
+  bool any_flat = false;
+  for (size_t j = 0; j < parameters.size(); ++j) {
+    const Parameter& p = parameters[j];
+    if (p.kind != Kind::kSigma) continue;
+    const auto i = static_cast<Eigen::Index>(j);
+    const bool with_tau = j + 1 < parameters.size() && parameters[j + 1].kind == Kind::kTau;
+    std::vector<double> log_se;
+    double log_correlation = std::numeric_limits<double>::quiet_NaN();
+    if (with_tau) {
+      auto information = em.BlockInformation(theta, {i, i + 1}, l0);
+      if (!information.ok()) return information.status();
+      if ((*information)(0, 0) > 0.0 && information->determinant() > 0.0) {
+        const Eigen::MatrixXd covariance = information->inverse();
+        log_se = {std::sqrt(covariance(0, 0)), std::sqrt(covariance(1, 1))};
+        log_correlation = covariance(0, 1) / (log_se[0] * log_se[1]);
+      }
+    } else {
+      auto information = em.Information(theta, i, l0);
+      if (!information.ok()) return information.status();
+      if (*information > 0.0) log_se = {1.0 / std::sqrt(*information)};
+    }
+    const size_t count = with_tau ? 2 : 1;
+    for (size_t k = 0; k < count; ++k) {
+      const Parameter& q = parameters[j + k];
+      if (log_se.empty()) {
+        // The likelihood is flat here: the run's motion does not make the
+        // drift observable (a level gyro's heading drift on a still table).
+        // Not an estimate — the model keeps its value.
+        ValueOf(out.model, q) = ValueOf(fit.start, q);
+        out.not_identifiable.push_back(NameOf(q));
+        any_flat = true;
+        continue;
+      }
+      out.identified.push_back(EstimateOf(q, std::exp(theta[i + static_cast<Eigen::Index>(k)]), log_se[k], a_priori));
+      if (with_tau) {
+        out.identified.back().jointly_with = NameOf(parameters[j + 1 - k]);
+        out.identified.back().log_correlation = log_correlation;
+      }
+    }
+  }
+  if (any_flat) {
+    auto kept = em.LogLikelihood(out.model);
+    if (!kept.ok()) return kept.status();
+    out.log_likelihood_after = *kept;
+  }
+  return std::move(out);
+}
+
+}  // namespace drift_em
+
+absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(
+    const EpochRun& run, const ErrorModel& model, const ErrorModel& a_priori,
+    const DriftSelection& which, const DriftSelection& tau_too, const DriftCeilings& ceilings,
+    const DriftLikelihoodOptions& options) {
+  auto fit = FitDriftsWithinCeilings(run, model, a_priori, which, tau_too, ceilings, options);
+  if (!fit.ok()) return fit.status();
+  return WithErrors(run, *std::move(fit), a_priori, options);
 }
 
 namespace {

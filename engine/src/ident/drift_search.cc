@@ -3,6 +3,7 @@
 #include <limits>
 #include <optional>
 
+#include "ident/drift_em.h"
 #include "insdiag/engine/ident/drift_likelihood.h"
 #include "insdiag/engine/numerics/parallel_map.h"
 #include "insdiag/engine/stats/distributions.h"
@@ -120,35 +121,37 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
   if (starts.grid_tau_points > 0)
     start_models.push_back(
         GridStart(run, model, which, which, starts, ceilings, passes).model);
-  // EM from each start: independent runs, taken in the starts' order.
-  std::vector<absl::StatusOr<DriftLikelihoodResult>> from_starts =
+  // EM from each start: independent runs, taken in the starts' order. The
+  // fits are compared on their maxima; only the one kept gets its errors.
+  std::vector<absl::StatusOr<drift_em::FitWithoutErrors>> from_starts =
       numerics::ParallelMap(start_models.size(), [&](std::size_t i) {
-        return IdentifyDriftsByLikelihood(run, start_models[i], a_priori, which, which, ceilings, options);
+        return drift_em::FitDriftsWithinCeilings(run, start_models[i], a_priori, which, which, ceilings, options);
       });
-  std::vector<DriftLikelihoodResult> fits;
+  std::vector<drift_em::FitWithoutErrors> fits;
   std::optional<double> before;  // the likelihood of the model as given: the first start's
   for (size_t i = 0; i < start_models.size(); ++i) {
     auto& fit = from_starts[i];
     if (!fit.ok()) continue;
-    if (i == 0) before = fit->log_likelihood_before;
-    iterations += fit->iterations;
-    passes += fit->filter_passes;
+    if (i == 0) before = fit->result.log_likelihood_before;
+    iterations += fit->result.iterations;
+    passes += fit->result.filter_passes;
     fits.push_back(*std::move(fit));
   }
   if (fits.empty()) return absl::FailedPreconditionError("no start of the drift identification converged");
   auto best = std::max_element(fits.begin(), fits.end(), [](const auto& a, const auto& b) {
-    return a.log_likelihood_after < b.log_likelihood_after;
+    return a.result.log_likelihood_after < b.result.log_likelihood_after;
   });
   // Axis by axis, another start's drift where it raises the likelihood: the
   // starts climb one ridge per axis, and the best joint fit may hold an axis
   // on its worse side.
-  ErrorModel combined = best->model;
-  double combined_ll = best->log_likelihood_after;
+  ErrorModel combined = best->result.model;
+  double combined_ll = best->result.log_likelihood_after;
   bool changed = false;
   for (const DriftAxis d : DriftAxis::All()) {
     if (!which.Contains(d)) continue;
-    for (const DriftLikelihoodResult& other : fits) {
-      if (&other == &*best || DriftOf(other.model, d) == DriftOf(combined, d)) continue;
+    for (const drift_em::FitWithoutErrors& fitted : fits) {
+      const DriftLikelihoodResult& other = fitted.result;
+      if (&fitted == &*best || DriftOf(other.model, d) == DriftOf(combined, d)) continue;
       ErrorModel trial = combined;
       DriftOf(trial, d) = DriftOf(other.model, d);
       const double ll = LogLikelihoodOrWorst(run, trial, passes);
@@ -159,21 +162,24 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromStarts(const EpochRun& r
       }
     }
   }
-  std::optional<DriftLikelihoodResult> result = *best;
+  drift_em::FitWithoutErrors kept = *std::move(best);
   if (changed) {
     // EM from the combined drifts: its likelihood only rises from there.
-    auto polished = IdentifyDriftsByLikelihood(run, combined, a_priori, which, which, ceilings, options);
+    auto polished = drift_em::FitDriftsWithinCeilings(run, combined, a_priori, which, which, ceilings, options);
     if (polished.ok()) {
-      iterations += polished->iterations;
-      passes += polished->filter_passes;
-      if (polished->log_likelihood_after > best->log_likelihood_after) result = *std::move(polished);
+      iterations += polished->result.iterations;
+      passes += polished->result.filter_passes;
+      if (polished->result.log_likelihood_after > kept.result.log_likelihood_after) kept = *std::move(polished);
     }
   }
+  const int passes_before_errors = kept.result.filter_passes;
+  auto result = drift_em::WithErrors(run, std::move(kept), a_priori, options);
+  if (!result.ok()) return result.status();
   // The improvement is measured from the model as given, not from a start.
   if (before.has_value()) result->log_likelihood_before = *before;
   result->iterations = iterations;
-  result->filter_passes = passes;
-  return *std::move(result);
+  result->filter_passes = passes + result->filter_passes - passes_before_errors;
+  return result;
 }
 
 absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsFromGrid(const EpochRun& run, const ErrorModel& model,
