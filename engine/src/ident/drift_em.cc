@@ -71,6 +71,138 @@ bool LikelihoodSettled(double gain, double last_gain, double tolerance) {
   return r < 1.0 && gain * r / (1.0 - r) < tolerance;
 }
 
+// The complete-data log-likelihood's derivatives (drift_em.h:
+// MomentInformation). Each state's Q is its own: the drift, walk and pair
+// states have transitions of their own (seed eq. 5 for the drift; the
+// header's walk and pair), so Q is a sum over the states and its Hessian in
+// θ′ is block-diagonal by state. Constants dropped; n epochs, n − 1
+// transitions; the smoothed sums are those of the M-step.
+
+// A scalar state's smoothed sums: a₀ = E[x₀²], Σ a_k and Σ a_{k+1} over the
+// transitions, Σ b_k (header: a_k, b_k).
+struct ScalarSums {
+  double a0 = 0.0, a_from = 0.0, a_to = 0.0, b = 0.0;
+};
+ScalarSums SumsOfState(const SmoothedPass& sm, int state, int K) {
+  ScalarSums out;
+  for (int k = 0; k + 1 < K; ++k) {
+    const double x0 = sm.x(k, state), x1 = sm.x(k + 1, state);
+    out.a_from += x0 * x0 + sm.variance(k, state);
+    out.a_to += x1 * x1 + sm.variance(k + 1, state);
+    out.b += x1 * x0 + sm.lag_one_covariance(k, state);
+  }
+  out.a0 = sm.x(0, state) * sm.x(0, state) + sm.variance(0, state);
+  return out;
+}
+
+// A pair's smoothed sums (header: Second-order pairs): T₀ = tr E[x₀x₀ᵀ],
+// tr S₀₀, tr S₁₁, tr S₁₀ and S₁₀[1,0] − S₁₀[0,1].
+struct PairSums {
+  double t0 = 0.0, t00 = 0.0, t11 = 0.0, tr10 = 0.0, skew = 0.0;
+};
+PairSums SumsOfPair(const Eigen::MatrixXd& x, int i,
+                    const Eigen::Matrix<double, Eigen::Dynamic, 7>& moments) {
+  const auto K = x.rows();
+  auto trace_second = [&](Eigen::Index k) {
+    return x(k, i) * x(k, i) + x(k, i + 1) * x(k, i + 1) + moments(k, 0) + moments(k, 2);
+  };
+  PairSums out;
+  out.t0 = trace_second(0);
+  for (Eigen::Index k = 0; k + 1 < K; ++k) {
+    out.t00 += trace_second(k);
+    out.t11 += trace_second(k + 1);
+    out.tr10 += x(k + 1, i) * x(k, i) + moments(k, 3) + x(k + 1, i + 1) * x(k, i + 1) + moments(k, 6);
+    out.skew += x(k + 1, i + 1) * x(k, i) + moments(k, 5) - (x(k + 1, i) * x(k, i + 1) + moments(k, 4));
+  }
+  return out;
+}
+
+// A first-order drift (x₀ ~ N(0, σ²), x_{k+1} = φx_k + w_k, Var w = σ²u,
+// u = 1 − φ², φ = e^{−Δt/τ}): with S(φ) = Σa_{k+1} − 2φΣb_k + φ²Σa_k and
+// g = S/u,
+//   Q = −n s − (a₀ + g) e^{−2s}/2 − (n − 1)/2 · ln u,   s = ln σ,
+//   Q_s = −n + (a₀ + g)/σ²,   Q_ss = −2(a₀ + g)/σ²,   Q_sφ = g′/σ²,
+//   Q_φ = (n − 1)φ/u − g′/(2σ²),   Q_φφ = (n − 1)(1 + φ²)/u² − g″/(2σ²),
+//   g′ = S′/u + 2φS/u²,   g″ = S″/u + 4φS′/u² + 2S/u² + 8φ²S/u³,
+//   S′ = 2(φΣa_k − Σb_k),   S″ = 2Σa_k;
+// in t = ln τ through φ_t = φΔt/τ, φ_tt = φ_t(Δt/τ − 1):
+//   Q_t = Q_φ φ_t,   Q_tt = Q_φφ φ_t² + Q_φ φ_tt,   Q_st = Q_sφ φ_t.
+// Q_s and Q_t are the score of the branch not adopted (Fisher's identity).
+struct TwoDerivatives {
+  Eigen::Vector2d score = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d hessian = Eigen::Matrix2d::Zero();
+};
+TwoDerivatives GaussMarkovDerivatives(double sigma, double tau_s, const ScalarSums& z, int n,
+                                      double dt) {
+  const double phi = std::exp(-dt / tau_s), u = 1.0 - phi * phi, s2 = sigma * sigma;
+  const double S = z.a_to - 2.0 * phi * z.b + phi * phi * z.a_from;
+  const double dS = 2.0 * (phi * z.a_from - z.b), d2S = 2.0 * z.a_from;
+  const double g = S / u;
+  const double dg = dS / u + 2.0 * phi * S / (u * u);
+  const double d2g = d2S / u + 4.0 * phi * dS / (u * u) + 2.0 * S / (u * u) +
+                     8.0 * phi * phi * S / (u * u * u);
+  const double transitions = n - 1.0;
+  const double q_s = -n + (z.a0 + g) / s2, q_ss = -2.0 * (z.a0 + g) / s2, q_sphi = dg / s2;
+  const double q_phi = transitions * phi / u - dg / (2.0 * s2);
+  const double q_phiphi = transitions * (1.0 + phi * phi) / (u * u) - d2g / (2.0 * s2);
+  const double phi_t = phi * dt / tau_s, phi_tt = phi_t * (dt / tau_s - 1.0);
+  TwoDerivatives out;
+  out.score << q_s, q_phi * phi_t;
+  out.hessian << q_ss, q_sphi * phi_t, q_sphi * phi_t, q_phiphi * phi_t * phi_t + q_phi * phi_tt;
+  return out;
+}
+
+// A pair (x₀ ~ N(0, σ₂²I), x_{k+1} = ρR(ω)x_k + w_k, Var w = σ₂²uI,
+// u = 1 − ρ², ρ = e^{−αΔt}, ω = βΔt): with C(ω) = cos ω tr S₁₀ +
+// sin ω (S₁₀[1,0] − S₁₀[0,1]), W = tr S₁₁ − 2ρC + ρ² tr S₀₀ = Σ E|x_{k+1} −
+// Φx_k|² and G = W/u,
+//   Q = −2n s₂ − (T₀ + G) e^{−2s₂}/2 − (n − 1) ln u,   s₂ = ln σ₂,
+//   Q_s = −2n + (T₀ + G)/σ₂²,   Q_ss = −2(T₀ + G)/σ₂²,
+//   Q_sρ = G_ρ/σ₂²,   Q_sω = G_ω/σ₂²,
+//   Q_ρ = 2(n − 1)ρ/u − G_ρ/(2σ₂²),   Q_ω = −G_ω/(2σ₂²),
+//   Q_ρρ = 2(n − 1)(1 + ρ²)/u² − G_ρρ/(2σ₂²),   Q_ρω = −G_ρω/(2σ₂²),   Q_ωω = −G_ωω/(2σ₂²),
+//   G_ρ = W_ρ/u + 2ρW/u²,   G_ρρ = W_ρρ/u + 4ρW_ρ/u² + 2W/u² + 8ρ²W/u³,
+//   G_ω = W_ω/u,   G_ωω = W_ωω/u,   G_ρω = W_ρω/u + 2ρW_ω/u²,
+//   W_ρ = 2(ρ tr S₀₀ − C),   W_ρρ = 2 tr S₀₀,   W_ω = −2ρC′,   W_ωω = 2ρC,   W_ρω = −2C′;
+// in (s₂, ln α, ln β) through ρ_a = −αΔtρ, ρ_aa = ρ_a(1 − αΔt), ω_b = ω_bb = ω.
+struct ThreeDerivatives {
+  Eigen::Vector3d score = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
+};
+ThreeDerivatives PairDerivatives(double sigma, double alpha_per_s, double beta_rad_s,
+                                 const PairSums& z, int n, double dt) {
+  const double rho = std::exp(-alpha_per_s * dt), u = 1.0 - rho * rho, s2 = sigma * sigma;
+  const double w = beta_rad_s * dt;
+  const double C = std::cos(w) * z.tr10 + std::sin(w) * z.skew;
+  const double dC = -std::sin(w) * z.tr10 + std::cos(w) * z.skew;
+  const double W = z.t11 - 2.0 * rho * C + rho * rho * z.t00;
+  const double W_r = 2.0 * (rho * z.t00 - C), W_rr = 2.0 * z.t00;
+  const double W_w = -2.0 * rho * dC, W_ww = 2.0 * rho * C, W_rw = -2.0 * dC;
+  const double G = W / u;
+  const double G_r = W_r / u + 2.0 * rho * W / (u * u);
+  const double G_rr = W_rr / u + 4.0 * rho * W_r / (u * u) + 2.0 * W / (u * u) +
+                      8.0 * rho * rho * W / (u * u * u);
+  const double G_w = W_w / u, G_ww = W_ww / u, G_rw = W_rw / u + 2.0 * rho * W_w / (u * u);
+  const double transitions = n - 1.0;
+  const double q_s = -2.0 * n + (z.t0 + G) / s2, q_ss = -2.0 * (z.t0 + G) / s2;
+  const double q_sr = G_r / s2, q_sw = G_w / s2;
+  const double q_r = 2.0 * transitions * rho / u - G_r / (2.0 * s2);
+  const double q_w = -G_w / (2.0 * s2);
+  const double q_rr = 2.0 * transitions * (1.0 + rho * rho) / (u * u) - G_rr / (2.0 * s2);
+  const double q_rw = -G_rw / (2.0 * s2), q_ww = -G_ww / (2.0 * s2);
+  const double rho_a = -alpha_per_s * dt * rho, rho_aa = rho_a * (1.0 - alpha_per_s * dt);
+  const double w_b = w, w_bb = w;
+  ThreeDerivatives out;
+  out.score << q_s, q_r * rho_a, q_w * w_b;
+  out.hessian(0, 0) = q_ss;
+  out.hessian(0, 1) = out.hessian(1, 0) = q_sr * rho_a;
+  out.hessian(0, 2) = out.hessian(2, 0) = q_sw * w_b;
+  out.hessian(1, 1) = q_rr * rho_a * rho_a + q_r * rho_aa;
+  out.hessian(1, 2) = out.hessian(2, 1) = q_rw * rho_a * w_b;
+  out.hessian(2, 2) = q_ww * w_b * w_b + q_w * w_bb;
+  return out;
+}
+
 }  // namespace
 
 int EffectOf(const ErrorModel& m, const std::string& name) {
@@ -339,10 +471,129 @@ absl::StatusOr<Eigen::MatrixXd> Maximiser::BlockInformation(const Eigen::VectorX
   return information;
 }
 
+Eigen::Index Maximiser::IndexOf(Kind kind, DriftAxis drift) const {
+  for (size_t j = 0; j < parameters_.size(); ++j) {
+    if (parameters_[j].kind == kind && parameters_[j].drift == drift) return static_cast<Eigen::Index>(j);
+  }
+  return -1;
+}
+
+absl::StatusOr<Maximiser::CompleteDerivatives> Maximiser::CompleteDataDerivatives(
+    const Eigen::VectorXd& smoothed_at, const Eigen::VectorXd& theta_prime, bool hessian) const {
+  auto fw = RunForwardFilter(run_, ModelOf(smoothed_at));
+  if (!fw.ok()) return fw.status();
+  const int K = fw->epochs();
+  if (K < 3)
+    return absl::InvalidArgumentError("drift likelihood: the run has fewer than three epochs");
+  auto sm = RunSmoother(*fw, smoother_);
+  if (!sm.ok()) return sm.status();
+  const double dt = (fw->epoch_time_s.back() - fw->epoch_time_s.front()) / (K - 1);
+  const ErrorModel at = ModelOf(theta_prime);
+  const auto m = static_cast<Eigen::Index>(parameters_.size());
+  CompleteDerivatives out{Eigen::VectorXd::Zero(m), Eigen::MatrixXd()};
+  if (hessian) out.hessian = Eigen::MatrixXd::Zero(m, m);
+  for (size_t j = 0; j < parameters_.size(); ++j) {
+    const Parameter& p = parameters_[j];
+    const auto i = static_cast<Eigen::Index>(j);
+    switch (p.kind) {
+      case Kind::kSigma: {  // the drift, with its τ where that is a parameter too
+        const int state =
+            (p.drift.sensor == Sensor::kGyro ? layout_.gyro_bias() : layout_.acc_bias()) + p.drift.axis;
+        const GaussMarkov& drift = DriftOf(at, p.drift);
+        const TwoDerivatives d =
+            GaussMarkovDerivatives(drift.sigma, drift.tau_s, SumsOfState(*sm, state, K), K, dt);
+        const Eigen::Index t = IndexOf(Kind::kTau, p.drift);
+        out.score[i] = d.score[0];
+        if (t >= 0) out.score[t] = d.score[1];
+        if (hessian) {
+          out.hessian(i, i) = d.hessian(0, 0);
+          if (t >= 0) {
+            out.hessian(i, t) = out.hessian(t, i) = d.hessian(0, 1);
+            out.hessian(t, t) = d.hessian(1, 1);
+          }
+        }
+        break;
+      }
+      case Kind::kWalk: {
+        // Started at zero with the run (x₀ = 0), x_{k+1} = x_k + w_k,
+        // Var w = K²Δt: with D = Σ (a_{k+1} − 2b_k + a_k) and κ = ln K,
+        //   Q = −(n − 1)κ − D e^{−2κ}/(2Δt),
+        //   Q_κ = −(n − 1) + D/(K²Δt),   Q_κκ = −2D/(K²Δt).
+        const ScalarSums z = SumsOfState(*sm, layout_.EffectOffset(WalkEffectOf(model_, p.drift)), K);
+        const double k = ValueOf(at, p);
+        const double d = (z.a_to - 2.0 * z.b + z.a_from) / (k * k * dt);
+        out.score[i] = -(K - 1.0) + d;
+        if (hessian) out.hessian(i, i) = -2.0 * d;
+        break;
+      }
+      case Kind::kPairSigma: {  // with the pair's α and β
+        const int slot = pair_slot_[static_cast<size_t>(p.drift.Index())];
+        const ModelEffect& e = at.effects[static_cast<size_t>(PairEffectOf(model_, p.drift))];
+        const ThreeDerivatives d = PairDerivatives(
+            e.second_order_sigma, e.second_order_alpha_per_s, e.second_order_beta_rad_s,
+            SumsOfPair(sm->x, smoother_.pair_states[static_cast<size_t>(slot)],
+                       sm->pair_moments[static_cast<size_t>(slot)]),
+            K, dt);
+        const std::array<Eigen::Index, 3> index = {i, IndexOf(Kind::kPairDecayRate, p.drift),
+                                                   IndexOf(Kind::kPairFrequency, p.drift)};
+        for (size_t a = 0; a < 3; ++a) {
+          if (index[a] < 0) continue;
+          out.score[index[a]] = d.score[static_cast<Eigen::Index>(a)];
+          if (!hessian) continue;
+          for (size_t b = 0; b < 3; ++b) {
+            if (index[b] >= 0)
+              out.hessian(index[a], index[b]) =
+                  d.hessian(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b));
+          }
+        }
+        break;
+      }
+      case Kind::kTau:
+      case Kind::kPairDecayRate:
+      case Kind::kPairFrequency:
+        break;  // with their σ's
+    }
+  }
+  return out;
+}
+
+absl::StatusOr<Eigen::MatrixXd> Maximiser::MomentInformation(const Eigen::VectorXd& theta,
+                                                             const std::vector<Eigen::Index>& at) {
+  const double h = options_.moment_information_step;
+  const auto r = static_cast<Eigen::Index>(at.size());
+  // Pass 0 at θ (the complete information), passes 1 + 2a and 2 + 2a with
+  // the smoother at θ ± h e_a; every score at θ′ = θ.
+  out_.filter_passes += static_cast<int>(2 * r + 1);
+  const auto passes = numerics::ParallelMap(
+      static_cast<std::size_t>(2 * r + 1), [&](std::size_t c) -> absl::StatusOr<CompleteDerivatives> {
+        Eigen::VectorXd smoothed_at = theta;
+        if (c > 0) smoothed_at[at[(c - 1) / 2]] += c % 2 == 1 ? h : -h;
+        return CompleteDataDerivatives(smoothed_at, theta, c == 0);
+      });
+  for (const auto& pass : passes) {
+    if (!pass.ok()) return pass.status();
+  }
+  const CompleteDerivatives& base = *passes[0];
+  Eigen::MatrixXd missing(r, r);  // ∂²Q/∂θ′_a ∂θ_b
+  for (Eigen::Index b = 0; b < r; ++b) {
+    const auto up = static_cast<size_t>(2 * b + 1);
+    const Eigen::VectorXd change = (passes[up]->score - passes[up + 1]->score) / (2.0 * h);
+    for (Eigen::Index a = 0; a < r; ++a) missing(a, b) = change[at[static_cast<size_t>(a)]];
+  }
+  Eigen::MatrixXd information(r, r);
+  for (Eigen::Index a = 0; a < r; ++a) {
+    for (Eigen::Index b = 0; b < r; ++b) {
+      information(a, b) = -base.hessian(at[static_cast<size_t>(a)], at[static_cast<size_t>(b)]) -
+                          0.5 * (missing(a, b) + missing(b, a));
+    }
+  }
+  return information;
+}
+
 absl::Status ValidateOptions(const DriftLikelihoodOptions& options) {
   if (!(options.max_iterations > 0 && options.second_order_max_iterations > 0 &&
         options.log_tolerance > 0.0 && options.likelihood_tolerance > 0.0 &&
-        options.curvature_step > 0.0)) {
+        options.curvature_step > 0.0 && options.moment_information_step > 0.0)) {
     return absl::InvalidArgumentError("drift likelihood options out of range");
   }
   return absl::OkStatus();

@@ -124,7 +124,18 @@ absl::StatusOr<DriftLikelihoodResult> WithErrors(const EpochRun& run, FitWithout
   Maximiser em(run, out.model, parameters, options, out);
   // The curvature at the estimate (observed information) in ln σ, or in
   // (ln σ, ln τ) jointly where τ is identified too: the two trade along a
-  // ridge, and their errors must show it.
+  // ridge, and their errors must show it. From the smoother's moments, every
+  // parameter's in one set of passes, each drift's block read from it.
+  const bool from_moments =
+      options.information == DriftLikelihoodOptions::Information::kSmootherMoments;
+  Eigen::MatrixXd all_information;
+  if (from_moments) {
+    std::vector<Eigen::Index> every(parameters.size());
+    for (size_t j = 0; j < parameters.size(); ++j) every[j] = static_cast<Eigen::Index>(j);
+    auto information = em.MomentInformation(theta, every);
+    if (!information.ok()) return information.status();
+    all_information = *std::move(information);
+  }
   bool any_flat = false;
   for (size_t j = 0; j < parameters.size(); ++j) {
     const Parameter& p = parameters[j];
@@ -134,17 +145,29 @@ absl::StatusOr<DriftLikelihoodResult> WithErrors(const EpochRun& run, FitWithout
     std::vector<double> log_se;
     double log_correlation = std::numeric_limits<double>::quiet_NaN();
     if (with_tau) {
-      auto information = em.BlockInformation(theta, {i, i + 1}, l0);
-      if (!information.ok()) return information.status();
-      if ((*information)(0, 0) > 0.0 && information->determinant() > 0.0) {
-        const Eigen::MatrixXd covariance = information->inverse();
+      Eigen::MatrixXd information;
+      if (from_moments) {
+        information = all_information.block(i, i, 2, 2);
+      } else {
+        auto differences = em.BlockInformation(theta, {i, i + 1}, l0);
+        if (!differences.ok()) return differences.status();
+        information = *std::move(differences);
+      }
+      if (information(0, 0) > 0.0 && information.determinant() > 0.0) {
+        const Eigen::MatrixXd covariance = information.inverse();
         log_se = {std::sqrt(covariance(0, 0)), std::sqrt(covariance(1, 1))};
         log_correlation = covariance(0, 1) / (log_se[0] * log_se[1]);
       }
     } else {
-      auto information = em.Information(theta, i, l0);
-      if (!information.ok()) return information.status();
-      if (*information > 0.0) log_se = {1.0 / std::sqrt(*information)};
+      double information = 0.0;
+      if (from_moments) {
+        information = all_information(i, i);
+      } else {
+        auto difference = em.Information(theta, i, l0);
+        if (!difference.ok()) return difference.status();
+        information = *difference;
+      }
+      if (information > 0.0) log_se = {1.0 / std::sqrt(information)};
     }
     const size_t count = with_tau ? 2 : 1;
     for (size_t k = 0; k < count; ++k) {
@@ -442,6 +465,22 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
   }
   const double l_hat = out.log_likelihood_after;
   Maximiser at_estimate(run, out.model, kept, options, out);
+  // From the smoother's moments, the blocks of every structure the nested
+  // test keeps in one set of passes.
+  std::vector<Eigen::Index> kept_blocks;
+  if (options.information == DriftLikelihoodOptions::Information::kSmootherMoments) {
+    for (size_t c = 0; c < fits.size(); ++c) {
+      if (!significant(fits[c])) continue;
+      for (Eigen::Index k = 0; k < per_axis; ++k) kept_blocks.push_back(static_cast<Eigen::Index>(c) * per_axis + k);
+    }
+  }
+  Eigen::MatrixXd kept_information;
+  if (!kept_blocks.empty()) {
+    auto information = at_estimate.MomentInformation(*theta, kept_blocks);
+    if (!information.ok()) return information.status();
+    kept_information = *std::move(information);
+  }
+  Eigen::Index kept_row = 0;
   for (size_t c = 0; c < fits.size(); ++c) {
     StructureEstimate& w = fits[c];
     const auto first = static_cast<Eigen::Index>(c) * per_axis;
@@ -454,9 +493,14 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
     if (significant(w)) {
       std::vector<Eigen::Index> block;
       for (Eigen::Index k = 0; k < per_axis; ++k) block.push_back(first + k);
-      auto information = at_estimate.BlockInformation(*theta, block, l_hat);
-      if (!information.ok()) return information.status();
-      covariance = StructureCovariance(*information);
+      if (!kept_blocks.empty()) {
+        covariance = StructureCovariance(kept_information.block(kept_row, kept_row, per_axis, per_axis));
+        kept_row += per_axis;
+      } else {
+        auto information = at_estimate.BlockInformation(*theta, block, l_hat);
+        if (!information.ok()) return information.status();
+        covariance = StructureCovariance(*information);
+      }
     }
     auto estimate = [&](Eigen::Index k) {
       return EstimateOf(kept[static_cast<size_t>(first + k)], std::exp((*theta)[first + k]), std::sqrt(covariance(k, k)),
@@ -486,6 +530,62 @@ Eigen::MatrixXd StructureCovariance(const Eigen::MatrixXd& information) {
     if (own.info() == Eigen::Success) covariance.bottomRightCorner(r, r) = own.solve(Eigen::MatrixXd::Identity(r, r));
   }
   return covariance;
+}
+
+absl::StatusOr<DriftInformation> ObservedDriftInformation(const EpochRun& run, const ErrorModel& model,
+                                                          const std::vector<std::string>& names,
+                                                          const DriftLikelihoodOptions& options) {
+  if (auto st = ValidateOptions(options); !st.ok()) return st;
+  std::vector<Parameter> candidates;
+  for (const DriftAxis d : DriftAxis::All()) {
+    if (HasDrift(model, d)) {
+      candidates.push_back({Kind::kSigma, d});
+      candidates.push_back({Kind::kTau, d});
+    }
+    if (WalkEffectOf(model, d) >= 0) candidates.push_back({Kind::kWalk, d});
+    if (PairEffectOf(model, d) >= 0) {
+      for (Kind k : {Kind::kPairSigma, Kind::kPairDecayRate, Kind::kPairFrequency}) candidates.push_back({k, d});
+    }
+  }
+  std::vector<Parameter> parameters;
+  for (const std::string& name : names) {
+    const auto found = std::find_if(candidates.begin(), candidates.end(),
+                                    [&](const Parameter& p) { return NameOf(p) == name; });
+    if (found == candidates.end())
+      return absl::InvalidArgumentError("drift information: the model has no parameter " + name);
+    parameters.push_back(*found);
+  }
+  // A τ is differentiated with its σ, a pair's α and β with its σ₂.
+  auto named = [&](Kind kind, DriftAxis d) {
+    return std::any_of(parameters.begin(), parameters.end(),
+                       [&](const Parameter& p) { return p.kind == kind && p.drift == d; });
+  };
+  for (const Parameter& p : parameters) {
+    const bool needs_sigma = p.kind == Kind::kTau && !named(Kind::kSigma, p.drift);
+    const bool needs_pair_sigma = (p.kind == Kind::kPairDecayRate || p.kind == Kind::kPairFrequency) &&
+                                  !named(Kind::kPairSigma, p.drift);
+    if (needs_sigma || needs_pair_sigma)
+      return absl::InvalidArgumentError("drift information: " + NameOf(p) + " without its σ");
+  }
+  DriftLikelihoodResult passes;
+  Maximiser em(run, model, parameters, options, passes);
+  const Eigen::VectorXd theta = em.Start();
+  std::vector<Eigen::Index> every(parameters.size());
+  for (size_t j = 0; j < parameters.size(); ++j) every[j] = static_cast<Eigen::Index>(j);
+  DriftInformation out;
+  if (options.information == DriftLikelihoodOptions::Information::kSmootherMoments) {
+    auto information = em.MomentInformation(theta, every);
+    if (!information.ok()) return information.status();
+    out.information = *std::move(information);
+  } else {
+    auto l0 = em.LogLikelihood(model);
+    if (!l0.ok()) return l0.status();
+    auto information = em.BlockInformation(theta, every, *l0);
+    if (!information.ok()) return information.status();
+    out.information = *std::move(information);
+  }
+  out.filter_passes = passes.filter_passes;
+  return out;
 }
 
 absl::StatusOr<DriftLikelihoodResult> IdentifyWalksByLikelihood(const EpochRun& run, const ErrorModel& model,

@@ -107,6 +107,17 @@ struct DriftLikelihoodOptions {
   double likelihood_tolerance = 0.01;
   // Step of the second difference in ln σ.
   double curvature_step = 0.15;
+  // Where the standard errors' observed information comes from: the second
+  // differences of ℓ (r(r + 1) forward passes for a block of r parameters,
+  // 2 for one), or the smoother's moments by Oakes' identity (2r + 1
+  // forward and smoother passes over every parameter at once; ident/
+  // drift_em.h, Maximiser::MomentInformation). Measured, not adopted
+  // (docs/PERFORMANCE.md): as many passes cost more, each with a smoother.
+  enum class Information { kSecondDifferences, kSmootherMoments };
+  Information information = Information::kSecondDifferences;
+  // Step in the ln of each parameter of the smoother's moments' central
+  // difference (the missing information's).
+  double moment_information_step = 1e-3;
   // Starting periods of a second-order pair's fit [s] (its decay time starts
   // at the period): over a few hours the likelihood in the period has a
   // local maximum near each multiple of the true one, so EM starts from a
@@ -191,6 +202,20 @@ absl::StatusOr<DriftLikelihoodResult> IdentifyDriftsByLikelihood(const EpochRun&
                                                                  const DriftSelection& tau_too,
                                                                  const DriftCeilings& ceilings,
                                                                  const DriftLikelihoodOptions& options = {});
+
+// The observed information −∂²ℓ/∂θ∂θᵀ of `model` on `run`, θ the ln of the
+// named parameters ("gyro_bias_gm.x.sigma", "…tau", "acc_bias_rw.y.density",
+// "gyro_bias_second_order.z.sigma", "….alpha", "….beta"; a τ with
+// its σ, a pair's α and β with its σ₂), by `options.information`, with the
+// passes it took: what the identification's errors come from, for tests and
+// measurements.
+struct DriftInformation {
+  Eigen::MatrixXd information;  // in the order of the names
+  int filter_passes = 0;        // forward passes, or forward and smoother passes
+};
+absl::StatusOr<DriftInformation> ObservedDriftInformation(const EpochRun& run, const ErrorModel& model,
+                                                          const std::vector<std::string>& names,
+                                                          const DriftLikelihoodOptions& options = {});
 
 // Where EM starts when the drifts may be far from the model's values.
 struct DriftStartOptions {
