@@ -302,8 +302,7 @@ absl::StatusOr<std::vector<double>> Maximiser::LogLikelihoods(
   return out;
 }
 
-absl::StatusOr<Maximiser::Step> Maximiser::EmStep(const Eigen::VectorXd& theta) {
-  ++out_.filter_passes;
+absl::StatusOr<Maximiser::Smoothed> Maximiser::SmoothedAt(const Eigen::VectorXd& theta) const {
   auto fw = RunForwardFilter(run_, ModelOf(theta));
   if (!fw.ok()) return fw.status();
   const int K = fw->epochs();
@@ -312,7 +311,17 @@ absl::StatusOr<Maximiser::Step> Maximiser::EmStep(const Eigen::VectorXd& theta) 
   auto sm = RunSmoother(*fw, smoother_);
   if (!sm.ok()) return sm.status();
   const double dt = (fw->epoch_time_s.back() - fw->epoch_time_s.front()) / (K - 1);
-  Step step{fw->log_likelihood, theta};
+  return Smoothed{fw->log_likelihood, *std::move(sm), K, dt};
+}
+
+absl::StatusOr<Maximiser::Step> Maximiser::EmStep(const Eigen::VectorXd& theta) {
+  ++out_.filter_passes;
+  auto smoothed = SmoothedAt(theta);
+  if (!smoothed.ok()) return smoothed.status();
+  const SmoothedPass* sm = &smoothed->pass;
+  const int K = smoothed->epochs;
+  const double dt = smoothed->dt;
+  Step step{smoothed->log_likelihood, theta};
   for (size_t j = 0; j < parameters_.size(); ++j) {
     const Parameter& p = parameters_[j];
     const auto i = static_cast<Eigen::Index>(j);
@@ -480,14 +489,11 @@ Eigen::Index Maximiser::IndexOf(Kind kind, DriftAxis drift) const {
 
 absl::StatusOr<Maximiser::CompleteDerivatives> Maximiser::CompleteDataDerivatives(
     const Eigen::VectorXd& smoothed_at, const Eigen::VectorXd& theta_prime, bool hessian) const {
-  auto fw = RunForwardFilter(run_, ModelOf(smoothed_at));
-  if (!fw.ok()) return fw.status();
-  const int K = fw->epochs();
-  if (K < 3)
-    return absl::InvalidArgumentError("drift likelihood: the run has fewer than three epochs");
-  auto sm = RunSmoother(*fw, smoother_);
-  if (!sm.ok()) return sm.status();
-  const double dt = (fw->epoch_time_s.back() - fw->epoch_time_s.front()) / (K - 1);
+  auto smoothed = SmoothedAt(smoothed_at);
+  if (!smoothed.ok()) return smoothed.status();
+  const SmoothedPass* sm = &smoothed->pass;
+  const int K = smoothed->epochs;
+  const double dt = smoothed->dt;
   const ErrorModel at = ModelOf(theta_prime);
   const auto m = static_cast<Eigen::Index>(parameters_.size());
   CompleteDerivatives out{Eigen::VectorXd::Zero(m), Eigen::MatrixXd()};

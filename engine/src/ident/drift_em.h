@@ -131,6 +131,15 @@ class Maximiser {
   int iterations() const { return iterations_; }
 
  private:
+  // The smoother's pass at θ: ℓ, the smoothed moments, the epoch count and
+  // the mean update interval (the M-step's and the information's inputs).
+  struct Smoothed {
+    double log_likelihood = 0.0;
+    SmoothedPass pass;
+    int epochs = 0;
+    double dt = 0.0;
+  };
+  absl::StatusOr<Smoothed> SmoothedAt(const Eigen::VectorXd& theta) const;
   // The score of Q(θ′|θ) in θ′ from a smoothed pass at θ (its sums), and
   // where `hessian` is given its Hessian in θ′, over every parameter.
   struct CompleteDerivatives {
