@@ -341,14 +341,8 @@ absl::StatusOr<Maximiser::Step> Maximiser::EmStep(const Eigen::VectorXd& theta) 
     const int bias = p.drift.sensor == Sensor::kGyro ? layout_.gyro_bias() : layout_.acc_bias();
     const int state =
         walk ? layout_.EffectOffset(WalkEffectOf(model_, p.drift)) : bias + p.drift.axis;
-    double a_from = 0.0, a_to = 0.0, b = 0.0;
-    for (int k = 0; k + 1 < K; ++k) {
-      const double x0 = sm->x(k, state), x1 = sm->x(k + 1, state);
-      a_from += x0 * x0 + sm->variance(k, state);
-      a_to += x1 * x1 + sm->variance(k + 1, state);
-      b += x1 * x0 + sm->lag_one_covariance(k, state);
-    }
-    const double a0 = sm->x(0, state) * sm->x(0, state) + sm->variance(0, state);
+    const ScalarSums sums = SumsOfState(*sm, state, K);
+    const double a0 = sums.a0, a_from = sums.a_from, a_to = sums.a_to, b = sums.b;
     if (walk) {
       const double k2 = (a_to - 2.0 * b + a_from) / ((K - 1) * dt);  // K̂²
       if (k2 > 0.0) step.next[i] = 0.5 * std::log(k2);

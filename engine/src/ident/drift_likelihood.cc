@@ -33,7 +33,6 @@ absl::StatusOr<FitWithoutErrors> FitDriftsByEm(const EpochRun& run, const ErrorM
                                               const DriftLikelihoodOptions& options) {
   FitWithoutErrors fit;
   fit.result.model = model;
-  fit.start = model;
   for (const DriftAxis d : DriftAxis::All()) {
     // A drift the model leaves out (σ = 0) has no state to identify.
     if (!which.Contains(d) || !HasDrift(model, d)) continue;
@@ -491,12 +490,12 @@ absl::StatusOr<DriftLikelihoodResult> FitStructures(const EpochRun& run, const E
     // nested test keeps: the block costs r(r + 1) passes.
     Eigen::MatrixXd covariance = Eigen::MatrixXd::Constant(per_axis, per_axis, std::numeric_limits<double>::quiet_NaN());
     if (significant(w)) {
-      std::vector<Eigen::Index> block;
-      for (Eigen::Index k = 0; k < per_axis; ++k) block.push_back(first + k);
       if (!kept_blocks.empty()) {
         covariance = StructureCovariance(kept_information.block(kept_row, kept_row, per_axis, per_axis));
         kept_row += per_axis;
       } else {
+        std::vector<Eigen::Index> block;
+        for (Eigen::Index k = 0; k < per_axis; ++k) block.push_back(first + k);
         auto information = at_estimate.BlockInformation(*theta, block, l_hat);
         if (!information.ok()) return information.status();
         covariance = StructureCovariance(*information);
