@@ -50,6 +50,8 @@ struct DaemonSettings {
   std::string log_format = "text";
   int workers = 1;
   double lease_s = 30.0;
+  // AnalysisWorkers::Options::cache_bytes in MiB.
+  long analysis_cache_mb = static_cast<long>(insdiag::server::AnalysisWorkers::Options{}.cache_bytes >> 20);
   double fleet_refresh_s = 600.0;
   insdiag::server::InsdiagServer::Options options;
 };
@@ -88,6 +90,10 @@ void AddOptions(CLI::App& app, DaemonSettings& s) {
   app.add_option("--workers", s.workers,
                  "Analysis worker threads (0: serve the API only; default: cores - 1, at least 1)")
       ->capture_default_str();
+  app.add_option("--analysis-cache-mb", s.analysis_cache_mb,
+                 "Memory the workers keep analysed runs in for the next analysis of the same run (an Add from "
+                 "the page then re-runs model B alone; 0: keep nothing)")
+      ->capture_default_str();
   app.add_option("--lease-seconds", s.lease_s,
                  "Lease of a running analysis; a job whose worker died is taken up again after it")
       ->capture_default_str();
@@ -103,8 +109,9 @@ void AddOptions(CLI::App& app, DaemonSettings& s) {
 
 // The workers' and the fleet views' settings from the command line's; false when one is out of range.
 bool SetWorkerOptions(DaemonSettings& s) {
-  if (s.workers < 0 || s.lease_s <= 0 || s.fleet_refresh_s < 0) return false;
+  if (s.workers < 0 || s.lease_s <= 0 || s.fleet_refresh_s < 0 || s.analysis_cache_mb < 0) return false;
   s.options.workers.workers = s.workers;
+  s.options.workers.cache_bytes = static_cast<std::size_t>(s.analysis_cache_mb) << 20;
   s.options.workers.lease = std::chrono::milliseconds(static_cast<long>(s.lease_s * 1000));
   s.options.fleet_refresh = std::chrono::milliseconds(static_cast<long>(s.fleet_refresh_s * 1000));
   return true;
@@ -177,7 +184,8 @@ int main(int argc, char** argv) {
   insdiag::server::SetLogFormat(settings.log_format == "json" ? insdiag::server::LogFormat::kJson
                                                               : insdiag::server::LogFormat::kText);
   if (!SetWorkerOptions(settings)) {
-    Log(LogLevel::kError, "--workers, --lease-seconds and --fleet-refresh-seconds must not be negative");
+    Log(LogLevel::kError,
+        "--workers, --lease-seconds, --fleet-refresh-seconds and --analysis-cache-mb must not be negative");
     return 2;
   }
   auto& options = settings.options;

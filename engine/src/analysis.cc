@@ -14,6 +14,7 @@
 #include "analysis/missing_effects.h"
 #include "analysis/model_change.h"
 #include "analysis/model_pass.h"
+#include "analysis/prepared_run.h"
 #include "analysis/run_context.h"
 #include "analysis/steps_in_raw_samples.h"
 #include "insdiag/engine/nav/reference_readout.h"
@@ -486,56 +487,128 @@ absl::StatusOr<Analysis> ModelAOrItsStartExplained(const pipeline::RunContext& c
   if (settled->has_value()) return **std::move(settled);
   Analysis only_a;
   only_a.report = std::move(model_a.report);
-  only_a.model = model_a.pass.model;
-  if (context.options.keep_series) pipeline::FillSeries(model_a.pass, only_a.series);
+  only_a.model = model_a.model;
+  if (context.options.keep_series) pipeline::FillSeries(*model_a.pass, only_a.series);
   return only_a;
+}
+
+// Model A: identified here or taken from the request's base, its pass
+// scanned for missing effects, and its report, with the identified
+// parameters and notes later models carry on.
+struct ModelA {
+  pipeline::ScannedModel scanned;
+  AnalysisReport report;
+  std::vector<ParameterEstimate> identified;
+  DecisionLog decisions;
+};
+
+absl::StatusOr<ModelA> RunModelA(const pipeline::PreparedRun& prepared, const pipeline::RunContext& context,
+                                 const AnalysisRequest& request) {
+  DecisionLog decisions = prepared.decisions;
+  pipeline::Identification identification;
+  identification.model = prepared.base;
+  if (request.identified_base.has_value()) {
+    identification = IdentifiedEarlier(*request.identified_base, identification.model, decisions);
+  } else if (context.options.identify) {
+    auto identified = pipeline::IdentifyModel(context, prepared.allan, identification.model, decisions);
+    if (!identified.ok()) return identified.status();
+    identification = *std::move(identified);
+  }
+  auto scanned = ScanModelA(context, request, identification, decisions);
+  if (!scanned.ok()) return scanned.status();
+  ModelA a{*std::move(scanned), {}, std::move(identification.identified), {}};
+  a.identified.insert(a.identified.begin(), prepared.removed_constants.estimates.begin(),
+                      prepared.removed_constants.estimates.end());
+  a.report = pipeline::ReportOf(context, a.scanned.pass, a.scanned.found, a.identified, decisions);
+  a.decisions = std::move(decisions);
+  return a;
+}
+
+// What an Add reads of model A: its pass reduced to the model and the scan.
+std::shared_ptr<const pipeline::ModelAOutcome> OutcomeOf(ModelA a) {
+  auto out = std::make_shared<pipeline::ModelAOutcome>();
+  out->model = std::move(a.scanned.pass.model);
+  out->scan = std::move(a.scanned.pass.scan);
+  out->found = std::move(a.scanned.found);
+  out->report = std::move(a.report);
+  out->identified = std::move(a.identified);
+  out->decisions = std::move(a.decisions);
+  return out;
+}
+
+// Model A's outcome for an Add from the request's identified base as
+// `outcomes` keeps it, if it is of the model this analysis would identify.
+std::shared_ptr<const pipeline::ModelAOutcome> KeptModelA(const pipeline::PreparedRun& prepared,
+                                                          const AnalysisRequest& request,
+                                                          const pipeline::ModelAOutcomes* outcomes) {
+  if (outcomes == nullptr || !request.identified_base.has_value()) return nullptr;
+  auto kept = outcomes->Find();
+  DecisionLog unused;
+  if (kept == nullptr || !(kept->model == IdentifiedEarlier(*request.identified_base, prepared.base, unused).model)) {
+    return nullptr;
+  }
+  return kept;
 }
 
 }  // namespace
 
-absl::StatusOr<Analysis> Analyze(const BenchRun& run, const AnalysisRequest& request,
-                                 const AnalysisOptions& options) {
-  return Analyze(BenchRun(run), request, options);
+namespace pipeline {
+
+std::size_t PreparedRun::Bytes() const {
+  const double epochs_bytes = epochs.BytesPerEpoch() * epochs.size();
+  return run.samples.size() * (sizeof(ImuSample) + sizeof(reference_measurements[0])) +
+         static_cast<std::size_t>(epochs_bytes);
 }
 
-absl::StatusOr<Analysis> Analyze(BenchRun&& input, const AnalysisRequest& request,
-                                 const AnalysisOptions& requested_options) {
+std::size_t ModelAOutcome::Bytes() const {
+  // The scan's n × p sensitivity and p × p information dominate.
+  const std::size_t columns = scan != nullptr ? scan->columns().size() : 0;
+  return sizeof(ModelAOutcome) + columns * columns * sizeof(double) * 4 +
+         (report.effect_candidates.size() + found.candidates.size()) * sizeof(EffectCandidate) * 2;
+}
+
+absl::StatusOr<std::unique_ptr<PreparedRun>> PrepareRun(BenchRun&& input, const AnalysisRequest& request,
+                                                        const AnalysisOptions& requested_options) {
   if (auto st = requested_options.Validate(); !st.ok()) return st;
   if (input.samples.size() < 2) return absl::InvalidArgumentError("the run has fewer than two samples");
-  DecisionLog decisions;
-  const AnalysisOptions options = WithTheRunsUpdateInterval(requested_options, input, decisions);
+  auto prepared = std::make_unique<PreparedRun>();
+  PreparedRun& p = *prepared;
+  DecisionLog& decisions = p.decisions;
+  p.options = WithTheRunsUpdateInterval(requested_options, input, decisions);
+  const AnalysisOptions& options = p.options;
 
   Progress(options, 0.0, "screening samples");
   // The samples are screened and their dominant constants removed in place:
   // the report quotes them as recorded through RecordedSamples.
-  BenchRun run = std::move(input);
+  p.run = std::move(input);
+  BenchRun& run = p.run;
   // The table's motion within each sample: the screen and the condensation
   // both need it, and it depends on the reference alone (screening and the
   // constants removed below change the sensors' samples only).
   const nav::RunCompensations compensations(run);
-  const std::vector<std::array<double, 6>> reference_measurements = ReferenceMeasurements(run, compensations);
+  p.reference_measurements = ReferenceMeasurements(run, compensations);
   // The bench's motion from the samples with their spikes repaired: a
   // transmission error is one sample, a move many. A departure inside a
   // stretch where the bench moved is the motion itself: it is kept as
   // recorded, for the mechanisation to follow.
-  SampleScreening screening;
-  screening.spikes = ScreenAndRepairSpikes(run, reference_measurements, options.screening);
-  screening.bench_motion = FindBenchMotion(run, reference_measurements, options.filter.update_interval_s,
+  SampleScreening& screening = p.screening;
+  screening.spikes = ScreenAndRepairSpikes(run, p.reference_measurements, options.screening);
+  screening.bench_motion = FindBenchMotion(run, p.reference_measurements, options.filter.update_interval_s,
                                            options.monitor.family_wise_alpha);
   KeepTheMotionAsRecorded(screening, run);
 
   Progress(options, 0.05, "Allan deviation and the run condensed to its epochs");
-  std::optional<ident::AllanResult> allan;
-  auto a_priori = ChooseAPrioriModel(run, request, allan, options, decisions);
+  auto a_priori = ChooseAPrioriModel(run, request, p.allan, options, decisions);
   if (!a_priori.ok()) return a_priori.status();
-  MeasureAttitudeReadout(run, a_priori->model, decisions);
-  NoteUnsurveyedHeading(run, a_priori->model, decisions);
-  const ident::RemovedConstants removed_constants =
-      options.remove_dominant_constants ? RemoveDominantConstants(run, allan, *a_priori, options, decisions)
-                                        : ident::RemovedConstants{};
-  ErrorModel base = a_priori->model;
+  p.a_priori = *std::move(a_priori);
+  MeasureAttitudeReadout(run, p.a_priori.model, decisions);
+  NoteUnsurveyedHeading(run, p.a_priori.model, decisions);
+  if (options.remove_dominant_constants) {
+    p.removed_constants = RemoveDominantConstants(run, p.allan, p.a_priori, options, decisions);
+  }
+  p.base = p.a_priori.model;
   if (auto st = AddEffects(run, request.baseline_effects, options.filter.update_interval_s,
-                           options.diffuse_prior_scale, base);
+                           options.diffuse_prior_scale, p.base);
       !st.ok()) {
     return st;
   }
@@ -547,52 +620,80 @@ absl::StatusOr<Analysis> Analyze(BenchRun&& input, const AnalysisRequest& reques
   absl::StatusOr<EpochRun> epochs;
   DecisionLog allan_notes;
   numerics::InParallel(
-      [&] { epochs = CondenseRun(run, base, options.filter.update_interval_s, &compensations); },
+      [&] { epochs = CondenseRun(run, p.base, options.filter.update_interval_s, &compensations); },
       [&] {
-        if (a_priori->FromDatasheet()) allan = AllanOfStaticSegments(run, options, allan_notes);
+        if (p.a_priori.FromDatasheet()) p.allan = AllanOfStaticSegments(run, options, allan_notes);
       });
   decisions.Append(allan_notes);
   if (!epochs.ok()) return epochs.status();
-  a_priori->counted_quantisation = CountedQuantisationOf(allan);
-  const RawSampleEvidence raw_samples = RawSampleEvidenceOf(run, allan, a_priori->model, options);
-  const ident::DriftCeilings drift_ceilings =
-      allan.has_value() ? ident::DriftCeilings::FromAllan(*allan, options.monitor.family_wise_alpha)
-                        : ident::DriftCeilings{};
-  const pipeline::RunContext context{run,     *epochs,    reference_measurements, screening,
-                                     options, *a_priori, raw_samples,            drift_ceilings};
+  p.epochs = *std::move(epochs);
+  p.a_priori.counted_quantisation = CountedQuantisationOf(p.allan);
+  p.raw_samples = RawSampleEvidenceOf(run, p.allan, p.a_priori.model, options);
+  p.drift_ceilings = p.allan.has_value()
+                         ? ident::DriftCeilings::FromAllan(*p.allan, options.monitor.family_wise_alpha)
+                         : ident::DriftCeilings{};
+  p.options.progress = nullptr;
+  return prepared;
+}
 
-  pipeline::Identification identification;
-  identification.model = std::move(base);
-  if (request.identified_base.has_value()) {
-    identification = IdentifiedEarlier(*request.identified_base, identification.model, decisions);
-  } else if (options.identify) {
-    auto identified = pipeline::IdentifyModel(context, allan, identification.model, decisions);
-    if (!identified.ok()) return identified.status();
-    identification = *std::move(identified);
-  }
-
-  auto a = ScanModelA(context, request, identification, decisions);
+absl::StatusOr<std::shared_ptr<const ModelAOutcome>> ModelAOutcomeOf(const PreparedRun& prepared,
+                                                                     const AnalysisRequest& request,
+                                                                     const AnalysisOptions& requested_options,
+                                                                     ModelAOutcomes* outcomes) {
+  if (auto kept = KeptModelA(prepared, request, outcomes); kept != nullptr) return kept;
+  AnalysisOptions options = prepared.options;
+  options.progress = requested_options.progress;
+  auto a = RunModelA(prepared, prepared.Context(options), request);
   if (!a.ok()) return a.status();
-  std::vector<ParameterEstimate> identified = std::move(identification.identified);
-  identified.insert(identified.begin(), removed_constants.estimates.begin(), removed_constants.estimates.end());
-  pipeline::ScannedModelA model_a{a->pass, a->found,
-                                  pipeline::ReportOf(context, a->pass, a->found, identified, decisions),
-                                  identified, decisions};
+  std::shared_ptr<const ModelAOutcome> outcome = OutcomeOf(*std::move(a));
+  if (outcomes != nullptr && request.identified_base.has_value()) outcomes->Keep(outcome);
+  return outcome;
+}
 
+absl::StatusOr<Analysis> AnalyzePrepared(const PreparedRun& prepared, const AnalysisRequest& request,
+                                         const AnalysisOptions& requested_options, ModelAOutcomes* outcomes) {
+  AnalysisOptions options = prepared.options;
+  options.progress = requested_options.progress;
+  const RunContext context = prepared.Context(options);
   absl::StatusOr<Analysis> out;
-  if (request.discover) {
-    out = pipeline::Discover(context, std::move(model_a));
-  } else if (!request.add_effects.empty()) {
-    out = pipeline::AddAndCompare(context, request.add_effects, std::move(model_a));
+  if (!request.discover && !request.add_effects.empty()) {
+    // An Add reads model A's model, scan and report only: its pass is let go
+    // before model B's runs.
+    auto a = ModelAOutcomeOf(prepared, request, options, outcomes);
+    if (!a.ok()) return a.status();
+    const ModelAOutcome& kept = **a;
+    out = AddAndCompare(context, request.add_effects,
+                        ScannedModelA{kept.model, kept.scan.get(), nullptr, kept.found, kept.report, kept.identified,
+                                      kept.decisions});
   } else {
-    out = ModelAOrItsStartExplained(context, std::move(model_a));
+    auto a = RunModelA(prepared, context, request);
+    if (!a.ok()) return a.status();
+    ModelPass& pass = a->scanned.pass;
+    ScannedModelA model_a{pass.model,    pass.scan.get(),        &pass,           a->scanned.found,
+                          std::move(a->report), std::move(a->identified), std::move(a->decisions)};
+    out = request.discover ? Discover(context, std::move(model_a))
+                           : ModelAOrItsStartExplained(context, std::move(model_a));
   }
   if (!out.ok()) return out.status();
-  out->report.allan = std::move(allan);
-  const RecordedSamples recorded{run, removed_constants.gyro_rad_s, removed_constants.acc_mps2, screening.spikes};
+  out->report.allan = prepared.allan;
+  const RecordedSamples recorded{prepared.run, prepared.removed_constants.gyro_rad_s,
+                                 prepared.removed_constants.acc_mps2, prepared.screening.spikes};
   out->report.plain_words = PlainWordsVerdict(out->report, recorded, options.monitor.family_wise_alpha);
   Progress(options, 1.0, "done");
   return out;
+}
+
+}  // namespace pipeline
+
+absl::StatusOr<Analysis> Analyze(const BenchRun& run, const AnalysisRequest& request,
+                                 const AnalysisOptions& options) {
+  return Analyze(BenchRun(run), request, options);
+}
+
+absl::StatusOr<Analysis> Analyze(BenchRun&& run, const AnalysisRequest& request, const AnalysisOptions& options) {
+  auto prepared = pipeline::PrepareRun(std::move(run), request, options);
+  if (!prepared.ok()) return prepared.status();
+  return pipeline::AnalyzePrepared(**prepared, request, options, nullptr);
 }
 
 }  // namespace insdiag::engine

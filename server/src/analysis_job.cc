@@ -18,18 +18,17 @@
 namespace insdiag::server {
 namespace {
 
-// The stored run and all its samples, as the engine takes them.
-absl::StatusOr<engine::BenchRun> ReadRun(kb::ConnectionPool& pool, const std::string& run_id) {
-  kb::RunStore runs(pool);
-  INSDIAG_ASSIGN_OR_RETURN(auto stored, runs.Get(run_id));
+// The stored run `stored` describes and all its samples, as the engine takes them.
+absl::StatusOr<engine::BenchRun> ReadRun(kb::ConnectionPool& pool, const kb::StoredRun& stored) {
   engine::BenchRun run;
   run.metadata = stored.metadata;
   run.has_temperature = stored.has_temperature;
   run.samples.reserve(static_cast<std::size_t>(stored.sample_count));
-  INSDIAG_RETURN_IF_ERROR(runs.ReadSamples(run_id, 1 << 16, [&](std::span<const engine::ImuSample> samples) {
-    run.samples.insert(run.samples.end(), samples.begin(), samples.end());
-    return true;
-  }));
+  INSDIAG_RETURN_IF_ERROR(
+      kb::RunStore(pool).ReadSamples(stored.id, 1 << 16, [&](std::span<const engine::ImuSample> samples) {
+        run.samples.insert(run.samples.end(), samples.begin(), samples.end());
+        return true;
+      }));
   return run;
 }
 
@@ -64,25 +63,75 @@ bool Retryable(const absl::Status& status) {
          status.code() != absl::StatusCode::kOutOfRange;
 }
 
-absl::StatusOr<engine::Analysis> RunAnalysisJob(kb::ConnectionPool& pool, const std::string& run_id,
-                                                const v1::AnalysisSpec& spec,
-                                                std::function<void(double, std::string_view)> progress) {
-  INSDIAG_ASSIGN_OR_RETURN(engine::BenchRun run, ReadRun(pool, run_id));
+namespace {
+
+// What a job of `spec` on run `run_id` analyses: the stored run, the
+// engine's request and options, and the names the analysis cache keeps its
+// parts under.
+struct JobInputs {
+  kb::StoredRun stored;
+  engine::AnalysisRequest request;
+  engine::AnalysisOptions options;
+  engine::AnalysisCacheKeys keys;
+};
+
+absl::StatusOr<JobInputs> InputsOf(kb::ConnectionPool& pool, const std::string& run_id,
+                                   const v1::AnalysisSpec& spec) {
+  JobInputs in;
+  INSDIAG_ASSIGN_OR_RETURN(in.stored, kb::RunStore(pool).Get(run_id));
   std::optional<v1::Analysis> base;
   if (!spec.base_analysis().empty()) {
     INSDIAG_ASSIGN_OR_RETURN(auto base_id, api::ResourceId(spec.base_analysis(), api::kAnalyses, "base_analysis"));
     INSDIAG_ASSIGN_OR_RETURN(auto stored_base, kb::AnalysisStore(pool).Get(base_id, true));
     base = ToProto(stored_base);
+    in.keys.identified_base = base_id;
   }
-  INSDIAG_ASSIGN_OR_RETURN(auto nominal, NominalModelOfUnitType(pool, run.metadata.unit_type));
-  INSDIAG_ASSIGN_OR_RETURN(
-      engine::AnalysisRequest request,
-      EngineRequestOf(spec, std::move(nominal), base.has_value() ? &base->report() : nullptr));
-  engine::AnalysisOptions options;
-  options.keep_series = true;
-  options.progress = std::move(progress);
+  INSDIAG_ASSIGN_OR_RETURN(auto nominal, NominalModelOfUnitType(pool, in.stored.metadata.unit_type));
+  INSDIAG_ASSIGN_OR_RETURN(in.request, EngineRequestOf(spec, std::move(nominal),
+                                                       base.has_value() ? &base->report() : nullptr));
+  in.options.keep_series = true;
+  // A run's samples never change once stored; its digest and count name them.
+  in.keys.run = absl::StrCat(run_id, "/", in.stored.sample_count, "/", in.stored.sha256);
+  return in;
+}
+
+}  // namespace
+
+absl::StatusOr<engine::Analysis> RunAnalysisJob(kb::ConnectionPool& pool, const std::string& run_id,
+                                                const v1::AnalysisSpec& spec,
+                                                std::function<void(double, std::string_view)> progress,
+                                                engine::AnalysisCache* cache) {
+  INSDIAG_ASSIGN_OR_RETURN(JobInputs in, InputsOf(pool, run_id, spec));
+  in.options.progress = std::move(progress);
   try {
-    return engine::Analyze(std::move(run), request, options);
+    if (cache == nullptr) {
+      INSDIAG_ASSIGN_OR_RETURN(engine::BenchRun run, ReadRun(pool, in.stored));
+      return engine::Analyze(std::move(run), in.request, in.options);
+    }
+    return cache->Analyze(in.keys, [&] { return ReadRun(pool, in.stored); }, in.request, in.options);
+  } catch (const std::exception& e) {
+    return absl::InternalError(absl::StrCat("the engine failed: ", e.what()));
+  }
+}
+
+absl::Status KeepModelAForAdds(kb::ConnectionPool& pool, const std::string& run_id, const std::string& analysis_id,
+                               engine::AnalysisCache& cache) {
+  INSDIAG_ASSIGN_OR_RETURN(auto stored, kb::AnalysisStore(pool).Get(analysis_id, true));
+  const v1::Analysis analysis = ToProto(stored);
+  // The spec of the page's Add once the service has checked it
+  // (AnalysisService::CheckBaseAnalysis): the base, and its model's effects
+  // as the baseline.
+  v1::AnalysisSpec spec;
+  spec.set_base_analysis(analysis.name());
+  *spec.mutable_baseline()->mutable_effects() = analysis.report().model().effects();
+  INSDIAG_ASSIGN_OR_RETURN(JobInputs in, InputsOf(pool, run_id, spec));
+  // Only where the run's preparation is still kept: preparing it again is an
+  // analysis's worth of work that nobody asked for.
+  const auto no_read = []() -> absl::StatusOr<engine::BenchRun> {
+    return absl::FailedPreconditionError("the run's preparation is no longer kept");
+  };
+  try {
+    return cache.KeepModelA(in.keys, no_read, in.request, in.options);
   } catch (const std::exception& e) {
     return absl::InternalError(absl::StrCat("the engine failed: ", e.what()));
   }

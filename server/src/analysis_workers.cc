@@ -72,7 +72,7 @@ std::string HostName() {
 }  // namespace
 
 AnalysisWorkers::AnalysisWorkers(kb::ConnectionPool& pool, Options options, Metrics* metrics)
-    : pool_(pool), options_(options), metrics_(metrics), store_(pool),
+    : pool_(pool), options_(options), metrics_(metrics), store_(pool), cache_(options.cache_bytes),
       owner_prefix_(absl::StrCat(HostName(), ":", getpid())) {}
 
 AnalysisWorkers::~AnalysisWorkers() { Stop(); }
@@ -107,6 +107,7 @@ bool AnalysisWorkers::SleepFor(std::chrono::milliseconds duration) {
 void AnalysisWorkers::Loop(int index) {
   const std::string owner = OwnerName(index);
   auto last_reap = std::chrono::steady_clock::now() - options_.lease;
+  std::optional<kb::ClaimedJob> idle_work;  // the last job that succeeded, until the queue is empty
   for (;;) {
     {
       std::lock_guard lock(mutex_);
@@ -127,18 +128,30 @@ void AnalysisWorkers::Loop(int index) {
       continue;
     }
     if (!job->has_value()) {
+      // Nothing queued: model A of the Add the page offers on the last
+      // analysis this worker finished, so that the first Add costs model B.
+      if (idle_work.has_value()) {
+        const absl::Status kept = KeepModelAForAdds(pool_, idle_work->run_id, idle_work->analysis_id, cache_);
+        if (!kept.ok() && kept.code() != absl::StatusCode::kFailedPrecondition) {
+          Log(LogLevel::kWarning, absl::StrCat(owner, ": model A of analyses/", idle_work->analysis_id,
+                                               " not kept for its Adds: ", kept.message()));
+        }
+        idle_work.reset();
+        continue;
+      }
       if (!SleepFor(options_.poll)) return;
       continue;
     }
-    RunJob(**job, owner);
+    if (RunJob(**job, owner) == "succeeded" && options_.cache_bytes > 0) idle_work = **job;
   }
 }
 
-void AnalysisWorkers::RunJob(const kb::ClaimedJob& job, const std::string& owner) {
+std::string_view AnalysisWorkers::RunJob(const kb::ClaimedJob& job, const std::string& owner) {
   const auto start = std::chrono::steady_clock::now();
   const std::string_view outcome = RunJobOutcome(job, owner);
   const std::chrono::duration<double> elapsed = std::chrono::steady_clock::now() - start;
   if (metrics_ != nullptr) metrics_->CountAnalysis(outcome, elapsed.count());
+  return outcome;
 }
 
 std::string_view AnalysisWorkers::RunJobOutcome(const kb::ClaimedJob& job, const std::string& owner) {
@@ -153,7 +166,8 @@ std::string_view AnalysisWorkers::RunJobOutcome(const kb::ClaimedJob& job, const
   };
   const absl::Status status = [&]() -> absl::Status {
     INSDIAG_ASSIGN_OR_RETURN(engine::Analysis analysis,
-                             RunAnalysisJob(pool_, job.run_id, SpecOf(job.encoded_spec), progress));
+                             RunAnalysisJob(pool_, job.run_id, SpecOf(job.encoded_spec), progress,
+                                            options_.cache_bytes > 0 ? &cache_ : nullptr));
     if (heartbeat.lost() || heartbeat.cancelled()) return absl::OkStatus();
     const v1::AnalysisReport report = api::ToProto(analysis.report, analysis.model);
     return store_.Complete(job.analysis_id, owner, EncodedReport(report), ReportRowsOf(report), &analysis.series);

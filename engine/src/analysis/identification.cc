@@ -203,7 +203,7 @@ absl::StatusOr<ident::DriftLikelihoodResult> DriftsBesideTheCandidate(const RunC
                                                                       const Findings& found,
                                                                       const EffectCandidate& best,
                                                                       const ErrorModel& base) {
-  auto with_candidate = ExtendModel(c.run, base, {best.name}, pass, found, c.options);
+  auto with_candidate = ExtendModel(c.run, base, {best.name}, pass.scan.get(), found, c.options);
   if (!with_candidate.ok()) return with_candidate.status();
   DecisionLog fit_notes;
   return DriftsFromStarts(c, *with_candidate, fit_notes);

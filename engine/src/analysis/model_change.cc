@@ -54,7 +54,7 @@ ScannedPlacement PlacementOf(const Findings& found, const EffectTerm& term,
 // Model `base` plus `selectors`, with priors from what model A's scan and
 // correlation processing found; anything not found gets the diffuse prior.
 absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& base,
-                                       const std::vector<std::string>& selectors, const ModelPass& a,
+                                       const std::vector<std::string>& selectors, const ScoreTestObserver* scan,
                                        const Findings& found, const AnalysisOptions& options) {
   ErrorModel model = base;
   std::vector<SelectedTerm> fallback;  // terms nothing found: the diffuse prior
@@ -96,12 +96,12 @@ absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& ba
     }
     // A constant the scan estimated: prior wide against its estimate.
     bool placed = false;
-    if (term.family->kind == EffectKind::kConstant && a.scan != nullptr) {
+    if (term.family->kind == EffectKind::kConstant && scan != nullptr) {
       ModelEffect e;
       e.term = term;
-      const auto& cols = a.scan->columns();
-      const Eigen::MatrixXd& I = a.scan->information();
-      const Eigen::VectorXd& s = a.scan->score();
+      const auto& cols = scan->columns();
+      const Eigen::MatrixXd& I = scan->information();
+      const Eigen::VectorXd& s = scan->score();
       placed = true;
       for (int p = 0; p < term.family->parameters_per_term; ++p) {
         auto it = std::find_if(cols.begin(), cols.end(), [&](const CandidateColumn& c) {
@@ -126,11 +126,11 @@ absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& ba
   return model;
 }
 
-ModelComparison Compare(const ModelPass& a, const ModelPass& b, const AnalysisReport& ra, const AnalysisReport& rb,
+ModelComparison Compare(const ErrorModel& a, const ErrorModel& b, const AnalysisReport& ra, const AnalysisReport& rb,
                         double predicted_lr) {
   ModelComparison c;
-  c.baseline_effects = a.model.EffectNames();
-  for (const std::string& e : b.model.EffectNames()) {
+  c.baseline_effects = a.EffectNames();
+  for (const std::string& e : b.EffectNames()) {
     if (std::find(c.baseline_effects.begin(), c.baseline_effects.end(), e) == c.baseline_effects.end()) {
       c.added_effects.push_back(e);
     }
@@ -153,14 +153,15 @@ bool SelectorCovers(const std::string& selector, const std::string& term_name) {
 }
 
 // Model A's score statistic for adding `added` jointly (the likelihood ratio it predicts).
-double PredictedLikelihoodRatio(const ModelPass& a, const std::vector<std::string>& added, const Findings& found) {
-  if (a.scan == nullptr) return 0.0;
+double PredictedLikelihoodRatio(const ScoreTestObserver* scan, const std::vector<std::string>& added,
+                                const Findings& found) {
+  if (scan == nullptr) return 0.0;
   std::vector<Eigen::Index> idx;
   double structure_lr = 0.0;
   for (const std::string& name : added) {
     // A family stands for its terms.
-    for (size_t i = 0; i < a.scan->columns().size(); ++i) {
-      if (SelectorCovers(name, a.scan->columns()[i].term.Name())) idx.push_back(static_cast<Eigen::Index>(i));
+    for (size_t i = 0; i < scan->columns().size(); ++i) {
+      if (SelectorCovers(name, scan->columns()[i].term.Name())) idx.push_back(static_cast<Eigen::Index>(i));
     }
     for (const StructureProposal& p : found.structures) {
       if (p.candidate.name == name) structure_lr += p.candidate.statistic;
@@ -176,8 +177,8 @@ double PredictedLikelihoodRatio(const ModelPass& a, const std::vector<std::strin
   Eigen::VectorXd s(n);
   Eigen::MatrixXd I(n, n);
   for (Eigen::Index r = 0; r < n; ++r) {
-    s[r] = a.scan->score()[idx[static_cast<size_t>(r)]];
-    for (Eigen::Index c = 0; c < n; ++c) I(r, c) = a.scan->information()(idx[static_cast<size_t>(r)], idx[static_cast<size_t>(c)]);
+    s[r] = scan->score()[idx[static_cast<size_t>(r)]];
+    for (Eigen::Index c = 0; c < n; ++c) I(r, c) = scan->information()(idx[static_cast<size_t>(r)], idx[static_cast<size_t>(c)]);
   }
   return s.dot(I.completeOrthogonalDecomposition().solve(s)) + structure_lr;
 }
@@ -220,7 +221,7 @@ absl::StatusOr<Analysis> Discover(const RunContext& c, ScannedModelA a) {
   const AnalysisOptions& options = c.options;
   // Model A stays whole for the comparison; `latest` holds the last step's pass.
   std::optional<ModelPass> latest;
-  auto current = [&]() -> const ModelPass& { return latest.has_value() ? *latest : a.pass; };
+  auto current = [&]() -> const ModelPass& { return latest.has_value() ? *latest : *a.pass; };
   Findings found = a.found;
   AnalysisReport report = a.report;
   std::vector<ParameterEstimate> identified = std::move(a.identified);
@@ -228,7 +229,7 @@ absl::StatusOr<Analysis> Discover(const RunContext& c, ScannedModelA a) {
     const EffectCandidate* top = NextDiscovery(found, options);
     if (top == nullptr) break;
     Progress(options, 0.7 + 0.3 * step / (options.max_discovery_steps + 1), "discovery: adding " + top->name);
-    auto extended = ExtendModel(c.run, current().model, {top->name}, current(), found, options);
+    auto extended = ExtendModel(c.run, current().model, {top->name}, current().scan.get(), found, options);
     if (!extended.ok()) return extended.status();
     auto next = RunPass(c.run, c.epochs, *extended, c.samples, options, /*with_scan=*/true);
     if (!next.ok()) return next.status();
@@ -248,7 +249,8 @@ absl::StatusOr<Analysis> Discover(const RunContext& c, ScannedModelA a) {
   if (!report.discovery.empty()) {
     std::vector<std::string> added;
     for (const DiscoveryStep& d : report.discovery) added.push_back(d.effect);
-    report.comparison = Compare(a.pass, current(), a.report, report, PredictedLikelihoodRatio(a.pass, added, a.found));
+    report.comparison =
+        Compare(a.model, current().model, a.report, report, PredictedLikelihoodRatio(a.scan, added, a.found));
   }
   Analysis out;
   out.report = std::move(report);
@@ -261,7 +263,7 @@ absl::StatusOr<Analysis> Discover(const RunContext& c, ScannedModelA a) {
 absl::StatusOr<Analysis> AddAndCompare(const RunContext& c, const std::vector<std::string>& effects, ScannedModelA a) {
   const AnalysisOptions& options = c.options;
   Progress(options, 0.8, "model with the added effects");
-  auto extended = ExtendModel(c.run, a.pass.model, effects, a.pass, a.found, options);
+  auto extended = ExtendModel(c.run, a.model, effects, a.scan, a.found, options);
   if (!extended.ok()) return extended.status();
   auto b = RunPass(c.run, c.epochs, *extended, c.samples, options, /*with_scan=*/true);
   if (!b.ok()) return b.status();
@@ -273,10 +275,10 @@ absl::StatusOr<Analysis> AddAndCompare(const RunContext& c, const std::vector<st
   out.report = ReportOf(c, *b, found_b, WithTakenStructures(a.identified, b->model, a.found), a.decisions);
   std::vector<std::string> added;
   for (const std::string& e : b->model.EffectNames()) {
-    if (a.pass.model.FindEffect(*ParseEffectSelector(e)->begin()) < 0) added.push_back(e);
+    if (a.model.FindEffect(*ParseEffectSelector(e)->begin()) < 0) added.push_back(e);
   }
   out.report.comparison =
-      Compare(a.pass, *b, a.report, out.report, PredictedLikelihoodRatio(a.pass, added, a.found));
+      Compare(a.model, b->model, a.report, out.report, PredictedLikelihoodRatio(a.scan, added, a.found));
   out.model = b->model;
   out.base_report = std::move(a.report);
   if (options.keep_series) FillSeries(*b, out.series);
@@ -329,7 +331,7 @@ absl::StatusOr<std::optional<Analysis>> ExplainTheStartByWarmUps(const RunContex
   if (!FailsOnlyBy(a.report, start_span_end_s, alpha)) return std::nullopt;
   const std::vector<std::string> warm_ups = WarmUpsLoweringTheBic(a.report);
   if (warm_ups.empty()) return std::nullopt;
-  auto b = AddAndCompare(c, warm_ups, ScannedModelA{a.pass, a.found, a.report, a.identified, a.decisions});
+  auto b = AddAndCompare(c, warm_ups, ScannedModelA{a.model, a.scan, a.pass, a.found, a.report, a.identified, a.decisions});
   if (!b.ok()) return b.status();
   const AnalysisReport& r = b->report;
   const bool better = static_cast<int>(r.verdict) < static_cast<int>(a.report.verdict);

@@ -18,7 +18,14 @@ namespace insdiag::engine::pipeline {
 // Model A: the identified model's pass, what its scan found and its report,
 // with the identified parameters and notes later models carry on.
 struct ScannedModelA {
-  const ModelPass& pass;
+  const ErrorModel& model;
+  // The missing-effect scan's score and information: the added effects'
+  // priors and the likelihood ratio predicted for them.
+  const ScoreTestObserver* scan;
+  // The whole pass, for the stages that read more of it than the scan (the
+  // loop's discovery, model A's own series); null where model A's outcome was
+  // kept from an earlier analysis, which serves an Add only.
+  const ModelPass* pass;
   const Findings& found;
   AnalysisReport report;
   std::vector<ParameterEstimate> identified;
@@ -49,19 +56,20 @@ absl::StatusOr<std::optional<Analysis>> ExplainTheStartByWarmUps(const RunContex
 std::vector<ParameterEstimate> WithTakenStructures(std::vector<ParameterEstimate> identified,
                                                    const ErrorModel& model, const Findings& found);
 
-// Model `base` plus `selectors`, with priors from what model A's scan and
+// Model `base` plus `selectors`, with priors from what `base`'s scan and
 // correlation processing found; anything not found gets the diffuse prior.
 absl::StatusOr<ErrorModel> ExtendModel(const BenchRun& run, const ErrorModel& base,
-                                       const std::vector<std::string>& selectors, const ModelPass& a,
+                                       const std::vector<std::string>& selectors, const ScoreTestObserver* scan,
                                        const Findings& found, const AnalysisOptions& options);
 
-ModelComparison Compare(const ModelPass& a, const ModelPass& b, const AnalysisReport& ra, const AnalysisReport& rb,
+ModelComparison Compare(const ErrorModel& a, const ErrorModel& b, const AnalysisReport& ra, const AnalysisReport& rb,
                         double predicted_lr);
 
 // Whether `term_name` is one of the terms `selector` (a term or a family) stands for.
 bool SelectorCovers(const std::string& selector, const std::string& term_name);
 
 // Model A's score statistic for adding `added` jointly (the likelihood ratio it predicts).
-double PredictedLikelihoodRatio(const ModelPass& a, const std::vector<std::string>& added, const Findings& found);
+double PredictedLikelihoodRatio(const ScoreTestObserver* scan, const std::vector<std::string>& added,
+                                const Findings& found);
 
 }  // namespace insdiag::engine::pipeline

@@ -13,6 +13,7 @@
 #include <absl/status/statusor.h>
 
 #include "insdiag/engine/analysis.h"
+#include "insdiag/engine/analysis_cache.h"
 #include "insdiag/kb/connection_pool.h"
 #include "insdiag/v1/analyses.pb.h"
 
@@ -34,9 +35,19 @@ bool Retryable(const absl::Status& status);
 
 // The job's analysis: the run `run_id` read from the store, the base
 // analysis and the unit type's nominal model looked up, the engine run on
-// them. `progress` receives the engine's stages.
+// them. `progress` receives the engine's stages. `cache` (may be null) keeps
+// what the next analysis of the run reuses: its preparation, and model A of
+// an Add from a base analysis (engine/analysis_cache.h).
 absl::StatusOr<engine::Analysis> RunAnalysisJob(kb::ConnectionPool& pool, const std::string& run_id,
                                                 const v1::AnalysisSpec& spec,
-                                                std::function<void(double, std::string_view)> progress);
+                                                std::function<void(double, std::string_view)> progress,
+                                                engine::AnalysisCache* cache = nullptr);
+
+// Keeps in `cache` model A of the Add the page offers on the succeeded
+// analysis `analysis_id` of run `run_id` (the request that Add sends, with
+// the analysis as its base): the Add then costs model B's pass alone.
+// FAILED_PRECONDITION where the cache no longer keeps the run's preparation.
+absl::Status KeepModelAForAdds(kb::ConnectionPool& pool, const std::string& run_id, const std::string& analysis_id,
+                               engine::AnalysisCache& cache);
 
 }  // namespace insdiag::server

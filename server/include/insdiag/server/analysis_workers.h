@@ -21,6 +21,7 @@
 #include <thread>
 #include <vector>
 
+#include "insdiag/engine/analysis_cache.h"
 #include "insdiag/kb/analysis_store.h"
 #include "insdiag/kb/connection_pool.h"
 #include "insdiag/server/metrics.h"
@@ -33,6 +34,12 @@ class AnalysisWorkers {
     int workers = 1;                                // 0: claim nothing (API only)
     std::chrono::milliseconds lease{30'000};        // a dead worker's job is taken up after this
     std::chrono::milliseconds poll{250};            // idle workers look for jobs this often
+    // What the workers keep of the runs they analysed for the next analysis
+    // of the same run (engine/analysis_cache.h). With nothing queued, a
+    // worker also computes model A of the Add the page offers on the last
+    // analysis it finished: an Add from the page then costs model B's pass.
+    // 0 keeps nothing.
+    std::size_t cache_bytes = std::size_t{512} << 20;
   };
 
   // `metrics` (may be null) counts each job's outcome and duration.
@@ -47,7 +54,8 @@ class AnalysisWorkers {
 
  private:
   void Loop(int index);
-  void RunJob(const kb::ClaimedJob& job, const std::string& owner);
+  // The job's outcome (RunJobOutcome's), counted in the metrics.
+  std::string_view RunJob(const kb::ClaimedJob& job, const std::string& owner);
   // RunJob's outcome: "succeeded", "failed", "retried" (queued again), "cancelled" or "lost".
   std::string_view RunJobOutcome(const kb::ClaimedJob& job, const std::string& owner);
   bool SleepFor(std::chrono::milliseconds duration);  // false when stopping
@@ -56,6 +64,7 @@ class AnalysisWorkers {
   Options options_;
   Metrics* metrics_;
   kb::AnalysisStore store_;
+  engine::AnalysisCache cache_;
   std::string owner_prefix_;
   std::vector<std::thread> threads_;
   std::mutex mutex_;

@@ -1,0 +1,101 @@
+// An analysis in two halves (engine/src/analysis.cc): the run's preparation,
+// which depends on the run, the a-priori inputs and the options only, and
+// what follows it from model A on. The preparation is what analyses of one
+// run share (insdiag/engine/analysis_cache.h): the samples screened, the
+// a-priori model chosen, the run condensed to its epochs.
+#pragma once
+
+#include <absl/status/statusor.h>
+
+#include <array>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "analysis/missing_effects.h"
+#include "analysis/run_context.h"
+#include "insdiag/engine/analysis.h"
+#include "insdiag/engine/decision.h"
+#include "insdiag/engine/finder/score_test.h"
+#include "insdiag/engine/ident/allan.h"
+#include "insdiag/engine/ident/static_constants.h"
+
+namespace insdiag::engine::pipeline {
+
+// The run as every stage after condensing reads it. Not movable: a
+// RunContext refers into it.
+struct PreparedRun {
+  PreparedRun() = default;
+  PreparedRun(const PreparedRun&) = delete;
+  PreparedRun& operator=(const PreparedRun&) = delete;
+
+  BenchRun run;  // screened, spikes repaired, dominant constants removed
+  // What the requested options became for this run (its update interval);
+  // `progress` left empty: each analysis brings its own.
+  AnalysisOptions options;
+  std::vector<std::array<double, 6>> reference_measurements;
+  SampleScreening screening;
+  std::optional<ident::AllanResult> allan;
+  APriori a_priori;
+  ident::RemovedConstants removed_constants;
+  ErrorModel base;  // the a-priori model with the baseline effects
+  EpochRun epochs;
+  RawSampleEvidence raw_samples;
+  ident::DriftCeilings drift_ceilings;
+  // The preparation's notes, which every report of the run starts from.
+  DecisionLog decisions;
+
+  // The context the later stages share, under `options` (this preparation's,
+  // with the caller's progress).
+  RunContext Context(const AnalysisOptions& with_progress) const {
+    return RunContext{run, epochs, reference_measurements, screening, with_progress, a_priori, raw_samples,
+                      drift_ceilings};
+  }
+  // About what the preparation holds in memory: the samples, the reference's
+  // measurements and the epochs.
+  std::size_t Bytes() const;
+};
+
+// Screens `run`, chooses the a-priori model from `request.nominal`, adds
+// `request.baseline_effects` and condenses the run.
+absl::StatusOr<std::unique_ptr<PreparedRun>> PrepareRun(BenchRun&& run, const AnalysisRequest& request,
+                                                        const AnalysisOptions& options);
+
+// What an Add reads of model A besides its report: the model, its
+// missing-effect scan's score and information (the added effects' priors and
+// the likelihood ratio predicted for them), and what the scan found.
+struct ModelAOutcome {
+  ErrorModel model;
+  std::unique_ptr<ScoreTestObserver> scan;
+  Findings found;
+  AnalysisReport report;
+  std::vector<ParameterEstimate> identified;
+  DecisionLog decisions;
+  std::size_t Bytes() const;
+};
+
+// Where an analysis from an earlier one's model A (AnalysisRequest::
+// identified_base) finds model A's outcome, and leaves it for the next.
+class ModelAOutcomes {
+ public:
+  virtual ~ModelAOutcomes() = default;
+  // Model A's outcome for this request's identified base, null if none is kept.
+  virtual std::shared_ptr<const ModelAOutcome> Find() const = 0;
+  virtual void Keep(std::shared_ptr<const ModelAOutcome> outcome) = 0;
+};
+
+// Model A's outcome for an Add: `outcomes`' where it keeps one for the
+// request's identified base, else computed (and kept there, where given).
+absl::StatusOr<std::shared_ptr<const ModelAOutcome>> ModelAOutcomeOf(const PreparedRun& prepared,
+                                                                     const AnalysisRequest& request,
+                                                                     const AnalysisOptions& options,
+                                                                     ModelAOutcomes* outcomes);
+
+// The analysis of a prepared run: identification (or model A taken from
+// `request.identified_base`), model A's scan, then the loop's step asked for.
+// `outcomes`, where given, serves and keeps model A of an Add from an
+// identified base.
+absl::StatusOr<Analysis> AnalyzePrepared(const PreparedRun& prepared, const AnalysisRequest& request,
+                                         const AnalysisOptions& options, ModelAOutcomes* outcomes);
+
+}  // namespace insdiag::engine::pipeline

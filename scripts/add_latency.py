@@ -1,0 +1,103 @@
+#!/usr/bin/env python3
+"""What the page's Add costs on a server, measured on this machine
+(docs/PERFORMANCE.md, "An Add on the server").
+
+Starts an insdiagd of its own (embedded PostgreSQL in a temporary
+directory, loopback only, one worker), uploads RUN.csv, analyses it (model
+A), then asks for the Adds the page would send (`baseAnalysis` and one
+effect each), one at a time, --pause seconds after the last ended. Prints each job's time from claim to end (the
+server's insdiag_analysis_duration_seconds) and what the client waited from
+POST to SUCCEEDED.
+
+Usage: scripts/add_latency.py RUN.csv [--effects E1,E2,...] [--cache-mb N] [--build-dir DIR]
+"""
+import argparse
+import http.client
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import uuid
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+from scaling_benchmark import call  # noqa: E402
+
+
+def job_seconds(conn, token):
+    """The sum of every ended job's claim-to-end time so far."""
+    status, body = call(conn, token, "GET", "/metrics")
+    assert status == 200, body
+    total = 0.0
+    for line in body.decode().splitlines():
+        m = re.match(r'insdiag_analysis_duration_seconds_sum\{outcome="succeeded"\} ([0-9.e+-]+)', line)
+        if m:
+            total += float(m.group(1))
+    return total
+
+
+def analyse(conn, token, analysis):
+    """Queues `analysis`, waits for it; (client wait s, job s, name)."""
+    before = job_seconds(conn, token)
+    start = time.monotonic()
+    status, body = call(conn, token, "POST", "/v1/analyses", json.dumps(analysis))
+    assert status == 200, body
+    name = json.loads(body)["name"]
+    while True:
+        status, body = call(conn, token, "GET", f"/v1/{name}")
+        state = json.loads(body)["state"]
+        if state == "SUCCEEDED":
+            break
+        if state in ("FAILED", "CANCELLED"):
+            sys.exit(f"{name} {state}: {body[:2000]}")
+        time.sleep(0.01)
+    waited = time.monotonic() - start
+    return waited, job_seconds(conn, token) - before, name
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("run")
+    parser.add_argument("--effects", default="gyro_scale_factor.z,gyro_scale_factor.x,acc_scale_factor.z")
+    parser.add_argument("--cache-mb", type=int, default=None, help="--analysis-cache-mb (default: the server's)")
+    parser.add_argument("--pause", type=float, default=2.0,
+                        help="seconds between an analysis ending and the next Add: the user reading the report")
+    parser.add_argument("--build-dir", default=os.path.join(ROOT, "build"))
+    args = parser.parse_args()
+    work = tempfile.mkdtemp(prefix="insdiag-add-")
+    os.chmod(work, 0o755)  # the embedded PostgreSQL runs as its own user when started as root
+    log = open(os.path.join(work, "insdiagd.log"), "w")
+    command = [f"{args.build_dir}/server/insdiagd", "--data-dir", os.path.join(work, "data"), "--grpc-port", "0",
+               "--http-port", "0", "--bind", "127.0.0.1", "--workers", "1", "--fleet-refresh-seconds", "0"]
+    if args.cache_mb is not None:
+        command += ["--analysis-cache-mb", str(args.cache_mb)]
+    server = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=log, text=True)
+    try:
+        line = server.stdout.readline()
+        if "listening" not in line:
+            sys.exit(f"insdiagd did not start: {open(log.name).read()[-2000:]}")
+        port = int(line.split(" http=")[1].split()[0].rsplit(":", 1)[1])
+        token = open(os.path.join(work, "data", "admin-token")).read().strip()
+        conn = http.client.HTTPConnection("127.0.0.1", port, timeout=600)
+        status, body = call(conn, token, "POST", f"/v1/runs:upload?requestId={uuid.uuid4()}",
+                            open(args.run, "rb").read(), "text/csv")
+        assert status == 200, body
+        run = json.loads(body)["name"]
+        waited, job, base = analyse(conn, token, {"run": run})
+        print(f"model A      job {job:6.2f} s  waited {waited:6.2f} s")
+        for effect in args.effects.split(","):
+            time.sleep(args.pause)
+            waited, job, _ = analyse(conn, token, {"run": run, "baseAnalysis": base, "model": {"effects": [effect]}})
+            print(f"add {effect:<22} job {job:6.2f} s  waited {waited:6.2f} s", flush=True)
+    finally:
+        server.terminate()
+        server.wait(120)
+        shutil.rmtree(work, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()
