@@ -78,6 +78,7 @@ class AnalysisCache::Impl::EntryModelAOutcomes final : public pipeline::ModelAOu
     if (entry == cache_.entries.end() || entry->models_a.contains(base_)) return;
     const std::size_t added = outcome->Bytes();
     entry->models_a.emplace(base_, std::move(outcome));
+    ++cache_.counts.models_a_kept;
     entry->bytes += added;
     cache_.bytes += added;
     cache_.Trim();

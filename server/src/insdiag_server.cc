@@ -64,6 +64,12 @@ struct InsdiagServer::Services {
     gauges.pool_open = usage.open;
     gauges.pool_idle = usage.idle;
     gauges.pool_max = usage.max;
+    const engine::AnalysisCache::Counts cache = workers.cache_counts();
+    gauges.analysis_cache_bytes = workers.cache_bytes();
+    gauges.preparations_made = cache.preparations_made;
+    gauges.preparations_reused = cache.preparations_reused;
+    gauges.models_a_kept = cache.models_a_kept;
+    gauges.models_a_reused = cache.models_a_reused;
     return metrics.Render(gauges);
   }
   kb::ConnectionPool& connection_pool;

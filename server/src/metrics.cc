@@ -158,6 +158,17 @@ std::string Metrics::Render(const Gauges& gauges) const {
   absl::StrAppend(&out, "insdiag_database_connections{state=\"open\"} ", gauges.pool_open, "\n");
   absl::StrAppend(&out, "insdiag_database_connections{state=\"idle\"} ", gauges.pool_idle, "\n");
   absl::StrAppend(&out, "insdiag_database_connections{state=\"max\"} ", gauges.pool_max, "\n");
+  Header(out, "insdiag_analysis_cache_bytes", "gauge", "what the workers keep of analysed runs for the next analysis");
+  absl::StrAppend(&out, "insdiag_analysis_cache_bytes ", gauges.analysis_cache_bytes, "\n");
+  Header(out, "insdiag_analysis_cache_made_total", "counter",
+         "runs prepared (screened, condensed) and models A of an Add computed, by part");
+  absl::StrAppend(&out, "insdiag_analysis_cache_made_total{part=\"preparation\"} ", gauges.preparations_made, "\n");
+  absl::StrAppend(&out, "insdiag_analysis_cache_made_total{part=\"model_a\"} ", gauges.models_a_kept, "\n");
+  Header(out, "insdiag_analysis_cache_reused_total", "counter",
+         "analyses that took a run's preparation or an Add's model A from the cache, by part");
+  absl::StrAppend(&out, "insdiag_analysis_cache_reused_total{part=\"preparation\"} ", gauges.preparations_reused,
+                  "\n");
+  absl::StrAppend(&out, "insdiag_analysis_cache_reused_total{part=\"model_a\"} ", gauges.models_a_reused, "\n");
   return out;
 }
 

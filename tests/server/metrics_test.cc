@@ -70,6 +70,31 @@ class MetricsTest : public ServerTest {
     const auto it = s.samples.find(name);
     return it == s.samples.end() ? 0.0 : it->second;
   }
+
+  // `asked` created, then read until it ends (three minutes at most).
+  v1::Analysis Ended(const v1::Analysis& asked) {
+    auto analyses = v1::AnalysisService::NewStub(channel());
+    v1::CreateAnalysisRequest create;
+    *create.mutable_analysis() = asked;
+    v1::Analysis analysis;
+    {
+      grpc::ClientContext context;
+      EXPECT_TRUE(analyses->CreateAnalysis(&context, create, &analysis).ok());
+    }
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(3);
+    while (analysis.state() == v1::Analysis::QUEUED || analysis.state() == v1::Analysis::RUNNING) {
+      if (std::chrono::steady_clock::now() > deadline) {
+        ADD_FAILURE() << "the analysis did not end";
+        break;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+      grpc::ClientContext context;
+      v1::GetAnalysisRequest get;
+      get.set_name(analysis.name());
+      EXPECT_TRUE(analyses->GetAnalysis(&context, get, &analysis).ok());
+    }
+    return analysis;
+  }
 };
 
 TEST_F(MetricsTest, AnswersOnlyAValidTokenAndAnyRoleReadsIt) {
@@ -164,23 +189,9 @@ TEST_F(MetricsTest, AnAnalysisJobCountsByItsOutcomeWithItsDuration) {
   viewer.set_bearer_token_auth(MakeToken(pool(), v1::VIEWER).c_str());
   auto run = client::UploadRun(runs(), SyntheticStaticRun(30000, 50.0, 5), client::UploadOptions{});
   ASSERT_TRUE(run.ok()) << run.status();
-  auto analyses = v1::AnalysisService::NewStub(channel());
-  v1::CreateAnalysisRequest create;
-  create.mutable_analysis()->set_run(run->name());
-  v1::Analysis analysis;
-  {
-    grpc::ClientContext context;
-    ASSERT_TRUE(analyses->CreateAnalysis(&context, create, &analysis).ok());
-  }
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(3);
-  while (analysis.state() == v1::Analysis::QUEUED || analysis.state() == v1::Analysis::RUNNING) {
-    ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "the analysis did not end";
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    grpc::ClientContext context;
-    v1::GetAnalysisRequest get;
-    get.set_name(analysis.name());
-    ASSERT_TRUE(analyses->GetAnalysis(&context, get, &analysis).ok());
-  }
+  v1::Analysis asked;
+  asked.set_run(run->name());
+  const v1::Analysis analysis = Ended(asked);
   ASSERT_EQ(analysis.state(), v1::Analysis::SUCCEEDED) << analysis.error().message();
   const std::string outcome = "succeeded";
   // The job's count is written after its state: wait for it briefly.
@@ -195,6 +206,41 @@ TEST_F(MetricsTest, AnAnalysisJobCountsByItsOutcomeWithItsDuration) {
   EXPECT_GT(Sample(s, "insdiag_analysis_duration_seconds_sum{outcome=\"" + outcome + "\"}"), 0.0);
   EXPECT_EQ(Sample(s, "insdiag_jobs_queued"), 0.0);
   EXPECT_EQ(Sample(s, "insdiag_jobs_running"), 0.0);
+}
+
+// The page's Add on an analysis: the worker, with nothing queued, kept model
+// A of that Add, and the Add runs on the run's preparation and that model A.
+TEST_F(MetricsTest, ThePagesAddTakesTheRunsPreparationAndAModelAKeptWhileTheWorkerWasIdle) {
+  httplib::Client viewer("127.0.0.1", server_->http_port());
+  viewer.set_bearer_token_auth(MakeToken(pool(), v1::VIEWER).c_str());
+  auto run = client::UploadRun(runs(), SyntheticStaticRun(6000, 50.0, 7), client::UploadOptions{});
+  ASSERT_TRUE(run.ok()) << run.status();
+  v1::Analysis asked;
+  asked.set_run(run->name());
+  const v1::Analysis a = Ended(asked);
+  ASSERT_EQ(a.state(), v1::Analysis::SUCCEEDED) << a.error().message();
+  Scrape idle = Get(viewer);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (Sample(idle, "insdiag_analysis_cache_made_total{part=\"model_a\"}") < 1.0 &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    idle = Get(viewer);
+  }
+  EXPECT_EQ(Sample(idle, "insdiag_analysis_cache_made_total{part=\"model_a\"}"), 1.0);
+  EXPECT_EQ(Sample(idle, "insdiag_analysis_cache_made_total{part=\"preparation\"}"), 1.0);
+  EXPECT_GT(Sample(idle, "insdiag_analysis_cache_bytes"), 6000.0 * 80.0) << "the samples at least";
+
+  asked.set_base_analysis(a.name());
+  asked.mutable_model()->add_effects("gyro_scale_factor.z");
+  const v1::Analysis b = Ended(asked);
+  ASSERT_EQ(b.state(), v1::Analysis::SUCCEEDED) << b.error().message();
+  ASSERT_TRUE(b.report().has_comparison());
+  const Scrape after = Get(viewer);
+  EXPECT_EQ(Sample(after, "insdiag_analysis_cache_made_total{part=\"preparation\"}"), 1.0);
+  EXPECT_EQ(Sample(after, "insdiag_analysis_cache_reused_total{part=\"model_a\"}"), 1.0);
+  EXPECT_EQ(Sample(after, "insdiag_analysis_cache_reused_total{part=\"preparation\"}"), 2.0)
+      << "model A kept while idle, then the Add";
+  EXPECT_EQ(after.types.at("insdiag_analysis_cache_reused_total"), "counter");
 }
 
 // With no worker to take it, a queued analysis shows in the queue's gauges:

@@ -42,6 +42,7 @@ class AnalysisCache {
   struct Counts {
     int64_t preparations_reused = 0;
     int64_t preparations_made = 0;
+    int64_t models_a_kept = 0;
     int64_t models_a_reused = 0;
   };
 

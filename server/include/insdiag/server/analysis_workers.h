@@ -52,6 +52,10 @@ class AnalysisWorkers {
   // "host:pid:index" of worker `index`: the lease owner written to the row.
   std::string OwnerName(int index) const;
 
+  // What the workers' cache holds and how often it served.
+  engine::AnalysisCache::Counts cache_counts() const { return cache_.counts(); }
+  std::size_t cache_bytes() const { return cache_.bytes(); }
+
  private:
   void Loop(int index);
   // The job's outcome (RunJobOutcome's), counted in the metrics.

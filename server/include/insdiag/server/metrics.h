@@ -1,7 +1,8 @@
 // What operations watch, in the Prometheus text exposition format (0.0.4):
 // calls by method and status with their latency, HTTP requests by method and
 // status with their latency, analyses by outcome with their duration, and,
-// read when scraped, the job queue and the database pool.
+// read when scraped, the job queue, the database pool and the workers'
+// analysis cache.
 //
 // Served at GET /metrics (rest_gateway.h) to any valid token: a scraper
 // holds a VIEWER token (Prometheus: `authorization: {credentials: …}`).
@@ -37,6 +38,9 @@ class Metrics {
     std::int64_t running = 0;
     double oldest_queued_age_s = 0.0;
     std::size_t pool_open = 0, pool_idle = 0, pool_max = 0;
+    // The workers' analysis cache (analysis_workers.h).
+    std::size_t analysis_cache_bytes = 0;
+    std::int64_t preparations_made = 0, preparations_reused = 0, models_a_kept = 0, models_a_reused = 0;
   };
   std::string Render(const Gauges& gauges) const;
 
