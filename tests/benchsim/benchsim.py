@@ -175,7 +175,17 @@ def write_csv(config, datasheet, times, measured, ref_roll, ref_pitch, ref_yaw):
     table = np.column_stack([times, measured["gyro"], measured["acc"], ref_roll, ref_pitch, ref_yaw])
     with open(config["out"], "w") as f:
         f.write("\n".join(lines) + "\n")
-        np.savetxt(f, table, fmt=["%.6f"] + ["%.12g"] * 9, delimiter=",")
+        write_rows(f, table, ["%.6f"] + ["%.12g"] * 9)
+
+
+def write_rows(f, table, fmt, rows_per_chunk=20000):
+    """The text np.savetxt(f, table, fmt=fmt, delimiter=",") writes, byte for
+    byte: each row is `",".join(fmt) % row`, but formatted a chunk of rows at
+    a time, not row by row in Python (a third of a 100 Hz run's simulation)."""
+    row = ",".join(fmt) + "\n"
+    for start in range(0, len(table), rows_per_chunk):
+        chunk = table[start:start + rows_per_chunk]
+        f.write((row * len(chunk)) % tuple(chunk.ravel().tolist()))
 
 
 def main(argv=None):

@@ -22,23 +22,8 @@
 namespace insdiag::engine::ident {
 namespace {
 
-TEST(NoiseRetuneTest, RealRecordNisNearOne) {
-  // The real ring-laser-gyro record (data/real), imported by the build (tests/CMakeLists.txt).
-  const std::string path = INSDIAG_REAL_RECORD_CSV;
-  auto run = benchrun::ReadBenchRunFile(path);
-  ASSERT_TRUE(run.ok()) << run.status();
-  auto a = Analyze(*run, AnalysisRequest{}, AnalysisOptions{});
-  ASSERT_TRUE(a.ok()) << a.status();
-  std::printf("NIS mean %.3f\n", a->report.fit.nis_mean);
-  bool retuned = false;
-  for (const Decision& d : a->report.decisions) {
-    if (d.kind != DecisionKind::kNoiseRetuned) continue;
-    retuned = true;
-    std::printf("%s\n", RenderNote(d).c_str());
-  }
-  EXPECT_TRUE(retuned);
-  EXPECT_NEAR(a->report.fit.nis_mean, 1.0, 0.2);
-}
+// NoiseRetuneTest.RealRecordNisNearOne, the re-tuning on the real record, is in
+// real_records_test.cc, beside the other test that analyses that record.
 
 // The maximum-likelihood re-tuning of noise terms set from Allan bounds
 // (retarget.h), on simulated runs of known truth: the white densities of
