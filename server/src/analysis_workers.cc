@@ -100,8 +100,17 @@ void AnalysisWorkers::Stop() {
 
 bool AnalysisWorkers::SleepFor(std::chrono::milliseconds duration) {
   std::unique_lock lock(mutex_);
-  wake_.wait_for(lock, duration, [this] { return stopping_; });
+  const std::uint64_t seen = wakes_;
+  wake_.wait_for(lock, duration, [&] { return stopping_ || wakes_ != seen; });
   return !stopping_;
+}
+
+void AnalysisWorkers::Wake() {
+  {
+    std::lock_guard lock(mutex_);
+    ++wakes_;
+  }
+  wake_.notify_all();
 }
 
 void AnalysisWorkers::Loop(int index) {

@@ -43,7 +43,7 @@ struct InsdiagServer::Services {
   Services(kb::ConnectionPool& pool, const Options& options)
       : connection_pool(pool), access_store(pool), guard(access_store), access(access_store), access_grpc(access, guard), store(pool, options.read_pool),
         runs(store, RunService::Options{options.max_upload_samples}), runs_grpc(runs, guard), analysis_store(pool, options.read_pool),
-        analyses(analysis_store, AnalysisService::Options{options.watch_poll}),
+        analyses(analysis_store, AnalysisService::Options{options.watch_poll, [this] { workers.Wake(); }}),
         catalogue_store(pool, options.read_pool), failure_record_store(pool, kb::DecodeReportFindings, options.read_pool),
         diagnosis_store(pool, kb::DecodeReportFindings, options.read_pool), unit_history_store(pool, options.read_pool),
         knowledge(catalogue_store, failure_record_store, diagnosis_store, unit_history_store), knowledge_grpc(knowledge, guard),

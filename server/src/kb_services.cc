@@ -57,6 +57,7 @@ absl::StatusOr<v1::Analysis> AnalysisService::CreateAnalysis(const v1::CreateAna
     INSDIAG_RETURN_IF_ERROR(CheckBaseAnalysis(request.analysis(), spec));
   }
   INSDIAG_ASSIGN_OR_RETURN(auto created, store_.Create(run_id, EncodedSpec(spec), request.request_id()));
+  if (options_.queued) options_.queued();
   return ToProto(created);
 }
 

@@ -14,6 +14,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdint>
 #include <condition_variable>
 #include <mutex>
 #include <string>
@@ -48,6 +49,8 @@ class AnalysisWorkers {
   void Start();
   // Stops claiming; waits for running analyses to finish.
   void Stop();
+  // A job was queued: idle workers look for it now, not at their next poll.
+  void Wake();
 
   // "host:pid:index" of worker `index`: the lease owner written to the row.
   std::string OwnerName(int index) const;
@@ -74,6 +77,7 @@ class AnalysisWorkers {
   std::mutex mutex_;
   std::condition_variable wake_;
   bool stopping_ = false;
+  std::uint64_t wakes_ = 0;  // Wake() calls so far
   bool started_ = false;
 };
 

@@ -32,6 +32,9 @@ class AnalysisService {
     // WatchAnalysis polls the row this often: it sees jobs run by any
     // insdiagd on the database.
     std::chrono::milliseconds watch_poll{250};
+    // Called once a job is queued: this process's idle workers take it now
+    // rather than at their next poll (null: nothing to tell).
+    std::function<void()> queued;
   };
   AnalysisService(kb::AnalysisStore& store, Options options) : store_(store), options_(options) {}
 
