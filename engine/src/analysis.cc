@@ -504,30 +504,32 @@ struct ModelA {
 
 absl::StatusOr<ModelA> RunModelA(const pipeline::PreparedRun& prepared, const pipeline::RunContext& context,
                                  const AnalysisRequest& request) {
-  DecisionLog decisions = prepared.decisions;
+  DecisionLog decisions = prepared.screened->decisions;
   pipeline::Identification identification;
   identification.model = prepared.base;
   if (request.identified_base.has_value()) {
     identification = IdentifiedEarlier(*request.identified_base, identification.model, decisions);
   } else if (context.options.identify) {
-    auto identified = pipeline::IdentifyModel(context, prepared.allan, identification.model, decisions);
+    auto identified = pipeline::IdentifyModel(context, prepared.screened->allan, identification.model, decisions);
     if (!identified.ok()) return identified.status();
     identification = *std::move(identified);
   }
   auto scanned = ScanModelA(context, request, identification, decisions);
   if (!scanned.ok()) return scanned.status();
   ModelA a{*std::move(scanned), {}, std::move(identification.identified), {}};
-  a.identified.insert(a.identified.begin(), prepared.removed_constants.estimates.begin(),
-                      prepared.removed_constants.estimates.end());
+  const ident::RemovedConstants& removed = prepared.screened->removed_constants;
+  a.identified.insert(a.identified.begin(), removed.estimates.begin(), removed.estimates.end());
   a.report = pipeline::ReportOf(context, a.scanned.pass, a.scanned.found, a.identified, decisions);
   a.decisions = std::move(decisions);
   return a;
 }
 
-// What an Add reads of model A: its pass reduced to the model and the scan.
+// What an Add reads of model A: its pass reduced to the model and the scan
+// (with the states the scan refers to).
 std::shared_ptr<const pipeline::ModelAOutcome> OutcomeOf(ModelA a) {
   auto out = std::make_shared<pipeline::ModelAOutcome>();
   out->model = std::move(a.scanned.pass.model);
+  out->layout = std::move(a.scanned.pass.layout);
   out->scan = std::move(a.scanned.pass.scan);
   out->found = std::move(a.scanned.found);
   out->report = std::move(a.report);
@@ -537,16 +539,18 @@ std::shared_ptr<const pipeline::ModelAOutcome> OutcomeOf(ModelA a) {
 }
 
 // Model A's outcome for an Add from the request's identified base as
-// `outcomes` keeps it, if it is of the model this analysis would identify.
+// `outcomes` keeps it. The caller's key names the base; the model this
+// analysis would start from checks that it names the same one.
 std::shared_ptr<const pipeline::ModelAOutcome> KeptModelA(const pipeline::PreparedRun& prepared,
                                                           const AnalysisRequest& request,
-                                                          const pipeline::ModelAOutcomes* outcomes) {
+                                                          pipeline::ModelAOutcomes* outcomes) {
   if (outcomes == nullptr || !request.identified_base.has_value()) return nullptr;
   auto kept = outcomes->Find();
   DecisionLog unused;
   if (kept == nullptr || !(kept->model == IdentifiedEarlier(*request.identified_base, prepared.base, unused).model)) {
     return nullptr;
   }
+  outcomes->Reused();
   return kept;
 }
 
@@ -554,16 +558,37 @@ std::shared_ptr<const pipeline::ModelAOutcome> KeptModelA(const pipeline::Prepar
 
 namespace pipeline {
 
+namespace {
+
+// The condensation's pilot: the a-priori model with the request's baseline effects.
+absl::StatusOr<ErrorModel> PilotModel(const ScreenedRun& s, const AnalysisRequest& request) {
+  ErrorModel base = s.a_priori.model;
+  if (auto st = AddEffects(s.run, request.baseline_effects, s.options.filter.update_interval_s,
+                           s.options.diffuse_prior_scale, base);
+      !st.ok()) {
+    return st;
+  }
+  return base;
+}
+
+}  // namespace
+
 std::size_t PreparedRun::Bytes() const {
   const double epochs_bytes = epochs.BytesPerEpoch() * epochs.size();
-  return run.samples.size() * (sizeof(ImuSample) + sizeof(reference_measurements[0])) +
+  return screened->run.samples.size() * (sizeof(ImuSample) + sizeof(screened->reference_measurements[0])) +
          static_cast<std::size_t>(epochs_bytes);
 }
 
 std::size_t ModelAOutcome::Bytes() const {
-  // The scan's n × p sensitivity and p × p information dominate.
-  const std::size_t columns = scan != nullptr ? scan->columns().size() : 0;
-  return sizeof(ModelAOutcome) + columns * columns * sizeof(double) * 4 +
+  // The scan's n × p sensitivity, p × p information and per-segment scores;
+  // the report's candidates.
+  const std::size_t p = scan != nullptr ? scan->columns().size() : 0;
+  const std::size_t n = layout != nullptr ? static_cast<std::size_t>(layout->size()) : 0;
+  std::size_t segment_scores = 0;
+  if (scan != nullptr) {
+    for (const Eigen::MatrixXd& m : scan->score_by_segment()) segment_scores += static_cast<std::size_t>(m.size());
+  }
+  return sizeof(ModelAOutcome) + (n * p + p * p + p + segment_scores) * sizeof(double) +
          (report.effect_candidates.size() + found.candidates.size()) * sizeof(EffectCandidate) * 2;
 }
 
@@ -571,47 +596,45 @@ absl::StatusOr<std::unique_ptr<PreparedRun>> PrepareRun(BenchRun&& input, const 
                                                         const AnalysisOptions& requested_options) {
   if (auto st = requested_options.Validate(); !st.ok()) return st;
   if (input.samples.size() < 2) return absl::InvalidArgumentError("the run has fewer than two samples");
-  auto prepared = std::make_unique<PreparedRun>();
-  PreparedRun& p = *prepared;
-  DecisionLog& decisions = p.decisions;
-  p.options = WithTheRunsUpdateInterval(requested_options, input, decisions);
-  const AnalysisOptions& options = p.options;
+  auto screened = std::make_shared<ScreenedRun>();
+  ScreenedRun& s = *screened;
+  DecisionLog& decisions = s.decisions;
+  s.options = WithTheRunsUpdateInterval(requested_options, input, decisions);
+  const AnalysisOptions& options = s.options;
 
   Progress(options, 0.0, "screening samples");
   // The samples are screened and their dominant constants removed in place:
   // the report quotes them as recorded through RecordedSamples.
-  p.run = std::move(input);
-  BenchRun& run = p.run;
+  s.run = std::move(input);
+  BenchRun& run = s.run;
   // The table's motion within each sample: the screen and the condensation
   // both need it, and it depends on the reference alone (screening and the
   // constants removed below change the sensors' samples only).
   const nav::RunCompensations compensations(run);
-  p.reference_measurements = ReferenceMeasurements(run, compensations);
+  s.reference_measurements = ReferenceMeasurements(run, compensations);
   // The bench's motion from the samples with their spikes repaired: a
   // transmission error is one sample, a move many. A departure inside a
   // stretch where the bench moved is the motion itself: it is kept as
   // recorded, for the mechanisation to follow.
-  SampleScreening& screening = p.screening;
-  screening.spikes = ScreenAndRepairSpikes(run, p.reference_measurements, options.screening);
-  screening.bench_motion = FindBenchMotion(run, p.reference_measurements, options.filter.update_interval_s,
+  SampleScreening& screening = s.screening;
+  screening.spikes = ScreenAndRepairSpikes(run, s.reference_measurements, options.screening);
+  screening.bench_motion = FindBenchMotion(run, s.reference_measurements, options.filter.update_interval_s,
                                            options.monitor.family_wise_alpha);
   KeepTheMotionAsRecorded(screening, run);
 
   Progress(options, 0.05, "Allan deviation and the run condensed to its epochs");
-  auto a_priori = ChooseAPrioriModel(run, request, p.allan, options, decisions);
+  auto a_priori = ChooseAPrioriModel(run, request, s.allan, options, decisions);
   if (!a_priori.ok()) return a_priori.status();
-  p.a_priori = *std::move(a_priori);
-  MeasureAttitudeReadout(run, p.a_priori.model, decisions);
-  NoteUnsurveyedHeading(run, p.a_priori.model, decisions);
+  s.a_priori = *std::move(a_priori);
+  MeasureAttitudeReadout(run, s.a_priori.model, decisions);
+  NoteUnsurveyedHeading(run, s.a_priori.model, decisions);
   if (options.remove_dominant_constants) {
-    p.removed_constants = RemoveDominantConstants(run, p.allan, p.a_priori, options, decisions);
+    s.removed_constants = RemoveDominantConstants(run, s.allan, s.a_priori, options, decisions);
   }
-  p.base = p.a_priori.model;
-  if (auto st = AddEffects(run, request.baseline_effects, options.filter.update_interval_s,
-                           options.diffuse_prior_scale, p.base);
-      !st.ok()) {
-    return st;
-  }
+  auto prepared = std::make_unique<PreparedRun>();
+  auto base = PilotModel(s, request);
+  if (!base.ok()) return base.status();
+  prepared->base = *std::move(base);
 
   // The run condensed to its update epochs once: every pass below filters the
   // epochs. Beside it, the Allan analysis, where the a-priori model did not
@@ -620,19 +643,35 @@ absl::StatusOr<std::unique_ptr<PreparedRun>> PrepareRun(BenchRun&& input, const 
   absl::StatusOr<EpochRun> epochs;
   DecisionLog allan_notes;
   numerics::InParallel(
-      [&] { epochs = CondenseRun(run, p.base, options.filter.update_interval_s, &compensations); },
+      [&] { epochs = CondenseRun(run, prepared->base, options.filter.update_interval_s, &compensations); },
       [&] {
-        if (p.a_priori.FromDatasheet()) p.allan = AllanOfStaticSegments(run, options, allan_notes);
+        if (s.a_priori.FromDatasheet()) s.allan = AllanOfStaticSegments(run, options, allan_notes);
       });
   decisions.Append(allan_notes);
   if (!epochs.ok()) return epochs.status();
-  p.epochs = *std::move(epochs);
-  p.a_priori.counted_quantisation = CountedQuantisationOf(p.allan);
-  p.raw_samples = RawSampleEvidenceOf(run, p.allan, p.a_priori.model, options);
-  p.drift_ceilings = p.allan.has_value()
-                         ? ident::DriftCeilings::FromAllan(*p.allan, options.monitor.family_wise_alpha)
+  prepared->epochs = *std::move(epochs);
+  s.a_priori.counted_quantisation = CountedQuantisationOf(s.allan);
+  s.raw_samples = RawSampleEvidenceOf(run, s.allan, s.a_priori.model, options);
+  s.drift_ceilings = s.allan.has_value()
+                         ? ident::DriftCeilings::FromAllan(*s.allan, options.monitor.family_wise_alpha)
                          : ident::DriftCeilings{};
-  p.options.progress = nullptr;
+  s.options.progress = nullptr;
+  prepared->screened = std::move(screened);
+  return prepared;
+}
+
+absl::StatusOr<std::unique_ptr<PreparedRun>> PrepareRun(std::shared_ptr<const ScreenedRun> screened,
+                                                        const AnalysisRequest& request) {
+  auto prepared = std::make_unique<PreparedRun>();
+  auto base = PilotModel(*screened, request);
+  if (!base.ok()) return base.status();
+  prepared->base = *std::move(base);
+  const BenchRun& run = screened->run;
+  const nav::RunCompensations compensations(run);
+  auto epochs = CondenseRun(run, prepared->base, screened->options.filter.update_interval_s, &compensations);
+  if (!epochs.ok()) return epochs.status();
+  prepared->epochs = *std::move(epochs);
+  prepared->screened = std::move(screened);
   return prepared;
 }
 
@@ -641,8 +680,7 @@ absl::StatusOr<std::shared_ptr<const ModelAOutcome>> ModelAOutcomeOf(const Prepa
                                                                      const AnalysisOptions& requested_options,
                                                                      ModelAOutcomes* outcomes) {
   if (auto kept = KeptModelA(prepared, request, outcomes); kept != nullptr) return kept;
-  AnalysisOptions options = prepared.options;
-  options.progress = requested_options.progress;
+  const AnalysisOptions options = prepared.OptionsFor(requested_options);
   auto a = RunModelA(prepared, prepared.Context(options), request);
   if (!a.ok()) return a.status();
   std::shared_ptr<const ModelAOutcome> outcome = OutcomeOf(*std::move(a));
@@ -652,8 +690,7 @@ absl::StatusOr<std::shared_ptr<const ModelAOutcome>> ModelAOutcomeOf(const Prepa
 
 absl::StatusOr<Analysis> AnalyzePrepared(const PreparedRun& prepared, const AnalysisRequest& request,
                                          const AnalysisOptions& requested_options, ModelAOutcomes* outcomes) {
-  AnalysisOptions options = prepared.options;
-  options.progress = requested_options.progress;
+  const AnalysisOptions options = prepared.OptionsFor(requested_options);
   const RunContext context = prepared.Context(options);
   absl::StatusOr<Analysis> out;
   if (!request.discover && !request.add_effects.empty()) {
@@ -675,9 +712,10 @@ absl::StatusOr<Analysis> AnalyzePrepared(const PreparedRun& prepared, const Anal
                            : ModelAOrItsStartExplained(context, std::move(model_a));
   }
   if (!out.ok()) return out.status();
-  out->report.allan = prepared.allan;
-  const RecordedSamples recorded{prepared.run, prepared.removed_constants.gyro_rad_s,
-                                 prepared.removed_constants.acc_mps2, prepared.screening.spikes};
+  const ScreenedRun& screened = *prepared.screened;
+  out->report.allan = screened.allan;
+  const RecordedSamples recorded{screened.run, screened.removed_constants.gyro_rad_s,
+                                 screened.removed_constants.acc_mps2, screened.screening.spikes};
   out->report.plain_words = PlainWordsVerdict(out->report, recorded, options.monitor.family_wise_alpha);
   Progress(options, 1.0, "done");
   return out;

@@ -1,6 +1,5 @@
 #include "insdiag/engine/analysis_cache.h"
 
-#include <iterator>
 #include <list>
 #include <map>
 #include <mutex>
@@ -12,7 +11,7 @@
 namespace insdiag::engine {
 
 struct AnalysisCache::Impl {
-  // One run's preparation for one set of a-priori inputs, and model A's
+  // One run's preparation for one nominal model and baseline, and model A's
   // outcome for each identified base an Add started from.
   struct Entry {
     std::string run;
@@ -37,6 +36,27 @@ struct AnalysisCache::Impl {
     return entries.end();
   }
 
+  // The run screened for this nominal model under any baseline; null if
+  // none is kept. Under `mutex`.
+  std::shared_ptr<const pipeline::ScreenedRun> FindScreened(const std::string& run,
+                                                            const AnalysisRequest& request) const {
+    for (const Entry& e : entries) {
+      if (e.run == run && e.nominal == request.nominal) return e.prepared->screened;
+    }
+    return nullptr;
+  }
+
+  // Keeps `prepared` unless an entry for the same inputs came first or it
+  // exceeds the whole bound. Under `mutex`.
+  void KeepPrepared(const std::string& run, const AnalysisRequest& request,
+                    std::shared_ptr<const pipeline::PreparedRun> prepared) {
+    const std::size_t size = prepared->Bytes();
+    if (size > capacity_bytes || Find(run, request) != entries.end()) return;
+    entries.push_front({run, request.nominal, request.baseline_effects, std::move(prepared), {}, size});
+    bytes += size;
+    Trim();
+  }
+
   // Drops the least recently used entries until the bound holds. Under `mutex`.
   void Trim() {
     while (bytes > capacity_bytes && !entries.empty()) {
@@ -58,8 +78,7 @@ struct AnalysisCache::Impl {
 // each use: the entry may have left the cache meanwhile.
 class AnalysisCache::Impl::EntryModelAOutcomes final : public pipeline::ModelAOutcomes {
  public:
-  EntryModelAOutcomes(Impl& cache, std::string run, const AnalysisRequest& request,
-                      std::string identified_base)
+  EntryModelAOutcomes(Impl& cache, std::string run, const AnalysisRequest& request, std::string identified_base)
       : cache_(cache), run_(std::move(run)), request_(request), base_(std::move(identified_base)) {}
 
   std::shared_ptr<const pipeline::ModelAOutcome> Find() const override {
@@ -67,20 +86,26 @@ class AnalysisCache::Impl::EntryModelAOutcomes final : public pipeline::ModelAOu
     const auto entry = cache_.Find(run_, request_);
     if (entry == cache_.entries.end()) return nullptr;
     const auto it = entry->models_a.find(base_);
-    if (it == entry->models_a.end()) return nullptr;
+    return it == entry->models_a.end() ? nullptr : it->second;
+  }
+
+  void Reused() override {
+    std::lock_guard lock(cache_.mutex);
     ++cache_.counts.models_a_reused;
-    return it->second;
   }
 
   void Keep(std::shared_ptr<const pipeline::ModelAOutcome> outcome) override {
     std::lock_guard lock(cache_.mutex);
     const auto entry = cache_.Find(run_, request_);
-    if (entry == cache_.entries.end() || entry->models_a.contains(base_)) return;
-    const std::size_t added = outcome->Bytes();
-    entry->models_a.emplace(base_, std::move(outcome));
+    if (entry == cache_.entries.end()) return;
+    std::size_t bytes = entry->bytes + outcome->Bytes();
+    if (const auto old = entry->models_a.find(base_); old != entry->models_a.end()) bytes -= old->second->Bytes();
+    // Not at the cost of the preparation it was computed on.
+    if (bytes > cache_.capacity_bytes) return;
+    cache_.bytes = cache_.bytes - entry->bytes + bytes;
+    entry->bytes = bytes;
+    entry->models_a[base_] = std::move(outcome);
     ++cache_.counts.models_a_kept;
-    entry->bytes += added;
-    cache_.bytes += added;
     cache_.Trim();
   }
 
@@ -105,52 +130,57 @@ std::size_t AnalysisCache::bytes() const {
 }
 
 absl::StatusOr<std::shared_ptr<const pipeline::PreparedRun>> AnalysisCache::Prepared(
-    const std::string& run_key, const std::function<absl::StatusOr<BenchRun>()>& read_run,
+    const std::string& run_key, const std::function<absl::StatusOr<BenchRun>()>* read_run,
     const AnalysisRequest& request, const AnalysisOptions& options) {
+  std::shared_ptr<const pipeline::ScreenedRun> screened;
   {
     std::lock_guard lock(impl_->mutex);
     if (const auto entry = impl_->Find(run_key, request); entry != impl_->entries.end()) {
       ++impl_->counts.preparations_reused;
       return entry->prepared;
     }
+    screened = impl_->FindScreened(run_key, request);
   }
-  auto run = read_run();
-  if (!run.ok()) return run.status();
-  auto made = pipeline::PrepareRun(*std::move(run), request, options);
+  if (screened == nullptr && read_run == nullptr) return nullptr;
+  const bool screens = screened == nullptr;
+  absl::StatusOr<std::unique_ptr<pipeline::PreparedRun>> made;
+  if (screens) {
+    auto run = (*read_run)();
+    if (!run.ok()) return run.status();
+    made = pipeline::PrepareRun(*std::move(run), request, options);
+  } else {
+    made = pipeline::PrepareRun(std::move(screened), request);
+  }
   if (!made.ok()) return made.status();
   std::shared_ptr<const pipeline::PreparedRun> prepared(*std::move(made));
   std::lock_guard lock(impl_->mutex);
-  ++impl_->counts.preparations_made;
-  const std::size_t size = prepared->Bytes();
-  // Another analysis of the same inputs may have kept its preparation first.
-  if (size <= impl_->capacity_bytes && impl_->Find(run_key, request) == impl_->entries.end()) {
-    impl_->entries.push_front({run_key, request.nominal, request.baseline_effects, prepared, {}, size});
-    impl_->bytes += size;
-    impl_->Trim();
-  }
+  ++(screens ? impl_->counts.preparations_made : impl_->counts.screenings_reused);
+  impl_->KeepPrepared(run_key, request, prepared);
   return prepared;
 }
 
 absl::StatusOr<Analysis> AnalysisCache::Analyze(const AnalysisCacheKeys& keys,
                                                 const std::function<absl::StatusOr<BenchRun>()>& read_run,
                                                 const AnalysisRequest& request, const AnalysisOptions& options) {
-  auto prepared = Prepared(keys.run, read_run, request, options);
+  auto prepared = Prepared(keys.run, &read_run, request, options);
   if (!prepared.ok()) return prepared.status();
   if (keys.identified_base.empty()) return pipeline::AnalyzePrepared(**prepared, request, options, nullptr);
   Impl::EntryModelAOutcomes outcomes(*impl_, keys.run, request, keys.identified_base);
   return pipeline::AnalyzePrepared(**prepared, request, options, &outcomes);
 }
 
-absl::Status AnalysisCache::KeepModelA(const AnalysisCacheKeys& keys,
-                                       const std::function<absl::StatusOr<BenchRun>()>& read_run,
-                                       const AnalysisRequest& request, const AnalysisOptions& options) {
+absl::StatusOr<bool> AnalysisCache::KeepModelA(const AnalysisCacheKeys& keys, const AnalysisRequest& request,
+                                               const AnalysisOptions& options) {
   if (keys.identified_base.empty() || !request.identified_base.has_value()) {
     return absl::InvalidArgumentError("model A is kept for an identified base only");
   }
-  auto prepared = Prepared(keys.run, read_run, request, options);
+  auto prepared = Prepared(keys.run, nullptr, request, options);
   if (!prepared.ok()) return prepared.status();
+  if (*prepared == nullptr) return false;
   Impl::EntryModelAOutcomes outcomes(*impl_, keys.run, request, keys.identified_base);
-  return pipeline::ModelAOutcomeOf(**prepared, request, options, &outcomes).status();
+  auto outcome = pipeline::ModelAOutcomeOf(**prepared, request, options, &outcomes);
+  if (!outcome.ok()) return outcome.status();
+  return true;
 }
 
 }  // namespace insdiag::engine

@@ -16,23 +16,6 @@
 #include "insdiag/server/unit_type_models.h"
 
 namespace insdiag::server {
-namespace {
-
-// The stored run `stored` describes and all its samples, as the engine takes them.
-absl::StatusOr<engine::BenchRun> ReadRun(kb::ConnectionPool& pool, const kb::StoredRun& stored) {
-  engine::BenchRun run;
-  run.metadata = stored.metadata;
-  run.has_temperature = stored.has_temperature;
-  run.samples.reserve(static_cast<std::size_t>(stored.sample_count));
-  INSDIAG_RETURN_IF_ERROR(
-      kb::RunStore(pool).ReadSamples(stored.id, 1 << 16, [&](std::span<const engine::ImuSample> samples) {
-        run.samples.insert(run.samples.end(), samples.begin(), samples.end());
-        return true;
-      }));
-  return run;
-}
-
-}  // namespace
 
 absl::StatusOr<engine::AnalysisRequest> EngineRequestOf(const v1::AnalysisSpec& spec,
                                                          std::optional<engine::ErrorModel> nominal,
@@ -63,7 +46,25 @@ bool Retryable(const absl::Status& status) {
          status.code() != absl::StatusCode::kOutOfRange;
 }
 
+void DefaultBaselineToBase(const v1::Analysis& base, v1::AnalysisSpec& spec) {
+  if (spec.baseline().effects_size() == 0) *spec.mutable_baseline()->mutable_effects() = base.report().model().effects();
+}
+
 namespace {
+
+// The stored run `stored` describes and all its samples, as the engine takes them.
+absl::StatusOr<engine::BenchRun> ReadRun(kb::ConnectionPool& pool, const kb::StoredRun& stored) {
+  engine::BenchRun run;
+  run.metadata = stored.metadata;
+  run.has_temperature = stored.has_temperature;
+  run.samples.reserve(static_cast<std::size_t>(stored.sample_count));
+  INSDIAG_RETURN_IF_ERROR(
+      kb::RunStore(pool).ReadSamples(stored.id, 1 << 16, [&](std::span<const engine::ImuSample> samples) {
+        run.samples.insert(run.samples.end(), samples.begin(), samples.end());
+        return true;
+      }));
+  return run;
+}
 
 // What a job of `spec` on run `run_id` analyses: the stored run, the
 // engine's request and options, and the names the analysis cache keeps its
@@ -76,7 +77,7 @@ struct JobInputs {
 };
 
 absl::StatusOr<JobInputs> InputsOf(kb::ConnectionPool& pool, const std::string& run_id,
-                                   const v1::AnalysisSpec& spec) {
+                                   v1::AnalysisSpec spec) {
   JobInputs in;
   INSDIAG_ASSIGN_OR_RETURN(in.stored, kb::RunStore(pool).Get(run_id));
   std::optional<v1::Analysis> base;
@@ -84,6 +85,7 @@ absl::StatusOr<JobInputs> InputsOf(kb::ConnectionPool& pool, const std::string& 
     INSDIAG_ASSIGN_OR_RETURN(auto base_id, api::ResourceId(spec.base_analysis(), api::kAnalyses, "base_analysis"));
     INSDIAG_ASSIGN_OR_RETURN(auto stored_base, kb::AnalysisStore(pool).Get(base_id, true));
     base = ToProto(stored_base);
+    DefaultBaselineToBase(*base, spec);
     in.keys.identified_base = base_id;
   }
   INSDIAG_ASSIGN_OR_RETURN(auto nominal, NominalModelOfUnitType(pool, in.stored.metadata.unit_type));
@@ -114,24 +116,14 @@ absl::StatusOr<engine::Analysis> RunAnalysisJob(kb::ConnectionPool& pool, const 
   }
 }
 
-absl::Status KeepModelAForAdds(kb::ConnectionPool& pool, const std::string& run_id, const std::string& analysis_id,
-                               engine::AnalysisCache& cache) {
-  INSDIAG_ASSIGN_OR_RETURN(auto stored, kb::AnalysisStore(pool).Get(analysis_id, true));
-  const v1::Analysis analysis = ToProto(stored);
-  // The spec of the page's Add once the service has checked it
-  // (AnalysisService::CheckBaseAnalysis): the base, and its model's effects
-  // as the baseline.
+absl::StatusOr<bool> KeepModelAForAdds(kb::ConnectionPool& pool, const std::string& run_id,
+                                       const std::string& analysis_id, engine::AnalysisCache& cache) {
+  // The page's Add: this analysis as its base (the baseline its model's effects).
   v1::AnalysisSpec spec;
-  spec.set_base_analysis(analysis.name());
-  *spec.mutable_baseline()->mutable_effects() = analysis.report().model().effects();
+  spec.set_base_analysis(api::ResourceName(api::kAnalyses, analysis_id));
   INSDIAG_ASSIGN_OR_RETURN(JobInputs in, InputsOf(pool, run_id, spec));
-  // Only where the run's preparation is still kept: preparing it again is an
-  // analysis's worth of work that nobody asked for.
-  const auto no_read = []() -> absl::StatusOr<engine::BenchRun> {
-    return absl::FailedPreconditionError("the run's preparation is no longer kept");
-  };
   try {
-    return cache.KeepModelA(in.keys, no_read, in.request, in.options);
+    return cache.KeepModelA(in.keys, in.request, in.options);
   } catch (const std::exception& e) {
     return absl::InternalError(absl::StrCat("the engine failed: ", e.what()));
   }

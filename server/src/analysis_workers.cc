@@ -98,11 +98,15 @@ void AnalysisWorkers::Stop() {
   threads_.clear();
 }
 
-bool AnalysisWorkers::SleepFor(std::chrono::milliseconds duration) {
+bool AnalysisWorkers::SleepFor(std::chrono::milliseconds duration, std::uint64_t wakes_seen) {
   std::unique_lock lock(mutex_);
-  const std::uint64_t seen = wakes_;
-  wake_.wait_for(lock, duration, [&] { return stopping_ || wakes_ != seen; });
+  wake_.wait_for(lock, duration, [&] { return stopping_ || wakes_ != wakes_seen; });
   return !stopping_;
+}
+
+std::uint64_t AnalysisWorkers::Wakes() {
+  std::lock_guard lock(mutex_);
+  return wakes_;
 }
 
 void AnalysisWorkers::Wake() {
@@ -130,25 +134,27 @@ void AnalysisWorkers::Loop(int index) {
                                              reaped->failed, " failed after their last attempt"));
       }
     }
+    // Before the claim: a job queued while it runs is not slept past.
+    const std::uint64_t wakes_seen = Wakes();
     auto job = store_.Claim(owner, options_.lease);
     if (!job.ok()) {
       Log(LogLevel::kError, absl::StrCat(owner, ": cannot claim jobs: ", job.status().message()));
-      if (!SleepFor(options_.poll * 4)) return;
+      if (!SleepFor(options_.poll * 4, wakes_seen)) return;
       continue;
     }
     if (!job->has_value()) {
       // Nothing queued: model A of the Add the page offers on the last
       // analysis this worker finished, so that the first Add costs model B.
       if (idle_work.has_value()) {
-        const absl::Status kept = KeepModelAForAdds(pool_, idle_work->run_id, idle_work->analysis_id, cache_);
-        if (!kept.ok() && kept.code() != absl::StatusCode::kFailedPrecondition) {
+        const auto kept = KeepModelAForAdds(pool_, idle_work->run_id, idle_work->analysis_id, cache_);
+        if (!kept.ok()) {
           Log(LogLevel::kWarning, absl::StrCat(owner, ": model A of analyses/", idle_work->analysis_id,
-                                               " not kept for its Adds: ", kept.message()));
+                                               " not kept for its Adds: ", kept.status().message()));
         }
         idle_work.reset();
         continue;
       }
-      if (!SleepFor(options_.poll)) return;
+      if (!SleepFor(options_.poll, wakes_seen)) return;
       continue;
     }
     if (RunJob(**job, owner) == "succeeded" && options_.cache_bytes > 0) idle_work = **job;

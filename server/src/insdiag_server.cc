@@ -43,6 +43,8 @@ struct InsdiagServer::Services {
   Services(kb::ConnectionPool& pool, const Options& options)
       : connection_pool(pool), access_store(pool), guard(access_store), access(access_store), access_grpc(access, guard), store(pool, options.read_pool),
         runs(store, RunService::Options{options.max_upload_samples}), runs_grpc(runs, guard), analysis_store(pool, options.read_pool),
+        // Wakes `workers`, built after it: only RPC handlers queue jobs, and
+        // the servers drain them before these services are destroyed.
         analyses(analysis_store, AnalysisService::Options{options.watch_poll, [this] { workers.Wake(); }}),
         catalogue_store(pool, options.read_pool), failure_record_store(pool, kb::DecodeReportFindings, options.read_pool),
         diagnosis_store(pool, kb::DecodeReportFindings, options.read_pool), unit_history_store(pool, options.read_pool),
@@ -68,6 +70,7 @@ struct InsdiagServer::Services {
     gauges.analysis_cache_bytes = workers.cache_bytes();
     gauges.preparations_made = cache.preparations_made;
     gauges.preparations_reused = cache.preparations_reused;
+    gauges.screenings_reused = cache.screenings_reused;
     gauges.models_a_kept = cache.models_a_kept;
     gauges.models_a_reused = cache.models_a_reused;
     return metrics.Render(gauges);

@@ -15,6 +15,7 @@
 #include "insdiag/engine/status_macros.h"
 #include "insdiag/kb/diagnose_analysis.h"
 #include "insdiag/kb/knowledge_messages.h"
+#include "insdiag/server/analysis_job.h"
 #include "insdiag/server/display_series.h"
 #include "knowledge_codec.h"
 
@@ -90,9 +91,7 @@ absl::Status AnalysisService::CheckBaseAnalysis(const v1::Analysis& asked, v1::A
                                                      asked.base_analysis(), "'s model"));
     }
   }
-  if (spec.baseline().effects_size() == 0) {
-    *spec.mutable_baseline()->mutable_effects() = base.report().model().effects();
-  }
+  DefaultBaselineToBase(base, spec);
   spec.set_base_analysis(asked.base_analysis());
   return absl::OkStatus();
 }

@@ -165,8 +165,11 @@ std::string Metrics::Render(const Gauges& gauges) const {
   absl::StrAppend(&out, "insdiag_analysis_cache_made_total{part=\"preparation\"} ", gauges.preparations_made, "\n");
   absl::StrAppend(&out, "insdiag_analysis_cache_made_total{part=\"model_a\"} ", gauges.models_a_kept, "\n");
   Header(out, "insdiag_analysis_cache_reused_total", "counter",
-         "analyses that took a run's preparation or an Add's model A from the cache, by part");
+         "analyses that took from the cache a run's preparation, its screening (condensed again under another "
+         "baseline) or an Add's model A, by part");
   absl::StrAppend(&out, "insdiag_analysis_cache_reused_total{part=\"preparation\"} ", gauges.preparations_reused,
+                  "\n");
+  absl::StrAppend(&out, "insdiag_analysis_cache_reused_total{part=\"screening\"} ", gauges.screenings_reused,
                   "\n");
   absl::StrAppend(&out, "insdiag_analysis_cache_reused_total{part=\"model_a\"} ", gauges.models_a_reused, "\n");
   return out;

@@ -209,7 +209,8 @@ TEST_F(MetricsTest, AnAnalysisJobCountsByItsOutcomeWithItsDuration) {
 }
 
 // The page's Add on an analysis: the worker, with nothing queued, kept model
-// A of that Add, and the Add runs on the run's preparation and that model A.
+// A of that Add, and the Add runs on the run's preparation and that model A;
+// and so on for an Add from that Add.
 TEST_F(MetricsTest, ThePagesAddTakesTheRunsPreparationAndAModelAKeptWhileTheWorkerWasIdle) {
   httplib::Client viewer("127.0.0.1", server_->http_port());
   viewer.set_bearer_token_auth(MakeToken(pool(), v1::VIEWER).c_str());
@@ -241,6 +242,27 @@ TEST_F(MetricsTest, ThePagesAddTakesTheRunsPreparationAndAModelAKeptWhileTheWork
   EXPECT_EQ(Sample(after, "insdiag_analysis_cache_reused_total{part=\"preparation\"}"), 2.0)
       << "model A kept while idle, then the Add";
   EXPECT_EQ(after.types.at("insdiag_analysis_cache_reused_total"), "counter");
+
+  // An Add from that Add: its baseline holds the added effect, so the kept
+  // screened run is condensed again under it (while the worker is idle),
+  // never read again.
+  Scrape idle_again = Get(viewer);
+  const auto deadline_again = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (Sample(idle_again, "insdiag_analysis_cache_made_total{part=\"model_a\"}") < 2.0 &&
+         std::chrono::steady_clock::now() < deadline_again) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    idle_again = Get(viewer);
+  }
+  asked.set_base_analysis(b.name());
+  asked.mutable_model()->set_effects(0, "gyro_scale_factor.x");
+  const v1::Analysis c = Ended(asked);
+  ASSERT_EQ(c.state(), v1::Analysis::SUCCEEDED) << c.error().message();
+  const Scrape last = Get(viewer);
+  EXPECT_EQ(Sample(last, "insdiag_analysis_cache_made_total{part=\"preparation\"}"), 1.0) << "read once";
+  // Once for the Add from B; the idle worker may since have condensed it for
+  // an Add from C as well.
+  EXPECT_GE(Sample(last, "insdiag_analysis_cache_reused_total{part=\"screening\"}"), 1.0);
+  EXPECT_EQ(Sample(last, "insdiag_analysis_cache_reused_total{part=\"model_a\"}"), 2.0);
 }
 
 // With no worker to take it, a queued analysis shows in the queue's gauges:

@@ -22,12 +22,13 @@
 
 namespace insdiag::engine::pipeline {
 
-// The run as every stage after condensing reads it. Not movable: a
-// RunContext refers into it.
-struct PreparedRun {
-  PreparedRun() = default;
-  PreparedRun(const PreparedRun&) = delete;
-  PreparedRun& operator=(const PreparedRun&) = delete;
+// What the preparation makes of the run before the baseline effects: the
+// run screened, the a-priori model chosen, the Allan analysis. It depends on
+// the run, the nominal model and the options only.
+struct ScreenedRun {
+  ScreenedRun() = default;
+  ScreenedRun(const ScreenedRun&) = delete;
+  ScreenedRun& operator=(const ScreenedRun&) = delete;
 
   BenchRun run;  // screened, spikes repaired, dominant constants removed
   // What the requested options became for this run (its update interval);
@@ -38,18 +39,35 @@ struct PreparedRun {
   std::optional<ident::AllanResult> allan;
   APriori a_priori;
   ident::RemovedConstants removed_constants;
-  ErrorModel base;  // the a-priori model with the baseline effects
-  EpochRun epochs;
   RawSampleEvidence raw_samples;
   ident::DriftCeilings drift_ceilings;
   // The preparation's notes, which every report of the run starts from.
   DecisionLog decisions;
+};
 
-  // The context the later stages share, under `options` (this preparation's,
-  // with the caller's progress).
-  RunContext Context(const AnalysisOptions& with_progress) const {
-    return RunContext{run, epochs, reference_measurements, screening, with_progress, a_priori, raw_samples,
-                      drift_ceilings};
+// The run as every stage after condensing reads it: screened, and condensed
+// with the a-priori model and the baseline effects as its pilot. Not
+// movable: a RunContext refers into it.
+struct PreparedRun {
+  PreparedRun() = default;
+  PreparedRun(const PreparedRun&) = delete;
+  PreparedRun& operator=(const PreparedRun&) = delete;
+
+  std::shared_ptr<const ScreenedRun> screened;
+  ErrorModel base;  // the a-priori model with the baseline effects
+  EpochRun epochs;
+
+  // The context the later stages share, under `options` (OptionsFor's).
+  RunContext Context(const AnalysisOptions& options) const {
+    const ScreenedRun& s = *screened;
+    return RunContext{s.run,     epochs,        s.reference_measurements, s.screening, options,
+                      s.a_priori, s.raw_samples, s.drift_ceilings};
+  }
+  // An analysis's own options at this run's update interval.
+  AnalysisOptions OptionsFor(const AnalysisOptions& requested) const {
+    AnalysisOptions out = requested;
+    out.filter.update_interval_s = screened->options.filter.update_interval_s;
+    return out;
   }
   // About what the preparation holds in memory: the samples, the reference's
   // measurements and the epochs.
@@ -60,12 +78,17 @@ struct PreparedRun {
 // `request.baseline_effects` and condenses the run.
 absl::StatusOr<std::unique_ptr<PreparedRun>> PrepareRun(BenchRun&& run, const AnalysisRequest& request,
                                                         const AnalysisOptions& options);
+// The same from a run already screened for the same nominal model and
+// options: only the condensation, with `request.baseline_effects` in its pilot.
+absl::StatusOr<std::unique_ptr<PreparedRun>> PrepareRun(std::shared_ptr<const ScreenedRun> screened,
+                                                        const AnalysisRequest& request);
 
 // What an Add reads of model A besides its report: the model, its
 // missing-effect scan's score and information (the added effects' priors and
 // the likelihood ratio predicted for them), and what the scan found.
 struct ModelAOutcome {
   ErrorModel model;
+  std::unique_ptr<StateLayout> layout;  // the scan's states
   std::unique_ptr<ScoreTestObserver> scan;
   Findings found;
   AnalysisReport report;
@@ -81,6 +104,9 @@ class ModelAOutcomes {
   virtual ~ModelAOutcomes() = default;
   // Model A's outcome for this request's identified base, null if none is kept.
   virtual std::shared_ptr<const ModelAOutcome> Find() const = 0;
+  // The outcome Find gave was taken.
+  virtual void Reused() = 0;
+  // Keeps `outcome` in place of any other for the same base.
   virtual void Keep(std::shared_ptr<const ModelAOutcome> outcome) = 0;
 };
 

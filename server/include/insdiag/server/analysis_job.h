@@ -45,9 +45,13 @@ absl::StatusOr<engine::Analysis> RunAnalysisJob(kb::ConnectionPool& pool, const 
 
 // Keeps in `cache` model A of the Add the page offers on the succeeded
 // analysis `analysis_id` of run `run_id` (the request that Add sends, with
-// the analysis as its base): the Add then costs model B's pass alone.
-// FAILED_PRECONDITION where the cache no longer keeps the run's preparation.
-absl::Status KeepModelAForAdds(kb::ConnectionPool& pool, const std::string& run_id, const std::string& analysis_id,
-                               engine::AnalysisCache& cache);
+// the analysis as its base): the Add then costs model B's pass alone. Only
+// for a run the cache keeps screened: false, and nothing kept, otherwise.
+absl::StatusOr<bool> KeepModelAForAdds(kb::ConnectionPool& pool, const std::string& run_id,
+                                       const std::string& analysis_id, engine::AnalysisCache& cache);
+
+// An analysis from `base` whose spec names no baseline starts from the
+// effects of the base's model.
+void DefaultBaselineToBase(const v1::Analysis& base, v1::AnalysisSpec& spec);
 
 }  // namespace insdiag::server

@@ -65,7 +65,10 @@ class AnalysisWorkers {
   std::string_view RunJob(const kb::ClaimedJob& job, const std::string& owner);
   // RunJob's outcome: "succeeded", "failed", "retried" (queued again), "cancelled" or "lost".
   std::string_view RunJobOutcome(const kb::ClaimedJob& job, const std::string& owner);
-  bool SleepFor(std::chrono::milliseconds duration);  // false when stopping
+  // Sleeps until `duration` passes, a Wake() after the `wakes_seen`-th, or
+  // Stop(); false when stopping.
+  bool SleepFor(std::chrono::milliseconds duration, std::uint64_t wakes_seen);
+  std::uint64_t Wakes();  // Wake() calls so far
 
   kb::ConnectionPool& pool_;
   Options options_;

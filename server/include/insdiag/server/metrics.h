@@ -40,7 +40,8 @@ class Metrics {
     std::size_t pool_open = 0, pool_idle = 0, pool_max = 0;
     // The workers' analysis cache (analysis_workers.h).
     std::size_t analysis_cache_bytes = 0;
-    std::int64_t preparations_made = 0, preparations_reused = 0, models_a_kept = 0, models_a_reused = 0;
+    std::int64_t preparations_made = 0, preparations_reused = 0, screenings_reused = 0;
+    std::int64_t models_a_kept = 0, models_a_reused = 0;
   };
   std::string Render(const Gauges& gauges) const;
 
