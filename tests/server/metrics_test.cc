@@ -71,6 +71,17 @@ class MetricsTest : public ServerTest {
     return it == s.samples.end() ? 0.0 : it->second;
   }
 
+  // Scrapes until `sample` reaches `at_least` (a minute at most).
+  Scrape Until(httplib::Client& client, const std::string& sample, double at_least) {
+    Scrape s = Get(client);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (Sample(s, sample) < at_least && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      s = Get(client);
+    }
+    return s;
+  }
+
   // `asked` created, then read until it ends (three minutes at most).
   v1::Analysis Ended(const v1::Analysis& asked) {
     auto analyses = v1::AnalysisService::NewStub(channel());
@@ -220,13 +231,7 @@ TEST_F(MetricsTest, ThePagesAddTakesTheRunsPreparationAndAModelAKeptWhileTheWork
   asked.set_run(run->name());
   const v1::Analysis a = Ended(asked);
   ASSERT_EQ(a.state(), v1::Analysis::SUCCEEDED) << a.error().message();
-  Scrape idle = Get(viewer);
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (Sample(idle, "insdiag_analysis_cache_made_total{part=\"model_a\"}") < 1.0 &&
-         std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    idle = Get(viewer);
-  }
+  const Scrape idle = Until(viewer, "insdiag_analysis_cache_made_total{part=\"model_a\"}", 1.0);
   EXPECT_EQ(Sample(idle, "insdiag_analysis_cache_made_total{part=\"model_a\"}"), 1.0);
   EXPECT_EQ(Sample(idle, "insdiag_analysis_cache_made_total{part=\"preparation\"}"), 1.0);
   EXPECT_GT(Sample(idle, "insdiag_analysis_cache_bytes"), 6000.0 * 80.0) << "the samples at least";
@@ -246,13 +251,9 @@ TEST_F(MetricsTest, ThePagesAddTakesTheRunsPreparationAndAModelAKeptWhileTheWork
   // An Add from that Add: its baseline holds the added effect, so the kept
   // screened run is condensed again under it (while the worker is idle),
   // never read again.
-  Scrape idle_again = Get(viewer);
-  const auto deadline_again = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (Sample(idle_again, "insdiag_analysis_cache_made_total{part=\"model_a\"}") < 2.0 &&
-         std::chrono::steady_clock::now() < deadline_again) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    idle_again = Get(viewer);
-  }
+  EXPECT_EQ(Sample(Until(viewer, "insdiag_analysis_cache_made_total{part=\"model_a\"}", 2.0),
+                   "insdiag_analysis_cache_made_total{part=\"model_a\"}"),
+            2.0);
   asked.set_base_analysis(b.name());
   asked.mutable_model()->set_effects(0, "gyro_scale_factor.x");
   const v1::Analysis c = Ended(asked);
