@@ -5,11 +5,12 @@
 Starts an insdiagd of its own (embedded PostgreSQL in a temporary
 directory, loopback only, one worker), uploads RUN.csv, analyses it (model
 A), then asks for the Adds the page would send (`baseAnalysis` and one
-effect each), one at a time, --pause seconds after the last ended. Prints each job's time from claim to end (the
+effect each), one at a time, --pause seconds after the last ended, each
+from model A or (--chain) from the Add before it. Prints each job's time from claim to end (the
 server's insdiag_analysis_duration_seconds) and what the client waited from
 POST to SUCCEEDED.
 
-Usage: scripts/add_latency.py RUN.csv [--effects E1,E2,...] [--cache-mb N] [--build-dir DIR]
+Usage: scripts/add_latency.py RUN.csv [--effects E1,E2,...] [--chain] [--cache-mb N] [--pause S] [--build-dir DIR]
 """
 import argparse
 import http.client
@@ -64,6 +65,8 @@ def main():
     parser.add_argument("run")
     parser.add_argument("--effects", default="gyro_scale_factor.z,gyro_scale_factor.x,acc_scale_factor.z")
     parser.add_argument("--cache-mb", type=int, default=None, help="--analysis-cache-mb (default: the server's)")
+    parser.add_argument("--chain", action="store_true",
+                        help="each Add from the one before (its baseline then holds the effects added so far)")
     parser.add_argument("--pause", type=float, default=2.0,
                         help="seconds between an analysis ending and the next Add: the user reading the report")
     parser.add_argument("--build-dir", default=os.path.join(ROOT, "build"))
@@ -91,7 +94,9 @@ def main():
         print(f"model A      job {job:6.2f} s  waited {waited:6.2f} s")
         for effect in args.effects.split(","):
             time.sleep(args.pause)
-            waited, job, _ = analyse(conn, token, {"run": run, "baseAnalysis": base, "model": {"effects": [effect]}})
+            waited, job, name = analyse(conn, token, {"run": run, "baseAnalysis": base, "model": {"effects": [effect]}})
+            if args.chain:
+                base = name
             print(f"add {effect:<22} job {job:6.2f} s  waited {waited:6.2f} s", flush=True)
     finally:
         server.terminate()
