@@ -29,25 +29,28 @@ sys.path.insert(0, os.path.join(ROOT, "scripts"))
 from scaling_benchmark import call  # noqa: E402
 
 
-def job_seconds(conn, token):
-    """The sum of every ended job's claim-to-end time so far."""
-    status, body = call(conn, token, "GET", "/metrics")
+def job_seconds(server, token):
+    """The sum of every succeeded job's claim-to-end time so far, and their count."""
+    status, body = call(server(), token, "GET", "/metrics")
     assert status == 200, body
-    total = 0.0
+    total, count = 0.0, 0
     for line in body.decode().splitlines():
-        m = re.match(r'insdiag_analysis_duration_seconds_sum\{outcome="succeeded"\} ([0-9.e+-]+)', line)
-        if m:
-            total += float(m.group(1))
-    return total
+        m = re.match(r'insdiag_analysis_duration_seconds_(sum|count)\{outcome="succeeded"\} ([0-9.e+-]+)', line)
+        if m and m.group(1) == "sum":
+            total = float(m.group(2))
+        elif m:
+            count = int(float(m.group(2)))
+    return total, count
 
 
-def analyse(conn, token, analysis):
+def analyse(server, token, analysis):
     """Queues `analysis`, waits for it; (client wait s, job s, name)."""
-    before = job_seconds(conn, token)
+    before = job_seconds(server, token)
     start = time.monotonic()
-    status, body = call(conn, token, "POST", "/v1/analyses", json.dumps(analysis))
+    status, body = call(server(), token, "POST", "/v1/analyses", json.dumps(analysis))
     assert status == 200, body
     name = json.loads(body)["name"]
+    conn = server()
     while True:
         status, body = call(conn, token, "GET", f"/v1/{name}")
         state = json.loads(body)["state"]
@@ -57,7 +60,12 @@ def analyse(conn, token, analysis):
             sys.exit(f"{name} {state}: {body[:2000]}")
         time.sleep(0.01)
     waited = time.monotonic() - start
-    return waited, job_seconds(conn, token) - before, name
+    # The job's duration is counted just after its state is written.
+    after = job_seconds(server, token)
+    while after[1] == before[1]:
+        time.sleep(0.01)
+        after = job_seconds(server, token)
+    return waited, after[0] - before[0], name
 
 
 def main():
@@ -85,16 +93,20 @@ def main():
             sys.exit(f"insdiagd did not start: {open(log.name).read()[-2000:]}")
         port = int(line.split(" http=")[1].split()[0].rsplit(":", 1)[1])
         token = open(os.path.join(work, "data", "admin-token")).read().strip()
-        conn = http.client.HTTPConnection("127.0.0.1", port, timeout=600)
-        status, body = call(conn, token, "POST", f"/v1/runs:upload?requestId={uuid.uuid4()}",
+        # A connection a request: the server closes one left idle (keep-alive).
+        def connection():
+            return http.client.HTTPConnection("127.0.0.1", port, timeout=600)
+
+        status, body = call(connection(), token, "POST", f"/v1/runs:upload?requestId={uuid.uuid4()}",
                             open(args.run, "rb").read(), "text/csv")
         assert status == 200, body
         run = json.loads(body)["name"]
-        waited, job, base = analyse(conn, token, {"run": run})
+        waited, job, base = analyse(connection, token, {"run": run})
         print(f"model A      job {job:6.2f} s  waited {waited:6.2f} s")
         for effect in args.effects.split(","):
             time.sleep(args.pause)
-            waited, job, name = analyse(conn, token, {"run": run, "baseAnalysis": base, "model": {"effects": [effect]}})
+            waited, job, name = analyse(connection, token,
+                                        {"run": run, "baseAnalysis": base, "model": {"effects": [effect]}})
             if args.chain:
                 base = name
             print(f"add {effect:<22} job {job:6.2f} s  waited {waited:6.2f} s", flush=True)

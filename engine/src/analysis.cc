@@ -573,10 +573,12 @@ absl::StatusOr<ErrorModel> PilotModel(const ScreenedRun& s, const AnalysisReques
 
 }  // namespace
 
-std::size_t PreparedRun::Bytes() const {
-  const double epochs_bytes = epochs.BytesPerEpoch() * epochs.size();
-  return screened->run.samples.size() * (sizeof(ImuSample) + sizeof(screened->reference_measurements[0])) +
-         static_cast<std::size_t>(epochs_bytes);
+std::size_t ScreenedRun::Bytes() const {
+  return run.samples.size() * (sizeof(ImuSample) + sizeof(reference_measurements[0]));
+}
+
+std::size_t PreparedRun::EpochBytes() const {
+  return static_cast<std::size_t>(epochs.BytesPerEpoch() * epochs.size());
 }
 
 std::size_t ModelAOutcome::Bytes() const {

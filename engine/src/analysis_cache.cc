@@ -4,6 +4,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <utility>
 
 #include "analysis/prepared_run.h"
@@ -19,7 +20,7 @@ struct AnalysisCache::Impl {
     std::vector<std::string> baseline_effects;
     std::shared_ptr<const pipeline::PreparedRun> prepared;
     std::map<std::string, std::shared_ptr<const pipeline::ModelAOutcome>> models_a;
-    std::size_t bytes = 0;
+    std::size_t bytes = 0;  // the epochs' and models A's; the screened run is counted once for all entries
   };
   using Entries = std::list<Entry>;  // most recently used first
 
@@ -50,19 +51,27 @@ struct AnalysisCache::Impl {
   // exceeds the whole bound. Under `mutex`.
   void KeepPrepared(const std::string& run, const AnalysisRequest& request,
                     std::shared_ptr<const pipeline::PreparedRun> prepared) {
-    const std::size_t size = prepared->Bytes();
-    if (size > capacity_bytes || Find(run, request) != entries.end()) return;
+    const std::size_t size = prepared->EpochBytes();
+    if (size + prepared->screened->Bytes() > capacity_bytes || Find(run, request) != entries.end()) return;
     entries.push_front({run, request.nominal, request.baseline_effects, std::move(prepared), {}, size});
-    bytes += size;
     Trim();
+  }
+
+  // What the entries hold: their own bytes, and each screened run once.
+  std::size_t Total() const {
+    std::size_t total = 0;
+    std::set<const pipeline::ScreenedRun*> screened;
+    for (const Entry& e : entries) {
+      total += e.bytes;
+      if (screened.insert(e.prepared->screened.get()).second) total += e.prepared->screened->Bytes();
+    }
+    return total;
   }
 
   // Drops the least recently used entries until the bound holds. Under `mutex`.
   void Trim() {
-    while (bytes > capacity_bytes && !entries.empty()) {
-      bytes -= entries.back().bytes;
-      entries.pop_back();
-    }
+    while (Total() > capacity_bytes && !entries.empty()) entries.pop_back();
+    bytes = Total();
   }
 
   class EntryModelAOutcomes;
@@ -101,8 +110,7 @@ class AnalysisCache::Impl::EntryModelAOutcomes final : public pipeline::ModelAOu
     std::size_t bytes = entry->bytes + outcome->Bytes();
     if (const auto old = entry->models_a.find(base_); old != entry->models_a.end()) bytes -= old->second->Bytes();
     // Not at the cost of the preparation it was computed on.
-    if (bytes > cache_.capacity_bytes) return;
-    cache_.bytes = cache_.bytes - entry->bytes + bytes;
+    if (bytes + entry->prepared->screened->Bytes() > cache_.capacity_bytes) return;
     entry->bytes = bytes;
     entry->models_a[base_] = std::move(outcome);
     ++cache_.counts.models_a_kept;

@@ -155,6 +155,7 @@ TEST_F(AnalysisCacheTest, AModelAKeptAheadServesTheFirstAdd) {
 TEST_F(AnalysisCacheTest, OtherAPrioriInputsPrepareTheRunAgain) {
   AnalysisCache cache(size_t{1} << 30);
   ASSERT_TRUE(cache.Analyze(KeysOf("run-1"), Reader(), request_, options_).ok());
+  const size_t one_baseline = cache.bytes();
   AnalysisRequest other = request_;
   other.baseline_effects = {"gyro_scale_factor.z"};
   auto condensed_again = cache.Analyze(KeysOf("run-1"), Reader(), other, options_);
@@ -164,6 +165,8 @@ TEST_F(AnalysisCacheTest, OtherAPrioriInputsPrepareTheRunAgain) {
   ExpectSameAnalysis(*condensed_again, *alone);
   EXPECT_EQ(reads_, 1);
   EXPECT_EQ(cache.counts().screenings_reused, 1);
+  EXPECT_GT(cache.bytes(), one_baseline);
+  EXPECT_LT(cache.bytes(), 2 * one_baseline) << "the screened run counted once for both";
   other = request_;
   other.nominal->gyro.bias[0].sigma *= 2.0;
   ASSERT_TRUE(cache.Analyze(KeysOf("run-1"), Reader(), other, options_).ok());

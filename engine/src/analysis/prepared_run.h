@@ -43,6 +43,9 @@ struct ScreenedRun {
   ident::DriftCeilings drift_ceilings;
   // The preparation's notes, which every report of the run starts from.
   DecisionLog decisions;
+
+  // About what it holds in memory: the samples and the reference's measurements.
+  std::size_t Bytes() const;
 };
 
 // The run as every stage after condensing reads it: screened, and condensed
@@ -69,9 +72,8 @@ struct PreparedRun {
     out.filter.update_interval_s = screened->options.filter.update_interval_s;
     return out;
   }
-  // About what the preparation holds in memory: the samples, the reference's
-  // measurements and the epochs.
-  std::size_t Bytes() const;
+  // About what the epochs hold in memory (the screened run's apart).
+  std::size_t EpochBytes() const;
 };
 
 // Screens `run`, chooses the a-priori model from `request.nominal`, adds
