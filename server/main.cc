@@ -93,6 +93,7 @@ void AddOptions(CLI::App& app, DaemonSettings& s) {
   app.add_option("--analysis-cache-mb", s.analysis_cache_mb,
                  "Memory the workers keep analysed runs in for the next analysis of the same run (an Add from "
                  "the page then re-runs model B alone; 0: keep nothing)")
+      ->check(CLI::Range(0L, 1L << 24))  // up to 16 TiB: MiB that fit in bytes
       ->capture_default_str();
   app.add_option("--lease-seconds", s.lease_s,
                  "Lease of a running analysis; a job whose worker died is taken up again after it")
