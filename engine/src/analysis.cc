@@ -487,8 +487,8 @@ absl::StatusOr<Analysis> ModelAOrItsStartExplained(const pipeline::RunContext& c
   if (settled->has_value()) return **std::move(settled);
   Analysis only_a;
   only_a.report = std::move(model_a.report);
-  only_a.model = model_a.model;
-  if (context.options.keep_series) pipeline::FillSeries(*model_a.pass, only_a.series);
+  only_a.model = model_a.pass.model;
+  if (context.options.keep_series) pipeline::FillSeries(model_a.pass, only_a.series);
   return only_a;
 }
 
@@ -702,14 +702,13 @@ absl::StatusOr<Analysis> AnalyzePrepared(const PreparedRun& prepared, const Anal
     if (!a.ok()) return a.status();
     const ModelAOutcome& kept = **a;
     out = AddAndCompare(context, request.add_effects,
-                        ScannedModelA{kept.model, kept.scan.get(), nullptr, kept.found, kept.report, kept.identified,
-                                      kept.decisions});
+                        ModelAForAdd{kept.model, kept.scan.get(), kept.found, kept.report, kept.identified,
+                                     kept.decisions});
   } else {
     auto a = RunModelA(prepared, context, request);
     if (!a.ok()) return a.status();
-    ModelPass& pass = a->scanned.pass;
-    ScannedModelA model_a{pass.model,    pass.scan.get(),        &pass,           a->scanned.found,
-                          std::move(a->report), std::move(a->identified), std::move(a->decisions)};
+    ScannedModelA model_a{a->scanned.pass, a->scanned.found, std::move(a->report), std::move(a->identified),
+                          std::move(a->decisions)};
     out = request.discover ? Discover(context, std::move(model_a))
                            : ModelAOrItsStartExplained(context, std::move(model_a));
   }

@@ -47,7 +47,9 @@ bool Retryable(const absl::Status& status) {
 }
 
 void DefaultBaselineToBase(const v1::Analysis& base, v1::AnalysisSpec& spec) {
-  if (spec.baseline().effects_size() == 0) *spec.mutable_baseline()->mutable_effects() = base.report().model().effects();
+  if (spec.baseline().effects_size() == 0) {
+    *spec.mutable_baseline()->mutable_effects() = base.report().model().effects();
+  }
 }
 
 namespace {

@@ -221,7 +221,7 @@ absl::StatusOr<Analysis> Discover(const RunContext& c, ScannedModelA a) {
   const AnalysisOptions& options = c.options;
   // Model A stays whole for the comparison; `latest` holds the last step's pass.
   std::optional<ModelPass> latest;
-  auto current = [&]() -> const ModelPass& { return latest.has_value() ? *latest : *a.pass; };
+  auto current = [&]() -> const ModelPass& { return latest.has_value() ? *latest : a.pass; };
   Findings found = a.found;
   AnalysisReport report = a.report;
   std::vector<ParameterEstimate> identified = std::move(a.identified);
@@ -250,7 +250,8 @@ absl::StatusOr<Analysis> Discover(const RunContext& c, ScannedModelA a) {
     std::vector<std::string> added;
     for (const DiscoveryStep& d : report.discovery) added.push_back(d.effect);
     report.comparison =
-        Compare(a.model, current().model, a.report, report, PredictedLikelihoodRatio(a.scan, added, a.found));
+        Compare(a.pass.model, current().model, a.report, report,
+                PredictedLikelihoodRatio(a.pass.scan.get(), added, a.found));
   }
   Analysis out;
   out.report = std::move(report);
@@ -260,7 +261,7 @@ absl::StatusOr<Analysis> Discover(const RunContext& c, ScannedModelA a) {
   return out;
 }
 
-absl::StatusOr<Analysis> AddAndCompare(const RunContext& c, const std::vector<std::string>& effects, ScannedModelA a) {
+absl::StatusOr<Analysis> AddAndCompare(const RunContext& c, const std::vector<std::string>& effects, ModelAForAdd a) {
   const AnalysisOptions& options = c.options;
   Progress(options, 0.8, "model with the added effects");
   auto extended = ExtendModel(c.run, a.model, effects, a.scan, a.found, options);
@@ -331,7 +332,7 @@ absl::StatusOr<std::optional<Analysis>> ExplainTheStartByWarmUps(const RunContex
   if (!FailsOnlyBy(a.report, start_span_end_s, alpha)) return std::nullopt;
   const std::vector<std::string> warm_ups = WarmUpsLoweringTheBic(a.report);
   if (warm_ups.empty()) return std::nullopt;
-  auto b = AddAndCompare(c, warm_ups, ScannedModelA{a.model, a.scan, a.pass, a.found, a.report, a.identified, a.decisions});
+  auto b = AddAndCompare(c, warm_ups, a.ForAdd());
   if (!b.ok()) return b.status();
   const AnalysisReport& r = b->report;
   const bool better = static_cast<int>(r.verdict) < static_cast<int>(a.report.verdict);

@@ -15,21 +15,29 @@
 
 namespace insdiag::engine::pipeline {
 
-// Model A: the identified model's pass, what its scan found and its report,
-// with the identified parameters and notes later models carry on.
-struct ScannedModelA {
+// What an Add reads of model A: its model; its missing-effect scan's score
+// and information (the added effects' priors and the likelihood ratio
+// predicted for them); what the scan found; its report, with the identified
+// parameters and notes later models carry on.
+struct ModelAForAdd {
   const ErrorModel& model;
-  // The missing-effect scan's score and information: the added effects'
-  // priors and the likelihood ratio predicted for them.
   const ScoreTestObserver* scan;
-  // The whole pass, for the stages that read more of it than the scan (the
-  // loop's discovery, model A's own series); null where model A's outcome was
-  // kept from an earlier analysis, which serves an Add only.
-  const ModelPass* pass;
   const Findings& found;
   AnalysisReport report;
   std::vector<ParameterEstimate> identified;
   DecisionLog decisions;
+};
+
+// Model A: the identified model's whole pass, what its scan found and its
+// report, with the identified parameters and notes later models carry on.
+struct ScannedModelA {
+  const ModelPass& pass;
+  const Findings& found;
+  AnalysisReport report;
+  std::vector<ParameterEstimate> identified;
+  DecisionLog decisions;
+
+  ModelAForAdd ForAdd() const { return {pass.model, pass.scan.get(), found, report, identified, decisions}; }
 };
 
 // Walks the loop from model A; the analysis's report is the last model's,
@@ -37,7 +45,7 @@ struct ScannedModelA {
 absl::StatusOr<Analysis> Discover(const RunContext& c, ScannedModelA a);
 
 // Model B = A + `effects`, its report compared with A's.
-absl::StatusOr<Analysis> AddAndCompare(const RunContext& c, const std::vector<std::string>& effects, ScannedModelA a);
+absl::StatusOr<Analysis> AddAndCompare(const RunContext& c, const std::vector<std::string>& effects, ModelAForAdd a);
 
 // A unit that settles after power-up fails at its start: the filter, started
 // from the run's mean biases, meets the start's. When model A's only failures
