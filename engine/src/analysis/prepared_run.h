@@ -76,6 +76,9 @@ struct PreparedRun {
   std::size_t EpochBytes() const;
 };
 
+// Records where model A's a-priori values came from (DecisionKind::kAPrioriModel).
+void RecordAPrioriSource(DecisionLog& decisions, std::string source, std::string why = "");
+
 // Screens `run`, chooses the a-priori model from `request.nominal`, adds
 // `request.baseline_effects` and condenses the run.
 absl::StatusOr<std::unique_ptr<PreparedRun>> PrepareRun(BenchRun&& run, const AnalysisRequest& request,
