@@ -300,10 +300,7 @@ absl::StatusOr<Analysis> AnalyzePrepared(const PreparedRun& prepared, const Anal
     // before model B's runs.
     auto a = ModelAOutcomeOf(prepared, request, options, outcomes);
     if (!a.ok()) return a.status();
-    const ModelAOutcome& kept = **a;
-    out = AddAndCompare(context, request.add_effects,
-                        ModelAForAdd{kept.model, kept.scan.get(), kept.found, kept.report, kept.identified,
-                                     kept.decisions});
+    out = AddAndCompare(context, request.add_effects, (*a)->ForAdd());
   } else {
     auto a = RunModelA(prepared, context, request);
     if (!a.ok()) return a.status();

@@ -205,13 +205,8 @@ TEST_F(MetricsTest, AnAnalysisJobCountsByItsOutcomeWithItsDuration) {
   const v1::Analysis analysis = Ended(asked);
   ASSERT_EQ(analysis.state(), v1::Analysis::SUCCEEDED) << analysis.error().message();
   const std::string outcome = "succeeded";
-  // The job's count is written after its state: wait for it briefly.
-  Scrape s;
-  for (int i = 0; i < 50; ++i) {
-    s = Get(viewer);
-    if (Sample(s, "insdiag_analyses_total{outcome=\"" + outcome + "\"}") >= 1.0) break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
+  // The job's count is written after its state: wait for it.
+  const Scrape s = Until(viewer, "insdiag_analyses_total{outcome=\"" + outcome + "\"}", 1.0);
   EXPECT_EQ(Sample(s, "insdiag_analyses_total{outcome=\"" + outcome + "\"}"), 1.0);
   EXPECT_EQ(Sample(s, "insdiag_analysis_duration_seconds_count{outcome=\"" + outcome + "\"}"), 1.0);
   EXPECT_GT(Sample(s, "insdiag_analysis_duration_seconds_sum{outcome=\"" + outcome + "\"}"), 0.0);

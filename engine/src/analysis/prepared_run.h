@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "analysis/missing_effects.h"
+#include "analysis/model_change.h"
 #include "analysis/run_context.h"
 #include "insdiag/engine/analysis.h"
 #include "insdiag/engine/decision.h"
@@ -100,6 +101,8 @@ struct ModelAOutcome {
   std::vector<ParameterEstimate> identified;
   DecisionLog decisions;
   std::size_t Bytes() const;
+
+  ModelAForAdd ForAdd() const { return {model, scan.get(), found, report, identified, decisions}; }
 };
 
 // Where an analysis from an earlier one's model A (AnalysisRequest::
